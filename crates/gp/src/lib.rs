@@ -1,0 +1,1 @@
+//! Gaussian-process regression numerics: kernels, marginal likelihood, conjugate gradients, Bayesian linear regression, DTW, PCA (being written)

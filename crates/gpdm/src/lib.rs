@@ -1,0 +1,1 @@
+//! Gaussian Process Dynamical Model and Hybrid Monte Carlo sampling (being written)

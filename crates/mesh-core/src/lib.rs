@@ -1,0 +1,22 @@
+//! mesh-core: what every surfcap stage shares.
+//!
+//! Data flows one way through the stages: capture set -> aligned -> parts ->
+//! coefficients -> model -> prediction -> surface -> render/report. This crate
+//! holds the pieces each of them needs: the triangle mesh and its topology,
+//! PLY/OBJ input and output, mesh sequences, the capture-set format, the
+//! artifact container that stages pass to each other, rigid motion, and the
+//! command-line conventions shared by all stage binaries.
+
+pub mod error;
+pub mod mesh;
+pub mod topology;
+pub mod io;
+pub mod sequence;
+pub mod capture_set;
+pub mod artifact;
+pub mod atomic;
+pub mod rigid;
+pub mod cli;
+
+pub use error::{Error, Result};
+pub use mesh::TriMesh;

@@ -1,0 +1,1 @@
+//! Poisson surface reconstruction: cotangent Laplacian, deformation gradients, correction, stitching, blending (being written)
