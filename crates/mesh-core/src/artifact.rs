@@ -1,1 +1,457 @@
-//! (being written)
+//! The artifact container: the one file format stages pass to each other.
+//!
+//! Byte layout (all integers little-endian):
+//!
+//! | bytes        | content                                                    |
+//! |--------------|------------------------------------------------------------|
+//! | 8            | magic `SURFCAP\0`                                          |
+//! | 4 (u32)      | container format version ([`CONTAINER_VERSION`])           |
+//! | 4 (u32) + k  | length of the artifact kind, then the kind (UTF-8)        |
+//! | 4 (u32)      | artifact-kind version                                      |
+//! | 8 (u64) + h  | length of the JSON header, then the header ([`Header`])    |
+//! | 8 (u64) + p  | length of the payload, then the payload (bincode 2, `standard()` config, serde) |
+//! | 32           | SHA-256 of every preceding byte                            |
+//!
+//! The header records provenance (producer, command line, parameters, seed,
+//! SHA-256 of the inputs) and nothing time-dependent, so the same inputs and
+//! seed give a byte-identical file. Writes are atomic
+//! ([`crate::atomic::write_atomic`]).
+//!
+//! Reading trusts nothing: every length is checked against the bytes that
+//! remain before anything is allocated, the checksum is verified before the
+//! header or payload is parsed, and the payload decoder has a byte limit
+//! below 4x the payload's length, so a crafted string length inside the
+//! payload cannot allocate more than the file justifies (sequences are
+//! capped by serde itself at 1 MiB of up-front reservation). Each failure is one
+//! [`Error::File`] line naming the file, e.g.
+//! `model.art: expected artifact kind 'pca-model', found 'gpr-model'`.
+
+use std::io::Read;
+use std::path::Path;
+
+use serde::de::DeserializeOwned;
+use serde::{Deserialize, Serialize};
+use sha2::{Digest, Sha256};
+
+use crate::error::{Error, Result};
+
+/// The eight magic bytes every artifact starts with.
+pub const MAGIC: [u8; 8] = *b"SURFCAP\0";
+/// Version of the container layout described in the module documentation.
+pub const CONTAINER_VERSION: u32 = 1;
+/// Longest artifact kind name accepted (a sanity bound, not a format limit).
+pub const MAX_KIND_LEN: usize = 256;
+const CHECKSUM_LEN: usize = 32;
+
+/// Which stage wrote an artifact.
+#[derive(Clone, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+pub struct Producer {
+    /// Stage (binary) name, e.g. `"align"`.
+    pub stage: String,
+    /// Version of the crate that holds the stage, e.g. `"0.1.0"`.
+    pub version: String,
+}
+
+/// One input file of a stage and the SHA-256 of its bytes (lowercase hex).
+#[derive(Clone, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+pub struct InputRecord {
+    pub path: String,
+    pub sha256: String,
+}
+
+/// Provenance header of an artifact, stored as JSON.
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+pub struct Header {
+    pub producer: Producer,
+    /// The stage's command line; the program name is reduced to its file
+    /// name so the record does not depend on where the binary was built.
+    pub command_line: Vec<String>,
+    /// The stage's parameters (its parsed options), any JSON value.
+    pub params: serde_json::Value,
+    /// Random seed, for stages that use randomness.
+    pub seed: Option<u64>,
+    /// Input files and their hashes.
+    pub inputs: Vec<InputRecord>,
+}
+
+impl Header {
+    /// A header for `stage` of crate version `version` (pass
+    /// `env!("CARGO_PKG_VERSION")`), with no command line, params, seed or inputs.
+    pub fn new(stage: &str, version: &str) -> Self {
+        Header {
+            producer: Producer {
+                stage: stage.to_string(),
+                version: version.to_string(),
+            },
+            command_line: Vec::new(),
+            params: serde_json::Value::Null,
+            seed: None,
+            inputs: Vec::new(),
+        }
+    }
+
+    /// Records the given command line (argument 0 reduced to its file name).
+    pub fn with_command_line<I, S>(mut self, args: I) -> Self
+    where
+        I: IntoIterator<Item = S>,
+        S: Into<String>,
+    {
+        self.command_line = args.into_iter().map(Into::into).collect();
+        if let Some(first) = self.command_line.first_mut() {
+            if let Some(name) = Path::new(first.as_str()).file_name() {
+                *first = name.to_string_lossy().into_owned();
+            }
+        }
+        self
+    }
+
+    /// Records this process's command line ([`std::env::args_os`], lossily UTF-8).
+    pub fn with_process_command_line(self) -> Self {
+        let args: Vec<String> = std::env::args_os()
+            .map(|a| a.to_string_lossy().into_owned())
+            .collect();
+        self.with_command_line(args)
+    }
+
+    /// Records the stage parameters (anything serde can turn into JSON).
+    pub fn with_params<P: Serialize>(mut self, params: &P) -> Result<Self> {
+        self.params = serde_json::to_value(params)
+            .map_err(|e| Error::invalid(format!("cannot record parameters as JSON: {e}")))?;
+        Ok(self)
+    }
+
+    pub fn with_seed(mut self, seed: u64) -> Self {
+        self.seed = Some(seed);
+        self
+    }
+
+    /// Hashes `path` and records it as an input (path as given).
+    pub fn with_input(mut self, path: impl AsRef<Path>) -> Result<Self> {
+        let path = path.as_ref();
+        let sha256 = sha256_file(path)?;
+        self.inputs.push(InputRecord {
+            path: path.display().to_string(),
+            sha256,
+        });
+        Ok(self)
+    }
+}
+
+/// A payload type with a fixed artifact kind and version, so stages can write
+/// `PcaModel::load(path)?` and `model.save(path, &header)?`.
+pub trait Artifact: Serialize + DeserializeOwned {
+    /// Kind name written in the file, e.g. `"pca-model"`.
+    const KIND: &'static str;
+    /// Version of this kind's payload layout; bump it when the struct changes.
+    const VERSION: u32;
+
+    /// Writes `self` to `path` atomically.
+    fn save(&self, path: impl AsRef<Path>, header: &Header) -> Result<()> {
+        write_artifact(path, Self::KIND, Self::VERSION, header, self)
+    }
+    /// Reads the payload, checking kind, version and checksum.
+    fn load(path: impl AsRef<Path>) -> Result<Self> {
+        Ok(Self::load_with_header(path)?.1)
+    }
+    /// Reads header and payload, checking kind, version and checksum.
+    fn load_with_header(path: impl AsRef<Path>) -> Result<(Header, Self)> {
+        read_artifact(path, Self::KIND, Self::VERSION)
+    }
+}
+
+/// What `inspect` reports about an artifact (checksum verified).
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct ArtifactInfo {
+    pub container_version: u32,
+    pub kind: String,
+    pub kind_version: u32,
+    pub header: Header,
+    pub payload_bytes: u64,
+}
+
+/// Encodes an artifact to bytes (see the module documentation for the layout).
+pub fn encode_artifact<T: Serialize + ?Sized>(
+    kind: &str,
+    kind_version: u32,
+    header: &Header,
+    payload: &T,
+) -> Result<Vec<u8>> {
+    if kind.is_empty() || kind.len() > MAX_KIND_LEN {
+        return Err(Error::invalid(format!(
+            "artifact kind must be 1 to {MAX_KIND_LEN} bytes, got {:?}",
+            kind
+        )));
+    }
+    let header_json = serde_json::to_vec(header)
+        .map_err(|e| Error::invalid(format!("cannot encode artifact header: {e}")))?;
+    let payload_bytes = bincode::serde::encode_to_vec(payload, bincode::config::standard())
+        .map_err(|e| Error::invalid(format!("cannot encode '{kind}' payload: {e}")))?;
+    let mut out = Vec::with_capacity(
+        8 + 4 + 4 + kind.len() + 4 + 8 + header_json.len() + 8 + payload_bytes.len() + CHECKSUM_LEN,
+    );
+    out.extend_from_slice(&MAGIC);
+    out.extend_from_slice(&CONTAINER_VERSION.to_le_bytes());
+    out.extend_from_slice(&(kind.len() as u32).to_le_bytes());
+    out.extend_from_slice(kind.as_bytes());
+    out.extend_from_slice(&kind_version.to_le_bytes());
+    out.extend_from_slice(&(header_json.len() as u64).to_le_bytes());
+    out.extend_from_slice(&header_json);
+    out.extend_from_slice(&(payload_bytes.len() as u64).to_le_bytes());
+    out.extend_from_slice(&payload_bytes);
+    let digest = Sha256::digest(&out);
+    out.extend_from_slice(&digest);
+    Ok(out)
+}
+
+/// Writes an artifact atomically (temporary file, then rename).
+pub fn write_artifact<T: Serialize + ?Sized>(
+    path: impl AsRef<Path>,
+    kind: &str,
+    kind_version: u32,
+    header: &Header,
+    payload: &T,
+) -> Result<()> {
+    let path = path.as_ref();
+    let bytes = encode_artifact(kind, kind_version, header, payload)
+        .map_err(|e| Error::file(path, e.to_string()))?;
+    crate::atomic::write_bytes_atomic(path, &bytes)
+}
+
+/// Reads an artifact of kind `kind` and version `kind_version`: header and payload.
+pub fn read_artifact<T: DeserializeOwned>(
+    path: impl AsRef<Path>,
+    kind: &str,
+    kind_version: u32,
+) -> Result<(Header, T)> {
+    let path = path.as_ref();
+    let bytes = std::fs::read(path).map_err(|e| Error::io(path, e))?;
+    decode_artifact(&bytes, kind, kind_version).map_err(|msg| Error::file(path, msg))
+}
+
+/// Reads kind, kind version and header of any artifact (checksum verified).
+pub fn read_header(path: impl AsRef<Path>) -> Result<(String, u32, Header)> {
+    let info = inspect_artifact(path)?;
+    Ok((info.kind, info.kind_version, info.header))
+}
+
+/// Reads everything but the payload of any artifact (checksum verified).
+pub fn inspect_artifact(path: impl AsRef<Path>) -> Result<ArtifactInfo> {
+    let path = path.as_ref();
+    let bytes = std::fs::read(path).map_err(|e| Error::io(path, e))?;
+    let file = |msg: String| Error::file(path, msg);
+    let raw = split(&bytes).map_err(file)?;
+    let header = parse_header(raw.header_json).map_err(file)?;
+    Ok(ArtifactInfo {
+        container_version: raw.container_version,
+        kind: raw.kind.to_string(),
+        kind_version: raw.kind_version,
+        header,
+        payload_bytes: raw.payload.len() as u64,
+    })
+}
+
+/// What `inspect` prints for one file: `{"file", "kind", "kind_version",
+/// "header", "payload_bytes"}`.
+pub fn inspect_json(path: impl AsRef<Path>) -> Result<serde_json::Value> {
+    let path = path.as_ref();
+    let info = inspect_artifact(path)?;
+    Ok(serde_json::json!({
+        "file": path.display().to_string(),
+        "kind": info.kind,
+        "kind_version": info.kind_version,
+        "header": info.header,
+        "payload_bytes": info.payload_bytes,
+    }))
+}
+
+/// Decodes an artifact held in memory; the error is the problem without the file name.
+pub fn decode_artifact<T: DeserializeOwned>(
+    bytes: &[u8],
+    kind: &str,
+    kind_version: u32,
+) -> std::result::Result<(Header, T), String> {
+    let raw = split(bytes)?;
+    if raw.kind != kind {
+        return Err(format!(
+            "expected artifact kind '{kind}', found '{}'",
+            raw.kind
+        ));
+    }
+    if raw.kind_version != kind_version {
+        return Err(format!(
+            "'{kind}' version {} is not supported (this build reads version {kind_version})",
+            raw.kind_version
+        ));
+    }
+    let header = parse_header(raw.header_json)?;
+    let payload = decode_payload::<T>(raw.payload)
+        .map_err(|e| format!("'{kind}' payload does not decode: {e}"))?;
+    Ok((header, payload))
+}
+
+/// SHA-256 of a file's bytes as lowercase hex (streamed, for input records).
+pub fn sha256_file(path: impl AsRef<Path>) -> Result<String> {
+    let path = path.as_ref();
+    let mut f = std::fs::File::open(path).map_err(|e| Error::io(path, e))?;
+    let mut hasher = Sha256::new();
+    let mut buf = vec![0u8; 1 << 16];
+    loop {
+        let n = f.read(&mut buf).map_err(|e| Error::io(path, e))?;
+        if n == 0 {
+            break;
+        }
+        hasher.update(&buf[..n]);
+    }
+    Ok(hex(&hasher.finalize()))
+}
+
+fn hex(bytes: &[u8]) -> String {
+    const DIGITS: &[u8; 16] = b"0123456789abcdef";
+    let mut s = String::with_capacity(bytes.len() * 2);
+    for b in bytes {
+        s.push(DIGITS[(b >> 4) as usize] as char);
+        s.push(DIGITS[(b & 15) as usize] as char);
+    }
+    s
+}
+
+/// The sections of a checksum-verified artifact, borrowed from the file bytes.
+struct RawArtifact<'a> {
+    container_version: u32,
+    kind: &'a str,
+    kind_version: u32,
+    header_json: &'a [u8],
+    payload: &'a [u8],
+}
+
+/// Bounds-checked reader over the file bytes.
+struct Cursor<'a> {
+    bytes: &'a [u8],
+    pos: usize,
+}
+
+impl<'a> Cursor<'a> {
+    fn remaining(&self) -> usize {
+        self.bytes.len() - self.pos
+    }
+    fn take(&mut self, n: u64, what: &str) -> std::result::Result<&'a [u8], String> {
+        let rem = self.remaining();
+        if n > rem as u64 {
+            return Err(format!(
+                "truncated: {what} needs {n} bytes at offset {}, {rem} remain",
+                self.pos
+            ));
+        }
+        let n = n as usize;
+        let s = &self.bytes[self.pos..self.pos + n];
+        self.pos += n;
+        Ok(s)
+    }
+    fn u32(&mut self, what: &str) -> std::result::Result<u32, String> {
+        let b = self.take(4, what)?;
+        Ok(u32::from_le_bytes(b.try_into().expect("4 bytes")))
+    }
+    fn u64(&mut self, what: &str) -> std::result::Result<u64, String> {
+        let b = self.take(8, what)?;
+        Ok(u64::from_le_bytes(b.try_into().expect("8 bytes")))
+    }
+}
+
+/// Splits the container into its sections, checking magic, container
+/// version, every length against the remaining bytes, and the checksum.
+fn split(bytes: &[u8]) -> std::result::Result<RawArtifact<'_>, String> {
+    if bytes.len() < MAGIC.len() {
+        return Err(if MAGIC.starts_with(bytes) {
+            format!(
+                "truncated: file is {} bytes, shorter than the magic bytes",
+                bytes.len()
+            )
+        } else {
+            "not a surfcap artifact (wrong magic bytes)".to_string()
+        });
+    }
+    if bytes[..MAGIC.len()] != MAGIC {
+        return Err("not a surfcap artifact (wrong magic bytes)".to_string());
+    }
+    let mut c = Cursor {
+        bytes,
+        pos: MAGIC.len(),
+    };
+    let container_version = c.u32("container version")?;
+    if container_version != CONTAINER_VERSION {
+        return Err(format!(
+            "container version {container_version} is not supported (this build reads version {CONTAINER_VERSION})"
+        ));
+    }
+    let kind_len = c.u32("kind length")?;
+    if kind_len as usize > MAX_KIND_LEN {
+        return Err(format!(
+            "corrupt: kind length {kind_len} exceeds the maximum of {MAX_KIND_LEN}"
+        ));
+    }
+    let kind = c.take(kind_len as u64, "kind")?;
+    let kind_version = c.u32("kind version")?;
+    let header_len = c.u64("header length")?;
+    let header_json = c.take(header_len, "header")?;
+    let payload_len = c.u64("payload length")?;
+    let payload = c.take(payload_len, "payload")?;
+    let body_end = c.pos;
+    let stored = c.take(CHECKSUM_LEN as u64, "checksum")?;
+    if c.remaining() != 0 {
+        return Err(format!(
+            "corrupt: {} unexpected bytes after the checksum",
+            c.remaining()
+        ));
+    }
+    if Sha256::digest(&bytes[..body_end]).as_slice() != stored {
+        return Err("checksum mismatch (file corrupt)".to_string());
+    }
+    let kind = std::str::from_utf8(kind).map_err(|_| "corrupt: kind is not UTF-8".to_string())?;
+    Ok(RawArtifact {
+        container_version,
+        kind,
+        kind_version,
+        header_json,
+        payload,
+    })
+}
+
+fn parse_header(json: &[u8]) -> std::result::Result<Header, String> {
+    serde_json::from_slice(json).map_err(|e| format!("header is not valid JSON: {e}"))
+}
+
+/// Decodes a bincode payload with a byte limit of the payload length rounded
+/// up to a power of four (at least 4 KiB), i.e. less than 4x the payload. With serde, bincode claims bytes
+/// against the limit only for strings and byte buffers, whose encoding is at
+/// least as long as the claim, so a valid payload always fits; a crafted
+/// length fails instead of allocating. The limit is a const generic in
+/// bincode 2, hence the dispatch over 15 powers of four (a coarser grid
+/// would mean fewer monomorphised copies of `T`'s decoder, a finer one a
+/// tighter bound).
+fn decode_payload<T: DeserializeOwned>(payload: &[u8]) -> std::result::Result<T, String> {
+    macro_rules! dispatch {
+        ($($k:literal)*) => {{
+            let need = payload.len().max(1 << 12);
+            $(
+                if need <= (1usize << $k) {
+                    return finish(bincode::serde::decode_from_slice::<T, _>(
+                        payload,
+                        bincode::config::standard().with_limit::<{ 1usize << $k }>(),
+                    ), payload.len());
+                }
+            )*
+            Err(format!("payload of {} bytes is too large", payload.len()))
+        }};
+    }
+    fn finish<T>(
+        r: std::result::Result<(T, usize), bincode::error::DecodeError>,
+        len: usize,
+    ) -> std::result::Result<T, String> {
+        let (value, used) = r.map_err(|e| e.to_string())?;
+        if used != len {
+            return Err(format!("{} unexpected bytes after the payload", len - used));
+        }
+        Ok(value)
+    }
+    dispatch!(12 14 16 18 20 22 24 26 28 30 32 34 36 38 40)
+}

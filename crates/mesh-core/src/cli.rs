@@ -1,1 +1,255 @@
-//! (being written)
+//! Command-line conventions shared by every stage binary.
+//!
+//! A stage is a thin `main` that parses its clap arguments, calls its library
+//! and reports:
+//!
+//! ```ignore
+//! use clap::Parser;
+//! use mesh_core::cli::{run_stage, CommonArgs};
+//!
+//! /// Rigidly align every frame of a capture set (transfer paper §4).
+//! #[derive(Parser)]
+//! #[command(name = "align", version,
+//!           after_help = "e.g.: align data/set --out work/set.aligned")]
+//! struct Args {
+//!     #[command(flatten)]
+//!     common: CommonArgs,
+//!     /// Capture-set folder
+//!     set: std::path::PathBuf,
+//! }
+//!
+//! fn main() -> std::process::ExitCode {
+//!     let args = Args::parse();
+//!     run_stage("align", || {
+//!         args.common.init()?;
+//!         align::run(&args.set, &args.common)
+//!     })
+//! }
+//! ```
+//!
+//! Conventions:
+//! - **Usage text**: the clap `about` (the struct's doc comment) is one line
+//!   saying what the stage does; `after_help` holds an `e.g.:` line with a real
+//!   invocation. `--help` and `--version` print to stdout and exit 0.
+//! - **Common flags** ([`CommonArgs`]): `-v`/`--verbose` (repeatable), `-q`/`--quiet`,
+//!   `--threads N`, `--seed S` (default 0). The same flag means the same thing
+//!   in every stage.
+//! - **Exit codes**: 0 success; 1 bad input or failure; 2 usage error (clap's
+//!   own `parse()` exits 2 on unknown flags or missing arguments).
+//! - **Errors**: exactly one line on stderr, `stage: file: problem` (the error
+//!   chain joined by `": "`), via [`run_stage`]. A stage that carries on past a
+//!   bad item prints it with [`report_error`] and returns [`AlreadyReported`]
+//!   at the end, so nothing is printed twice. Panics (bugs) are also one line.
+//! - **Quiet on success**: nothing on stdout unless stdout is the stage's
+//!   product; progress bars ([`progress_bar`]) appear only when stderr is a
+//!   terminal and without `-q`; [`info!`] messages only with `-v`,
+//!   [`warn!`] messages unless `-q`.
+//! - **Outputs and `--force`**: there is no `--force`. Stages always
+//!   overwrite their outputs, atomically ([`crate::atomic`]), so an output
+//!   either is complete or does not exist; deciding what is stale is the
+//!   Makefile's job.
+//! - **Threads**: rayon does the parallelism; BLAS is kept single-threaded
+//!   (OpenBLAS threads fight rayon's, see `STACK.md`).
+
+use std::fmt;
+use std::io::IsTerminal;
+use std::process::ExitCode;
+use std::sync::atomic::{AtomicBool, AtomicU8, Ordering};
+use std::sync::OnceLock;
+
+use indicatif::{ProgressBar, ProgressStyle};
+
+use crate::artifact::Header;
+
+/// Flags every stage accepts; `#[command(flatten)]` it into the stage's args.
+#[derive(clap::Args, Clone, Debug, Default, PartialEq, Eq)]
+pub struct CommonArgs {
+    /// More messages on stderr (repeat for more detail)
+    #[arg(short, long, action = clap::ArgAction::Count)]
+    pub verbose: u8,
+    /// Only errors on stderr: no progress bars, no messages
+    #[arg(short, long, conflicts_with = "verbose")]
+    pub quiet: bool,
+    /// Worker threads [default: one per core]; BLAS always uses one thread
+    #[arg(long, value_name = "N", value_parser = clap::value_parser!(u32).range(1..))]
+    pub threads: Option<u32>,
+    /// Random seed: the same inputs and seed give byte-identical outputs
+    #[arg(long, value_name = "S", default_value_t = 0)]
+    pub seed: u64,
+}
+
+static VERBOSITY: AtomicU8 = AtomicU8::new(0);
+static QUIET: AtomicBool = AtomicBool::new(false);
+static STAGE: OnceLock<String> = OnceLock::new();
+
+impl CommonArgs {
+    /// Applies the flags to the process; call once, first thing in the stage
+    /// (before any BLAS call or rayon use): records verbosity, sets up rayon's
+    /// global pool with `--threads` workers, and makes BLAS single-threaded
+    /// (`OPENBLAS_NUM_THREADS=1` for child processes, plus
+    /// `openblas_set_num_threads(1)` if OpenBLAS is linked in, because OpenBLAS
+    /// reads the variable when it is loaded, before `main`).
+    pub fn init(&self) -> anyhow::Result<()> {
+        VERBOSITY.store(if self.quiet { 0 } else { self.verbose }, Ordering::Relaxed);
+        QUIET.store(self.quiet, Ordering::Relaxed);
+        std::env::set_var("OPENBLAS_NUM_THREADS", "1");
+        blas_single_thread();
+        if let Some(n) = self.threads {
+            rayon::ThreadPoolBuilder::new()
+                .num_threads(n as usize)
+                .build_global()
+                .map_err(|e| anyhow::anyhow!("cannot start {n} worker threads: {e}"))?;
+        }
+        Ok(())
+    }
+
+    /// An artifact header for this run: producer, this process's command
+    /// line and the seed. Add params and inputs with the `Header::with_*` methods.
+    pub fn header(&self, stage: &str, version: &str) -> Header {
+        Header::new(stage, version)
+            .with_process_command_line()
+            .with_seed(self.seed)
+    }
+}
+
+/// Calls `openblas_set_num_threads(1)` when the process has OpenBLAS loaded;
+/// does nothing otherwise (looked up with `dlsym` so that stages without BLAS
+/// do not have to link it).
+#[cfg(all(target_os = "linux", target_env = "gnu"))]
+fn blas_single_thread() {
+    use std::ffi::{c_char, c_int, c_void};
+    extern "C" {
+        fn dlsym(handle: *mut c_void, symbol: *const c_char) -> *mut c_void;
+    }
+    // RTLD_DEFAULT is the null handle on glibc.
+    let sym = unsafe { dlsym(std::ptr::null_mut(), c"openblas_set_num_threads".as_ptr()) };
+    if !sym.is_null() {
+        // SAFETY: OpenBLAS declares `void openblas_set_num_threads(int)`.
+        let set: extern "C" fn(c_int) = unsafe { std::mem::transmute(sym) };
+        set(1);
+    }
+}
+
+#[cfg(not(all(target_os = "linux", target_env = "gnu")))]
+fn blas_single_thread() {}
+
+/// Current verbosity (0 unless `-v` was given; always 0 with `-q`).
+pub fn verbosity() -> u8 {
+    VERBOSITY.load(Ordering::Relaxed)
+}
+
+/// Whether `-q` was given.
+pub fn is_quiet() -> bool {
+    QUIET.load(Ordering::Relaxed)
+}
+
+/// Name of the running stage (set by [`run_stage`]), for message prefixes.
+pub fn stage_name() -> &'static str {
+    STAGE.get().map(String::as_str).unwrap_or("surfcap")
+}
+
+/// Prints `stage: message` on stderr when `-v` was given.
+#[macro_export]
+macro_rules! info {
+    ($($arg:tt)*) => {
+        if $crate::cli::verbosity() >= 1 {
+            eprintln!("{}: {}", $crate::cli::stage_name(), format_args!($($arg)*));
+        }
+    };
+}
+
+/// Prints `stage: warning: message` on stderr unless `-q` was given.
+#[macro_export]
+macro_rules! warn {
+    ($($arg:tt)*) => {
+        if !$crate::cli::is_quiet() {
+            eprintln!("{}: warning: {}", $crate::cli::stage_name(), format_args!($($arg)*));
+        }
+    };
+}
+
+/// Error returned by a stage that has already printed its errors with
+/// [`report_error`]: [`run_stage`] exits 1 without printing anything more.
+#[derive(Debug)]
+pub struct AlreadyReported;
+
+impl fmt::Display for AlreadyReported {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str("errors reported above")
+    }
+}
+
+impl std::error::Error for AlreadyReported {}
+
+/// An error chain as one line: causes joined by `": "`, a cause skipped when
+/// its text is already part of the message (as when a `Display` embeds its
+/// `source`), line breaks replaced by spaces.
+pub fn error_line(err: &anyhow::Error) -> String {
+    let mut line = String::new();
+    for cause in err.chain() {
+        let text = cause.to_string();
+        if text.is_empty() || line.contains(&text) {
+            continue;
+        }
+        if !line.is_empty() {
+            line.push_str(": ");
+        }
+        line.push_str(&text);
+    }
+    line.split_whitespace().collect::<Vec<_>>().join(" ")
+}
+
+/// Prints `stage: <error>` as one line on stderr (for stages that report a
+/// bad item and carry on).
+pub fn report_error(err: &anyhow::Error) {
+    eprintln!("{}: {}", stage_name(), error_line(err));
+}
+
+/// Runs a stage's body: on error prints one line `stage: file: problem` on
+/// stderr and returns exit code 1; on success returns 0. A panic is printed
+/// as one line `stage: internal error: ...` and also gives 1.
+pub fn run_stage(stage_name: &str, main: impl FnOnce() -> anyhow::Result<()>) -> ExitCode {
+    let stage = STAGE.get_or_init(|| stage_name.to_string()).clone();
+    let hook_stage = stage.clone();
+    std::panic::set_hook(Box::new(move |info| {
+        let msg = info
+            .payload()
+            .downcast_ref::<&str>()
+            .map(|s| s.to_string())
+            .or_else(|| info.payload().downcast_ref::<String>().cloned())
+            .unwrap_or_else(|| "panic".to_string());
+        let place = info
+            .location()
+            .map(|l| format!(" at {}:{}", l.file(), l.line()));
+        let msg = msg.split_whitespace().collect::<Vec<_>>().join(" ");
+        eprintln!(
+            "{hook_stage}: internal error: {msg}{}",
+            place.unwrap_or_default()
+        );
+    }));
+    match std::panic::catch_unwind(std::panic::AssertUnwindSafe(main)) {
+        Ok(Ok(())) => ExitCode::SUCCESS,
+        Ok(Err(e)) => {
+            if !e.is::<AlreadyReported>() {
+                eprintln!("{stage}: {}", error_line(&e));
+            }
+            ExitCode::FAILURE
+        }
+        Err(_) => ExitCode::FAILURE,
+    }
+}
+
+/// A progress bar on stderr for work of `len` steps, hidden when stderr is
+/// not a terminal or with `-q` (so logs of batch jobs stay clean).
+pub fn progress_bar(len: u64, message: &str, args: &CommonArgs) -> ProgressBar {
+    if args.quiet || !std::io::stderr().is_terminal() {
+        return ProgressBar::hidden();
+    }
+    let style =
+        ProgressStyle::with_template("{msg} [{bar:30}] {pos}/{len} {elapsed_precise} (eta {eta})")
+            .expect("valid progress template")
+            .progress_chars("=> ");
+    ProgressBar::new(len)
+        .with_style(style)
+        .with_message(message.to_string())
+}

@@ -17,6 +17,7 @@ pub mod artifact;
 pub mod atomic;
 pub mod rigid;
 pub mod cli;
+pub mod shapes;
 
 pub use error::{Error, Result};
 pub use mesh::TriMesh;

@@ -1,1 +1,237 @@
-//! (being written)
+//! Mesh sequences: ordered frames sharing one topology, stored on disk as a
+//! directory of `000000.ply`, `000001.ply`, ... (or `.obj`) files.
+
+use std::path::{Path, PathBuf};
+use std::str::FromStr;
+
+use nalgebra::Vector3;
+use rayon::prelude::*;
+
+use crate::error::{Error, Result};
+use crate::io::{read_mesh, write_ply, MeshFormat};
+use crate::mesh::TriMesh;
+use crate::topology::Topology;
+
+/// Frames of one subject's motion: one face list, per-frame vertex positions.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct MeshSequence {
+    pub faces: Vec<[u32; 3]>,
+    pub frames: Vec<Vec<Vector3<f64>>>,
+}
+
+/// A half-open frame range `a:b` (`a` defaults to 0, `b` to the end), as
+/// given to `--frames`.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct FrameRange {
+    pub start: usize,
+    pub end: Option<usize>,
+}
+
+impl FromStr for FrameRange {
+    type Err = String;
+    /// Parses `a:b`, `a:`, `:b`, `:` or a single frame `a` (= `a:a+1`).
+    fn from_str(s: &str) -> std::result::Result<Self, String> {
+        let num = |t: &str| -> std::result::Result<Option<usize>, String> {
+            let t = t.trim();
+            if t.is_empty() {
+                return Ok(None);
+            }
+            t.parse()
+                .map(Some)
+                .map_err(|_| format!("bad frame number '{t}' in range '{s}'"))
+        };
+        let r = match s.split_once(':') {
+            Some((a, b)) => FrameRange {
+                start: num(a)?.unwrap_or(0),
+                end: num(b)?,
+            },
+            None => {
+                let a = num(s)?.ok_or_else(|| format!("empty frame range '{s}'"))?;
+                FrameRange {
+                    start: a,
+                    end: Some(a + 1),
+                }
+            }
+        };
+        if r.end.is_some_and(|e| e <= r.start) {
+            return Err(format!(
+                "empty frame range '{s}' (end must be greater than start)"
+            ));
+        }
+        Ok(r)
+    }
+}
+
+/// Frame number of a file named `<digits>.ply` / `<digits>.obj`.
+fn frame_number(path: &Path) -> Option<usize> {
+    MeshFormat::from_path(path)?;
+    let stem = path.file_stem()?.to_str()?;
+    if stem.is_empty() || !stem.bytes().all(|b| b.is_ascii_digit()) {
+        return None;
+    }
+    stem.parse().ok()
+}
+
+/// The frame files of `dir` in frame order: files named `<digits>.ply` or
+/// `<digits>.obj` (other files are ignored), numbered `0, 1, 2, ...` without
+/// gaps or duplicates.
+pub fn frame_files(dir: impl AsRef<Path>) -> Result<Vec<PathBuf>> {
+    let dir = dir.as_ref();
+    let mut found: Vec<(usize, PathBuf)> = Vec::new();
+    for entry in std::fs::read_dir(dir).map_err(|e| Error::io(dir, e))? {
+        let path = entry.map_err(|e| Error::io(dir, e))?.path();
+        if let Some(n) = frame_number(&path) {
+            found.push((n, path));
+        }
+    }
+    if found.is_empty() {
+        return Err(Error::file(
+            dir,
+            "no frame files (000000.ply, 000001.ply, ... or .obj)",
+        ));
+    }
+    found.sort();
+    for (i, (n, p)) in found.iter().enumerate() {
+        if *n != i {
+            let name = |p: &Path| {
+                p.file_name()
+                    .unwrap_or_default()
+                    .to_string_lossy()
+                    .into_owned()
+            };
+            let msg = if *n < i {
+                format!(
+                    "frame {n} appears twice ({} and {})",
+                    name(&found[i - 1].1),
+                    name(p)
+                )
+            } else {
+                format!("frame {i:06} is missing (numbering jumps to {})", name(p))
+            };
+            return Err(Error::file(dir, msg));
+        }
+    }
+    Ok(found.into_iter().map(|(_, p)| p).collect())
+}
+
+impl MeshSequence {
+    pub fn new(faces: Vec<[u32; 3]>, frames: Vec<Vec<Vector3<f64>>>) -> Self {
+        MeshSequence { faces, frames }
+    }
+
+    pub fn n_frames(&self) -> usize {
+        self.frames.len()
+    }
+    /// Vertices per frame (0 for an empty sequence).
+    pub fn n_vertices(&self) -> usize {
+        self.frames.first().map_or(0, Vec::len)
+    }
+    pub fn n_faces(&self) -> usize {
+        self.faces.len()
+    }
+
+    /// Frame `i` as a standalone mesh (copies). Panics if `i >= n_frames()`.
+    pub fn frame_mesh(&self, i: usize) -> TriMesh {
+        TriMesh::new(self.frames[i].clone(), self.faces.clone())
+    }
+
+    /// Adjacency of the shared topology.
+    pub fn topology(&self) -> Topology {
+        Topology::new(self.n_vertices(), &self.faces)
+    }
+
+    /// Loads every frame of `dir` (see [`frame_files`]).
+    pub fn load_dir(dir: impl AsRef<Path>) -> Result<Self> {
+        Self::load_dir_range(dir, FrameRange::default())
+    }
+
+    /// Loads frames `range` of `dir`, in parallel but deterministically: the
+    /// result and the reported error (the first bad frame in frame order) do
+    /// not depend on the thread count. Every frame must have the vertex count
+    /// and faces of the first loaded frame; the error names the offending file.
+    pub fn load_dir_range(dir: impl AsRef<Path>, range: FrameRange) -> Result<Self> {
+        let dir = dir.as_ref();
+        let files = frame_files(dir)?;
+        let end = range.end.unwrap_or(files.len());
+        if range.start >= files.len() || end > files.len() {
+            return Err(Error::file(
+                dir,
+                format!(
+                    "frame range {}:{end} is outside the {} frames",
+                    range.start,
+                    files.len()
+                ),
+            ));
+        }
+        Self::load_files(&files[range.start..end])
+    }
+
+    /// Loads the given frame files in order (in parallel), checking each
+    /// against the first.
+    pub fn load_files(files: &[PathBuf]) -> Result<Self> {
+        let Some(first_path) = files.first() else {
+            return Ok(Self::default());
+        };
+        let meshes: Vec<Result<TriMesh>> = files.par_iter().map(read_mesh).collect();
+        let mut faces = Vec::new();
+        let mut frames = Vec::with_capacity(files.len());
+        for (i, (mesh, path)) in meshes.into_iter().zip(files).enumerate() {
+            let mesh = mesh?;
+            if i == 0 {
+                faces = mesh.faces;
+                frames.push(mesh.vertices);
+                continue;
+            }
+            let first = first_path.file_name().unwrap_or_default().to_string_lossy();
+            if mesh.vertices.len() != frames[0].len() {
+                return Err(Error::file(
+                    path,
+                    format!(
+                        "has {} vertices but the first frame ({first}) has {}",
+                        mesh.vertices.len(),
+                        frames[0].len()
+                    ),
+                ));
+            }
+            if mesh.faces != faces {
+                let msg = match mesh.faces.iter().zip(&faces).position(|(a, b)| a != b) {
+                    _ if mesh.faces.len() != faces.len() => format!(
+                        "has {} faces but the first frame ({first}) has {}",
+                        mesh.faces.len(),
+                        faces.len()
+                    ),
+                    Some(f) => format!(
+                        "face {f} differs from the first frame ({first}): topology must be shared"
+                    ),
+                    None => unreachable!("equal lengths and no differing face"),
+                };
+                return Err(Error::file(path, msg));
+            }
+            frames.push(mesh.vertices);
+        }
+        Ok(MeshSequence { faces, frames })
+    }
+
+    /// Writes the frames as `dir/000000.ply`, `000001.ply`, ... (binary PLY),
+    /// each atomically, then removes stale frame files left in `dir` by an
+    /// earlier, longer sequence (or with the other extension), so that
+    /// [`MeshSequence::load_dir`] reads back exactly this sequence.
+    pub fn write_dir(&self, dir: impl AsRef<Path>) -> Result<()> {
+        let dir = dir.as_ref();
+        std::fs::create_dir_all(dir).map_err(|e| Error::io(dir, e))?;
+        let names: Vec<PathBuf> = (0..self.n_frames())
+            .map(|i| dir.join(format!("{i:06}.ply")))
+            .collect();
+        names
+            .par_iter()
+            .enumerate()
+            .try_for_each(|(i, p)| write_ply(p, &self.frame_mesh(i)))?;
+        for entry in std::fs::read_dir(dir).map_err(|e| Error::io(dir, e))? {
+            let path = entry.map_err(|e| Error::io(dir, e))?.path();
+            if frame_number(&path).is_some() && !names.contains(&path) {
+                std::fs::remove_file(&path).map_err(|e| Error::io(&path, e))?;
+            }
+        }
+        Ok(())
+    }
+}

@@ -1,0 +1,340 @@
+//! Multi-output Gaussian-process regression, eqs. 8-13.
+//!
+//! Each output column `Y_i` (a target PCA coefficient, or one of the 6 rigid-displacement
+//! values) is an independent GP over the same inputs with the **same kernel** (eq. 8), so one
+//! Cholesky factorisation of `K + σn² I` serves all outputs and the log marginal likelihood is
+//! the sum over outputs:
+//! ```text
+//! log p(Y | X) = -½ Σ_i Y_iᵀ (K + σn² I)⁻¹ Y_i - (m/2) log|K + σn² I| - (m F / 2) log 2π
+//! ∂/∂θ        =  ½ tr( (α αᵀ - m (K + σn² I)⁻¹) ∂K/∂θ ),     α = (K + σn² I)⁻¹ Y
+//! ```
+//! (Rasmussen & Williams eqs. 2.30 and 5.9, summed over the `m` outputs.) The noise variance is
+//! fixed at the paper's `σn² = 0.1` by default and can optionally be learnt (in log space).
+//! Hyperparameters are found by maximising the log marginal likelihood with
+//! [`crate::optim::minimize`] (Polak-Ribière+ CG) on log hyperparameters.
+//!
+//! Prediction is the posterior mean of eq. 13, `K_* α`, for many inputs at once (one kernel
+//! evaluation and one matrix product), and optionally the latent variance of eq. 12,
+//! `K_** - K_* (K + σn² I)⁻¹ K_*ᵀ` (add `noise_var` for the variance of a noisy observation).
+
+use crate::kernel::Kernel;
+use crate::linalg::Cholesky;
+use crate::optim::{minimize, CgOptions, ExitState};
+use crate::{check_finite, invalid, Result};
+use nalgebra::{DMatrix, DVector};
+use rayon::prelude::*;
+use serde::{Deserialize, Serialize};
+
+/// The paper's fixed observation-noise variance (after eq. 8).
+pub const PAPER_NOISE_VAR: f64 = 0.1;
+
+/// Training settings.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+pub struct GprOptions {
+    /// Observation-noise variance `σn²` (the starting value when `learn_noise`).
+    pub noise_var: f64,
+    /// Also optimise `log σn²` (off by default: the paper fixes `σn² = 0.1`).
+    pub learn_noise: bool,
+    /// Optimise the kernel hyperparameters (otherwise the given kernel is used as is).
+    pub optimise: bool,
+    /// Start the optimiser from [`initial_kernel`] instead of the given hyperparameters.
+    pub data_init: bool,
+    /// Conjugate-gradient settings.
+    pub cg: CgOptions,
+}
+
+impl Default for GprOptions {
+    fn default() -> Self {
+        Self {
+            noise_var: PAPER_NOISE_VAR,
+            learn_noise: false,
+            optimise: true,
+            data_init: true,
+            cg: CgOptions::default(),
+        }
+    }
+}
+
+/// What training did: optimiser exit state, likelihoods, numerical notes (jitter retries).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct TrainReport {
+    /// `None` when hyperparameters were not optimised.
+    pub exit: Option<ExitState>,
+    pub iterations: usize,
+    pub evaluations: usize,
+    /// Log marginal likelihood at the starting hyperparameters.
+    pub initial_lml: f64,
+    /// Log marginal likelihood of the returned model.
+    pub lml: f64,
+    /// One line per numerical event (jitter added), to be logged by the caller.
+    pub notes: Vec<String>,
+}
+
+/// A trained GP regressor: hyperparameters, training inputs and `α = (K + σn² I)⁻¹ Y`.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Gpr {
+    pub kernel: Kernel,
+    pub noise_var: f64,
+    /// Jitter that had to be added to `K + σn² I` (0 normally).
+    pub jitter: f64,
+    x: DMatrix<f64>,
+    alpha: DMatrix<f64>,
+}
+
+fn check_xy(x: &DMatrix<f64>, y: &DMatrix<f64>) -> Result<()> {
+    if x.nrows() == 0 {
+        return invalid("GP regression needs at least one training pair");
+    }
+    if x.nrows() != y.nrows() {
+        return invalid(format!(
+            "GP regression: {} input rows but {} output rows",
+            x.nrows(),
+            y.nrows()
+        ));
+    }
+    check_finite("GP inputs", x)?;
+    check_finite("GP outputs", y)
+}
+
+fn noisy_gram(mut ky: DMatrix<f64>, noise_var: f64) -> DMatrix<f64> {
+    for i in 0..ky.nrows() {
+        ky[(i, i)] += noise_var;
+    }
+    ky
+}
+
+fn lml_value(chol: &Cholesky, y: &DMatrix<f64>, alpha: &DMatrix<f64>) -> f64 {
+    let (f, m) = (y.nrows() as f64, y.ncols() as f64);
+    -0.5 * y.dot(alpha) - 0.5 * m * chol.log_det() - 0.5 * m * f * (2.0 * std::f64::consts::PI).ln()
+}
+
+/// `Σ_ij W_ij D_ij` for symmetric `W`, `D` from the lower triangle of `D` only.
+fn sym_lower_dot(w: &DMatrix<f64>, d: &DMatrix<f64>) -> f64 {
+    let n = w.nrows();
+    let (ws, ds) = (w.as_slice(), d.as_slice());
+    let mut total = 0.0;
+    for j in 0..n {
+        let c = j * n;
+        total += ws[c + j] * ds[c + j];
+        let off: f64 = ws[c + j + 1..c + n].iter().zip(&ds[c + j + 1..c + n]).map(|(a, b)| a * b).sum();
+        total += 2.0 * off;
+    }
+    total
+}
+
+/// Log marginal likelihood of `Y` given `X` summed over the output columns.
+pub fn log_marginal_likelihood(
+    kernel: &Kernel,
+    noise_var: f64,
+    x: &DMatrix<f64>,
+    y: &DMatrix<f64>,
+    notes: &mut Vec<String>,
+) -> Result<f64> {
+    check_xy(x, y)?;
+    let chol = Cholesky::new(&noisy_gram(kernel.gram_lower(x, false).0, noise_var), "K + noise", notes)?;
+    let alpha = chol.solve(y);
+    Ok(lml_value(&chol, y, &alpha))
+}
+
+/// Log marginal likelihood and its gradient with respect to the kernel's log
+/// hyperparameters ([`Kernel::log_params`] order), followed by `∂/∂ log σn²` when
+/// `with_noise`.
+pub fn log_marginal_likelihood_grad(
+    kernel: &Kernel,
+    noise_var: f64,
+    with_noise: bool,
+    x: &DMatrix<f64>,
+    y: &DMatrix<f64>,
+    notes: &mut Vec<String>,
+) -> Result<(f64, Vec<f64>)> {
+    check_xy(x, y)?;
+    // Lower triangles only: the Cholesky reads the lower triangle and the contractions below
+    // are over a symmetric product.
+    let (k, dl) = kernel.gram_lower(x, true);
+    let ky = noisy_gram(k, noise_var);
+    let chol = Cholesky::new(&ky, "K + noise", notes)?;
+    let alpha = chol.solve(y);
+    let value = lml_value(&chol, y, &alpha);
+    // W = α αᵀ - m (K + σn² I)⁻¹; the inverse's elements are needed for the trace term.
+    let mut w = chol.inverse_elements();
+    w *= -(y.ncols() as f64);
+    w.gemm(1.0, &alpha, &alpha.transpose(), 1.0);
+    // ½ tr(W ∂K/∂θ) with ∂K/∂log σf = 2K (every kernel's σf is a prefactor σf²).
+    let mut grad = Vec::with_capacity(3);
+    if let Some(dl) = &dl {
+        grad.push(0.5 * sym_lower_dot(&w, dl));
+    }
+    grad.push(sym_lower_dot(&w, &ky) - noise_var * w.trace());
+    if with_noise {
+        grad.push(0.5 * noise_var * w.trace());
+    }
+    Ok((value, grad))
+}
+
+/// A data-driven starting point: `l` = root-mean-square input norm (NN) or RMS distance to
+/// the input mean (SE), and `σf` such that the mean prior variance `mean k(x, x)` equals
+/// the mean squared output (the outputs are modelled with zero mean, as in the paper).
+pub fn initial_kernel(kernel: &Kernel, x: &DMatrix<f64>, y: &DMatrix<f64>) -> Kernel {
+    let f = x.nrows().max(1) as f64;
+    let rms_norm = (x.iter().map(|v| v * v).sum::<f64>() / f).sqrt().max(1e-3);
+    let mean = x.row_mean();
+    let rms_spread =
+        (x.row_iter().map(|r| (r - &mean).norm_squared()).sum::<f64>() / f).sqrt().max(1e-3);
+    let y2 = (y.iter().map(|v| v * v).sum::<f64>() / (y.len().max(1) as f64)).max(1e-6);
+    let unit = match *kernel {
+        Kernel::NeuralNetwork { bias, .. } => Kernel::NeuralNetwork { l: rms_norm, sigma_f: 1.0, bias },
+        Kernel::SquaredExponential { .. } => Kernel::SquaredExponential { l: rms_spread, sigma_f: 1.0 },
+        Kernel::Linear { .. } => Kernel::Linear { sigma_f: 1.0 },
+    };
+    let prior = unit.diag(x).mean().max(1e-12);
+    let sf = (y2 / prior).sqrt();
+    let mut p = unit.log_params();
+    *p.last_mut().unwrap() = sf.ln();
+    unit.with_log_params(&p)
+}
+
+fn summarise_notes(mut notes: Vec<String>) -> Vec<String> {
+    const KEEP: usize = 5;
+    if notes.len() > KEEP {
+        let extra = notes.len() - KEEP;
+        notes.truncate(KEEP);
+        notes.push(format!("... and {extra} more jitter retries"));
+    }
+    notes
+}
+
+impl Gpr {
+    /// Conditions the GP on `(X, Y)` with fixed hyperparameters (no optimisation).
+    pub fn fit(
+        kernel: Kernel,
+        noise_var: f64,
+        x: &DMatrix<f64>,
+        y: &DMatrix<f64>,
+        notes: &mut Vec<String>,
+    ) -> Result<Self> {
+        check_xy(x, y)?;
+        if !(noise_var >= 0.0 && noise_var.is_finite()) {
+            return invalid(format!("noise variance must be >= 0, got {noise_var}"));
+        }
+        let chol = Cholesky::new(&noisy_gram(kernel.gram_lower(x, false).0, noise_var), "K + noise", notes)?;
+        let alpha = chol.solve(y);
+        Ok(Self { kernel, noise_var, jitter: chol.jitter, x: x.clone(), alpha })
+    }
+
+    /// Trains on `X` (`F x D`) -> `Y` (`F x m`): maximises the log marginal likelihood over
+    /// the kernel's hyperparameters (and `σn²` if asked), starting from `kernel` or from
+    /// [`initial_kernel`], then conditions on the data with the best hyperparameters found.
+    pub fn train(
+        kernel: Kernel,
+        x: &DMatrix<f64>,
+        y: &DMatrix<f64>,
+        opts: &GprOptions,
+    ) -> Result<(Self, TrainReport)> {
+        check_xy(x, y)?;
+        let mut notes = Vec::new();
+        let start = if opts.data_init { initial_kernel(&kernel, x, y) } else { kernel };
+        let initial_lml = log_marginal_likelihood(&start, opts.noise_var, x, y, &mut notes)?;
+        let (kernel, noise_var, exit, iterations, evaluations) = if opts.optimise {
+            let nk = start.param_names().len();
+            let mut theta0 = start.log_params();
+            if opts.learn_noise {
+                theta0.push(opts.noise_var.ln());
+            }
+            let objective = |theta: &[f64]| {
+                let kern = start.with_log_params(&theta[..nk]);
+                let noise = if opts.learn_noise { theta[nk].exp() } else { opts.noise_var };
+                match log_marginal_likelihood_grad(&kern, noise, opts.learn_noise, x, y, &mut notes)
+                {
+                    Ok((v, g)) => (-v, g.into_iter().map(|d| -d).collect()),
+                    Err(_) => (f64::INFINITY, vec![0.0; theta.len()]),
+                }
+            };
+            let r = minimize(objective, &theta0, &opts.cg);
+            let kern = start.with_log_params(&r.x[..nk]);
+            let noise = if opts.learn_noise { r.x[nk].exp() } else { opts.noise_var };
+            (kern, noise, Some(r.exit), r.iterations, r.evaluations)
+        } else {
+            (start, opts.noise_var, None, 0, 0)
+        };
+        let mut fit_notes = Vec::new();
+        let model = Self::fit(kernel, noise_var, x, y, &mut fit_notes)?;
+        let lml = log_marginal_likelihood(&kernel, noise_var, x, y, &mut Vec::new())?;
+        notes.extend(fit_notes);
+        let report =
+            TrainReport { exit, iterations, evaluations, initial_lml, lml, notes: summarise_notes(notes) };
+        Ok((model, report))
+    }
+
+    /// Number of training pairs `F`.
+    pub fn n_train(&self) -> usize {
+        self.x.nrows()
+    }
+
+    /// Input dimension `D`.
+    pub fn input_dim(&self) -> usize {
+        self.x.ncols()
+    }
+
+    /// Output dimension `m`.
+    pub fn output_dim(&self) -> usize {
+        self.alpha.ncols()
+    }
+
+    fn check_inputs(&self, xs: &DMatrix<f64>) -> Result<()> {
+        if xs.ncols() != self.input_dim() {
+            return invalid(format!(
+                "GP prediction: inputs have {} columns, the model expects {}",
+                xs.ncols(),
+                self.input_dim()
+            ));
+        }
+        check_finite("GP prediction inputs", xs)
+    }
+
+    /// Posterior mean (eq. 13) for every row of `xs` (`N x D` -> `N x m`): `K_* α`.
+    pub fn predict_mean(&self, xs: &DMatrix<f64>) -> Result<DMatrix<f64>> {
+        self.check_inputs(xs)?;
+        Ok(self.kernel.cross(xs, &self.x) * &self.alpha)
+    }
+
+    /// Posterior mean (eq. 13) and latent variance (eq. 12, shared by all outputs) for every
+    /// row of `xs`. The variance refactorises `K + σn² I` (the model does not store the
+    /// `F x F` factor, to keep artifacts small): use [`Gpr::predict_mean`] when only the
+    /// mean is needed.
+    pub fn predict_with_variance(
+        &self,
+        xs: &DMatrix<f64>,
+        notes: &mut Vec<String>,
+    ) -> Result<(DMatrix<f64>, DVector<f64>)> {
+        self.check_inputs(xs)?;
+        let ks = self.kernel.cross(xs, &self.x);
+        let mean = &ks * &self.alpha;
+        let mut ky = noisy_gram(self.kernel.gram_lower(&self.x, false).0, self.noise_var);
+        for i in 0..ky.nrows() {
+            ky[(i, i)] += self.jitter;
+        }
+        let l = Cholesky::new(&ky, "K + noise", notes)?.lower();
+        // v = L⁻¹ K_*ᵀ; variance = k(x*, x*) - |v|² per column.
+        let v = l
+            .solve_lower_triangular(&ks.transpose())
+            .ok_or_else(|| crate::GpError::Invalid("singular Cholesky factor".into()))?;
+        let prior = self.kernel.diag(xs);
+        let var = DVector::from_iterator(
+            xs.nrows(),
+            v.column_iter().zip(prior.iter()).map(|(c, p)| (p - c.norm_squared()).max(0.0)),
+        );
+        Ok((mean, var))
+    }
+}
+
+/// Trains one GP per `(X, Y)` problem (body parts, displacement) in parallel with rayon,
+/// all with the same kernel family and options. Sets faer to sequential mode (its own
+/// threading is slower than one job per core; STACK.md); run with `OPENBLAS_NUM_THREADS=1`.
+pub fn train_many(
+    kernel: Kernel,
+    problems: &[(DMatrix<f64>, DMatrix<f64>)],
+    opts: &GprOptions,
+) -> Vec<Result<(Gpr, TrainReport)>> {
+    faer::set_global_parallelism(faer::Par::Seq);
+    problems.par_iter().map(|(x, y)| Gpr::train(kernel, x, y, opts)).collect()
+}

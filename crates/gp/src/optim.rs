@@ -1,0 +1,268 @@
+//! Non-linear conjugate gradients (Polak-Ribière+, Nocedal & Wright 2006 eq. 5.45) with a
+//! line search satisfying the strong Wolfe conditions (N&W algorithms 3.5 and 3.6, cubic
+//! interpolation in the zoom phase). Used to maximise the log marginal likelihood over the
+//! GP hyperparameters (the paper's "conjugate gradients [18]", after eq. 10).
+//!
+//! Written here rather than taken from argmin (STACK.md): argmin's CG has no gradient stop
+//! and drops its result when the line search fails. This one always returns the best point
+//! seen and says why it stopped ([`ExitState`]).
+
+use serde::{Deserialize, Serialize};
+
+/// Why the optimiser stopped.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+pub enum ExitState {
+    /// `‖∇f‖∞ <= grad_tol · max(1, |f|)` at the returned point.
+    Converged,
+    /// `max_iter` iterations done without meeting the gradient tolerance.
+    MaxIterations,
+    /// No step satisfying the strong Wolfe conditions was found, even along steepest
+    /// descent (typically: at the limit of floating-point resolution near an optimum).
+    LineSearchFailed,
+    /// The objective was not finite at the starting point.
+    NonFiniteStart,
+}
+
+impl ExitState {
+    /// Short lower-case label for logs and reports.
+    pub fn label(&self) -> &'static str {
+        match self {
+            ExitState::Converged => "converged (gradient tolerance)",
+            ExitState::MaxIterations => "max iterations",
+            ExitState::LineSearchFailed => "line search failed",
+            ExitState::NonFiniteStart => "non-finite objective at start",
+        }
+    }
+}
+
+/// Settings of [`minimize`].
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+pub struct CgOptions {
+    /// Maximum number of CG iterations (line searches).
+    pub max_iter: usize,
+    /// Relative gradient tolerance: stop when `‖∇f‖∞ <= grad_tol · max(1, |f|)`.
+    pub grad_tol: f64,
+    /// Sufficient-decrease constant of the Wolfe conditions.
+    pub c1: f64,
+    /// Curvature constant of the strong Wolfe conditions (0.1 is usual for CG).
+    pub c2: f64,
+    /// Maximum objective evaluations per line search.
+    pub max_line_evals: usize,
+    /// Largest move `‖α d‖∞` tried as a first step (in parameter units; log units for GP
+    /// hyperparameters).
+    pub max_step: f64,
+}
+
+impl Default for CgOptions {
+    fn default() -> Self {
+        Self { max_iter: 100, grad_tol: 1e-6, c1: 1e-4, c2: 0.1, max_line_evals: 25, max_step: 2.0 }
+    }
+}
+
+/// Outcome of [`minimize`]: the best point seen and how the run ended.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct CgReport {
+    pub x: Vec<f64>,
+    pub f: f64,
+    pub grad: Vec<f64>,
+    pub iterations: usize,
+    pub evaluations: usize,
+    pub exit: ExitState,
+}
+
+fn dot(a: &[f64], b: &[f64]) -> f64 {
+    a.iter().zip(b).map(|(u, v)| u * v).sum()
+}
+
+fn inf_norm(a: &[f64]) -> f64 {
+    a.iter().fold(0.0, |m: f64, v| m.max(v.abs()))
+}
+
+/// A point with its value and gradient.
+#[derive(Clone)]
+struct Point {
+    x: Vec<f64>,
+    f: f64,
+    g: Vec<f64>,
+}
+
+/// Trial point at step `alpha` along `d` with its directional derivative.
+struct Trial {
+    alpha: f64,
+    p: Point,
+    dphi: f64,
+}
+
+struct Search<'a, F> {
+    fg: &'a mut F,
+    evals: usize,
+    best: Option<Point>,
+}
+
+impl<F: FnMut(&[f64]) -> (f64, Vec<f64>)> Search<'_, F> {
+    fn eval(&mut self, x: Vec<f64>) -> Point {
+        let (f, g) = (self.fg)(&x);
+        self.evals += 1;
+        let f = if f.is_finite() && g.iter().all(|v| v.is_finite()) { f } else { f64::INFINITY };
+        let p = Point { x, f, g };
+        if p.f.is_finite() && self.best.as_ref().is_none_or(|b| p.f < b.f) {
+            self.best = Some(p.clone());
+        }
+        p
+    }
+
+    fn trial(&mut self, x0: &[f64], d: &[f64], alpha: f64) -> Trial {
+        let x: Vec<f64> = x0.iter().zip(d).map(|(a, b)| a + alpha * b).collect();
+        let p = self.eval(x);
+        let dphi = if p.f.is_finite() { dot(&p.g, d) } else { f64::NAN };
+        Trial { alpha, p, dphi }
+    }
+
+    /// Strong-Wolfe line search from `start` along descent direction `d` (N&W alg. 3.5).
+    fn line_search(&mut self, start: &Point, d: &[f64], alpha0: f64, o: &CgOptions) -> Option<Trial> {
+        let (f0, dphi0) = (start.f, dot(&start.g, d));
+        let armijo = |t: &Trial| t.p.f.is_finite() && t.p.f <= f0 + o.c1 * t.alpha * dphi0;
+        let mut prev = Trial { alpha: 0.0, p: start.clone(), dphi: dphi0 };
+        let mut alpha = alpha0;
+        let mut used = 0;
+        loop {
+            let t = self.trial(&start.x, d, alpha);
+            used += 1;
+            if !armijo(&t) || (prev.alpha > 0.0 && t.p.f >= prev.p.f) {
+                return self.zoom(start, d, prev, t, used, o);
+            }
+            if t.dphi.abs() <= -o.c2 * dphi0 {
+                return Some(t);
+            }
+            if t.dphi >= 0.0 {
+                return self.zoom(start, d, t, prev, used, o);
+            }
+            if used >= o.max_line_evals {
+                return None;
+            }
+            alpha = t.alpha * 2.0;
+            prev = t;
+        }
+    }
+
+    /// Zoom phase (N&W alg. 3.6): `lo` satisfies sufficient decrease and has the lowest value
+    /// so far; the interval between `lo` and `hi` contains a strong-Wolfe step.
+    fn zoom(
+        &mut self,
+        start: &Point,
+        d: &[f64],
+        mut lo: Trial,
+        mut hi: Trial,
+        mut used: usize,
+        o: &CgOptions,
+    ) -> Option<Trial> {
+        let (f0, dphi0) = (start.f, dot(&start.g, d));
+        while used < o.max_line_evals {
+            let (a, b) = (lo.alpha, hi.alpha);
+            let width = (b - a).abs();
+            if width <= 1e-14 * a.abs().max(b.abs()).max(1e-300) {
+                return None;
+            }
+            let alpha = interpolate(&lo, &hi).clamp(a.min(b) + 0.1 * width, a.max(b) - 0.1 * width);
+            let t = self.trial(&start.x, d, alpha);
+            used += 1;
+            if !t.p.f.is_finite() || t.p.f > f0 + o.c1 * alpha * dphi0 || t.p.f >= lo.p.f {
+                hi = t;
+            } else {
+                if t.dphi.abs() <= -o.c2 * dphi0 {
+                    return Some(t);
+                }
+                if t.dphi * (hi.alpha - lo.alpha) >= 0.0 {
+                    hi = lo;
+                }
+                lo = t;
+            }
+        }
+        None
+    }
+}
+
+/// Minimiser of the cubic through `(a, φa, φ'a)`, `(b, φb, φ'b)` (N&W eq. 3.59); the
+/// midpoint when the cubic is degenerate or `b` was not finite.
+fn interpolate(lo: &Trial, hi: &Trial) -> f64 {
+    let (a, fa, ga) = (lo.alpha, lo.p.f, lo.dphi);
+    let (b, fb, gb) = (hi.alpha, hi.p.f, hi.dphi);
+    let mid = 0.5 * (a + b);
+    if !(fb.is_finite() && gb.is_finite()) {
+        return mid;
+    }
+    let d1 = ga + gb - 3.0 * (fa - fb) / (a - b);
+    let disc = d1 * d1 - ga * gb;
+    if disc < 0.0 {
+        return mid;
+    }
+    let d2 = (b - a).signum() * disc.sqrt();
+    let x = b - (b - a) * (gb + d2 - d1) / (gb - ga + 2.0 * d2);
+    if x.is_finite() { x } else { mid }
+}
+
+/// Minimises `f` from `x0` with Polak-Ribière+ conjugate gradients. `fg(x)` returns the value
+/// and gradient; a non-finite value (e.g. a failed factorisation) is treated as "too far" by
+/// the line search. The best point seen is returned whatever the exit state. When a line
+/// search fails along a conjugate direction, one steepest-descent restart is tried before
+/// giving up.
+pub fn minimize<F>(mut fg: F, x0: &[f64], o: &CgOptions) -> CgReport
+where
+    F: FnMut(&[f64]) -> (f64, Vec<f64>),
+{
+    let mut s = Search { fg: &mut fg, evals: 0, best: None };
+    let mut cur = s.eval(x0.to_vec());
+    let finish = |s: Search<'_, F>, cur: Point, iterations: usize, exit: ExitState| {
+        let evaluations = s.evals;
+        let b = s.best.unwrap_or(cur);
+        CgReport { x: b.x, f: b.f, grad: b.g, iterations, evaluations, exit }
+    };
+    if !cur.f.is_finite() {
+        return finish(s, cur, 0, ExitState::NonFiniteStart);
+    }
+    let converged = |p: &Point| inf_norm(&p.g) <= o.grad_tol * p.f.abs().max(1.0);
+    let mut d: Vec<f64> = cur.g.iter().map(|v| -v).collect();
+    let mut prev_slope = 0.0;
+    let mut prev_alpha = 0.0;
+    for it in 0..o.max_iter {
+        if converged(&cur) {
+            return finish(s, cur, it, ExitState::Converged);
+        }
+        let mut slope = dot(&cur.g, &d);
+        if slope >= 0.0 {
+            d = cur.g.iter().map(|v| -v).collect();
+            slope = dot(&cur.g, &d);
+        }
+        // First trial step: N&W eq. 3.60 after the first iteration, capped by max_step.
+        let cap = o.max_step / inf_norm(&d).max(1e-300);
+        let alpha0 = if it == 0 || prev_alpha == 0.0 {
+            cap.min(1.0)
+        } else {
+            (prev_alpha * prev_slope / slope).min(cap)
+        };
+        let mut found = s.line_search(&cur, &d, alpha0, o);
+        if found.is_none() {
+            let is_sd = d.iter().zip(&cur.g).all(|(a, b)| *a == -*b);
+            if !is_sd {
+                d = cur.g.iter().map(|v| -v).collect();
+                slope = dot(&cur.g, &d);
+                let cap = o.max_step / inf_norm(&d).max(1e-300);
+                found = s.line_search(&cur, &d, cap.min(1.0), o);
+            }
+        }
+        let Some(t) = found else {
+            return finish(s, cur, it, ExitState::LineSearchFailed);
+        };
+        let next = t.p;
+        // Polak-Ribière+: β = max(0, gₖ₊₁ᵀ(gₖ₊₁ - gₖ) / gₖᵀgₖ).
+        let gg = dot(&cur.g, &cur.g);
+        let y: Vec<f64> = next.g.iter().zip(&cur.g).map(|(a, b)| a - b).collect();
+        let beta = (dot(&next.g, &y) / gg).max(0.0);
+        d = next.g.iter().zip(&d).map(|(g, di)| -g + beta * di).collect();
+        prev_slope = slope;
+        prev_alpha = t.alpha;
+        cur = next;
+    }
+    let exit = if converged(&cur) { ExitState::Converged } else { ExitState::MaxIterations };
+    finish(s, cur, o.max_iter, exit)
+}

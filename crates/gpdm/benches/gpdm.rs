@@ -1,0 +1,78 @@
+//! Speed of the GPDM numerics (issue 6 targets, numpy reference in brackets):
+//! - objective + gradient of eq. 7 for N = 446 frames, D = 15000 (numpy ~20 ms, one core);
+//! - HMC: 100 samples of a 100-frame latent trajectory (numpy ~11 s).
+//! Run with `OPENBLAS_NUM_THREADS=1 cargo bench -p gpdm`.
+
+use criterion::{criterion_group, criterion_main, Criterion};
+use gpdm::hmc::{sample_trajectories, HmcOptions};
+use gpdm::predict::Predictor;
+use gpdm::{Gpdm, GpdmConfig};
+use nalgebra::DMatrix;
+use rand::{RngExt, SeedableRng};
+use rand_chacha::ChaCha8Rng;
+use std::hint::black_box;
+
+/// Four cyclic sequences (446 frames in all) of a smooth 3-D latent motion mapped to D
+/// dimensions through random sinusoids, plus 1 mm noise: realistic conditioning, any D.
+fn synthetic(d_obs: usize) -> Vec<DMatrix<f64>> {
+    let mut rng = ChaCha8Rng::seed_from_u64(1);
+    let w: Vec<[f64; 4]> = (0..d_obs)
+        .map(|_| std::array::from_fn(|_| rng.sample::<f64, _>(rand_distr::StandardNormal)))
+        .collect();
+    [120usize, 110, 106, 110]
+        .iter()
+        .enumerate()
+        .map(|(s, &len)| {
+            DMatrix::from_fn(len, d_obs, |t, j| {
+                let ph = 0.25 * t as f64 * (1.0 + 0.1 * s as f64) + s as f64;
+                let z = [ph.cos(), ph.sin(), 0.3 * (2.0 * ph).sin()];
+                0.1 * (w[j][0] * z[0] + w[j][1] * z[1] + w[j][2] * z[2] + w[j][3]).sin()
+                    + 1e-3 * ((t * 7919 + j * 104729) % 1000) as f64 / 1000.0
+            })
+        })
+        .collect()
+}
+
+fn objective(c: &mut Criterion) {
+    let m = Gpdm::new(&synthetic(15000), GpdmConfig::default()).unwrap();
+    let obj = m.objective().unwrap();
+    let theta = m.theta();
+    let mut g = vec![0.0; theta.len()];
+    let mut group = c.benchmark_group("objective");
+    group.sample_size(20);
+    group.bench_function("value+gradient N=446 D=15000", |b| {
+        b.iter(|| black_box(obj.eval(black_box(&theta), Some(&mut g)).unwrap()))
+    });
+    group.bench_function("value N=446 D=15000", |b| {
+        b.iter(|| black_box(obj.eval(black_box(&theta), None).unwrap()))
+    });
+    group.finish();
+}
+
+fn hmc(c: &mut Criterion) {
+    let mut m = Gpdm::new(&synthetic(30), GpdmConfig::default()).unwrap();
+    // A short fit so that the dynamics are meaningful.
+    let opts = gpdm::optim::TrainOptions {
+        schedule: gpdm::optim::Schedule::Alternate { rounds: 3, iters: 20 },
+        ..Default::default()
+    };
+    gpdm::optim::train(&mut m, &opts).unwrap();
+    let pred = Predictor::new(&m).unwrap();
+    let template = m.sequence_latent(0).unwrap().rows(0, 100).into_owned();
+    let hopts = HmcOptions {
+        n_samples: 100,
+        burn_in: 100,
+        thin: 1,
+        leapfrog_steps: 10,
+        ..Default::default()
+    };
+    let mut group = c.benchmark_group("hmc");
+    group.sample_size(10);
+    group.bench_function("100 samples x 100 frames (100 burn-in, 10 leapfrog)", |b| {
+        b.iter(|| black_box(sample_trajectories(&pred, &template, &hopts).unwrap()))
+    });
+    group.finish();
+}
+
+criterion_group!(benches, objective, hmc);
+criterion_main!(benches);

@@ -1,0 +1,23 @@
+//! Errors of the GPDM library: shape mismatches, bad input, factorisation failures.
+
+/// Everything that can go wrong in this crate; messages are one line.
+#[derive(Debug, thiserror::Error)]
+pub enum GpdmError {
+    /// A kernel matrix stayed non-positive-definite after all jitter retries.
+    #[error("{what}: kernel matrix not positive definite (pivot {pivot}) even with jitter {jitter:e}")]
+    NotPositiveDefinite {
+        what: &'static str,
+        pivot: usize,
+        jitter: f64,
+    },
+    /// Inconsistent shapes or invalid parameters supplied by the caller.
+    #[error("invalid input: {0}")]
+    Invalid(String),
+}
+
+/// Crate result type.
+pub type Result<T> = std::result::Result<T, GpdmError>;
+
+pub(crate) fn invalid<T>(msg: impl Into<String>) -> Result<T> {
+    Err(GpdmError::Invalid(msg.into()))
+}

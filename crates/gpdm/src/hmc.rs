@@ -1,0 +1,353 @@
+//! Hybrid Monte Carlo over whole latent trajectories (paper §6, "Latent sampling").
+//!
+//! The sampled density is the trajectory likelihood of the learned dynamics, eqs. 8-10,
+//! given the first point: `p(x_2..x_T | x_1) = ∏_t N(x_{t+1}; μ_X(x_t), σ²_X(x_t) I)`, i.e. the
+//! energy `E = Σ_t ‖x_{t+1} − μ_X(x_t)‖² / (2σ²_X(x_t)) + d/2 ln σ²_X(x_t)`. Each factor is
+//! the GP predictive conditioned on the training dynamics only (Markov form), so `K_X` is
+//! factorised once per model and every energy evaluation costs one batched triangular solve.
+//!
+//! Leapfrog with unit mass, step size adapted during burn-in by dual averaging (Hoffman &
+//! Gelman 2014, alg. 5) toward a target acceptance rate, then frozen at the averaged value;
+//! ±10 % step jitter per iteration; thinning; ChaCha8 RNG seeded by the caller.
+
+use crate::error::{invalid, Result};
+use crate::linalg::mul;
+use crate::predict::Predictor;
+use faer::Mat;
+use nalgebra::DMatrix;
+use rand::{RngExt, SeedableRng};
+use rand_chacha::ChaCha8Rng;
+use serde::{Deserialize, Serialize};
+
+/// A differentiable energy (negative log density up to a constant).
+pub trait Energy {
+    /// Number of free coordinates.
+    fn dim(&self) -> usize;
+    /// Energy at `q`, writing `∂E/∂q` into `grad`; `None` when not finite.
+    fn energy_grad(&self, q: &[f64], grad: &mut [f64]) -> Option<f64>;
+}
+
+/// Sampler options.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct HmcOptions {
+    /// Samples kept.
+    pub n_samples: usize,
+    /// Adaptation iterations discarded before sampling.
+    pub burn_in: usize,
+    /// Keep one iteration in `thin`.
+    pub thin: usize,
+    /// Leapfrog steps per iteration.
+    pub leapfrog_steps: usize,
+    /// Starting step size (refined by a doubling/halving search, then adapted).
+    pub initial_step: f64,
+    /// Target acceptance probability during burn-in.
+    pub target_accept: f64,
+    /// RNG seed: same seed, same samples.
+    pub seed: u64,
+}
+
+impl Default for HmcOptions {
+    fn default() -> Self {
+        HmcOptions {
+            n_samples: 100,
+            burn_in: 200,
+            thin: 2,
+            leapfrog_steps: 20,
+            initial_step: 0.01,
+            target_accept: 0.7,
+            seed: 0,
+        }
+    }
+}
+
+/// Output of a chain.
+#[derive(Clone, Debug, PartialEq)]
+pub struct HmcResult {
+    /// Kept samples, in order.
+    pub samples: Vec<Vec<f64>>,
+    /// Acceptance rate after burn-in (fraction of accepted proposals).
+    pub accept_rate: f64,
+    /// Acceptance rate during burn-in.
+    pub burn_in_accept_rate: f64,
+    /// Step size used after burn-in.
+    pub step_size: f64,
+    /// Energy/gradient evaluations.
+    pub evaluations: usize,
+}
+
+struct State {
+    q: Vec<f64>,
+    e: f64,
+    g: Vec<f64>,
+}
+
+/// One leapfrog trajectory from `s` with momentum `p`; returns the end state and ΔH.
+fn leapfrog<E: Energy + ?Sized>(
+    energy: &E,
+    s: &State,
+    p0: &[f64],
+    eps: f64,
+    steps: usize,
+    evals: &mut usize,
+) -> Option<(State, f64)> {
+    let n = s.q.len();
+    let mut q = s.q.clone();
+    let mut p = p0.to_vec();
+    let mut g = s.g.clone();
+    let mut e = s.e;
+    for _ in 0..steps {
+        for i in 0..n {
+            p[i] -= 0.5 * eps * g[i];
+            q[i] += eps * p[i];
+        }
+        *evals += 1;
+        e = energy.energy_grad(&q, &mut g)?;
+        if !e.is_finite() || g.iter().any(|v| !v.is_finite()) {
+            return None;
+        }
+        for i in 0..n {
+            p[i] -= 0.5 * eps * g[i];
+        }
+    }
+    let k0: f64 = 0.5 * p0.iter().map(|v| v * v).sum::<f64>();
+    let k1: f64 = 0.5 * p.iter().map(|v| v * v).sum::<f64>();
+    let dh = (e + k1) - (s.e + k0);
+    Some((State { q, e, g }, dh))
+}
+
+fn momentum(rng: &mut ChaCha8Rng, n: usize) -> Vec<f64> {
+    (0..n).map(|_| rng.sample(rand_distr::StandardNormal)).collect()
+}
+
+/// Runs one HMC chain from `q0`.
+pub fn sample<E: Energy + ?Sized>(energy: &E, q0: &[f64], opts: &HmcOptions) -> Result<HmcResult> {
+    let n = energy.dim();
+    if q0.len() != n {
+        return invalid(format!("start has {} coordinates, energy has {n}", q0.len()));
+    }
+    if opts.thin == 0 || opts.leapfrog_steps == 0 || !(opts.initial_step > 0.0) {
+        return invalid("thin, leapfrog_steps and initial_step must be positive");
+    }
+    if !(opts.target_accept > 0.0 && opts.target_accept < 1.0) {
+        return invalid("target acceptance must lie in (0, 1)");
+    }
+    let mut rng = ChaCha8Rng::seed_from_u64(opts.seed);
+    let mut evals = 1;
+    let mut g = vec![0.0; n];
+    let Some(e) = energy.energy_grad(q0, &mut g).filter(|e| e.is_finite()) else {
+        return invalid("energy is not finite at the start point");
+    };
+    let mut s = State { q: q0.to_vec(), e, g };
+
+    // Reasonable first step: double or halve until one leapfrog step's acceptance crosses 1/2.
+    let mut eps = opts.initial_step;
+    {
+        let p = momentum(&mut rng, n);
+        let acc = |eps: f64, evals: &mut usize| -> f64 {
+            leapfrog(energy, &s, &p, eps, 1, evals)
+                .map(|(_, dh)| (-dh).exp().min(1.0))
+                .unwrap_or(0.0)
+        };
+        let up = acc(eps, &mut evals) > 0.5;
+        for _ in 0..50 {
+            let a = acc(eps, &mut evals);
+            if up && a <= 0.5 {
+                eps *= 0.5;
+                break;
+            }
+            if !up && a > 0.5 {
+                break;
+            }
+            eps = if up { eps * 2.0 } else { eps * 0.5 };
+        }
+    }
+
+    // Dual averaging state.
+    let mu = (10.0 * eps).ln();
+    let (gamma, t0, kappa) = (0.05, 10.0, 0.75);
+    let mut hbar = 0.0;
+    let mut log_eps_bar = eps.ln();
+    let mut burn_acc = 0.0;
+    let mut post_acc = 0usize;
+    let mut post_n = 0usize;
+    let total = opts.burn_in + opts.n_samples * opts.thin;
+    let mut samples = Vec::with_capacity(opts.n_samples);
+    for it in 0..total {
+        let adapting = it < opts.burn_in;
+        let base = if adapting { eps } else { log_eps_bar.exp() };
+        let step = base * (0.9 + 0.2 * rng.random::<f64>());
+        let p = momentum(&mut rng, n);
+        let prop = leapfrog(energy, &s, &p, step, opts.leapfrog_steps, &mut evals);
+        let a = prop
+            .as_ref()
+            .map(|(_, dh)| if dh.is_nan() { 0.0 } else { (-dh).exp().min(1.0) })
+            .unwrap_or(0.0);
+        let u: f64 = rng.random();
+        let accepted = u < a;
+        if accepted {
+            s = prop.expect("accepted proposal exists").0;
+        }
+        if adapting {
+            burn_acc += a;
+            let m = (it + 1) as f64;
+            hbar = (1.0 - 1.0 / (m + t0)) * hbar + (opts.target_accept - a) / (m + t0);
+            eps = (mu - m.sqrt() / gamma * hbar).exp();
+            let w = m.powf(-kappa);
+            log_eps_bar = w * eps.ln() + (1.0 - w) * log_eps_bar;
+        } else {
+            post_n += 1;
+            post_acc += accepted as usize;
+            if (it - opts.burn_in + 1) % opts.thin == 0 {
+                samples.push(s.q.clone());
+            }
+        }
+    }
+    if opts.burn_in == 0 {
+        log_eps_bar = eps.ln();
+    }
+    Ok(HmcResult {
+        samples,
+        accept_rate: post_acc as f64 / post_n.max(1) as f64,
+        burn_in_accept_rate: burn_acc / opts.burn_in.max(1) as f64,
+        step_size: log_eps_bar.exp(),
+        evaluations: evals,
+    })
+}
+
+/// Energy of a latent trajectory with its first point fixed (module doc); the free
+/// coordinates are rows 2..T, row-major.
+pub struct TrajectoryEnergy<'a> {
+    pred: &'a Predictor,
+    x1: Vec<f64>,
+    len: usize,
+}
+
+impl<'a> TrajectoryEnergy<'a> {
+    /// Trajectories of `len` ≥ 2 frames starting at `x1`.
+    pub fn new(pred: &'a Predictor, x1: &[f64], len: usize) -> Result<Self> {
+        if x1.len() != pred.latent_dim() || len < 2 {
+            return invalid("trajectory needs a start point of latent dimension and ≥ 2 frames");
+        }
+        Ok(TrajectoryEnergy {
+            pred,
+            x1: x1.to_vec(),
+            len,
+        })
+    }
+
+    /// Free coordinates of a full trajectory (T × d).
+    pub fn free_coords(&self, traj: &DMatrix<f64>) -> Vec<f64> {
+        let d = self.x1.len();
+        (1..traj.nrows())
+            .flat_map(|t| (0..d).map(move |c| traj[(t, c)]))
+            .collect()
+    }
+
+    /// Full trajectory (T × d) from free coordinates.
+    pub fn trajectory(&self, q: &[f64]) -> DMatrix<f64> {
+        let d = self.x1.len();
+        DMatrix::from_fn(self.len, d, |t, c| {
+            if t == 0 {
+                self.x1[c]
+            } else {
+                q[(t - 1) * d + c]
+            }
+        })
+    }
+}
+
+impl Energy for TrajectoryEnergy<'_> {
+    fn dim(&self) -> usize {
+        (self.len - 1) * self.x1.len()
+    }
+
+    fn energy_grad(&self, q: &[f64], grad: &mut [f64]) -> Option<f64> {
+        let d = self.x1.len();
+        let steps = self.len - 1;
+        let at = |t: usize, c: usize| if t == 0 { self.x1[c] } else { q[(t - 1) * d + c] };
+        let k = self.pred.dynamics_kernel();
+        let xin = self.pred.dynamics_inputs();
+        let m = xin.nrows();
+        // Inputs x_1..x_{T-1}.
+        let p = Mat::from_fn(steps, d, |t, c| at(t, c));
+        // RBF and linear parts of k_X(x_t, X_in), M × steps.
+        let mut rbf = Mat::<f64>::zeros(m, steps);
+        let mut kst = Mat::<f64>::zeros(m, steps);
+        for t in 0..steps {
+            for i in 0..m {
+                let mut s = 0.0;
+                let mut dotp = 0.0;
+                for c in 0..d {
+                    let u = p[(t, c)];
+                    let v = xin[(i, c)];
+                    s += (u - v) * (u - v);
+                    dotp += u * v;
+                }
+                let r = k.var * (-0.5 * k.gamma * s).exp();
+                rbf[(i, t)] = r;
+                kst[(i, t)] = r + k.lin * dotp;
+            }
+        }
+        // Means (eq. 9): μ_t = (K_X⁻¹ X_out)ᵀ k_t.
+        let mu = mul(self.pred.dynamics_weights().transpose(), kst.as_ref()); // d × steps
+        // V = K_X⁻¹ K*, U = L⁻¹ K* for the variances (eq. 10).
+        let chol = self.pred.dynamics_cholesky();
+        let mut v = kst;
+        chol.half_solve_in_place(v.as_mut());
+        let kvk: Vec<f64> = (0..steps).map(|t| v.col(t).squared_norm_l2()).collect();
+        chol.half_solve_t_in_place(v.as_mut());
+
+        grad.iter_mut().for_each(|g| *g = 0.0);
+        let mut energy = 0.0;
+        let a = self.pred.dynamics_weights();
+        let mut w = vec![0.0; m];
+        for t in 0..steps {
+            let xt: Vec<f64> = (0..d).map(|c| p[(t, c)]).collect();
+            let s = k.self_cov(&xt) - kvk[t];
+            if !(s > 0.0) {
+                return None;
+            }
+            let e: Vec<f64> = (0..d).map(|c| at(t + 1, c) - mu[(c, t)]).collect();
+            let e2: f64 = e.iter().map(|v| v * v).sum();
+            energy += 0.5 * e2 / s + 0.5 * d as f64 * s.ln();
+            // ∂/∂x_{t+1}
+            for c in 0..d {
+                grad[t * d + c] += e[c] / s;
+            }
+            if t == 0 {
+                continue; // x_1 is fixed
+            }
+            // ∂/∂x_t through μ_t and s_t.
+            let cs = -0.5 * e2 / (s * s) + 0.5 * d as f64 / s;
+            for i in 0..m {
+                let ai: f64 = (0..d).map(|c| a[(i, c)] * e[c]).sum();
+                w[i] = -ai / s - 2.0 * cs * v[(i, t)];
+            }
+            let g = &mut grad[(t - 1) * d..t * d];
+            for c in 0..d {
+                let mut acc = 2.0 * cs * k.lin * xt[c];
+                for i in 0..m {
+                    acc += w[i] * (-k.gamma * rbf[(i, t)] * (xt[c] - xin[(i, c)]) + k.lin * xin[(i, c)]);
+                }
+                g[c] += acc;
+            }
+        }
+        Some(energy)
+    }
+}
+
+/// Variations of a latent trajectory: mean prediction (eq. 8) from the first row of
+/// `template` over its length, then an HMC chain started there (first point fixed).
+/// Returns the sampled trajectories (each T × d) and the chain statistics.
+pub fn sample_trajectories(
+    pred: &Predictor,
+    template: &DMatrix<f64>,
+    opts: &HmcOptions,
+) -> Result<(Vec<DMatrix<f64>>, HmcResult)> {
+    let x1: Vec<f64> = template.row(0).iter().copied().collect();
+    let start = pred.mean_trajectory(&x1, template.nrows())?;
+    let energy = TrajectoryEnergy::new(pred, &x1, template.nrows())?;
+    let res = sample(&energy, &energy.free_coords(&start), opts)?;
+    let trajs = res.samples.iter().map(|q| energy.trajectory(q)).collect();
+    Ok((trajs, res))
+}

@@ -1,0 +1,157 @@
+//! Covariance functions of the GPDM (paper eqs. 4 and 6) and their gradients.
+//!
+//! Both kernels are instances of one family
+//! `k(x, x') = var · exp(-γ/2 ‖x − x'‖²) + lin · xᵀx' + δ(x, x') / prec`:
+//! - pose mapping, eq. 4: `k_Y` with `(var, γ, lin, prec) = (α1, α2, 0, α3)`;
+//! - dynamics, eq. 6: `k_X` with `(var, γ, lin, prec) = (β1, β2, β3, β4)`.
+//!
+//! `δ(x, x')` is the Kronecker delta on training indices (the noise term), so it appears on
+//! the diagonal of a Gram matrix and never in a cross-covariance with a test point.
+
+use faer::{Mat, MatRef};
+use serde::{Deserialize, Serialize};
+
+/// Parameters of the RBF + linear + white-noise kernel.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+pub struct RbfLinear {
+    /// RBF output scale (α1 or β1).
+    pub var: f64,
+    /// RBF inverse squared width γ (α2 or β2).
+    pub gamma: f64,
+    /// Linear term weight (0 for the pose kernel, β3 for the dynamics).
+    pub lin: f64,
+    /// Noise precision: the noise variance is `1/prec` (α3 or β4).
+    pub prec: f64,
+}
+
+impl RbfLinear {
+    /// Pose kernel `k_Y` of eq. 4 from `α = [α1, α2, α3]`.
+    pub fn pose(alpha: [f64; 3]) -> Self {
+        RbfLinear {
+            var: alpha[0],
+            gamma: alpha[1],
+            lin: 0.0,
+            prec: alpha[2],
+        }
+    }
+
+    /// Dynamics kernel `k_X` of eq. 6 from `β = [β1, β2, β3, β4]`.
+    pub fn dynamics(beta: [f64; 4]) -> Self {
+        RbfLinear {
+            var: beta[0],
+            gamma: beta[1],
+            lin: beta[2],
+            prec: beta[3],
+        }
+    }
+
+    /// `k(x, x)` for a point taken as a new (noisy) observation: `var + lin ‖x‖² + 1/prec`.
+    pub fn self_cov(&self, x: &[f64]) -> f64 {
+        self.var + self.lin * x.iter().map(|v| v * v).sum::<f64>() + 1.0 / self.prec
+    }
+
+    /// Gram matrix on the rows of `x` (n × d), with its noise-free RBF part kept for the
+    /// gradients.
+    pub fn gram(&self, x: MatRef<'_, f64>) -> Gram {
+        let n = x.nrows();
+        let d = x.ncols();
+        let rows: Vec<f64> = (0..n).flat_map(|i| (0..d).map(move |c| x[(i, c)])).collect();
+        let mut rbf = Mat::<f64>::zeros(n, n);
+        let mut k = Mat::<f64>::zeros(n, n);
+        let half_gamma = -0.5 * self.gamma;
+        for j in 0..n {
+            let xj = &rows[j * d..(j + 1) * d];
+            for i in j..n {
+                let xi = &rows[i * d..(i + 1) * d];
+                let mut s = 0.0;
+                let mut dot = 0.0;
+                for c in 0..d {
+                    s += (xi[c] - xj[c]) * (xi[c] - xj[c]);
+                    dot += xi[c] * xj[c];
+                }
+                let r = self.var * (half_gamma * s).exp();
+                let v = r + self.lin * dot;
+                rbf[(i, j)] = r;
+                k[(i, j)] = v;
+            }
+            k[(j, j)] += 1.0 / self.prec;
+        }
+        for j in 0..n {
+            for i in j + 1..n {
+                rbf[(j, i)] = rbf[(i, j)];
+                k[(j, i)] = k[(i, j)];
+            }
+        }
+        Gram { k, rbf }
+    }
+
+    /// Cross-covariance `k(a_i, b_j)` (no noise term), `n_a × n_b`.
+    pub fn cross(&self, a: MatRef<'_, f64>, b: MatRef<'_, f64>) -> Mat<f64> {
+        let d = a.ncols();
+        Mat::from_fn(a.nrows(), b.nrows(), |i, j| {
+            let mut s = 0.0;
+            let mut dot = 0.0;
+            for c in 0..d {
+                let u = a[(i, c)];
+                let v = b[(j, c)];
+                s += (u - v) * (u - v);
+                dot += u * v;
+            }
+            self.var * (-0.5 * self.gamma * s).exp() + self.lin * dot
+        })
+    }
+
+    /// `∂L/∂(var, γ, lin, prec)` given `G = ∂L/∂K` (symmetric) and the Gram matrix on `x`.
+    pub fn param_grads(&self, gram: &Gram, x: MatRef<'_, f64>, g: MatRef<'_, f64>) -> [f64; 4] {
+        let n = g.nrows();
+        let d = x.ncols();
+        let rows: Vec<f64> = (0..n).flat_map(|i| (0..d).map(move |c| x[(i, c)])).collect();
+        let (mut gv, mut gg, mut gl, mut tr) = (0.0, 0.0, 0.0, 0.0);
+        for j in 0..n {
+            let xj = &rows[j * d..(j + 1) * d];
+            for i in 0..n {
+                let xi = &rows[i * d..(i + 1) * d];
+                let gij = g[(i, j)];
+                let r = gram.rbf[(i, j)];
+                let mut s = 0.0;
+                let mut dot = 0.0;
+                for c in 0..d {
+                    s += (xi[c] - xj[c]) * (xi[c] - xj[c]);
+                    dot += xi[c] * xj[c];
+                }
+                gg += gij * r * (-0.5 * s);
+                gv += gij * r;
+                gl += gij * dot;
+            }
+            tr += g[(j, j)];
+        }
+        [gv / self.var, gg, gl, -tr / (self.prec * self.prec)]
+    }
+
+    /// `∂L/∂X` through `K(X)` given `G = ∂L/∂K` (symmetric):
+    /// `−2γ (diag(P 1) X − P X) + 2 lin G X` with `P = G ∘ K_rbf`.
+    pub fn x_grad(&self, gram: &Gram, x: MatRef<'_, f64>, g: MatRef<'_, f64>) -> Mat<f64> {
+        let n = x.nrows();
+        let d = x.ncols();
+        let mut out = Mat::<f64>::zeros(n, d);
+        for j in 0..n {
+            for i in 0..n {
+                let p = g[(i, j)] * gram.rbf[(i, j)];
+                let gl = 2.0 * self.lin * g[(i, j)];
+                for c in 0..d {
+                    out[(i, c)] += -2.0 * self.gamma * p * (x[(i, c)] - x[(j, c)]) + gl * x[(j, c)];
+                }
+            }
+        }
+        out
+    }
+}
+
+/// A Gram matrix with the pieces its gradient needs.
+#[derive(Clone, Debug)]
+pub struct Gram {
+    /// Full kernel matrix including the noise diagonal.
+    pub k: Mat<f64>,
+    /// RBF part `var · exp(-γ/2 ‖x_i − x_j‖²)`.
+    pub rbf: Mat<f64>,
+}

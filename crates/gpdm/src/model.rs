@@ -1,0 +1,428 @@
+//! The GPDM negative log posterior, paper eqs. 3-7, with analytic gradients.
+//!
+//! With `Y` the centred poses (N × D, sequences stacked), `X` the latent points (N × d),
+//! `X_in`/`X_out` the latent points that have a successor/predecessor in the same sequence
+//! (M = N − #sequences rows each), the minimised objective is (constants dropped)
+//!
+//! ```text
+//! L = D/2 ln|K_Y| + 1/2 tr(K_Y⁻¹ Y Yᵀ)                      eq. 3 (N × N form, Y Yᵀ precomputed)
+//!   + d/2 ln|K_X| + 1/2 tr(K_X⁻¹ X_out X_outᵀ)              eq. 5, K_X = k_X(X_in, X_in)
+//!   + Σ_seq ‖x_first‖² / (2 σ0²)                            isotropic prior on each first point
+//!   + Σ_k ln α_k + Σ_k ln β_k                               priors P(α) = ∏ 1/α_k, P(β) = ∏ 1/β_k
+//! ```
+//!
+//! Optimisation coordinates `θ` (see [`Gpdm::theta`]): X column-major, then `ln α1, ln α2,
+//! ln(1/α3 − floor_Y)`, then `ln β1, ln β2, ln β3, ln(1/β4 − floor_X)`. The noise-variance floor
+//! (`1/α3 ≥ floor`) is built into the parametrisation, so the objective stays bounded below
+//! when the data are noise-free (issue 6). The MAP point in (X, α, β) is unchanged by the
+//! reparametrisation (no Jacobian term: this is optimisation, not a density change).
+
+use crate::error::{invalid, Result};
+use crate::kernel::RbfLinear;
+use crate::linalg::{mul_abt, view, Cholesky};
+use faer::{Mat, MatRef};
+use nalgebra::{DMatrix, DVector};
+use serde::{Deserialize, Serialize};
+
+/// Model options.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct GpdmConfig {
+    /// Latent dimension d (paper: 3).
+    pub latent_dim: usize,
+    /// Lower bound on the pose-noise variance 1/α3, in squared units of Y (default 1e-6 m²).
+    pub pose_noise_floor: Option<f64>,
+    /// Lower bound on the dynamics-noise variance 1/β4 (default none).
+    pub dyn_noise_floor: Option<f64>,
+    /// Variance σ0² of the isotropic Gaussian prior on each sequence's first latent point.
+    pub first_point_var: f64,
+}
+
+impl Default for GpdmConfig {
+    fn default() -> Self {
+        GpdmConfig {
+            latent_dim: 3,
+            pose_noise_floor: Some(1e-6),
+            dyn_noise_floor: None,
+            first_point_var: 1.0,
+        }
+    }
+}
+
+/// Which rows of X enter the dynamics: no transition crosses a sequence boundary.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Layout {
+    /// Sequence lengths (each ≥ 2), in stacking order.
+    pub seq_lens: Vec<usize>,
+    /// Rows with a successor in the same sequence (`X_in`, the dynamics inputs).
+    pub x_in: Vec<usize>,
+    /// Their successors (`X_out` = the paper's X').
+    pub x_out: Vec<usize>,
+    /// First row of each sequence.
+    pub firsts: Vec<usize>,
+}
+
+impl Layout {
+    /// Builds the layout; every sequence needs at least two frames.
+    pub fn new(seq_lens: &[usize]) -> Result<Self> {
+        if seq_lens.is_empty() {
+            return invalid("no sequences");
+        }
+        let (mut x_in, mut x_out, mut firsts) = (vec![], vec![], vec![]);
+        let mut start = 0;
+        for (s, &len) in seq_lens.iter().enumerate() {
+            if len < 2 {
+                return invalid(format!("sequence {s} has {len} frame(s); at least 2 needed"));
+            }
+            firsts.push(start);
+            for t in start..start + len - 1 {
+                x_in.push(t);
+                x_out.push(t + 1);
+            }
+            start += len;
+        }
+        Ok(Layout {
+            seq_lens: seq_lens.to_vec(),
+            x_in,
+            x_out,
+            firsts,
+        })
+    }
+
+    /// Total number of frames N.
+    pub fn n(&self) -> usize {
+        self.seq_lens.iter().sum()
+    }
+}
+
+/// `α` from optimisation coordinates: `[e^θ0, e^θ1, 1/(floor + e^θ2)]`.
+pub fn alpha_from_theta(t: &[f64], floor: Option<f64>) -> [f64; 3] {
+    [t[0].exp(), t[1].exp(), 1.0 / (floor.unwrap_or(0.0) + t[2].exp())]
+}
+
+/// `β` from optimisation coordinates: `[e^θ0, e^θ1, e^θ2, 1/(floor + e^θ3)]`.
+pub fn beta_from_theta(t: &[f64], floor: Option<f64>) -> [f64; 4] {
+    [
+        t[0].exp(),
+        t[1].exp(),
+        t[2].exp(),
+        1.0 / (floor.unwrap_or(0.0) + t[3].exp()),
+    ]
+}
+
+/// Inverse of the noise transform: `ln(1/prec − floor)`, clamped when `1/prec ≤ floor`.
+fn noise_theta(prec: f64, floor: Option<f64>) -> f64 {
+    let f = floor.unwrap_or(0.0);
+    (1.0 / prec - f).max(1e-3 * f.max(1e-300)).ln()
+}
+
+/// Value of the objective split into its terms, plus any Cholesky jitter that was needed.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct Eval {
+    /// Total negative log posterior (constants dropped).
+    pub value: f64,
+    /// Pose term, eq. 3.
+    pub pose: f64,
+    /// Dynamics term, eq. 5 (including the first-point priors).
+    pub dynamics: f64,
+    /// Hyperparameter priors.
+    pub prior: f64,
+    /// Jitter added to K_Y (0 if none).
+    pub jitter_y: f64,
+    /// Jitter added to K_X (0 if none).
+    pub jitter_x: f64,
+}
+
+/// The negative log posterior of eq. 7 for fixed data; `Y Yᵀ` is formed once here.
+#[derive(Clone, Debug)]
+pub struct Objective {
+    yyt: Mat<f64>,
+    d_obs: usize,
+    latent_dim: usize,
+    layout: Layout,
+    config: GpdmConfig,
+}
+
+impl Objective {
+    /// Prepares the objective for centred poses `y` (N × D).
+    pub fn new(y: MatRef<'_, f64>, layout: Layout, config: GpdmConfig) -> Result<Self> {
+        if y.nrows() != layout.n() {
+            return invalid(format!(
+                "Y has {} rows but the sequences total {}",
+                y.nrows(),
+                layout.n()
+            ));
+        }
+        Ok(Objective {
+            yyt: mul_abt(y, y),
+            d_obs: y.ncols(),
+            latent_dim: config.latent_dim,
+            layout,
+            config,
+        })
+    }
+
+    /// Length of the optimisation vector θ.
+    pub fn n_params(&self) -> usize {
+        self.layout.n() * self.latent_dim + 7
+    }
+
+    /// Evaluates `L(θ)`; writes `∂L/∂θ` into `grad` when given. The pose and dynamics terms
+    /// are computed concurrently (`rayon::join`; on one thread when rayon has one).
+    pub fn eval(&self, theta: &[f64], grad: Option<&mut [f64]>) -> Result<Eval> {
+        let n = self.layout.n();
+        let d = self.latent_dim;
+        if theta.len() != self.n_params() {
+            return invalid(format!(
+                "θ has {} entries, expected {}",
+                theta.len(),
+                self.n_params()
+            ));
+        }
+        let x = MatRef::from_column_major_slice(&theta[..n * d], n, d);
+        let ta = &theta[n * d..n * d + 3];
+        let tb = &theta[n * d + 3..];
+        let alpha = alpha_from_theta(ta, self.config.pose_noise_floor);
+        let beta = beta_from_theta(tb, self.config.dyn_noise_floor);
+        let want = grad.is_some();
+        let (py, px) = rayon::join(
+            || self.pose_term(x, alpha, want),
+            || self.dynamics_term(x, beta, want),
+        );
+        let (py, px) = (py?, px?);
+        // Priors ∏ 1/α_k, ∏ 1/β_k → Σ ln α_k + Σ ln β_k.
+        let prior: f64 = alpha.iter().map(|a| a.ln()).sum::<f64>()
+            + beta.iter().map(|b| b.ln()).sum::<f64>();
+        let out = Eval {
+            value: py.value + px.value + prior,
+            pose: py.value,
+            dynamics: px.value,
+            prior,
+            jitter_y: py.jitter,
+            jitter_x: px.jitter,
+        };
+        let Some(grad) = grad else {
+            return Ok(out);
+        };
+        let (gx_part, gh) = grad.split_at_mut(n * d);
+        let (dxy, dxx) = (py.dx.expect("requested"), px.dx.expect("requested"));
+        for j in 0..d {
+            for i in 0..n {
+                gx_part[i + j * n] = dxy[(i, j)] + dxx[(i, j)];
+            }
+        }
+        let (pa, pb) = (py.dparams, px.dparams);
+        // Chain rule to θ, priors included (∂ ln α_k / ∂θ_k = 1 for the log-parametrised ones).
+        gh[0] = alpha[0] * pa[0] + 1.0;
+        gh[1] = alpha[1] * pa[1] + 1.0;
+        gh[2] = (pa[3] + 1.0 / alpha[2]) * (-alpha[2] * alpha[2] * ta[2].exp());
+        gh[3] = beta[0] * pb[0] + 1.0;
+        gh[4] = beta[1] * pb[1] + 1.0;
+        gh[5] = beta[2] * pb[2] + 1.0;
+        gh[6] = (pb[3] + 1.0 / beta[3]) * (-beta[3] * beta[3] * tb[3].exp());
+        Ok(out)
+    }
+
+    /// Eq. 3 term `D/2 ln|K_Y| + 1/2 tr(K_Y⁻¹ S)`, `S = Y Yᵀ`, and its gradient via
+    /// `∂L/∂K_Y = 1/2 K⁻¹ (D I − S K⁻¹) = 1/2 L⁻ᵀ (D I − C) L⁻¹`, `C = L⁻¹ S L⁻ᵀ`.
+    fn pose_term(&self, x: MatRef<'_, f64>, alpha: [f64; 3], want: bool) -> Result<Term> {
+        let n = x.nrows();
+        let ky = RbfLinear::pose(alpha);
+        let gy = ky.gram(x);
+        let cy = Cholesky::factor(gy.k.as_ref(), "K_Y")?;
+        let mut c = self.yyt.clone();
+        cy.half_solve_in_place(c.as_mut()); // L⁻¹ S
+        let mut c = c.transpose().to_owned();
+        cy.half_solve_in_place(c.as_mut()); // C = L⁻¹ S L⁻ᵀ
+        let tr_y: f64 = (0..n).map(|i| c[(i, i)]).sum();
+        let dd = self.d_obs as f64;
+        let value = 0.5 * dd * cy.logdet() + 0.5 * tr_y;
+        let mut term = Term {
+            value,
+            jitter: cy.jitter,
+            dx: None,
+            dparams: [0.0; 4],
+        };
+        if want {
+            let mut q = -c;
+            for i in 0..n {
+                q[(i, i)] += dd;
+            }
+            let g = cy.sandwich(q.as_ref()) * faer::Scale(0.5);
+            term.dx = Some(ky.x_grad(&gy, x, g.as_ref()));
+            term.dparams = ky.param_grads(&gy, x, g.as_ref());
+        }
+        Ok(term)
+    }
+
+    /// Eq. 5 term `d/2 ln|K_X| + 1/2 tr(K_X⁻¹ X_out X_outᵀ)` plus the first-point priors,
+    /// with `∂L/∂K_X = 1/2 L⁻ᵀ (d I − W Wᵀ) L⁻¹`, `W = L⁻¹ X_out`, `∂L/∂X_out = L⁻ᵀ W`.
+    fn dynamics_term(&self, x: MatRef<'_, f64>, beta: [f64; 4], want: bool) -> Result<Term> {
+        let n = x.nrows();
+        let d = x.ncols();
+        let kx = RbfLinear::dynamics(beta);
+        let xin = Mat::from_fn(self.layout.x_in.len(), d, |i, j| x[(self.layout.x_in[i], j)]);
+        let xout = Mat::from_fn(self.layout.x_out.len(), d, |i, j| x[(self.layout.x_out[i], j)]);
+        let m = xin.nrows();
+        let gx = kx.gram(xin.as_ref());
+        let cx = Cholesky::factor(gx.k.as_ref(), "K_X")?;
+        let mut w = xout;
+        cx.half_solve_in_place(w.as_mut()); // W = L⁻¹ X_out
+        let quad_x: f64 = w.col_iter().map(|col| col.squared_norm_l2()).sum();
+        let sigma0 = self.config.first_point_var;
+        let first: f64 = self
+            .layout
+            .firsts
+            .iter()
+            .map(|&f| (0..d).map(|j| x[(f, j)] * x[(f, j)]).sum::<f64>())
+            .sum::<f64>()
+            / (2.0 * sigma0);
+        let value = 0.5 * d as f64 * cx.logdet() + 0.5 * quad_x + first;
+        let mut term = Term {
+            value,
+            jitter: cx.jitter,
+            dx: None,
+            dparams: [0.0; 4],
+        };
+        if want {
+            let mut q = -mul_abt(w.as_ref(), w.as_ref());
+            for i in 0..m {
+                q[(i, i)] += d as f64;
+            }
+            let g = cx.sandwich(q.as_ref()) * faer::Scale(0.5);
+            let dx_in = kx.x_grad(&gx, xin.as_ref(), g.as_ref());
+            term.dparams = kx.param_grads(&gx, xin.as_ref(), g.as_ref());
+            let mut dx_out = w;
+            cx.half_solve_t_in_place(dx_out.as_mut());
+            let mut dx = Mat::<f64>::zeros(n, d);
+            for j in 0..d {
+                for r in 0..m {
+                    dx[(self.layout.x_in[r], j)] += dx_in[(r, j)];
+                    dx[(self.layout.x_out[r], j)] += dx_out[(r, j)];
+                }
+                for &f in &self.layout.firsts {
+                    dx[(f, j)] += x[(f, j)] / sigma0;
+                }
+            }
+            term.dx = Some(dx);
+        }
+        Ok(term)
+    }
+}
+
+/// One term of the objective with its gradient pieces.
+struct Term {
+    value: f64,
+    jitter: f64,
+    dx: Option<Mat<f64>>,
+    /// Raw `∂/∂(var, γ, lin, prec)` of the kernel.
+    dparams: [f64; 4],
+}
+
+/// A (trained or initialised) GPDM: data, latent points and hyperparameters. Serialisable.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Gpdm {
+    /// Model options.
+    pub config: GpdmConfig,
+    /// Lengths of the stacked training sequences.
+    pub seq_lens: Vec<usize>,
+    /// Mean pose subtracted from the data (the GP of eq. 3 has zero mean).
+    pub y_mean: DVector<f64>,
+    /// Centred training poses, N × D.
+    pub y: DMatrix<f64>,
+    /// Latent points, N × d.
+    pub x: DMatrix<f64>,
+    /// Pose-kernel hyperparameters (α1, α2, α3), eq. 4.
+    pub alpha: [f64; 3],
+    /// Dynamics-kernel hyperparameters (β1, β2, β3, β4), eq. 6.
+    pub beta: [f64; 4],
+}
+
+impl Gpdm {
+    /// Stacks the sequences (each T_j × D), centres them and sets the paper's starting point:
+    /// X from PCA ([`crate::optim::pca_init`]), α_k = β_k = 1 and noise variances 0.1.
+    pub fn new(sequences: &[DMatrix<f64>], config: GpdmConfig) -> Result<Self> {
+        if sequences.is_empty() {
+            return invalid("no training sequences");
+        }
+        let dim = sequences[0].ncols();
+        if dim == 0 {
+            return invalid("poses have dimension 0");
+        }
+        if let Some((i, s)) = sequences.iter().enumerate().find(|(_, s)| s.ncols() != dim) {
+            return invalid(format!("sequence {i} has pose dimension {}, expected {dim}", s.ncols()));
+        }
+        if sequences.iter().any(|s| s.iter().any(|v| !v.is_finite())) {
+            return invalid("training poses contain NaN or infinity");
+        }
+        if config.latent_dim == 0 {
+            return invalid("latent dimension must be positive");
+        }
+        let seq_lens: Vec<usize> = sequences.iter().map(|s| s.nrows()).collect();
+        Layout::new(&seq_lens)?;
+        let n: usize = seq_lens.iter().sum();
+        if config.latent_dim > n.min(dim) {
+            return invalid(format!(
+                "latent dimension {} exceeds min(frames {n}, pose dimension {dim})",
+                config.latent_dim
+            ));
+        }
+        let mut y = DMatrix::zeros(n, dim);
+        let mut r = 0;
+        for s in sequences {
+            y.rows_mut(r, s.nrows()).copy_from(s);
+            r += s.nrows();
+        }
+        let y_mean = y.row_mean().transpose();
+        for mut row in y.row_iter_mut() {
+            row -= y_mean.transpose();
+        }
+        let x = crate::optim::pca_init(&y, config.latent_dim)?;
+        Ok(Gpdm {
+            config,
+            seq_lens,
+            y_mean,
+            y,
+            x,
+            alpha: [1.0, 1.0, 10.0],
+            beta: [1.0, 1.0, 1.0, 10.0],
+        })
+    }
+
+    /// The sequence layout.
+    pub fn layout(&self) -> Layout {
+        Layout::new(&self.seq_lens).expect("layout validated at construction")
+    }
+
+    /// Builds the objective of eq. 7 (forms Y Yᵀ once).
+    pub fn objective(&self) -> Result<Objective> {
+        Objective::new(view(&self.y), self.layout(), self.config.clone())
+    }
+
+    /// Current parameters in optimisation coordinates.
+    pub fn theta(&self) -> Vec<f64> {
+        let mut t: Vec<f64> = self.x.as_slice().to_vec();
+        t.push(self.alpha[0].ln());
+        t.push(self.alpha[1].ln());
+        t.push(noise_theta(self.alpha[2], self.config.pose_noise_floor));
+        t.push(self.beta[0].ln());
+        t.push(self.beta[1].ln());
+        t.push(self.beta[2].ln());
+        t.push(noise_theta(self.beta[3], self.config.dyn_noise_floor));
+        t
+    }
+
+    /// Sets the parameters from optimisation coordinates.
+    pub fn set_theta(&mut self, theta: &[f64]) {
+        let nd = self.x.len();
+        self.x.as_mut_slice().copy_from_slice(&theta[..nd]);
+        self.alpha = alpha_from_theta(&theta[nd..nd + 3], self.config.pose_noise_floor);
+        self.beta = beta_from_theta(&theta[nd + 3..nd + 7], self.config.dyn_noise_floor);
+    }
+
+    /// Latent trajectory of training sequence `s` (T_s × d).
+    pub fn sequence_latent(&self, s: usize) -> Option<DMatrix<f64>> {
+        let start: usize = self.seq_lens.get(..s)?.iter().sum();
+        let len = *self.seq_lens.get(s)?;
+        Some(self.x.rows(start, len).into_owned())
+    }
+}

@@ -1,0 +1,487 @@
+//! Fitting the GPDM: PCA initialisation and an L-BFGS minimiser of eq. 7.
+//!
+//! The hyperparameters are optimised in log coordinates (see [`crate::model`]); on top of
+//! that, [`Schedule::Alternate`] interleaves (X, α) phases with β-only phases, because the
+//! curvature along β is orders of magnitude smaller than along X (issue 6): a joint quasi-Newton
+//! step barely moves β. Every phase keeps and returns its best point.
+
+use crate::error::{invalid, Result};
+use crate::linalg::{mul_abt, view};
+use crate::model::Gpdm;
+use nalgebra::DMatrix;
+use serde::{Deserialize, Serialize};
+
+/// PCA initialisation: the top `d` principal-component scores of the centred `y` (N × D),
+/// computed from the N × N matrix `Y Yᵀ` (never D × D), then scaled by one common factor so
+/// that the latent coordinates have unit mean variance (the paper's unit hyperparameters and
+/// the unit first-point prior then start at a sensible length scale; relative scales kept).
+pub fn pca_init(y: &DMatrix<f64>, d: usize) -> Result<DMatrix<f64>> {
+    let n = y.nrows();
+    if d == 0 || d > n {
+        return invalid(format!("cannot take {d} principal components of {n} frames"));
+    }
+    let s = crate::linalg::to_na(mul_abt(view(y), view(y)).as_ref());
+    let eig = nalgebra::SymmetricEigen::new(s);
+    let mut order: Vec<usize> = (0..n).collect();
+    order.sort_by(|&a, &b| eig.eigenvalues[b].total_cmp(&eig.eigenvalues[a]));
+    let mut x = DMatrix::zeros(n, d);
+    for (c, &k) in order.iter().take(d).enumerate() {
+        let lam = eig.eigenvalues[k].max(0.0);
+        let u = eig.eigenvectors.column(k);
+        // Deterministic sign: largest-magnitude entry positive.
+        let imax = u.iamax();
+        let sign = if u[imax] < 0.0 { -1.0 } else { 1.0 };
+        for i in 0..n {
+            x[(i, c)] = sign * u[i] * lam.sqrt();
+        }
+    }
+    let var = x.iter().map(|v| v * v).sum::<f64>() / (n * d) as f64;
+    if var > 0.0 {
+        x /= var.sqrt();
+    }
+    Ok(x)
+}
+
+/// Why a minimisation stopped.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+pub enum Exit {
+    /// Gradient infinity-norm below tolerance.
+    GradientTolerance,
+    /// Relative decrease of f below tolerance.
+    ValueTolerance,
+    /// Iteration limit reached.
+    MaxIterations,
+    /// Evaluation limit reached.
+    MaxEvaluations,
+    /// The line search found no acceptable step (best point returned).
+    LineSearchFailed,
+    /// The objective could not be evaluated at the start point.
+    StartFailed,
+}
+
+/// L-BFGS options.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct LbfgsOptions {
+    /// Number of stored correction pairs.
+    pub memory: usize,
+    /// Maximum iterations.
+    pub max_iter: usize,
+    /// Maximum objective evaluations.
+    pub max_evals: usize,
+    /// Stop when ‖∇f‖∞ ≤ grad_tol.
+    pub grad_tol: f64,
+    /// Stop when (f_prev − f) ≤ value_tol · max(|f|, 1).
+    pub value_tol: f64,
+}
+
+impl Default for LbfgsOptions {
+    fn default() -> Self {
+        LbfgsOptions {
+            memory: 10,
+            max_iter: 500,
+            max_evals: 2000,
+            grad_tol: 1e-6,
+            value_tol: 1e-10,
+        }
+    }
+}
+
+/// Outcome of a minimisation: the best point seen and why it stopped.
+#[derive(Clone, Debug, PartialEq)]
+pub struct LbfgsResult {
+    /// Best point.
+    pub x: Vec<f64>,
+    /// f at the best point.
+    pub f: f64,
+    /// ‖∇f‖∞ at the best point.
+    pub grad_norm: f64,
+    /// Iterations done.
+    pub iterations: usize,
+    /// Objective evaluations done.
+    pub evaluations: usize,
+    /// Stop reason.
+    pub exit: Exit,
+    /// (evaluations so far, best f) after each iteration.
+    pub history: Vec<(usize, f64)>,
+}
+
+fn dot(a: &[f64], b: &[f64]) -> f64 {
+    a.iter().zip(b).map(|(x, y)| x * y).sum()
+}
+
+fn inf_norm(a: &[f64]) -> f64 {
+    a.iter().fold(0.0, |m, v| m.max(v.abs()))
+}
+
+/// Minimises `f` by L-BFGS with a strong-Wolfe line search (Nocedal & Wright, alg. 7.4,
+/// 3.5 and 3.6). `f(x, g)` returns the value and writes the gradient, or `None` when it cannot
+/// be evaluated (treated as +∞: the step is shortened).
+pub fn lbfgs<F>(mut f: F, x0: &[f64], opts: &LbfgsOptions) -> LbfgsResult
+where
+    F: FnMut(&[f64], &mut [f64]) -> Option<f64>,
+{
+    let n = x0.len();
+    let mut evals = 0usize;
+    let mut x = x0.to_vec();
+    let mut g = vec![0.0; n];
+    let fx = f(&x, &mut g);
+    evals += 1;
+    let Some(mut fx) = fx.filter(|v| v.is_finite()) else {
+        return LbfgsResult {
+            x,
+            f: f64::INFINITY,
+            grad_norm: f64::INFINITY,
+            iterations: 0,
+            evaluations: evals,
+            exit: Exit::StartFailed,
+            history: vec![],
+        };
+    };
+    let mut s_hist: Vec<Vec<f64>> = vec![];
+    let mut y_hist: Vec<Vec<f64>> = vec![];
+    let mut history = vec![(evals, fx)];
+    let mut exit = Exit::MaxIterations;
+    let mut iterations = 0;
+    let (c1, c2) = (1e-4, 0.9);
+    for it in 0..opts.max_iter {
+        iterations = it;
+        if inf_norm(&g) <= opts.grad_tol {
+            exit = Exit::GradientTolerance;
+            break;
+        }
+        // Two-loop recursion: p = −H ∇f.
+        let mut q = g.clone();
+        let k = s_hist.len();
+        let mut alphas = vec![0.0; k];
+        for i in (0..k).rev() {
+            let rho = 1.0 / dot(&y_hist[i], &s_hist[i]);
+            alphas[i] = rho * dot(&s_hist[i], &q);
+            for j in 0..n {
+                q[j] -= alphas[i] * y_hist[i][j];
+            }
+        }
+        let gamma = if k > 0 {
+            dot(&s_hist[k - 1], &y_hist[k - 1]) / dot(&y_hist[k - 1], &y_hist[k - 1])
+        } else {
+            1.0 / inf_norm(&g).max(1.0)
+        };
+        for v in q.iter_mut() {
+            *v *= gamma;
+        }
+        for i in 0..k {
+            let rho = 1.0 / dot(&y_hist[i], &s_hist[i]);
+            let beta = rho * dot(&y_hist[i], &q);
+            for j in 0..n {
+                q[j] += s_hist[i][j] * (alphas[i] - beta);
+            }
+        }
+        let mut p: Vec<f64> = q.iter().map(|v| -v).collect();
+        let mut dg0 = dot(&p, &g);
+        if !(dg0 < 0.0) {
+            // Not a descent direction: restart with steepest descent.
+            s_hist.clear();
+            y_hist.clear();
+            let sc = 1.0 / inf_norm(&g).max(1.0);
+            p = g.iter().map(|v| -v * sc).collect();
+            dg0 = dot(&p, &g);
+        }
+        let budget = opts.max_evals.saturating_sub(evals);
+        let ls = wolfe_search(&mut f, &x, fx, dg0, &p, c1, c2, budget);
+        evals += ls.evals;
+        match ls.step {
+            Some((xn, fnew, gn)) => {
+                let s: Vec<f64> = xn.iter().zip(&x).map(|(a, b)| a - b).collect();
+                let yv: Vec<f64> = gn.iter().zip(&g).map(|(a, b)| a - b).collect();
+                let sy = dot(&s, &yv);
+                if sy > 1e-12 * dot(&yv, &yv).sqrt() * dot(&s, &s).sqrt() {
+                    if s_hist.len() == opts.memory {
+                        s_hist.remove(0);
+                        y_hist.remove(0);
+                    }
+                    s_hist.push(s);
+                    y_hist.push(yv);
+                }
+                let decrease = fx - fnew;
+                x = xn;
+                g = gn;
+                fx = fnew;
+                history.push((evals, fx));
+                iterations = it + 1;
+                if decrease <= opts.value_tol * fx.abs().max(1.0) {
+                    exit = Exit::ValueTolerance;
+                    break;
+                }
+            }
+            None => {
+                if !s_hist.is_empty() {
+                    // Retry once from steepest descent before giving up.
+                    s_hist.clear();
+                    y_hist.clear();
+                    if evals < opts.max_evals {
+                        continue;
+                    }
+                }
+                exit = if evals >= opts.max_evals {
+                    Exit::MaxEvaluations
+                } else {
+                    Exit::LineSearchFailed
+                };
+                break;
+            }
+        }
+        if evals >= opts.max_evals {
+            exit = Exit::MaxEvaluations;
+            break;
+        }
+    }
+    if exit == Exit::MaxIterations && inf_norm(&g) <= opts.grad_tol {
+        exit = Exit::GradientTolerance;
+    }
+    LbfgsResult {
+        grad_norm: inf_norm(&g),
+        x,
+        f: fx,
+        iterations,
+        evaluations: evals,
+        exit,
+        history,
+    }
+}
+
+struct LineSearch {
+    step: Option<(Vec<f64>, f64, Vec<f64>)>,
+    evals: usize,
+}
+
+/// Strong-Wolfe line search along `p` from `x` (f(x) = f0, ∇f·p = dg0 < 0).
+#[allow(clippy::too_many_arguments)]
+fn wolfe_search<F>(
+    f: &mut F,
+    x: &[f64],
+    f0: f64,
+    dg0: f64,
+    p: &[f64],
+    c1: f64,
+    c2: f64,
+    budget: usize,
+) -> LineSearch
+where
+    F: FnMut(&[f64], &mut [f64]) -> Option<f64>,
+{
+    let n = x.len();
+    let mut evals = 0;
+    let mut phi = |a: f64, evals: &mut usize| -> (f64, f64, Vec<f64>, Vec<f64>) {
+        let xa: Vec<f64> = (0..n).map(|i| x[i] + a * p[i]).collect();
+        let mut ga = vec![0.0; n];
+        *evals += 1;
+        match f(&xa, &mut ga) {
+            Some(v) if v.is_finite() && ga.iter().all(|g| g.is_finite()) => {
+                let d = dot(&ga, p);
+                (v, d, xa, ga)
+            }
+            _ => (f64::INFINITY, f64::NAN, xa, ga),
+        }
+    };
+    let max_evals = budget.min(30);
+    let (mut a_prev, mut f_prev, mut d_prev) = (0.0, f0, dg0);
+    let mut a = 1.0;
+    let mut best: Option<(Vec<f64>, f64, Vec<f64>)> = None;
+    // Bracketing phase.
+    let (mut lo, mut hi);
+    loop {
+        if evals >= max_evals {
+            return LineSearch { step: best, evals };
+        }
+        let (fa, da, xa, ga) = phi(a, &mut evals);
+        if fa.is_finite() && fa < f0 && best.as_ref().is_none_or(|b| fa < b.1) {
+            best = Some((xa.clone(), fa, ga.clone()));
+        }
+        if !fa.is_finite() || fa > f0 + c1 * a * dg0 || (evals > 1 && fa >= f_prev) {
+            lo = (a_prev, f_prev, d_prev);
+            hi = (a, fa, da);
+            break;
+        }
+        if da.abs() <= -c2 * dg0 {
+            return LineSearch {
+                step: Some((xa, fa, ga)),
+                evals,
+            };
+        }
+        if da >= 0.0 {
+            lo = (a, fa, da);
+            hi = (a_prev, f_prev, d_prev);
+            break;
+        }
+        a_prev = a;
+        f_prev = fa;
+        d_prev = da;
+        a *= 2.0;
+    }
+    // Zoom phase.
+    loop {
+        if evals >= max_evals || (hi.0 - lo.0).abs() < 1e-16 * lo.0.abs().max(1e-300) {
+            return LineSearch { step: best, evals };
+        }
+        let at = interpolate(lo, hi);
+        let (fa, da, xa, ga) = phi(at, &mut evals);
+        if fa.is_finite() && fa < f0 && best.as_ref().is_none_or(|b| fa < b.1) {
+            best = Some((xa.clone(), fa, ga.clone()));
+        }
+        if !fa.is_finite() || fa > f0 + c1 * at * dg0 || fa >= lo.1 {
+            hi = (at, fa, da);
+        } else {
+            if da.abs() <= -c2 * dg0 {
+                return LineSearch {
+                    step: Some((xa, fa, ga)),
+                    evals,
+                };
+            }
+            if da * (hi.0 - lo.0) >= 0.0 {
+                hi = lo;
+            }
+            lo = (at, fa, da);
+        }
+    }
+}
+
+/// Minimiser of the cubic through (a, f, f') at both ends, safeguarded into the middle 80 %
+/// of the interval; bisection when the cubic is unusable.
+fn interpolate(lo: (f64, f64, f64), hi: (f64, f64, f64)) -> f64 {
+    let (a0, f0, d0) = lo;
+    let (a1, f1, d1) = hi;
+    let (left, right) = if a0 < a1 { (a0, a1) } else { (a1, a0) };
+    let mid = 0.5 * (a0 + a1);
+    if !(f1.is_finite() && d1.is_finite()) {
+        return mid;
+    }
+    let d1c = d0 + d1 - 3.0 * (f0 - f1) / (a0 - a1);
+    let disc = d1c * d1c - d0 * d1;
+    if disc < 0.0 {
+        return mid;
+    }
+    let d2 = (a1 - a0).signum() * disc.sqrt();
+    let t = a1 - (a1 - a0) * (d1 + d2 - d1c) / (d1 - d0 + 2.0 * d2);
+    let w = right - left;
+    if t.is_finite() && t > left + 0.1 * w && t < right - 0.1 * w {
+        t
+    } else {
+        mid
+    }
+}
+
+/// How the parameter blocks are optimised.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub enum Schedule {
+    /// All of (X, ln α, ln β) together.
+    Joint,
+    /// `rounds` × [(X, ln α) for `iters` iterations, then ln β only for `iters` iterations],
+    /// then a final joint polish of up to `iters` iterations.
+    Alternate { rounds: usize, iters: usize },
+}
+
+/// Training options.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct TrainOptions {
+    /// Block schedule.
+    pub schedule: Schedule,
+    /// L-BFGS options (iteration counts are per phase for the joint schedule).
+    pub lbfgs: LbfgsOptions,
+}
+
+impl Default for TrainOptions {
+    fn default() -> Self {
+        TrainOptions {
+            schedule: Schedule::Alternate {
+                rounds: 10,
+                iters: 50,
+            },
+            lbfgs: LbfgsOptions::default(),
+        }
+    }
+}
+
+/// What training did.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct TrainReport {
+    /// Objective (eq. 7, negative log posterior without constants) at the start.
+    pub initial_value: f64,
+    /// Objective at the end.
+    pub final_value: f64,
+    /// Total objective evaluations.
+    pub evaluations: usize,
+    /// Stop reason of every phase, in order.
+    pub exits: Vec<Exit>,
+    /// Largest Cholesky jitter seen at the returned point (0 if none).
+    pub max_jitter: f64,
+    /// (cumulative evaluations, objective) after each iteration, over all phases.
+    pub history: Vec<(usize, f64)>,
+}
+
+/// Minimises eq. 7 over X, α and β starting from the model's current parameters and stores
+/// the best point found back into `model`.
+pub fn train(model: &mut Gpdm, opts: &TrainOptions) -> Result<TrainReport> {
+    let obj = model.objective()?;
+    let mut theta = model.theta();
+    let n_all = theta.len();
+    let start = obj.eval(&theta, None)?;
+    let mut report = TrainReport {
+        initial_value: start.value,
+        final_value: start.value,
+        evaluations: 1,
+        exits: vec![],
+        max_jitter: 0.0,
+        history: vec![(1, start.value)],
+    };
+    let nx_alpha = n_all - 4;
+    let phases: Vec<(Vec<usize>, usize)> = match &opts.schedule {
+        Schedule::Joint => vec![((0..n_all).collect(), opts.lbfgs.max_iter)],
+        Schedule::Alternate { rounds, iters } => {
+            let mut v = vec![];
+            for _ in 0..*rounds {
+                v.push(((0..nx_alpha).collect(), *iters));
+                v.push(((nx_alpha..n_all).collect(), *iters));
+            }
+            v.push(((0..n_all).collect(), *iters));
+            v
+        }
+    };
+    let mut full_grad = vec![0.0; n_all];
+    for (idx, iters) in phases {
+        let base = theta.clone();
+        let sub0: Vec<f64> = idx.iter().map(|&i| theta[i]).collect();
+        let mut o = opts.lbfgs.clone();
+        o.max_iter = iters;
+        let res = lbfgs(
+            |sub, g| {
+                let mut t = base.clone();
+                for (k, &i) in idx.iter().enumerate() {
+                    t[i] = sub[k];
+                }
+                let e = obj.eval(&t, Some(&mut full_grad)).ok()?;
+                for (k, &i) in idx.iter().enumerate() {
+                    g[k] = full_grad[i];
+                }
+                Some(e.value)
+            },
+            &sub0,
+            &o,
+        );
+        report.evaluations += res.evaluations;
+        report.exits.push(res.exit);
+        let offset = report.history.last().map(|h| h.0).unwrap_or(0);
+        report
+            .history
+            .extend(res.history.iter().skip(1).map(|&(e, f)| (offset + e, f)));
+        if res.f.is_finite() && res.f <= report.final_value {
+            for (k, &i) in idx.iter().enumerate() {
+                theta[i] = res.x[k];
+            }
+            report.final_value = res.f;
+        }
+    }
+    let end = obj.eval(&theta, None)?;
+    report.final_value = end.value;
+    report.max_jitter = end.jitter_x.max(end.jitter_y);
+    model.set_theta(&theta);
+    Ok(report)
+}

@@ -1,0 +1,187 @@
+//! Predictions of a trained GPDM: latent dynamics (eqs. 8-10) and pose reconstruction
+//! (eqs. 11-13). `K_X` and `K_Y` are factorised once when the predictor is built, and
+//! `K_X⁻¹ X_out` and `K_Y⁻¹ Y` are formed by triangular solves.
+
+use crate::error::{invalid, Result};
+use crate::kernel::RbfLinear;
+use crate::linalg::{mul, to_na, view, Cholesky};
+use crate::model::Gpdm;
+use faer::{Mat, MatRef};
+use nalgebra::{DMatrix, DVector};
+use rand::RngExt;
+
+/// A trained model ready for prediction.
+#[derive(Clone, Debug)]
+pub struct Predictor {
+    kx: RbfLinear,
+    ky: RbfLinear,
+    /// Dynamics inputs X_in (M × d).
+    x_in: Mat<f64>,
+    chol_x: Cholesky,
+    /// K_X⁻¹ X_out (M × d).
+    a_x: Mat<f64>,
+    /// Training latents X (N × d).
+    x: Mat<f64>,
+    chol_y: Cholesky,
+    /// K_Y⁻¹ Y (N × D), Y centred.
+    a_y: Mat<f64>,
+    y_mean: DVector<f64>,
+    /// Jitter notes from the factorisations (empty when none was needed); callers log these.
+    pub notes: Vec<String>,
+}
+
+impl Predictor {
+    /// Factorises the kernel matrices of `model`.
+    pub fn new(model: &Gpdm) -> Result<Self> {
+        let layout = model.layout();
+        let d = model.config.latent_dim;
+        let x = view(&model.x).to_owned();
+        let x_in = Mat::from_fn(layout.x_in.len(), d, |i, j| x[(layout.x_in[i], j)]);
+        let x_out = Mat::from_fn(layout.x_out.len(), d, |i, j| x[(layout.x_out[i], j)]);
+        let kx = RbfLinear::dynamics(model.beta);
+        let ky = RbfLinear::pose(model.alpha);
+        let chol_x = Cholesky::factor(kx.gram(x_in.as_ref()).k.as_ref(), "K_X")?;
+        let chol_y = Cholesky::factor(ky.gram(x.as_ref()).k.as_ref(), "K_Y")?;
+        let mut notes = vec![];
+        for (name, c) in [("K_X", &chol_x), ("K_Y", &chol_y)] {
+            if c.jitter > 0.0 {
+                notes.push(format!("{name}: Cholesky needed jitter {:e}", c.jitter));
+            }
+        }
+        let a_x = chol_x.solve(x_out.as_ref());
+        let a_y = chol_y.solve(view(&model.y));
+        Ok(Predictor {
+            kx,
+            ky,
+            x_in,
+            chol_x,
+            a_x,
+            x,
+            chol_y,
+            a_y,
+            y_mean: model.y_mean.clone(),
+            notes,
+        })
+    }
+
+    /// Latent dimension d.
+    pub fn latent_dim(&self) -> usize {
+        self.x.ncols()
+    }
+
+    /// Pose dimension D.
+    pub fn pose_dim(&self) -> usize {
+        self.a_y.ncols()
+    }
+
+    /// Dynamics kernel.
+    pub fn dynamics_kernel(&self) -> RbfLinear {
+        self.kx
+    }
+
+    /// Dynamics inputs X_in (M × d).
+    pub fn dynamics_inputs(&self) -> MatRef<'_, f64> {
+        self.x_in.as_ref()
+    }
+
+    /// K_X⁻¹ X_out (M × d).
+    pub fn dynamics_weights(&self) -> MatRef<'_, f64> {
+        self.a_x.as_ref()
+    }
+
+    /// Cholesky factor of K_X.
+    pub fn dynamics_cholesky(&self) -> &Cholesky {
+        &self.chol_x
+    }
+
+    /// Eqs. 9 and 10: mean `μ_X(x) = X_outᵀ K_X⁻¹ k_X(x)` and variance
+    /// `σ²_X(x) = k_X(x, x) − k_X(x)ᵀ K_X⁻¹ k_X(x)` of the next latent point (k_X(x, x)
+    /// includes the noise 1/β4: the next point is a noisy observation of the mapping).
+    pub fn dynamics(&self, x: &[f64]) -> (Vec<f64>, f64) {
+        let d = self.latent_dim();
+        let q = MatRef::from_row_major_slice(x, 1, d);
+        let kstar = self.kx.cross(self.x_in.as_ref(), q); // M × 1
+        let mu = mul(self.a_x.as_ref().transpose(), kstar.as_ref());
+        let mut v = kstar.clone();
+        self.chol_x.half_solve_in_place(v.as_mut());
+        let var = self.kx.self_cov(x) - v.col(0).squared_norm_l2();
+        ((0..d).map(|c| mu[(c, 0)]).collect(), var)
+    }
+
+    /// Eq. 8 by mean prediction: `x̂_1 = x1`, `x̂_{t+1} = μ_X(x̂_t)`; returns `len × d`.
+    pub fn mean_trajectory(&self, x1: &[f64], len: usize) -> Result<DMatrix<f64>> {
+        let d = self.latent_dim();
+        if x1.len() != d {
+            return invalid(format!("start point has {} coordinates, expected {d}", x1.len()));
+        }
+        let mut out = DMatrix::zeros(len, d);
+        if len == 0 {
+            return Ok(out);
+        }
+        let mut cur = x1.to_vec();
+        for t in 0..len {
+            for c in 0..d {
+                out[(t, c)] = cur[c];
+            }
+            cur = self.dynamics(&cur).0;
+        }
+        Ok(out)
+    }
+
+    fn check_latent(&self, xs: &DMatrix<f64>) -> Result<()> {
+        if xs.ncols() != self.latent_dim() {
+            return invalid(format!(
+                "latent points have {} coordinates, expected {}",
+                xs.ncols(),
+                self.latent_dim()
+            ));
+        }
+        Ok(())
+    }
+
+    /// Eq. 12 for each row of `xs` (T × d): `μ_Y(x) = Yᵀ K_Y⁻¹ k_Y(x)` plus the data mean.
+    pub fn pose_mean(&self, xs: &DMatrix<f64>) -> Result<DMatrix<f64>> {
+        self.check_latent(xs)?;
+        let kstar = self.ky.cross(view(xs), self.x.as_ref()); // T × N
+        let mut m = to_na(mul(kstar.as_ref(), self.a_y.as_ref()).as_ref());
+        for mut row in m.row_iter_mut() {
+            row += self.y_mean.transpose();
+        }
+        Ok(m)
+    }
+
+    /// Eq. 13 for each row of `xs`: `σ²_Y(x) = k_Y(x, x) − k_Y(x)ᵀ K_Y⁻¹ k_Y(x)`, with
+    /// k_Y(x, x) = α1 + 1/α3 (a new noisy pose).
+    pub fn pose_variance(&self, xs: &DMatrix<f64>) -> Result<Vec<f64>> {
+        self.check_latent(xs)?;
+        let mut v = self.ky.cross(self.x.as_ref(), view(xs)); // N × T
+        self.chol_y.half_solve_in_place(v.as_mut());
+        Ok((0..xs.nrows())
+            .map(|t| {
+                let row: Vec<f64> = xs.row(t).iter().copied().collect();
+                (self.ky.self_cov(&row) - v.col(t).squared_norm_l2()).max(0.0)
+            })
+            .collect())
+    }
+
+    /// Eq. 11: poses for the latent rows of `xs`; the mean (eq. 12) when `rng` is `None`,
+    /// otherwise a draw `ỹ ~ N(μ_Y(x), σ²_Y(x) I)`.
+    pub fn reconstruct<R: rand::Rng + ?Sized>(
+        &self,
+        xs: &DMatrix<f64>,
+        rng: Option<&mut R>,
+    ) -> Result<DMatrix<f64>> {
+        let mut m = self.pose_mean(xs)?;
+        if let Some(rng) = rng {
+            let var = self.pose_variance(xs)?;
+            for (t, v) in var.iter().enumerate() {
+                let s = v.sqrt();
+                for c in 0..m.ncols() {
+                    let z: f64 = rng.sample(rand_distr::StandardNormal);
+                    m[(t, c)] += s * z;
+                }
+            }
+        }
+        Ok(m)
+    }
+}

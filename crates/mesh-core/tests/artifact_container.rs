@@ -1,0 +1,297 @@
+//! The artifact container: round trip, determinism, byte layout, and one
+//! distinct one-line error per kind of bad file.
+
+use std::collections::BTreeMap;
+use std::path::Path;
+
+use mesh_core::artifact::{
+    read_artifact, read_header, sha256_file, write_artifact, Artifact, Header, MAGIC,
+};
+use serde::{Deserialize, Serialize};
+use sha2::{Digest, Sha256};
+
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+struct Model {
+    name: String,
+    values: Vec<f64>,
+    faces: Vec<[u32; 3]>,
+    parts: BTreeMap<String, Vec<u64>>,
+}
+
+impl Artifact for Model {
+    const KIND: &'static str = "test-model";
+    const VERSION: u32 = 3;
+}
+
+fn model() -> Model {
+    let mut parts = BTreeMap::new();
+    parts.insert("torso".to_string(), vec![0, 1, 2, u64::MAX]);
+    parts.insert("arm_l".to_string(), vec![]);
+    Model {
+        name: "walk ünïcode".to_string(),
+        values: vec![0.1, -2.5e-300, f64::MAX, 1.0 / 3.0, -0.0],
+        faces: vec![[0, 1, 2], [2, 1, 70000]],
+        parts,
+    }
+}
+
+fn header(dir: &Path) -> Header {
+    let input = dir.join("input.txt");
+    std::fs::write(&input, b"abc").unwrap();
+    Header::new("test-stage", "0.1.0")
+        .with_command_line(["/some/build/dir/test-stage", "--seed", "7", "in.ply"])
+        .with_params(&serde_json::json!({"m": 20, "kernel": "nn"}))
+        .unwrap()
+        .with_seed(7)
+        .with_input(&input)
+        .unwrap()
+}
+
+/// Writes a valid artifact and returns its bytes.
+fn good_file(dir: &Path) -> (std::path::PathBuf, Vec<u8>) {
+    let path = dir.join("good.art");
+    model().save(&path, &header(dir)).unwrap();
+    let bytes = std::fs::read(&path).unwrap();
+    (path, bytes)
+}
+
+fn err_of<T: std::fmt::Debug>(r: mesh_core::Result<T>) -> String {
+    let msg = r.expect_err("expected an error").to_string();
+    assert!(!msg.contains('\n'), "error is not one line: {msg:?}");
+    msg
+}
+
+#[test]
+fn round_trip_preserves_header_and_payload() {
+    let dir = tempfile::tempdir().unwrap();
+    let (path, _) = good_file(dir.path());
+    let (h, m) = Model::load_with_header(&path).unwrap();
+    assert_eq!(m, model());
+    assert_eq!(h, header(dir.path()));
+    assert_eq!(
+        h.command_line[0], "test-stage",
+        "program name reduced to its file name"
+    );
+    assert_eq!(
+        h.inputs[0].sha256,
+        "ba7816bf8f01cfea414140de5dae2223b00361a396177a9cb410ff61f20015ad"
+    );
+    let (kind, version, h2) = read_header(&path).unwrap();
+    assert_eq!((kind.as_str(), version), ("test-model", 3));
+    assert_eq!(h2, h);
+    // The free functions agree with the trait.
+    let (_, m2): (Header, Model) = read_artifact(&path, "test-model", 3).unwrap();
+    assert_eq!(m2, model());
+}
+
+#[test]
+fn sha256_file_matches_known_vectors() {
+    let dir = tempfile::tempdir().unwrap();
+    let p = dir.path().join("empty");
+    std::fs::write(&p, b"").unwrap();
+    assert_eq!(
+        sha256_file(&p).unwrap(),
+        "e3b0c44298fc1c149afbf4c8996fb92427ae41e4649b934ca495991b7852b855"
+    );
+    // Larger than the 64 KiB read buffer: compare with a one-shot digest.
+    let big: Vec<u8> = (0..200_000u32).map(|i| (i * 7 % 251) as u8).collect();
+    std::fs::write(&p, &big).unwrap();
+    let expect: String = Sha256::digest(&big)
+        .iter()
+        .map(|b| format!("{b:02x}"))
+        .collect();
+    assert_eq!(sha256_file(&p).unwrap(), expect);
+}
+
+#[test]
+fn same_input_gives_byte_identical_files() {
+    let dir = tempfile::tempdir().unwrap();
+    let a = dir.path().join("a.art");
+    let b = dir.path().join("b.art");
+    model().save(&a, &header(dir.path())).unwrap();
+    model().save(&b, &header(dir.path())).unwrap();
+    assert_eq!(std::fs::read(&a).unwrap(), std::fs::read(&b).unwrap());
+}
+
+#[test]
+fn byte_layout_matches_the_documentation() {
+    let dir = tempfile::tempdir().unwrap();
+    let (_, bytes) = good_file(dir.path());
+    let u32_at = |o: usize| u32::from_le_bytes(bytes[o..o + 4].try_into().unwrap());
+    let u64_at = |o: usize| u64::from_le_bytes(bytes[o..o + 8].try_into().unwrap()) as usize;
+    assert_eq!(&bytes[..8], b"SURFCAP\0");
+    assert_eq!(MAGIC, *b"SURFCAP\0");
+    assert_eq!(u32_at(8), 1, "container version");
+    let klen = u32_at(12) as usize;
+    assert_eq!(&bytes[16..16 + klen], b"test-model");
+    let mut o = 16 + klen;
+    assert_eq!(u32_at(o), 3, "kind version");
+    o += 4;
+    let hlen = u64_at(o);
+    o += 8;
+    let h: serde_json::Value = serde_json::from_slice(&bytes[o..o + hlen]).unwrap();
+    assert_eq!(h["producer"]["stage"], "test-stage");
+    assert_eq!(h["seed"], 7);
+    assert_eq!(h["params"]["m"], 20);
+    o += hlen;
+    let plen = u64_at(o);
+    o += 8;
+    let expect = bincode::serde::encode_to_vec(model(), bincode::config::standard()).unwrap();
+    assert_eq!(&bytes[o..o + plen], &expect[..]);
+    o += plen;
+    assert_eq!(bytes.len(), o + 32);
+    assert_eq!(&bytes[o..], Sha256::digest(&bytes[..o]).as_slice());
+}
+
+#[test]
+fn wrong_kind_is_named() {
+    let dir = tempfile::tempdir().unwrap();
+    let (path, _) = good_file(dir.path());
+    let msg = err_of(read_artifact::<Model>(&path, "pca-model", 3));
+    assert_eq!(
+        msg,
+        format!(
+            "{}: expected artifact kind 'pca-model', found 'test-model'",
+            path.display()
+        )
+    );
+}
+
+#[test]
+fn wrong_kind_version_is_named() {
+    let dir = tempfile::tempdir().unwrap();
+    let (path, _) = good_file(dir.path());
+    let msg = err_of(read_artifact::<Model>(&path, "test-model", 4));
+    assert!(msg.starts_with(&path.display().to_string()), "{msg}");
+    assert!(
+        msg.contains("version 3 is not supported") && msg.contains("reads version 4"),
+        "{msg}"
+    );
+}
+
+#[test]
+fn any_flipped_byte_after_the_lengths_is_a_checksum_mismatch() {
+    let dir = tempfile::tempdir().unwrap();
+    let (path, bytes) = good_file(dir.path());
+    let klen = u32::from_le_bytes(bytes[12..16].try_into().unwrap()) as usize;
+    let hstart = 16 + klen + 4 + 8;
+    let hlen = u64::from_le_bytes(bytes[hstart - 8..hstart].try_into().unwrap()) as usize;
+    let pstart = hstart + hlen + 8;
+    // Bytes in the kind, the header JSON, the payload and the checksum itself.
+    for at in [
+        16,
+        16 + klen,
+        hstart + 3,
+        hstart + hlen / 2,
+        pstart,
+        bytes.len() - 40,
+        bytes.len() - 1,
+    ] {
+        let mut bad = bytes.clone();
+        bad[at] ^= 0x10;
+        std::fs::write(&path, &bad).unwrap();
+        let msg = err_of(Model::load(&path));
+        assert_eq!(
+            msg,
+            format!("{}: checksum mismatch (file corrupt)", path.display()),
+            "byte {at}"
+        );
+        assert!(
+            read_header(&path).is_err(),
+            "read_header must verify the checksum too"
+        );
+    }
+}
+
+#[test]
+fn every_truncation_is_reported_as_truncated() {
+    let dir = tempfile::tempdir().unwrap();
+    let (path, bytes) = good_file(dir.path());
+    for cut in 0..bytes.len() {
+        std::fs::write(&path, &bytes[..cut]).unwrap();
+        let msg = err_of(Model::load(&path));
+        assert!(msg.contains("truncated"), "cut at {cut}: {msg}");
+        assert!(msg.starts_with(&path.display().to_string()), "{msg}");
+    }
+}
+
+#[test]
+fn wrong_magic_container_version_and_trailing_bytes() {
+    let dir = tempfile::tempdir().unwrap();
+    let (path, bytes) = good_file(dir.path());
+
+    std::fs::write(&path, b"ply\nformat binary_little_endian 1.0\n").unwrap();
+    assert!(err_of(Model::load(&path)).ends_with("not a surfcap artifact (wrong magic bytes)"));
+
+    let mut v2 = bytes.clone();
+    v2[8] = 2;
+    std::fs::write(&path, &v2).unwrap();
+    assert!(err_of(Model::load(&path)).contains("container version 2 is not supported"));
+
+    let mut long = bytes.clone();
+    long.extend_from_slice(b"xx");
+    std::fs::write(&path, &long).unwrap();
+    assert!(err_of(Model::load(&path)).contains("2 unexpected bytes after the checksum"));
+
+    let missing = dir.path().join("missing.art");
+    let msg = err_of(Model::load(&missing));
+    assert!(msg.starts_with(&missing.display().to_string()), "{msg}");
+}
+
+#[test]
+fn payload_of_another_type_is_rejected() {
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("x.art");
+    // Same kind and version but a payload that is not a `Model`.
+    write_artifact(&path, "test-model", 3, &Header::new("s", "0"), &(1u8, 2u8)).unwrap();
+    let msg = err_of(Model::load(&path));
+    assert!(
+        msg.contains("'test-model' payload does not decode"),
+        "{msg}"
+    );
+}
+
+/// A payload whose serialisation fails, to make a write fail midway.
+struct Unserialisable;
+impl Serialize for Unserialisable {
+    fn serialize<S: serde::Serializer>(&self, _: S) -> Result<S::Ok, S::Error> {
+        Err(serde::ser::Error::custom("cannot serialise"))
+    }
+}
+
+#[test]
+fn failed_writes_leave_no_partial_or_temporary_file() {
+    let dir = tempfile::tempdir().unwrap();
+    let (path, bytes) = good_file(dir.path());
+    let before: Vec<_> = std::fs::read_dir(dir.path())
+        .unwrap()
+        .map(|e| e.unwrap().file_name())
+        .collect();
+
+    // Encoding fails: the existing artifact stays intact.
+    let msg = err_of(write_artifact(
+        &path,
+        "test-model",
+        3,
+        &Header::default(),
+        &Unserialisable,
+    ));
+    assert!(msg.starts_with(&path.display().to_string()), "{msg}");
+    assert_eq!(std::fs::read(&path).unwrap(), bytes);
+
+    // The rename fails (the destination is a non-empty directory).
+    let blocker = dir.path().join("blocked.art");
+    std::fs::create_dir(&blocker).unwrap();
+    std::fs::write(blocker.join("keep"), b"").unwrap();
+    assert!(model().save(&blocker, &Header::default()).is_err());
+
+    let mut after: Vec<_> = std::fs::read_dir(dir.path())
+        .unwrap()
+        .map(|e| e.unwrap().file_name())
+        .collect();
+    after.retain(|n| n != "blocked.art");
+    let mut before = before;
+    before.sort();
+    after.sort();
+    assert_eq!(before, after, "temporary files left behind");
+}

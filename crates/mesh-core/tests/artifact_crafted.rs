@@ -1,0 +1,117 @@
+//! Crafted lengths must fail fast without allocating more than the file
+//! justifies. A counting allocator records the largest single allocation.
+
+use std::alloc::{GlobalAlloc, Layout, System};
+use std::sync::atomic::{AtomicUsize, Ordering};
+use std::sync::Mutex;
+
+use mesh_core::artifact::{read_artifact, read_header, Header};
+use sha2::{Digest, Sha256};
+
+struct Counting;
+static LARGEST: AtomicUsize = AtomicUsize::new(0);
+
+unsafe impl GlobalAlloc for Counting {
+    unsafe fn alloc(&self, layout: Layout) -> *mut u8 {
+        LARGEST.fetch_max(layout.size(), Ordering::Relaxed);
+        System.alloc(layout)
+    }
+    unsafe fn alloc_zeroed(&self, layout: Layout) -> *mut u8 {
+        LARGEST.fetch_max(layout.size(), Ordering::Relaxed);
+        System.alloc_zeroed(layout)
+    }
+    unsafe fn realloc(&self, ptr: *mut u8, layout: Layout, new_size: usize) -> *mut u8 {
+        LARGEST.fetch_max(new_size, Ordering::Relaxed);
+        System.realloc(ptr, layout, new_size)
+    }
+    unsafe fn dealloc(&self, ptr: *mut u8, layout: Layout) {
+        System.dealloc(ptr, layout)
+    }
+}
+
+#[global_allocator]
+static ALLOC: Counting = Counting;
+
+/// Tests in this file measure the process-wide largest allocation: run them one at a time.
+static SERIAL: Mutex<()> = Mutex::new(());
+
+/// Container bytes with the given raw header length field and payload, checksum valid.
+fn container(header_len_field: u64, header: &[u8], payload: &[u8]) -> Vec<u8> {
+    let mut b = Vec::new();
+    b.extend_from_slice(b"SURFCAP\0");
+    b.extend_from_slice(&1u32.to_le_bytes());
+    b.extend_from_slice(&4u32.to_le_bytes());
+    b.extend_from_slice(b"test");
+    b.extend_from_slice(&1u32.to_le_bytes());
+    b.extend_from_slice(&header_len_field.to_le_bytes());
+    b.extend_from_slice(header);
+    b.extend_from_slice(&(payload.len() as u64).to_le_bytes());
+    b.extend_from_slice(payload);
+    let d = Sha256::digest(&b);
+    b.extend_from_slice(&d);
+    b
+}
+
+fn largest_allocation_during<T>(f: impl FnOnce() -> T) -> (T, usize) {
+    LARGEST.store(0, Ordering::Relaxed);
+    let r = f();
+    (r, LARGEST.load(Ordering::Relaxed))
+}
+
+#[test]
+fn header_length_of_2_pow_60_fails_fast_without_allocating() {
+    let _g = SERIAL.lock().unwrap();
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("crafted.art");
+    let bytes = container(1 << 60, b"{}", b"");
+    std::fs::write(&path, &bytes).unwrap();
+    let t = std::time::Instant::now();
+    let (r, largest) = largest_allocation_during(|| read_header(&path));
+    let msg = r.unwrap_err().to_string();
+    assert!(
+        msg.contains("truncated") && msg.contains(&(1u64 << 60).to_string()),
+        "{msg}"
+    );
+    assert!(
+        largest < 64 * 1024,
+        "allocated {largest} bytes for a {}-byte file",
+        bytes.len()
+    );
+    assert!(t.elapsed().as_secs() < 5);
+}
+
+#[test]
+fn crafted_string_length_inside_a_valid_payload_is_bounded() {
+    let _g = SERIAL.lock().unwrap();
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("crafted.art");
+    // bincode varint: 253 marks a u64 length; claim a 2^40-byte string.
+    let mut payload = vec![253u8];
+    payload.extend_from_slice(&(1u64 << 40).to_le_bytes());
+    payload.extend_from_slice(b"abc");
+    let header = serde_json::to_vec(&Header::default()).unwrap();
+    std::fs::write(&path, container(header.len() as u64, &header, &payload)).unwrap();
+    let (r, largest) = largest_allocation_during(|| read_artifact::<String>(&path, "test", 1));
+    let msg = r.unwrap_err().to_string();
+    assert!(msg.contains("payload does not decode"), "{msg}");
+    assert!(largest < 64 * 1024, "allocated {largest} bytes");
+}
+
+#[test]
+fn crafted_sequence_length_inside_a_valid_payload_is_bounded() {
+    let _g = SERIAL.lock().unwrap();
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("crafted.art");
+    let mut payload = vec![253u8];
+    payload.extend_from_slice(&(1u64 << 60).to_le_bytes());
+    payload.extend_from_slice(&1.5f64.to_le_bytes());
+    let header = serde_json::to_vec(&Header::default()).unwrap();
+    std::fs::write(&path, container(header.len() as u64, &header, &payload)).unwrap();
+    let (r, largest) = largest_allocation_during(|| read_artifact::<Vec<f64>>(&path, "test", 1));
+    assert!(r
+        .unwrap_err()
+        .to_string()
+        .contains("payload does not decode"));
+    // serde's sequence visitor caps its up-front reservation at 1 MiB.
+    assert!(largest <= 1 << 20, "allocated {largest} bytes");
+}

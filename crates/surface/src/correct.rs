@@ -1,0 +1,138 @@
+//! Body part correction (transfer paper §6.1, figure 4).
+//!
+//! For a predicted part mesh `P` (same topology as the training part meshes):
+//! 1. the `M` nearest training meshes `N_k` by vertex distance
+//!    `d_k = sqrt(mean_v |P_v - N_k,v|²)` (no alignment: parts are already rigidly aligned);
+//! 2. weights decreasing with distance: `w_k = (1/d_k) / Σ_j (1/d_j)`; an exact match
+//!    (`d_k ≤ 1e-12 · size of P`) gets weight 1 and the others 0;
+//! 3. per face, the deformation gradient `D_f` from `N_k`'s triangle to `P`'s (Sumner frame)
+//!    and its polar decomposition `D_f = R_f S_f` ([`crate::polar::triangle_rotation`], closed
+//!    form, equal to the SVD route); the non-isometric `S_f` is dropped;
+//! 4. `N_k` deformed by the rotations only: target gradients `J_f = R_f ∇N_k` (gradients on
+//!    `N_k`'s own geometry), Poisson solve with `N_k`'s cotangent Laplacian and one Dirichlet
+//!    vertex (vertex 0), then translated so its centroid is `P`'s centroid;
+//! 5. result `Σ_k w_k X_k`.
+//!
+//! Each training mesh's operator and factorisation are built on first use and cached, so a
+//! sequence of predictions only pays for the polar decompositions and the solves.
+
+use crate::deformation_gradient::GradientOperator;
+use crate::poisson::PoissonSolver;
+use crate::polar::triangle_rotation;
+use crate::{centroid, check_faces, check_vertices, Error, Result};
+use nalgebra::{Matrix3, Vector3};
+use rayon::prelude::*;
+use std::sync::OnceLock;
+
+/// Default number of nearest training meshes (the paper's M = 3).
+pub const DEFAULT_NEIGHBOURS: usize = 3;
+
+struct Prepared {
+    op: GradientOperator,
+    solver: PoissonSolver,
+    /// ∇N_k on its own geometry (tangent projectors).
+    own_gradient: Vec<Matrix3<f64>>,
+}
+
+/// The training part meshes of one body part, ready to correct predictions of that part.
+pub struct Corrector {
+    faces: Vec<[u32; 3]>,
+    training: Vec<Vec<Vector3<f64>>>,
+    prepared: Vec<OnceLock<std::result::Result<Prepared, String>>>,
+}
+
+/// Weights `w_k ∝ 1/d_k`, normalised; an exact match (`d ≤ tol`) takes all the weight.
+pub fn distance_weights(distances: &[f64], tol: f64) -> Vec<f64> {
+    if let Some(k) = distances.iter().position(|&d| d <= tol) {
+        return (0..distances.len()).map(|j| if j == k { 1.0 } else { 0.0 }).collect();
+    }
+    let inv: Vec<f64> = distances.iter().map(|d| 1.0 / d).collect();
+    let s: f64 = inv.iter().sum();
+    inv.iter().map(|w| w / s).collect()
+}
+
+/// Root-mean-square vertex distance.
+pub fn vertex_distance(a: &[Vector3<f64>], b: &[Vector3<f64>]) -> f64 {
+    (a.iter().zip(b).map(|(p, q)| (p - q).norm_squared()).sum::<f64>() / a.len().max(1) as f64).sqrt()
+}
+
+impl Corrector {
+    /// Checks the training meshes against `faces` (equal vertex counts, finite, valid indices).
+    pub fn new(faces: Vec<[u32; 3]>, training: Vec<Vec<Vector3<f64>>>) -> Result<Self> {
+        let n = training.first().ok_or_else(|| Error::invalid("correct: no training meshes"))?.len();
+        check_faces(n, &faces, "correct: part faces")?;
+        for (k, t) in training.iter().enumerate() {
+            check_vertices(t, n, &format!("correct: training mesh {k}"))?;
+        }
+        let prepared = (0..training.len()).map(|_| OnceLock::new()).collect();
+        Ok(Corrector { faces, training, prepared })
+    }
+
+    pub fn n_vertices(&self) -> usize {
+        self.training[0].len()
+    }
+    pub fn faces(&self) -> &[[u32; 3]] {
+        &self.faces
+    }
+
+    /// The `m` nearest training meshes to `prediction`: (index, distance), nearest first.
+    pub fn nearest(&self, prediction: &[Vector3<f64>], m: usize) -> Vec<(usize, f64)> {
+        let mut d: Vec<(usize, f64)> =
+            self.training.iter().enumerate().map(|(k, t)| (k, vertex_distance(prediction, t))).collect();
+        d.sort_by(|a, b| a.1.total_cmp(&b.1).then(a.0.cmp(&b.0)));
+        d.truncate(m.max(1));
+        d
+    }
+
+    fn prepared(&self, k: usize) -> Result<&Prepared> {
+        self.prepared[k]
+            .get_or_init(|| {
+                let n = &self.training[k];
+                let op = GradientOperator::new(n, &self.faces);
+                let solver = PoissonSolver::new(&op.stiffness(), &[0]).map_err(|e| e.to_string())?;
+                let own_gradient = op.gradient(n);
+                Ok(Prepared { op, solver, own_gradient })
+            })
+            .as_ref()
+            .map_err(|e| Error::invalid(format!("correct: training mesh {k}: {e}")))
+    }
+
+    /// Training mesh `k` deformed by the per-face rotations of its polar decompositions towards
+    /// `prediction` (steps 3-4), centred on the prediction's centroid.
+    pub fn rotate_towards(&self, k: usize, prediction: &[Vector3<f64>]) -> Result<Vec<Vector3<f64>>> {
+        let p = self.prepared(k)?;
+        let nk = &self.training[k];
+        let field: Vec<Matrix3<f64>> = self
+            .faces
+            .par_iter()
+            .zip(p.own_gradient.par_iter())
+            .map(|(f, g)| {
+                let rest = f.map(|i| nk[i as usize]);
+                let def = f.map(|i| prediction[i as usize]);
+                let r = triangle_rotation(&rest, &def).unwrap_or_else(Matrix3::identity);
+                r * g
+            })
+            .collect();
+        let mut x = p.solver.solve(&p.op.divergence(&field), &[nk[0]])?;
+        let shift = centroid(prediction) - centroid(&x);
+        x.iter_mut().for_each(|v| *v += shift);
+        Ok(x)
+    }
+
+    /// Corrects one predicted part mesh with the `m` nearest training meshes.
+    pub fn correct(&self, prediction: &[Vector3<f64>], m: usize) -> Result<Vec<Vector3<f64>>> {
+        check_vertices(prediction, self.n_vertices(), "correct: prediction")?;
+        let near = self.nearest(prediction, m);
+        let size = prediction.iter().map(|v| v.norm()).fold(0.0, f64::max).max(f64::MIN_POSITIVE);
+        let w = distance_weights(&near.iter().map(|x| x.1).collect::<Vec<_>>(), 1e-12 * size);
+        let mut out = vec![Vector3::zeros(); prediction.len()];
+        for ((k, _), wk) in near.iter().zip(w) {
+            if wk == 0.0 {
+                continue;
+            }
+            let x = self.rotate_towards(*k, prediction)?;
+            out.iter_mut().zip(x).for_each(|(o, v)| *o += wk * v);
+        }
+        Ok(out)
+    }
+}

@@ -1,0 +1,261 @@
+//! Poisson reconstruction `L x = div J` with Dirichlet vertices (issue 5, "Poisson core";
+//! transfer paper §6.1 uses it to rebuild the corrected part, §6.2 to merge parts).
+//!
+//! Minimising `Σ_f A_f |∇x - J_f|²` over the free vertices, with the fixed ones held at given
+//! positions, gives `L_FF x_F = (Gᵀ A J)_F - L_FC x_C` (`L = Gᵀ A G`, cotangent Laplacian).
+//! To keep one sparsity pattern whatever the fixed set is, the solver keeps all `|V|` unknowns:
+//! rows and columns of fixed vertices are zeroed except the diagonal, and their right-hand
+//! side is `L_ii x_i`. The pattern then only depends on the mesh topology, so the symbolic
+//! Cholesky factorisation (faer `SymbolicLlt`) is computed once per topology and reused when
+//! the values change (new geometry, new fixed set); the numeric factorisation is reused for
+//! every right-hand side (3 coordinates at once, and across frames).
+
+use crate::deformation_gradient::GradientOperator;
+use crate::{Error, Result};
+use faer::linalg::solvers::Solve;
+use faer::sparse::linalg::solvers::{Llt, SymbolicLlt};
+use faer::sparse::SparseColMat;
+use faer::{Mat, Side};
+use nalgebra::{Matrix3, Vector3};
+
+/// A factorised Poisson system with Dirichlet vertices, reusable across right-hand sides.
+pub struct PoissonSolver {
+    n: usize,
+    col_ptr: Vec<usize>,
+    row_idx: Vec<usize>,
+    symbolic: SymbolicLlt<usize>,
+    llt: Llt<usize, f64>,
+    fixed: Vec<usize>,
+    /// (free row, fixed slot, L value): the `L_FC x_C` coupling moved to the right-hand side.
+    coupling: Vec<(usize, usize, f64)>,
+    fixed_diag: Vec<f64>,
+    jitter: f64,
+}
+
+impl PoissonSolver {
+    /// Factorises `laplacian` (PSD cotangent form, all diagonal entries in the pattern) with
+    /// the vertices `fixed` held. Sets faer to sequential mode (faster on 2 cores, STACK.md).
+    pub fn new(laplacian: &SparseColMat<usize, f64>, fixed: &[usize]) -> Result<Self> {
+        faer::set_global_parallelism(faer::Par::Seq);
+        let n = laplacian.nrows();
+        if laplacian.ncols() != n {
+            return Err(Error::invalid("poisson: system matrix is not square"));
+        }
+        let symbolic = SymbolicLlt::try_new(laplacian.symbolic(), Side::Lower)
+            .map_err(|e| Error::invalid(format!("poisson: symbolic factorisation failed: {e:?}")))?;
+        let (llt, parts) = factor(&symbolic, laplacian, fixed)?;
+        Ok(PoissonSolver {
+            n,
+            col_ptr: laplacian.symbolic().col_ptr().to_vec(),
+            row_idx: laplacian.symbolic().row_idx().to_vec(),
+            symbolic,
+            llt,
+            fixed: fixed.to_vec(),
+            coupling: parts.coupling,
+            fixed_diag: parts.fixed_diag,
+            jitter: parts.jitter,
+        })
+    }
+
+    /// Refactorises for new values and/or a new fixed set. The symbolic factorisation is
+    /// reused when the sparsity pattern is unchanged (same topology), recomputed otherwise.
+    pub fn refactor(&mut self, laplacian: &SparseColMat<usize, f64>, fixed: &[usize]) -> Result<()> {
+        let same = laplacian.nrows() == self.n
+            && laplacian.ncols() == self.n
+            && laplacian.symbolic().col_ptr() == self.col_ptr.as_slice()
+            && laplacian.symbolic().row_idx() == self.row_idx.as_slice();
+        if !same {
+            *self = PoissonSolver::new(laplacian, fixed)?;
+            return Ok(());
+        }
+        let (llt, parts) = factor(&self.symbolic, laplacian, fixed)?;
+        self.llt = llt;
+        self.fixed = fixed.to_vec();
+        self.coupling = parts.coupling;
+        self.fixed_diag = parts.fixed_diag;
+        self.jitter = parts.jitter;
+        Ok(())
+    }
+
+    /// Number of unknowns (vertices).
+    pub fn n(&self) -> usize {
+        self.n
+    }
+    /// The Dirichlet vertices.
+    pub fn fixed(&self) -> &[usize] {
+        &self.fixed
+    }
+    /// Diagonal jitter that had to be added to factorise (0 when none was needed).
+    pub fn jitter(&self) -> f64 {
+        self.jitter
+    }
+
+    /// Solves `L x = rhs` on the free vertices with `x[fixed[k]] = values[k]`, for the three
+    /// coordinates at once.
+    pub fn solve(&self, rhs: &[Vector3<f64>], values: &[Vector3<f64>]) -> Result<Vec<Vector3<f64>>> {
+        if rhs.len() != self.n || values.len() != self.fixed.len() {
+            return Err(Error::invalid(format!(
+                "poisson: right-hand side has {} rows and {} fixed values, expected {} and {}",
+                rhs.len(),
+                values.len(),
+                self.n,
+                self.fixed.len()
+            )));
+        }
+        let mut b = Mat::<f64>::zeros(self.n, 3);
+        for (i, r) in rhs.iter().enumerate() {
+            for d in 0..3 {
+                b[(i, d)] = r[d];
+            }
+        }
+        for &(row, k, l) in &self.coupling {
+            for d in 0..3 {
+                b[(row, d)] -= l * values[k][d];
+            }
+        }
+        for (k, &v) in self.fixed.iter().enumerate() {
+            for d in 0..3 {
+                b[(v, d)] = self.fixed_diag[k] * values[k][d];
+            }
+        }
+        self.llt.solve_in_place(b.as_mut());
+        let x: Vec<Vector3<f64>> = (0..self.n).map(|i| Vector3::new(b[(i, 0)], b[(i, 1)], b[(i, 2)])).collect();
+        if x.iter().any(|p| !p.iter().all(|c| c.is_finite())) {
+            return Err(Error::invalid("poisson: solution is not finite"));
+        }
+        Ok(x)
+    }
+}
+
+struct Parts {
+    coupling: Vec<(usize, usize, f64)>,
+    fixed_diag: Vec<f64>,
+    jitter: f64,
+}
+
+/// Builds the Dirichlet-modified matrix and factorises it, retrying with a growing diagonal
+/// jitter (logged on stderr) if it is not numerically positive definite.
+fn factor(
+    symbolic: &SymbolicLlt<usize>,
+    l: &SparseColMat<usize, f64>,
+    fixed: &[usize],
+) -> Result<(Llt<usize, f64>, Parts)> {
+    let n = l.nrows();
+    let mut slot = vec![usize::MAX; n];
+    for (k, &v) in fixed.iter().enumerate() {
+        if v >= n {
+            return Err(Error::invalid(format!("poisson: fixed vertex {v} out of range ({n} vertices)")));
+        }
+        if slot[v] != usize::MAX {
+            return Err(Error::invalid(format!("poisson: vertex {v} fixed twice")));
+        }
+        slot[v] = k;
+    }
+    let mut a = l.clone();
+    let cp = l.symbolic().col_ptr().to_vec();
+    let ri = l.symbolic().row_idx().to_vec();
+    let vals = a.val_mut();
+    let mut diag_pos = vec![usize::MAX; n];
+    let mut coupling = Vec::new();
+    let mut fixed_diag = vec![1.0; fixed.len()];
+    let mut max_diag = 0.0f64;
+    for j in 0..n {
+        for p in cp[j]..cp[j + 1] {
+            let i = ri[p];
+            if i == j {
+                diag_pos[j] = p;
+                max_diag = max_diag.max(vals[p].abs());
+            }
+            if slot[i] == usize::MAX && slot[j] == usize::MAX {
+                continue;
+            }
+            if i == j {
+                let d = if vals[p] > 0.0 { vals[p] } else { 1.0 };
+                fixed_diag[slot[j]] = d;
+                vals[p] = d;
+            } else {
+                if slot[i] == usize::MAX {
+                    coupling.push((i, slot[j], vals[p]));
+                }
+                vals[p] = 0.0;
+            }
+        }
+    }
+    check_anchored(n, &cp, &ri, &slot)?;
+    if let Some(j) = diag_pos.iter().position(|&p| p == usize::MAX) {
+        return Err(Error::invalid(format!("poisson: diagonal entry {j} missing from the sparsity pattern")));
+    }
+    let mut jitter = 0.0;
+    for attempt in 0..6 {
+        match Llt::try_new_with_symbolic(symbolic.clone(), a.as_ref(), Side::Lower) {
+            Ok(llt) => {
+                if attempt > 0 {
+                    eprintln!(
+                        "surface: poisson: system not positive definite, factorised with diagonal jitter {jitter:.3e}"
+                    );
+                }
+                return Ok((llt, Parts { coupling, fixed_diag, jitter }));
+            }
+            Err(_) => {
+                let add = max_diag.max(1.0) * 1e-12 * 100f64.powi(attempt);
+                let vals = a.val_mut();
+                for j in 0..n {
+                    if slot[j] == usize::MAX {
+                        vals[diag_pos[j]] += add - jitter;
+                    }
+                }
+                jitter = add;
+            }
+        }
+    }
+    Err(Error::invalid(format!(
+        "poisson: system is singular even with diagonal jitter {jitter:.1e} (a part without a fixed vertex?)"
+    )))
+}
+
+/// Every connected component of the matrix graph needs a fixed vertex: the Laplacian is
+/// singular (constants) on a component without one.
+fn check_anchored(n: usize, cp: &[usize], ri: &[usize], slot: &[usize]) -> Result<()> {
+    let mut parent: Vec<usize> = (0..n).collect();
+    fn find(p: &mut [usize], mut x: usize) -> usize {
+        while p[x] != x {
+            p[x] = p[p[x]];
+            x = p[x];
+        }
+        x
+    }
+    for j in 0..n {
+        for &i in &ri[cp[j]..cp[j + 1]] {
+            let (a, b) = (find(&mut parent, i), find(&mut parent, j));
+            if a != b {
+                parent[a] = b;
+            }
+        }
+    }
+    let mut anchored = vec![false; n];
+    for v in 0..n {
+        if slot[v] != usize::MAX {
+            let r = find(&mut parent, v);
+            anchored[r] = true;
+        }
+    }
+    for v in 0..n {
+        if !anchored[find(&mut parent, v)] {
+            return Err(Error::invalid(format!(
+                "poisson: no fixed vertex in the connected part containing vertex {v} (the system would be singular)"
+            )));
+        }
+    }
+    Ok(())
+}
+
+/// One-shot reconstruction: solves `Gᵀ A G x = Gᵀ A J` with `x[fixed[k]] = values[k]`.
+pub fn reconstruct(
+    op: &GradientOperator,
+    field: &[Matrix3<f64>],
+    fixed: &[usize],
+    values: &[Vector3<f64>],
+) -> Result<Vec<Vector3<f64>>> {
+    let solver = PoissonSolver::new(&op.stiffness(), fixed)?;
+    solver.solve(&op.divergence(field), values)
+}

@@ -1,0 +1,195 @@
+//! correct (§6.1), optimal boundary and stitch (§6.2), blend: known answers on synthetic meshes.
+mod common;
+use common::*;
+use nalgebra::Vector3;
+use surface::blend::{linear_blend, Blender};
+use surface::correct::{distance_weights, Corrector};
+use surface::optimal_boundary::optimal_loop;
+use surface::stitch::{Part, PartLayout, Stitcher};
+
+/// A flat sheet of width 2 and height 1 rolled with curvature `kappa` (an isometric family).
+fn rolled_sheet(kappa: f64) -> (Vec<Vector3<f64>>, Vec<[u32; 3]>) {
+    let (g, f, _) = grid(16, 8, 0.0);
+    let v = g
+        .iter()
+        .map(|p| {
+            let u = 2.0 * p.x - 1.0;
+            if kappa.abs() < 1e-12 {
+                Vector3::new(u, p.y, 0.0)
+            } else {
+                Vector3::new((kappa * u).sin() / kappa, p.y, (1.0 - (kappa * u).cos()) / kappa)
+            }
+        })
+        .collect();
+    (v, f)
+}
+
+fn mean_edge_ratio(x: &[Vector3<f64>], reference: &[Vector3<f64>], f: &[[u32; 3]]) -> (f64, f64) {
+    let (a, b) = (edge_lengths(x, f), edge_lengths(reference, f));
+    let r: Vec<f64> = a.iter().zip(&b).map(|(p, q)| p / q).collect();
+    let mean = r.iter().sum::<f64>() / r.len() as f64;
+    let worst = r.iter().map(|x| (x - 1.0).abs()).fold(0.0, f64::max);
+    (mean, worst)
+}
+
+#[test]
+fn weights_decrease_with_distance_and_exact_match_wins() {
+    let w = distance_weights(&[1.0, 2.0, 4.0], 1e-12);
+    assert!((w.iter().sum::<f64>() - 1.0).abs() < 1e-15 && w[0] > w[1] && w[1] > w[2]);
+    assert!((w[0] / w[1] - 2.0).abs() < 1e-12);
+    assert_eq!(distance_weights(&[0.0, 2.0], 1e-12), vec![1.0, 0.0]);
+}
+
+#[test]
+fn correct_restores_size_of_shrunk_rotated_prediction() {
+    let kappas = [0.0, 0.4, 0.8, 1.2, 1.6, 2.0];
+    let f = rolled_sheet(0.0).1;
+    let training: Vec<_> = kappas.iter().map(|&k| rolled_sheet(k).0).collect();
+    let corrector = Corrector::new(f.clone(), training.clone()).unwrap();
+    let truth = &training[3];
+    let r = rot([0.2, 1.0, 0.3], 0.5);
+    let c = surface::centroid(truth);
+    let prediction: Vec<_> = truth.iter().map(|p| r * ((p - c) * 0.9) + c + Vector3::new(0.1, 0.0, 0.0)).collect();
+    let (m0, _) = mean_edge_ratio(&prediction, truth, &f);
+    assert!((m0 - 0.9).abs() < 1e-9);
+    for m in [1, 3] {
+        let out = corrector.correct(&prediction, m).unwrap();
+        let (mean, worst) = mean_edge_ratio(&out, truth, &f);
+        assert!((mean - 1.0).abs() < 0.01, "M={m}: mean edge ratio {mean}");
+        assert!(worst < 0.03, "M={m}: worst edge ratio error {worst}");
+        // The shape follows the prediction: rigidly aligned to the truth rotated by r.
+        let want: Vec<_> = truth.iter().map(|p| r * (p - c) + surface::centroid(&prediction)).collect();
+        assert!(max_dist(&out, &want) < 0.05, "M={m}: {}", max_dist(&out, &want));
+        assert!((surface::centroid(&out) - surface::centroid(&prediction)).norm() < 1e-12);
+    }
+    // An exact training mesh is returned unchanged.
+    let same = corrector.correct(&training[2], 3).unwrap();
+    assert!(max_dist(&same, &training[2]) < 1e-10);
+}
+
+#[test]
+fn correct_rejects_bad_input() {
+    let (v, f) = rolled_sheet(0.5);
+    assert!(Corrector::new(f.clone(), vec![]).is_err());
+    assert!(Corrector::new(vec![[0, 1, 9999]], vec![v.clone()]).is_err());
+    let c = Corrector::new(f, vec![v.clone()]).unwrap();
+    assert!(c.correct(&v[1..], 1).is_err());
+    let mut nan = v.clone();
+    nan[3].x = f64::NAN;
+    assert!(c.correct(&nan, 1).unwrap_err().to_string().contains("vertex 3"));
+}
+
+/// Tube band of `rings` rings; vertices of `ring` have zero discrepancy, all others positive.
+#[test]
+fn optimal_loop_finds_the_zero_discrepancy_ring() {
+    let (around, rings) = (16, 9);
+    let (mut v, f) = tube(around, rings, 1.0, 0.2, false);
+    v.iter_mut().enumerate().for_each(|(i, p)| p.z += 0.05 * hash01(i as u64));
+    for target in [0, 3, 5, 8] {
+        let cost: Vec<f64> = (0..v.len())
+            .map(|i| if i / around == target { 0.0 } else { 0.2 + hash01(i as u64 + 77) })
+            .collect();
+        let l = optimal_loop(&v, &f, &cost).unwrap();
+        let mut got = l.vertices.clone();
+        got.sort_unstable();
+        let want: Vec<usize> = (target * around..(target + 1) * around).collect();
+        assert_eq!(got, want, "ring {target}");
+    }
+    // A tilted loop (rising by diagonals, falling by vertical steps) with zero cost.
+    let mut cheap = Vec::new();
+    let mut k = 3;
+    for j in 0..around {
+        cheap.push(k * around + j);
+        if (1..4).contains(&j) {
+            k += 1;
+        } else if (9..12).contains(&j) {
+            k -= 1;
+            cheap.push(k * around + j);
+        }
+    }
+    let cost: Vec<f64> = (0..v.len()).map(|i| if cheap.contains(&i) { 0.0 } else { 1.0 }).collect();
+    let l = optimal_loop(&v, &f, &cost).unwrap();
+    let mut got = l.vertices.clone();
+    got.sort_unstable();
+    cheap.sort_unstable();
+    assert_eq!(got, cheap);
+    // Not a cylinder: a disc.
+    let (g, gf, _) = grid(4, 4, 0.0);
+    assert!(optimal_loop(&g, &gf, &vec![1.0; g.len()]).is_err());
+}
+
+fn halves(around: usize, rings: usize, lo: usize, hi: usize) -> (Vec<Vector3<f64>>, Vec<[u32; 3]>, Vec<Part>) {
+    let (v, f) = tube(around, rings, 1.0, 0.2, true);
+    let (bot, top) = ((rings * around) as u32, (rings * around + 1) as u32);
+    let ring = |a: usize, b: usize| (a * around..(b + 1) * around).map(|i| i as u32);
+    let root: Vec<u32> = ring(0, hi).chain([bot]).collect();
+    let child: Vec<u32> = ring(lo, rings - 1).chain([top]).collect();
+    (v, f, vec![Part { vertices: root, parent: None }, Part { vertices: child, parent: Some(0) }])
+}
+
+#[test]
+fn stitch_puts_rigidly_moved_half_back() {
+    let (mut v, f, parts) = halves(20, 30, 10, 16);
+    v = bend(&v, 2.0, 1.0, 1.0);
+    let layout = PartLayout::new(v.len(), f.clone(), parts.clone()).unwrap();
+    let mut stitcher = Stitcher::new(layout);
+    let r = rot([1.0, 0.3, -0.2], 0.8);
+    let t = Vector3::new(5.0, -2.0, 1.0);
+    let pos: Vec<Vec<Vector3<f64>>> = vec![
+        parts[0].vertices.iter().map(|&i| v[i as usize]).collect(),
+        parts[1].vertices.iter().map(|&i| r * v[i as usize] + t).collect(),
+    ];
+    let out = stitcher.stitch(&pos).unwrap();
+    assert!(max_dist(&out.vertices, &v) < 1e-9, "{}", max_dist(&out.vertices, &v));
+    let lp = out.loops[1].as_ref().unwrap();
+    assert!(lp.vertices.iter().all(|&i| (10 * 20..17 * 20).contains(&i)));
+    // Second frame reuses the factorisation; a deformed child still gives a closed mesh
+    // that follows the root on its side and the child on the other.
+    let noisy: Vec<Vector3<f64>> =
+        pos[1].iter().enumerate().map(|(i, p)| p + 0.01 * Vector3::new(hash01(i as u64), 0.0, 0.0)).collect();
+    let out2 = stitcher.stitch(&[pos[0].clone(), noisy]).unwrap();
+    assert!(out2.vertices.iter().all(|p| p.iter().all(|c| c.is_finite())));
+    assert!((out2.vertices[0] - v[0]).norm() < 0.02 && max_dist(&out2.vertices, &v) < 0.05);
+}
+
+#[test]
+fn stitch_rejects_bad_layouts() {
+    let (v, f, mut parts) = halves(12, 10, 4, 6);
+    parts[1].parent = None;
+    assert!(PartLayout::new(v.len(), f.clone(), parts.clone()).is_err());
+    let (v, f, mut parts) = halves(12, 10, 7, 6);
+    assert!(PartLayout::new(v.len(), f.clone(), parts.clone()).is_err(), "no overlap");
+    parts[0].vertices.push(99999);
+    assert!(PartLayout::new(v.len(), f, parts).is_err());
+}
+
+#[test]
+fn blend_keeps_edges_and_volume_where_linear_blend_collapses() {
+    let (rest, f) = tube(24, 41, 0.5, 0.1, true);
+    let bent = bend(&rest, 1.0, 0.8, 0.75 * std::f64::consts::PI); // 135 degrees
+    let blender = Blender::new(rest.clone(), f.clone()).unwrap();
+    for (w, want) in [(0.0, &rest), (1.0, &bent)] {
+        let x = blender.blend(&rest, &bent, w).unwrap();
+        assert!(max_dist(&x, want) < 1e-9, "w={w}: {}", max_dist(&x, want));
+    }
+    let half = blender.blend(&rest, &bent, 0.5).unwrap();
+    let lin = linear_blend(&rest, &bent, 0.5);
+    let (v0, v1) = (volume(&rest, &f), volume(&bent, &f));
+    let vref = 0.5 * (v0 + v1);
+    let (vh, vl) = (volume(&half, &f), volume(&lin, &f));
+    let (eh, _) = mean_edge_ratio(&half, &rest, &f);
+    let (el, _) = mean_edge_ratio(&lin, &rest, &f);
+    let (e1, _) = mean_edge_ratio(&bent, &rest, &f);
+    eprintln!("volume rest {v0:.4} bent {v1:.4} blend {vh:.4} linear {vl:.4}; edge ratio bent {e1:.4} blend {eh:.4} linear {el:.4}");
+    assert!((vh / vref - 1.0).abs() < 0.03, "blend volume {vh} vs {vref}");
+    assert!((eh - 1.0).abs() < 0.03, "blend edges {eh}");
+    assert!((vl / vref - 1.0).abs() > 0.05 || (el - 1.0).abs() > 0.05, "linear {vl} {el}");
+    // The far end turned by about half the angle: tip axis direction at 67.5 degrees.
+    let top = rest.len() - 1;
+    let ring = |x: &[Vector3<f64>], k: usize| surface::centroid(&x[k * 24..(k + 1) * 24]);
+    let dir = (half[top] - ring(&half, 32)).normalize();
+    let angle = dir.z.acos().to_degrees();
+    assert!((angle - 67.5).abs() < 3.0, "tip angle {angle}");
+    let seq = blender.blend_sequences(&[rest.clone(), bent.clone()], &[bent.clone(), rest.clone()], 1.0).unwrap();
+    assert!(max_dist(&seq[0], &bent) < 1e-9 && max_dist(&seq[1], &rest) < 1e-9);
+}

@@ -1,0 +1,334 @@
+//! Builds a whole capture set (format in docs/FORMATS.md) from a [`Config`]: both subjects'
+//! training and test motions, the target's truth of the source's test motions, subject and
+//! set descriptions with the ground truth (correspondences, key-poses, contacts, curves).
+//!
+//! Written into a temporary sibling folder, then renamed over the output: the set is either
+//! complete or absent. Every frame is independent (own noise stream), so the files are
+//! byte-identical for a seed whatever the number of threads.
+
+use std::collections::BTreeMap;
+use std::path::{Path, PathBuf};
+
+use nalgebra::Vector3;
+use rayon::prelude::*;
+use serde_json::{json, Value};
+
+use crate::assets::{self, paths};
+use crate::mocap::{self, Clip};
+use crate::noise::{self, Jitter, NoiseLevel};
+use crate::parts;
+use crate::preset::{Config, MotionDef, MotionSource};
+use crate::retarget::{Retarget, SourceKind};
+use crate::subject::{BodyAssets, Subject};
+use crate::truth;
+use mesh_core::capture_set::{SetSpec, SubjectSpec, TrainPair};
+use mesh_core::{Error, Result, TriMesh};
+
+/// A loaded motion clip and its source kind.
+pub struct Motion {
+    pub def: MotionDef,
+    pub clip: Clip,
+    pub kind: SourceKind,
+}
+
+/// Loads a motion's clip (looped / windowed, cut to `max_duration`).
+pub fn load_motion(dir: &Path, def: &MotionDef, max_duration: f64) -> Result<Motion> {
+    let (clip, kind) = match &def.source {
+        MotionSource::DeepMimic { file, cycles } => {
+            let leg = mocap::deepmimic_leg_length(&dir.join(paths::HUMANOID_URDF))?;
+            let c = mocap::parse_deepmimic(&dir.join(paths::MOTIONS).join(file), &def.name, leg)?;
+            (c.looped(*cycles), SourceKind::DeepMimic)
+        }
+        MotionSource::Cmu { t0, t1 } => (
+            mocap::parse_bvh(&dir.join(paths::CMU_BVH), &def.name)?.window(*t0, *t1),
+            SourceKind::Cmu,
+        ),
+    };
+    let clip = clip.window(0.0, max_duration);
+    Ok(Motion {
+        def: def.clone(),
+        clip,
+        kind,
+    })
+}
+
+/// One generated sequence: per frame its mocap time and feet contacts.
+pub struct Sequence {
+    pub times: Vec<f64>,
+    pub contacts: Vec<[bool; 2]>,
+}
+
+/// Poses `s` at mocap `times` of `m`, writes frames to `dir` (with noise if given).
+pub fn write_sequence(
+    s: &Subject,
+    m: &Motion,
+    times: &[f64],
+    dir: &Path,
+    noise: Option<(&NoiseLevel, u64)>,
+    tick: &(dyn Fn() + Sync),
+) -> Result<Sequence> {
+    std::fs::create_dir_all(dir).map_err(|e| Error::io(dir, e))?;
+    let rt = Retarget::new(&s.skeleton, &m.clip, m.kind)?;
+    let ground = s.ground_offset(&m.clip, &rt);
+    let jitter = noise.map(|(lvl, id)| Jitter::new(id, lvl.jitter));
+    let feet: Vec<(Vector3<f64>, Vector3<f64>)> = times
+        .par_iter()
+        .enumerate()
+        .map(|(k, &t)| {
+            let pose = s.pose_at(&m.clip, &rt, t, ground);
+            let mut v = s.skin(&pose);
+            let foot = |idx: &[usize]| {
+                let mut c =
+                    idx.iter().map(|&i| v[i]).sum::<Vector3<f64>>() / idx.len().max(1) as f64;
+                c.y = idx.iter().map(|&i| v[i].y).fold(f64::INFINITY, f64::min);
+                c
+            };
+            let f = (foot(&s.sole_left), foot(&s.sole_right));
+            if let (Some((lvl, id)), Some(j)) = (noise, &jitter) {
+                noise::add_noise(&mut v, lvl, j, id, k, k as f64 / s.def.fps);
+            }
+            let path = dir.join(format!("{k:06}.ply"));
+            mesh_core::io::write_ply(&path, &TriMesh::new(v, s.faces.clone()))?;
+            tick();
+            Ok(f)
+        })
+        .collect::<Result<_>>()?;
+    let (l, r): (Vec<_>, Vec<_>) = feet.into_iter().unzip();
+    Ok(Sequence {
+        times: times.to_vec(),
+        contacts: truth::contacts(&l, &r, s.def.fps, 0.03, 0.6),
+    })
+}
+
+/// Frame counts of the whole set (for a progress bar).
+pub fn count_frames(cfg: &Config, motions: &[Motion]) -> usize {
+    let n = |s: &crate::subject::SubjectDef, m: &Motion| {
+        truth::frame_times(&s.style.warp, s.fps, m.clip.duration(), 100_000).len()
+    };
+    let ntrain = cfg.train.len();
+    motions
+        .iter()
+        .enumerate()
+        .map(|(i, m)| {
+            n(&cfg.source, m)
+                + if i < ntrain {
+                    n(&cfg.target, m)
+                } else {
+                    2 * n(&cfg.source, m)
+                }
+        })
+        .sum()
+}
+
+fn contacts_json(c: &[[bool; 2]]) -> Value {
+    json!(c
+        .iter()
+        .map(|[l, r]| [*l as u8, *r as u8])
+        .collect::<Vec<_>>())
+}
+
+fn round6(x: f64) -> f64 {
+    (x * 1e6).round() / 1e6
+}
+
+/// Summary of a written set.
+pub struct Summary {
+    pub frames: usize,
+    pub heights: [f64; 2],
+    pub vertices: [usize; 2],
+}
+
+/// Loads assets, motions and subjects for `cfg`.
+pub fn prepare(cfg: &Config) -> Result<(Subject, Subject, Vec<Motion>)> {
+    let dir = assets::asset_dir()?;
+    let body = BodyAssets::load(&dir)?;
+    let a = Subject::build(&body, &cfg.source)?;
+    let b = Subject::build(&body, &cfg.target)?;
+    let motions = cfg
+        .train
+        .iter()
+        .chain(&cfg.test)
+        .map(|d| load_motion(&dir, d, cfg.max_duration))
+        .collect::<Result<Vec<_>>>()?;
+    Ok((a, b, motions))
+}
+
+/// Writes the capture set of `cfg` to `out` (replacing an existing capture set there).
+/// `truth_for_train` also writes `truth/<target>/<train motion>/` (used by tests).
+pub fn synthesise(
+    cfg: &Config,
+    out: &Path,
+    truth_for_train: bool,
+    start: &dyn Fn(usize),
+    tick: &(dyn Fn() + Sync),
+) -> Result<Summary> {
+    let (a, b, motions) = prepare(cfg)?;
+    start(count_frames(cfg, &motions));
+    if out.exists() && !out.join("set.json").is_file() {
+        return Err(Error::file(
+            out,
+            "exists and is not a capture set (no set.json): not replacing it",
+        ));
+    }
+    let parent = out
+        .parent()
+        .filter(|p| !p.as_os_str().is_empty())
+        .unwrap_or(Path::new("."));
+    std::fs::create_dir_all(parent).map_err(|e| Error::io(parent, e))?;
+    let name = out
+        .file_name()
+        .ok_or_else(|| Error::file(out, "not a folder name"))?
+        .to_string_lossy();
+    let tmp: PathBuf = parent.join(format!(".{name}.tmp-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&tmp);
+    let result = write_all(cfg, &a, &b, &motions, &tmp, truth_for_train, tick);
+    if let Err(e) = result {
+        let _ = std::fs::remove_dir_all(&tmp);
+        return Err(e);
+    }
+    if out.exists() {
+        std::fs::remove_dir_all(out).map_err(|e| Error::io(out, e))?;
+    }
+    std::fs::rename(&tmp, out).map_err(|e| Error::io(out, e))?;
+    result
+}
+
+fn write_all(
+    cfg: &Config,
+    a: &Subject,
+    b: &Subject,
+    motions: &[Motion],
+    root: &Path,
+    truth_for_train: bool,
+    tick: &(dyn Fn() + Sync),
+) -> Result<Summary> {
+    let ntrain = cfg.train.len();
+    let mut frames = 0;
+    let mut times: [BTreeMap<String, Value>; 2] = Default::default();
+    let mut contacts: [BTreeMap<String, Value>; 2] = Default::default();
+    let mut truth_contacts: BTreeMap<String, Value> = BTreeMap::new();
+    let mut pairs = Vec::new();
+    let mut sources = BTreeMap::new();
+    for (mi, m) in motions.iter().enumerate() {
+        let name = &m.def.name;
+        sources.insert(
+            name.clone(),
+            json!(match &m.def.source {
+                MotionSource::DeepMimic { file, cycles } =>
+                    format!("pybullet_data/data/motions/{file} x{cycles}"),
+                MotionSource::Cmu { t0, t1 } => format!("CMU 01_01.bvh {t0}-{t1} s"),
+            }),
+        );
+        let d = m.clip.duration();
+        let ta = truth::frame_times(&a.def.style.warp, a.def.fps, d, 100_000);
+        let noise_of = |s: &Subject| {
+            cfg.noise
+                .as_ref()
+                .map(|l| (l, noise::stream(cfg.seed, &[&s.def.name, name])))
+        };
+        let sa = write_sequence(
+            a,
+            m,
+            &ta,
+            &root.join(&a.def.name).join(name),
+            noise_of(a),
+            tick,
+        )?;
+        frames += ta.len();
+        times[0].insert(
+            name.clone(),
+            json!(ta.iter().map(|&t| round6(t)).collect::<Vec<_>>()),
+        );
+        contacts[0].insert(name.clone(), contacts_json(&sa.contacts));
+        let is_train = mi < ntrain;
+        if is_train {
+            let tb = truth::frame_times(&b.def.style.warp, b.def.fps, d, 100_000);
+            let sb = write_sequence(
+                b,
+                m,
+                &tb,
+                &root.join(&b.def.name).join(name),
+                noise_of(b),
+                tick,
+            )?;
+            frames += tb.len();
+            times[1].insert(
+                name.clone(),
+                json!(tb.iter().map(|&t| round6(t)).collect::<Vec<_>>()),
+            );
+            contacts[1].insert(name.clone(), contacts_json(&sb.contacts));
+            let corr = truth::correspondences(&ta, &tb);
+            let mut extra = BTreeMap::new();
+            extra.insert("correspondences".to_string(), json!(corr));
+            pairs.push(TrainPair {
+                source: name.clone(),
+                target: name.clone(),
+                keyposes: truth::keyposes(&corr, cfg.keyposes),
+                extra,
+            });
+        }
+        if !is_train || truth_for_train {
+            // Truth: B performing A's motion in B's style, frame for frame with A (A's times).
+            let st = write_sequence(
+                b,
+                m,
+                &ta,
+                &root.join("truth").join(&b.def.name).join(name),
+                None,
+                tick,
+            )?;
+            frames += ta.len();
+            truth_contacts.insert(name.clone(), contacts_json(&st.contacts));
+        }
+    }
+    for (k, s) in [a, b].iter().enumerate() {
+        let mut extra = BTreeMap::new();
+        extra.insert("description".into(), json!(s.def.description));
+        extra.insert("height_m".into(), json!(round6(s.height())));
+        extra.insert("n_vertices".into(), json!(s.rest.len()));
+        extra.insert("mocap_time".into(), json!(times[k]));
+        extra.insert("contacts".into(), json!(contacts[k]));
+        if k == 1 {
+            extra.insert("truth_contacts".into(), json!(truth_contacts));
+        }
+        let spec = SubjectSpec {
+            fps: s.def.fps,
+            units: "m".into(),
+            up: "+y".into(),
+            parts: parts::part_tree(),
+            curves: parts::part_curves(s)?,
+            extra,
+        };
+        write_json(&root.join(&s.def.name).join("subject.json"), &spec)?;
+    }
+    let mut extra = BTreeMap::new();
+    extra.insert("preset".into(), json!(cfg.preset));
+    extra.insert("seed".into(), json!(cfg.seed));
+    extra.insert(
+        "noise".into(),
+        match &cfg.noise {
+            Some(n) => json!({"surface_sigma_m": n.surface, "jitter_m": n.jitter}),
+            None => Value::Null,
+        },
+    );
+    extra.insert("mocap".into(), json!(sources));
+    let set = SetSpec {
+        source: a.def.name.clone(),
+        target: b.def.name.clone(),
+        train: pairs,
+        test: cfg.test.iter().map(|m| m.name.clone()).collect(),
+        extra,
+    };
+    write_json(&root.join("set.json"), &set)?;
+    Ok(Summary {
+        frames,
+        heights: [a.height(), b.height()],
+        vertices: [a.rest.len(), b.rest.len()],
+    })
+}
+
+fn write_json<T: serde::Serialize>(path: &Path, v: &T) -> Result<()> {
+    let mut s = serde_json::to_string_pretty(v).map_err(|e| Error::file(path, e.to_string()))?;
+    s.push('\n');
+    mesh_core::atomic::write_bytes_atomic(path, s.as_bytes())
+}

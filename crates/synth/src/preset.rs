@@ -1,0 +1,156 @@
+//! The two presets: `tiny` (coarse decimated topologies, ~1.2 s clips, builds in seconds, for
+//! tests) and `default` (full body and `notoes` topologies, 25 and 50 fps: the demo set).
+
+use crate::noise::NoiseLevel;
+use crate::style::{Style, TimeWarp};
+use crate::subject::{SubjectDef, Topology};
+
+/// Where a motion's frames come from.
+#[derive(Clone, Debug)]
+pub enum MotionSource {
+    /// A DeepMimic clip under `pybullet_data/data/motions/`, repeated `cycles` times if cyclic.
+    DeepMimic { file: String, cycles: usize },
+    /// The CMU BVH `01_01.bvh` between two times (seconds).
+    Cmu { t0: f64, t1: f64 },
+}
+
+/// One motion of the set.
+#[derive(Clone, Debug)]
+pub struct MotionDef {
+    pub name: String,
+    pub source: MotionSource,
+}
+
+/// Everything that defines a capture set.
+#[derive(Clone, Debug)]
+pub struct Config {
+    pub preset: String,
+    pub seed: u64,
+    pub noise: Option<NoiseLevel>,
+    pub source: SubjectDef,
+    pub target: SubjectDef,
+    pub train: Vec<MotionDef>,
+    pub test: Vec<MotionDef>,
+    /// Longest clip, in mocap seconds.
+    pub max_duration: f64,
+    /// Key-poses per training pair.
+    pub keyposes: usize,
+}
+
+fn dm(name: &str, file: &str, cycles: usize) -> MotionDef {
+    MotionDef {
+        name: name.to_string(),
+        source: MotionSource::DeepMimic {
+            file: format!("humanoid3d_{file}.txt"),
+            cycles,
+        },
+    }
+}
+
+/// Subject A: 1.6 m slim young woman, mild style (slightly smaller arm swing), 25 fps.
+pub fn subject_a(topology: Topology, fps: f64) -> SubjectDef {
+    SubjectDef {
+        name: "A".into(),
+        description: "1.6 m slim young woman (MakeHuman caucasian-female-young + 0.3 minmuscle-averageweight)".into(),
+        targets: vec![
+            ("macrodetails/caucasian-female-young".into(), 1.0),
+            ("macrodetails/universal-female-young-minmuscle-averageweight".into(), 0.3),
+        ],
+        topology,
+        fps,
+        style: Style {
+            arm_gain: 0.85,
+            arm_max: 2.0,
+            arm_abduction: 4f64.to_radians(),
+            elbow_gain: 1.0,
+            knee_k: 0.05,
+            hip_abduction: 0.0,
+            lean_per_speed: 0.02,
+            warp: TimeWarp { rate: 1.0, amp: 0.025, period: 1.4, phase: 0.0 },
+        },
+    }
+}
+
+/// Subject B: 1.9 m heavy young man, large saturated arm swing, arms and legs held wider,
+/// deeper knee bend, leaning with speed, slower cadence, 50 fps.
+pub fn subject_b(topology: Topology, fps: f64) -> SubjectDef {
+    SubjectDef {
+        name: "B".into(),
+        description: "1.9 m heavy young man (MakeHuman caucasian-male-young + 0.6 averagemuscle-maxweight + 0.25 maxheight)".into(),
+        targets: vec![
+            ("macrodetails/caucasian-male-young".into(), 1.0),
+            ("macrodetails/universal-male-young-averagemuscle-maxweight".into(), 0.6),
+            ("macrodetails/height/male-young-averagemuscle-averageweight-maxheight".into(), 0.25),
+        ],
+        topology,
+        fps,
+        style: Style {
+            arm_gain: 1.5,
+            arm_max: 1.4,
+            arm_abduction: 13f64.to_radians(),
+            elbow_gain: 1.2,
+            knee_k: 0.35,
+            hip_abduction: 3f64.to_radians(),
+            lean_per_speed: 0.08,
+            warp: TimeWarp { rate: 0.85, amp: 0.035, period: 1.9, phase: 0.7 },
+        },
+    }
+}
+
+fn motions() -> (Vec<MotionDef>, Vec<MotionDef>) {
+    let train = vec![
+        dm("walk", "walk", 2),
+        dm("run", "run", 3),
+        dm("jump", "jump", 1),
+        dm("kick", "kick", 1),
+        dm("dance", "dance_a", 1),
+    ];
+    let test = vec![
+        dm("punch", "punch", 1),
+        dm("spinkick", "spinkick", 1),
+        MotionDef {
+            name: "cmu_jump".into(),
+            source: MotionSource::Cmu { t0: 1.0, t1: 3.5 },
+        },
+    ];
+    (train, test)
+}
+
+/// Capture-like noise of the default set: 1 mm surface noise, 2 mm coherent jitter.
+pub fn default_noise() -> NoiseLevel {
+    NoiseLevel {
+        surface: 0.001,
+        jitter: 0.002,
+    }
+}
+
+/// A preset by name (`tiny` or `default`).
+pub fn preset(name: &str, seed: u64, noise: bool) -> Option<Config> {
+    let (train, test) = motions();
+    let noise = noise.then(default_noise);
+    match name {
+        "tiny" => Some(Config {
+            preset: name.into(),
+            seed,
+            noise,
+            source: subject_a(Topology::Obj("notoes_collapse10pc.obj".into()), 20.0),
+            target: subject_b(Topology::Obj("notoes_collapse5pc.obj".into()), 25.0),
+            train,
+            test,
+            max_duration: 1.2,
+            keyposes: 5,
+        }),
+        "default" => Some(Config {
+            preset: name.into(),
+            seed,
+            noise,
+            source: subject_a(Topology::Body, 25.0),
+            target: subject_b(Topology::Obj("notoes.obj".into()), 50.0),
+            train,
+            test,
+            max_duration: 3.0,
+            keyposes: 5,
+        }),
+        _ => None,
+    }
+}

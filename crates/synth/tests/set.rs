@@ -1,0 +1,186 @@
+//! The ground truth of a tiny capture set (needs the fetched assets: run scripts/fetch-assets).
+
+use std::path::Path;
+
+use mesh_core::capture_set::{SetSpec, SubjectSpec};
+use nalgebra::Vector3;
+use serde_json::Value;
+use synth::capture_set_writer::synthesise;
+use synth::preset::preset;
+
+fn read<T: serde::de::DeserializeOwned>(p: &Path) -> T {
+    serde_json::from_str(&std::fs::read_to_string(p).unwrap()).unwrap()
+}
+
+fn frame(dir: &Path, k: usize) -> Vec<Vector3<f64>> {
+    mesh_core::io::read_mesh(dir.join(format!("{k:06}.ply")))
+        .unwrap()
+        .vertices
+}
+
+fn max_dist(a: &[Vector3<f64>], b: &[Vector3<f64>]) -> f64 {
+    a.iter()
+        .zip(b)
+        .map(|(p, q)| (p - q).norm())
+        .fold(0.0, f64::max)
+}
+
+fn build(noise: bool) -> tempfile::TempDir {
+    let tmp = tempfile::tempdir().unwrap();
+    let cfg = preset("tiny", 11, noise).unwrap();
+    synthesise(&cfg, &tmp.path().join("set"), true, &|_| {}, &|| {})
+        .expect("synth failed (are the assets fetched? run scripts/fetch-assets)");
+    tmp
+}
+
+fn times(spec: &SubjectSpec, m: &str) -> Vec<f64> {
+    spec.extra["mocap_time"][m]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|v| v.as_f64().unwrap())
+        .collect()
+}
+
+#[test]
+fn truth_of_a_training_motion_equals_the_targets_own_sequence_at_corresponding_frames() {
+    let tmp = build(false);
+    let set = tmp.path().join("set");
+    let spec: SetSpec = read(&set.join("set.json"));
+    let b: SubjectSpec = read(&set.join("B/subject.json"));
+    let a: SubjectSpec = read(&set.join("A/subject.json"));
+    assert!(spec.train.len() >= 5 && spec.test.len() >= 3);
+    for t in &spec.test {
+        assert!(
+            spec.train.iter().all(|p| &p.source != t && &p.target != t),
+            "{t} is also trained on"
+        );
+        let na = std::fs::read_dir(set.join("A").join(t)).unwrap().count();
+        assert_eq!(
+            std::fs::read_dir(set.join("truth/B").join(t))
+                .unwrap()
+                .count(),
+            na
+        );
+    }
+    for pair in &spec.train {
+        let m = &pair.source;
+        let (ta, tb) = (times(&a, m), times(&b, m));
+        let corr: Vec<[usize; 2]> =
+            serde_json::from_value(pair.extra["correspondences"].clone()).unwrap();
+        assert_eq!(corr.len(), ta.len());
+        assert!(pair.keyposes.len() >= 4 && pair.keyposes.iter().all(|k| corr.contains(k)));
+        let truth = set.join("truth/B").join(m);
+        let own = set.join("B").join(m);
+        // Frame 0 of both is the clip's first instant: identical meshes.
+        assert_eq!(max_dist(&frame(&truth, 0), &frame(&own, 0)), 0.0, "{m}");
+        // Lipschitz bound from B's own sequence: max vertex speed per unit of mocap time.
+        let nb = tb.len();
+        let mut speed: f64 = 0.0;
+        for j in 1..nb {
+            speed = speed.max(max_dist(&frame(&own, j), &frame(&own, j - 1)) / (tb[j] - tb[j - 1]));
+        }
+        let (mut err_corr, mut err_shift) = (0.0, 0.0);
+        for &[i, j] in corr.iter().step_by(3) {
+            let t = frame(&truth, i);
+            let d = max_dist(&t, &frame(&own, j));
+            assert!(
+                d <= 1.5 * speed * (ta[i] - tb[j]).abs() + 1e-6,
+                "{m} frame {i}->{j}: {d}"
+            );
+            err_corr += d;
+            err_shift += max_dist(&t, &frame(&own, (j + nb / 3) % nb));
+        }
+        assert!(
+            err_corr < 0.2 * err_shift,
+            "{m}: corresponding frames are not closer ({err_corr} vs {err_shift})"
+        );
+    }
+}
+
+#[test]
+fn noise_is_small_and_only_on_the_inputs() {
+    let noisy = build(true);
+    let clean = build(false);
+    let (n, c) = (noisy.path().join("set"), clean.path().join("set"));
+    for sub in ["A/walk", "B/run", "A/punch"] {
+        let mut sum = 0.0;
+        let mut cnt = 0.0;
+        for k in [0, 5, 10] {
+            let (p, q) = (frame(&n.join(sub), k), frame(&c.join(sub), k));
+            assert!(max_dist(&p, &q) < 0.02, "{sub}: noise too large");
+            sum += p
+                .iter()
+                .zip(&q)
+                .map(|(a, b)| (a - b).norm_squared())
+                .sum::<f64>();
+            cnt += p.len() as f64;
+        }
+        let rms = (sum / cnt).sqrt();
+        assert!(rms > 0.001 && rms < 0.006, "{sub}: rms noise {rms}");
+    }
+    // Truth is never noisy.
+    for k in [0, 7] {
+        assert_eq!(
+            frame(&n.join("truth/B/punch"), k),
+            frame(&c.join("truth/B/punch"), k)
+        );
+    }
+}
+
+#[test]
+fn curves_contacts_and_heights_are_sound() {
+    let tmp = build(false);
+    let set = tmp.path().join("set");
+    for (s, h) in [("A", 1.6), ("B", 1.9)] {
+        let spec: SubjectSpec = read(&set.join(s).join("subject.json"));
+        assert!((spec.extra["height_m"].as_f64().unwrap() - h).abs() < 0.05);
+        assert_eq!(spec.parts.len(), 5);
+        let rest = frame(&set.join(s).join("walk"), 0);
+        for (part, loops) in &spec.curves {
+            assert_eq!(loops.len(), 2, "{s} {part}");
+            let centre = |l: &Vec<u32>| {
+                l.iter().map(|&i| rest[i as usize]).sum::<Vector3<f64>>() / l.len() as f64
+            };
+            for l in loops {
+                assert!(l.len() >= 4 && l.iter().all(|&i| (i as usize) < rest.len()));
+                // A loop surrounds its centre: vertices spread around it, not on one side.
+                let c = centre(l);
+                let mean_off = l
+                    .iter()
+                    .map(|&i| rest[i as usize] - c)
+                    .sum::<Vector3<f64>>()
+                    .norm()
+                    / l.len() as f64;
+                let radius = l
+                    .iter()
+                    .map(|&i| (rest[i as usize] - c).norm())
+                    .sum::<f64>()
+                    / l.len() as f64;
+                assert!(mean_off < 0.2 * radius && radius < 0.15, "{s} {part}");
+            }
+            // Arms hang in the rest pose, so further down the limb is lower for every part.
+            assert!(
+                centre(&loops[1]).y < centre(&loops[0]).y - 0.02,
+                "{s} {part}: loops out of order"
+            );
+        }
+        // Walking: each foot is sometimes down and sometimes up; mostly some foot is down.
+        let c: Vec<[u8; 2]> =
+            serde_json::from_value(spec.extra["contacts"]["walk"].clone()).unwrap();
+        for side in 0..2 {
+            assert!(
+                c.iter().any(|f| f[side] == 1) && c.iter().any(|f| f[side] == 0),
+                "{s} side {side}"
+            );
+        }
+        assert!(
+            c.iter().filter(|f| f[0] + f[1] > 0).count() * 10 >= c.len() * 8,
+            "{s}: {c:?}"
+        );
+        let fps = spec.fps;
+        assert!(fps > 0.0);
+        let v: Value = spec.extra["mocap_time"]["walk"].clone();
+        assert_eq!(v.as_array().unwrap().len(), c.len());
+    }
+}

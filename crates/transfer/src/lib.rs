@@ -1,0 +1,11 @@
+//! The stages of surface motion transfer (Boukhayma, Franco, Boyer, CVPR 2017).
+//!
+//! Each module is one stage's logic; `src/bin/<stage>.rs` parses arguments
+//! and calls it. Data flows one way: capture set -> [`align`] (per motion)
+//! and [`segment`] (per subject) -> PCA per part -> dense correspondences ->
+//! GP models -> predicted target sequences -> evaluation.
+
+pub mod align;
+pub mod segment;
+pub mod part_pca;
+pub mod densify;
