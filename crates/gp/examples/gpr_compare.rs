@@ -32,10 +32,20 @@ fn main() {
         _ => Kernel::neural_network(1.0, 1.0),
     };
     let problems = synthetic_pairs::both_directions(n, 7);
-    let opts = GprOptions::default();
+    let mut opts = GprOptions::default();
+    if let Some(v) = get("--grad-tol") {
+        opts.cg.grad_tol = v.parse().expect("--grad-tol X");
+    }
+    if let Some(v) = get("--max-step") {
+        opts.cg.max_step = v.parse().expect("--max-step X");
+    }
+    if let Some(v) = get("--c2") {
+        opts.cg.c2 = v.parse().expect("--c2 X");
+    }
     let t0 = Instant::now();
     let models = train_many(kernel, &problems, &opts);
     let train_s = t0.elapsed().as_secs_f64();
+    let mut total_evals = 0;
     println!("pairs {n}: trained {} models ({}) in {train_s:.3} s", models.len(), kernel.name());
     let mut trained = Vec::new();
     for (i, m) in models.into_iter().enumerate() {
@@ -44,11 +54,13 @@ fn main() {
             "  model {i:2}: lml {:12.4} (start {:12.4}) exit {:?} iters {} evals {} kernel {:?}",
             rep.lml, rep.initial_lml, rep.exit, rep.iterations, rep.evaluations, model.kernel
         );
+        total_evals += rep.evaluations;
         for note in &rep.notes {
             println!("    note: {note}");
         }
         trained.push(model);
     }
+    println!("total evaluations {total_evals}");
     // Prediction throughput: one direction (5 parts + displacement), many frames at once.
     let frames = 5000;
     let test = synthetic_pairs::pairs(frames, 99);

@@ -7,26 +7,10 @@
 
 use gpdm::optim::{train, LbfgsOptions, Schedule, TrainOptions};
 use gpdm::{Gpdm, GpdmConfig};
-use nalgebra::DMatrix;
 use std::time::Instant;
 
-fn synthetic(d_obs: usize) -> Vec<DMatrix<f64>> {
-    let w: Vec<[f64; 4]> = (0..d_obs)
-        .map(|j| std::array::from_fn(|k| (((j * 4 + k) as f64 * 12.9898).sin() * 43758.5453).fract() * 2.0))
-        .collect();
-    [120usize, 110, 106, 110]
-        .iter()
-        .enumerate()
-        .map(|(s, &len)| {
-            DMatrix::from_fn(len, d_obs, |t, j| {
-                let ph = 0.25 * t as f64 * (1.0 + 0.1 * s as f64) + s as f64;
-                let z = [ph.cos(), ph.sin(), 0.3 * (2.0 * ph).sin()];
-                0.1 * (w[j][0] * z[0] + w[j][1] * z[1] + w[j][2] * z[2] + w[j][3]).sin()
-                    + 1e-3 * ((t * 7919 + j * 104729) % 1000) as f64 / 1000.0
-            })
-        })
-        .collect()
-}
+#[path = "common/synthetic.rs"]
+mod synthetic;
 
 fn write_f64(path: &std::path::Path, v: &[f64]) {
     let bytes: Vec<u8> = v.iter().flat_map(|x| x.to_le_bytes()).collect();
@@ -36,7 +20,7 @@ fn write_f64(path: &std::path::Path, v: &[f64]) {
 fn main() {
     let args: Vec<String> = std::env::args().collect();
     let d_obs: usize = args.get(1).map(|s| s.parse().expect("D")).unwrap_or(2000);
-    let m0 = Gpdm::new(&synthetic(d_obs), GpdmConfig::default()).unwrap();
+    let m0 = Gpdm::new(&synthetic::synthetic(d_obs, 1e-3), GpdmConfig::default()).unwrap();
     if let Some(dir) = args.get(2) {
         let dir = std::path::Path::new(dir);
         std::fs::create_dir_all(dir).unwrap();
@@ -78,6 +62,11 @@ fn main() {
         let target = r.final_value + 1e-6 * r.final_value.abs();
         if let Some(&(e, _)) = r.history.iter().find(|h| h.1 <= target) {
             println!("  reached final value (1e-6 rel) after {e} evals");
+        }
+        if let Some(dir) = args.get(2) {
+            let tr: Vec<String> = r.trace.iter().map(|(t, f)| format!("[{t}, {f}]")).collect();
+            let path = std::path::Path::new(dir).join(format!("rust_trace_{name}.json"));
+            std::fs::write(path, format!("[{}]", tr.join(","))).unwrap();
         }
     }
 }

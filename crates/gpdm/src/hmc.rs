@@ -7,7 +7,8 @@
 //! factorised once per model and every energy evaluation costs one batched triangular solve.
 //!
 //! Leapfrog with unit mass, step size adapted during burn-in by dual averaging (Hoffman &
-//! Gelman 2014, alg. 5) toward a target acceptance rate, then frozen at the averaged value;
+//! Gelman 2014, alg. 5, restarted halfway) toward a target acceptance rate, then frozen at the
+//! averaged value;
 //! ±10 % step jitter per iteration; thinning; ChaCha8 RNG seeded by the caller.
 
 use crate::error::{invalid, Result};
@@ -162,11 +163,16 @@ pub fn sample<E: Energy + ?Sized>(energy: &E, q0: &[f64], opts: &HmcOptions) -> 
         }
     }
 
-    // Dual averaging state.
-    let mu = (10.0 * eps).ln();
+    // Dual averaging state. H̄ averages (target − a) uniformly over the whole history, so the
+    // early exploratory steps (too large, rarely accepted) would bias the final step small and
+    // the sampling acceptance above target; the adaptation therefore restarts halfway through
+    // burn-in, centred on the step found so far (as Stan restarts it per warm-up window).
     let (gamma, t0, kappa) = (0.05, 10.0, 0.75);
+    let mut mu = (10.0 * eps).ln();
     let mut hbar = 0.0;
     let mut log_eps_bar = eps.ln();
+    let mut m_adapt = 0usize;
+    let restart_at = opts.burn_in / 2;
     let mut burn_acc = 0.0;
     let mut post_acc = 0usize;
     let mut post_n = 0usize;
@@ -189,11 +195,18 @@ pub fn sample<E: Energy + ?Sized>(energy: &E, q0: &[f64], opts: &HmcOptions) -> 
         }
         if adapting {
             burn_acc += a;
-            let m = (it + 1) as f64;
+            m_adapt += 1;
+            let m = m_adapt as f64;
             hbar = (1.0 - 1.0 / (m + t0)) * hbar + (opts.target_accept - a) / (m + t0);
             eps = (mu - m.sqrt() / gamma * hbar).exp();
             let w = m.powf(-kappa);
             log_eps_bar = w * eps.ln() + (1.0 - w) * log_eps_bar;
+            if it + 1 == restart_at && restart_at >= 20 {
+                mu = log_eps_bar;
+                eps = log_eps_bar.exp();
+                hbar = 0.0;
+                m_adapt = 0;
+            }
         } else {
             post_n += 1;
             post_acc += accepted as usize;

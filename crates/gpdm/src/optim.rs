@@ -391,10 +391,7 @@ pub struct TrainOptions {
 impl Default for TrainOptions {
     fn default() -> Self {
         TrainOptions {
-            schedule: Schedule::Alternate {
-                rounds: 10,
-                iters: 50,
-            },
+            schedule: Schedule::Joint,
             lbfgs: LbfgsOptions::default(),
         }
     }
@@ -415,11 +412,14 @@ pub struct TrainReport {
     pub max_jitter: f64,
     /// (cumulative evaluations, objective) after each iteration, over all phases.
     pub history: Vec<(usize, f64)>,
+    /// (seconds since start, objective) at every evaluation, over all phases.
+    pub trace: Vec<(f64, f64)>,
 }
 
 /// Minimises eq. 7 over X, α and β starting from the model's current parameters and stores
 /// the best point found back into `model`.
 pub fn train(model: &mut Gpdm, opts: &TrainOptions) -> Result<TrainReport> {
+    let clock = std::time::Instant::now();
     let obj = model.objective()?;
     let mut theta = model.theta();
     let n_all = theta.len();
@@ -431,6 +431,7 @@ pub fn train(model: &mut Gpdm, opts: &TrainOptions) -> Result<TrainReport> {
         exits: vec![],
         max_jitter: 0.0,
         history: vec![(1, start.value)],
+        trace: vec![(clock.elapsed().as_secs_f64(), start.value)],
     };
     let nx_alpha = n_all - 4;
     let phases: Vec<(Vec<usize>, usize)> = match &opts.schedule {
@@ -457,7 +458,10 @@ pub fn train(model: &mut Gpdm, opts: &TrainOptions) -> Result<TrainReport> {
                 for (k, &i) in idx.iter().enumerate() {
                     t[i] = sub[k];
                 }
-                let e = obj.eval(&t, Some(&mut full_grad)).ok()?;
+                let e = obj.eval(&t, Some(&mut full_grad)).ok();
+                let v = e.as_ref().map(|e| e.value).unwrap_or(f64::INFINITY);
+                report.trace.push((clock.elapsed().as_secs_f64(), v));
+                let e = e?;
                 for (k, &i) in idx.iter().enumerate() {
                     g[k] = full_grad[i];
                 }

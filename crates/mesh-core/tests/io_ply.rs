@@ -257,7 +257,9 @@ fn malformed_ascii_payloads_give_one_line_errors() {
     assert!(m.contains("at least 3"), "{m}");
     let m = read_err(format!("{head}0 0 0\n1 0 0\n0 1 0\n3 0 1 1\n").as_bytes());
     assert!(m.contains("repeats"), "{m}");
-    read_err(format!("{head}0 0 0\n1 nan 0\n0 1 0\n3 0 1 2\n").as_bytes());
+    let m = read_err(format!("{head}0 0 0\n1 nan 0\n0 1 0\n3 0 1 2\n").as_bytes());
+    assert!(m.contains("Line 11") && m.contains("'1 nan 0'"), "{m}");
+    eprintln!("{m}");
     // 1e999 overflows f32 to infinity: parsed, then rejected as non-finite.
     let m = read_err(format!("{head}0 0 0\n1 1e999 0\n0 1 0\n3 0 1 2\n").as_bytes());
     assert!(m.contains("vertex 1") && m.contains("non-finite"), "{m}");
@@ -316,11 +318,9 @@ fn huge_counts_in_a_small_file_fail_fast_without_allocating() {
         )
         .into_bytes();
         bytes.resize(1024, b'1');
-        let t = std::time::Instant::now();
+        // Rejected from the header alone: a real attempt would abort on allocation.
         let msg = read_err(&bytes);
         assert!(msg.contains("header declares"), "{msg}");
-        // Correctness bound only (no speed goal): a real attempt would take minutes or abort.
-        assert!(t.elapsed().as_secs() < 5);
     }
     // A face list count of 2^32 - 1 in a binary file must not allocate 16 GB.
     let mut bytes = b"ply\nformat binary_little_endian 1.0\nelement vertex 3\nproperty float x\nproperty float y\n\

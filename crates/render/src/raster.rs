@@ -33,67 +33,92 @@ impl Target {
     }
 
     /// Draws a triangle with per-vertex colours (0..255). Degenerate,
-    /// non-finite or off-screen triangles draw nothing.
+    /// non-finite or off-screen triangles draw nothing, nor do triangles with
+    /// a vertex more than 2^20 pixels off the image (guard band).
+    ///
+    /// Vertices are snapped to 1/16 pixel and edge functions evaluated
+    /// exactly in integers, stepped incrementally along each row; depth and
+    /// colour are interpolated with barycentric weights from the same edge values.
     pub fn fill_triangle(&mut self, v: [ScreenVertex; 3], c: [[f32; 3]; 3]) {
-        let [p0, mut p1, mut p2] = v;
-        let [c0, mut c1, mut c2] = c;
-        let mut area = (p1[0] - p0[0]) * (p2[1] - p0[1]) - (p1[1] - p0[1]) * (p2[0] - p0[0]);
-        if !area.is_finite() || area == 0.0 {
+        const SUB: i64 = 16;
+        const LIMIT: f32 = (1 << 20) as f32;
+        if !v.iter().all(|p| p[0].abs() < LIMIT && p[1].abs() < LIMIT && p[2].is_finite()) {
             return;
         }
-        if area < 0.0 {
-            std::mem::swap(&mut p1, &mut p2);
-            std::mem::swap(&mut c1, &mut c2);
+        let snap = |p: &ScreenVertex| [(p[0] * SUB as f32).round() as i64, (p[1] * SUB as f32).round() as i64];
+        let (mut q, mut z, mut col) = ([snap(&v[0]), snap(&v[1]), snap(&v[2])], [v[0][2], v[1][2], v[2][2]], c);
+        let mut area = (q[1][0] - q[0][0]) * (q[2][1] - q[0][1]) - (q[1][1] - q[0][1]) * (q[2][0] - q[0][0]);
+        if area == 0 {
+            return;
+        }
+        if area < 0 {
+            q.swap(1, 2);
+            z.swap(1, 2);
+            col.swap(1, 2);
             area = -area;
         }
-        let (w, h) = (self.width as i64, self.height as i64);
-        let xmin = (p0[0].min(p1[0]).min(p2[0]) - 0.5).floor().max(0.0) as i64;
-        let xmax = ((p0[0].max(p1[0]).max(p2[0]) - 0.5).ceil() as i64).min(w - 1);
-        let ymin = (p0[1].min(p1[1]).min(p2[1]) - 0.5).floor().max(0.0) as i64;
-        let ymax = ((p0[1].max(p1[1]).max(p2[1]) - 0.5).ceil() as i64).min(h - 1);
+        // Pixel x is sampled at 16x + 8 (its centre) in fixed point.
+        let half = SUB / 2;
+        let lo = |m: i64| -((half - m).div_euclid(SUB)); // ceil((m - half) / SUB)
+        let hi = |m: i64| (m - half).div_euclid(SUB);
+        let xmin = lo(q[0][0].min(q[1][0]).min(q[2][0])).max(0);
+        let xmax = hi(q[0][0].max(q[1][0]).max(q[2][0])).min(self.width as i64 - 1);
+        let ymin = lo(q[0][1].min(q[1][1]).min(q[2][1])).max(0);
+        let ymax = hi(q[0][1].max(q[1][1]).max(q[2][1])).min(self.height as i64 - 1);
         if xmin > xmax || ymin > ymax {
             return;
         }
-        // Edge a->b: E(p) = (bx-ax)(py-ay) - (by-ay)(px-ax), positive inside.
-        // Top-left rule (y down, this winding): top edge dy == 0 && dx > 0, left edge dy < 0.
-        let edge = |a: ScreenVertex, b: ScreenVertex| {
+        // Edge a->b: E(p) = dx (py - ay) - dy (px - ax), positive inside for this
+        // winding. Top-left rule (y down): top edge dy == 0 && dx > 0, left edge
+        // dy < 0; other edges exclude E == 0 through a bias of -1.
+        struct Edge {
+            w: i64,
+            step_x: i64,
+            step_y: i64,
+            bias: i64,
+        }
+        let (px0, py0) = (xmin * SUB + half, ymin * SUB + half);
+        let edge = |a: [i64; 2], b: [i64; 2]| {
             let (dx, dy) = (b[0] - a[0], b[1] - a[1]);
-            let top_left = (dy == 0.0 && dx > 0.0) || dy < 0.0;
-            (a, dx, dy, top_left)
+            let bias = if (dy == 0 && dx > 0) || dy < 0 { 0 } else { -1 };
+            Edge { w: dx * (py0 - a[1]) - dy * (px0 - a[0]) + bias, step_x: -dy * SUB, step_y: dx * SUB, bias }
         };
-        let e12 = edge(p1, p2); // weight of p0
-        let e20 = edge(p2, p0); // weight of p1
-        let e01 = edge(p0, p1); // weight of p2
-        let inv = 1.0 / area;
-        // E(px, py) = dx (py - ay) - dy (px - ax) = row(py) - dy px, evaluated
-        // directly per pixel (no running sums, so no drift along long rows).
-        let row_const = |e: &(ScreenVertex, f32, f32, bool), py: f32| e.1 * (py - e.0[1]) + e.2 * e.0[0];
-        let inside = |v: f32, tl: bool| v > 0.0 || (v == 0.0 && tl);
+        let mut e0 = edge(q[1], q[2]); // weight of vertex 0
+        let mut e1 = edge(q[2], q[0]); // weight of vertex 1
+        let mut e2 = edge(q[0], q[1]); // weight of vertex 2
+        let inv = 1.0 / area as f32;
+        let dz = [z[1] - z[0], z[2] - z[0]];
+        let dc: [[f32; 2]; 3] = std::array::from_fn(|k| [col[1][k] - col[0][k], col[2][k] - col[0][k]]);
         let width = self.width as usize;
         for y in ymin..=ymax {
-            let py = y as f32 + 0.5;
-            let (r0, r1, r2) = (row_const(&e12, py), row_const(&e20, py), row_const(&e01, py));
+            let (mut w0, mut w1, mut w2) = (e0.w, e1.w, e2.w);
             let row = y as usize * width;
+            let mut entered = false;
             for x in xmin..=xmax {
-                let px = x as f32 + 0.5;
-                let w0 = r0 - e12.2 * px;
-                let w1 = r1 - e20.2 * px;
-                let w2 = r2 - e01.2 * px;
-                if !(inside(w0, e12.3) && inside(w1, e20.3) && inside(w2, e01.3)) {
-                    continue;
-                }
-                let (l0, l1, l2) = (w0 * inv, w1 * inv, w2 * inv);
-                let z = l0 * p0[2] + l1 * p1[2] + l2 * p2[2];
-                let i = row + x as usize;
-                if z > self.depth[i] {
-                    self.depth[i] = z;
-                    let k = 3 * i;
-                    for ch in 0..3 {
-                        let v = l0 * c0[ch] + l1 * c1[ch] + l2 * c2[ch];
-                        self.colour[k + ch] = (v + 0.5).clamp(0.0, 255.0) as u8;
+                if (w0 | w1 | w2) >= 0 {
+                    entered = true;
+                    let l1 = (w1 - e1.bias) as f32 * inv;
+                    let l2 = (w2 - e2.bias) as f32 * inv;
+                    let d = z[0] + l1 * dz[0] + l2 * dz[1];
+                    let i = row + x as usize;
+                    if d > self.depth[i] {
+                        self.depth[i] = d;
+                        let k = 3 * i;
+                        for ch in 0..3 {
+                            let val = col[0][ch] + l1 * dc[ch][0] + l2 * dc[ch][1];
+                            self.colour[k + ch] = (val + 0.5).clamp(0.0, 255.0) as u8;
+                        }
                     }
+                } else if entered {
+                    break; // convex: the row's span is over
                 }
+                w0 += e0.step_x;
+                w1 += e1.step_x;
+                w2 += e2.step_x;
             }
+            e0.w += e0.step_y;
+            e1.w += e1.step_y;
+            e2.w += e2.step_y;
         }
     }
 
@@ -128,6 +153,9 @@ impl Target {
         if s == 1 {
             return RgbImage { width: ow, height: oh, data: self.colour.clone() };
         }
+        if s == 2 {
+            return self.resolve_2x2();
+        }
         let (s, w) = (s as usize, self.width as usize);
         let (ow, oh) = (ow as usize, oh as usize);
         let n = (s * s) as u32;
@@ -152,6 +180,24 @@ impl Target {
         }
         let (ow, oh) = (ow as u32, oh as u32);
         RgbImage { width: ow, height: oh, data }
+    }
+}
+
+impl Target {
+    /// [`Target::resolve`] for 2x2 blocks (the default anti-aliasing).
+    fn resolve_2x2(&self) -> RgbImage {
+        let (w, ow, oh) = (self.width as usize, self.width as usize / 2, self.height as usize / 2);
+        let mut data = vec![0u8; 3 * ow * oh];
+        for (oy, out) in data.chunks_exact_mut(3 * ow).enumerate() {
+            let r0 = &self.colour[3 * (2 * oy) * w..][..6 * ow];
+            let r1 = &self.colour[3 * (2 * oy + 1) * w..][..6 * ow];
+            for ((o, a), b) in out.chunks_exact_mut(3).zip(r0.chunks_exact(6)).zip(r1.chunks_exact(6)) {
+                for k in 0..3 {
+                    o[k] = ((a[k] as u16 + a[k + 3] as u16 + b[k] as u16 + b[k + 3] as u16 + 2) >> 2) as u8;
+                }
+            }
+        }
+        RgbImage { width: ow as u32, height: oh as u32, data }
     }
 }
 

@@ -100,6 +100,8 @@ fn benches(c: &mut Criterion) {
     c.bench_function("correct_parts_13k", |b| {
         b.iter(|| s.correctors.iter().zip(&s.predictions).map(|(c, p)| c.correct(p, 3).unwrap()).count())
     });
+    let corrected: Vec<_> = s.correctors.iter().zip(&s.predictions).map(|(c, p)| c.correct(p, 3).unwrap()).collect();
+    c.bench_function("stitch_frame_13k", |b| b.iter(|| stitcher.stitch(&corrected).unwrap()));
     c.bench_function("correct_and_stitch_frame_13k", |b| b.iter(|| frame(&mut stitcher)));
 }
 

@@ -125,13 +125,12 @@ impl Corrector {
         let near = self.nearest(prediction, m);
         let size = prediction.iter().map(|v| v.norm()).fold(0.0, f64::max).max(f64::MIN_POSITIVE);
         let w = distance_weights(&near.iter().map(|x| x.1).collect::<Vec<_>>(), 1e-12 * size);
+        let used: Vec<(usize, f64)> = near.iter().zip(w).filter(|x| x.1 > 0.0).map(|(n, w)| (n.0, w)).collect();
+        let shapes: Vec<Vec<Vector3<f64>>> =
+            used.par_iter().map(|&(k, _)| self.rotate_towards(k, prediction)).collect::<Result<_>>()?;
         let mut out = vec![Vector3::zeros(); prediction.len()];
-        for ((k, _), wk) in near.iter().zip(w) {
-            if wk == 0.0 {
-                continue;
-            }
-            let x = self.rotate_towards(*k, prediction)?;
-            out.iter_mut().zip(x).for_each(|(o, v)| *o += wk * v);
+        for (x, (_, wk)) in shapes.iter().zip(&used) {
+            out.iter_mut().zip(x).for_each(|(o, v)| *o += *wk * v);
         }
         Ok(out)
     }

@@ -128,6 +128,46 @@ impl GradientOperator {
     }
 }
 
+/// The sparsity pattern of `Gᵀ A G` for one face list, with the 9 value slots of every face,
+/// so the matrix is refilled for a new geometry without sorting triplets again (stitching
+/// assembles a new mixed-geometry Laplacian every frame).
+pub struct StiffnessPattern {
+    matrix: SparseColMat<usize, f64>,
+    slots: Vec<[usize; 9]>,
+}
+
+impl StiffnessPattern {
+    /// Panics on out-of-range face indices (check with [`crate::check_faces`]).
+    pub fn new(n_vertices: usize, faces: &[[u32; 3]]) -> Self {
+        let e = faces
+            .iter()
+            .flat_map(|f| (0..9).map(move |k| (f[k / 3] as usize, f[k % 3] as usize, 0.0)))
+            .collect();
+        let matrix = crate::laplacian::assemble(n_vertices, e);
+        let (cp, ri) = (matrix.symbolic().col_ptr(), matrix.symbolic().row_idx());
+        let slot = |i: usize, j: usize| cp[j] + ri[cp[j]..cp[j + 1]].iter().position(|&r| r == i).expect("in pattern");
+        let slots = faces
+            .iter()
+            .map(|f| std::array::from_fn(|k| slot(f[k / 3] as usize, f[k % 3] as usize)))
+            .collect();
+        StiffnessPattern { matrix, slots }
+    }
+
+    /// Fills the pattern with `op`'s `Gᵀ A G` (same faces as at construction).
+    pub fn fill(&mut self, op: &GradientOperator) -> &SparseColMat<usize, f64> {
+        assert_eq!(op.faces.len(), self.slots.len(), "stiffness pattern built for other faces");
+        let vals = self.matrix.val_mut();
+        vals.iter_mut().for_each(|v| *v = 0.0);
+        for (f, sl) in self.slots.iter().enumerate() {
+            let (g, a) = (&op.grads[f], op.areas[f]);
+            for k in 0..9 {
+                vals[sl[k]] += a * g[k / 3].dot(&g[k % 3]);
+            }
+        }
+        &self.matrix
+    }
+}
+
 /// Sumner's frame `[e_1 e_2 v_4]` of a triangle.
 fn frame(t: &[Vector3<f64>; 3]) -> Matrix3<f64> {
     let (e1, e2) = (t[1] - t[0], t[2] - t[0]);

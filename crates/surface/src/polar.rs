@@ -47,21 +47,21 @@ fn triangle_frame(t: &[Vector3<f64>; 3]) -> Option<(Matrix3<f64>, [f64; 3])> {
 /// `rest` to `deformed` ([`crate::deformation_gradient::triangle_deformation`]), in closed form.
 ///
 /// With orthonormal frames `F`, `F'` of the two triangles, `D = F' diag(A, s) Fᵀ` where `A` is
-/// the 2x2 in-plane map in local coordinates and `s > 0` the normal scale, so for `det A > 0`
-/// the polar rotation is exactly `F' diag(R_θ, 1) Fᵀ` with `θ = atan2(a_21 - a_12, a_11 + a_22)`
-/// (closest 2D rotation). A flipped triangle (`det A ≤ 0`) falls back to the SVD of `D`.
-/// `None` for a degenerate triangle.
+/// the 2x2 in-plane map in local coordinates and `s > 0` the normal scale. Each frame takes
+/// its normal from its own edges, so `A` is upper triangular with a positive diagonal
+/// (`det A > 0`, and `det D > 0`: Sumner's frame never produces a reflection, even for a
+/// triangle whose normal turned over). The polar rotation is therefore exactly
+/// `F' diag(R_θ, 1) Fᵀ` with `θ = atan2(a_21 - a_12, a_11 + a_22)` (closest 2D rotation),
+/// about 10x cheaper than a 3x3 SVD. `None` for a degenerate triangle.
 pub fn triangle_rotation(rest: &[Vector3<f64>; 3], deformed: &[Vector3<f64>; 3]) -> Option<Matrix3<f64>> {
     let (f, [r11, r12, r22]) = triangle_frame(rest)?;
     let (g, [d11, d12, d22]) = triangle_frame(deformed)?;
     // A = P_d P_r⁻¹ with upper-triangular P = [[p11, p12], [0, p22]] (back substitution).
-    let (a11, a21) = (d11 / r11, 0.0);
+    // a_21 = 0; a_11, a_22 > 0.
+    let a11 = d11 / r11;
     let a12 = (d12 - a11 * r12) / r22;
     let a22 = d22 / r22;
-    if a11 * a22 - a12 * a21 <= 0.0 {
-        return crate::deformation_gradient::triangle_deformation(rest, deformed).map(|d| rotation(&d));
-    }
-    let th = (a21 - a12).atan2(a11 + a22);
+    let th = (-a12).atan2(a11 + a22);
     let (sn, cs) = th.sin_cos();
     let r2 = Matrix3::new(cs, -sn, 0.0, sn, cs, 0.0, 0.0, 0.0, 1.0);
     Some(g * r2 * f.transpose())

@@ -17,7 +17,7 @@
 //! The sparsity pattern depends only on the template, so the symbolic factorisation is
 //! computed once and reused for every frame.
 
-use crate::deformation_gradient::GradientOperator;
+use crate::deformation_gradient::{GradientOperator, StiffnessPattern};
 use crate::optimal_boundary::{discrepancy, optimal_loop, BoundaryLoop};
 use crate::poisson::PoissonSolver;
 use crate::{check_faces, check_vertices, Error, Result};
@@ -126,12 +126,14 @@ pub struct Stitched {
 /// Stitches part meshes into one template mesh; keeps the factorisation between frames.
 pub struct Stitcher {
     layout: PartLayout,
+    pattern: StiffnessPattern,
     solver: Option<PoissonSolver>,
 }
 
 impl Stitcher {
     pub fn new(layout: PartLayout) -> Self {
-        Stitcher { layout, solver: None }
+        let pattern = StiffnessPattern::new(layout.n_vertices, &layout.faces);
+        Stitcher { layout, pattern, solver: None }
     }
     pub fn layout(&self) -> &PartLayout {
         &self.layout
@@ -147,6 +149,7 @@ impl Stitcher {
             check_vertices(x, p.vertices.len(), &format!("stitch: part {k}"))?;
         }
         let n = lay.n_vertices;
+        let t0 = std::time::Instant::now();
         let mut aligned: Vec<Vec<Vector3<f64>>> = Vec::with_capacity(parts.len());
         let mut alignments = Vec::with_capacity(parts.len());
         let mut loops = vec![None];
@@ -196,6 +199,7 @@ impl Stitcher {
             alignments.push(motion);
         }
 
+        let t1 = t0.elapsed();
         // Source part of every face: the owner of its first vertex off the loops.
         let mut src = Vec::with_capacity(lay.faces.len());
         for (f, face) in lay.faces.iter().enumerate() {
@@ -231,12 +235,15 @@ impl Stitcher {
                 values.push(aligned[0][lay.local[0][v] as usize]);
             }
         }
-        let l = op.stiffness();
+        let t2 = t0.elapsed();
+        let l = self.pattern.fill(&op);
         match self.solver.as_mut() {
-            Some(s) => s.refactor(&l, &fixed)?,
-            None => self.solver = Some(PoissonSolver::new(&l, &fixed)?),
+            Some(s) => s.refactor(l, &fixed)?,
+            None => self.solver = Some(PoissonSolver::new(l, &fixed)?),
         }
+        let t3 = t0.elapsed();
         let vertices = self.solver.as_ref().expect("set above").solve(&op.divergence(&field), &values)?;
+        if std::env::var("SURFACE_PROFILE").is_ok() { eprintln!("PROFILE loops {:?} op {:?} factor {:?} solve {:?}", t1, t2-t1, t3-t2, t0.elapsed()-t3); }
         Ok(Stitched { vertices, loops, alignments })
     }
 }

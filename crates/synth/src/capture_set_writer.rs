@@ -1,5 +1,5 @@
 //! Builds a whole capture set (format in docs/FORMATS.md) from a [`Config`]: both subjects'
-//! training and test motions, the target's truth of the source's test motions, subject and
+//! training motions, each subject's test motions with the other subject's truth of them, subject and
 //! set descriptions with the ground truth (correspondences, key-poses, contacts, curves).
 //!
 //! Written into a temporary sibling folder, then renamed over the output: the set is either
@@ -103,22 +103,26 @@ pub fn write_sequence(
 /// Frame counts of the whole set (for a progress bar).
 pub fn count_frames(cfg: &Config, motions: &[Motion]) -> usize {
     let n = |s: &crate::subject::SubjectDef, m: &Motion| {
-        truth::frame_times(&s.style.warp, s.fps, m.clip.duration(), 100_000).len()
+        truth::frame_times(&s.style.warp, s.fps, m.clip.duration(), MAX_FRAMES).len()
     };
-    let ntrain = cfg.train.len();
+    let (ntrain, ntest) = (cfg.train.len(), cfg.test.len());
     motions
         .iter()
         .enumerate()
         .map(|(i, m)| {
-            n(&cfg.source, m)
-                + if i < ntrain {
-                    n(&cfg.target, m)
-                } else {
-                    2 * n(&cfg.source, m)
-                }
+            if i < ntrain {
+                n(&cfg.source, m) + n(&cfg.target, m)
+            } else if i < ntrain + ntest {
+                2 * n(&cfg.source, m)
+            } else {
+                2 * n(&cfg.target, m)
+            }
         })
         .sum()
 }
+
+/// Upper bound on the frames of one sequence.
+const MAX_FRAMES: usize = 100_000;
 
 fn contacts_json(c: &[[bool; 2]]) -> Value {
     json!(c
@@ -148,6 +152,7 @@ pub fn prepare(cfg: &Config) -> Result<(Subject, Subject, Vec<Motion>)> {
         .train
         .iter()
         .chain(&cfg.test)
+        .chain(&cfg.target_test)
         .map(|d| load_motion(&dir, d, cfg.max_duration))
         .collect::<Result<Vec<_>>>()?;
     Ok((a, b, motions))
@@ -202,13 +207,14 @@ fn write_all(
     truth_for_train: bool,
     tick: &(dyn Fn() + Sync),
 ) -> Result<Summary> {
-    let ntrain = cfg.train.len();
+    let (ntrain, ntest) = (cfg.train.len(), cfg.test.len());
     let mut frames = 0;
     let mut times: [BTreeMap<String, Value>; 2] = Default::default();
     let mut contacts: [BTreeMap<String, Value>; 2] = Default::default();
-    let mut truth_contacts: BTreeMap<String, Value> = BTreeMap::new();
+    let mut truth_contacts: [BTreeMap<String, Value>; 2] = Default::default();
     let mut pairs = Vec::new();
     let mut sources = BTreeMap::new();
+    let subjects = [a, b];
     for (mi, m) in motions.iter().enumerate() {
         let name = &m.def.name;
         sources.insert(
@@ -220,44 +226,42 @@ fn write_all(
             }),
         );
         let d = m.clip.duration();
-        let ta = truth::frame_times(&a.def.style.warp, a.def.fps, d, 100_000);
         let noise_of = |s: &Subject| {
             cfg.noise
                 .as_ref()
                 .map(|l| (l, noise::stream(cfg.seed, &[&s.def.name, name])))
         };
-        let sa = write_sequence(
-            a,
-            m,
-            &ta,
-            &root.join(&a.def.name).join(name),
-            noise_of(a),
-            tick,
-        )?;
-        frames += ta.len();
-        times[0].insert(
-            name.clone(),
-            json!(ta.iter().map(|&t| round6(t)).collect::<Vec<_>>()),
-        );
-        contacts[0].insert(name.clone(), contacts_json(&sa.contacts));
-        let is_train = mi < ntrain;
-        if is_train {
-            let tb = truth::frame_times(&b.def.style.warp, b.def.fps, d, 100_000);
-            let sb = write_sequence(
-                b,
+        // Who performs it: training motions both; test motions the source, the target's own
+        // test motions the target. The other subject gets the truth (at the performer's times).
+        let performers: &[usize] = if mi < ntrain {
+            &[0, 1]
+        } else if mi < ntrain + ntest {
+            &[0]
+        } else {
+            &[1]
+        };
+        let mut perf_times = Vec::new();
+        for &k in performers {
+            let s = subjects[k];
+            let t = truth::frame_times(&s.def.style.warp, s.def.fps, d, MAX_FRAMES);
+            let seq = write_sequence(
+                s,
                 m,
-                &tb,
-                &root.join(&b.def.name).join(name),
-                noise_of(b),
+                &t,
+                &root.join(&s.def.name).join(name),
+                noise_of(s),
                 tick,
             )?;
-            frames += tb.len();
-            times[1].insert(
+            frames += t.len();
+            times[k].insert(
                 name.clone(),
-                json!(tb.iter().map(|&t| round6(t)).collect::<Vec<_>>()),
+                json!(t.iter().map(|&x| round6(x)).collect::<Vec<_>>()),
             );
-            contacts[1].insert(name.clone(), contacts_json(&sb.contacts));
-            let corr = truth::correspondences(&ta, &tb);
+            contacts[k].insert(name.clone(), contacts_json(&seq.contacts));
+            perf_times.push(t);
+        }
+        if performers.len() == 2 {
+            let corr = truth::correspondences(&perf_times[0], &perf_times[1]);
             let mut extra = BTreeMap::new();
             extra.insert("correspondences".to_string(), json!(corr));
             pairs.push(TrainPair {
@@ -267,29 +271,26 @@ fn write_all(
                 extra,
             });
         }
-        if !is_train || truth_for_train {
-            // Truth: B performing A's motion in B's style, frame for frame with A (A's times).
-            let st = write_sequence(
-                b,
-                m,
-                &ta,
-                &root.join("truth").join(&b.def.name).join(name),
-                None,
-                tick,
-            )?;
-            frames += ta.len();
-            truth_contacts.insert(name.clone(), contacts_json(&st.contacts));
+        if performers.len() == 1 || truth_for_train {
+            // Truth: the other subject performing the motion in its own style, frame for frame
+            // with the performer (the source, for training motions).
+            let other = 1 - performers[0];
+            let s = subjects[other];
+            let dir = root.join("truth").join(&s.def.name).join(name);
+            let st = write_sequence(s, m, &perf_times[0], &dir, None, tick)?;
+            frames += perf_times[0].len();
+            truth_contacts[other].insert(name.clone(), contacts_json(&st.contacts));
         }
     }
-    for (k, s) in [a, b].iter().enumerate() {
+    for (k, s) in subjects.iter().enumerate() {
         let mut extra = BTreeMap::new();
         extra.insert("description".into(), json!(s.def.description));
         extra.insert("height_m".into(), json!(round6(s.height())));
         extra.insert("n_vertices".into(), json!(s.rest.len()));
         extra.insert("mocap_time".into(), json!(times[k]));
         extra.insert("contacts".into(), json!(contacts[k]));
-        if k == 1 {
-            extra.insert("truth_contacts".into(), json!(truth_contacts));
+        if !truth_contacts[k].is_empty() {
+            extra.insert("truth_contacts".into(), json!(truth_contacts[k]));
         }
         let spec = SubjectSpec {
             fps: s.def.fps,
@@ -312,6 +313,10 @@ fn write_all(
         },
     );
     extra.insert("mocap".into(), json!(sources));
+    if !cfg.target_test.is_empty() {
+        let names: Vec<&str> = cfg.target_test.iter().map(|m| m.name.as_str()).collect();
+        extra.insert("target_test".into(), json!(names));
+    }
     let set = SetSpec {
         source: a.def.name.clone(),
         target: b.def.name.clone(),

@@ -31,6 +31,8 @@ pub struct Config {
     pub target: SubjectDef,
     pub train: Vec<MotionDef>,
     pub test: Vec<MotionDef>,
+    /// The target subject's own test motions (their truth is the source performing them).
+    pub target_test: Vec<MotionDef>,
     /// Longest clip, in mocap seconds.
     pub max_duration: f64,
     /// Key-poses per training pair.
@@ -91,7 +93,7 @@ pub fn subject_b(topology: Topology, fps: f64) -> SubjectDef {
             elbow_gain: 1.2,
             knee_k: 0.35,
             hip_abduction: 3f64.to_radians(),
-            lean_per_speed: 0.08,
+            lean_per_speed: 0.06,
             warp: TimeWarp { rate: 0.85, amp: 0.035, period: 1.9, phase: 0.7 },
         },
     }
@@ -135,8 +137,9 @@ pub fn preset(name: &str, seed: u64, noise: bool) -> Option<Config> {
             noise,
             source: subject_a(Topology::Obj("notoes_collapse10pc.obj".into()), 20.0),
             target: subject_b(Topology::Obj("notoes_collapse5pc.obj".into()), 25.0),
-            train,
-            test,
+            train: train.clone(),
+            test: test.clone(),
+            target_test: vec![dm("dance_b", "dance_b", 1)],
             max_duration: 1.2,
             keyposes: 5,
         }),
@@ -146,8 +149,9 @@ pub fn preset(name: &str, seed: u64, noise: bool) -> Option<Config> {
             noise,
             source: subject_a(Topology::Body, 25.0),
             target: subject_b(Topology::Obj("notoes.obj".into()), 50.0),
-            train,
-            test,
+            train: train.clone(),
+            test: test.clone(),
+            target_test: vec![dm("dance_b", "dance_b", 1)],
             max_duration: 3.0,
             keyposes: 5,
         }),

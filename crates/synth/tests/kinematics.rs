@@ -256,3 +256,42 @@ fn retargeted_rest_poses_match_the_sources_rest_poses() {
     let err = mocap::parse_bvh(&p, "t").unwrap_err().to_string();
     assert!(err.contains("t.bvh") && err.contains("frame"), "{err}");
 }
+
+#[test]
+fn part_loops_ring_the_upper_limb_bones_in_order() {
+    let b = assets();
+    let s = tiny_a(&b);
+    let curves = synth::parts::part_curves(&s).unwrap();
+    assert_eq!(curves.len(), 4);
+    for (part, bone) in [
+        ("arm_l", "LeftArm"),
+        ("arm_r", "RightArm"),
+        ("leg_l", "LeftUpLeg"),
+        ("leg_r", "RightUpLeg"),
+    ] {
+        let bn = &s.skeleton.bones[s.skeleton.index(bone).unwrap()];
+        let (h, d, len) = (bn.head, bn.direction(), (bn.tail - bn.head).norm());
+        let along = |l: &Vec<u32>| {
+            l.iter()
+                .map(|&i| (s.rest[i as usize] - h).dot(&d))
+                .sum::<f64>()
+                / l.len() as f64
+                / len
+        };
+        let loops = &curves[part];
+        assert_eq!(loops.len(), 2);
+        let (a0, a1) = (along(&loops[0]), along(&loops[1]));
+        assert!(
+            0.0 < a0 && a0 < a1 && a1 < 0.7,
+            "{part}: loops at {a0:.2}, {a1:.2} of the bone"
+        );
+        for l in loops {
+            // Every loop vertex is on this limb's side of the body.
+            let side = if part.ends_with("_l") { 1.0 } else { -1.0 };
+            assert!(
+                l.iter().all(|&i| side * s.rest[i as usize].x > 0.0),
+                "{part}"
+            );
+        }
+    }
+}

@@ -9,3 +9,8 @@ pub mod align;
 pub mod segment;
 pub mod part_pca;
 pub mod densify;
+pub mod gpr_model;
+pub mod predict;
+pub mod assemble;
+pub mod placement;
+pub mod evaluate;

@@ -292,9 +292,15 @@ fn check_counts(header: &Header, payload_len: usize) -> std::result::Result<(), 
     Ok(())
 }
 
-/// Collapses a multi-line ply-rs-bw message into one short line.
+/// Turns a multi-line ply-rs-bw error into one short line: its first line
+/// (which carries the file line number) plus the offending text, if quoted.
 fn one_line(s: &str) -> String {
-    let mut out: String = s.split_whitespace().collect::<Vec<_>>().join(" ");
+    let mut out = s.lines().next().unwrap_or_default().trim().to_string();
+    let quoted = s.split_once("String: '").and_then(|(_, rest)| rest.split_once('\''));
+    if let Some((text, _)) = quoted {
+        out.push_str(&format!(" '{}'", text.trim()));
+    }
+    let mut out: String = out.split_whitespace().collect::<Vec<_>>().join(" ");
     if out.len() > 200 {
         let mut cut = 200;
         while !out.is_char_boundary(cut) {

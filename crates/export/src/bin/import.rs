@@ -1,0 +1,44 @@
+//! `import`: OBJ/PLY frames or a template + PC2 point cache to a surfcap sequence folder.
+use std::path::PathBuf;
+use std::process::ExitCode;
+
+use clap::Parser;
+use mesh_core::cli::{run_stage, CommonArgs};
+
+/// Read a mesh sequence made by other tools (PC2 point cache + template, or OBJ/PLY frames) into a folder of PLY frames
+#[derive(Parser)]
+#[command(
+    name = "import",
+    version,
+    after_help = "e.g.: import walk.pc2 work/walk            # template: walk.obj beside it\n\
+                  e.g.: import walk.pc2 work/walk --template body.ply\n\
+                  e.g.: import blender-export/ work/walk   # folder of 000000.obj, ..."
+)]
+struct Args {
+    #[command(flatten)]
+    common: CommonArgs,
+    /// A .pc2 file or a folder of numbered OBJ/PLY frames
+    input: PathBuf,
+    /// Output folder of numbered PLY frames
+    out: PathBuf,
+    /// Mesh holding the faces for a .pc2 input [default: INPUT with .obj]
+    #[arg(long, value_name = "MESH")]
+    template: Option<PathBuf>,
+}
+
+fn main() -> ExitCode {
+    let args = Args::parse();
+    run_stage("import", || {
+        args.common.init()?;
+        let is_pc2 = args.input.extension().is_some_and(|e| e.eq_ignore_ascii_case("pc2"));
+        let seq = if is_pc2 {
+            let template = args.template.clone().unwrap_or_else(|| args.input.with_extension("obj"));
+            export::pc2::read_obj_pc2(&template, &args.input)?
+        } else {
+            export::frames::read_frames(&args.input)?
+        };
+        seq.write_dir(&args.out)?;
+        mesh_core::info!("wrote {} frames to {}", seq.n_frames(), args.out.display());
+        Ok(())
+    })
+}

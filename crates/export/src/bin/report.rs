@@ -1,0 +1,62 @@
+//! `report`: the static HTML page of a pipeline run (OUT/index.html).
+use std::path::PathBuf;
+use std::process::ExitCode;
+
+use clap::Parser;
+use export::report::{write_report, ReportOptions};
+use mesh_core::cli::{run_stage, CommonArgs};
+
+/// Write OUT/index.html: 3D view, result tables, contact sheets, GIFs, plots and provenance of a pipeline run
+#[derive(Parser)]
+#[command(
+    name = "report",
+    version,
+    after_help = "The page works from disk (file://), with no server and no network.\n\
+                  e.g.: report out --view source=data/set/A/test/walk \\\n\
+                  \x20      --view transfer=out/transfer/A-to-B/walk/gpr-nn --view truth=data/set/truth/B/walk"
+)]
+struct Args {
+    #[command(flatten)]
+    common: CommonArgs,
+    /// Pipeline output folder to report on; index.html is written there
+    out: PathBuf,
+    /// A sequence for the 3D view, LABEL=FOLDER of numbered frames (repeat, shown side by side)
+    #[arg(long, value_name = "LABEL=DIR", value_parser = parse_view)]
+    view: Vec<(String, PathBuf)>,
+    /// Page title
+    #[arg(long, default_value = "surfcap report")]
+    title: String,
+    /// Frames per second of the sequences
+    #[arg(long, default_value_t = 30.0, value_name = "F")]
+    fps: f64,
+    /// Frames kept at most per sequence in the 3D view (evenly subsampled)
+    #[arg(long, default_value_t = 60, value_name = "N", value_parser = clap::value_parser!(u32).range(1..))]
+    max_frames: u32,
+    /// Folder of the npm package `three` [default: crates/export/web/node_modules/three]
+    #[arg(long, value_name = "DIR")]
+    three: Option<PathBuf>,
+}
+
+fn parse_view(s: &str) -> Result<(String, PathBuf), String> {
+    match s.split_once('=') {
+        Some((label, dir)) if !label.is_empty() && !dir.is_empty() => Ok((label.to_string(), dir.into())),
+        _ => Err(format!("expected LABEL=DIR, got '{s}'")),
+    }
+}
+
+fn main() -> ExitCode {
+    let args = Args::parse();
+    run_stage("report", || {
+        args.common.init()?;
+        let page = write_report(&ReportOptions {
+            out: args.out.clone(),
+            views: args.view.clone(),
+            title: args.title.clone(),
+            fps: args.fps,
+            max_frames: args.max_frames as usize,
+            three_dir: args.three.clone().unwrap_or_else(|| export::viewer::DEFAULT_THREE_DIR.into()),
+        })?;
+        mesh_core::info!("wrote {}", page.display());
+        Ok(())
+    })
+}

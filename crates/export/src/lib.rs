@@ -1,0 +1,21 @@
+//! export: results people can open (issue 7).
+//!
+//! - [`frames`]: a mesh sequence as one OBJ or PLY file per frame, and back.
+//! - [`pc2`]: the PC2 point cache (Blender's Mesh Cache modifier, 3ds Max),
+//!   written beside a template OBJ, and back.
+//! - [`glb`]: a glTF 2.0 binary with the animation as morph targets whose
+//!   weights are sampled one-hot per frame (validator-clean by default;
+//!   frame stride and int16 quantisation on request).
+//! - [`report`]: the static `OUT/index.html` page of a pipeline run, with
+//!   [`viewer`] the embedded three.js player of source / transfer / truth.
+//!
+//! Everything written goes through [`mesh_core::atomic`], so an output is
+//! either complete or absent.
+
+pub mod base64;
+pub mod frames;
+pub mod glb;
+pub mod html;
+pub mod pc2;
+pub mod report;
+pub mod viewer;

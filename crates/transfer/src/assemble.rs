@@ -1,0 +1,134 @@
+//! Assembling decoded target parts into one mesh with the target template's
+//! topology (the simple rule used until the `surface` crate's stitching, paper
+//! §6, is wired in).
+//!
+//! Every decoded part is in its own reference frame (pca-fit aligns each part
+//! to the template part). The first part (the root) is kept as decoded. Then,
+//! repeatedly, the unplaced part sharing the most template vertices with the
+//! parts already placed (its overlap band with its parent) is rigidly aligned
+//! onto them: Procrustes of the part's copies of the shared vertices onto the
+//! positions they already have. Vertices covered by several parts get the mean
+//! of their aligned copies.
+
+use mesh_core::rigid::procrustes;
+use mesh_core::{Error, Result};
+use nalgebra::Vector3;
+use rayon::prelude::*;
+
+use crate::part_pca::PcaModel;
+
+/// One step of the assembly: which part, and which of its local vertices
+/// anchor it on already-placed template vertices.
+#[derive(Clone, Debug, PartialEq)]
+pub struct AssemblyStep {
+    pub part: usize,
+    /// Local indices (into the part) of the anchor vertices (empty for the root).
+    pub anchor_local: Vec<usize>,
+    /// Template indices of the same vertices.
+    pub anchor_global: Vec<u32>,
+}
+
+/// The order in which parts are placed and their anchors.
+#[derive(Clone, Debug, PartialEq)]
+pub struct AssemblyPlan {
+    pub n_vertices: usize,
+    pub steps: Vec<AssemblyStep>,
+    /// How many parts cover each template vertex.
+    pub coverage: Vec<u32>,
+}
+
+/// Plans the assembly of `pca`'s parts; every template vertex must be in a
+/// part and every non-root part must share at least 3 vertices with the others.
+pub fn plan(pca: &PcaModel) -> Result<AssemblyPlan> {
+    let n = pca.n_vertices;
+    let mut coverage = vec![0u32; n];
+    for p in &pca.parts {
+        for &v in &p.vertices {
+            let v = v as usize;
+            if v >= n {
+                return Err(Error::invalid(format!("part '{}' has vertex {v} beyond the {n} template vertices", p.name)));
+            }
+            coverage[v] += 1;
+        }
+    }
+    if let Some(v) = coverage.iter().position(|&c| c == 0) {
+        return Err(Error::invalid(format!("template vertex {v} is in no part")));
+    }
+    let mut placed = vec![false; n];
+    let mut done = vec![false; pca.parts.len()];
+    let mut steps = Vec::with_capacity(pca.parts.len());
+    let Some(root) = pca.parts.first() else {
+        return Err(Error::invalid("the PCA model has no parts"));
+    };
+    for &v in &root.vertices {
+        placed[v as usize] = true;
+    }
+    done[0] = true;
+    steps.push(AssemblyStep { part: 0, anchor_local: Vec::new(), anchor_global: Vec::new() });
+    while steps.len() < pca.parts.len() {
+        let best = pca
+            .parts
+            .iter()
+            .enumerate()
+            .filter(|(k, _)| !done[*k])
+            .map(|(k, p)| (k, p.vertices.iter().filter(|&&v| placed[v as usize]).count()))
+            .max_by_key(|&(k, c)| (c, std::cmp::Reverse(k)))
+            .expect("an unplaced part remains");
+        let (k, shared) = best;
+        if shared < 3 {
+            return Err(Error::invalid(format!(
+                "part '{}' shares {shared} vertices with the parts placed before it (need 3 to align it)",
+                pca.parts[k].name
+            )));
+        }
+        let part = &pca.parts[k];
+        let (anchor_local, anchor_global) =
+            part.vertices.iter().enumerate().filter(|(_, &v)| placed[v as usize]).map(|(i, &v)| (i, v)).unzip();
+        for &v in &part.vertices {
+            placed[v as usize] = true;
+        }
+        done[k] = true;
+        steps.push(AssemblyStep { part: k, anchor_local, anchor_global });
+    }
+    Ok(AssemblyPlan { n_vertices: n, steps, coverage })
+}
+
+/// Assembles one frame from its decoded parts (`parts[k]` in part-local order).
+pub fn assemble_frame(plan: &AssemblyPlan, pca: &PcaModel, parts: &[&[Vector3<f64>]]) -> Vec<Vector3<f64>> {
+    let n = plan.n_vertices;
+    let mut first: Vec<Option<Vector3<f64>>> = vec![None; n];
+    let mut sum = vec![Vector3::zeros(); n];
+    for step in &plan.steps {
+        let verts = parts[step.part];
+        let index = &pca.parts[step.part].vertices;
+        let motion = if step.anchor_local.is_empty() {
+            mesh_core::rigid::RigidMotion::identity()
+        } else {
+            let src: Vec<Vector3<f64>> = step.anchor_local.iter().map(|&i| verts[i]).collect();
+            let dst: Vec<Vector3<f64>> =
+                step.anchor_global.iter().map(|&v| first[v as usize].expect("anchor placed")).collect();
+            procrustes(&src, &dst, None)
+        };
+        for (p, &v) in verts.iter().zip(index) {
+            let q = motion.apply(p);
+            let v = v as usize;
+            if first[v].is_none() {
+                first[v] = Some(q);
+            }
+            sum[v] += q;
+        }
+    }
+    sum.iter().zip(&plan.coverage).map(|(s, &c)| s / c as f64).collect()
+}
+
+/// Assembles every frame: `decoded[part][frame]` as from `PcaModel::decode`.
+pub fn assemble(plan: &AssemblyPlan, pca: &PcaModel, decoded: &[Vec<Vec<Vector3<f64>>>]) -> Vec<Vec<Vector3<f64>>> {
+    let n_frames = decoded.first().map_or(0, |d| d.len());
+    (0..n_frames)
+        .into_par_iter()
+        .map(|f| {
+            let parts: Vec<&[Vector3<f64>]> = decoded.iter().map(|d| d[f].as_slice()).collect();
+            assemble_frame(plan, pca, &parts)
+        })
+        .collect()
+}

@@ -1,0 +1,103 @@
+use std::path::PathBuf;
+use std::process::ExitCode;
+use std::time::Instant;
+
+use anyhow::{bail, Context};
+use clap::Parser;
+use mesh_core::artifact::Artifact;
+use mesh_core::cli::{run_stage, CommonArgs};
+use mesh_core::sequence::MeshSequence;
+use transfer::align::AlignedMotion;
+use transfer::gpr_model::GprModel;
+use transfer::part_pca::PcaModel;
+use transfer::placement::Placement;
+use transfer::predict::transfer_motion;
+
+/// Transfer an aligned source motion to the target subject with a trained model: PLY frames in world coordinates
+#[derive(Parser, Debug)]
+#[command(
+    name = "gpr-predict",
+    version,
+    after_help = "e.g.: gpr-predict --model work/A-to-B/gpr-nn.model --source-pca work/A/pca.model --target-pca work/B/pca.model \\\n        --target-template set/B/walk/000000.ply work/A/punch.aligned --out out/transfer/A-to-B/punch/gpr-nn"
+)]
+struct Args {
+    #[command(flatten)]
+    common: CommonArgs,
+    /// Trained model (from gpr-train)
+    #[arg(long)]
+    model: PathBuf,
+    /// PCA model of the model's source subject (the one it was trained with)
+    #[arg(long)]
+    source_pca: PathBuf,
+    /// PCA model of the model's target subject
+    #[arg(long)]
+    target_pca: PathBuf,
+    /// Target template mesh (gives the output's faces)
+    #[arg(long)]
+    target_template: PathBuf,
+    /// How the poses are placed in the world
+    #[arg(long, value_enum, default_value_t = Placement::Regressed)]
+    placement: Placement,
+    /// Aligned source motion (from align)
+    motion: PathBuf,
+    /// Output folder of PLY frames 000000.ply, ... (the target's topology, one frame per source frame)
+    #[arg(short, long)]
+    out: PathBuf,
+    /// Also write timings (frames per second of the prediction) as JSON
+    #[arg(long)]
+    timing: Option<PathBuf>,
+}
+
+fn main() -> ExitCode {
+    let args = Args::parse();
+    run_stage("gpr-predict", || {
+        args.common.init()?;
+        let model = GprModel::load(&args.model)?;
+        let (src_pca, tgt_pca) = (PcaModel::load(&args.source_pca)?, PcaModel::load(&args.target_pca)?);
+        for (pca, path) in [(&src_pca, &args.source_pca), (&tgt_pca, &args.target_pca)] {
+            let names: Vec<&String> = pca.parts.iter().map(|p| &p.name).collect();
+            if names.iter().map(|s| s.as_str()).ne(model.part_names.iter().map(|s| s.as_str())) {
+                bail!("{}: parts {:?} differ from the model's {:?}", path.display(), names, model.part_names);
+            }
+        }
+        let motion = AlignedMotion::load(&args.motion)?;
+        let template = mesh_core::io::read_mesh(&args.target_template)?;
+        if template.n_vertices() != tgt_pca.n_vertices {
+            bail!(
+                "{}: {} vertices but the target PCA model was fitted on {}",
+                args.target_template.display(),
+                template.n_vertices(),
+                tgt_pca.n_vertices
+            );
+        }
+        let faces = template.faces;
+        let t0 = Instant::now();
+        let result = transfer_motion(&model, &src_pca, &tgt_pca, &motion, args.placement)
+            .with_context(|| args.motion.display().to_string())?;
+        let total = t0.elapsed().as_secs_f64();
+        let t1 = Instant::now();
+        MeshSequence::new(faces, result.frames).write_dir(&args.out)?;
+        let write = t1.elapsed().as_secs_f64();
+        let n = motion.n_frames() as f64;
+        mesh_core::info!(
+            "{} frames: encode {:.4} s, GP {:.4} s ({:.0} frames/s), decode+assemble {:.4} s, total {:.4} s, PLY writing {:.3} s",
+            n,
+            result.timing.encode_s,
+            result.timing.gp_s,
+            n / result.timing.gp_s.max(1e-12),
+            result.timing.decode_s,
+            total,
+            write
+        );
+        if let Some(path) = &args.timing {
+            let json = serde_json::json!({
+                "frames": motion.n_frames(), "encode_s": result.timing.encode_s, "gp_s": result.timing.gp_s,
+                "gp_frames_per_s": n / result.timing.gp_s.max(1e-12), "decode_assemble_s": result.timing.decode_s,
+                "total_s": total, "frames_per_s_without_writing": n / total.max(1e-12), "ply_write_s": write,
+            });
+            mesh_core::atomic::write_bytes_atomic(path, serde_json::to_string_pretty(&json)?.as_bytes())?;
+        }
+        Ok(())
+    })
+}
+

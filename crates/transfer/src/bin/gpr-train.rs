@@ -1,0 +1,124 @@
+use std::path::PathBuf;
+use std::process::ExitCode;
+
+use anyhow::{bail, Context};
+use clap::Parser;
+use gp::gpr::{GprOptions, PAPER_NOISE_VAR};
+use mesh_core::artifact::Artifact;
+use mesh_core::cli::{run_stage, CommonArgs};
+use transfer::align::AlignedMotion;
+use transfer::densify::Correspondences;
+use transfer::gpr_model::{train, GprModel, Method, PairData};
+use transfer::part_pca::PcaModel;
+
+/// Train the source-to-target GP regression per body part and for the rigid displacement (eqs. 8-13)
+#[derive(Parser, Debug)]
+#[command(
+    name = "gpr-train",
+    version,
+    after_help = "e.g.: gpr-train --source-pca work/A/pca.model --target-pca work/B/pca.model --source-fps 25 --target-fps 50 \\\n        --pair work/A/walk.aligned work/B/walk.aligned work/pairs/walk.corr --method gpr-nn --out work/A-to-B/gpr-nn.model"
+)]
+struct Args {
+    #[command(flatten)]
+    common: CommonArgs,
+    /// PCA model (from pca-fit) of this direction's source subject
+    #[arg(long)]
+    source_pca: PathBuf,
+    /// PCA model of this direction's target subject (same part names)
+    #[arg(long)]
+    target_pca: PathBuf,
+    /// Frame rate of this direction's source subject
+    #[arg(long)]
+    source_fps: f64,
+    /// Frame rate of this direction's target subject
+    #[arg(long)]
+    target_fps: f64,
+    /// A training pair as in the set: aligned motion of the set's source subject, of its target subject, and their correspondences (repeat per pair)
+    #[arg(long, num_args = 3, value_names = ["SET_SOURCE", "SET_TARGET", "CORR"], required = true, action = clap::ArgAction::Append)]
+    pair: Vec<PathBuf>,
+    /// Train the reverse direction (set target -> set source): --source-pca/--source-fps are then the set target's
+    #[arg(long)]
+    reverse: bool,
+    /// gpr-nn, gpr-se, gpr-linear, keypose-affine or whole-body (gpr-nn on whole-body PCA models)
+    #[arg(long, default_value = "gpr-nn")]
+    method: String,
+    /// Train on the key-pose pairs only (instead of the dense DTW pairs)
+    #[arg(long)]
+    keyposes_only: bool,
+    /// Observation-noise variance σn² (the paper's 0.1)
+    #[arg(long, default_value_t = PAPER_NOISE_VAR)]
+    noise_var: f64,
+    /// Maximum conjugate-gradient iterations per GP
+    #[arg(long, default_value_t = 100)]
+    max_iter: usize,
+    /// Output artifact (kind gpr-model)
+    #[arg(short, long)]
+    out: PathBuf,
+}
+
+fn main() -> ExitCode {
+    let args = Args::parse();
+    run_stage("gpr-train", || {
+        args.common.init()?;
+        let Some(method) = Method::from_name(&args.method) else {
+            bail!("unknown method '{}' (gpr-nn, gpr-se, gpr-linear, keypose-affine, whole-body)", args.method);
+        };
+        let (src_pca, tgt_pca) = (PcaModel::load(&args.source_pca)?, PcaModel::load(&args.target_pca)?);
+        let names: Vec<String> = src_pca.parts.iter().map(|p| p.name.clone()).collect();
+        let tgt_names: Vec<String> = tgt_pca.parts.iter().map(|p| p.name.clone()).collect();
+        if names != tgt_names {
+            bail!("{}: parts {:?} differ from the target's {:?}", args.source_pca.display(), names, tgt_names);
+        }
+        if method == Method::WholeBody && names.len() != 1 {
+            mesh_core::warn!("method whole-body with a {}-part PCA model (expected pca-fit --whole-body)", names.len());
+        }
+        let mut pairs = Vec::new();
+        for chunk in args.pair.chunks(3) {
+            let [s, t, c] = chunk else { bail!("--pair takes three files") };
+            let (src, tgt) = (AlignedMotion::load(s)?, AlignedMotion::load(t)?);
+            let corr = Correspondences::load(c)?;
+            // The files are in the set's order (set source, set target); the PCA
+            // models are in the direction's order.
+            let (src_model, tgt_model) = if args.reverse { (&tgt_pca, &src_pca) } else { (&src_pca, &tgt_pca) };
+            let data = PairData {
+                source_coeffs: src_model.encode(&src).with_context(|| s.display().to_string())?,
+                target_coeffs: tgt_model.encode(&tgt).with_context(|| t.display().to_string())?,
+                source_disp: src.displacements,
+                target_disp: tgt.displacements,
+                pairs: corr.pairs,
+                keyposes: corr.keyposes,
+            };
+            let data = if args.reverse { data.reversed() } else { data };
+            pairs.push(data);
+        }
+        let opts = GprOptions {
+            noise_var: args.noise_var,
+            cg: gp::optim::CgOptions { max_iter: args.max_iter, ..Default::default() },
+            ..Default::default()
+        };
+        let ratio = args.target_fps / args.source_fps;
+        let start = std::time::Instant::now();
+        let model: GprModel = train(method, &names, &pairs, ratio, args.keyposes_only, &opts)?;
+        mesh_core::info!("trained {} on {} pairs in {:.3} s", method.name(), model.n_train, start.elapsed().as_secs_f64());
+        for r in &model.reports {
+            mesh_core::info!("{}", r.line());
+            for n in &r.notes {
+                mesh_core::warn!("{}: {n}", r.name);
+            }
+        }
+        let mut header = args
+            .common
+            .header("gpr-train", env!("CARGO_PKG_VERSION"))
+            .with_params(&serde_json::json!({
+                "method": method.name(), "keyposes_only": args.keyposes_only, "noise_var": args.noise_var,
+                "reverse": args.reverse, "source_fps": args.source_fps, "target_fps": args.target_fps,
+            }))?
+            .with_input(&args.source_pca)?
+            .with_input(&args.target_pca)?;
+        for p in &args.pair {
+            header = header.with_input(p)?;
+        }
+        model.save(&args.out, &header)?;
+        Ok(())
+    })
+}

@@ -1,0 +1,396 @@
+//! `gpr-train`: the GP regression model of the transfer (paper §5, eqs. 8-13).
+//!
+//! For every body part `k`, a multi-output GP maps the source subject's part-`k`
+//! PCA coefficients to the target subject's part-`k` coefficients (eq. 8: one GP
+//! per output column, all sharing the kernel and its hyperparameters); one more
+//! GP maps the source's rigid displacement 6-vector to the target's (paper §4,
+//! "Rigid Transformation"). Training pairs are the dense correspondences of
+//! `dtw-densify` (eq. 7), or only the key-poses (`--keyposes-only`).
+//!
+//! Methods (paper §7 comparisons):
+//! - `gpr-nn` (the paper): neural-network kernel, eq. 10;
+//! - `gpr-se`, `gpr-linear`: squared-exponential and linear kernels;
+//! - `keypose-affine`: Semantic Deformation Transfer (Baran et al. 2009) on the
+//!   key-pose pairs only, per part (`gp::affine_keypose`);
+//! - `whole-body`: `gpr-nn` on a single-part PCA (`pca-fit --whole-body`).
+//!
+//! Deviations (documented for the report):
+//! - The displacement GP is always a `gpr-nn` GP (also for `keypose-affine`,
+//!   which has no displacement model in Baran et al.), so that the methods
+//!   differ only in the pose mapping.
+//! - The displacement outputs are divided by their RMS before training
+//!   (`y_scale`, undone at prediction), so that the paper's `σn² = 0.1` is a
+//!   noise level relative to the signal: per-frame displacements are a few
+//!   centimetres, and an absolute `σn² = 0.1 m²` would flatten the regression
+//!   to zero.
+//! - Frame rates: see [`target_step`].
+
+use gp::affine_keypose::AffineKeypose;
+use gp::gpr::{Gpr, GprOptions, TrainReport};
+use gp::kernel::Kernel;
+use mesh_core::artifact::Artifact;
+use mesh_core::rigid::{integrate, RigidMotion};
+use mesh_core::{Error, Result};
+use nalgebra::{DMatrix, Vector6};
+use serde::{Deserialize, Serialize};
+
+/// The transfer methods compared in the paper (§7).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+pub enum Method {
+    GprNn,
+    GprSe,
+    GprLinear,
+    KeyposeAffine,
+    WholeBody,
+}
+
+impl Method {
+    pub const ALL: [Method; 5] =
+        [Method::GprNn, Method::GprSe, Method::GprLinear, Method::KeyposeAffine, Method::WholeBody];
+
+    /// The name used on the command line, in file paths and in results.json.
+    pub fn name(&self) -> &'static str {
+        match self {
+            Method::GprNn => "gpr-nn",
+            Method::GprSe => "gpr-se",
+            Method::GprLinear => "gpr-linear",
+            Method::KeyposeAffine => "keypose-affine",
+            Method::WholeBody => "whole-body",
+        }
+    }
+
+    pub fn from_name(name: &str) -> Option<Method> {
+        Method::ALL.into_iter().find(|m| m.name() == name)
+    }
+
+    /// The kernel of the pose GPs (`None` for the affine baseline). Starting
+    /// hyperparameters are replaced by `gp::gpr::initial_kernel` when training.
+    pub fn kernel(&self) -> Option<Kernel> {
+        match self {
+            Method::GprNn | Method::WholeBody => Some(Kernel::neural_network(1.0, 1.0)),
+            Method::GprSe => Some(Kernel::SquaredExponential { l: 1.0, sigma_f: 1.0 }),
+            Method::GprLinear => Some(Kernel::Linear { sigma_f: 1.0 }),
+            Method::KeyposeAffine => None,
+        }
+    }
+}
+
+/// The mapping of one part's coefficients (or of the displacement).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub enum Regressor {
+    /// A GP trained on outputs divided by `y_scale`.
+    Gp { gpr: Gpr, y_scale: f64 },
+    Affine(AffineKeypose),
+}
+
+impl Regressor {
+    /// Mapped outputs for the rows of `xs`.
+    pub fn predict(&self, xs: &DMatrix<f64>) -> Result<DMatrix<f64>> {
+        let out = match self {
+            Regressor::Gp { gpr, y_scale } => gpr.predict_mean(xs).map(|m| m * *y_scale),
+            Regressor::Affine(a) => a.predict(xs),
+        };
+        out.map_err(|e| Error::invalid(e.to_string()))
+    }
+}
+
+/// What training one regressor did (printed with `-v`, kept in the model).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct RegressorReport {
+    /// Part name, or `displacement`.
+    pub name: String,
+    pub kernel: Option<Kernel>,
+    /// Optimiser exit state (`None`: not optimised, e.g. the affine baseline).
+    pub exit: Option<String>,
+    pub iterations: usize,
+    pub initial_lml: f64,
+    pub lml: f64,
+    /// Numerical notes (Cholesky jitter retries).
+    pub notes: Vec<String>,
+}
+
+impl RegressorReport {
+    fn from_train(name: &str, gpr: &Gpr, r: &TrainReport) -> Self {
+        RegressorReport {
+            name: name.to_string(),
+            kernel: Some(gpr.kernel),
+            exit: r.exit.map(|e| e.label().to_string()),
+            iterations: r.iterations,
+            initial_lml: r.initial_lml,
+            lml: r.lml,
+            notes: r.notes.clone(),
+        }
+    }
+
+    /// One line for logs.
+    pub fn line(&self) -> String {
+        match (&self.kernel, &self.exit) {
+            (Some(k), exit) => format!(
+                "{}: kernel {:?}, log marginal likelihood {:.3} -> {:.3}, {} iterations, exit: {}",
+                self.name,
+                k,
+                self.initial_lml,
+                self.lml,
+                self.iterations,
+                exit.as_deref().unwrap_or("not optimised")
+            ),
+            (None, _) => format!("{}: affine key-pose mapping (no optimisation)", self.name),
+        }
+    }
+}
+
+/// A trained transfer model (artifact kind `gpr-model`).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct GprModel {
+    pub method: Method,
+    /// Part names, in the order of the PCA models the model was trained with.
+    pub part_names: Vec<String>,
+    pub parts: Vec<Regressor>,
+    pub displacement: Regressor,
+    /// Number of training pairs (rows) of the pose regressions.
+    pub n_train: usize,
+    /// Target frames per source frame `q = fps_target / fps_source`.
+    pub frame_ratio: f64,
+    pub keyposes_only: bool,
+    pub reports: Vec<RegressorReport>,
+}
+
+impl Artifact for GprModel {
+    const KIND: &'static str = "gpr-model";
+    const VERSION: u32 = 1;
+}
+
+/// The coefficients and displacements of one training pair of motions, with
+/// the frame pairs to learn from.
+#[derive(Clone, Debug)]
+pub struct PairData {
+    /// Source coefficients per part (`F_s x m_k`).
+    pub source_coeffs: Vec<DMatrix<f64>>,
+    /// Target coefficients per part (`F_t x m_k`).
+    pub target_coeffs: Vec<DMatrix<f64>>,
+    /// Source displacements `D_i` (align.rs), one per source frame.
+    pub source_disp: Vec<[f64; 6]>,
+    /// Target displacements, one per target frame.
+    pub target_disp: Vec<[f64; 6]>,
+    /// Dense `(source frame, target frame)` pairs.
+    pub pairs: Vec<[usize; 2]>,
+    /// Key-pose pairs (a subset of the path).
+    pub keyposes: Vec<[usize; 2]>,
+}
+
+impl PairData {
+    /// Swaps source and target (the B->A direction uses the A->B path reversed).
+    pub fn reversed(self) -> PairData {
+        let swap = |v: Vec<[usize; 2]>| v.into_iter().map(|[i, j]| [j, i]).collect();
+        PairData {
+            source_coeffs: self.target_coeffs,
+            target_coeffs: self.source_coeffs,
+            source_disp: self.target_disp,
+            target_disp: self.source_disp,
+            pairs: swap(self.pairs),
+            keyposes: swap(self.keyposes),
+        }
+    }
+}
+
+/// Stacked regression problems: per part `(X_k, Y_k)` and the displacement `(X_d, Y_d)`.
+#[derive(Clone, Debug)]
+pub struct TrainingSet {
+    pub x_parts: Vec<DMatrix<f64>>,
+    pub y_parts: Vec<DMatrix<f64>>,
+    pub x_disp: DMatrix<f64>,
+    pub y_disp: DMatrix<f64>,
+}
+
+impl TrainingSet {
+    pub fn len(&self) -> usize {
+        self.x_disp.nrows()
+    }
+
+    pub fn is_empty(&self) -> bool {
+        self.len() == 0
+    }
+
+    /// The rows `rows` of every problem.
+    pub fn subset(&self, rows: &[usize]) -> TrainingSet {
+        let pick = |m: &DMatrix<f64>| m.select_rows(rows.iter());
+        TrainingSet {
+            x_parts: self.x_parts.iter().map(pick).collect(),
+            y_parts: self.y_parts.iter().map(pick).collect(),
+            x_disp: pick(&self.x_disp),
+            y_disp: pick(&self.y_disp),
+        }
+    }
+}
+
+/// The target's rigid displacement over **one source frame interval** ending
+/// at target frame `j`, from per-target-frame displacements `disp` and the
+/// frame ratio `q = fps_target / fps_source`.
+///
+/// With `c = ceil(q)` (`c = q` when `q` is an integer), the displacements of
+/// target frames `j-c+1 ..= j` are composed (frames before 1 are the identity:
+/// `D_0 = 0`). When `q` is not an integer (or `q < 1`), the composed 6-vector
+/// is scaled by `q / c`: a first-order approximation of scaling the twist of
+/// the motion, exact for straight-line translation at constant speed and for
+/// rotation about a fixed axis without translation.
+pub fn target_step(disp: &[[f64; 6]], j: usize, q: f64) -> [f64; 6] {
+    let c = q.ceil().max(1.0) as usize;
+    let first = (j + 1).saturating_sub(c);
+    let steps: Vec<RigidMotion> = (first..=j)
+        .map(|f| RigidMotion::from_6vec(&Vector6::from_column_slice(&disp[f])))
+        .collect();
+    let composed = *integrate(&RigidMotion::identity(), &steps).last().expect("integrate returns the start");
+    let v = composed.to_6vec() * (q / c as f64);
+    v.into()
+}
+
+/// Stacks the training rows of all pairs: pose rows for every dense pair (or
+/// key-pose pair when `keyposes_only`), displacement rows `(D^s_i, target_step(j))`.
+pub fn training_set(pairs: &[PairData], frame_ratio: f64, keyposes_only: bool) -> Result<TrainingSet> {
+    let n_parts = pairs.first().map_or(0, |p| p.source_coeffs.len());
+    if pairs.is_empty() || n_parts == 0 {
+        return Err(Error::invalid("no training pairs or no parts"));
+    }
+    let mut rows: Vec<(usize, usize, usize)> = Vec::new();
+    for (p, pair) in pairs.iter().enumerate() {
+        if pair.source_coeffs.len() != n_parts || pair.target_coeffs.len() != n_parts {
+            return Err(Error::invalid(format!("training pair {p}: part counts differ")));
+        }
+        let (fs, ft) = (pair.source_disp.len(), pair.target_disp.len());
+        let chosen = if keyposes_only { &pair.keyposes } else { &pair.pairs };
+        for &[i, j] in chosen {
+            if i >= fs || j >= ft {
+                return Err(Error::invalid(format!(
+                    "training pair {p}: frame pair ({i}, {j}) outside the motions ({fs} and {ft} frames)"
+                )));
+            }
+            rows.push((p, i, j));
+        }
+    }
+    if rows.is_empty() {
+        return Err(Error::invalid("no training frame pairs"));
+    }
+    let n = rows.len();
+    let gather = |dim: usize, get: &dyn Fn(usize, usize, usize, usize) -> f64| {
+        DMatrix::from_fn(n, dim, |r, c| {
+            let (p, i, j) = rows[r];
+            get(p, i, j, c)
+        })
+    };
+    let mut x_parts = Vec::with_capacity(n_parts);
+    let mut y_parts = Vec::with_capacity(n_parts);
+    for k in 0..n_parts {
+        let ms = pairs[0].source_coeffs[k].ncols();
+        let mt = pairs[0].target_coeffs[k].ncols();
+        x_parts.push(gather(ms, &|p, i, _, c| pairs[p].source_coeffs[k][(i, c)]));
+        y_parts.push(gather(mt, &|p, _, j, c| pairs[p].target_coeffs[k][(j, c)]));
+    }
+    let steps: Vec<[f64; 6]> = rows.iter().map(|&(p, _, j)| target_step(&pairs[p].target_disp, j, frame_ratio)).collect();
+    let x_disp = gather(6, &|p, i, _, c| pairs[p].source_disp[i][c]);
+    let y_disp = DMatrix::from_fn(n, 6, |r, c| steps[r][c]);
+    Ok(TrainingSet { x_parts, y_parts, x_disp, y_disp })
+}
+
+fn rms(m: &DMatrix<f64>) -> f64 {
+    (m.norm_squared() / m.len().max(1) as f64).sqrt()
+}
+
+/// Trains the GP of `method` on every part, with `opts`. `keys` gives the
+/// key-pose rows for the affine baseline.
+fn train_parts(
+    method: Method,
+    names: &[String],
+    data: &TrainingSet,
+    keys: &TrainingSet,
+    opts: &GprOptions,
+) -> Result<(Vec<Regressor>, Vec<RegressorReport>)> {
+    match method.kernel() {
+        Some(kernel) => {
+            let problems: Vec<(DMatrix<f64>, DMatrix<f64>)> =
+                data.x_parts.iter().cloned().zip(data.y_parts.iter().cloned()).collect();
+            let trained = gp::gpr::train_many(kernel, &problems, opts);
+            let mut regs = Vec::new();
+            let mut reports = Vec::new();
+            for (name, t) in names.iter().zip(trained) {
+                let (gpr, r) = t.map_err(|e| Error::invalid(format!("part '{name}': {e}")))?;
+                reports.push(RegressorReport::from_train(name, &gpr, &r));
+                regs.push(Regressor::Gp { gpr, y_scale: 1.0 });
+            }
+            Ok((regs, reports))
+        }
+        None => {
+            let mut regs = Vec::new();
+            let mut reports = Vec::new();
+            for (k, name) in names.iter().enumerate() {
+                let a = AffineKeypose::fit(&keys.x_parts[k], &keys.y_parts[k])
+                    .map_err(|e| Error::invalid(format!("part '{name}': {e}")))?;
+                regs.push(Regressor::Affine(a));
+                reports.push(RegressorReport {
+                    name: name.clone(),
+                    kernel: None,
+                    exit: None,
+                    iterations: 0,
+                    initial_lml: f64::NAN,
+                    lml: f64::NAN,
+                    notes: Vec::new(),
+                });
+            }
+            Ok((regs, reports))
+        }
+    }
+}
+
+/// Trains the displacement GP (`gpr-nn`, outputs scaled to unit RMS).
+pub fn train_displacement(data: &TrainingSet, opts: &GprOptions) -> Result<(Regressor, RegressorReport)> {
+    let y_scale = rms(&data.y_disp).max(1e-9);
+    let y = &data.y_disp / y_scale;
+    let (gpr, r) = Gpr::train(Kernel::neural_network(1.0, 1.0), &data.x_disp, &y, opts)
+        .map_err(|e| Error::invalid(format!("displacement: {e}")))?;
+    let report = RegressorReport::from_train("displacement", &gpr, &r);
+    Ok((Regressor::Gp { gpr, y_scale }, report))
+}
+
+/// Trains a transfer model: the pose mapping of `method` per part and the
+/// displacement GP. `part_names` are the parts of both PCA models (equal).
+pub fn train(
+    method: Method,
+    part_names: &[String],
+    pairs: &[PairData],
+    frame_ratio: f64,
+    keyposes_only: bool,
+    opts: &GprOptions,
+) -> Result<GprModel> {
+    if !(frame_ratio > 0.0 && frame_ratio.is_finite()) {
+        return Err(Error::invalid(format!("frame-rate ratio must be positive, got {frame_ratio}")));
+    }
+    let data = training_set(pairs, frame_ratio, keyposes_only)?;
+    if data.x_parts.len() != part_names.len() {
+        return Err(Error::invalid(format!(
+            "{} part names for {} parts of coefficients",
+            part_names.len(),
+            data.x_parts.len()
+        )));
+    }
+    let keys = if method == Method::KeyposeAffine && !keyposes_only {
+        training_set(pairs, frame_ratio, true)?
+    } else {
+        data.clone()
+    };
+    let (parts, disp) = rayon::join(
+        || train_parts(method, part_names, &data, &keys, opts),
+        || train_displacement(&data, opts),
+    );
+    let (parts, mut reports) = parts?;
+    let (displacement, disp_report) = disp?;
+    reports.push(disp_report);
+    Ok(GprModel {
+        method,
+        part_names: part_names.to_vec(),
+        parts,
+        displacement,
+        n_train: if method == Method::KeyposeAffine { keys.len() } else { data.len() },
+        frame_ratio,
+        keyposes_only,
+        reports,
+    })
+}

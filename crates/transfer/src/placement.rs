@@ -1,0 +1,83 @@
+//! Placing the transferred poses in the world: per-frame rigid displacements
+//! integrated from the source's first world pose (paper §4, "Rigid
+//! Transformation": `P_i = P_{i-1} ∘ (dT_i, dR_i)`).
+//!
+//! Three choices of per-frame displacement, all reported by `evaluate`:
+//! - `regressed` (the paper): the displacement GP's prediction;
+//! - `scaled-source`: the source's own displacement with its translation scaled
+//!   by the target/source height ratio `s = h_t / h_s` (heights are the
+//!   templates' bounding-box extents along +y); rotation unchanged;
+//! - `blended`: per frame `D = (1 - w) D_regressed + w D_scaled`, on the
+//!   6-vectors, with `w = σ²_*(x) / k(x, x)` the displacement GP's latent
+//!   predictive variance (eq. 12) relative to its prior variance: `w ≈ 0`
+//!   where the source displacement is like the training data, `w -> 1` where
+//!   the GP extrapolates (its mean falls back to the prior mean, 0, which
+//!   integrates to a standing body, while the scaled source keeps moving).
+
+use clap::ValueEnum;
+use mesh_core::rigid::{integrate, RigidMotion};
+use nalgebra::{Vector3, Vector6};
+use serde::{Deserialize, Serialize};
+
+use crate::part_pca::PcaModel;
+
+/// Which per-frame displacement places the transferred poses.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize, ValueEnum)]
+#[serde(rename_all = "kebab-case")]
+pub enum Placement {
+    /// The displacement GP's prediction (the paper)
+    Regressed,
+    /// The source displacement, translation scaled by the height ratio
+    ScaledSource,
+    /// Regressed, falling back to scaled-source where the GP's variance is high
+    Blended,
+}
+
+impl Placement {
+    pub fn name(&self) -> &'static str {
+        match self {
+            Placement::Regressed => "regressed",
+            Placement::ScaledSource => "scaled-source",
+            Placement::Blended => "blended",
+        }
+    }
+}
+
+/// Extent along +y of a subject's template, from the union of the PCA parts'
+/// reference vertices (each part's reference is the template part).
+pub fn template_height(pca: &PcaModel) -> f64 {
+    let ys = pca.parts.iter().flat_map(|p| p.reference.iter().map(|v| v.y));
+    let (lo, hi) = ys.fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), y| (lo.min(y), hi.max(y)));
+    if hi > lo { hi - lo } else { 0.0 }
+}
+
+/// The source displacements with translation scaled by `ratio`.
+pub fn scaled_source(source_disp: &[[f64; 6]], ratio: f64) -> Vec<[f64; 6]> {
+    source_disp.iter().map(|d| [d[0] * ratio, d[1] * ratio, d[2] * ratio, d[3], d[4], d[5]]).collect()
+}
+
+/// `(1 - w_i) a_i + w_i b_i` per frame.
+pub fn blend(regressed: &[[f64; 6]], scaled: &[[f64; 6]], weights: &[f64]) -> Vec<[f64; 6]> {
+    regressed
+        .iter()
+        .zip(scaled)
+        .zip(weights)
+        .map(|((a, b), &w)| std::array::from_fn(|c| (1.0 - w) * a[c] + w * b[c]))
+        .collect()
+}
+
+/// World poses: `P_0 = start`, `P_i = P_{i-1} ∘ D_i` (the first displacement,
+/// `D_0`, is not used: frame 0 stands at `start`).
+pub fn poses(start: &RigidMotion, steps: &[[f64; 6]]) -> Vec<RigidMotion> {
+    if steps.is_empty() {
+        return Vec::new();
+    }
+    let rel: Vec<RigidMotion> =
+        steps[1..].iter().map(|d| RigidMotion::from_6vec(&Vector6::from_column_slice(d))).collect();
+    integrate(start, &rel)
+}
+
+/// Applies each frame's pose to its (template-frame) vertices.
+pub fn place(poses: &[RigidMotion], frames: &[Vec<Vector3<f64>>]) -> Vec<Vec<Vector3<f64>>> {
+    frames.iter().zip(poses).map(|(f, p)| p.apply_all(f)).collect()
+}

@@ -1,0 +1,129 @@
+//! `gpr-predict`: source coefficients and displacements -> target coefficients
+//! and displacements (paper eq. 13, the GP posterior mean `K_* α`, for all
+//! frames at once), and the displacement GP's predictive variance (eq. 12)
+//! used by the `blended` placement.
+
+use mesh_core::{Error, Result};
+use nalgebra::DMatrix;
+use rayon::prelude::*;
+
+use crate::gpr_model::{GprModel, Regressor};
+
+/// The model's output for a source sequence of `N` frames.
+#[derive(Clone, Debug)]
+pub struct TargetPrediction {
+    /// Target coefficients per part (`N x m_k`).
+    pub coeffs: Vec<DMatrix<f64>>,
+    /// Target displacement 6-vectors, one per frame (`N x 6`).
+    pub displacement: DMatrix<f64>,
+    /// Per frame, the displacement GP's latent variance divided by its prior
+    /// variance `k(x, x)`, in `[0, 1]`: 0 on the training data, 1 far from it.
+    /// `None` unless asked for (it costs a Cholesky of the training Gram matrix).
+    pub variance_ratio: Option<Vec<f64>>,
+}
+
+/// Source displacements as an `N x 6` matrix.
+pub fn displacement_matrix(disp: &[[f64; 6]]) -> DMatrix<f64> {
+    DMatrix::from_fn(disp.len(), 6, |r, c| disp[r][c])
+}
+
+/// Maps source coefficients (per part, `N x m_k`) and displacements through `model`.
+pub fn predict(
+    model: &GprModel,
+    source_coeffs: &[DMatrix<f64>],
+    source_disp: &DMatrix<f64>,
+    with_variance: bool,
+) -> Result<TargetPrediction> {
+    if source_coeffs.len() != model.parts.len() {
+        return Err(Error::invalid(format!(
+            "the source PCA has {} parts but the model was trained with {} ({:?})",
+            source_coeffs.len(),
+            model.parts.len(),
+            model.part_names
+        )));
+    }
+    let coeffs = model
+        .parts
+        .par_iter()
+        .zip(source_coeffs)
+        .zip(&model.part_names)
+        .map(|((reg, x), name)| reg.predict(x).map_err(|e| Error::invalid(format!("part '{name}': {e}"))))
+        .collect::<Result<Vec<_>>>()?;
+    let (displacement, variance_ratio) = match (&model.displacement, with_variance) {
+        (Regressor::Gp { gpr, y_scale }, true) => {
+            let mut notes = Vec::new();
+            let (mean, var) = gpr
+                .predict_with_variance(source_disp, &mut notes)
+                .map_err(|e| Error::invalid(format!("displacement: {e}")))?;
+            for n in notes {
+                mesh_core::warn!("displacement GP: {n}");
+            }
+            let prior = gpr.kernel.diag(source_disp);
+            let ratio = var.iter().zip(prior.iter()).map(|(v, p)| if *p > 0.0 { (v / p).clamp(0.0, 1.0) } else { 1.0 }).collect();
+            (mean * *y_scale, Some(ratio))
+        }
+        (reg, _) => (reg.predict(source_disp)?, None),
+    };
+    Ok(TargetPrediction { coeffs, displacement, variance_ratio })
+}
+
+/// Wall-clock seconds of the steps of [`transfer_motion`].
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct Timing {
+    /// Source PCA encoding of the aligned frames.
+    pub encode_s: f64,
+    /// GP prediction (eq. 13) of all parts and of the displacement.
+    pub gp_s: f64,
+    /// Target PCA decoding, assembly and placement.
+    pub decode_s: f64,
+}
+
+/// A transferred sequence: target frames in world coordinates and the poses used.
+#[derive(Clone, Debug)]
+pub struct Transferred {
+    pub frames: Vec<Vec<nalgebra::Vector3<f64>>>,
+    pub poses: Vec<mesh_core::rigid::RigidMotion>,
+    pub timing: Timing,
+}
+
+/// The whole of `gpr-predict` but the file writing: source aligned motion ->
+/// source coefficients -> target coefficients (and displacements) -> target
+/// parts -> assembled target mesh -> placed from the source's first world pose.
+pub fn transfer_motion(
+    model: &GprModel,
+    source_pca: &crate::part_pca::PcaModel,
+    target_pca: &crate::part_pca::PcaModel,
+    motion: &crate::align::AlignedMotion,
+    placement: crate::placement::Placement,
+) -> Result<Transferred> {
+    use crate::placement::{blend, place, poses, scaled_source, template_height, Placement};
+    use std::time::Instant;
+    let t0 = Instant::now();
+    let xs = source_pca.encode(motion)?;
+    let xd = displacement_matrix(&motion.displacements);
+    let encode_s = t0.elapsed().as_secs_f64();
+    let t1 = Instant::now();
+    let pred = predict(model, &xs, &xd, placement == Placement::Blended)?;
+    let gp_s = t1.elapsed().as_secs_f64();
+    let t2 = Instant::now();
+    let decoded = target_pca.decode(&pred.coeffs)?;
+    let plan = crate::assemble::plan(target_pca)?;
+    let frames = crate::assemble::assemble(&plan, target_pca, &decoded);
+    let regressed: Vec<[f64; 6]> =
+        pred.displacement.row_iter().map(|r| std::array::from_fn(|c| r[c])).collect();
+    let hs = template_height(source_pca);
+    let ratio = if hs > 0.0 { template_height(target_pca) / hs } else { 1.0 };
+    let steps = match placement {
+        Placement::Regressed => regressed,
+        Placement::ScaledSource => scaled_source(&motion.displacements, ratio),
+        Placement::Blended => {
+            let w = pred.variance_ratio.clone().unwrap_or_else(|| vec![0.0; regressed.len()]);
+            blend(&regressed, &scaled_source(&motion.displacements, ratio), &w)
+        }
+    };
+    let start = motion.poses.first().copied().unwrap_or_default();
+    let world_poses = poses(&start, &steps);
+    let frames = place(&world_poses, &frames);
+    let decode_s = t2.elapsed().as_secs_f64();
+    Ok(Transferred { frames, poses: world_poses, timing: Timing { encode_s, gp_s, decode_s } })
+}
