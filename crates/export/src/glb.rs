@@ -109,8 +109,15 @@ impl Builder {
             }
             bytes.extend_from_slice(&[0, 0]);
         }
-        let as_f: Vec<f32> = data.iter().map(|&q| dequantize(q)).collect();
-        let (min, max) = min_max(&as_f, 3);
+        // For integer component types, glTF bounds are the stored integers.
+        let mut min = [i16::MAX; 3];
+        let mut max = [i16::MIN; 3];
+        for v in data.chunks(3) {
+            for c in 0..3 {
+                min[c] = min[c].min(v[c]);
+                max[c] = max[c].max(v[c]);
+            }
+        }
         let view = self.view(&bytes, Some(ARRAY_BUFFER), Some(8));
         self.accessor(json!({"bufferView": view, "componentType": SHORT, "normalized": true,
             "count": data.len() / 3, "type": "VEC3", "min": min, "max": max}))
@@ -131,11 +138,7 @@ fn min_max(data: &[f32], width: usize) -> (Vec<f64>, Vec<f64>) {
     (min, max)
 }
 
-/// The glTF decoding of a normalized int16: `max(q / 32767, -1)`.
-fn dequantize(q: i16) -> f32 {
-    (f32::from(q) / 32767.0).max(-1.0)
-}
-
+/// int16 normalized encoding of `x` in [-1, 1] (decoded as `q / 32767`).
 fn quantize(x: f64) -> i16 {
     (x * 32767.0).round().clamp(-32767.0, 32767.0) as i16
 }

@@ -45,6 +45,7 @@ function start(view) {
 
   // Meshes side by side along x, each one bounding-box width plus a gap apart.
   const seqs = [];
+  const gap = 1.3 * Math.max(...view.seqs.map((s) => 2 * Math.max(s.scale[0], s.scale[2])));
   let x = 0;
   for (const s of view.seqs) {
     const q = decode(s.positions, Int16Array);
@@ -56,9 +57,8 @@ function start(view) {
     geometry.setIndex(new THREE.BufferAttribute(faces, 1));
     const material = new THREE.MeshStandardMaterial({ color: s.colour, roughness: 0.7, side: THREE.DoubleSide });
     const mesh = new THREE.Mesh(geometry, material);
-    const width = 2 * Math.max(s.scale[0], s.scale[2]);
     mesh.position.set(x - s.centre[0], 0, -s.centre[2]);
-    x += width * 1.3;
+    x += gap;
     scene.add(mesh);
     seqs.push({ s, q, nv, pos, geometry, mesh });
   }

@@ -1,15 +1,16 @@
-//! Times GP training (all parts + displacement, both directions) and prediction on the
-//! synthetic pairs, and optionally dumps one problem's arrays as CSV for
-//! `scripts/compare/gpr_gpy.py`.
+//! Times GP training (5 parts x 20-D + 6-D displacement, both directions = 12 models) and
+//! prediction on synthetic pairs, and optionally dumps every problem as CSV with our results
+//! for `scripts/compare/gpr_gpy.py`.
 //!
-//! Usage: `gpr_compare [--pairs N] [--dump DIR] [--kernel nn|se|linear]`
-//! e.g.: `OPENBLAS_NUM_THREADS=1 cargo run --release -p gp --example gpr_compare -- --pairs 1100 --dump /tmp/gpr`
+//! Usage: `gpr_compare [--pairs N] [--kernel nn|se|linear] [--dump DIR] [--grad-tol X]`
+//! e.g.: `OPENBLAS_NUM_THREADS=1 cargo run --release -p gp --example gpr_compare -- --pairs 1100 --dump /tmp/gpr1100`
 #[path = "../benches/synthetic_pairs.rs"]
 mod synthetic_pairs;
 
-use gp::gpr::{train_many, GprOptions};
+use gp::gpr::{initial_kernel, train_many, Gpr, GprOptions};
 use gp::kernel::Kernel;
 use nalgebra::DMatrix;
+use rayon::prelude::*;
 use std::io::Write;
 use std::time::Instant;
 
@@ -22,6 +23,13 @@ fn write_csv(path: &std::path::Path, m: &DMatrix<f64>) -> std::io::Result<()> {
     Ok(())
 }
 
+fn l_sf(k: &Kernel) -> (f64, f64) {
+    match *k {
+        Kernel::NeuralNetwork { l, sigma_f, .. } | Kernel::SquaredExponential { l, sigma_f } => (l, sigma_f),
+        Kernel::Linear { sigma_f } => (f64::NAN, sigma_f),
+    }
+}
+
 fn main() {
     let args: Vec<String> = std::env::args().collect();
     let get = |flag: &str| args.iter().position(|a| a == flag).and_then(|i| args.get(i + 1)).cloned();
@@ -31,33 +39,29 @@ fn main() {
         "linear" => Kernel::Linear { sigma_f: 1.0 },
         _ => Kernel::neural_network(1.0, 1.0),
     };
-    let problems = synthetic_pairs::both_directions(n, 7);
     let mut opts = GprOptions::default();
     if let Some(v) = get("--grad-tol") {
         opts.cg.grad_tol = v.parse().expect("--grad-tol X");
     }
-    if let Some(v) = get("--max-step") {
-        opts.cg.max_step = v.parse().expect("--max-step X");
-    }
-    if let Some(v) = get("--c2") {
-        opts.cg.c2 = v.parse().expect("--c2 X");
-    }
+    let problems = synthetic_pairs::both_directions(n, 7);
     let t0 = Instant::now();
     let models = train_many(kernel, &problems, &opts);
     let train_s = t0.elapsed().as_secs_f64();
+    println!("pairs {n}: trained {} models ({}) in {train_s:.3} s (rayon, {} threads)", models.len(), kernel.name(), rayon::current_num_threads());
     let mut total_evals = 0;
-    println!("pairs {n}: trained {} models ({}) in {train_s:.3} s", models.len(), kernel.name());
     let mut trained = Vec::new();
+    let mut records = Vec::new();
     for (i, m) in models.into_iter().enumerate() {
         let (model, rep) = m.expect("training");
         println!(
-            "  model {i:2}: lml {:12.4} (start {:12.4}) exit {:?} iters {} evals {} kernel {:?}",
-            rep.lml, rep.initial_lml, rep.exit, rep.iterations, rep.evaluations, model.kernel
+            "  model {i:2}: lml {:12.4} (start {:12.4}) exit {:?} iters {} evals {} (l, sf) = {:?}",
+            rep.lml, rep.initial_lml, rep.exit, rep.iterations, rep.evaluations, l_sf(&model.kernel)
         );
         total_evals += rep.evaluations;
         for note in &rep.notes {
             println!("    note: {note}");
         }
+        records.push((rep, model.kernel));
         trained.push(model);
     }
     println!("total evaluations {total_evals}");
@@ -65,7 +69,6 @@ fn main() {
     let frames = 5000;
     let test = synthetic_pairs::pairs(frames, 99);
     let t1 = Instant::now();
-    use rayon::prelude::*;
     let preds: Vec<_> =
         trained[..6].par_iter().zip(&test).map(|(m, (x, _))| m.predict_mean(x).unwrap()).collect();
     let pred_s = t1.elapsed().as_secs_f64();
@@ -74,22 +77,28 @@ fn main() {
     if let Some(dir) = get("--dump") {
         let dir = std::path::PathBuf::from(dir);
         std::fs::create_dir_all(&dir).unwrap();
-        let (x, y) = &problems[0];
-        write_csv(&dir.join("x.csv"), x).unwrap();
-        write_csv(&dir.join("y.csv"), y).unwrap();
-        // Time of our training on this one problem, for the ratio against GPy.
-        let t = Instant::now();
-        let (m, rep) = gp::gpr::Gpr::train(kernel, x, y, &opts).unwrap();
-        let one_s = t.elapsed().as_secs_f64();
-        let (l, sf) = match m.kernel {
-            Kernel::NeuralNetwork { l, sigma_f, .. } => (l, sigma_f),
-            _ => (f64::NAN, f64::NAN),
-        };
+        // Sequential single-thread timing per model, for a like-for-like ratio with GPy.
+        let mut items = Vec::new();
+        let mut seq_total = 0.0;
+        for (i, ((x, y), (rep, k))) in problems.iter().zip(&records).enumerate() {
+            write_csv(&dir.join(format!("problem_{i:02}_x.csv")), x).unwrap();
+            write_csv(&dir.join(format!("problem_{i:02}_y.csv")), y).unwrap();
+            let t = Instant::now();
+            let _ = Gpr::train(kernel, x, y, &opts).unwrap();
+            let secs = t.elapsed().as_secs_f64();
+            seq_total += secs;
+            let (l0, sf0) = l_sf(&initial_kernel(&kernel, x, y));
+            let (l, sf) = l_sf(k);
+            items.push(format!(
+                "{{\"index\": {i}, \"lml\": {:.10}, \"l\": {l:.10e}, \"sigma_f\": {sf:.10e}, \"l0\": {l0:.10e}, \"sigma_f0\": {sf0:.10e}, \"train_s\": {secs:.6}, \"exit\": \"{:?}\"}}",
+                rep.lml, rep.exit
+            ));
+        }
         let json = format!(
-            "{{\"pairs\": {n}, \"noise_var\": {}, \"lml\": {:.10}, \"l\": {l:.10}, \"sigma_f\": {sf:.10}, \"train_s\": {one_s:.6}, \"all_models_both_directions_s\": {train_s:.6}, \"models\": {}, \"exit\": \"{:?}\"}}\n",
-            opts.noise_var, rep.lml, problems.len(), rep.exit
+            "{{\"pairs\": {n}, \"kernel\": \"{}\", \"noise_var\": {}, \"parallel_train_s\": {train_s:.6}, \"sequential_train_s\": {seq_total:.6}, \"predict_frames_per_s\": {:.1}, \"models\": [\n  {}\n]}}\n",
+            kernel.name(), opts.noise_var, frames as f64 / pred_s, items.join(",\n  ")
         );
         std::fs::write(dir.join("rust.json"), json).unwrap();
-        println!("dumped problem 0 to {}", dir.display());
+        println!("dumped {} problems to {} (sequential total {seq_total:.3} s)", problems.len(), dir.display());
     }
 }

@@ -121,12 +121,14 @@ fn training_increases_lml_reaches_a_stationary_point_and_generalises() {
     let mut rng = Rng::new(13);
     let x = rng.matrix(120, 3, 1.0);
     let y = target_fn(&x);
-    let (model, report) = Gpr::train(Kernel::neural_network(1.0, 1.0), &x, &y, &GprOptions::default()).unwrap();
+    let mut opts = GprOptions::default();
+    opts.cg.grad_tol = 1e-7;
+    let (model, report) = Gpr::train(Kernel::neural_network(1.0, 1.0), &x, &y, &opts).unwrap();
     assert!(report.lml >= report.initial_lml, "{report:?}");
     assert_eq!(report.exit, Some(ExitState::Converged), "{report:?}");
     // The gradient at the returned point is (relatively) zero: a stationary point of the LML.
     let (v, g) = log_marginal_likelihood_grad(&model.kernel, model.noise_var, false, &x, &y, &mut Vec::new()).unwrap();
-    assert!(g.iter().all(|d| d.abs() <= 1e-5 * v.abs().max(1.0)), "{g:?}");
+    assert!(g.iter().all(|d| d.abs() <= 1e-7 * v.abs().max(1.0)), "{g:?}");
     assert!((v - report.lml).abs() < 1e-9);
     // Held-out error well below the output spread (σn² = 0.1 limits the fit).
     let xt = rng.matrix(50, 3, 1.0);

@@ -53,7 +53,10 @@ fn hmc(c: &mut Criterion) {
     let mut m = Gpdm::new(&synthetic(30), GpdmConfig::default()).unwrap();
     // A short fit so that the dynamics are meaningful.
     let opts = gpdm::optim::TrainOptions {
-        schedule: gpdm::optim::Schedule::Alternate { rounds: 3, iters: 20 },
+        schedule: gpdm::optim::Schedule::Alternate {
+            rounds: 3,
+            iters: 20,
+        },
         ..Default::default()
     };
     gpdm::optim::train(&mut m, &opts).unwrap();

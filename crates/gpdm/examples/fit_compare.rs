@@ -43,15 +43,32 @@ fn main() {
     for _ in 0..reps {
         obj.eval(&th, Some(&mut g)).unwrap();
     }
-    println!("objective+gradient: {:.2} ms (N = {}, D = {d_obs})", t.elapsed().as_secs_f64() * 1e3 / reps as f64, m0.y.nrows());
+    println!(
+        "objective+gradient: {:.2} ms (N = {}, D = {d_obs})",
+        t.elapsed().as_secs_f64() * 1e3 / reps as f64,
+        m0.y.nrows()
+    );
     let schedules = [
         ("joint", Schedule::Joint),
-        ("alternate", Schedule::Alternate { rounds: 10, iters: 50 }),
+        (
+            "alternate",
+            Schedule::Alternate {
+                rounds: 10,
+                iters: 50,
+            },
+        ),
     ];
     for (name, schedule) in schedules {
         let mut m = m0.clone();
         let t = Instant::now();
-        let opts = TrainOptions { schedule, lbfgs: LbfgsOptions { max_iter: 1000, max_evals: 3000, ..Default::default() } };
+        let opts = TrainOptions {
+            schedule,
+            lbfgs: LbfgsOptions {
+                max_iter: 1000,
+                max_evals: 3000,
+                ..Default::default()
+            },
+        };
         let r = train(&mut m, &opts).unwrap();
         let secs = t.elapsed().as_secs_f64();
         println!(

@@ -15,15 +15,28 @@ use gpdm::{Gpdm, GpdmConfig};
 use std::time::Instant;
 
 fn main() {
-    let d_obs: usize = std::env::args().nth(1).map(|s| s.parse().expect("D")).unwrap_or(300);
+    let d_obs: usize = std::env::args()
+        .nth(1)
+        .map(|s| s.parse().expect("D"))
+        .unwrap_or(300);
     for noise in [0.0, 2e-3] {
         let clean = synthetic::synthetic(d_obs, 0.0);
         let data = synthetic::synthetic(d_obs, noise);
         for floor in [None, Some(1e-6)] {
-            let config = GpdmConfig { pose_noise_floor: floor, ..Default::default() };
+            let config = GpdmConfig {
+                pose_noise_floor: floor,
+                ..Default::default()
+            };
             let mut m = Gpdm::new(&data, config).unwrap();
             let t = Instant::now();
-            let opts = TrainOptions { lbfgs: LbfgsOptions { max_iter: 1000, max_evals: 3000, ..Default::default() }, ..Default::default() };
+            let opts = TrainOptions {
+                lbfgs: LbfgsOptions {
+                    max_iter: 1000,
+                    max_evals: 3000,
+                    ..Default::default()
+                },
+                ..Default::default()
+            };
             let r = train(&mut m, &opts).unwrap();
             let secs = t.elapsed().as_secs_f64();
             let k = RbfLinear::pose(m.alpha).gram(gpdm::linalg::view(&m.x)).k;
@@ -34,7 +47,12 @@ fn main() {
             let x1: Vec<f64> = m.x.row(0).iter().copied().collect();
             let traj = pred.mean_trajectory(&x1, 120).unwrap();
             let poses = pred.pose_mean(&traj).unwrap();
-            let err = |a: usize, b: usize| ((poses.rows(a, b - a) - clean[0].rows(a, b - a)).map(|v| v * v).mean()).sqrt();
+            let err = |a: usize, b: usize| {
+                ((poses.rows(a, b - a) - clean[0].rows(a, b - a))
+                    .map(|v| v * v)
+                    .mean())
+                .sqrt()
+            };
             println!(
                 "noise {noise:.0e} floor {floor:?}: 1/α3 = {:.2e}, 1/β4 = {:.2e}, cond(K_Y) = {cond:.1e}, exit {:?} after {} evals ({secs:.1} s), f = {:.1}; \
                  mean-prediction RMS frames 0-30 {:.4}, 30-60 {:.4}, 60-120 {:.4} (data RMS {:.3}); notes {:?}",

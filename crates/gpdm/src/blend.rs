@@ -63,7 +63,11 @@ impl BlendSet {
         if let Some(i) = self.weights.iter().position(|&v| v == w) {
             return Ok((i, i));
         }
-        let i2 = self.weights.iter().position(|&v| v > w).expect("1 is present");
+        let i2 = self
+            .weights
+            .iter()
+            .position(|&v| v > w)
+            .expect("1 is present");
         Ok((i2 - 1, i2))
     }
 

@@ -4,7 +4,9 @@
 #[derive(Debug, thiserror::Error)]
 pub enum GpdmError {
     /// A kernel matrix stayed non-positive-definite after all jitter retries.
-    #[error("{what}: kernel matrix not positive definite (pivot {pivot}) even with jitter {jitter:e}")]
+    #[error(
+        "{what}: kernel matrix not positive definite (pivot {pivot}) even with jitter {jitter:e}"
+    )]
     NotPositiveDefinite {
         what: &'static str,
         pivot: usize,

@@ -6,9 +6,9 @@
 //! the GP predictive conditioned on the training dynamics only (Markov form), so `K_X` is
 //! factorised once per model and every energy evaluation costs one batched triangular solve.
 //!
-//! Leapfrog with unit mass, step size adapted during burn-in by dual averaging (Hoffman &
-//! Gelman 2014, alg. 5, restarted halfway) toward a target acceptance rate, then frozen at the
-//! averaged value;
+//! Leapfrog with unit mass, step size adapted during burn-in toward a target acceptance rate
+//! (dual averaging, Hoffman & Gelman 2014 alg. 5, then a Robbins-Monro refinement with Polyak
+//! averaging; see [`sample`]), then frozen;
 //! ±10 % step jitter per iteration; thinning; ChaCha8 RNG seeded by the caller.
 
 use crate::error::{invalid, Result};
@@ -117,14 +117,19 @@ fn leapfrog<E: Energy + ?Sized>(
 }
 
 fn momentum(rng: &mut ChaCha8Rng, n: usize) -> Vec<f64> {
-    (0..n).map(|_| rng.sample(rand_distr::StandardNormal)).collect()
+    (0..n)
+        .map(|_| rng.sample(rand_distr::StandardNormal))
+        .collect()
 }
 
 /// Runs one HMC chain from `q0`.
 pub fn sample<E: Energy + ?Sized>(energy: &E, q0: &[f64], opts: &HmcOptions) -> Result<HmcResult> {
     let n = energy.dim();
     if q0.len() != n {
-        return invalid(format!("start has {} coordinates, energy has {n}", q0.len()));
+        return invalid(format!(
+            "start has {} coordinates, energy has {n}",
+            q0.len()
+        ));
     }
     if opts.thin == 0 || opts.leapfrog_steps == 0 || !(opts.initial_step > 0.0) {
         return invalid("thin, leapfrog_steps and initial_step must be positive");
@@ -138,7 +143,11 @@ pub fn sample<E: Energy + ?Sized>(energy: &E, q0: &[f64], opts: &HmcOptions) -> 
     let Some(e) = energy.energy_grad(q0, &mut g).filter(|e| e.is_finite()) else {
         return invalid("energy is not finite at the start point");
     };
-    let mut s = State { q: q0.to_vec(), e, g };
+    let mut s = State {
+        q: q0.to_vec(),
+        e,
+        g,
+    };
 
     // Reasonable first step: double or halve until one leapfrog step's acceptance crosses 1/2.
     let mut eps = opts.initial_step;
@@ -163,16 +172,19 @@ pub fn sample<E: Energy + ?Sized>(energy: &E, q0: &[f64], opts: &HmcOptions) -> 
         }
     }
 
-    // Dual averaging state. H̄ averages (target − a) uniformly over the whole history, so the
-    // early exploratory steps (too large, rarely accepted) would bias the final step small and
-    // the sampling acceptance above target; the adaptation therefore restarts halfway through
-    // burn-in, centred on the step found so far (as Stan restarts it per warm-up window).
+    // Step-size adaptation in two halves of burn-in.
+    // 1. Dual averaging (Hoffman & Gelman 2014, alg. 5): finds the scale quickly, but its
+    //    iterates spread widely and the acceptance is concave in log ε near the stability
+    //    limit, so the averaged step accepts more often than the target (issue 6 saw 0.82-0.88
+    //    for 0.7).
+    // 2. Robbins-Monro on log ε with a small decreasing gain, started from the dual-averaged
+    //    step, and Polyak averaging over its second half: low spread, acceptance on target.
     let (gamma, t0, kappa) = (0.05, 10.0, 0.75);
-    let mut mu = (10.0 * eps).ln();
+    let mu = (10.0 * eps).ln();
     let mut hbar = 0.0;
     let mut log_eps_bar = eps.ln();
-    let mut m_adapt = 0usize;
-    let restart_at = opts.burn_in / 2;
+    let phase2 = opts.burn_in / 2;
+    let (mut log_sum, mut log_n) = (0.0, 0usize);
     let mut burn_acc = 0.0;
     let mut post_acc = 0usize;
     let mut post_n = 0usize;
@@ -186,7 +198,13 @@ pub fn sample<E: Energy + ?Sized>(energy: &E, q0: &[f64], opts: &HmcOptions) -> 
         let prop = leapfrog(energy, &s, &p, step, opts.leapfrog_steps, &mut evals);
         let a = prop
             .as_ref()
-            .map(|(_, dh)| if dh.is_nan() { 0.0 } else { (-dh).exp().min(1.0) })
+            .map(|(_, dh)| {
+                if dh.is_nan() {
+                    0.0
+                } else {
+                    (-dh).exp().min(1.0)
+                }
+            })
             .unwrap_or(0.0);
         let u: f64 = rng.random();
         let accepted = u < a;
@@ -195,17 +213,27 @@ pub fn sample<E: Energy + ?Sized>(energy: &E, q0: &[f64], opts: &HmcOptions) -> 
         }
         if adapting {
             burn_acc += a;
-            m_adapt += 1;
-            let m = m_adapt as f64;
-            hbar = (1.0 - 1.0 / (m + t0)) * hbar + (opts.target_accept - a) / (m + t0);
-            eps = (mu - m.sqrt() / gamma * hbar).exp();
-            let w = m.powf(-kappa);
-            log_eps_bar = w * eps.ln() + (1.0 - w) * log_eps_bar;
-            if it + 1 == restart_at && restart_at >= 20 {
-                mu = log_eps_bar;
-                eps = log_eps_bar.exp();
-                hbar = 0.0;
-                m_adapt = 0;
+            if it < phase2 {
+                let m = (it + 1) as f64;
+                hbar = (1.0 - 1.0 / (m + t0)) * hbar + (opts.target_accept - a) / (m + t0);
+                eps = (mu - m.sqrt() / gamma * hbar).exp();
+                let w = m.powf(-kappa);
+                log_eps_bar = w * eps.ln() + (1.0 - w) * log_eps_bar;
+                if it + 1 == phase2 {
+                    eps = log_eps_bar.exp();
+                }
+            } else {
+                let k = (it - phase2 + 1) as f64;
+                eps *= (0.5 * (a - opts.target_accept) / (k + 10.0).powf(0.6)).exp();
+                if 2 * (it - phase2) >= opts.burn_in - phase2 {
+                    log_sum += eps.ln();
+                    log_n += 1;
+                }
+                log_eps_bar = if log_n > 0 {
+                    log_sum / log_n as f64
+                } else {
+                    eps.ln()
+                };
             }
         } else {
             post_n += 1;
@@ -277,7 +305,13 @@ impl Energy for TrajectoryEnergy<'_> {
     fn energy_grad(&self, q: &[f64], grad: &mut [f64]) -> Option<f64> {
         let d = self.x1.len();
         let steps = self.len - 1;
-        let at = |t: usize, c: usize| if t == 0 { self.x1[c] } else { q[(t - 1) * d + c] };
+        let at = |t: usize, c: usize| {
+            if t == 0 {
+                self.x1[c]
+            } else {
+                q[(t - 1) * d + c]
+            }
+        };
         let k = self.pred.dynamics_kernel();
         let xin = self.pred.dynamics_inputs();
         let m = xin.nrows();
@@ -303,7 +337,7 @@ impl Energy for TrajectoryEnergy<'_> {
         }
         // Means (eq. 9): μ_t = (K_X⁻¹ X_out)ᵀ k_t.
         let mu = mul(self.pred.dynamics_weights().transpose(), kst.as_ref()); // d × steps
-        // V = K_X⁻¹ K*, U = L⁻¹ K* for the variances (eq. 10).
+                                                                              // V = K_X⁻¹ K*, U = L⁻¹ K* for the variances (eq. 10).
         let chol = self.pred.dynamics_cholesky();
         let mut v = kst;
         chol.half_solve_in_place(v.as_mut());
@@ -340,7 +374,8 @@ impl Energy for TrajectoryEnergy<'_> {
             for c in 0..d {
                 let mut acc = 2.0 * cs * k.lin * xt[c];
                 for i in 0..m {
-                    acc += w[i] * (-k.gamma * rbf[(i, t)] * (xt[c] - xin[(i, c)]) + k.lin * xin[(i, c)]);
+                    acc += w[i]
+                        * (-k.gamma * rbf[(i, t)] * (xt[c] - xin[(i, c)]) + k.lin * xin[(i, c)]);
                 }
                 g[c] += acc;
             }

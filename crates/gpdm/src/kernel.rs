@@ -51,36 +51,51 @@ impl RbfLinear {
     }
 
     /// Gram matrix on the rows of `x` (n × d), with its noise-free RBF part kept for the
-    /// gradients.
+    /// gradients. Only the lower triangles are filled (the strict upper triangles are zero):
+    /// the Cholesky factorisation and [`RbfLinear::gradients`] read the lower triangle only.
     pub fn gram(&self, x: MatRef<'_, f64>) -> Gram {
         let n = x.nrows();
         let d = x.ncols();
-        let rows: Vec<f64> = (0..n).flat_map(|i| (0..d).map(move |c| x[(i, c)])).collect();
+        let rows: Vec<f64> = (0..n)
+            .flat_map(|i| (0..d).map(move |c| x[(i, c)]))
+            .collect();
         let mut rbf = Mat::<f64>::zeros(n, n);
         let mut k = Mat::<f64>::zeros(n, n);
         let half_gamma = -0.5 * self.gamma;
         for j in 0..n {
             let xj = &rows[j * d..(j + 1) * d];
-            for i in j..n {
+            let rcol = &mut rbf
+                .col_mut(j)
+                .try_as_col_major_mut()
+                .expect("contiguous")
+                .as_slice_mut()[j..];
+            for (r, i) in rcol.iter_mut().zip(j..n) {
                 let xi = &rows[i * d..(i + 1) * d];
                 let mut s = 0.0;
-                let mut dot = 0.0;
                 for c in 0..d {
                     s += (xi[c] - xj[c]) * (xi[c] - xj[c]);
-                    dot += xi[c] * xj[c];
                 }
-                let r = self.var * (half_gamma * s).exp();
-                let v = r + self.lin * dot;
-                rbf[(i, j)] = r;
-                k[(i, j)] = v;
+                *r = self.var * (half_gamma * s).exp();
+            }
+            let rcol = &rbf
+                .col(j)
+                .try_as_col_major()
+                .expect("contiguous")
+                .as_slice()[j..];
+            let kcol = &mut k
+                .col_mut(j)
+                .try_as_col_major_mut()
+                .expect("contiguous")
+                .as_slice_mut()[j..];
+            for ((kv, r), i) in kcol.iter_mut().zip(rcol).zip(j..n) {
+                let mut v = *r;
+                if self.lin != 0.0 {
+                    let xi = &rows[i * d..(i + 1) * d];
+                    v += self.lin * (0..d).map(|c| xi[c] * xj[c]).sum::<f64>();
+                }
+                *kv = v;
             }
             k[(j, j)] += 1.0 / self.prec;
-        }
-        for j in 0..n {
-            for i in j + 1..n {
-                rbf[(j, i)] = rbf[(i, j)];
-                k[(j, i)] = k[(i, j)];
-            }
         }
         Gram { k, rbf }
     }
@@ -101,49 +116,67 @@ impl RbfLinear {
         })
     }
 
-    /// `∂L/∂(var, γ, lin, prec)` given `G = ∂L/∂K` (symmetric) and the Gram matrix on `x`.
-    pub fn param_grads(&self, gram: &Gram, x: MatRef<'_, f64>, g: MatRef<'_, f64>) -> [f64; 4] {
+    /// Chain rule through `K(X)`: given `G = ∂L/∂K` (symmetric; its lower triangle is read)
+    /// returns `∂L/∂(var, γ, lin, prec)` and `∂L/∂X`, where
+    /// `∂L/∂x_i = Σ_j 2 G_ij (−γ K_rbf,ij (x_i − x_j) + lin x_j)`.
+    pub fn gradients(
+        &self,
+        gram: &Gram,
+        x: MatRef<'_, f64>,
+        g: MatRef<'_, f64>,
+    ) -> ([f64; 4], Mat<f64>) {
         let n = g.nrows();
         let d = x.ncols();
-        let rows: Vec<f64> = (0..n).flat_map(|i| (0..d).map(move |c| x[(i, c)])).collect();
+        let rows: Vec<f64> = (0..n)
+            .flat_map(|i| (0..d).map(move |c| x[(i, c)]))
+            .collect();
+        let mut dx = vec![0.0; n * d];
         let (mut gv, mut gg, mut gl, mut tr) = (0.0, 0.0, 0.0, 0.0);
+        let two_gamma = 2.0 * self.gamma;
         for j in 0..n {
-            let xj = &rows[j * d..(j + 1) * d];
-            for i in 0..n {
-                let xi = &rows[i * d..(i + 1) * d];
-                let gij = g[(i, j)];
-                let r = gram.rbf[(i, j)];
+            let gcol = &g.col(j).try_as_col_major().expect("contiguous").as_slice()[j..];
+            let rcol = &gram
+                .rbf
+                .col(j)
+                .try_as_col_major()
+                .expect("contiguous")
+                .as_slice()[j..];
+            let gjj = gcol[0];
+            tr += gjj;
+            gv += gjj * rcol[0];
+            for (o, i) in (j + 1..n).enumerate() {
+                let gij = gcol[o + 1];
+                let r = rcol[o + 1];
                 let mut s = 0.0;
                 let mut dot = 0.0;
                 for c in 0..d {
-                    s += (xi[c] - xj[c]) * (xi[c] - xj[c]);
-                    dot += xi[c] * xj[c];
+                    let (a, b) = (rows[i * d + c], rows[j * d + c]);
+                    s += (a - b) * (a - b);
+                    dot += a * b;
                 }
-                gg += gij * r * (-0.5 * s);
-                gv += gij * r;
-                gl += gij * dot;
-            }
-            tr += g[(j, j)];
-        }
-        [gv / self.var, gg, gl, -tr / (self.prec * self.prec)]
-    }
-
-    /// `∂L/∂X` through `K(X)` given `G = ∂L/∂K` (symmetric):
-    /// `−2γ (diag(P 1) X − P X) + 2 lin G X` with `P = G ∘ K_rbf`.
-    pub fn x_grad(&self, gram: &Gram, x: MatRef<'_, f64>, g: MatRef<'_, f64>) -> Mat<f64> {
-        let n = x.nrows();
-        let d = x.ncols();
-        let mut out = Mat::<f64>::zeros(n, d);
-        for j in 0..n {
-            for i in 0..n {
-                let p = g[(i, j)] * gram.rbf[(i, j)];
-                let gl = 2.0 * self.lin * g[(i, j)];
+                // Off-diagonal pairs count twice (G and K symmetric).
+                gv += 2.0 * gij * r;
+                gg -= gij * r * s;
+                gl += 2.0 * gij * dot;
+                let p = two_gamma * gij * r;
+                let l = 2.0 * self.lin * gij;
                 for c in 0..d {
-                    out[(i, c)] += -2.0 * self.gamma * p * (x[(i, c)] - x[(j, c)]) + gl * x[(j, c)];
+                    let (a, b) = (rows[i * d + c], rows[j * d + c]);
+                    dx[i * d + c] += -p * (a - b) + l * b;
+                    dx[j * d + c] += -p * (b - a) + l * a;
                 }
             }
+            // Diagonal: K_jj = var + lin ‖x_j‖² + 1/prec.
+            let mut dot = 0.0;
+            for c in 0..d {
+                let a = rows[j * d + c];
+                dot += a * a;
+                dx[j * d + c] += 2.0 * self.lin * gjj * a;
+            }
+            gl += gjj * dot;
         }
-        out
+        let dxm = Mat::from_fn(n, d, |i, c| dx[i * d + c]);
+        ([gv / self.var, gg, gl, -tr / (self.prec * self.prec)], dxm)
     }
 }
 

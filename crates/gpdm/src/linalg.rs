@@ -114,15 +114,15 @@ impl Cholesky {
         out
     }
 
-    /// `L⁻ᵀ Q L⁻¹` for a symmetric `Q`, by four triangular solves (symmetrised on output).
-    /// This is how `K⁻¹ (·) K⁻¹`-type gradient matrices are formed without an inverse.
+    /// `L⁻ᵀ Q L⁻¹` for a symmetric `Q`, by two triangular solves with n right-hand sides.
+    /// This is how `K⁻¹ (·) K⁻¹`-type gradient matrices are formed without an inverse. The
+    /// result is symmetric up to rounding; callers read its lower triangle.
     pub fn sandwich(&self, q: MatRef<'_, f64>) -> Mat<f64> {
-        // E = L⁻ᵀ Q ; result = E L⁻¹ = (L⁻ᵀ Eᵀ)ᵀ
+        // E = L⁻ᵀ Q ; result = E L⁻¹ = (L⁻ᵀ Eᵀ)ᵀ, solved in place on the transposed view.
         let mut e = q.to_owned();
         self.half_solve_t_in_place(e.as_mut());
-        let mut r = e.transpose().to_owned();
-        self.half_solve_t_in_place(r.as_mut());
-        symmetrise(r)
+        self.half_solve_t_in_place(e.as_mut().transpose_mut());
+        e
     }
 }
 
@@ -142,7 +142,14 @@ pub fn symmetrise(mut a: Mat<f64>) -> Mat<f64> {
 /// `A Bᵀ`, sequential.
 pub fn mul_abt(a: MatRef<'_, f64>, b: MatRef<'_, f64>) -> Mat<f64> {
     let mut out = Mat::zeros(a.nrows(), b.nrows());
-    matmul(out.as_mut(), Accum::Replace, a, b.transpose(), 1.0, Par::Seq);
+    matmul(
+        out.as_mut(),
+        Accum::Replace,
+        a,
+        b.transpose(),
+        1.0,
+        Par::Seq,
+    );
     out
 }
 

@@ -71,7 +71,9 @@ impl Layout {
         let mut start = 0;
         for (s, &len) in seq_lens.iter().enumerate() {
             if len < 2 {
-                return invalid(format!("sequence {s} has {len} frame(s); at least 2 needed"));
+                return invalid(format!(
+                    "sequence {s} has {len} frame(s); at least 2 needed"
+                ));
             }
             firsts.push(start);
             for t in start..start + len - 1 {
@@ -96,7 +98,11 @@ impl Layout {
 
 /// `α` from optimisation coordinates: `[e^θ0, e^θ1, 1/(floor + e^θ2)]`.
 pub fn alpha_from_theta(t: &[f64], floor: Option<f64>) -> [f64; 3] {
-    [t[0].exp(), t[1].exp(), 1.0 / (floor.unwrap_or(0.0) + t[2].exp())]
+    [
+        t[0].exp(),
+        t[1].exp(),
+        1.0 / (floor.unwrap_or(0.0) + t[2].exp()),
+    ]
 }
 
 /// `β` from optimisation coordinates: `[e^θ0, e^θ1, e^θ2, 1/(floor + e^θ3)]`.
@@ -190,8 +196,8 @@ impl Objective {
         );
         let (py, px) = (py?, px?);
         // Priors ∏ 1/α_k, ∏ 1/β_k → Σ ln α_k + Σ ln β_k.
-        let prior: f64 = alpha.iter().map(|a| a.ln()).sum::<f64>()
-            + beta.iter().map(|b| b.ln()).sum::<f64>();
+        let prior: f64 =
+            alpha.iter().map(|a| a.ln()).sum::<f64>() + beta.iter().map(|b| b.ln()).sum::<f64>();
         let out = Eval {
             value: py.value + px.value + prior,
             pose: py.value,
@@ -230,9 +236,8 @@ impl Objective {
         let gy = ky.gram(x);
         let cy = Cholesky::factor(gy.k.as_ref(), "K_Y")?;
         let mut c = self.yyt.clone();
-        cy.half_solve_in_place(c.as_mut()); // L⁻¹ S
-        let mut c = c.transpose().to_owned();
-        cy.half_solve_in_place(c.as_mut()); // C = L⁻¹ S L⁻ᵀ
+        cy.half_solve_in_place(c.as_mut()); // B = L⁻¹ S
+        cy.half_solve_in_place(c.as_mut().transpose_mut()); // C = L⁻¹ Bᵀ = L⁻¹ S L⁻ᵀ (Cᵀ stored; C symmetric)
         let tr_y: f64 = (0..n).map(|i| c[(i, i)]).sum();
         let dd = self.d_obs as f64;
         let value = 0.5 * dd * cy.logdet() + 0.5 * tr_y;
@@ -248,8 +253,9 @@ impl Objective {
                 q[(i, i)] += dd;
             }
             let g = cy.sandwich(q.as_ref()) * faer::Scale(0.5);
-            term.dx = Some(ky.x_grad(&gy, x, g.as_ref()));
-            term.dparams = ky.param_grads(&gy, x, g.as_ref());
+            let (dp, dx) = ky.gradients(&gy, x, g.as_ref());
+            term.dx = Some(dx);
+            term.dparams = dp;
         }
         Ok(term)
     }
@@ -260,8 +266,12 @@ impl Objective {
         let n = x.nrows();
         let d = x.ncols();
         let kx = RbfLinear::dynamics(beta);
-        let xin = Mat::from_fn(self.layout.x_in.len(), d, |i, j| x[(self.layout.x_in[i], j)]);
-        let xout = Mat::from_fn(self.layout.x_out.len(), d, |i, j| x[(self.layout.x_out[i], j)]);
+        let xin = Mat::from_fn(self.layout.x_in.len(), d, |i, j| {
+            x[(self.layout.x_in[i], j)]
+        });
+        let xout = Mat::from_fn(self.layout.x_out.len(), d, |i, j| {
+            x[(self.layout.x_out[i], j)]
+        });
         let m = xin.nrows();
         let gx = kx.gram(xin.as_ref());
         let cx = Cholesky::factor(gx.k.as_ref(), "K_X")?;
@@ -289,8 +299,8 @@ impl Objective {
                 q[(i, i)] += d as f64;
             }
             let g = cx.sandwich(q.as_ref()) * faer::Scale(0.5);
-            let dx_in = kx.x_grad(&gx, xin.as_ref(), g.as_ref());
-            term.dparams = kx.param_grads(&gx, xin.as_ref(), g.as_ref());
+            let (dp, dx_in) = kx.gradients(&gx, xin.as_ref(), g.as_ref());
+            term.dparams = dp;
             let mut dx_out = w;
             cx.half_solve_t_in_place(dx_out.as_mut());
             let mut dx = Mat::<f64>::zeros(n, d);
@@ -349,7 +359,10 @@ impl Gpdm {
             return invalid("poses have dimension 0");
         }
         if let Some((i, s)) = sequences.iter().enumerate().find(|(_, s)| s.ncols() != dim) {
-            return invalid(format!("sequence {i} has pose dimension {}, expected {dim}", s.ncols()));
+            return invalid(format!(
+                "sequence {i} has pose dimension {}, expected {dim}",
+                s.ncols()
+            ));
         }
         if sequences.iter().any(|s| s.iter().any(|v| !v.is_finite())) {
             return invalid("training poses contain NaN or infinity");

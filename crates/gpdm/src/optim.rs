@@ -18,7 +18,9 @@ use serde::{Deserialize, Serialize};
 pub fn pca_init(y: &DMatrix<f64>, d: usize) -> Result<DMatrix<f64>> {
     let n = y.nrows();
     if d == 0 || d > n {
-        return invalid(format!("cannot take {d} principal components of {n} frames"));
+        return invalid(format!(
+            "cannot take {d} principal components of {n} frames"
+        ));
     }
     let s = crate::linalg::to_na(mul_abt(view(y), view(y)).as_ref());
     let eig = nalgebra::SymmetricEigen::new(s);

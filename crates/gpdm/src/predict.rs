@@ -112,7 +112,10 @@ impl Predictor {
     pub fn mean_trajectory(&self, x1: &[f64], len: usize) -> Result<DMatrix<f64>> {
         let d = self.latent_dim();
         if x1.len() != d {
-            return invalid(format!("start point has {} coordinates, expected {d}", x1.len()));
+            return invalid(format!(
+                "start point has {} coordinates, expected {d}",
+                x1.len()
+            ));
         }
         let mut out = DMatrix::zeros(len, d);
         if len == 0 {

@@ -28,9 +28,16 @@ fn check_fd(f: &dyn Fn(&[f64]) -> f64, theta: &[f64], grad: &[f64], h: f64, tol:
         let fd = (f(&tp) - f(&tm)) / (2.0 * h);
         let err = (fd - grad[i]).abs() / grad[i].abs().max(1.0);
         worst = worst.max(err);
-        assert!(err < tol, "component {i}: analytic {} vs finite difference {fd}", grad[i]);
+        assert!(
+            err < tol,
+            "component {i}: analytic {} vs finite difference {fd}",
+            grad[i]
+        );
     }
-    eprintln!("worst relative gradient error {worst:e} over {} components", theta.len());
+    eprintln!(
+        "worst relative gradient error {worst:e} over {} components",
+        theta.len()
+    );
 }
 
 fn check_objective(config: GpdmConfig) {
@@ -48,7 +55,13 @@ fn check_objective(config: GpdmConfig) {
     assert!(g[..nd].iter().any(|v| v.abs() > 1e-3));
     assert!(g[nd..nd + 3].iter().all(|v| v.abs() > 1e-6));
     assert!(g[nd + 3..].iter().all(|v| v.abs() > 1e-6));
-    check_fd(&|t| obj.eval(t, None).unwrap().value, &theta, &g, 1e-5, 1e-6);
+    check_fd(
+        &|t| obj.eval(t, None).unwrap().value,
+        &theta,
+        &g,
+        1e-5,
+        1e-6,
+    );
 }
 
 #[test]
@@ -92,18 +105,28 @@ fn objective_matches_direct_formula() {
     let ky = DMatrix::from_fn(n, n, |i, j| k(&row(i), &row(j), pa, i == j));
     let yy = &m.y * m.y.transpose();
     let dy = m.y.ncols() as f64;
-    let pose = 0.5 * dy * ky.determinant().ln()
-        + 0.5 * ky.clone().lu().solve(&yy).unwrap().trace();
+    let pose = 0.5 * dy * ky.determinant().ln() + 0.5 * ky.clone().lu().solve(&yy).unwrap().trace();
     let ins: Vec<usize> = (0..6).chain(7..12).collect();
     let outs: Vec<usize> = (1..7).chain(8..13).collect();
     let kx = DMatrix::from_fn(11, 11, |i, j| k(&row(ins[i]), &row(ins[j]), m.beta, i == j));
     let xo = DMatrix::from_fn(11, x.ncols(), |i, c| x[(outs[i], c)]);
     let d = x.ncols() as f64;
     let dynamics = 0.5 * d * kx.determinant().ln()
-        + 0.5 * kx.clone().lu().solve(&(&xo * xo.transpose())).unwrap().trace()
-        + 0.5 * (row(0).iter().map(|v| v * v).sum::<f64>() + row(7).iter().map(|v| v * v).sum::<f64>());
+        + 0.5
+            * kx.clone()
+                .lu()
+                .solve(&(&xo * xo.transpose()))
+                .unwrap()
+                .trace()
+        + 0.5
+            * (row(0).iter().map(|v| v * v).sum::<f64>()
+                + row(7).iter().map(|v| v * v).sum::<f64>());
     let prior: f64 = m.alpha.iter().chain(m.beta.iter()).map(|v| v.ln()).sum();
-    assert!((e.pose - pose).abs() < 1e-9 * pose.abs().max(1.0), "{} vs {pose}", e.pose);
+    assert!(
+        (e.pose - pose).abs() < 1e-9 * pose.abs().max(1.0),
+        "{} vs {pose}",
+        e.pose
+    );
     assert!((e.dynamics - dynamics).abs() < 1e-9 * dynamics.abs().max(1.0));
     assert!((e.prior - prior).abs() < 1e-12);
 }
@@ -127,8 +150,17 @@ fn trajectory_energy_gradient_and_value() {
         let e2: f64 = (0..3).map(|c| (full[(t + 1, c)] - mu[c]).powi(2)).sum();
         direct += 0.5 * e2 / s + 1.5 * s.ln();
     }
-    assert!((e - direct).abs() < 1e-10 * direct.abs().max(1.0), "{e} vs {direct}");
+    assert!(
+        (e - direct).abs() < 1e-10 * direct.abs().max(1.0),
+        "{e} vs {direct}"
+    );
     let mut scratch = vec![0.0; q.len()];
-    check_fd(&|t| energy.energy_grad(t, &mut scratch.clone()).unwrap(), &q, &g, 1e-6, 1e-6);
+    check_fd(
+        &|t| energy.energy_grad(t, &mut scratch.clone()).unwrap(),
+        &q,
+        &g,
+        1e-6,
+        1e-6,
+    );
     scratch.clear();
 }

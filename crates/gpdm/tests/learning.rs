@@ -16,14 +16,29 @@ fn lbfgs_minimises_rosenbrock() {
         g[1] = 200.0 * (b - a * a);
         Some((1.0 - a).powi(2) + 100.0 * (b - a * a).powi(2))
     };
-    let r = lbfgs(f, &[-1.2, 1.0], &LbfgsOptions { value_tol: 0.0, ..Default::default() });
+    let r = lbfgs(
+        f,
+        &[-1.2, 1.0],
+        &LbfgsOptions {
+            value_tol: 0.0,
+            ..Default::default()
+        },
+    );
     assert_eq!(r.exit, Exit::GradientTolerance, "{r:?}");
-    assert!((r.x[0] - 1.0).abs() < 1e-5 && (r.x[1] - 1.0).abs() < 1e-5, "{:?}", r.x);
+    assert!(
+        (r.x[0] - 1.0).abs() < 1e-5 && (r.x[1] - 1.0).abs() < 1e-5,
+        "{:?}",
+        r.x
+    );
 }
 
 #[test]
 fn lbfgs_reports_unevaluable_start() {
-    let r = lbfgs(|_: &[f64], _: &mut [f64]| None, &[0.0], &LbfgsOptions::default());
+    let r = lbfgs(
+        |_: &[f64], _: &mut [f64]| None,
+        &[0.0],
+        &LbfgsOptions::default(),
+    );
     assert_eq!(r.exit, Exit::StartFailed);
 }
 
@@ -31,7 +46,10 @@ fn rotation_model() -> (Gpdm, Vec<DMatrix<f64>>, gpdm::optim::TrainReport) {
     let omega = std::f64::consts::TAU / 16.0;
     let (c1, y1) = common::rotation_system(40, omega, 0.0, 0.01, 1);
     let (c2, y2) = common::rotation_system(30, omega, 1.0, 0.01, 2);
-    let config = GpdmConfig { latent_dim: 2, ..GpdmConfig::default() };
+    let config = GpdmConfig {
+        latent_dim: 2,
+        ..GpdmConfig::default()
+    };
     let mut m = Gpdm::new(&[y1, y2], config).unwrap();
     let rep = train(&mut m, &TrainOptions::default()).unwrap();
     (m, vec![c1, c2], rep)
@@ -40,7 +58,10 @@ fn rotation_model() -> (Gpdm, Vec<DMatrix<f64>>, gpdm::optim::TrainReport) {
 #[test]
 fn learned_dynamics_predict_the_next_state_of_a_rotation() {
     let (m, clean, rep) = rotation_model();
-    eprintln!("objective {} -> {} in {} evaluations, exits {:?}", rep.initial_value, rep.final_value, rep.evaluations, rep.exits);
+    eprintln!(
+        "objective {} -> {} in {} evaluations, exits {:?}",
+        rep.initial_value, rep.final_value, rep.evaluations, rep.exits
+    );
     assert!(rep.final_value < rep.initial_value);
     let pred = Predictor::new(&m).unwrap();
     // One-step prediction in pose space: y_{t+1} ≈ μ_Y(μ_X(x_t)), against the clean truth,
@@ -51,7 +72,9 @@ fn learned_dynamics_predict_the_next_state_of_a_rotation() {
         for t in 0..c.nrows() - 1 {
             let xt: Vec<f64> = m.x.row(row + t).iter().copied().collect();
             let (next, _) = pred.dynamics(&xt);
-            let y = pred.pose_mean(&DMatrix::from_row_slice(1, 2, &next)).unwrap();
+            let y = pred
+                .pose_mean(&DMatrix::from_row_slice(1, 2, &next))
+                .unwrap();
             err += (y.row(0) - c.row(t + 1)).norm_squared();
             base += (c.row(t) - c.row(t + 1)).norm_squared();
             count += 1.0;
@@ -60,15 +83,23 @@ fn learned_dynamics_predict_the_next_state_of_a_rotation() {
     }
     let (err, base) = ((err / count).sqrt(), (base / count).sqrt());
     eprintln!("one-step RMS error {err:.4}, persistence baseline {base:.4}");
-    assert!(err < 0.1 * base, "one-step error {err} vs persistence {base}");
+    assert!(
+        err < 0.1 * base,
+        "one-step error {err} vs persistence {base}"
+    );
 
     // Mean prediction (eq. 8) from the first latent point follows the cycle for 2 periods.
-    let traj = pred.mean_trajectory(&m.x.row(0).iter().copied().collect::<Vec<_>>(), 32).unwrap();
+    let traj = pred
+        .mean_trajectory(&m.x.row(0).iter().copied().collect::<Vec<_>>(), 32)
+        .unwrap();
     let poses = pred.pose_mean(&traj).unwrap();
     let scale = clean[0].rows(0, 32).map(|v| v * v).mean().sqrt();
     let rms = (poses - clean[0].rows(0, 32)).map(|v| v * v).mean().sqrt();
     eprintln!("32-frame mean-prediction RMS error {rms:.4} (data RMS {scale:.3})");
-    assert!(rms < 0.1 * scale, "rollout error {rms} vs data scale {scale}");
+    assert!(
+        rms < 0.1 * scale,
+        "rollout error {rms} vs data scale {scale}"
+    );
 }
 
 #[test]
@@ -77,15 +108,43 @@ fn both_schedules_move_beta_and_lower_the_objective() {
     // coordinates both the joint and the alternating schedules must move β.
     let omega = std::f64::consts::TAU / 16.0;
     let (_, y1) = common::rotation_system(40, omega, 0.0, 0.01, 1);
-    let config = GpdmConfig { latent_dim: 2, ..GpdmConfig::default() };
+    let config = GpdmConfig {
+        latent_dim: 2,
+        ..GpdmConfig::default()
+    };
     let m0 = Gpdm::new(&[y1], config).unwrap();
-    for schedule in [Schedule::Joint, Schedule::Alternate { rounds: 5, iters: 50 }] {
+    for schedule in [
+        Schedule::Joint,
+        Schedule::Alternate {
+            rounds: 5,
+            iters: 50,
+        },
+    ] {
         let mut m = m0.clone();
-        let r = train(&mut m, &TrainOptions { schedule: schedule.clone(), ..Default::default() }).unwrap();
-        eprintln!("{schedule:?}: {} -> {} ({} evals) beta {:?}", r.initial_value, r.final_value, r.evaluations, m.beta);
+        let r = train(
+            &mut m,
+            &TrainOptions {
+                schedule: schedule.clone(),
+                ..Default::default()
+            },
+        )
+        .unwrap();
+        eprintln!(
+            "{schedule:?}: {} -> {} ({} evals) beta {:?}",
+            r.initial_value, r.final_value, r.evaluations, m.beta
+        );
         assert!(r.final_value < r.initial_value - 1.0);
-        let moved = m.beta.iter().zip(m0.beta.iter()).filter(|(a, b)| (*a / *b).ln().abs() > 0.1).count();
-        assert!(moved >= 2, "{schedule:?} left β near its start: {:?}", m.beta);
+        let moved = m
+            .beta
+            .iter()
+            .zip(m0.beta.iter())
+            .filter(|(a, b)| (*a / *b).ln().abs() > 0.1)
+            .count();
+        assert!(
+            moved >= 2,
+            "{schedule:?} left β near its start: {:?}",
+            m.beta
+        );
         // The returned value is the objective at the stored parameters.
         let again = m.objective().unwrap().eval(&m.theta(), None).unwrap().value;
         assert!((again - r.final_value).abs() <= 1e-9 * again.abs().max(1.0));
@@ -105,9 +164,14 @@ fn pose_reconstruction_interpolates_training_poses() {
     // Noise std is 0.01: the GP mean at training inputs smooths to about that level.
     assert!(rms < 0.03, "reconstruction RMS {rms}");
     let var = pred.pose_variance(&m.x).unwrap();
-    let far = pred.pose_variance(&DMatrix::from_row_slice(1, 2, &[1e3, 1e3])).unwrap()[0];
+    let far = pred
+        .pose_variance(&DMatrix::from_row_slice(1, 2, &[1e3, 1e3]))
+        .unwrap()[0];
     let prior = m.alpha[0] + 1.0 / m.alpha[2];
-    assert!((far - prior).abs() < 1e-9 * prior, "far variance {far} vs prior {prior}");
+    assert!(
+        (far - prior).abs() < 1e-9 * prior,
+        "far variance {far} vs prior {prior}"
+    );
     assert!(var.iter().all(|&v| v < 0.1 * prior));
 }
 
@@ -116,9 +180,19 @@ fn hmc_variations_stay_near_the_cycle_and_differ() {
     let (m, clean, _) = rotation_model();
     let pred = Predictor::new(&m).unwrap();
     let template = m.sequence_latent(0).unwrap();
-    let opts = HmcOptions { n_samples: 10, burn_in: 100, thin: 2, leapfrog_steps: 10, seed: 3, ..Default::default() };
+    let opts = HmcOptions {
+        n_samples: 10,
+        burn_in: 100,
+        thin: 2,
+        leapfrog_steps: 10,
+        seed: 3,
+        ..Default::default()
+    };
     let (trajs, res) = sample_trajectories(&pred, &template, &opts).unwrap();
-    eprintln!("trajectory HMC acceptance {:.2}, step {:.2e}", res.accept_rate, res.step_size);
+    eprintln!(
+        "trajectory HMC acceptance {:.2}, step {:.2e}",
+        res.accept_rate, res.step_size
+    );
     assert_eq!(trajs.len(), 10);
     let scale = clean[0].map(|v| v * v).mean().sqrt();
     for t in &trajs {
@@ -127,26 +201,49 @@ fn hmc_variations_stay_near_the_cycle_and_differ() {
         // Plausible: every pose close to the data's circle in the 2-D latent truth means
         // a bounded distance from the nearest clean training pose.
         for r in poses.row_iter() {
-            let nearest = clean.iter().flat_map(|c| c.row_iter().map(|q| (q - r).norm()).collect::<Vec<_>>())
+            let nearest = clean
+                .iter()
+                .flat_map(|c| c.row_iter().map(|q| (q - r).norm()).collect::<Vec<_>>())
                 .fold(f64::INFINITY, f64::min);
-            assert!(nearest < 0.5 * scale * (10f64).sqrt(), "pose {nearest} from the data");
+            assert!(
+                nearest < 0.5 * scale * (10f64).sqrt(),
+                "pose {nearest} from the data"
+            );
         }
     }
-    assert!(trajs.windows(2).any(|w| (&w[0] - &w[1]).abs().max() > 1e-6), "all samples identical");
+    assert!(
+        trajs.windows(2).any(|w| (&w[0] - &w[1]).abs().max() > 1e-6),
+        "all samples identical"
+    );
 }
 
 #[test]
 fn model_serialises_round_trip_and_validates_input() {
     let (m, _, _) = {
         let (c, y) = common::rotation_system(10, 0.3, 0.0, 0.01, 1);
-        (Gpdm::new(&[y], GpdmConfig { latent_dim: 2, ..Default::default() }).unwrap(), c, ())
+        (
+            Gpdm::new(
+                &[y],
+                GpdmConfig {
+                    latent_dim: 2,
+                    ..Default::default()
+                },
+            )
+            .unwrap(),
+            c,
+            (),
+        )
     };
     let s = serde_json::to_string(&m).unwrap();
     let back: Gpdm = serde_json::from_str(&s).unwrap();
     assert_eq!(back, m);
     assert!(Gpdm::new(&[], GpdmConfig::default()).is_err());
     assert!(Gpdm::new(&[DMatrix::zeros(1, 4)], GpdmConfig::default()).is_err());
-    assert!(Gpdm::new(&[DMatrix::zeros(5, 4), DMatrix::zeros(5, 3)], GpdmConfig::default()).is_err());
+    assert!(Gpdm::new(
+        &[DMatrix::zeros(5, 4), DMatrix::zeros(5, 3)],
+        GpdmConfig::default()
+    )
+    .is_err());
     let mut bad = DMatrix::zeros(5, 4);
     bad[(0, 0)] = f64::NAN;
     assert!(Gpdm::new(&[bad], GpdmConfig::default()).is_err());

@@ -52,23 +52,47 @@ fn hmc_recovers_gaussian_mean_and_covariance() {
     let res = sample(&Gauss, &[5.0, 5.0, 5.0], &gauss_opts(11)).unwrap();
     assert_eq!(res.samples.len(), 4000);
     let n = res.samples.len() as f64;
-    let mean: Vec<f64> = (0..3).map(|i| res.samples.iter().map(|s| s[i]).sum::<f64>() / n).collect();
+    let mean: Vec<f64> = (0..3)
+        .map(|i| res.samples.iter().map(|s| s[i]).sum::<f64>() / n)
+        .collect();
     for i in 0..3 {
         // Monte-Carlo standard error for independent draws is sqrt(Σ_ii / n) ≤ 0.023;
         // allow 5 standard errors (HMC draws are close to independent here).
         let se = (COV[i][i] / n).sqrt();
-        assert!((mean[i] - MEAN[i]).abs() < 5.0 * se, "mean[{i}] = {} vs {}", mean[i], MEAN[i]);
+        assert!(
+            (mean[i] - MEAN[i]).abs() < 5.0 * se,
+            "mean[{i}] = {} vs {}",
+            mean[i],
+            MEAN[i]
+        );
     }
     for i in 0..3 {
         for j in 0..3 {
-            let c = res.samples.iter().map(|s| (s[i] - mean[i]) * (s[j] - mean[j])).sum::<f64>() / (n - 1.0);
+            let c = res
+                .samples
+                .iter()
+                .map(|s| (s[i] - mean[i]) * (s[j] - mean[j]))
+                .sum::<f64>()
+                / (n - 1.0);
             // Standard error of a sample covariance: sqrt((Σ_ii Σ_jj + Σ_ij²) / n).
             let se = ((COV[i][i] * COV[j][j] + COV[i][j] * COV[i][j]) / n).sqrt();
-            assert!((c - COV[i][j]).abs() < 5.0 * se, "cov[{i}][{j}] = {c} vs {}", COV[i][j]);
+            assert!(
+                (c - COV[i][j]).abs() < 5.0 * se,
+                "cov[{i}][{j}] = {c} vs {}",
+                COV[i][j]
+            );
         }
     }
-    eprintln!("acceptance {} (burn-in {}), step {}", res.accept_rate, res.burn_in_accept_rate, res.step_size);
-    assert!(res.accept_rate > 0.4 && res.accept_rate < 0.999, "acceptance {}", res.accept_rate);
+    eprintln!(
+        "acceptance {} (burn-in {}), step {}",
+        res.accept_rate, res.burn_in_accept_rate, res.step_size
+    );
+    // Adaptation reaches the target acceptance (0.7) in the sampling phase, not only in burn-in.
+    assert!(
+        (res.accept_rate - 0.7).abs() < 0.07,
+        "acceptance {}",
+        res.accept_rate
+    );
 }
 
 #[test]
@@ -97,7 +121,12 @@ fn set() -> (BlendSet, DMatrix<f64>, DMatrix<f64>, DMatrix<f64>) {
     let x0 = common::randn(20, 3, 1);
     let xh = common::randn(20, 3, 2);
     let x1 = common::randn(20, 3, 3);
-    let s = BlendSet::new(vec![(1.0, vec![x1.clone()]), (0.0, vec![x0.clone()]), (0.5, vec![xh.clone()])]).unwrap();
+    let s = BlendSet::new(vec![
+        (1.0, vec![x1.clone()]),
+        (0.0, vec![x0.clone()]),
+        (0.5, vec![xh.clone()]),
+    ])
+    .unwrap();
     (s, x0, xh, x1)
 }
 
@@ -132,5 +161,9 @@ fn blend_set_validates_input() {
     let a = common::randn(20, 3, 1);
     assert!(BlendSet::new(vec![(0.0, vec![a.clone()])]).is_err());
     assert!(BlendSet::new(vec![(0.0, vec![a.clone()]), (1.0, vec![])]).is_err());
-    assert!(BlendSet::new(vec![(0.0, vec![a.clone()]), (1.0, vec![common::randn(19, 3, 2)])]).is_err());
+    assert!(BlendSet::new(vec![
+        (0.0, vec![a.clone()]),
+        (1.0, vec![common::randn(19, 3, 2)])
+    ])
+    .is_err());
 }

@@ -142,9 +142,33 @@ impl SubjectSpec {
                 format!("fps must be a positive number, got {}", spec.fps),
             ));
         }
+        if spec.up_vector().is_none() {
+            return Err(Error::file(
+                path,
+                format!("up must be one of +x -x +y -y +z -z, got '{}'", spec.up),
+            ));
+        }
         spec.check_parts()
             .map_err(|e| Error::file(path, e.to_string()))?;
         Ok(spec)
+    }
+
+    /// The unit "up" axis named by `up` (`"+y"`, `"-z"`, ...), if valid.
+    pub fn up_vector(&self) -> Option<nalgebra::Vector3<f64>> {
+        let (sign, axis) = match self.up.as_bytes() {
+            [b'+', a] => (1.0, *a),
+            [b'-', a] => (-1.0, *a),
+            _ => return None,
+        };
+        let k = match axis {
+            b'x' => 0,
+            b'y' => 1,
+            b'z' => 2,
+            _ => return None,
+        };
+        let mut v = nalgebra::Vector3::zeros();
+        v[k] = sign;
+        Some(v)
     }
 
     /// The root part (the one whose parent is `null`).
@@ -332,7 +356,8 @@ pub struct Subject {
 
 impl CaptureSet {
     /// Opens `dir/set.json` and checks that both subjects have a
-    /// `subject.json` and every training motion a directory.
+    /// `subject.json`, every training and test motion a directory of frames,
+    /// and every keypose `[src_frame, tgt_frame]` lies within its motions.
     pub fn open(dir: impl AsRef<Path>) -> Result<Self> {
         let root = dir.as_ref().to_path_buf();
         let spec = SetSpec::load(root.join("set.json"))?;
@@ -346,14 +371,38 @@ impl CaptureSet {
                 ));
             }
         }
-        for t in &set.spec.train {
-            for d in [
+        for (i, t) in set.spec.train.iter().enumerate() {
+            let mut n_frames = [0; 2];
+            for (k, d) in [
                 set.motion_dir(&set.spec.source, &t.source),
                 set.motion_dir(&set.spec.target, &t.target),
-            ] {
+            ]
+            .iter()
+            .enumerate()
+            {
                 if !d.is_dir() {
-                    return Err(Error::file(&d, "training motion directory is missing"));
+                    return Err(Error::file(d, "training motion directory is missing"));
                 }
+                n_frames[k] = frame_files(d)?.len();
+            }
+            if let Some(kp) = t
+                .keyposes
+                .iter()
+                .find(|kp| kp[0] >= n_frames[0] || kp[1] >= n_frames[1])
+            {
+                return Err(Error::file(
+                    set.set_json(),
+                    format!(
+                        "training pair {i} ({} / {}): keypose {kp:?} is outside the motions' {} / {} frames",
+                        t.source, t.target, n_frames[0], n_frames[1]
+                    ),
+                ));
+            }
+        }
+        for m in &set.spec.test {
+            let d = set.motion_dir(&set.spec.source, m);
+            if !d.is_dir() {
+                return Err(Error::file(&d, "test motion directory is missing"));
             }
         }
         Ok(set)

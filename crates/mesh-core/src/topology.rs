@@ -139,7 +139,9 @@ impl Topology {
     /// each loop follows the direction of its faces' edges, so the surface lies
     /// to the left when walking it on the outside of a counter-clockwise mesh.
     /// Loops start at their smallest boundary half-edge and are listed in that
-    /// order, so the result is deterministic.
+    /// order, so the result is deterministic. Where two loops touch at one
+    /// vertex (non-manifold) the walk takes the smallest unused outgoing
+    /// boundary edge, which may merge them into one figure-eight loop.
     pub fn boundary_loops(&self) -> Vec<Vec<u32>> {
         // Directed boundary half-edges as they appear in their face, sorted.
         let mut out: Vec<[u32; 2]> = Vec::new();

@@ -227,6 +227,8 @@ fn bad_subjects_give_one_line_errors_naming_subject_json() {
     assert!(subject_error(&root_curves).contains("root part"));
     assert!(subject_error("{\"fps\": 25, \"parts\": ").contains("invalid JSON"));
     assert!(subject_error(&good.replace("\"fps\": 25", "\"fps\": -1")).contains("fps"));
+    let sideways = good.replace("\"fps\": 25", "\"fps\": 25, \"up\": \"y\"");
+    assert!(subject_error(&sideways).contains("up must be"));
 }
 
 #[test]
@@ -248,6 +250,24 @@ fn bad_set_files_give_one_line_errors() {
     std::fs::write(&p, r#"{"source": "A", "target": "B", "train": [{"source": "run", "target": "walk2", "keyposes": [[0,0]]}]}"#).unwrap();
     let msg = CaptureSet::open(dir.path()).unwrap_err().to_string();
     assert!(msg.contains("run") && msg.contains("missing"), "{msg}");
+    // Keyposes beyond the motions' frames (each motion has 3 frames).
+    std::fs::write(
+        &p,
+        r#"{"source": "A", "target": "B", "train": [{"source": "walk", "target": "walk2", "keyposes": [[0,0],[1,3]]}]}"#,
+    )
+    .unwrap();
+    let msg = CaptureSet::open(dir.path()).unwrap_err().to_string();
+    assert!(
+        msg.contains("set.json") && msg.contains("[1, 3]") && msg.contains("3 / 3 frames"),
+        "{msg}"
+    );
+    std::fs::write(
+        &p,
+        r#"{"source": "A", "target": "B", "train": [{"source": "walk", "target": "walk2", "keyposes": [[2,2]]}], "test": ["kick"]}"#,
+    )
+    .unwrap();
+    let msg = CaptureSet::open(dir.path()).unwrap_err().to_string();
+    assert!(msg.contains("kick") && msg.contains("test motion"), "{msg}");
     let msg = SubjectSpec::load(dir.path().join("C/subject.json"))
         .unwrap_err()
         .to_string();

@@ -259,7 +259,6 @@ fn malformed_ascii_payloads_give_one_line_errors() {
     assert!(m.contains("repeats"), "{m}");
     let m = read_err(format!("{head}0 0 0\n1 nan 0\n0 1 0\n3 0 1 2\n").as_bytes());
     assert!(m.contains("Line 11") && m.contains("'1 nan 0'"), "{m}");
-    eprintln!("{m}");
     // 1e999 overflows f32 to infinity: parsed, then rejected as non-finite.
     let m = read_err(format!("{head}0 0 0\n1 1e999 0\n0 1 0\n3 0 1 2\n").as_bytes());
     assert!(m.contains("vertex 1") && m.contains("non-finite"), "{m}");

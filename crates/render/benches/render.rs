@@ -12,11 +12,37 @@ fn bench(c: &mut Criterion) {
     assert!((12_000..14_000).contains(&m.vertices.len()));
     let (v, f) = (m.vertices, m.faces);
     let bbox = Aabb::from_points(&v);
-    for (name, style) in [("aa2x2", Style::default()), ("no_aa", Style { supersample: 1, ..Style::default() })] {
-        let r = Renderer::new(&bbox, &View::THREE_QUARTER, &Axis::PLUS_Y, ProjectionKind::Orthographic, 512, 512, style);
-        let layer = Layer { vertices: &v, faces: &f, colour: render::colour::palette(0), vertex_colours: None };
-        c.bench_function(&format!("render_13k_512_{name}"), |b| b.iter(|| r.render(std::hint::black_box(&[layer]))));
-        c.bench_function(&format!("render_png_13k_512_{name}"), |b| b.iter(|| r.render(&[layer]).encode_png()));
+    for (name, style) in [
+        ("aa2x2", Style::default()),
+        (
+            "no_aa",
+            Style {
+                supersample: 1,
+                ..Style::default()
+            },
+        ),
+    ] {
+        let r = Renderer::new(
+            &bbox,
+            &View::THREE_QUARTER,
+            &Axis::PLUS_Y,
+            ProjectionKind::Orthographic,
+            512,
+            512,
+            style,
+        );
+        let layer = Layer {
+            vertices: &v,
+            faces: &f,
+            colour: render::colour::palette(0),
+            vertex_colours: None,
+        };
+        c.bench_function(&format!("render_13k_512_{name}"), |b| {
+            b.iter(|| r.render(std::hint::black_box(&[layer])))
+        });
+        c.bench_function(&format!("render_png_13k_512_{name}"), |b| {
+            b.iter(|| r.render(&[layer]).encode_png())
+        });
     }
 }
 

@@ -47,9 +47,17 @@ impl GifPalette {
             .iter()
             .enumerate()
             .filter(|(_, h)| h.0 > 0)
-            .map(|(i, h)| Cell { key: [(i >> 10) as u8, ((i >> 5) & 31) as u8, (i & 31) as u8], count: h.0, sum: h.1 })
+            .map(|(i, h)| Cell {
+                key: [(i >> 10) as u8, ((i >> 5) & 31) as u8, (i & 31) as u8],
+                count: h.0,
+                sum: h.1,
+            })
             .collect();
-        let mut boxes: Vec<Vec<Cell>> = if cells.is_empty() { Vec::new() } else { vec![cells] };
+        let mut boxes: Vec<Vec<Cell>> = if cells.is_empty() {
+            Vec::new()
+        } else {
+            vec![cells]
+        };
         while boxes.len() < 256 {
             // The box with the widest channel range (ties: more pixels, then lower index).
             let pick = boxes
@@ -58,10 +66,17 @@ impl GifPalette {
                 .filter(|(_, b)| b.len() > 1)
                 .map(|(i, b)| {
                     let (axis, range) = widest(b);
-                    (range, b.iter().map(|c| c.count).sum::<u64>(), std::cmp::Reverse(i), axis)
+                    (
+                        range,
+                        b.iter().map(|c| c.count).sum::<u64>(),
+                        std::cmp::Reverse(i),
+                        axis,
+                    )
                 })
                 .max();
-            let Some((_, total, std::cmp::Reverse(i), axis)) = pick else { break };
+            let Some((_, total, std::cmp::Reverse(i), axis)) = pick else {
+                break;
+            };
             let mut b = std::mem::take(&mut boxes[i]);
             b.sort_by_key(|c| (c.key[axis], c.key));
             let mut acc = 0;
@@ -98,7 +113,9 @@ impl GifPalette {
             let q = [ch(10), ch(5), ch(0)];
             let mut best = (i32::MAX, 0usize);
             for j in 0..n_pal {
-                let d: i32 = (0..3).map(|c| (colours[3 * j + c] as i32 - q[c]).pow(2)).sum();
+                let d: i32 = (0..3)
+                    .map(|c| (colours[3 * j + c] as i32 - q[c]).pow(2))
+                    .sum();
                 if d < best.0 {
                     best = (d, j);
                 }
@@ -110,7 +127,10 @@ impl GifPalette {
 
     /// Palette indices for every pixel.
     pub fn map(&self, img: &RgbImage) -> Vec<u8> {
-        img.data.chunks_exact(3).map(|p| self.lut[cell_index(p)]).collect()
+        img.data
+            .chunks_exact(3)
+            .map(|p| self.lut[cell_index(p)])
+            .collect()
     }
 }
 
@@ -139,12 +159,27 @@ impl GifBuilder {
     /// `fps` is rounded to GIF's centisecond delays (at least 2 cs: browsers
     /// slow down faster GIFs).
     pub fn new(width: u32, height: u32, fps: f64, palette: GifPalette) -> Result<Self, String> {
-        let (w, h) = (u16::try_from(width).map_err(|_| "GIF too wide")?, u16::try_from(height).map_err(|_| "GIF too tall")?);
-        let mut enc = gif::Encoder::new(Vec::new(), w, h, &palette.colours).map_err(|e| e.to_string())?;
-        enc.set_repeat(gif::Repeat::Infinite).map_err(|e| e.to_string())?;
-        let fps = if fps.is_finite() && fps > 0.0 { fps } else { 25.0 };
+        let (w, h) = (
+            u16::try_from(width).map_err(|_| "GIF too wide")?,
+            u16::try_from(height).map_err(|_| "GIF too tall")?,
+        );
+        let mut enc =
+            gif::Encoder::new(Vec::new(), w, h, &palette.colours).map_err(|e| e.to_string())?;
+        enc.set_repeat(gif::Repeat::Infinite)
+            .map_err(|e| e.to_string())?;
+        let fps = if fps.is_finite() && fps > 0.0 {
+            fps
+        } else {
+            25.0
+        };
         let delay_cs = (100.0 / fps).round().clamp(2.0, 65535.0) as u16;
-        Ok(GifBuilder { enc, palette, delay_cs, width: w, height: h })
+        Ok(GifBuilder {
+            enc,
+            palette,
+            delay_cs,
+            width: w,
+            height: h,
+        })
     }
 
     pub fn delay_cs(&self) -> u16 {
@@ -154,7 +189,10 @@ impl GifBuilder {
     /// Appends a frame (must have the GIF's size).
     pub fn push(&mut self, img: &RgbImage) -> Result<(), String> {
         if img.width != self.width as u32 || img.height != self.height as u32 {
-            return Err(format!("frame is {}x{}, GIF is {}x{}", img.width, img.height, self.width, self.height));
+            return Err(format!(
+                "frame is {}x{}, GIF is {}x{}",
+                img.width, img.height, self.width, self.height
+            ));
         }
         let mut frame = gif::Frame::default();
         frame.width = self.width;
@@ -219,7 +257,12 @@ mod tests {
         let mut worst = 0;
         for (i, p) in img.data.chunks_exact(3).enumerate() {
             let q = &pal.colours[3 * idx[i] as usize..3 * idx[i] as usize + 3];
-            worst = worst.max((0..3).map(|k| (p[k] as i32 - q[k] as i32).abs()).max().unwrap());
+            worst = worst.max(
+                (0..3)
+                    .map(|k| (p[k] as i32 - q[k] as i32).abs())
+                    .max()
+                    .unwrap(),
+            );
         }
         assert!(worst <= 16, "worst channel error {worst}");
     }

@@ -18,7 +18,10 @@ pub struct Aabb {
 impl Aabb {
     /// The empty box (adding any point makes it that point).
     pub fn empty() -> Self {
-        Aabb { min: Vector3::repeat(f64::INFINITY), max: Vector3::repeat(f64::NEG_INFINITY) }
+        Aabb {
+            min: Vector3::repeat(f64::INFINITY),
+            max: Vector3::repeat(f64::NEG_INFINITY),
+        }
     }
     pub fn is_empty(&self) -> bool {
         (0..3).any(|k| self.min[k] > self.max[k])
@@ -61,7 +64,10 @@ pub struct Axis {
 }
 
 impl Axis {
-    pub const PLUS_Y: Axis = Axis { index: 1, positive: true };
+    pub const PLUS_Y: Axis = Axis {
+        index: 1,
+        positive: true,
+    };
     /// Parses `+x`, `-y`, `z`, ... (case-insensitive).
     pub fn parse(s: &str) -> Option<Axis> {
         let s = s.trim().to_ascii_lowercase();
@@ -104,9 +110,18 @@ pub struct View {
 }
 
 impl View {
-    pub const FRONT: View = View { azimuth_deg: 0.0, elevation_deg: 0.0 };
-    pub const SIDE: View = View { azimuth_deg: 90.0, elevation_deg: 0.0 };
-    pub const THREE_QUARTER: View = View { azimuth_deg: 40.0, elevation_deg: 15.0 };
+    pub const FRONT: View = View {
+        azimuth_deg: 0.0,
+        elevation_deg: 0.0,
+    };
+    pub const SIDE: View = View {
+        azimuth_deg: 90.0,
+        elevation_deg: 0.0,
+    };
+    pub const THREE_QUARTER: View = View {
+        azimuth_deg: 40.0,
+        elevation_deg: 15.0,
+    };
 
     /// `front`, `side`, `three-quarter` (or `3q`), or `AZ,EL` in degrees.
     pub fn parse(s: &str) -> Option<View> {
@@ -117,8 +132,10 @@ impl View {
             other => {
                 let (a, e) = other.split_once(',')?;
                 let (a, e) = (a.trim().parse::<f64>().ok()?, e.trim().parse::<f64>().ok()?);
-                (a.is_finite() && e.is_finite() && e.abs() <= 90.0)
-                    .then_some(View { azimuth_deg: a, elevation_deg: e })
+                (a.is_finite() && e.is_finite() && e.abs() <= 90.0).then_some(View {
+                    azimuth_deg: a,
+                    elevation_deg: e,
+                })
             }
         }
     }
@@ -128,7 +145,10 @@ impl View {
         let u = up.normalize();
         let f = (facing - u * u.dot(facing)).normalize();
         let l = u.cross(&f);
-        let (az, el) = (self.azimuth_deg.to_radians(), self.elevation_deg.to_radians());
+        let (az, el) = (
+            self.azimuth_deg.to_radians(),
+            self.elevation_deg.to_radians(),
+        );
         (f * az.cos() + l * az.sin()) * el.cos() + u * el.sin()
     }
 }
@@ -190,7 +210,10 @@ impl Camera {
         height: u32,
     ) -> Camera {
         let bbox = if bbox.is_empty() {
-            Aabb { min: Vector3::repeat(-1.0), max: Vector3::repeat(1.0) }
+            Aabb {
+                min: Vector3::repeat(-1.0),
+                max: Vector3::repeat(1.0),
+            }
         } else {
             *bbox
         };
@@ -241,7 +264,10 @@ impl Camera {
                 let half = (half_y.min(half_x).tan() * (1.0 - 2.0 * MARGIN)).atan();
                 let r = ((bbox.max - bbox.min).norm() * 0.5).max(1e-9);
                 let distance = r / half.sin();
-                cam.projection = Projection::Perspective { fov_y_deg: fov_y.to_degrees(), distance };
+                cam.projection = Projection::Perspective {
+                    fov_y_deg: fov_y.to_degrees(),
+                    distance,
+                };
             }
         }
         cam
@@ -253,7 +279,9 @@ impl Camera {
         c.width *= s;
         c.height *= s;
         if let Projection::Orthographic { scale } = c.projection {
-            c.projection = Projection::Orthographic { scale: scale * s as f64 };
+            c.projection = Projection::Orthographic {
+                scale: scale * s as f64,
+            };
         }
         c
     }
@@ -273,7 +301,9 @@ impl Camera {
         let d = p - self.target;
         let (x, y, z) = (d.dot(&self.right), d.dot(&self.up), d.dot(&self.back));
         match self.projection {
-            Projection::Orthographic { .. } => Vector3::new(x - self.offset[0], y - self.offset[1], z),
+            Projection::Orthographic { .. } => {
+                Vector3::new(x - self.offset[0], y - self.offset[1], z)
+            }
             Projection::Perspective { distance, .. } => Vector3::new(x, y, z - distance),
         }
     }
@@ -285,7 +315,10 @@ impl Camera {
         let (w2, h2) = (self.width as f64 * 0.5, self.height as f64 * 0.5);
         match self.projection {
             Projection::Orthographic { scale } => Some([w2 + c.x * scale, h2 - c.y * scale, c.z]),
-            Projection::Perspective { fov_y_deg, distance } => {
+            Projection::Perspective {
+                fov_y_deg,
+                distance,
+            } => {
                 let depth = -c.z;
                 if depth <= NEAR * distance {
                     return None;
@@ -323,8 +356,18 @@ mod tests {
 
     #[test]
     fn front_view_looks_down_minus_z_with_y_up() {
-        let b = Aabb { min: Vector3::new(-1.0, -1.0, -1.0), max: Vector3::new(1.0, 1.0, 1.0) };
-        let cam = Camera::frame(&b, &View::FRONT, &Axis::PLUS_Y, ProjectionKind::Orthographic, 100, 100);
+        let b = Aabb {
+            min: Vector3::new(-1.0, -1.0, -1.0),
+            max: Vector3::new(1.0, 1.0, 1.0),
+        };
+        let cam = Camera::frame(
+            &b,
+            &View::FRONT,
+            &Axis::PLUS_Y,
+            ProjectionKind::Orthographic,
+            100,
+            100,
+        );
         assert!((cam.back - Vector3::z()).norm() < 1e-12);
         assert!((cam.right - Vector3::x()).norm() < 1e-12);
         // +x lands right of centre, +y above centre, +z is nearer.
@@ -348,8 +391,18 @@ mod tests {
 
     #[test]
     fn ortho_framing_is_tight_on_the_longer_side() {
-        let b = Aabb { min: Vector3::new(-0.5, 0.0, -0.1), max: Vector3::new(0.5, 2.0, 0.1) };
-        let cam = Camera::frame(&b, &View::FRONT, &Axis::PLUS_Y, ProjectionKind::Orthographic, 200, 200);
+        let b = Aabb {
+            min: Vector3::new(-0.5, 0.0, -0.1),
+            max: Vector3::new(0.5, 2.0, 0.1),
+        };
+        let cam = Camera::frame(
+            &b,
+            &View::FRONT,
+            &Axis::PLUS_Y,
+            ProjectionKind::Orthographic,
+            200,
+            200,
+        );
         let top = cam.project(&Vector3::new(0.0, 2.0, 0.0)).unwrap();
         let bottom = cam.project(&Vector3::new(0.0, 0.0, 0.0)).unwrap();
         assert!((top[1] - 10.0).abs() < 1e-9, "{top:?}");
@@ -358,9 +411,23 @@ mod tests {
 
     #[test]
     fn every_corner_in_frame_for_all_presets_and_projections() {
-        let b = Aabb { min: Vector3::new(-0.3, 0.0, -2.0), max: Vector3::new(0.4, 1.8, 3.0) };
-        for view in [View::FRONT, View::SIDE, View::THREE_QUARTER, View { azimuth_deg: 200.0, elevation_deg: 89.0 }] {
-            for kind in [ProjectionKind::Orthographic, ProjectionKind::Perspective { fov_y_deg: 35.0 }] {
+        let b = Aabb {
+            min: Vector3::new(-0.3, 0.0, -2.0),
+            max: Vector3::new(0.4, 1.8, 3.0),
+        };
+        for view in [
+            View::FRONT,
+            View::SIDE,
+            View::THREE_QUARTER,
+            View {
+                azimuth_deg: 200.0,
+                elevation_deg: 89.0,
+            },
+        ] {
+            for kind in [
+                ProjectionKind::Orthographic,
+                ProjectionKind::Perspective { fov_y_deg: 35.0 },
+            ] {
                 for (w, h) in [(320, 200), (200, 320)] {
                     let cam = Camera::frame(&b, &view, &Axis::PLUS_Y, kind, w, h);
                     for c in b.corners() {
@@ -374,10 +441,22 @@ mod tests {
     #[test]
     fn parses_views_and_axes() {
         assert_eq!(View::parse("side"), Some(View::SIDE));
-        assert_eq!(View::parse("30, -10"), Some(View { azimuth_deg: 30.0, elevation_deg: -10.0 }));
+        assert_eq!(
+            View::parse("30, -10"),
+            Some(View {
+                azimuth_deg: 30.0,
+                elevation_deg: -10.0
+            })
+        );
         assert_eq!(View::parse("30,100"), None);
         assert_eq!(View::parse("top"), None);
-        assert_eq!(Axis::parse("-X"), Some(Axis { index: 0, positive: false }));
+        assert_eq!(
+            Axis::parse("-X"),
+            Some(Axis {
+                index: 0,
+                positive: false
+            })
+        );
         assert_eq!(Axis::parse("w"), None);
     }
 }

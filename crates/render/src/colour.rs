@@ -55,7 +55,11 @@ pub fn parse(s: &str) -> Option<Rgb> {
 
 /// Linear blend `a*(1-t) + b*t`.
 pub fn mix(a: Rgb, b: Rgb, t: f32) -> Rgb {
-    let f = |x: u8, y: u8| (x as f32 * (1.0 - t) + y as f32 * t).round().clamp(0.0, 255.0) as u8;
+    let f = |x: u8, y: u8| {
+        (x as f32 * (1.0 - t) + y as f32 * t)
+            .round()
+            .clamp(0.0, 255.0) as u8
+    };
     [f(a[0], b[0]), f(a[1], b[1]), f(a[2], b[2])]
 }
 
@@ -76,7 +80,9 @@ mod tests {
     fn palette_colours_are_distinct() {
         for i in 0..PALETTE.len() {
             for j in 0..i {
-                let d: i32 = (0..3).map(|k| (PALETTE[i][k] as i32 - PALETTE[j][k] as i32).abs()).sum();
+                let d: i32 = (0..3)
+                    .map(|k| (PALETTE[i][k] as i32 - PALETTE[j][k] as i32).abs())
+                    .sum();
                 assert!(d > 60, "palette {i} and {j} too close");
             }
         }

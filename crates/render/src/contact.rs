@@ -2,6 +2,8 @@
 //! sequences such as "source / transfer / truth") by columns (evenly spaced
 //! frames), with optional row labels and frame numbers in the built-in font.
 
+use rayon::prelude::*;
+
 use crate::camera::{Axis, ProjectionKind, View};
 use crate::colour::{self, Rgb};
 use crate::font;
@@ -63,7 +65,12 @@ impl<'a> ContactSheet<'a> {
     /// The frame index shown in each column: `n` evenly spaced frames from
     /// the first to the last of the range (rounded to the nearest frame).
     pub fn column_frames(&self) -> Vec<usize> {
-        let longest = self.rows.iter().flat_map(|r| r.sequences.iter().map(|s| s.1.n_frames())).max().unwrap_or(0);
+        let longest = self
+            .rows
+            .iter()
+            .flat_map(|r| r.sequences.iter().map(|s| s.1.n_frames()))
+            .max()
+            .unwrap_or(0);
         let end = self.frames.end.min(longest);
         let start = self.frames.start.min(end);
         let len = end - start;
@@ -71,7 +78,9 @@ impl<'a> ContactSheet<'a> {
         match n {
             0 => Vec::new(),
             1 => vec![start],
-            _ => (0..n).map(|j| start + ((j * (len - 1)) as f64 / (n - 1) as f64).round() as usize).collect(),
+            _ => (0..n)
+                .map(|j| start + ((j * (len - 1)) as f64 / (n - 1) as f64).round() as usize)
+                .collect(),
         }
     }
 
@@ -83,48 +92,102 @@ impl<'a> ContactSheet<'a> {
         let line_h = (font::GLYPH_H + 3) * s;
         let pad = 4 * s;
         let label_w = if self.labels {
-            let w = self.rows.iter().flat_map(|r| r.label.lines().map(|l| font::text_width(l, s))).max().unwrap_or(0);
-            if w > 0 { w + 2 * pad } else { 0 }
+            let w = self
+                .rows
+                .iter()
+                .flat_map(|r| r.label.lines().map(|l| font::text_width(l, s)))
+                .max()
+                .unwrap_or(0);
+            if w > 0 {
+                w + 2 * pad
+            } else {
+                0
+            }
         } else {
             0
         };
-        let header_h = if self.labels && !cols.is_empty() { line_h + pad } else { 0 };
+        let header_h = if self.labels && !cols.is_empty() {
+            line_h + pad
+        } else {
+            0
+        };
         let width = label_w + self.cell_width * cols.len().max(1) as u32;
         let height = header_h + self.cell_height * self.rows.len().max(1) as u32;
         let mut sheet = RgbImage::new(width, height, self.style.background);
 
-        let all: Vec<SeqView> = self.rows.iter().flat_map(|r| r.sequences.iter().map(|s| s.1)).collect();
+        let all: Vec<SeqView> = self
+            .rows
+            .iter()
+            .flat_map(|r| r.sequences.iter().map(|s| s.1))
+            .collect();
         let bbox = bounding_box(&all, self.frames.clone());
-        let renderer = Renderer::new(&bbox, &self.view, &self.up, self.projection, self.cell_width, self.cell_height, self.style);
+        let renderer = Renderer::new(
+            &bbox,
+            &self.view,
+            &self.up,
+            self.projection,
+            self.cell_width,
+            self.cell_height,
+            self.style,
+        );
 
         if header_h > 0 {
             for (c, f) in cols.iter().enumerate() {
                 let text = f.to_string();
-                let x = label_w as i64 + c as i64 * self.cell_width as i64 + (self.cell_width as i64 - font::text_width(&text, s) as i64) / 2;
+                let x = label_w as i64
+                    + c as i64 * self.cell_width as i64
+                    + (self.cell_width as i64 - font::text_width(&text, s) as i64) / 2;
                 font::draw_text(&mut sheet, x, pad as i64, &text, s, colour::TEXT);
             }
         }
-        for (r, row) in self.rows.iter().enumerate() {
-            let y0 = header_h as i64 + r as i64 * self.cell_height as i64;
-            for (c, &f) in cols.iter().enumerate() {
-                let layers: Vec<Layer> = row
+        // Cells render in parallel; each is independent, so the sheet does not
+        // depend on the thread count.
+        let jobs: Vec<(usize, usize)> = (0..self.rows.len())
+            .flat_map(|r| (0..cols.len()).map(move |c| (r, c)))
+            .collect();
+        let cells: Vec<RgbImage> = jobs
+            .par_iter()
+            .map(|&(r, c)| {
+                let layers: Vec<Layer> = self.rows[r]
                     .sequences
                     .iter()
                     .filter_map(|(col, seq)| {
-                        Some(Layer { vertices: seq.frame_clamped(f)?, faces: seq.faces, colour: *col, vertex_colours: seq.vertex_colours })
+                        Some(Layer {
+                            vertices: seq.frame_clamped(cols[c])?,
+                            faces: seq.faces,
+                            colour: *col,
+                            vertex_colours: seq.vertex_colours,
+                        })
                     })
                     .collect();
-                let cell = renderer.render(&layers);
-                sheet.blit(&cell, label_w as i64 + c as i64 * self.cell_width as i64, y0);
-            }
+                renderer.render(&layers)
+            })
+            .collect();
+        for (&(r, c), cell) in jobs.iter().zip(&cells) {
+            let y0 = header_h as i64 + r as i64 * self.cell_height as i64;
+            sheet.blit(cell, label_w as i64 + c as i64 * self.cell_width as i64, y0);
+        }
+        for (r, row) in self.rows.iter().enumerate() {
+            let y0 = header_h as i64 + r as i64 * self.cell_height as i64;
             if label_w > 0 {
                 let lines: Vec<&str> = row.label.lines().collect();
                 let legend = lines.len() == row.sequences.len() && lines.len() > 1;
                 let block = lines.len() as i64 * line_h as i64;
                 let top = y0 + (self.cell_height as i64 - block) / 2;
                 for (k, line) in lines.iter().enumerate() {
-                    let c = if legend { row.sequences[k].0 } else { colour::TEXT };
-                    font::draw_text(&mut sheet, pad as i64, top + k as i64 * line_h as i64, line, s, c);
+                    let c = if legend {
+                        row.sequences[k].0
+                    } else {
+                        colour::TEXT
+                    };
+                    font::draw_text(
+                        &mut sheet,
+                        pad as i64,
+                        top + k as i64 * line_h as i64,
+                        line,
+                        s,
+                        c,
+                    );
                 }
             }
         }
@@ -141,7 +204,11 @@ mod tests {
         let frames = (0..n)
             .map(|i| {
                 let x = i as f64 * 0.1;
-                vec![Vector3::new(x, 0.0, 0.0), Vector3::new(x + 1.0, 0.0, 0.0), Vector3::new(x, 1.0, 0.0)]
+                vec![
+                    Vector3::new(x, 0.0, 0.0),
+                    Vector3::new(x + 1.0, 0.0, 0.0),
+                    Vector3::new(x, 1.0, 0.0),
+                ]
             })
             .collect();
         (vec![[0, 1, 2]], frames)
@@ -150,7 +217,10 @@ mod tests {
     #[test]
     fn columns_are_evenly_spaced_and_include_both_ends() {
         let (f, fr) = tri_frames(11);
-        let mut sheet = ContactSheet::new(vec![Row { label: "A".into(), sequences: vec![(colour::palette(0), SeqView::new(&f, &fr))] }]);
+        let mut sheet = ContactSheet::new(vec![Row {
+            label: "A".into(),
+            sequences: vec![(colour::palette(0), SeqView::new(&f, &fr))],
+        }]);
         sheet.n_columns = 6;
         assert_eq!(sheet.column_frames(), vec![0, 2, 4, 6, 8, 10]);
         sheet.n_columns = 50;
@@ -165,8 +235,14 @@ mod tests {
         let (f, fr) = tri_frames(5);
         let v = SeqView::new(&f, &fr);
         let rows = vec![
-            Row { label: "source".into(), sequences: vec![(colour::palette(0), v)] },
-            Row { label: "transfer\ntruth".into(), sequences: vec![(colour::palette(1), v), (colour::palette(2), v)] },
+            Row {
+                label: "source".into(),
+                sequences: vec![(colour::palette(0), v)],
+            },
+            Row {
+                label: "transfer\ntruth".into(),
+                sequences: vec![(colour::palette(1), v), (colour::palette(2), v)],
+            },
         ];
         let mut sheet = ContactSheet::new(rows);
         sheet.n_columns = 3;
@@ -184,7 +260,8 @@ mod tests {
         // Each cell shows the triangle: some non-background pixels in every cell.
         for r in 0..2 {
             for c in 0..3 {
-                let hit = (0..30).any(|y| (0..40).any(|x| img.get(c * 40 + x, r * 30 + y) != colour::WHITE));
+                let hit = (0..30)
+                    .any(|y| (0..40).any(|x| img.get(c * 40 + x, r * 30 + y) != colour::WHITE));
                 assert!(hit, "cell {r},{c} is empty");
             }
         }

@@ -17,8 +17,16 @@ impl RgbImage {
     /// An image filled with `fill`.
     pub fn new(width: u32, height: u32, fill: Rgb) -> Self {
         let n = width as usize * height as usize;
-        let data = if fill[0] == fill[1] && fill[1] == fill[2] { vec![fill[0]; 3 * n] } else { fill.repeat(n) };
-        RgbImage { width, height, data }
+        let data = if fill[0] == fill[1] && fill[1] == fill[2] {
+            vec![fill[0]; 3 * n]
+        } else {
+            fill.repeat(n)
+        };
+        RgbImage {
+            width,
+            height,
+            data,
+        }
     }
 
     pub fn get(&self, x: u32, y: u32) -> Rgb {

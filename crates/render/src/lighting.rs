@@ -22,7 +22,11 @@ pub struct Lights {
 
 impl Default for Lights {
     fn default() -> Self {
-        Lights { ambient: 0.28, head: 0.62, fill: 0.25 }
+        Lights {
+            ambient: 0.28,
+            head: 0.62,
+            fill: 0.25,
+        }
     }
 }
 
@@ -37,7 +41,10 @@ pub struct LightRig {
 impl LightRig {
     pub fn new(lights: Lights, camera: &Camera) -> Self {
         let d = camera.right * -0.55 + camera.up * 0.7 + camera.back * 0.45;
-        LightRig { lights, fill_dir: d.normalize() }
+        LightRig {
+            lights,
+            fill_dir: d.normalize(),
+        }
     }
 
     /// Light intensity for unit normal `n` seen along `to_eye` (unit, surface to eye).
@@ -68,7 +75,11 @@ mod tests {
     #[test]
     fn lambert_falls_off_with_the_cosine_and_is_two_sided() {
         let rig = LightRig {
-            lights: Lights { ambient: 0.1, head: 0.9, fill: 0.0 },
+            lights: Lights {
+                ambient: 0.1,
+                head: 0.9,
+                fill: 0.0,
+            },
             fill_dir: Vector3::y(),
         };
         let e = Vector3::z();

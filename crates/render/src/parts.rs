@@ -11,8 +11,10 @@
 //! - else it touches the near loop of `p`: `p`'s parent;
 //! - else: the root part.
 //!
-//! When several parts qualify the deepest one in the part tree wins. Loop
-//! vertices take their band's colour. Part colours follow the palette in
+//! Vertices lying on both loops of a part (loops may touch on coarse meshes)
+//! do not count as a border of that part. When several parts qualify the
+//! deepest one in the part tree wins. Loop vertices take their band's
+//! colour. The root is light grey, the other parts follow the palette in
 //! part-name order.
 
 use std::collections::BTreeMap;
@@ -25,20 +27,42 @@ use nalgebra::Vector3;
 
 use crate::colour::{self, Rgb};
 
-/// Colour of each part (palette in part-name order).
+/// Colour of each part: light grey for the root, palette colours for the
+/// other parts in part-name order.
 pub fn part_palette(spec: &SubjectSpec) -> BTreeMap<String, Rgb> {
-    spec.parts.keys().enumerate().map(|(i, p)| (p.clone(), colour::palette(i))).collect()
+    let mut i = 0;
+    spec.parts
+        .iter()
+        .map(|(p, parent)| {
+            let c = if parent.is_none() {
+                ROOT_COLOUR
+            } else {
+                i += 1;
+                colour::palette(i - 1)
+            };
+            (p.clone(), c)
+        })
+        .collect()
 }
+
+/// Colour of the root part (the torso).
+pub const ROOT_COLOUR: Rgb = [200, 200, 200];
 
 /// Reads and parses a `subject.json`.
 pub fn read_subject(path: &Path) -> Result<SubjectSpec> {
     let text = std::fs::read_to_string(path).map_err(|e| Error::io(path, e))?;
-    serde_json::from_str(&text).map_err(|e| Error::file(path, format!("not a valid subject.json: {e}")))
+    serde_json::from_str(&text)
+        .map_err(|e| Error::file(path, format!("not a valid subject.json: {e}")))
 }
 
 /// Per-vertex colours for a mesh with `faces` and rest positions `positions`.
 /// `spec_path` names the subject file in errors.
-pub fn part_colours(spec: &SubjectSpec, spec_path: &Path, positions: &[Vector3<f64>], faces: &[[u32; 3]]) -> Result<Vec<Rgb>> {
+pub fn part_colours(
+    spec: &SubjectSpec,
+    spec_path: &Path,
+    positions: &[Vector3<f64>],
+    faces: &[[u32; 3]],
+) -> Result<Vec<Rgb>> {
     let n = positions.len();
     let bad = |msg: String| Error::file(spec_path, msg);
     if faces.iter().any(|f| f.iter().any(|&v| v as usize >= n)) {
@@ -61,7 +85,10 @@ pub fn part_colours(spec: &SubjectSpec, spec_path: &Path, positions: &[Vector3<f
         }
         depth.insert(p, d);
     }
-    let root = depth.iter().find(|(_, &d)| d == 0).map(|(p, _)| p.to_string());
+    let root = depth
+        .iter()
+        .find(|(_, &d)| d == 0)
+        .map(|(p, _)| p.to_string());
     let Some(root) = root else {
         return Err(bad("part tree has no root (a part with parent null)".into()));
     };
@@ -73,14 +100,21 @@ pub fn part_colours(spec: &SubjectSpec, spec_path: &Path, positions: &[Vector3<f
             return Err(bad(format!("curves given for unknown part {part:?}")));
         }
         if curves.len() < 2 {
-            return Err(bad(format!("part {part:?} needs two loops (near the parent, down the limb), has {}", curves.len())));
+            return Err(bad(format!(
+                "part {part:?} needs two loops (near the parent, down the limb), has {}",
+                curves.len()
+            )));
         }
         for (k, c) in curves.iter().take(2).enumerate() {
             if let Some(&v) = c.iter().find(|&&v| v as usize >= n) {
-                return Err(bad(format!("curve of part {part:?} uses vertex {v}, the mesh has {n}")));
+                return Err(bad(format!(
+                    "curve of part {part:?} uses vertex {v}, the mesh has {n}"
+                )));
             }
             if c.len() < 3 {
-                return Err(bad(format!("loop {k} of part {part:?} has fewer than 3 vertices")));
+                return Err(bad(format!(
+                    "loop {k} of part {part:?} has fewer than 3 vertices"
+                )));
             }
             let mut closed = Vec::new();
             for i in 0..c.len() {
@@ -89,9 +123,11 @@ pub fn part_colours(spec: &SubjectSpec, spec_path: &Path, positions: &[Vector3<f
                     closed.push(a);
                     continue;
                 }
-                let (path, _) = topo
-                    .shortest_path(positions, a, b)
-                    .ok_or_else(|| bad(format!("loop {k} of part {part:?} is not closed: vertices {a} and {b} are not connected")))?;
+                let (path, _) = topo.shortest_path(positions, a, b).ok_or_else(|| {
+                    bad(format!(
+                        "loop {k} of part {part:?} is not closed: vertices {a} and {b} are not connected"
+                    ))
+                })?;
                 closed.extend_from_slice(&path[..path.len() - 1]);
             }
             loops.push((part.clone(), k, closed));
@@ -119,7 +155,14 @@ pub fn part_colours(spec: &SubjectSpec, spec_path: &Path, positions: &[Vector3<f
             for &w in topo.vertex_neighbors(v) {
                 let wi = w as usize;
                 if !on_loop[wi].is_empty() {
-                    touched.extend_from_slice(&on_loop[wi]);
+                    // A vertex on both loops of one part (loops may touch) says
+                    // nothing about which side of that part the region is on.
+                    let here = &on_loop[wi];
+                    touched.extend(here.iter().copied().filter(|&li| {
+                        !here
+                            .iter()
+                            .any(|&lj| loops[lj].0 == loops[li].0 && loops[lj].1 != loops[li].1)
+                    }));
                 } else if region[wi] == NONE {
                     region[wi] = id;
                     stack.push(w);
@@ -133,15 +176,25 @@ pub fn part_colours(spec: &SubjectSpec, spec_path: &Path, positions: &[Vector3<f
     let pal = part_palette(spec);
     let part_colour = |p: &str| pal.get(p).copied().unwrap_or(colour::palette(0));
     let band_colour = |p: &str| {
-        let parent = spec.parts.get(p).cloned().flatten().unwrap_or_else(|| root.clone());
+        let parent = spec
+            .parts
+            .get(p)
+            .cloned()
+            .flatten()
+            .unwrap_or_else(|| root.clone());
         colour::mix(part_colour(p), part_colour(&parent), 0.5)
     };
     let deeper = |a: &Option<(usize, Rgb)>, d: usize| a.is_none_or(|(da, _)| d > da);
     let region_colours: Vec<Rgb> = borders
         .iter()
         .map(|b| {
-            let has = |part: &str, k: usize| b.iter().any(|&li| loops[li].0 == part && loops[li].1 == k);
-            let (mut band, mut own, mut parent): (Option<(usize, Rgb)>, Option<(usize, Rgb)>, Option<(usize, Rgb)>) = (None, None, None);
+            let has =
+                |part: &str, k: usize| b.iter().any(|&li| loops[li].0 == part && loops[li].1 == k);
+            let (mut band, mut own, mut parent): (
+                Option<(usize, Rgb)>,
+                Option<(usize, Rgb)>,
+                Option<(usize, Rgb)>,
+            ) = (None, None, None);
             for part in spec.curves.keys() {
                 let d = depth[part.as_str()];
                 let (near, far) = (has(part, 0), has(part, 1));
@@ -150,11 +203,19 @@ pub fn part_colours(spec: &SubjectSpec, spec_path: &Path, positions: &[Vector3<f
                 } else if far && !near && deeper(&own, d) {
                     own = Some((d, part_colour(part)));
                 } else if near && !far && deeper(&parent, d) {
-                    let par = spec.parts.get(part).cloned().flatten().unwrap_or_else(|| root.clone());
+                    let par = spec
+                        .parts
+                        .get(part)
+                        .cloned()
+                        .flatten()
+                        .unwrap_or_else(|| root.clone());
                     parent = Some((d, part_colour(&par)));
                 }
             }
-            band.or(own).or(parent).map(|x| x.1).unwrap_or_else(|| part_colour(&root))
+            band.or(own)
+                .or(parent)
+                .map(|x| x.1)
+                .unwrap_or_else(|| part_colour(&root))
         })
         .collect();
     Ok((0..n)

@@ -42,12 +42,25 @@ impl Target {
     pub fn fill_triangle(&mut self, v: [ScreenVertex; 3], c: [[f32; 3]; 3]) {
         const SUB: i64 = 16;
         const LIMIT: f32 = (1 << 20) as f32;
-        if !v.iter().all(|p| p[0].abs() < LIMIT && p[1].abs() < LIMIT && p[2].is_finite()) {
+        if !v
+            .iter()
+            .all(|p| p[0].abs() < LIMIT && p[1].abs() < LIMIT && p[2].is_finite())
+        {
             return;
         }
-        let snap = |p: &ScreenVertex| [(p[0] * SUB as f32).round() as i64, (p[1] * SUB as f32).round() as i64];
-        let (mut q, mut z, mut col) = ([snap(&v[0]), snap(&v[1]), snap(&v[2])], [v[0][2], v[1][2], v[2][2]], c);
-        let mut area = (q[1][0] - q[0][0]) * (q[2][1] - q[0][1]) - (q[1][1] - q[0][1]) * (q[2][0] - q[0][0]);
+        let snap = |p: &ScreenVertex| {
+            [
+                (p[0] * SUB as f32).round() as i64,
+                (p[1] * SUB as f32).round() as i64,
+            ]
+        };
+        let (mut q, mut z, mut col) = (
+            [snap(&v[0]), snap(&v[1]), snap(&v[2])],
+            [v[0][2], v[1][2], v[2][2]],
+            c,
+        );
+        let mut area =
+            (q[1][0] - q[0][0]) * (q[2][1] - q[0][1]) - (q[1][1] - q[0][1]) * (q[2][0] - q[0][0]);
         if area == 0 {
             return;
         }
@@ -81,14 +94,20 @@ impl Target {
         let edge = |a: [i64; 2], b: [i64; 2]| {
             let (dx, dy) = (b[0] - a[0], b[1] - a[1]);
             let bias = if (dy == 0 && dx > 0) || dy < 0 { 0 } else { -1 };
-            Edge { w: dx * (py0 - a[1]) - dy * (px0 - a[0]) + bias, step_x: -dy * SUB, step_y: dx * SUB, bias }
+            Edge {
+                w: dx * (py0 - a[1]) - dy * (px0 - a[0]) + bias,
+                step_x: -dy * SUB,
+                step_y: dx * SUB,
+                bias,
+            }
         };
         let mut e0 = edge(q[1], q[2]); // weight of vertex 0
         let mut e1 = edge(q[2], q[0]); // weight of vertex 1
         let mut e2 = edge(q[0], q[1]); // weight of vertex 2
         let inv = 1.0 / area as f32;
         let dz = [z[1] - z[0], z[2] - z[0]];
-        let dc: [[f32; 2]; 3] = std::array::from_fn(|k| [col[1][k] - col[0][k], col[2][k] - col[0][k]]);
+        let dc: [[f32; 2]; 3] =
+            std::array::from_fn(|k| [col[1][k] - col[0][k], col[2][k] - col[0][k]]);
         let width = self.width as usize;
         for y in ymin..=ymax {
             let (mut w0, mut w1, mut w2) = (e0.w, e1.w, e2.w);
@@ -151,7 +170,11 @@ impl Target {
         let s = s.max(1);
         let (ow, oh) = (self.width / s, self.height / s);
         if s == 1 {
-            return RgbImage { width: ow, height: oh, data: self.colour.clone() };
+            return RgbImage {
+                width: ow,
+                height: oh,
+                data: self.colour.clone(),
+            };
         }
         if s == 2 {
             return self.resolve_2x2();
@@ -179,30 +202,52 @@ impl Target {
             }
         }
         let (ow, oh) = (ow as u32, oh as u32);
-        RgbImage { width: ow, height: oh, data }
+        RgbImage {
+            width: ow,
+            height: oh,
+            data,
+        }
     }
 }
 
 impl Target {
     /// [`Target::resolve`] for 2x2 blocks (the default anti-aliasing).
     fn resolve_2x2(&self) -> RgbImage {
-        let (w, ow, oh) = (self.width as usize, self.width as usize / 2, self.height as usize / 2);
+        let (w, ow, oh) = (
+            self.width as usize,
+            self.width as usize / 2,
+            self.height as usize / 2,
+        );
         let mut data = vec![0u8; 3 * ow * oh];
         for (oy, out) in data.chunks_exact_mut(3 * ow).enumerate() {
             let r0 = &self.colour[3 * (2 * oy) * w..][..6 * ow];
             let r1 = &self.colour[3 * (2 * oy + 1) * w..][..6 * ow];
-            for ((o, a), b) in out.chunks_exact_mut(3).zip(r0.chunks_exact(6)).zip(r1.chunks_exact(6)) {
+            for ((o, a), b) in out
+                .chunks_exact_mut(3)
+                .zip(r0.chunks_exact(6))
+                .zip(r1.chunks_exact(6))
+            {
                 for k in 0..3 {
-                    o[k] = ((a[k] as u16 + a[k + 3] as u16 + b[k] as u16 + b[k + 3] as u16 + 2) >> 2) as u8;
+                    o[k] = ((a[k] as u16 + a[k + 3] as u16 + b[k] as u16 + b[k + 3] as u16 + 2)
+                        >> 2) as u8;
                 }
             }
         }
-        RgbImage { width: ow as u32, height: oh as u32, data }
+        RgbImage {
+            width: ow as u32,
+            height: oh as u32,
+            data,
+        }
     }
 }
 
 /// Liang-Barsky clip of a segment to `[0,w] x [0,h]`, depth interpolated.
-fn clip_segment(a: ScreenVertex, b: ScreenVertex, w: f32, h: f32) -> Option<(ScreenVertex, ScreenVertex)> {
+fn clip_segment(
+    a: ScreenVertex,
+    b: ScreenVertex,
+    w: f32,
+    h: f32,
+) -> Option<(ScreenVertex, ScreenVertex)> {
     if !(a.iter().chain(b.iter()).all(|v| v.is_finite())) {
         return None;
     }
@@ -241,7 +286,12 @@ mod tests {
     fn axis_aligned_square_covers_exactly_its_pixels() {
         let mut t = Target::new(20, 20, [255; 3]);
         let c = [[0.0; 3]; 3];
-        let (a, b, cc, d) = ([2.0, 3.0, 0.0], [12.0, 3.0, 0.0], [12.0, 9.0, 0.0], [2.0, 9.0, 0.0]);
+        let (a, b, cc, d) = (
+            [2.0, 3.0, 0.0],
+            [12.0, 3.0, 0.0],
+            [12.0, 9.0, 0.0],
+            [2.0, 9.0, 0.0],
+        );
         t.fill_triangle([a, b, cc], c);
         t.fill_triangle([a, cc, d], c);
         // 10 x 6 pixels, shared diagonal counted once (top-left rule).
@@ -273,15 +323,25 @@ mod tests {
         assert!(writes.iter().all(|&w| w <= 1), "a pixel was covered twice");
         // Polygon area = n/2 r^2 sin(2 pi / n).
         let area = n as f32 / 2.0 * 625.0 * (std::f32::consts::TAU / n as f32).sin();
-        assert!((covered(&t) as f32 - area).abs() / area < 0.02, "{} vs {area}", covered(&t));
+        assert!(
+            (covered(&t) as f32 - area).abs() / area < 0.02,
+            "{} vs {area}",
+            covered(&t)
+        );
     }
 
     #[test]
     fn nearer_wins_regardless_of_order() {
         for order in [false, true] {
             let mut t = Target::new(10, 10, [255; 3]);
-            let near = ([[0.0, 0.0, 2.0], [10.0, 0.0, 2.0], [0.0, 10.0, 2.0]], [[255.0, 0.0, 0.0]; 3]);
-            let far = ([[0.0, 0.0, 1.0], [10.0, 0.0, 1.0], [0.0, 10.0, 1.0]], [[0.0, 0.0, 255.0]; 3]);
+            let near = (
+                [[0.0, 0.0, 2.0], [10.0, 0.0, 2.0], [0.0, 10.0, 2.0]],
+                [[255.0, 0.0, 0.0]; 3],
+            );
+            let far = (
+                [[0.0, 0.0, 1.0], [10.0, 0.0, 1.0], [0.0, 10.0, 1.0]],
+                [[0.0, 0.0, 255.0]; 3],
+            );
             let (first, second) = if order { (near, far) } else { (far, near) };
             t.fill_triangle(first.0, first.1);
             t.fill_triangle(second.0, second.1);
@@ -301,12 +361,33 @@ mod tests {
     }
 
     #[test]
+    fn resolve_3x3_averages_blocks() {
+        let mut t = Target::new(6, 3, [0; 3]);
+        for k in 0..3 {
+            // Three of nine pixels of the first block are 90: mean 30.
+            let i = 3 * (k * 6 + k % 3);
+            t.colour[i..i + 3].copy_from_slice(&[90, 90, 90]);
+        }
+        t.colour[3 * 5..3 * 5 + 3].copy_from_slice(&[255, 0, 9]);
+        let img = t.resolve(3);
+        assert_eq!((img.width, img.height), (2, 1));
+        assert_eq!(img.get(0, 0), [30, 30, 30]);
+        assert_eq!(img.get(1, 0), [28, 0, 1]);
+    }
+
+    #[test]
     fn lines_are_clipped_and_depth_tested() {
         let mut t = Target::new(10, 10, [255; 3]);
         t.draw_line([-100.0, 5.5, 0.0], [100.0, 5.5, 0.0], [0, 0, 0]);
         assert_eq!(covered(&t), 10);
-        t.fill_triangle([[0.0, 0.0, 1.0], [10.0, 0.0, 1.0], [0.0, 10.0, 1.0]], [[9.0; 3]; 3]);
+        t.fill_triangle(
+            [[0.0, 0.0, 1.0], [10.0, 0.0, 1.0], [0.0, 10.0, 1.0]],
+            [[9.0; 3]; 3],
+        );
         t.draw_line([0.0, 2.5, 0.5], [10.0, 2.5, 0.5], [0, 0, 0]);
-        assert_eq!(&t.colour[3 * (2 * 10 + 1)..3 * (2 * 10 + 1) + 3], &[9, 9, 9]);
+        assert_eq!(
+            &t.colour[3 * (2 * 10 + 1)..3 * (2 * 10 + 1) + 3],
+            &[9, 9, 9]
+        );
     }
 }

@@ -69,8 +69,14 @@ impl FloorGrid {
         }
         let u = up.index;
         let (a, b) = ((u + 1) % 3, (u + 2) % 3);
-        let level = if up.positive { bbox.min[u] } else { bbox.max[u] };
-        let ext = (bbox.max[a] - bbox.min[a]).max(bbox.max[b] - bbox.min[b]).max(1e-6);
+        let level = if up.positive {
+            bbox.min[u]
+        } else {
+            bbox.max[u]
+        };
+        let ext = (bbox.max[a] - bbox.min[a])
+            .max(bbox.max[b] - bbox.min[b])
+            .max(1e-6);
         let step = nice_step(ext / 10.0);
         let lo = |k: usize| ((bbox.min[k] - 0.25 * ext) / step).floor() * step;
         let hi = |k: usize| ((bbox.max[k] + 0.25 * ext) / step).ceil() * step;
@@ -123,10 +129,22 @@ pub struct Renderer {
 
 impl Renderer {
     /// Frames `bbox` (which should cover every frame of every sequence).
-    pub fn new(bbox: &Aabb, view: &View, up: &Axis, projection: ProjectionKind, width: u32, height: u32, style: Style) -> Self {
+    pub fn new(
+        bbox: &Aabb,
+        view: &View,
+        up: &Axis,
+        projection: ProjectionKind,
+        width: u32,
+        height: u32,
+        style: Style,
+    ) -> Self {
         let camera = Camera::frame(bbox, view, up, projection, width, height);
         let floor = style.floor.then(|| FloorGrid::under(bbox, up));
-        Renderer { camera, style, floor }
+        Renderer {
+            camera,
+            style,
+            floor,
+        }
     }
 
     /// Draws the layers (and the floor) into a `width x height` image.
@@ -151,7 +169,12 @@ impl Renderer {
 }
 
 /// Projects a world segment, clipping it against the perspective near plane.
-fn project_segment(cam: &Camera, p: &Vector3<f64>, q: &Vector3<f64>, distance: Option<f64>) -> Option<(ScreenVertex, ScreenVertex)> {
+fn project_segment(
+    cam: &Camera,
+    p: &Vector3<f64>,
+    q: &Vector3<f64>,
+    distance: Option<f64>,
+) -> Option<(ScreenVertex, ScreenVertex)> {
     let (mut a, mut b) = (cam.to_camera(p), cam.to_camera(q));
     if let Some(d) = distance {
         let near = -0.01 * d; // camera-space z must be below this
@@ -203,13 +226,17 @@ fn draw_layer(target: &mut Target, cam: &Camera, rig: &LightRig, layer: &Layer, 
         .iter()
         .map(|p| {
             let q = cam.project(p)?;
-            q.iter().all(|v| v.is_finite()).then(|| [q[0] as f32, q[1] as f32, q[2] as f32])
+            q.iter()
+                .all(|v| v.is_finite())
+                .then(|| [q[0] as f32, q[1] as f32, q[2] as f32])
         })
         .collect();
     let lit: Vec<[f32; 3]> = match shading {
         Shading::Gouraud => {
             let normals = vertex_normals(verts, layer.faces);
-            (0..verts.len()).map(|i| rig.shade(albedo(i), &normals[i], &cam.towards_eye(&verts[i]))).collect()
+            (0..verts.len())
+                .map(|i| rig.shade(albedo(i), &normals[i], &cam.towards_eye(&verts[i])))
+                .collect()
         }
         Shading::Flat => Vec::new(),
     };
@@ -226,9 +253,16 @@ fn draw_layer(target: &mut Target, cam: &Camera, rig: &LightRig, layer: &Layer, 
             Shading::Gouraud => [lit[i], lit[j], lit[k]],
             Shading::Flat => {
                 let (p, q, r) = (&verts[i], &verts[j], &verts[k]);
-                let normal = (q - p).cross(&(r - p)).try_normalize(0.0).unwrap_or_else(Vector3::zeros);
+                let normal = (q - p)
+                    .cross(&(r - p))
+                    .try_normalize(0.0)
+                    .unwrap_or_else(Vector3::zeros);
                 let e = cam.towards_eye(&((p + q + r) / 3.0));
-                [rig.shade(albedo(i), &normal, &e), rig.shade(albedo(j), &normal, &e), rig.shade(albedo(k), &normal, &e)]
+                [
+                    rig.shade(albedo(i), &normal, &e),
+                    rig.shade(albedo(j), &normal, &e),
+                    rig.shade(albedo(k), &normal, &e),
+                ]
             }
         };
         target.fill_triangle([a, b, c], colours);
@@ -249,7 +283,10 @@ mod tests {
 
     #[test]
     fn floor_grid_lies_on_the_lowest_plane_and_covers_the_footprint() {
-        let b = Aabb { min: Vector3::new(-0.3, 0.1, -0.2), max: Vector3::new(0.3, 1.8, 0.2) };
+        let b = Aabb {
+            min: Vector3::new(-0.3, 0.1, -0.2),
+            max: Vector3::new(0.3, 1.8, 0.2),
+        };
         let g = FloorGrid::under(&b, &Axis::PLUS_Y);
         assert!(!g.lines.is_empty());
         let fb = Aabb::from_points(g.lines.iter().flat_map(|(p, q)| [p, q]));
@@ -259,7 +296,12 @@ mod tests {
 
     #[test]
     fn vertex_normals_of_a_flat_quad_point_along_z() {
-        let v = vec![Vector3::new(0.0, 0.0, 0.0), Vector3::new(1.0, 0.0, 0.0), Vector3::new(1.0, 1.0, 0.0), Vector3::new(0.0, 1.0, 0.0)];
+        let v = vec![
+            Vector3::new(0.0, 0.0, 0.0),
+            Vector3::new(1.0, 0.0, 0.0),
+            Vector3::new(1.0, 1.0, 0.0),
+            Vector3::new(0.0, 1.0, 0.0),
+        ];
         let n = vertex_normals(&v, &[[0, 1, 2], [0, 2, 3]]);
         for x in n {
             assert!((x - Vector3::z()).norm() < 1e-12);

@@ -1,7 +1,5 @@
-//! Mesh sequences as the renderer sees them: borrowed views (so callers keep
-//! their own types) and loading a folder of frames for the CLI.
-
-use std::path::Path;
+//! Mesh sequences as the renderer sees them: borrowed views, so callers keep
+//! their own types (`mesh_core::sequence::MeshSequence` converts with `into()`).
 
 use nalgebra::Vector3;
 
@@ -20,7 +18,11 @@ pub struct SeqView<'a> {
 
 impl<'a> SeqView<'a> {
     pub fn new(faces: &'a [[u32; 3]], frames: &'a [Vec<Vector3<f64>>]) -> Self {
-        SeqView { faces, frames, vertex_colours: None }
+        SeqView {
+            faces,
+            frames,
+            vertex_colours: None,
+        }
     }
     pub fn with_vertex_colours(mut self, colours: &'a [Rgb]) -> Self {
         self.vertex_colours = Some(colours);
@@ -52,57 +54,8 @@ pub fn bounding_box(seqs: &[SeqView], frames: std::ops::Range<usize>) -> Aabb {
     b
 }
 
-/// A sequence loaded from a folder: the shared faces and every frame's positions.
-#[derive(Clone, Debug, PartialEq)]
-pub struct Loaded {
-    pub faces: Vec<[u32; 3]>,
-    pub frames: Vec<Vec<Vector3<f64>>>,
-}
-
-impl Loaded {
-    pub fn view(&self) -> SeqView<'_> {
-        SeqView::new(&self.faces, &self.frames)
+impl<'a> From<&'a mesh_core::sequence::MeshSequence> for SeqView<'a> {
+    fn from(s: &'a mesh_core::sequence::MeshSequence) -> Self {
+        SeqView::new(&s.faces, &s.frames)
     }
-}
-
-/// Loads `dir/NNNNNN.ply|.obj` frames in order, checking that every frame
-/// has the first frame's vertex count and faces.
-///
-// NOTE(next): replace with `mesh_core::sequence::MeshSequence::load_dir` once
-// it exists (it is being written with this exact contract).
-pub fn load_dir(dir: &Path) -> mesh_core::Result<Loaded> {
-    use mesh_core::Error;
-    let rd = std::fs::read_dir(dir).map_err(|e| Error::io(dir, e))?;
-    let mut files = Vec::new();
-    for entry in rd {
-        let entry = entry.map_err(|e| Error::io(dir, e))?;
-        let path = entry.path();
-        let is_frame = path.file_stem().and_then(|s| s.to_str()).is_some_and(|s| !s.is_empty() && s.bytes().all(|b| b.is_ascii_digit()))
-            && mesh_core::io::MeshFormat::from_path(&path).is_some();
-        if is_frame {
-            files.push(path);
-        }
-    }
-    files.sort();
-    if files.is_empty() {
-        return Err(Error::file(dir, "no frames (expected NNNNNN.ply or NNNNNN.obj files)"));
-    }
-    let mut faces = Vec::new();
-    let mut frames = Vec::with_capacity(files.len());
-    for (i, path) in files.iter().enumerate() {
-        let m = mesh_core::io::read_mesh(path)?;
-        if i == 0 {
-            faces = m.faces;
-        } else if m.vertices.len() != frames_len(&frames) {
-            return Err(Error::file(path, format!("{} vertices, but the first frame has {}", m.vertices.len(), frames_len(&frames))));
-        } else if m.faces != faces {
-            return Err(Error::file(path, "faces differ from the first frame's (one topology per sequence)"));
-        }
-        frames.push(m.vertices);
-    }
-    Ok(Loaded { faces, frames })
-}
-
-fn frames_len(frames: &[Vec<Vector3<f64>>]) -> usize {
-    frames.first().map_or(0, Vec::len)
 }

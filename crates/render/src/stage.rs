@@ -1,7 +1,6 @@
 //! The `render` stage: sequence folders in, PNG frames, a contact sheet and
 //! an animated GIF out. `main` only parses [`Args`] and calls [`run`].
 
-use std::ops::Range;
 use std::path::PathBuf;
 
 use anyhow::{bail, Context};
@@ -16,7 +15,8 @@ use crate::contact::{ContactSheet, Row};
 use crate::font;
 use crate::image::RgbImage;
 use crate::scene::{Layer, Renderer, Shading, Style};
-use crate::sequence::{bounding_box, load_dir, Loaded, SeqView};
+use crate::sequence::{bounding_box, SeqView};
+use mesh_core::sequence::{FrameRange, MeshSequence};
 
 /// Draw mesh sequences, overlaid in distinct colours, to PNG frames, a contact sheet and a GIF
 #[derive(Parser, Debug)]
@@ -47,8 +47,8 @@ pub struct Args {
     #[arg(long, default_value = "512", value_parser = parse_size)]
     pub size: (u32, u32),
     /// Frames to draw, START:END (END excluded; either may be omitted)
-    #[arg(long, value_name = "A:B", value_parser = parse_range)]
-    pub frames: Option<Range<usize>>,
+    #[arg(long, value_name = "A:B")]
+    pub frames: Option<FrameRange>,
     /// Draw every N-th frame (frames, GIF)
     #[arg(long, default_value_t = 1, value_name = "N", value_parser = clap::value_parser!(u32).range(1..))]
     pub stride: u32,
@@ -91,7 +91,9 @@ pub struct Args {
 }
 
 fn parse_view(s: &str) -> Result<View, String> {
-    View::parse(s).ok_or_else(|| "expected front, side, three-quarter or AZIMUTH,ELEVATION (|elevation| <= 90)".into())
+    View::parse(s).ok_or_else(|| {
+        "expected front, side, three-quarter or AZIMUTH,ELEVATION (|elevation| <= 90)".into()
+    })
 }
 fn parse_axis(s: &str) -> Result<Axis, String> {
     Axis::parse(s).ok_or_else(|| "expected +x, -x, +y, -y, +z or -z".into())
@@ -100,28 +102,18 @@ fn parse_colour(s: &str) -> Result<Rgb, String> {
     colour::parse(s).ok_or_else(|| format!("unknown colour {s:?} (a palette name or #rrggbb)"))
 }
 fn parse_size(s: &str) -> Result<(u32, u32), String> {
-    let p = |t: &str| t.trim().parse::<u32>().ok().filter(|v| (8..=8192).contains(v));
+    let p = |t: &str| {
+        t.trim()
+            .parse::<u32>()
+            .ok()
+            .filter(|v| (8..=4096).contains(v))
+    };
     let r = match s.split_once(['x', 'X']) {
         Some((w, h)) => p(w).zip(p(h)),
         None => p(s).map(|v| (v, v)),
     };
-    r.ok_or_else(|| "expected N or WxH with each side in 8..=8192".into())
+    r.ok_or_else(|| "expected N or WxH with each side in 8..=4096".into())
 }
-fn parse_range(s: &str) -> Result<Range<usize>, String> {
-    let num = |t: &str, d: usize| if t.trim().is_empty() { Ok(d) } else { t.trim().parse::<usize>().map_err(|_| format!("bad frame number {t:?}")) };
-    let r = match s.split_once(':') {
-        Some((a, b)) => num(a, 0)?..num(b, usize::MAX)?,
-        None => {
-            let a = num(s, 0)?;
-            a..a + 1
-        }
-    };
-    if r.start >= r.end {
-        return Err("empty range (END must exceed START)".into());
-    }
-    Ok(r)
-}
-
 /// Runs the stage (after `args.common.init()`).
 pub fn run(args: &Args) -> anyhow::Result<()> {
     let n_seq = args.seq_dirs.len();
@@ -144,15 +136,23 @@ pub fn run(args: &Args) -> anyhow::Result<()> {
         }
     }
     // Everything is read and checked before anything is written.
-    let seqs: Vec<Loaded> = args.seq_dirs.iter().map(|d| load_dir(d)).collect::<Result<_, _>>()?;
+    let seqs: Vec<MeshSequence> = args
+        .seq_dirs
+        .iter()
+        .map(MeshSequence::load_dir)
+        .collect::<Result<_, _>>()?;
     let lens: Vec<usize> = seqs.iter().map(|s| s.frames.len()).collect();
     let longest = *lens.iter().max().unwrap_or(&0);
     if lens.iter().any(|&l| l != longest) {
-        mesh_core::warn!("sequences differ in length ({lens:?} frames): shorter ones hold their last frame");
+        mesh_core::warn!(
+            "sequences differ in length ({lens:?} frames): shorter ones hold their last frame"
+        );
     }
     let range = match &args.frames {
-        Some(r) if r.start >= longest => bail!("--frames {}:{}: the sequences have {longest} frames", r.start, r.end),
-        Some(r) => r.start..r.end.min(longest),
+        Some(r) if r.start >= longest => {
+            bail!("--frames {}: the sequences have {longest} frames", r.start)
+        }
+        Some(r) => r.start..r.end.unwrap_or(usize::MAX).min(longest),
         None => 0..longest,
     };
     let part_colours: Vec<Option<Vec<Rgb>>> = match &args.parts {
@@ -177,15 +177,23 @@ pub fn run(args: &Args) -> anyhow::Result<()> {
         .iter()
         .zip(&part_colours)
         .map(|(s, pc)| match pc {
-            Some(c) => s.view().with_vertex_colours(c),
-            None => s.view(),
+            Some(c) => SeqView::from(s).with_vertex_colours(c),
+            None => SeqView::from(s),
         })
         .collect();
 
     let style = Style {
-        shading: if args.flat { Shading::Flat } else { Shading::Gouraud },
+        shading: if args.flat {
+            Shading::Flat
+        } else {
+            Shading::Gouraud
+        },
         supersample: if args.no_aa { 1 } else { 2 },
-        background: if args.grey { colour::LIGHT_GREY } else { colour::WHITE },
+        background: if args.grey {
+            colour::LIGHT_GREY
+        } else {
+            colour::WHITE
+        },
         floor: !args.no_floor,
         ..Style::default()
     };
@@ -196,12 +204,25 @@ pub fn run(args: &Args) -> anyhow::Result<()> {
     let (w, h) = args.size;
     let bbox = bounding_box(&views, range.clone());
     let renderer = Renderer::new(&bbox, &args.camera, &args.up, projection, w, h, style);
-    let legend: Vec<(String, Rgb)> = args.labels.iter().flatten().cloned().zip(colours.iter().copied()).collect();
+    let legend: Vec<(String, Rgb)> = args
+        .labels
+        .iter()
+        .flatten()
+        .cloned()
+        .zip(colours.iter().copied())
+        .collect();
     let draw = |f: usize| -> RgbImage {
         let layers: Vec<Layer> = views
             .iter()
             .zip(&colours)
-            .filter_map(|(v, &c)| Some(Layer { vertices: v.frame_clamped(f)?, faces: v.faces, colour: c, vertex_colours: v.vertex_colours }))
+            .filter_map(|(v, &c)| {
+                Some(Layer {
+                    vertices: v.frame_clamped(f)?,
+                    faces: v.faces,
+                    colour: c,
+                    vertex_colours: v.vertex_colours,
+                })
+            })
             .collect();
         let mut img = renderer.render(&layers);
         draw_legend(&mut img, &legend);
@@ -209,7 +230,8 @@ pub fn run(args: &Args) -> anyhow::Result<()> {
     };
 
     let out = &args.out;
-    std::fs::create_dir_all(out).with_context(|| format!("{}: cannot create output folder", out.display()))?;
+    std::fs::create_dir_all(out)
+        .with_context(|| format!("{}: cannot create output folder", out.display()))?;
     let chosen: Vec<usize> = range.clone().step_by(args.stride as usize).collect();
     let want_frames = !args.no_frames;
     let want_gif = !args.no_gif;
@@ -217,7 +239,10 @@ pub fn run(args: &Args) -> anyhow::Result<()> {
         let picks: Vec<usize> = (0..8).map(|k| chosen[k * (chosen.len() - 1) / 7]).collect();
         let samples: Vec<RgbImage> = picks.par_iter().map(|&f| draw(f)).collect();
         let refs: Vec<&RgbImage> = samples.iter().collect();
-        Some(GifBuilder::new(w, h, args.gif_fps, GifPalette::learn(&refs)).map_err(|e| anyhow::anyhow!("{}: {e}", out.join("anim.gif").display()))?)
+        Some(
+            GifBuilder::new(w, h, args.gif_fps, GifPalette::learn(&refs))
+                .map_err(|e| anyhow::anyhow!("{}: {e}", out.join("anim.gif").display()))?,
+        )
     } else {
         None
     };
@@ -229,11 +254,14 @@ pub fn run(args: &Args) -> anyhow::Result<()> {
         for (c, chunk) in chosen.chunks(64).enumerate() {
             let images: Vec<RgbImage> = chunk.par_iter().map(|&f| draw(f)).collect();
             if want_frames {
-                images.par_iter().enumerate().try_for_each(|(k, img)| img.write_png(&frames_dir.join(format!("{:06}.png", c * 64 + k))))?;
+                images.par_iter().enumerate().try_for_each(|(k, img)| {
+                    img.write_png(&frames_dir.join(format!("{:06}.png", c * 64 + k)))
+                })?;
             }
             if let Some(g) = gif.as_mut() {
                 for img in &images {
-                    g.push(img).map_err(|e| anyhow::anyhow!("{}: {e}", out.join("anim.gif").display()))?;
+                    g.push(img)
+                        .map_err(|e| anyhow::anyhow!("{}: {e}", out.join("anim.gif").display()))?;
                 }
             }
             bar.inc(chunk.len() as u64);
@@ -242,7 +270,9 @@ pub fn run(args: &Args) -> anyhow::Result<()> {
     }
     if let Some(g) = gif {
         let path = out.join("anim.gif");
-        let bytes = g.finish().map_err(|e| anyhow::anyhow!("{}: {e}", path.display()))?;
+        let bytes = g
+            .finish()
+            .map_err(|e| anyhow::anyhow!("{}: {e}", path.display()))?;
         mesh_core::atomic::write_bytes_atomic(&path, &bytes)?;
     }
     if args.contact_columns > 0 {
@@ -251,9 +281,20 @@ pub fn run(args: &Args) -> anyhow::Result<()> {
             None => args.seq_dirs.iter().map(|d| short_name(d)).collect(),
         };
         let rows: Vec<Row> = if args.separate_rows || n_seq == 1 {
-            views.iter().zip(&colours).zip(&names).map(|((v, &c), n)| Row { label: n.clone(), sequences: vec![(c, *v)] }).collect()
+            views
+                .iter()
+                .zip(&colours)
+                .zip(&names)
+                .map(|((v, &c), n)| Row {
+                    label: n.clone(),
+                    sequences: vec![(c, *v)],
+                })
+                .collect()
         } else {
-            vec![Row { label: names.join("\n"), sequences: colours.iter().copied().zip(views.iter().copied()).collect() }]
+            vec![Row {
+                label: names.join("\n"),
+                sequences: colours.iter().copied().zip(views.iter().copied()).collect(),
+            }]
         };
         let mut sheet = ContactSheet::new(rows);
         sheet.n_columns = args.contact_columns;
@@ -266,13 +307,19 @@ pub fn run(args: &Args) -> anyhow::Result<()> {
         sheet.style = style;
         sheet.render().write_png(&out.join("contact.png"))?;
     }
-    mesh_core::info!("drew {} frames of {n_seq} sequence(s) into {}", chosen.len(), out.display());
+    mesh_core::info!(
+        "drew {} frames of {n_seq} sequence(s) into {}",
+        chosen.len(),
+        out.display()
+    );
     Ok(())
 }
 
 /// A folder's last component (for default row labels).
 fn short_name(p: &std::path::Path) -> String {
-    p.file_name().map(|s| s.to_string_lossy().into_owned()).unwrap_or_else(|| p.display().to_string())
+    p.file_name()
+        .map(|s| s.to_string_lossy().into_owned())
+        .unwrap_or_else(|| p.display().to_string())
 }
 
 /// Sequence names in their colours, top-left.

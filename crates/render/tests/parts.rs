@@ -14,7 +14,9 @@ fn regions_between_and_beyond_loops_get_band_and_part_colours() {
     let near = lay.ring(12);
     // The far loop given sparsely (every third vertex): joined by shortest paths.
     let far: Vec<u32> = lay.ring(16).into_iter().step_by(3).collect();
-    let json = format!(r#"{{"fps": 25, "parts": {{"torso": null, "arm": "torso"}}, "curves": {{"arm": [{near:?}, {far:?}]}}}}"#);
+    let json = format!(
+        r#"{{"fps": 25, "parts": {{"torso": null, "arm": "torso"}}, "curves": {{"arm": [{near:?}, {far:?}]}}}}"#
+    );
     let spec: SubjectSpec = serde_json::from_str(&json).unwrap();
     let c = part_colours(&spec, Path::new("subject.json"), &m.vertices, &m.faces).unwrap();
     let pal = part_palette(&spec);
@@ -24,7 +26,10 @@ fn regions_between_and_beyond_loops_get_band_and_part_colours() {
     let ring_colour = |k: usize| {
         let r = lay.ring(k);
         let c0 = c[r[0] as usize];
-        assert!(r.iter().all(|&v| c[v as usize] == c0), "ring {k} not uniform");
+        assert!(
+            r.iter().all(|&v| c[v as usize] == c0),
+            "ring {k} not uniform"
+        );
         c0
     };
     for k in 0..12 {
@@ -41,13 +46,61 @@ fn regions_between_and_beyond_loops_get_band_and_part_colours() {
 }
 
 #[test]
+fn loops_that_touch_still_separate_parent_band_and_part() {
+    // The far loop runs along ring 16 for half the circumference and along
+    // the near loop (ring 12) for the other half: shared vertices.
+    let (m, lay) = shapes::capsule_body(20, 12, 0.2, 2.0);
+    let near = lay.ring(12);
+    let far: Vec<u32> = (0..12)
+        .map(|s| {
+            if s < 6 {
+                lay.ring(16)[s]
+            } else {
+                lay.ring(12)[s]
+            }
+        })
+        .collect();
+    let json = format!(
+        r#"{{"fps": 25, "parts": {{"torso": null, "arm": "torso"}}, "curves": {{"arm": [{near:?}, {far:?}]}}}}"#
+    );
+    let spec: SubjectSpec = serde_json::from_str(&json).unwrap();
+    let c = part_colours(&spec, Path::new("subject.json"), &m.vertices, &m.faces).unwrap();
+    let pal = part_palette(&spec);
+    assert_eq!(c[lay.bottom_pole() as usize], pal["torso"]);
+    assert_eq!(c[lay.top_pole() as usize], pal["arm"]);
+    for k in 0..11 {
+        assert!(
+            lay.ring(k).iter().all(|&v| c[v as usize] == pal["torso"]),
+            "ring {k}"
+        );
+    }
+    for k in 17..lay.n_rings() {
+        assert!(
+            lay.ring(k).iter().all(|&v| c[v as usize] == pal["arm"]),
+            "ring {k}"
+        );
+    }
+    // Ring 14 on the side where the loops part is the band.
+    let band = colour::mix(pal["arm"], pal["torso"], 0.5);
+    assert_eq!(c[lay.ring(14)[2] as usize], band);
+}
+
+#[test]
 fn bad_curves_are_reported_against_the_subject_file() {
     let (m, _) = shapes::capsule_body(4, 8, 0.2, 1.0);
+    let spec: SubjectSpec = serde_json::from_str(
+        r#"{"fps": 25, "parts": {"torso": null, "arm": "torso"}, "curves": {"arm": [[0, 1, 2]]}}"#,
+    )
+    .unwrap();
+    let e = part_colours(&spec, Path::new("s/subject.json"), &m.vertices, &m.faces)
+        .unwrap_err()
+        .to_string();
+    assert!(
+        e.starts_with("s/subject.json: ") && e.contains("two loops"),
+        "{e}"
+    );
     let spec: SubjectSpec =
-        serde_json::from_str(r#"{"fps": 25, "parts": {"torso": null, "arm": "torso"}, "curves": {"arm": [[0, 1, 2]]}}"#).unwrap();
-    let e = part_colours(&spec, Path::new("s/subject.json"), &m.vertices, &m.faces).unwrap_err().to_string();
-    assert!(e.starts_with("s/subject.json: ") && e.contains("two loops"), "{e}");
-    let spec: SubjectSpec =
-        serde_json::from_str(r#"{"fps": 25, "parts": {"a": "b", "b": "a"}, "curves": {}}"#).unwrap();
+        serde_json::from_str(r#"{"fps": 25, "parts": {"a": "b", "b": "a"}, "curves": {}}"#)
+            .unwrap();
     assert!(part_colours(&spec, Path::new("s.json"), &m.vertices, &m.faces).is_err());
 }

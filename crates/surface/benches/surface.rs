@@ -103,6 +103,12 @@ fn benches(c: &mut Criterion) {
     let corrected: Vec<_> = s.correctors.iter().zip(&s.predictions).map(|(c, p)| c.correct(p, 3).unwrap()).collect();
     c.bench_function("stitch_frame_13k", |b| b.iter(|| stitcher.stitch(&corrected).unwrap()));
     c.bench_function("correct_and_stitch_frame_13k", |b| b.iter(|| frame(&mut stitcher)));
+    // Throughput over a sequence: two frames in flight, one Stitcher (factorisation) each.
+    let mut other = Stitcher::new(PartLayout::new(s.vertices.len(), s.faces.clone(), s.parts.clone()).unwrap());
+    frame(&mut other);
+    c.bench_function("correct_and_stitch_2_frames_in_parallel_13k", |b| {
+        b.iter(|| rayon::join(|| frame(&mut stitcher), || frame(&mut other)))
+    });
 }
 
 criterion_group! {

@@ -16,10 +16,12 @@
 pub mod blend;
 pub mod correct;
 pub mod deformation_gradient;
+pub mod frames;
 pub mod laplacian;
 pub mod optimal_boundary;
 pub mod poisson;
 pub mod polar;
+pub mod segmentation;
 pub mod stitch;
 mod topo;
 

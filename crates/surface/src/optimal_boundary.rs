@@ -51,12 +51,17 @@ impl Ord for Key {
 /// The cheapest loop around the band. `positions` give edge lengths, `faces` the band faces
 /// (indices into `positions`), `cost` the per-vertex discrepancy.
 pub fn optimal_loop(positions: &[Vector3<f64>], faces: &[[u32; 3]], cost: &[f64]) -> Result<BoundaryLoop> {
+    crate::check_faces(positions.len(), faces, "overlap band")?;
+    optimal_loop_in(&Topology::new(positions.len(), faces), positions, cost)
+}
+
+/// [`optimal_loop`] on a band whose topology is already built (reused across frames).
+pub fn optimal_loop_in(topo: &Topology, positions: &[Vector3<f64>], cost: &[f64]) -> Result<BoundaryLoop> {
     let n = positions.len();
-    crate::check_faces(n, faces, "overlap band")?;
-    if cost.len() != n || cost.iter().any(|c| !c.is_finite() || *c < 0.0) {
-        return Err(Error::invalid("overlap band: discrepancy must be finite, non-negative, one per vertex"));
+    let faces = topo.faces();
+    if topo.n_vertices() != n || cost.len() != n || cost.iter().any(|c| !c.is_finite() || *c < 0.0) {
+        return Err(Error::invalid("overlap band: positions and discrepancy must be finite, one per vertex"));
     }
-    let topo = Topology::new(n, faces);
     let loops = topo.boundary_loops();
     if loops.len() != 2 {
         return Err(Error::invalid(format!(
@@ -64,8 +69,9 @@ pub fn optimal_loop(positions: &[Vector3<f64>], faces: &[[u32; 3]], cost: &[f64]
             loops.len()
         )));
     }
-    let cut = cut_path(&topo, &loops[0], &loops[1])?;
-    let crossing = crossing_edges(&cut, &topo, faces)?;
+    let cut = cut_path(topo, &loops[0], &loops[1])?;
+    let crossing = crossing_edges(&cut, topo, faces)?;
+    let flips = |u: usize, v: usize| crossing[u].contains(&v) || crossing[v].contains(&u);
 
     let mean = cost.iter().sum::<f64>() / n as f64;
     let delta = if mean > 0.0 { 1e-3 * mean } else { 1.0 };
@@ -92,7 +98,7 @@ pub fn optimal_loop(positions: &[Vector3<f64>], faces: &[[u32; 3]], cost: &[f64]
             let (u, sheet) = (node / 2, node % 2);
             for &v in topo.vertex_neighbors(u as u32) {
                 let v = v as usize;
-                let flip = crossing.contains(&(u.min(v), u.max(v))) as usize;
+                let flip = flips(u, v) as usize;
                 let next = 2 * v + (sheet ^ flip);
                 let nd = d + weight(u, v);
                 if nd < dist[next] {
@@ -151,11 +157,12 @@ fn cut_path(topo: &Topology, a: &[u32], b: &[u32]) -> Result<Vec<usize>> {
     Err(Error::invalid("overlap band: its two boundaries are not connected"))
 }
 
-/// Edges (sorted pairs) from a cut vertex to a neighbour on the cut's right side.
-fn crossing_edges(cut: &[usize], topo: &Topology, faces: &[[u32; 3]]) -> Result<HashSet<(usize, usize)>> {
+/// For each cut vertex, its neighbours on the cut's right side (the sheet-switching edges);
+/// empty for the other vertices.
+fn crossing_edges(cut: &[usize], topo: &Topology, faces: &[[u32; 3]]) -> Result<Vec<Vec<usize>>> {
     let on_cut: HashSet<usize> = cut.iter().copied().collect();
     let m = cut.len();
-    let mut crossing = HashSet::new();
+    let mut crossing = vec![Vec::new(); topo.n_vertices()];
     for (k, &p) in cut.iter().enumerate() {
         let fan = ordered_fan(p, topo.vertex_faces(p as u32), faces)?;
         let pos = |x: usize| fan.iter().position(|&y| y == x);
@@ -183,11 +190,7 @@ fn crossing_edges(cut: &[usize], topo: &Topology, faces: &[[u32; 3]]) -> Result<
             }
             r
         };
-        for u in right {
-            if !on_cut.contains(&u) {
-                crossing.insert((p.min(u), p.max(u)));
-            }
-        }
+        crossing[p] = right.into_iter().filter(|u| !on_cut.contains(u)).collect();
     }
     Ok(crossing)
 }

@@ -18,7 +18,7 @@
 //! computed once and reused for every frame.
 
 use crate::deformation_gradient::{GradientOperator, StiffnessPattern};
-use crate::optimal_boundary::{discrepancy, optimal_loop, BoundaryLoop};
+use crate::optimal_boundary::{discrepancy, optimal_loop_in, BoundaryLoop};
 use crate::poisson::PoissonSolver;
 use crate::{check_faces, check_vertices, Error, Result};
 use mesh_core::rigid::{procrustes, RigidMotion};
@@ -37,8 +37,8 @@ pub struct Part {
 struct Band {
     /// Template indices of the overlap vertices.
     vertices: Vec<u32>,
-    /// Template faces inside the overlap, in band-local indices.
-    faces: Vec<[u32; 3]>,
+    /// Connectivity of the template faces inside the overlap, in band-local indices.
+    topology: Topology,
 }
 
 /// The template topology and its decomposition into overlapping parts.
@@ -95,7 +95,8 @@ impl PartLayout {
             if bfaces.is_empty() {
                 return Err(Error::invalid(format!("stitch: part {k} does not overlap its parent part {q}")));
             }
-            bands.push(Some(Band { vertices, faces: bfaces }));
+            let topology = Topology::new(vertices.len(), &bfaces);
+            bands.push(Some(Band { vertices, topology }));
         }
         let topology = Topology::new(n_vertices, &faces);
         Ok(PartLayout { n_vertices, faces, parts, local, bands, topology, in_face })
@@ -149,7 +150,6 @@ impl Stitcher {
             check_vertices(x, p.vertices.len(), &format!("stitch: part {k}"))?;
         }
         let n = lay.n_vertices;
-        let t0 = std::time::Instant::now();
         let mut aligned: Vec<Vec<Vector3<f64>>> = Vec::with_capacity(parts.len());
         let mut alignments = Vec::with_capacity(parts.len());
         let mut loops = vec![None];
@@ -167,7 +167,7 @@ impl Stitcher {
             let motion = procrustes(&in_child, &in_parent, None);
             let child = motion.apply_all(&parts[k]);
             let in_child: Vec<Vector3<f64>> = band.vertices.iter().map(|&v| at(k, &child, v)).collect();
-            let bl = optimal_loop(&in_parent, &band.faces, &discrepancy(&in_parent, &in_child))
+            let bl = optimal_loop_in(&band.topology, &in_parent, &discrepancy(&in_parent, &in_child))
                 .map_err(|e| Error::invalid(format!("stitch: part {k}: {e}")))?;
             for &i in &bl.vertices {
                 let v = band.vertices[i] as usize;
@@ -199,7 +199,6 @@ impl Stitcher {
             alignments.push(motion);
         }
 
-        let t1 = t0.elapsed();
         // Source part of every face: the owner of its first vertex off the loops.
         let mut src = Vec::with_capacity(lay.faces.len());
         for (f, face) in lay.faces.iter().enumerate() {
@@ -235,15 +234,12 @@ impl Stitcher {
                 values.push(aligned[0][lay.local[0][v] as usize]);
             }
         }
-        let t2 = t0.elapsed();
         let l = self.pattern.fill(&op);
         match self.solver.as_mut() {
             Some(s) => s.refactor(l, &fixed)?,
             None => self.solver = Some(PoissonSolver::new(l, &fixed)?),
         }
-        let t3 = t0.elapsed();
         let vertices = self.solver.as_ref().expect("set above").solve(&op.divergence(&field), &values)?;
-        if std::env::var("SURFACE_PROFILE").is_ok() { eprintln!("PROFILE loops {:?} op {:?} factor {:?} solve {:?}", t1, t2-t1, t3-t2, t0.elapsed()-t3); }
         Ok(Stitched { vertices, loops, alignments })
     }
 }

@@ -113,3 +113,46 @@ pub fn apply(e: &Embedding, values: &[Vector3<f64>]) -> Vec<Vector3<f64>> {
         .map(|row| row.iter().map(|&(i, w)| values[i] * w).sum())
         .collect()
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn closest_points_on_a_triangle() {
+        let (a, b, c) = (Vector3::zeros(), Vector3::x(), Vector3::y());
+        let w = closest_barycentric(&Vector3::new(0.25, 0.25, 3.0), &a, &b, &c);
+        assert!(
+            (w[0] - 0.5).abs() < 1e-12
+                && (w[1] - 0.25).abs() < 1e-12
+                && (w[2] - 0.25).abs() < 1e-12
+        );
+        assert_eq!(
+            closest_barycentric(&Vector3::new(-1.0, -1.0, 0.0), &a, &b, &c),
+            [1.0, 0.0, 0.0]
+        );
+        let w = closest_barycentric(&Vector3::new(1.0, 1.0, 0.0), &a, &b, &c);
+        assert!((w[1] - 0.5).abs() < 1e-12 && (w[2] - 0.5).abs() < 1e-12);
+    }
+
+    #[test]
+    fn embedding_reproduces_points_on_the_mesh() {
+        let v = vec![
+            Vector3::zeros(),
+            Vector3::x(),
+            Vector3::y(),
+            Vector3::new(1.0, 1.0, 0.0),
+        ];
+        let f = vec![[0, 1, 2], [1, 3, 2]];
+        let pts = vec![
+            Vector3::new(0.2, 0.3, 0.0),
+            Vector3::new(0.9, 0.8, 0.0),
+            Vector3::x(),
+        ];
+        let e = embed(&pts, &v, &f);
+        assert_eq!(e[2], vec![(1, 1.0)]);
+        for (p, q) in pts.iter().zip(apply(&e, &v)) {
+            assert!((p - q).norm() < 1e-12);
+        }
+    }
+}

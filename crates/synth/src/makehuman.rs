@@ -85,8 +85,9 @@ fn read_json(path: &Path) -> Result<Value> {
     serde_json::from_str(&read_text(path)?).map_err(|e| Error::file(path, format!("bad JSON: {e}")))
 }
 
-/// Vertex groups of the base mesh: name -> vertex indices (inclusive ranges on disk).
-pub fn read_vertex_groups(path: &Path) -> Result<BTreeMap<String, Vec<usize>>> {
+/// Vertex groups of the base mesh: name -> vertex indices (inclusive ranges on disk, each
+/// checked against the mesh's `n_vertices`, so a crafted file cannot make us allocate more).
+pub fn read_vertex_groups(path: &Path, n_vertices: usize) -> Result<BTreeMap<String, Vec<usize>>> {
     let v = read_json(path)?;
     let obj = v
         .as_object()
@@ -98,7 +99,7 @@ pub fn read_vertex_groups(path: &Path) -> Result<BTreeMap<String, Vec<usize>>> {
             let a = r.get(0).and_then(Value::as_u64);
             let b = r.get(1).and_then(Value::as_u64);
             match (a, b) {
-                (Some(a), Some(b)) if a <= b && b < 1_000_000 => {
+                (Some(a), Some(b)) if a <= b && (b as usize) < n_vertices => {
                     idx.extend(a as usize..=b as usize)
                 }
                 _ => return Err(Error::file(path, format!("group {name}: bad range"))),

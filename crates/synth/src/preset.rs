@@ -87,9 +87,9 @@ pub fn subject_b(topology: Topology, fps: f64) -> SubjectDef {
         topology,
         fps,
         style: Style {
-            arm_gain: 1.5,
-            arm_max: 1.4,
-            arm_abduction: 13f64.to_radians(),
+            arm_gain: 1.6,
+            arm_max: 1.2,
+            arm_abduction: 10f64.to_radians(),
             elbow_gain: 1.2,
             knee_k: 0.35,
             hip_abduction: 3f64.to_radians(),

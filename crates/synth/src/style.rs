@@ -5,8 +5,9 @@
 //! `C_b` is the shortest arc from the body's rest bone direction to "straight down" for limb
 //! bones (identity otherwise), i.e. rotations relative to an arms-down, legs-down stance,
 //! whatever the source's rest pose. Maps (rotation vector `r`, angle `θ = |r|`):
-//! - upper arm: `θ' = θmax tanh(g θ / θmax)` (saturated larger/smaller swing), then an
-//!   abduction by `α` about the forward axis;
+//! - upper arm: swing (the rotation vector's component `r_x` about the lateral axis)
+//!   `r_x' = θmax tanh(g r_x / θmax)` (saturated larger/smaller swing), then an abduction by
+//!   `α` about the forward axis;
 //! - forearm: `θ' = e θ`; knee: `θ' = θ + k θ² / π` (deeper bend at high flexion);
 //! - upper leg: abduction by `β`; spine: forward lean `λ · v` with `v` the root speed (m/s).
 
@@ -153,7 +154,10 @@ impl Stylist {
                 Role::Other => local,
                 Role::UpperArm(side) => {
                     let (g, m) = (style.arm_gain, style.arm_max);
-                    let swung = scale_angle(&local, |th| m * (g * th / m).tanh());
+                    // Swing = the rotation vector's component about the lateral (x) axis.
+                    let mut r = local.scaled_axis();
+                    r.x = m * (g * r.x / m).tanh();
+                    let swung = UnitQuaternion::from_scaled_axis(r);
                     UnitQuaternion::from_axis_angle(&fwd, side * style.arm_abduction) * swung
                 }
                 Role::ForeArm => scale_angle(&local, |th| style.elbow_gain * th),
@@ -179,5 +183,32 @@ impl Stylist {
         for b in 0..n {
             rots[b] = (out[b] * self.canon[b]).to_rotation_matrix();
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn time_warps_of_the_presets_are_monotonic() {
+        for s in [
+            crate::preset::subject_a(crate::subject::Topology::Body, 25.0),
+            crate::preset::subject_b(crate::subject::Topology::Body, 50.0),
+        ] {
+            let w = s.style.warp;
+            assert!(w.min_slope() > 0.0);
+            assert_eq!(w.mocap_time(0.0), 0.0);
+            let ts: Vec<f64> = (0..2000).map(|k| w.mocap_time(k as f64 * 0.005)).collect();
+            assert!(ts.windows(2).all(|p| p[1] > p[0]));
+        }
+    }
+
+    #[test]
+    fn angle_maps_keep_the_axis_and_change_the_angle() {
+        let q = UnitQuaternion::from_axis_angle(&Vector3::x_axis(), 1.0);
+        let k = scale_angle(&q, |t| t + 0.35 * t * t / std::f64::consts::PI);
+        assert!((k.angle() - (1.0 + 0.35 / std::f64::consts::PI)).abs() < 1e-12);
+        assert!((k.axis().unwrap().into_inner() - Vector3::x()).norm() < 1e-12);
     }
 }

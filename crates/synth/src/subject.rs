@@ -44,11 +44,13 @@ impl BodyAssets {
                 "unexpected body layout",
             ));
         }
+        let groups =
+            makehuman::read_vertex_groups(&dir.join(paths::VERTEX_GROUPS), obj.vertices.len())?;
         Ok(BodyAssets {
             dir: dir.to_path_buf(),
+            groups,
             base: obj.vertices,
             body_faces: obj.faces,
-            groups: makehuman::read_vertex_groups(&dir.join(paths::VERTEX_GROUPS))?,
             rig: makehuman::read_rig(&dir.join(paths::RIG))?,
             weights: makehuman::read_weights(&dir.join(paths::WEIGHTS))?,
         })

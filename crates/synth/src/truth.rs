@@ -64,3 +64,39 @@ pub fn contacts(
     };
     (0..n).map(|k| [down(left, k), down(right, k)]).collect()
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn correspondences_pick_the_nearest_time() {
+        let src = [0.0, 0.1, 0.2, 0.3];
+        let tgt = [0.0, 0.04, 0.09, 0.13, 0.16, 0.31];
+        let c = correspondences(&src, &tgt);
+        assert_eq!(c, vec![[0, 0], [1, 2], [2, 4], [3, 5]]);
+        assert_eq!(keyposes(&c, 2), vec![[1, 2], [3, 5]]);
+    }
+
+    #[test]
+    fn frame_times_follow_the_warp_and_stop_at_the_clip_end() {
+        let w = TimeWarp {
+            rate: 0.5,
+            amp: 0.0,
+            period: 1.0,
+            phase: 0.0,
+        };
+        let t = frame_times(&w, 10.0, 1.0, 1000);
+        assert_eq!(t.len(), 21);
+        assert!((t[20] - 1.0).abs() < 1e-12);
+    }
+
+    #[test]
+    fn contacts_need_low_and_still_feet() {
+        let low = |x: f64| Vector3::new(x, 0.0, 0.0);
+        let left: Vec<_> = (0..5).map(|_| low(0.0)).collect();
+        let right: Vec<_> = (0..5).map(|k| low(k as f64 * 0.1)).collect(); // 2.5 m/s at 25 fps
+        let c = contacts(&left, &right, 25.0, 0.03, 0.6);
+        assert!(c.iter().all(|f| f[0] && !f[1]));
+    }
+}

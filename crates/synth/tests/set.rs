@@ -179,3 +179,31 @@ fn curves_contacts_and_heights_are_sound() {
         assert_eq!(v.as_array().unwrap().len(), c.len());
     }
 }
+
+#[test]
+fn the_set_opens_with_mesh_core_and_its_curves_resolve() {
+    let tmp = build(true);
+    let set = mesh_core::capture_set::CaptureSet::open(tmp.path().join("set")).unwrap();
+    for name in ["A", "B"] {
+        let s = set
+            .subject(name)
+            .unwrap_or_else(|e| panic!("subject {name}: {e}"));
+        assert_eq!(s.curves.len(), 4);
+        for m in set.motions(name).unwrap() {
+            let seq =
+                mesh_core::sequence::MeshSequence::load_dir(set.motion_dir(name, &m)).unwrap();
+            assert_eq!(seq.n_vertices(), s.template.vertices.len(), "{name}/{m}");
+        }
+    }
+    // The target's own test motion has the source's truth, frame for frame.
+    let spec = &set.spec;
+    let tt: Vec<String> = serde_json::from_value(spec.extra["target_test"].clone()).unwrap();
+    assert!(!tt.is_empty());
+    for m in &tt {
+        let nb = set.frames("B", m).unwrap().len();
+        let truth = mesh_core::sequence::frame_files(set.truth_dir("A", m))
+            .unwrap()
+            .len();
+        assert_eq!(truth, nb, "{m}");
+    }
+}

@@ -21,6 +21,8 @@ pub struct EvalRecord {
     pub motion: String,
     pub method: String,
     pub placement: String,
+    /// `dense` (DTW pairs) or `keyposes` (key-pose pairs only).
+    pub training: String,
     pub rms_pose_m: f64,
     pub rms_placed_m: f64,
     pub frames: usize,

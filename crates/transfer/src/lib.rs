@@ -14,3 +14,4 @@ pub mod predict;
 pub mod assemble;
 pub mod placement;
 pub mod evaluate;
+pub mod learning_curves;

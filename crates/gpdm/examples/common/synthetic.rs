@@ -5,7 +5,11 @@ use nalgebra::DMatrix;
 
 pub fn synthetic(d_obs: usize, noise: f64) -> Vec<DMatrix<f64>> {
     let w: Vec<[f64; 4]> = (0..d_obs)
-        .map(|j| std::array::from_fn(|k| (((j * 4 + k) as f64 * 12.9898).sin() * 43758.5453).fract() * 2.0))
+        .map(|j| {
+            std::array::from_fn(|k| {
+                (((j * 4 + k) as f64 * 12.9898).sin() * 43758.5453).fract() * 2.0
+            })
+        })
         .collect();
     [120usize, 110, 106, 110]
         .iter()

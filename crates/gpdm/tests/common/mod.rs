@@ -13,11 +13,21 @@ pub fn randn(rows: usize, cols: usize, seed: u64) -> DMatrix<f64> {
 
 /// Linear dynamical system: z_{t+1} = R(ω) z_t on the unit circle (2-D), observed through a
 /// fixed random 10 × 2 map plus Gaussian noise of std `noise`. Returns (clean, noisy) poses.
-pub fn rotation_system(len: usize, omega: f64, phase: f64, noise: f64, seed: u64) -> (DMatrix<f64>, DMatrix<f64>) {
+pub fn rotation_system(
+    len: usize,
+    omega: f64,
+    phase: f64,
+    noise: f64,
+    seed: u64,
+) -> (DMatrix<f64>, DMatrix<f64>) {
     let c = randn(10, 2, 7);
     let z = DMatrix::from_fn(len, 2, |t, k| {
         let a = phase + omega * t as f64;
-        if k == 0 { a.cos() } else { a.sin() }
+        if k == 0 {
+            a.cos()
+        } else {
+            a.sin()
+        }
     });
     let clean = &z * c.transpose();
     let noisy = &clean + randn(len, 10, seed) * noise;

@@ -296,7 +296,9 @@ fn check_counts(header: &Header, payload_len: usize) -> std::result::Result<(), 
 /// (which carries the file line number) plus the offending text, if quoted.
 fn one_line(s: &str) -> String {
     let mut out = s.lines().next().unwrap_or_default().trim().to_string();
-    let quoted = s.split_once("String: '").and_then(|(_, rest)| rest.split_once('\''));
+    let quoted = s
+        .split_once("String: '")
+        .and_then(|(_, rest)| rest.split_once('\''));
     if let Some((text, _)) = quoted {
         out.push_str(&format!(" '{}'", text.trim()));
     }

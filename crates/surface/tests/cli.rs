@@ -1,0 +1,75 @@
+//! The `blend` and `correct` binaries: outputs match the library, errors are one line, exit 1.
+mod common;
+use common::*;
+use mesh_core::io::{read_mesh, write_mesh};
+use mesh_core::sequence::MeshSequence;
+use mesh_core::TriMesh;
+use std::process::Command;
+use surface::blend::Blender;
+use surface::correct::Corrector;
+
+fn run(bin: &str, args: &[&str]) -> (i32, String) {
+    let out = Command::new(bin).args(args).env("OPENBLAS_NUM_THREADS", "1").output().unwrap();
+    (out.status.code().unwrap_or(-1), String::from_utf8_lossy(&out.stderr).into_owned())
+}
+
+#[test]
+fn blend_binary_matches_library_and_fails_cleanly() {
+    let dir = tempfile::tempdir().unwrap();
+    let (rest, f) = tube(16, 21, 0.5, 0.1, true);
+    let bent = bend(&rest, 0.5, 0.8, 1.6);
+    let (pa, pb, po) = (dir.path().join("a.ply"), dir.path().join("b.ply"), dir.path().join("o.ply"));
+    write_mesh(&pa, &TriMesh::new(rest.clone(), f.clone())).unwrap();
+    write_mesh(&pb, &TriMesh::new(bent.clone(), f.clone())).unwrap();
+    let bin = env!("CARGO_BIN_EXE_blend");
+    let s = |p: &std::path::Path| p.to_str().unwrap().to_string();
+    let (code, err) = run(bin, &[&s(&pa), &s(&pb), "-w", "0.25", "-o", &s(&po)]);
+    assert_eq!(code, 0, "{err}");
+    assert!(err.is_empty(), "quiet on success: {err}");
+    let got = read_mesh(&po).unwrap();
+    let want = Blender::new(rest.clone(), f.clone()).unwrap().blend(&rest, &bent, 0.25).unwrap();
+    assert!(max_dist(&got.vertices, &want) < 1e-9);
+    assert_eq!(got.faces, f);
+
+    let (code, err) = run(bin, &[&s(&pa), &s(&pb), "-w", "1.5", "-o", &s(&po)]);
+    assert_eq!((code, err.lines().count()), (1, 1), "{err}");
+    assert!(err.starts_with("blend: ") && err.contains("weight"), "{err}");
+    let missing = dir.path().join("nope.ply");
+    let (code, err) = run(bin, &[&s(&pa), &s(&missing), "-o", &s(&dir.path().join("x.ply"))]);
+    assert_eq!((code, err.lines().count()), (1, 1), "{err}");
+    assert!(err.contains("nope.ply"), "{err}");
+    assert!(!dir.path().join("x.ply").exists(), "no output on failure");
+    let other = dir.path().join("other.ply");
+    let (v2, f2) = tube(10, 5, 0.5, 0.1, true);
+    write_mesh(&other, &TriMesh::new(v2, f2)).unwrap();
+    let (code, err) = run(bin, &[&s(&pa), &s(&other), "-o", &s(&po)]);
+    assert_eq!(code, 1);
+    assert!(err.contains("other.ply") && err.contains("topology"), "{err}");
+}
+
+#[test]
+fn correct_binary_processes_a_frame_directory() {
+    let dir = tempfile::tempdir().unwrap();
+    let (rest, f) = tube(12, 15, 0.5, 0.1, true);
+    let training: Vec<_> = (0..5).map(|k| bend(&rest, 0.3, 0.8, 0.3 * k as f64)).collect();
+    MeshSequence::new(f.clone(), training.clone()).write_dir(dir.path().join("train")).unwrap();
+    let preds: Vec<_> = [0.45, 0.75]
+        .iter()
+        .map(|&a| bend(&rest, 0.3, 0.8, a).iter().map(|p| p * 0.92).collect::<Vec<_>>())
+        .collect();
+    MeshSequence::new(f.clone(), preds.clone()).write_dir(dir.path().join("pred")).unwrap();
+    let p = |x: &str| dir.path().join(x).to_str().unwrap().to_string();
+    let (code, err) = run(
+        env!("CARGO_BIN_EXE_correct"),
+        &["--training", &p("train"), &p("pred"), "-m", "2", "-o", &p("out")],
+    );
+    assert_eq!(code, 0, "{err}");
+    let got = MeshSequence::load_dir(dir.path().join("out")).unwrap();
+    let c = Corrector::new(f.clone(), training).unwrap();
+    for (g, pr) in got.frames.iter().zip(&preds) {
+        assert!(max_dist(g, &c.correct(pr, 2).unwrap()) < 1e-9);
+    }
+    let (code, err) = run(env!("CARGO_BIN_EXE_correct"), &["--training", &p("pred/000000.ply"), &p("pred"), "-o", &p("o2")]);
+    assert_eq!((code, err.lines().count()), (1, 1), "{err}");
+    assert!(err.starts_with("correct: ") && err.contains("000000.ply"), "{err}");
+}

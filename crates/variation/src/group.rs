@@ -1,0 +1,204 @@
+//! A movement group ready for modelling: the subject's template and body parts, its motions
+//! rigidly aligned and time-warped onto a reference motion ([`crate::prealign`]), plus the
+//! pre-blended sequences `Y_w = blend(Y_1, Y_2, w)` for `w ∈ W` (paper §7), made with the
+//! non-linear mesh interpolation `surface::blend::Blender` on the aligned frames.
+//!
+//! A blend's rigid displacements are the linear blend of the two 6-vectors (they are small
+//! per-frame motions), integrated from the first motion's starting pose; its contacts are the
+//! nearer endpoint's (`w < 0.5`: the first).
+
+use mesh_core::artifact::Artifact;
+use mesh_core::capture_set::CaptureSet;
+use mesh_core::rigid::{integrate, RigidMotion};
+use mesh_core::sequence::MeshSequence;
+use mesh_core::{Error, Result};
+use nalgebra::{Vector3, Vector6};
+use serde::{Deserialize, Serialize};
+use transfer::align::{align_motion, AlignedMotion};
+
+use crate::contacts::{self, Contacts};
+use crate::prealign::{apply, apply_contacts, warp, PrealignOptions};
+
+/// One body part (transfer paper §4 segmentation, overlap bands included).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct PartDef {
+    pub name: String,
+    /// Index of the parent part (None for the root, the torso, which is part 0).
+    pub parent: Option<usize>,
+    /// Template vertex indices.
+    pub vertices: Vec<u32>,
+}
+
+/// One time-aligned training sequence.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct GroupSequence {
+    /// Motion name, or `blend-<w>` for a pre-blended sequence.
+    pub name: String,
+    /// For a pre-blended sequence, its weight `w` between the group's blend pair.
+    pub blend: Option<f64>,
+    pub motion: AlignedMotion,
+    pub contacts: Option<Contacts>,
+    /// Motion frame used for each reference frame (identity for the reference and blends).
+    pub map: Vec<usize>,
+}
+
+/// A prealigned movement group.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Group {
+    pub name: String,
+    pub subject: String,
+    pub fps: f64,
+    /// Unit up axis of the subject.
+    pub up: Vector3<f64>,
+    pub template: Vec<Vector3<f64>>,
+    pub faces: Vec<[u32; 3]>,
+    pub parts: Vec<PartDef>,
+    /// Name of the reference motion.
+    pub reference: String,
+    pub sequences: Vec<GroupSequence>,
+    /// Indices of the blend pair `(Y_1, Y_2)` (w = 0 and w = 1), if the group has two motions.
+    pub pair: Option<(usize, usize)>,
+}
+
+impl Artifact for Group {
+    const KIND: &'static str = "variation-group";
+    const VERSION: u32 = 1;
+}
+
+impl Group {
+    /// Index of the sequence named `name`.
+    pub fn index(&self, name: &str) -> Option<usize> {
+        self.sequences.iter().position(|s| s.name == name)
+    }
+    /// Frames per sequence (all equal after prealignment).
+    pub fn n_frames(&self) -> usize {
+        self.sequences.first().map_or(0, |s| s.motion.n_frames())
+    }
+}
+
+/// Name of the pre-blended sequence at weight `w`.
+pub fn blend_name(w: f64) -> String {
+    format!("blend-{w}")
+}
+
+/// What [`build`] needs.
+#[derive(Clone, Debug)]
+pub struct GroupSpec {
+    pub name: String,
+    pub subject: String,
+    /// Motions of the group, in order; missing ones are skipped (reported by [`build`]).
+    pub motions: Vec<String>,
+    /// Reference motion (default: the first present).
+    pub reference: Option<String>,
+    /// Blend weights `W` (each in (0, 1)) between the first two present motions.
+    pub blend_weights: Vec<f64>,
+    pub prealign: PrealignOptions,
+}
+
+/// Loads, aligns, prealigns and blends the group. Returns the group and the skipped motions.
+pub fn build(set: &CaptureSet, spec: &GroupSpec) -> Result<(Group, Vec<String>)> {
+    let subject = set.subject(&spec.subject)?;
+    let template = &subject.template;
+    let available = set.motions(&spec.subject)?;
+    let (present, skipped): (Vec<String>, Vec<String>) =
+        spec.motions.iter().cloned().partition(|m| available.contains(m));
+    if present.is_empty() {
+        return Err(Error::invalid(format!(
+            "group '{}': none of the motions {:?} exists for subject {}",
+            spec.name, spec.motions, spec.subject
+        )));
+    }
+    let reference = spec.reference.clone().unwrap_or_else(|| present[0].clone());
+    if !present.contains(&reference) {
+        return Err(Error::invalid(format!("group '{}': reference motion '{reference}' is not in the group", spec.name)));
+    }
+    for &w in &spec.blend_weights {
+        if !(w > 0.0 && w < 1.0) {
+            return Err(Error::invalid(format!("blend weight {w} must lie strictly between 0 and 1")));
+        }
+    }
+    let mut loaded = Vec::new();
+    for m in &present {
+        let dir = set.motion_dir(&spec.subject, m);
+        let seq = MeshSequence::load_dir(&dir)?;
+        let aligned = align_motion(template, &seq).map_err(|e| Error::invalid(format!("{}: {e}", dir.display())))?;
+        let c = contacts::from_subject(&subject.spec, m, aligned.n_frames())
+            .map_err(|e| Error::file(set.subject_json(&spec.subject), e.to_string()))?;
+        loaded.push((m.clone(), aligned, c));
+    }
+    let r = present.iter().position(|m| *m == reference).expect("checked");
+    let (ref_frames, ref_contacts) = (loaded[r].1.frames.clone(), loaded[r].2.clone());
+    let mut sequences = Vec::new();
+    for (name, motion, c) in loaded {
+        let map: Vec<usize> = if name == reference {
+            (0..motion.n_frames()).collect()
+        } else {
+            warp(&motion.frames, c.as_ref(), &ref_frames, ref_contacts.as_ref(), &spec.prealign)
+                .map_err(|e| Error::invalid(format!("{name}: {e}")))?
+                .map
+        };
+        let contacts = c.as_ref().map(|c| apply_contacts(c, &map));
+        sequences.push(GroupSequence { name, blend: None, motion: apply(&motion, &map), contacts, map });
+    }
+    let seg = transfer::segment::segment(template, &subject.spec)
+        .map_err(|e| Error::file(set.subject_json(&spec.subject), e.to_string()))?;
+    let parts = seg
+        .parts
+        .iter()
+        .map(|p| PartDef {
+            name: p.name.clone(),
+            parent: p.parent.as_ref().and_then(|q| seg.parts.iter().position(|x| &x.name == q)),
+            vertices: p.vertices.clone(),
+        })
+        .collect();
+    let pair = (sequences.len() >= 2).then_some((0, 1));
+    let mut group = Group {
+        name: spec.name.clone(),
+        subject: spec.subject.clone(),
+        fps: subject.spec.fps,
+        up: subject.spec.up_vector().unwrap_or(Vector3::y()),
+        template: template.vertices.clone(),
+        faces: template.faces.clone(),
+        parts,
+        reference,
+        sequences,
+        pair,
+    };
+    if !spec.blend_weights.is_empty() {
+        let Some((a, b)) = pair else {
+            return Err(Error::invalid(format!("group '{}': blending needs two motions", spec.name)));
+        };
+        let blender = surface::blend::Blender::new(group.template.clone(), group.faces.clone())?;
+        for &w in &spec.blend_weights {
+            let s = blend_sequences(&blender, &group.sequences[a], &group.sequences[b], w)?;
+            group.sequences.push(s);
+        }
+    }
+    Ok((group, skipped))
+}
+
+/// The pre-blended sequence `Y_w` of two time-aligned sequences (module doc).
+pub fn blend_sequences(blender: &surface::blend::Blender, a: &GroupSequence, b: &GroupSequence, w: f64) -> Result<GroupSequence> {
+    use rayon::prelude::*;
+    let n = a.motion.n_frames();
+    if b.motion.n_frames() != n {
+        return Err(Error::invalid(format!("blend: {} and {} have different lengths", a.name, b.name)));
+    }
+    let frames = (0..n)
+        .into_par_iter()
+        .map(|t| blender.blend(&a.motion.frames[t], &b.motion.frames[t], w))
+        .collect::<Result<Vec<_>>>()?;
+    let disp: Vec<[f64; 6]> = (0..n)
+        .map(|t| std::array::from_fn(|k| (1.0 - w) * a.motion.displacements[t][k] + w * b.motion.displacements[t][k]))
+        .collect();
+    let rel: Vec<RigidMotion> = disp[1..].iter().map(|d| RigidMotion::from_6vec(&Vector6::from_row_slice(d))).collect();
+    let poses = integrate(&a.motion.poses[0], &rel);
+    let contacts = if w < 0.5 { a.contacts.clone() } else { b.contacts.clone() };
+    Ok(GroupSequence {
+        name: blend_name(w),
+        blend: Some(w),
+        motion: AlignedMotion { faces: a.motion.faces.clone(), frames, poses, displacements: disp },
+        contacts,
+        map: (0..n).collect(),
+    })
+}

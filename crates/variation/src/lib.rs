@@ -1,0 +1,18 @@
+//! The stages of variation synthesis (Boukhayma & Boyer, "Controllable Variation Synthesis for
+//! Surface Motion Capture", 3DV 2017).
+//!
+//! Data flows one way: capture set -> [`prealign`] (contact-guided DTW of one movement group to a
+//! reference, [`contacts`] from the subject description, pre-blended `Y_w` sequences, §7) ->
+//! [`part_data`] (per-part pose vectors, §4) -> [`train`] (one GPDM per part, §5) -> [`sample`]
+//! (mean prediction + HMC over latent trajectories, §6; latent blending, §7) -> [`reconstruct`]
+//! (eqs. 11-13, stitching, displacement integration) -> [`metrics`] and [`plots`].
+
+pub mod contacts;
+pub mod group;
+pub mod metrics;
+pub mod part_data;
+pub mod plots;
+pub mod prealign;
+pub mod reconstruct;
+pub mod sample;
+pub mod train;

@@ -1,0 +1,141 @@
+//! Figures of merit for variations (issue 6): distance to the source, timing offset,
+//! edge-length distortion, foot sliding; and the reconstruction errors of figures 4 and 7b.
+
+use gp::dtw::{dtw_path, DtwOptions};
+use mesh_core::rigid::procrustes;
+use nalgebra::{DMatrix, Vector3};
+use serde::{Deserialize, Serialize};
+
+use crate::group::PartDef;
+
+/// Mean over frames and vertices of `‖a_t(v) − b_t(v)‖` (over the common frames).
+pub fn mean_vertex_distance(a: &[Vec<Vector3<f64>>], b: &[Vec<Vector3<f64>>]) -> f64 {
+    let n = a.len().min(b.len());
+    if n == 0 {
+        return 0.0;
+    }
+    let s: f64 = (0..n)
+        .map(|t| a[t].iter().zip(&b[t]).map(|(p, q)| (p - q).norm()).sum::<f64>() / a[t].len().max(1) as f64)
+        .sum();
+    s / n as f64
+}
+
+/// Mean per-vertex distance between rows of two pose matrices (rows `(x, y, z, ...)`), ignoring
+/// columns beyond `3 × n_vertices`.
+pub fn mean_row_distance(a: &DMatrix<f64>, b: &DMatrix<f64>, n_vertices: usize) -> f64 {
+    let mut s = 0.0;
+    for t in 0..a.nrows() {
+        for v in 0..n_vertices {
+            let d = Vector3::new(a[(t, 3 * v)] - b[(t, 3 * v)], a[(t, 3 * v + 1)] - b[(t, 3 * v + 1)], a[(t, 3 * v + 2)] - b[(t, 3 * v + 2)]);
+            s += d.norm();
+        }
+    }
+    s / (a.nrows() * n_vertices).max(1) as f64
+}
+
+/// Timing offset in frames: mean `|i − j|` along the DTW path between the two sequences' poses
+/// (each frame rigidly aligned to `template` first, so travel does not count).
+pub fn timing_offset(a: &[Vec<Vector3<f64>>], b: &[Vec<Vector3<f64>>], template: &[Vector3<f64>]) -> f64 {
+    let norm = |s: &[Vec<Vector3<f64>>]| -> Vec<Vec<Vector3<f64>>> {
+        s.iter().map(|f| procrustes(f, template, None).apply_all(f)).collect()
+    };
+    let (a, b) = (norm(a), norm(b));
+    let cost = crate::prealign::pose_cost(&a, &b, 400);
+    match dtw_path(&cost, &[], &DtwOptions::default()) {
+        Ok(p) => p.iter().map(|&(i, j)| (i as f64 - j as f64).abs()).sum::<f64>() / p.len().max(1) as f64,
+        Err(_) => f64::NAN,
+    }
+}
+
+/// Unique undirected edges of `faces`.
+pub fn edges(faces: &[[u32; 3]]) -> Vec<[u32; 2]> {
+    let mut e: Vec<[u32; 2]> = faces
+        .iter()
+        .flat_map(|f| [[f[0], f[1]], [f[1], f[2]], [f[2], f[0]]])
+        .map(|[a, b]| [a.min(b), a.max(b)])
+        .collect();
+    e.sort_unstable();
+    e.dedup();
+    e
+}
+
+/// Mean relative edge-length change `|l / l₀ − 1|` against `rest`, over frames and edges.
+pub fn edge_distortion(frames: &[Vec<Vector3<f64>>], rest: &[Vector3<f64>], edges: &[[u32; 2]]) -> f64 {
+    let l0: Vec<f64> = edges.iter().map(|&[a, b]| (rest[a as usize] - rest[b as usize]).norm()).collect();
+    let mut s = 0.0;
+    let mut n = 0usize;
+    for f in frames {
+        for (e, &l) in edges.iter().zip(&l0) {
+            if l > 0.0 {
+                s += ((f[e[0] as usize] - f[e[1] as usize]).norm() / l - 1.0).abs();
+                n += 1;
+            }
+        }
+    }
+    if n == 0 {
+        0.0
+    } else {
+        s / n as f64
+    }
+}
+
+/// Sole vertices of the two legs: vertices of parts named `leg*` within `tol` of the part's
+/// lowest template vertex along `up` (left first if named `*_l`).
+pub fn soles(parts: &[PartDef], template: &[Vector3<f64>], up: &Vector3<f64>, tol: f64) -> Vec<Vec<u32>> {
+    let mut legs: Vec<&PartDef> = parts.iter().filter(|p| p.name.starts_with("leg")).collect();
+    legs.sort_by_key(|p| !p.name.ends_with('l'));
+    legs.iter()
+        .map(|p| {
+            let h = |v: u32| template[v as usize].dot(up);
+            let lo = p.vertices.iter().map(|&v| h(v)).fold(f64::INFINITY, f64::min);
+            p.vertices.iter().copied().filter(|&v| h(v) <= lo + tol).collect()
+        })
+        .collect()
+}
+
+/// Foot sliding (m per frame): mean horizontal motion of each sole's centroid between
+/// consecutive frames in which that foot is in contact in both. A foot is in contact when its
+/// lowest sole vertex is within `contact_height` of the sequence's ground (the lowest sole
+/// vertex over all frames). The same rule is applied to training and synthesised sequences.
+pub fn foot_sliding(frames: &[Vec<Vector3<f64>>], soles: &[Vec<u32>], up: &Vector3<f64>, contact_height: f64) -> Option<f64> {
+    let ground = soles
+        .iter()
+        .flat_map(|s| frames.iter().flat_map(move |f| s.iter().map(move |&v| f[v as usize].dot(up))))
+        .fold(f64::INFINITY, f64::min);
+    let mut total = 0.0;
+    let mut count = 0usize;
+    for s in soles.iter().filter(|s| !s.is_empty()) {
+        let low = |f: &Vec<Vector3<f64>>| s.iter().map(|&v| f[v as usize].dot(up)).fold(f64::INFINITY, f64::min);
+        let centre = |f: &Vec<Vector3<f64>>| s.iter().map(|&v| f[v as usize]).sum::<Vector3<f64>>() / s.len() as f64;
+        for w in frames.windows(2) {
+            if low(&w[0]) - ground <= contact_height && low(&w[1]) - ground <= contact_height {
+                let d = centre(&w[1]) - centre(&w[0]);
+                total += (d - up * d.dot(up)).norm();
+                count += 1;
+            }
+        }
+    }
+    (count > 0).then(|| total / count as f64)
+}
+
+/// Summary statistics of a list of values.
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+pub struct Stats {
+    pub mean: f64,
+    pub min: f64,
+    pub max: f64,
+}
+
+impl Stats {
+    pub fn of(v: &[f64]) -> Stats {
+        let v: Vec<f64> = v.iter().copied().filter(|x| x.is_finite()).collect();
+        if v.is_empty() {
+            return Stats { mean: f64::NAN, min: f64::NAN, max: f64::NAN };
+        }
+        Stats {
+            mean: v.iter().sum::<f64>() / v.len() as f64,
+            min: v.iter().copied().fold(f64::INFINITY, f64::min),
+            max: v.iter().copied().fold(f64::NEG_INFINITY, f64::max),
+        }
+    }
+}

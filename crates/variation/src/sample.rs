@@ -1,0 +1,107 @@
+//! `hmc-sample`: variations of latent trajectories (paper §6) and of blends (§7).
+//!
+//! For a training sequence, every part's chain starts from the mean prediction (eqs. 8-10) from
+//! the sequence's first learned latent point and draws whole trajectories by Hybrid Monte Carlo
+//! with the first point fixed (`gpdm::hmc::sample_trajectories`: burn-in with step-size
+//! adaptation toward the target acceptance, then thinning). Parts are sampled independently
+//! (one of the paper's sources of variation); variation `k` takes sample `k` of every part.
+//! For a blend weight `w*`, each part's `gpdm::blend::BlendSet` of sampled variants at
+//! `W ∪ {0, 1}` gives `X̃_{w*}` from random variants of the bounding trajectories.
+//! Every chain has its own seed derived from `(seed, sequence, part)`: same seed, same samples.
+
+use gpdm::blend::BlendSet;
+use gpdm::hmc::{sample_trajectories, HmcOptions};
+use mesh_core::{Error, Result};
+use nalgebra::DMatrix;
+use rand::SeedableRng;
+use rand_chacha::ChaCha8Rng;
+use rayon::prelude::*;
+use serde::{Deserialize, Serialize};
+
+use crate::reconstruct::Decoder;
+
+/// Statistics of one chain.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct ChainStats {
+    pub sequence: String,
+    pub part: String,
+    pub accept_rate: f64,
+    pub burn_in_accept_rate: f64,
+    pub step_size: f64,
+}
+
+/// `variations[k][part]`: latent trajectory (T × d) of part `part` in variation `k`.
+pub type Variations = Vec<Vec<DMatrix<f64>>>;
+
+/// Sampler defaults for variations: decorrelated draws (thin 10) after 200 burn-in iterations.
+pub fn default_hmc(n: usize, seed: u64) -> HmcOptions {
+    HmcOptions { n_samples: n, burn_in: 200, thin: 10, leapfrog_steps: 20, initial_step: 0.01, target_accept: 0.7, seed }
+}
+
+/// A seed for stream `(a, b)` of run `seed` (SplitMix64 finaliser).
+pub fn mix(seed: u64, a: u64, b: u64) -> u64 {
+    let mut z = seed ^ a.wrapping_mul(0x9E37_79B9_7F4A_7C15) ^ b.wrapping_mul(0xBF58_476D_1CE4_E5B9);
+    z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
+    z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
+    z ^ (z >> 31)
+}
+
+/// `opts.n_samples` variations of training sequence `s` (chains seeded from `opts.seed`).
+pub fn sequence_variations(dec: &Decoder, s: usize, opts: &HmcOptions) -> Result<(Variations, Vec<ChainStats>)> {
+    let model = dec.model;
+    let info = model.sequences.get(s).ok_or_else(|| Error::invalid(format!("no training sequence {s}")))?;
+    let per_part: Vec<Result<(Vec<DMatrix<f64>>, ChainStats)>> = dec
+        .predictors
+        .par_iter()
+        .zip(model.parts.par_iter())
+        .enumerate()
+        .map(|(k, (pr, pm))| {
+            let x = pm.gpdm.sequence_latent(s).expect("index checked");
+            let o = HmcOptions { seed: mix(opts.seed, s as u64 + 1, k as u64 + 1), ..opts.clone() };
+            let (trajs, res) = sample_trajectories(pr, &x, &o)
+                .map_err(|e| Error::invalid(format!("{} part '{}': {e}", info.name, pm.part.name)))?;
+            let stats = ChainStats {
+                sequence: info.name.clone(),
+                part: pm.part.name.clone(),
+                accept_rate: res.accept_rate,
+                burn_in_accept_rate: res.burn_in_accept_rate,
+                step_size: res.step_size,
+            };
+            Ok((trajs, stats))
+        })
+        .collect();
+    let mut by_part = Vec::new();
+    let mut stats = Vec::new();
+    for r in per_part {
+        let (t, st) = r?;
+        by_part.push(t);
+        stats.push(st);
+    }
+    let n = by_part.iter().map(|t| t.len()).min().unwrap_or(0);
+    Ok(((0..n).map(|k| by_part.iter().map(|t| t[k].clone()).collect()).collect(), stats))
+}
+
+/// `n` variations of the blend at `w` from the sampled variants `pools[s]` of the training
+/// sequences (index `s` as in the model); needs the model's blend pair.
+pub fn blend_variations(dec: &Decoder, pools: &[Variations], w: f64, n: usize, seed: u64) -> Result<Variations> {
+    let model = dec.model;
+    let (a, b) = model.pair.ok_or_else(|| Error::invalid("the model has no blend pair (train with two motions)"))?;
+    let mut entries_idx = vec![(0.0, a), (1.0, b)];
+    for (i, s) in model.sequences.iter().enumerate() {
+        if let Some(v) = s.blend {
+            entries_idx.push((v, i));
+        }
+    }
+    let sets = (0..model.parts.len())
+        .map(|k| {
+            let entries = entries_idx.iter().map(|&(v, i)| (v, pools[i].iter().map(|var| var[k].clone()).collect())).collect();
+            BlendSet::new(entries).map_err(|e| Error::invalid(format!("blend: {e}")))
+        })
+        .collect::<Result<Vec<_>>>()?;
+    let mut rng = ChaCha8Rng::seed_from_u64(mix(seed, 0xB1E4D, (w * 1e6).round() as u64));
+    (0..n)
+        .map(|_| {
+            sets.iter().map(|set| set.sample(w, &mut rng).map_err(|e| Error::invalid(format!("blend: {e}")))).collect()
+        })
+        .collect()
+}

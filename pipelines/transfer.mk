@@ -1,0 +1,141 @@
+# Motion transfer (transfer paper, sections 4, 5, 7):
+#   make transfer SET=<capture set> OUT=<dir>     (defaults: SET=$(OUT)/demo/set, OUT=out)
+# Writes $(OUT)/transfer/<src>-to-<tgt>/<motion>/<method>/NNNNNN.ply, contact sheets under
+# $(OUT)/render/, learning curves under $(OUT)/learning-curves/ and $(OUT)/results.json.
+# Intermediate artifacts go to $(OUT)/work/. The per-motion rules are generated from set.json into
+# $(OUT)/work/transfer-rules.mk (python3). Idempotent (make's timestamps) and `make -j` safe.
+
+SET ?= $(OUT)/demo/set
+TRANSFER_METHODS ?= gpr-nn gpr-se gpr-linear keypose-affine whole-body
+TRANSFER_WORK := $(OUT)/work
+TRANSFER_RULES := $(TRANSFER_WORK)/transfer-rules.mk
+TRANSFER_BINS := align segment pca-fit dtw-densify gpr-train gpr-predict evaluate learning-curves render
+
+.PHONY: transfer transfer-results
+transfer:
+	@test -f $(SET)/set.json || { echo "transfer: $(SET)/set.json: no capture set (run 'make demo' or pass SET=<dir>)" >&2; exit 1; }
+	$(CARGO) build --release --workspace --quiet
+	@$(MAKE) --no-print-directory transfer-results SET=$(SET) OUT=$(OUT)
+
+# The generated rules: one block per subject, motion, pair, direction and method.
+define TRANSFER_RULES_PY
+import json, os, sys
+set_dir, out, methods = sys.argv[1], sys.argv[2], sys.argv[3].split()
+W = out + "/work"
+spec = json.load(open(os.path.join(set_dir, "set.json")))
+S, T = spec["source"], spec["target"]
+subj = {x: json.load(open(os.path.join(set_dir, x, "subject.json"))) for x in (S, T)}
+fps = {x: float(subj[x]["fps"]) for x in (S, T)}
+def motions(x):
+    d = os.path.join(set_dir, x)
+    return sorted(m for m in os.listdir(d) if os.path.isdir(os.path.join(d, m)))
+def frames(d):
+    return sorted(f for f in os.listdir(d) if f.split(".")[-1].lower() in ("ply", "obj") and f.split(".")[0].isdigit())
+train = {S: [p["source"] for p in spec["train"]], T: [p["target"] for p in spec["train"]]}
+def template(x):
+    t = subj[x].get("template")
+    if t:
+        return os.path.join(set_dir, x, t)
+    d = os.path.join(set_dir, x, train[x][0])
+    return os.path.join(d, frames(d)[0])
+tpl = {x: template(x) for x in (S, T)}
+B = "$$(BIN)"
+rules, results, stamps = [], [], []
+def rule(target, deps, *cmds):
+    rules.append("%s: %s\n%s\n" % (target, " ".join(deps), "".join("\t%s\n" % c for c in cmds)))
+for x in (S, T):
+    for m in motions(x):
+        d = os.path.join(set_dir, x, m)
+        rule("%s/%s/%s.aligned" % (W, x, m), [B + "/align", tpl[x]] + [os.path.join(d, f) for f in frames(d)],
+             "@mkdir -p $$(@D)", "%s/align -q --template %s %s --out $$@" % (B, tpl[x], d))
+    rule("%s/%s/parts.seg" % (W, x), [B + "/segment", os.path.join(set_dir, x, "subject.json"), tpl[x]],
+         "@mkdir -p $$(@D)", "%s/segment -q %s --template %s --out $$@" % (B, os.path.join(set_dir, x, "subject.json"), tpl[x]))
+    aligned = ["%s/%s/%s.aligned" % (W, x, m) for m in train[x]]
+    rule("%s/%s/pca.model" % (W, x), [B + "/pca-fit", "%s/%s/parts.seg" % (W, x)] + aligned,
+         "%s/pca-fit -q --template %s --parts %s/%s/parts.seg %s --out $$@ --report %s/%s/pca.json" % (B, tpl[x], W, x, " ".join(aligned), W, x))
+    rule("%s/%s/pca-whole.model" % (W, x), [B + "/pca-fit"] + aligned,
+         "%s/pca-fit -q --whole-body --template %s %s --out $$@ --report %s/%s/pca-whole.json" % (B, tpl[x], " ".join(aligned), W, x))
+pair_args = []
+corrs = []
+for p in spec["train"]:
+    c = "%s/pairs/%s.corr" % (W, p["source"])
+    sa, ta = "%s/%s/%s.aligned" % (W, S, p["source"]), "%s/%s/%s.aligned" % (W, T, p["target"])
+    rule(c, [B + "/dtw-densify", os.path.join(set_dir, "set.json"), sa, ta, "%s/%s/pca.model" % (W, S), "%s/%s/pca.model" % (W, T)],
+         "@mkdir -p $$(@D)",
+         "%s/dtw-densify -q --set %s --pair %s --source-pca %s/%s/pca.model --target-pca %s/%s/pca.model --target-fps %g %s %s --out $$@ --report %s/pairs/%s.json"
+         % (B, os.path.join(set_dir, "set.json"), p["source"], W, S, W, T, fps[T], sa, ta, W, p["source"]))
+    pair_args.append("--pair %s %s %s" % (sa, ta, c))
+    corrs += [sa, ta, c]
+# Directions: forward tests the set's test motions; reverse tests the target's motions that have truth
+# for the source subject (plus an optional "target_test" list in set.json).
+rev_tests = sorted(set(m for m in motions(T) if os.path.isdir(os.path.join(set_dir, "truth", S, m))) | set(spec.get("target_test", [])))
+directions = [(S, T, False, spec.get("test", [])), (T, S, True, rev_tests)]
+variants = [(m, m, False) for m in methods] + [("gpr-nn-keyposes", "gpr-nn", True)]
+for (src, tgt, rev, tests) in directions:
+    dn = "%s-to-%s" % (src, tgt)
+    label = "%s->%s" % (src, tgt)
+    for (name, method, keys) in variants:
+        pca = "pca-whole" if method == "whole-body" else "pca"
+        model = "%s/models/%s/%s.model" % (W, dn, name)
+        rule(model, [B + "/gpr-train", "%s/%s/%s.model" % (W, src, pca), "%s/%s/%s.model" % (W, tgt, pca)] + corrs,
+             "@mkdir -p $$(@D)",
+             "%s/gpr-train -q --method %s %s %s --source-pca %s/%s/%s.model --target-pca %s/%s/%s.model --source-fps %g --target-fps %g %s --out $$@"
+             % (B, method, "--keyposes-only" if keys else "", "--reverse" if rev else "", W, src, pca, W, tgt, pca, fps[src], fps[tgt], " ".join(pair_args)))
+        stamps.append(model)
+        for m in tests:
+            if not os.path.isdir(os.path.join(set_dir, src, m)):
+                continue
+            truth = os.path.join(set_dir, "truth", tgt, m)
+            places = ["regressed"] + (["scaled-source", "blended"] if name == "gpr-nn" else [])
+            for pl in places:
+                seq = "%s/transfer/%s/%s/%s" % (out, dn, m, name) if pl == "regressed" else "%s/placement/%s/%s/%s" % (W, dn, m, pl)
+                timing = "%s/predict/%s/%s/%s-%s.json" % (W, dn, m, name, pl)
+                rule(timing, [B + "/gpr-predict", model, "%s/%s/%s.aligned" % (W, src, m)],
+                     "@mkdir -p $$(@D)",
+                     "%s/gpr-predict -q --model %s --source-pca %s/%s/%s.model --target-pca %s/%s/%s.model --target-template %s --placement %s %s/%s/%s.aligned --out %s --timing $$@"
+                     % (B, model, W, src, pca, W, tgt, pca, tpl[tgt], pl, W, src, m, seq))
+                stamps.append(timing)
+                if os.path.isdir(truth):
+                    rec = "%s/eval/%s/%s/%s-%s.json" % (W, dn, m, name, pl)
+                    rule(rec, [B + "/evaluate", timing],
+                         "@mkdir -p $$(@D)",
+                         "%s/evaluate -q %s %s --direction '%s' --motion %s --method %s --placement %s --training %s --out $$@"
+                         % (B, seq, truth, label, m, method, pl, "keyposes" if keys else "dense"))
+                    results.append(rec)
+            if name == "gpr-nn":
+                sheet = "%s/render/%s/%s/contact.png" % (out, dn, m)
+                seqs = [os.path.join(set_dir, src, m), "%s/transfer/%s/%s/gpr-nn" % (out, dn, m)]
+                labels = "source,transfer"
+                if os.path.isdir(truth):
+                    seqs.append(truth)
+                    labels += ",truth"
+                rule(sheet, [B + "/render", "%s/predict/%s/%s/gpr-nn-regressed.json" % (W, dn, m)],
+                     "%s/render -q --separate-rows --no-frames --no-gif --labels %s --out $$(@D) %s" % (B, labels, " ".join(seqs)))
+                stamps.append(sheet)
+lc = "%s/learning-curves/learning_curves.csv" % out
+rule(lc, [B + "/learning-curves", "%s/%s/pca.model" % (W, S), "%s/%s/pca.model" % (W, T), "%s/%s/pca-whole.model" % (W, S), "%s/%s/pca-whole.model" % (W, T)] + corrs,
+     "@mkdir -p $$(@D)",
+     "%s/learning-curves -q --seed 0 --source-pca %s/%s/pca.model --target-pca %s/%s/pca.model --source-whole %s/%s/pca-whole.model --target-whole %s/%s/pca-whole.model --source-fps %g --target-fps %g --source-name %s --target-name %s %s --out $$(@D)"
+     % (B, W, S, W, T, W, S, W, T, fps[S], fps[T], S, T, " ".join(pair_args)))
+stamps.append(lc)
+print("TRANSFER_RECORDS := " + " ".join(results))
+print("TRANSFER_STAMPS := " + " ".join(stamps))
+print()
+print("\n".join(rules))
+endef
+export TRANSFER_RULES_PY
+
+$(TRANSFER_RULES): $(SET)/set.json $(wildcard $(SET)/* $(SET)/truth/*) pipelines/transfer.mk
+	@mkdir -p $(@D)
+	@python3 -c "$$TRANSFER_RULES_PY" $(SET) $(OUT) "$(TRANSFER_METHODS)" > $@.tmp && mv $@.tmp $@
+
+ifneq ($(filter transfer-results,$(MAKECMDGOALS)),)
+include $(TRANSFER_RULES)
+endif
+
+transfer-results: $(OUT)/results.json
+
+# All evaluation records, merged into one list (sorted for a stable file).
+$(OUT)/results.json: $(TRANSFER_RECORDS) $(TRANSFER_STAMPS)
+	@python3 -c 'import json, sys; recs = [json.load(open(f)) for f in sys.argv[2:]]; recs.sort(key=lambda r: (r["direction"], r["motion"], r["method"], r.get("training", ""), r.get("placement", ""))); open(sys.argv[1] + ".tmp", "w").write(json.dumps(recs, indent=1) + "\n")' $@ $(TRANSFER_RECORDS)
+	@mv $@.tmp $@
