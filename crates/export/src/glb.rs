@@ -4,7 +4,9 @@
 //! further exported frame `k` is a morph target holding the deltas
 //! `frame_k - base`. One animation channel drives the mesh node's `weights`:
 //! at time `t_k = k * stride / fps` the weight vector is one-hot on target
-//! `k` (all zeros at `t_0`, which shows the base). With `STEP` sampling each
+//! `k` (all zeros at `t_0`, which shows the base); a closing key at
+//! `t_last + stride / fps` repeats the last frame so that a looping player
+//! gives it its full duration. With `STEP` sampling each
 //! key shows an exact frame; with `LINEAR` sampling the weights blend
 //! linearly, which moves each vertex on the straight line between frames.
 //! No normals are written: the glTF spec has clients compute flat normals,
@@ -119,8 +121,10 @@ impl Builder {
             }
         }
         let view = self.view(&bytes, Some(ARRAY_BUFFER), Some(8));
-        self.accessor(json!({"bufferView": view, "componentType": SHORT, "normalized": true,
-            "count": data.len() / 3, "type": "VEC3", "min": min, "max": max}))
+        self.accessor(
+            json!({"bufferView": view, "componentType": SHORT, "normalized": true,
+            "count": data.len() / 3, "type": "VEC3", "min": min, "max": max}),
+        )
     }
 }
 
@@ -167,17 +171,27 @@ pub fn encode_glb(seq: &MeshSequence, name: &str, opts: &GlbOptions) -> Result<V
         views: Vec::new(),
         accessors: Vec::new(),
     };
-    let indices: Vec<u8> = seq.faces.iter().flatten().flat_map(|i| i.to_le_bytes()).collect();
+    let indices: Vec<u8> = seq
+        .faces
+        .iter()
+        .flatten()
+        .flat_map(|i| i.to_le_bytes())
+        .collect();
     let index_view = b.view(&indices, Some(ELEMENT_ARRAY_BUFFER), None);
     let max_index = seq.faces.iter().flatten().copied().max().unwrap_or(0);
-    let index_acc = b.accessor(json!({"bufferView": index_view, "componentType": UNSIGNED_INT,
-        "count": seq.faces.len() * 3, "type": "SCALAR", "min": [0], "max": [max_index]}));
+    let index_acc = b.accessor(
+        json!({"bufferView": index_view, "componentType": UNSIGNED_INT,
+        "count": seq.faces.len() * 3, "type": "SCALAR", "min": [0], "max": [max_index]}),
+    );
 
     let mut node = json!({"mesh": 0, "name": name});
     let (position, targets): (usize, Vec<usize>) = if opts.quantize {
         // p = centre + scale * q, per axis; the scale covers base and deltas.
         let (lo, hi) = base.iter().fold(
-            (Vector3::repeat(f64::INFINITY), Vector3::repeat(f64::NEG_INFINITY)),
+            (
+                Vector3::repeat(f64::INFINITY),
+                Vector3::repeat(f64::NEG_INFINITY),
+            ),
             |(lo, hi), p| (lo.inf(p), hi.sup(p)),
         );
         let centre = (lo + hi) / 2.0;
@@ -205,7 +219,9 @@ pub fn encode_glb(seq: &MeshSequence, name: &str, opts: &GlbOptions) -> Result<V
         (position, targets)
     } else {
         let flat = |vs: &[Vector3<f64>]| -> Vec<f32> {
-            vs.iter().flat_map(|v| [v.x as f32, v.y as f32, v.z as f32]).collect()
+            vs.iter()
+                .flat_map(|v| [v.x as f32, v.y as f32, v.z as f32])
+                .collect()
         };
         let position = b.floats(&flat(base), "VEC3", 3, Some(ARRAY_BUFFER));
         let targets = deltas
@@ -216,7 +232,8 @@ pub fn encode_glb(seq: &MeshSequence, name: &str, opts: &GlbOptions) -> Result<V
     };
 
     let n_targets = targets.len();
-    let mut primitive = json!({"attributes": {"POSITION": position}, "indices": index_acc, "mode": 4});
+    let mut primitive =
+        json!({"attributes": {"POSITION": position}, "indices": index_acc, "mode": 4});
     let mut mesh = json!({"name": name, "primitives": []});
     let mut animations = json!([]);
     if n_targets > 0 {
@@ -224,10 +241,15 @@ pub fn encode_glb(seq: &MeshSequence, name: &str, opts: &GlbOptions) -> Result<V
         mesh["weights"] = json!(vec![0.0; n_targets]);
         let names: Vec<String> = kept[1..].iter().map(|k| format!("frame_{k:06}")).collect();
         mesh["extras"] = json!({"targetNames": names});
-        let times: Vec<f32> = kept.iter().map(|&k| (k as f64 / opts.fps) as f32).collect();
-        let mut weights = vec![0f32; kept.len() * n_targets];
-        for k in 1..kept.len() {
-            weights[k * n_targets + (k - 1)] = 1.0;
+        // One key per kept frame plus a closing key one step after the last
+        // that repeats it, so that a looping player shows the last frame for
+        // as long as the others.
+        let step = opts.stride as f64 / opts.fps;
+        let mut times: Vec<f32> = kept.iter().map(|&k| (k as f64 / opts.fps) as f32).collect();
+        times.push((*kept.last().expect("frames") as f64 / opts.fps + step) as f32);
+        let mut weights = vec![0f32; times.len() * n_targets];
+        for k in 1..times.len() {
+            weights[k * n_targets + (k - 1).min(n_targets - 1)] = 1.0;
         }
         let input = b.floats(&times, "SCALAR", 1, None);
         let output = b.floats(&weights, "SCALAR", 1, None);

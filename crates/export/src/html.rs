@@ -51,7 +51,11 @@ pub fn format_number(x: f64) -> String {
     if x == 0.0 {
         "0".to_string()
     } else if (1e-3..1e5).contains(&a) {
-        let digits = if a >= 1.0 { 4usize.saturating_sub(a.log10().floor() as usize + 1) } else { 4 + (-a.log10()).floor() as usize };
+        let digits = if a >= 1.0 {
+            4usize.saturating_sub(a.log10().floor() as usize + 1)
+        } else {
+            4 + (-a.log10()).floor() as usize
+        };
         format!("{x:.digits$}")
     } else {
         format!("{x:.3e}")
@@ -59,12 +63,16 @@ pub fn format_number(x: f64) -> String {
 }
 
 /// Renders a JSON value: an array of objects as one table (columns = the
-/// union of keys, in order of first appearance), an object as a two-column
+/// union of keys, `direction`, `motion`, `method` first), an object as a two-column
 /// key/value table, scalars as text; nested values recursively.
 pub fn json_to_html(v: &Value) -> String {
     match v {
         Value::Array(items) if !items.is_empty() && items.iter().all(Value::is_object) => {
-            let mut cols: Vec<&str> = Vec::new();
+            // Identifying columns first, then the others in key order.
+            let mut cols: Vec<&str> = ["direction", "motion", "method"]
+                .into_iter()
+                .filter(|c| items.iter().any(|it| it.get(*c).is_some()))
+                .collect();
             for it in items {
                 for k in it.as_object().expect("object").keys() {
                     if !cols.contains(&k.as_str()) {
@@ -108,7 +116,10 @@ mod tests {
 
     #[test]
     fn escapes_markup() {
-        assert_eq!(escape("<a href=\"x\">&'"), "&lt;a href=&quot;x&quot;&gt;&amp;&#39;");
+        assert_eq!(
+            escape("<a href=\"x\">&'"),
+            "&lt;a href=&quot;x&quot;&gt;&amp;&#39;"
+        );
         assert_eq!(url_path("a b/c#.png"), "a%20b/c%23.png");
     }
 
@@ -123,7 +134,10 @@ mod tests {
         for col in ["direction", "rms_pose_m", "frames"] {
             assert!(h.contains(&format!("<th>{col}</th>")), "{h}");
         }
-        assert!(h.contains("A-&gt;B") && h.contains("0.01235") && h.contains("40"), "{h}");
+        assert!(
+            h.contains("A-&gt;B") && h.contains("0.01235") && h.contains("40"),
+            "{h}"
+        );
     }
 
     #[test]

@@ -113,7 +113,11 @@ pub fn parse_pc2(bytes: &[u8]) -> std::result::Result<PointCache, String> {
     for s in 0..n_samples {
         let mut frame = Vec::with_capacity(n_points);
         for p in 0..n_points {
-            let v = Vector3::new(f32_at(bytes, at), f32_at(bytes, at + 4), f32_at(bytes, at + 8));
+            let v = Vector3::new(
+                f32_at(bytes, at),
+                f32_at(bytes, at + 4),
+                f32_at(bytes, at + 8),
+            );
             if !v.iter().all(|c| c.is_finite()) {
                 return Err(format!("sample {s}, point {p}: coordinate is not finite"));
             }
@@ -183,7 +187,10 @@ mod tests {
     /// Byte layout checked by hand against the format description.
     #[test]
     fn known_bytes() {
-        let frames = vec![vec![Vector3::new(1.0, 2.0, 3.0)], vec![Vector3::new(-0.5, 0.25, 4.0)]];
+        let frames = vec![
+            vec![Vector3::new(1.0, 2.0, 3.0)],
+            vec![Vector3::new(-0.5, 0.25, 4.0)],
+        ];
         let mut out = Vec::new();
         encode_pc2(&mut out, &frames).unwrap();
         let mut expected = header(1, 2);

@@ -54,6 +54,8 @@ pub struct Findings {
     pub artifacts: Vec<PathBuf>,
     /// Items beyond the listing limit.
     pub left_out: usize,
+    /// The scan stopped at [`MAX_FILES`] files.
+    pub truncated: bool,
 }
 
 fn is_numbered(path: &Path) -> bool {
@@ -76,7 +78,7 @@ pub fn scan(out: &Path) -> Result<Findings> {
     let mut f = Findings::default();
     let mut queue = vec![PathBuf::new()];
     let mut visited = 0usize;
-    while let Some(rel) = queue.pop() {
+    'walk: while let Some(rel) = queue.pop() {
         let dir = out.join(&rel);
         let mut entries: Vec<_> = std::fs::read_dir(&dir)
             .map_err(|e| Error::io(&dir, e))?
@@ -96,16 +98,23 @@ pub fn scan(out: &Path) -> Result<Findings> {
             }
             visited += 1;
             if visited > MAX_FILES {
-                return Ok(f);
+                f.truncated = true;
+                break 'walk;
             }
-            let ext = r.extension().and_then(|x| x.to_str()).unwrap_or("").to_ascii_lowercase();
+            let ext = r
+                .extension()
+                .and_then(|x| x.to_str())
+                .unwrap_or("")
+                .to_ascii_lowercase();
             let list = match ext.as_str() {
                 "json" if name == "results.json" || name == "variation.json" => &mut f.tables,
                 "gif" => &mut f.gifs,
                 "png" | "svg" if is_numbered(&r) => continue,
                 "png" if name.contains("contact") => &mut f.contact_sheets,
                 "png" | "svg" => &mut f.plots,
-                "ply" | "obj" | "json" | "csv" | "html" | "js" | "txt" | "md" | "pc2" | "glb" => continue,
+                "ply" | "obj" | "json" | "csv" | "html" | "js" | "txt" | "md" | "pc2" | "glb" => {
+                    continue
+                }
                 _ if has_artifact_magic(&e.path()) => &mut f.artifacts,
                 _ => continue,
             };
@@ -116,7 +125,13 @@ pub fn scan(out: &Path) -> Result<Findings> {
             }
         }
     }
-    for list in [&mut f.tables, &mut f.contact_sheets, &mut f.gifs, &mut f.plots, &mut f.artifacts] {
+    for list in [
+        &mut f.tables,
+        &mut f.contact_sheets,
+        &mut f.gifs,
+        &mut f.plots,
+        &mut f.artifacts,
+    ] {
         list.sort();
     }
     Ok(f)
@@ -128,7 +143,9 @@ fn git_describe() -> Option<String> {
         .stderr(std::process::Stdio::null())
         .output()
         .ok()?;
-    out.status.success().then(|| String::from_utf8_lossy(&out.stdout).trim().to_string())
+    out.status
+        .success()
+        .then(|| String::from_utf8_lossy(&out.stdout).trim().to_string())
 }
 
 fn images(title: &str, list: &[PathBuf]) -> String {
@@ -161,12 +178,18 @@ figure img{max-width:640px;max-height:480px;border:1px solid #ddd}figcaption{fon
 pub fn write_report(opts: &ReportOptions) -> Result<PathBuf> {
     let out = &opts.out;
     if !out.is_dir() {
-        return Err(Error::file(out, "is not a folder (the pipeline output to report on)"));
+        return Err(Error::file(
+            out,
+            "is not a folder (the pipeline output to report on)",
+        ));
     }
     let mut views = Vec::new();
     for (label, dir) in &opts.views {
         let seq = MeshSequence::load_dir(dir)?;
-        views.push(ViewSequence { label: label.clone(), seq });
+        views.push(ViewSequence {
+            label: label.clone(),
+            seq,
+        });
     }
     let found = scan(out)?;
     let title = escape(&opts.title);
@@ -175,7 +198,10 @@ pub fn write_report(opts: &ReportOptions) -> Result<PathBuf> {
     let mut head_extra = String::new();
     if !views.is_empty() {
         let data = view_data_js(&views, opts.fps, opts.max_frames);
-        mesh_core::atomic::write_bytes_atomic(&out.join(ASSETS_DIR).join("view-data.js"), data.as_bytes())?;
+        mesh_core::atomic::write_bytes_atomic(
+            &out.join(ASSETS_DIR).join("view-data.js"),
+            data.as_bytes(),
+        )?;
         head_extra = import_map(&opts.three_dir)?;
         let legend: Vec<String> = data_legend(&views);
         body += &format!(
@@ -196,7 +222,11 @@ pub fn write_report(opts: &ReportOptions) -> Result<PathBuf> {
         let text = std::fs::read_to_string(&path).map_err(|e| Error::io(&path, e))?;
         let v: serde_json::Value = serde_json::from_str(&text)
             .map_err(|e| Error::file(&path, format!("not valid JSON: {e}")))?;
-        body += &format!("<section><h2>{}</h2>{}</section>", escape(&t.to_string_lossy()), json_to_html(&v));
+        body += &format!(
+            "<section><h2>{}</h2>{}</section>",
+            escape(&t.to_string_lossy()),
+            json_to_html(&v)
+        );
     }
     body += &images("Contact sheets", &found.contact_sheets);
     body += &images("Animations", &found.gifs);
@@ -204,6 +234,9 @@ pub fn write_report(opts: &ReportOptions) -> Result<PathBuf> {
     body += &provenance(out, &found.artifacts, &opts.three_dir);
     if found.left_out > 0 {
         body += &format!("<p>{} more files were not listed.</p>", found.left_out);
+    }
+    if found.truncated {
+        body += &format!("<p>The scan of this folder stopped after {MAX_FILES} files.</p>");
     }
     let page = format!(
         "<!DOCTYPE html>\n<html lang=\"en\"><head><meta charset=\"utf-8\">\
@@ -250,7 +283,9 @@ fn provenance(out: &Path, artifacts: &[PathBuf], three_dir: &Path) -> String {
                 v["file"] = a.to_string_lossy().into_owned().into();
                 rows.push(v);
             }
-            Err(e) => rows.push(serde_json::json!({"file": a.to_string_lossy(), "error": e.to_string()})),
+            Err(e) => {
+                rows.push(serde_json::json!({"file": a.to_string_lossy(), "error": e.to_string()}))
+            }
         }
     }
     if !rows.is_empty() {

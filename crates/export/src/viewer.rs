@@ -30,7 +30,9 @@ pub const VIEWER_JS: &str = include_str!("../web/viewer.js");
 pub const DEFAULT_THREE_DIR: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/web/node_modules/three");
 
 /// Colours of the first sequences (source, transfer, truth, then others).
-pub const COLOURS: [&str; 6] = ["#8a9bb0", "#e0893a", "#5aa469", "#b569b0", "#c9b44a", "#4aa3c9"];
+pub const COLOURS: [&str; 6] = [
+    "#8a9bb0", "#e0893a", "#5aa469", "#b569b0", "#c9b44a", "#4aa3c9",
+];
 
 /// One labelled sequence to show.
 pub struct ViewSequence {
@@ -53,8 +55,12 @@ pub fn view_data_js(seqs: &[ViewSequence], fps: f64, max_frames: usize) -> Strin
     let mut out = Vec::new();
     for (i, v) in seqs.iter().enumerate() {
         let n = v.seq.n_frames();
-        let frames: Vec<&Vec<Vector3<f64>>> = kept.iter().map(|&k| &v.seq.frames[k.min(n - 1)]).collect();
-        let (mut lo, mut hi) = (Vector3::repeat(f64::INFINITY), Vector3::repeat(f64::NEG_INFINITY));
+        let frames: Vec<&Vec<Vector3<f64>>> =
+            kept.iter().map(|&k| &v.seq.frames[k.min(n - 1)]).collect();
+        let (mut lo, mut hi) = (
+            Vector3::repeat(f64::INFINITY),
+            Vector3::repeat(f64::NEG_INFINITY),
+        );
         for p in frames.iter().copied().flatten() {
             lo = lo.inf(p);
             hi = hi.sup(p);
@@ -69,7 +75,13 @@ pub fn view_data_js(seqs: &[ViewSequence], fps: f64, max_frames: usize) -> Strin
                 q.extend_from_slice(&qi.to_le_bytes());
             }
         }
-        let faces: Vec<u8> = v.seq.faces.iter().flatten().flat_map(|i| i.to_le_bytes()).collect();
+        let faces: Vec<u8> = v
+            .seq
+            .faces
+            .iter()
+            .flatten()
+            .flat_map(|i| i.to_le_bytes())
+            .collect();
         out.push(json!({
             "label": v.label,
             "colour": COLOURS[i % COLOURS.len()],
@@ -89,7 +101,10 @@ fn read_text(path: &Path) -> Result<String> {
 }
 
 fn data_url(js: &str) -> String {
-    format!("data:text/javascript;base64,{}", base64::encode(js.as_bytes()))
+    format!(
+        "data:text/javascript;base64,{}",
+        base64::encode(js.as_bytes())
+    )
 }
 
 /// The `<script type="importmap">` element mapping `three`, its core and
@@ -131,13 +146,120 @@ pub fn three_version(three_dir: &Path) -> Option<String> {
 mod tests {
     use super::*;
 
+    /// Standard base64 decoding, written independently of the encoder.
+    fn unbase64(s: &str) -> Vec<u8> {
+        let val = |c: u8| match c {
+            b'A'..=b'Z' => c - b'A',
+            b'a'..=b'z' => c - b'a' + 26,
+            b'0'..=b'9' => c - b'0' + 52,
+            b'+' => 62,
+            b'/' => 63,
+            _ => panic!("bad base64 byte {c}"),
+        };
+        let mut out = Vec::new();
+        for chunk in s.as_bytes().chunks(4) {
+            let pad = chunk.iter().filter(|&&c| c == b'=').count();
+            let n = chunk
+                .iter()
+                .take(4 - pad)
+                .enumerate()
+                .fold(0u32, |n, (i, &c)| n | (u32::from(val(c)) << (18 - 6 * i)));
+            out.extend_from_slice(&n.to_be_bytes()[1..4 - pad]);
+        }
+        out
+    }
+
+    /// The page reconstructs `centre + scale * q / 32767`: within half a
+    /// quantisation step of the true positions, at the sampled frames.
+    #[test]
+    fn packed_sequences_decode_to_the_frames() {
+        let (mesh, _) = mesh_core::shapes::capsule_body(4, 8, 0.1, 1.0);
+        let frames: Vec<Vec<Vector3<f64>>> = (0..10)
+            .map(|t| {
+                mesh.vertices
+                    .iter()
+                    .map(|p| p + Vector3::new(0.05 * t as f64, 0.0, -0.02 * t as f64))
+                    .collect()
+            })
+            .collect();
+        let short = MeshSequence::new(mesh.faces.clone(), frames[..4].to_vec());
+        let seqs = [
+            ViewSequence {
+                label: "a".into(),
+                seq: MeshSequence::new(mesh.faces.clone(), frames.clone()),
+            },
+            ViewSequence {
+                label: "b".into(),
+                seq: short,
+            },
+        ];
+        let js = view_data_js(&seqs, 25.0, 4);
+        let doc: serde_json::Value = serde_json::from_str(
+            js.strip_prefix("window.SURFCAP_VIEW = ")
+                .unwrap()
+                .trim_end()
+                .strip_suffix(';')
+                .unwrap(),
+        )
+        .unwrap();
+        assert_eq!(
+            (doc["stride"].as_u64(), doc["nFrames"].as_u64()),
+            (Some(3), Some(4))
+        );
+        for (si, v) in seqs.iter().enumerate() {
+            let s = &doc["seqs"][si];
+            let faces = unbase64(s["faces"].as_str().unwrap());
+            let faces: Vec<u32> = faces
+                .chunks(4)
+                .map(|b| u32::from_le_bytes(b.try_into().unwrap()))
+                .collect();
+            assert_eq!(
+                faces,
+                v.seq.faces.iter().flatten().copied().collect::<Vec<_>>()
+            );
+            let q = unbase64(s["positions"].as_str().unwrap());
+            let q: Vec<f64> = q
+                .chunks(2)
+                .map(|b| f64::from(i16::from_le_bytes([b[0], b[1]])))
+                .collect();
+            let c: Vec<f64> = s["centre"]
+                .as_array()
+                .unwrap()
+                .iter()
+                .map(|x| x.as_f64().unwrap())
+                .collect();
+            let sc: Vec<f64> = s["scale"]
+                .as_array()
+                .unwrap()
+                .iter()
+                .map(|x| x.as_f64().unwrap())
+                .collect();
+            let nv = v.seq.n_vertices();
+            for (j, k) in [0usize, 3, 6, 9].into_iter().enumerate() {
+                let truth = &v.seq.frames[k.min(v.seq.n_frames() - 1)];
+                for (i, p) in truth.iter().enumerate() {
+                    for a in 0..3 {
+                        let got = c[a] + sc[a] * q[(j * nv + i) * 3 + a] / 32767.0;
+                        assert!(
+                            (got - p[a]).abs() <= 0.51 * sc[a] / 32767.0,
+                            "seq {si} frame {k} vertex {i}"
+                        );
+                    }
+                }
+            }
+        }
+    }
+
     #[test]
     fn stride_keeps_at_most_max_frames() {
         for n in 1..300 {
             for m in [1, 7, 60] {
                 let s = view_stride(n, m);
                 assert!((0..n).step_by(s).count() <= m, "n={n} m={m}");
-                assert!(s == 1 || (0..n).step_by(s - 1).count() > m, "stride not minimal");
+                assert!(
+                    s == 1 || (0..n).step_by(s - 1).count() > m,
+                    "stride not minimal"
+                );
             }
         }
     }

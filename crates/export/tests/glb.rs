@@ -27,12 +27,19 @@ fn split_glb(bytes: &[u8]) -> (Value, &[u8]) {
 fn read_accessor(doc: &Value, bin: &[u8], i: usize) -> Vec<f64> {
     let a = &doc["accessors"][i];
     let v = &doc["bufferViews"][a["bufferView"].as_u64().unwrap() as usize];
-    let off = v["byteOffset"].as_u64().unwrap() as usize + a["byteOffset"].as_u64().unwrap_or(0) as usize;
-    let width = match a["type"].as_str().unwrap() { "SCALAR" => 1, "VEC3" => 3, t => panic!("{t}") };
+    let off =
+        v["byteOffset"].as_u64().unwrap() as usize + a["byteOffset"].as_u64().unwrap_or(0) as usize;
+    let width = match a["type"].as_str().unwrap() {
+        "SCALAR" => 1,
+        "VEC3" => 3,
+        t => panic!("{t}"),
+    };
     let count = a["count"].as_u64().unwrap() as usize;
     let ct = a["componentType"].as_u64().unwrap();
     let size = if ct == 5126 { 4 } else { 2 };
-    let stride = v["byteStride"].as_u64().map_or(width * size, |s| s as usize);
+    let stride = v["byteStride"]
+        .as_u64()
+        .map_or(width * size, |s| s as usize);
     let mut out = Vec::with_capacity(count * width);
     for e in 0..count {
         for c in 0..width {
@@ -41,7 +48,8 @@ fn read_accessor(doc: &Value, bin: &[u8], i: usize) -> Vec<f64> {
                 5126 => f32::from_le_bytes(bin[p..p + 4].try_into().unwrap()) as f64,
                 5122 => {
                     assert_eq!(a["normalized"], true);
-                    (i16::from_le_bytes(bin[p..p + 2].try_into().unwrap()) as f64 / 32767.0).max(-1.0)
+                    (i16::from_le_bytes(bin[p..p + 2].try_into().unwrap()) as f64 / 32767.0)
+                        .max(-1.0)
                 }
                 _ => panic!("component type {ct}"),
             });
@@ -54,12 +62,37 @@ fn read_accessor(doc: &Value, bin: &[u8], i: usize) -> Vec<f64> {
 fn decoded_frames(bytes: &[u8]) -> (Vec<Vec<[f64; 3]>>, Vec<f64>, Vec<f64>) {
     let (doc, bin) = split_glb(bytes);
     let prim = &doc["meshes"][0]["primitives"][0];
-    let base = read_accessor(&doc, bin, prim["attributes"]["POSITION"].as_u64().unwrap() as usize);
+    let base = read_accessor(
+        &doc,
+        bin,
+        prim["attributes"]["POSITION"].as_u64().unwrap() as usize,
+    );
     let node = &doc["nodes"][0];
-    let tr: Vec<f64> = node.get("translation").map_or(vec![0.0; 3], |t| t.as_array().unwrap().iter().map(|x| x.as_f64().unwrap()).collect());
-    let sc: Vec<f64> = node.get("scale").map_or(vec![1.0; 3], |t| t.as_array().unwrap().iter().map(|x| x.as_f64().unwrap()).collect());
+    let tr: Vec<f64> = node.get("translation").map_or(vec![0.0; 3], |t| {
+        t.as_array()
+            .unwrap()
+            .iter()
+            .map(|x| x.as_f64().unwrap())
+            .collect()
+    });
+    let sc: Vec<f64> = node.get("scale").map_or(vec![1.0; 3], |t| {
+        t.as_array()
+            .unwrap()
+            .iter()
+            .map(|x| x.as_f64().unwrap())
+            .collect()
+    });
     let world = |local: &[f64]| -> Vec<[f64; 3]> {
-        local.chunks(3).map(|p| [tr[0] + sc[0] * p[0], tr[1] + sc[1] * p[1], tr[2] + sc[2] * p[2]]).collect()
+        local
+            .chunks(3)
+            .map(|p| {
+                [
+                    tr[0] + sc[0] * p[0],
+                    tr[1] + sc[1] * p[1],
+                    tr[2] + sc[2] * p[2],
+                ]
+            })
+            .collect()
     };
     let mut frames = vec![world(&base)];
     let targets = prim["targets"].as_array().cloned().unwrap_or_default();
@@ -82,7 +115,10 @@ fn max_error(decoded: &[Vec<[f64; 3]>], seq: &MeshSequence, kept: &[usize]) -> f
     let mut worst = 0.0f64;
     for (f, &k) in decoded.iter().zip(kept) {
         for (p, q) in f.iter().zip(&seq.frames[k]) {
-            worst = worst.max((p[0] - q.x).abs()).max((p[1] - q.y).abs()).max((p[2] - q.z).abs());
+            worst = worst
+                .max((p[0] - q.x).abs())
+                .max((p[1] - q.y).abs())
+                .max((p[2] - q.z).abs());
         }
     }
     worst
@@ -92,18 +128,42 @@ fn max_error(decoded: &[Vec<[f64; 3]>], seq: &MeshSequence, kept: &[usize]) -> f
 fn morph_target_animation_decodes_to_the_frames() {
     let seq = common::bending_capsule(9, 0.7, 0.2);
     for (stride, quantize, tol) in [(1, false, 1e-6), (4, false, 1e-6), (2, true, 2e-4)] {
-        let opts = GlbOptions { stride, quantize, fps: 25.0, ..Default::default() };
+        let opts = GlbOptions {
+            stride,
+            quantize,
+            fps: 25.0,
+            ..Default::default()
+        };
         let bytes = encode_glb(&seq, "walk", &opts).unwrap();
         let kept: Vec<usize> = (0..9).step_by(stride).collect();
         let (frames, times, weights) = decoded_frames(&bytes);
         let err = max_error(&frames, &seq, &kept);
-        assert!(err < tol, "stride {stride} quantize {quantize}: max error {err}");
+        assert!(
+            err < tol,
+            "stride {stride} quantize {quantize}: max error {err}"
+        );
         // Keys at k / fps, one-hot on target k - 1 (all zero at the first key).
         let n_t = kept.len() - 1;
-        for (j, &k) in kept.iter().enumerate() {
-            assert!((times[j] - k as f64 / 25.0).abs() < 1e-6);
-            for t in 0..n_t {
-                assert_eq!(weights[j * n_t + t], if j >= 1 && t == j - 1 { 1.0 } else { 0.0 });
+        // ... plus a closing key one stride later repeating the last frame.
+        let mut keys: Vec<(f64, Option<usize>)> = kept
+            .iter()
+            .enumerate()
+            .map(|(j, &k)| (k as f64 / 25.0, j.checked_sub(1)))
+            .collect();
+        keys.push(((kept[kept.len() - 1] + stride) as f64 / 25.0, Some(n_t - 1)));
+        assert_eq!(times.len(), keys.len());
+        for (j, (t, on)) in keys.iter().enumerate() {
+            assert!(
+                (times[j] - t).abs() < 1e-6,
+                "key {j}: time {} != {t}",
+                times[j]
+            );
+            for i in 0..n_t {
+                assert_eq!(
+                    weights[j * n_t + i],
+                    if Some(i) == *on { 1.0 } else { 0.0 },
+                    "key {j} target {i}"
+                );
             }
         }
     }
@@ -115,8 +175,21 @@ fn khronos_validator_reports_no_errors() {
     let seq = common::bending_capsule(20, 0.7, 0.2);
     let variants = [
         ("default.glb", GlbOptions::default()),
-        ("stride.glb", GlbOptions { stride: 3, interpolation: Interpolation::Linear, ..Default::default() }),
-        ("quantized.glb", GlbOptions { quantize: true, ..Default::default() }),
+        (
+            "stride.glb",
+            GlbOptions {
+                stride: 3,
+                interpolation: Interpolation::Linear,
+                ..Default::default()
+            },
+        ),
+        (
+            "quantized.glb",
+            GlbOptions {
+                quantize: true,
+                ..Default::default()
+            },
+        ),
     ];
     let mut paths = Vec::new();
     for (name, opts) in &variants {
@@ -133,10 +206,22 @@ fn khronos_validator_reports_no_errors() {
     let stdout = String::from_utf8_lossy(&out.stdout);
     eprintln!("{stdout}{}", String::from_utf8_lossy(&out.stderr));
     assert!(out.status.success(), "validator found errors:\n{stdout}");
-    let lines: Vec<Value> = stdout.lines().map(|l| serde_json::from_str(l).unwrap()).collect();
+    let lines: Vec<Value> = stdout
+        .lines()
+        .map(|l| serde_json::from_str(l).unwrap())
+        .collect();
     assert_eq!(lines.len(), paths.len());
     for l in &lines {
         assert_eq!(l["errors"], 0, "{l}");
         assert_eq!(l["warnings"], 0, "{l}");
     }
+    // three.js (the report's viewer) loads every file and its animation drives
+    // the morph weights one-hot, frame by frame.
+    let out = common::node("three-load.mjs", &args);
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    eprintln!("{stdout}{}", String::from_utf8_lossy(&out.stderr));
+    assert!(
+        out.status.success(),
+        "three.js could not load or play the files:\n{stdout}"
+    );
 }

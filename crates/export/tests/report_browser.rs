@@ -13,7 +13,9 @@ fn write_png(path: &Path, w: u32, h: u32) {
     let mut enc = png::Encoder::new(file, w, h);
     enc.set_color(png::ColorType::Rgb);
     enc.set_depth(png::BitDepth::Eight);
-    let data: Vec<u8> = (0..w * h).flat_map(|i| [(i % w * 255 / w) as u8, (i / w * 255 / h) as u8, 128]).collect();
+    let data: Vec<u8> = (0..w * h)
+        .flat_map(|i| [(i % w * 255 / w) as u8, (i / w * 255 / h) as u8, 128])
+        .collect();
     enc.write_header().unwrap().write_image_data(&data).unwrap();
 }
 
@@ -39,14 +41,20 @@ fn fake_run(root: &Path) -> (PathBuf, Vec<(String, PathBuf)>) {
     let out = root.join("out");
     let _ = std::fs::remove_dir_all(root);
     let data = root.join("data");
-    let views = [("source", 0.5, 0.0), ("transfer", 0.8, 0.3), ("truth", 0.7, 0.2)]
-        .iter()
-        .map(|(label, amp, ph)| {
-            let d = data.join(label);
-            common::bending_capsule(24, *amp, *ph).write_dir(&d).unwrap();
-            (label.to_string(), d)
-        })
-        .collect();
+    let views = [
+        ("source", 0.5, 0.0),
+        ("transfer", 0.8, 0.3),
+        ("truth", 0.7, 0.2),
+    ]
+    .iter()
+    .map(|(label, amp, ph)| {
+        let d = data.join(label);
+        common::bending_capsule(24, *amp, *ph)
+            .write_dir(&d)
+            .unwrap();
+        (label.to_string(), d)
+    })
+    .collect();
     std::fs::create_dir_all(&out).unwrap();
     std::fs::write(
         out.join("results.json"),
@@ -56,12 +64,23 @@ fn fake_run(root: &Path) -> (PathBuf, Vec<(String, PathBuf)>) {
     .unwrap();
     std::fs::write(out.join("variation/variation.json"), "").ok();
     std::fs::create_dir_all(out.join("variation")).unwrap();
-    std::fs::write(out.join("variation/variation.json"), r#"{"hmc_acceptance":0.71,"variations":5}"#).unwrap();
+    std::fs::write(
+        out.join("variation/variation.json"),
+        r#"{"hmc_acceptance":0.71,"variations":5}"#,
+    )
+    .unwrap();
     write_png(&out.join("transfer/A-to-B/walk/contact.png"), 64, 32);
     write_png(&out.join("curves/learning-curve.png"), 40, 30);
     write_png(&out.join("transfer/A-to-B/walk/frames/000000.png"), 8, 8);
     let header = mesh_core::artifact::Header::new("pca-fit", "0.1.0").with_seed(7);
-    mesh_core::artifact::write_artifact(out.join("model.art"), "pca-model", 1, &header, &vec![1.0f64, 2.0]).unwrap();
+    mesh_core::artifact::write_artifact(
+        out.join("model.art"),
+        "pca-model",
+        1,
+        &header,
+        &vec![1.0f64, 2.0],
+    )
+    .unwrap();
     (out, views)
 }
 
@@ -81,16 +100,31 @@ fn page_lists_what_the_run_produced() {
     let html = std::fs::read_to_string(&page).unwrap();
     assert!(html.contains("<title>walk &lt;test&gt;</title>"));
     for needle in [
-        "<th>rms_pose_m</th>", "gpr-se", "<th>hmc_acceptance</th>", "0.7100",
-        "src=\"transfer/A-to-B/walk/contact.png\"", "src=\"curves/learning-curve.png\"",
-        "pca-model", "type=\"importmap\"", "report-assets/view-data.js",
+        "<th>rms_pose_m</th>",
+        "gpr-se",
+        "<th>hmc_acceptance</th>",
+        "0.7100",
+        "src=\"transfer/A-to-B/walk/contact.png\"",
+        "src=\"curves/learning-curve.png\"",
+        "pca-model",
+        "type=\"importmap\"",
+        "report-assets/view-data.js",
     ] {
         assert!(html.contains(needle), "page lacks {needle}");
     }
-    assert!(!html.contains("frames/000000.png"), "numbered frame images are not listed");
-    assert!(!html.contains("http://") && !html.contains("https://"), "no network references");
+    assert!(
+        !html.contains("frames/000000.png"),
+        "numbered frame images are not listed"
+    );
+    assert!(
+        !html.contains("http://") && !html.contains("https://"),
+        "no network references"
+    );
     let data = std::fs::read_to_string(out.join("report-assets/view-data.js")).unwrap();
-    assert!(data.contains("\"nFrames\":8") && data.contains("\"stride\":3"), "24 frames, at most 10 kept");
+    assert!(
+        data.contains("\"nFrames\":8") && data.contains("\"stride\":3"),
+        "24 frames, at most 10 kept"
+    );
 }
 
 #[test]
@@ -110,7 +144,14 @@ fn page_works_in_headless_chromium_from_disk() {
     let res = common::node("browser-test.mjs", &[&page, &shot]);
     let stdout = String::from_utf8_lossy(&res.stdout);
     eprintln!("{stdout}{}", String::from_utf8_lossy(&res.stderr));
-    assert!(res.status.success(), "browser test failed: {stdout}{}", String::from_utf8_lossy(&res.stderr));
+    assert!(
+        res.status.success(),
+        "browser test failed: {stdout}{}",
+        String::from_utf8_lossy(&res.stderr)
+    );
     let var = png_variance(&shot);
-    assert!(var > 10.0, "screenshot of the canvas is blank (luminance variance {var})");
+    assert!(
+        var > 10.0,
+        "screenshot of the canvas is blank (luminance variance {var})"
+    );
 }

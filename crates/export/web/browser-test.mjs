@@ -67,9 +67,13 @@ try {
   if (!(result.canvasVariance > 1)) problems.push(`canvas looks blank (variance ${result.canvasVariance})`);
   result.frameBefore = Number(await page.locator('#frame').textContent());
   await page.click('#play');
-  await page.waitForTimeout(1500);
-  result.frameAfter = Number(await page.locator('#frame').textContent());
-  if (!(result.frameAfter > result.frameBefore)) problems.push(`play did not advance the frame (${result.frameBefore} -> ${result.frameAfter})`);
+  // Sample the counter while playing (it wraps around at the end).
+  result.framesSeen = [];
+  for (let i = 0; i < 10; i++) {
+    await page.waitForTimeout(200);
+    result.framesSeen.push(Number(await page.locator('#frame').textContent()));
+  }
+  if (!result.framesSeen.some((f) => f !== result.frameBefore)) problems.push(`play did not advance the frame (stayed at ${result.frameBefore})`);
   await page.click('#play');
 } catch (e) {
   problems.push(`browser: ${e.message.split('\n')[0]}`);

@@ -102,13 +102,19 @@ function start(view) {
   });
   play.addEventListener('click', () => {
     playing = !playing;
+    last = 0;
     play.textContent = playing ? 'Pause' : 'Play';
   });
+  // Playback follows the clock (frames are skipped when drawing is slow).
   renderer.setAnimationLoop((t) => {
-    if (playing && t - last >= dt) {
-      last = t;
-      frame = (frame + 1) % view.nFrames;
-      setFrame(frame);
+    if (playing) {
+      if (last === 0) last = t;
+      const steps = Math.floor((t - last) / dt);
+      if (steps > 0) {
+        last += steps * dt;
+        frame = (frame + steps) % view.nFrames;
+        setFrame(frame);
+      }
     }
     renderer.render(scene, camera);
   });

@@ -1,2 +1,71 @@
-//! Benchmarks (placeholder, being written).
-fn main() {}
+//! Speed goals of issue 4 for the GP numerics (run with `OPENBLAS_NUM_THREADS=1 cargo bench -p gp`):
+//! - training all 5 parts (20-D -> 20-D) plus the displacement (6-D -> 6-D), both directions
+//!   (12 models, rayon over models on the machine's cores): <= 1 s with 350 dense pairs,
+//!   <= 5 s with 1100;
+//! - prediction (eq. 13, 5 parts + displacement): >= 5000 frames/s.
+//! - one log-marginal-likelihood + gradient evaluation (the optimiser's unit of work).
+use criterion::{criterion_group, criterion_main, BenchmarkId, Criterion, Throughput};
+use gp::gpr::{log_marginal_likelihood_grad, train_many, GprOptions};
+use gp::kernel::Kernel;
+use rayon::prelude::*;
+use std::time::Duration;
+
+#[path = "synthetic_pairs.rs"]
+mod synthetic_pairs;
+
+fn train(c: &mut Criterion) {
+    let mut g = c.benchmark_group("gpr_train_all_parts_both_directions");
+    g.sample_size(10)
+        .measurement_time(Duration::from_secs(20))
+        .warm_up_time(Duration::from_secs(1));
+    for n in [350usize, 1100] {
+        let problems = synthetic_pairs::both_directions(n, 7);
+        g.bench_with_input(BenchmarkId::from_parameter(n), &problems, |b, p| {
+            b.iter(|| train_many(Kernel::neural_network(1.0, 1.0), p, &GprOptions::default()))
+        });
+    }
+    g.finish();
+}
+
+fn lml_grad(c: &mut Criterion) {
+    let mut g = c.benchmark_group("lml_and_gradient_one_model");
+    for n in [350usize, 1100] {
+        let p = synthetic_pairs::pairs(n, 7);
+        let (x, y) = &p[0];
+        let k = Kernel::neural_network(3.0, 1.5);
+        g.bench_function(BenchmarkId::from_parameter(n), |b| {
+            b.iter(|| log_marginal_likelihood_grad(&k, 0.1, false, x, y, &mut Vec::new()).unwrap())
+        });
+    }
+    g.finish();
+}
+
+fn predict(c: &mut Criterion) {
+    let mut g = c.benchmark_group("gpr_predict_5_parts_and_displacement");
+    let frames = 2000;
+    for n in [350usize, 1100] {
+        let models: Vec<_> = train_many(
+            Kernel::neural_network(1.0, 1.0),
+            &synthetic_pairs::pairs(n, 7),
+            &GprOptions::default(),
+        )
+        .into_iter()
+        .map(|r| r.unwrap().0)
+        .collect();
+        let test = synthetic_pairs::pairs(frames, 99);
+        g.throughput(Throughput::Elements(frames as u64));
+        g.bench_function(BenchmarkId::from_parameter(n), |b| {
+            b.iter(|| {
+                models
+                    .par_iter()
+                    .zip(&test)
+                    .map(|(m, (x, _))| m.predict_mean(x).unwrap())
+                    .collect::<Vec<_>>()
+            })
+        });
+    }
+    g.finish();
+}
+
+criterion_group!(benches, lml_grad, predict, train);
+criterion_main!(benches);

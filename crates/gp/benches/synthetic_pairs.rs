@@ -32,7 +32,11 @@ pub fn pairs(n: usize, seed: u64) -> Vec<(DMatrix<f64>, DMatrix<f64>)> {
         let t = f as f64 * (0.15 + 0.05 * motion as f64);
         let h = (k / 2 + 1) as f64;
         let amp = 1.0 + 0.3 * motion as f64;
-        if k % 2 == 0 { amp * (h * t).sin() / h } else { amp * (h * t).cos() / h }
+        if k % 2 == 0 {
+            amp * (h * t).sin() / h
+        } else {
+            amp * (h * t).cos() / h
+        }
     });
     let mut out = Vec::new();
     for (din, dout) in [(20, 20), (20, 20), (20, 20), (20, 20), (20, 20), (6, 6)] {

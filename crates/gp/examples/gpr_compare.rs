@@ -25,17 +25,27 @@ fn write_csv(path: &std::path::Path, m: &DMatrix<f64>) -> std::io::Result<()> {
 
 fn l_sf(k: &Kernel) -> (f64, f64) {
     match *k {
-        Kernel::NeuralNetwork { l, sigma_f, .. } | Kernel::SquaredExponential { l, sigma_f } => (l, sigma_f),
+        Kernel::NeuralNetwork { l, sigma_f, .. } | Kernel::SquaredExponential { l, sigma_f } => {
+            (l, sigma_f)
+        }
         Kernel::Linear { sigma_f } => (f64::NAN, sigma_f),
     }
 }
 
 fn main() {
     let args: Vec<String> = std::env::args().collect();
-    let get = |flag: &str| args.iter().position(|a| a == flag).and_then(|i| args.get(i + 1)).cloned();
+    let get = |flag: &str| {
+        args.iter()
+            .position(|a| a == flag)
+            .and_then(|i| args.get(i + 1))
+            .cloned()
+    };
     let n: usize = get("--pairs").map_or(350, |s| s.parse().expect("--pairs N"));
     let kernel = match get("--kernel").as_deref().unwrap_or("nn") {
-        "se" => Kernel::SquaredExponential { l: 1.0, sigma_f: 1.0 },
+        "se" => Kernel::SquaredExponential {
+            l: 1.0,
+            sigma_f: 1.0,
+        },
         "linear" => Kernel::Linear { sigma_f: 1.0 },
         _ => Kernel::neural_network(1.0, 1.0),
     };
@@ -47,7 +57,12 @@ fn main() {
     let t0 = Instant::now();
     let models = train_many(kernel, &problems, &opts);
     let train_s = t0.elapsed().as_secs_f64();
-    println!("pairs {n}: trained {} models ({}) in {train_s:.3} s (rayon, {} threads)", models.len(), kernel.name(), rayon::current_num_threads());
+    println!(
+        "pairs {n}: trained {} models ({}) in {train_s:.3} s (rayon, {} threads)",
+        models.len(),
+        kernel.name(),
+        rayon::current_num_threads()
+    );
     let mut total_evals = 0;
     let mut trained = Vec::new();
     let mut records = Vec::new();
@@ -55,7 +70,12 @@ fn main() {
         let (model, rep) = m.expect("training");
         println!(
             "  model {i:2}: lml {:12.4} (start {:12.4}) exit {:?} iters {} evals {} (l, sf) = {:?}",
-            rep.lml, rep.initial_lml, rep.exit, rep.iterations, rep.evaluations, l_sf(&model.kernel)
+            rep.lml,
+            rep.initial_lml,
+            rep.exit,
+            rep.iterations,
+            rep.evaluations,
+            l_sf(&model.kernel)
         );
         total_evals += rep.evaluations;
         for note in &rep.notes {
@@ -69,10 +89,16 @@ fn main() {
     let frames = 5000;
     let test = synthetic_pairs::pairs(frames, 99);
     let t1 = Instant::now();
-    let preds: Vec<_> =
-        trained[..6].par_iter().zip(&test).map(|(m, (x, _))| m.predict_mean(x).unwrap()).collect();
+    let preds: Vec<_> = trained[..6]
+        .par_iter()
+        .zip(&test)
+        .map(|(m, (x, _))| m.predict_mean(x).unwrap())
+        .collect();
     let pred_s = t1.elapsed().as_secs_f64();
-    println!("predict: {frames} frames (6 models) in {pred_s:.4} s = {:.0} frames/s", frames as f64 / pred_s);
+    println!(
+        "predict: {frames} frames (6 models) in {pred_s:.4} s = {:.0} frames/s",
+        frames as f64 / pred_s
+    );
     assert_eq!(preds.len(), 6);
     if let Some(dir) = get("--dump") {
         let dir = std::path::PathBuf::from(dir);
@@ -99,6 +125,10 @@ fn main() {
             kernel.name(), opts.noise_var, frames as f64 / pred_s, items.join(",\n  ")
         );
         std::fs::write(dir.join("rust.json"), json).unwrap();
-        println!("dumped {} problems to {} (sequential total {seq_total:.3} s)", problems.len(), dir.display());
+        println!(
+            "dumped {} problems to {} (sequential total {seq_total:.3} s)",
+            problems.len(),
+            dir.display()
+        );
     }
 }

@@ -36,14 +36,20 @@ impl AffineKeypose {
         }
         check_finite("source key-poses", source_keys)?;
         check_finite("target key-poses", target_keys)?;
-        Ok(Self { source_keys: source_keys.clone(), target_keys: target_keys.clone() })
+        Ok(Self {
+            source_keys: source_keys.clone(),
+            target_keys: target_keys.clone(),
+        })
     }
 
     /// Affine weights (`N x L`, rows sum to 1) of every row of `xs` (`N x D_s`).
     pub fn weights(&self, xs: &DMatrix<f64>) -> Result<DMatrix<f64>> {
         let (l, ds) = (self.source_keys.nrows(), self.source_keys.ncols());
         if xs.ncols() != ds {
-            return invalid(format!("affine key-pose mapping: inputs have {} columns, expected {ds}", xs.ncols()));
+            return invalid(format!(
+                "affine key-pose mapping: inputs have {} columns, expected {ds}",
+                xs.ncols()
+            ));
         }
         let n = xs.nrows();
         let mut w = DMatrix::zeros(n, l);
@@ -57,7 +63,9 @@ impl AffineKeypose {
         let rhs = DMatrix::from_fn(ds, n, |r, c| xs[(c, r)] - s0[r]);
         let svd = basis.svd(true, true);
         let tol = svd.singular_values.max() * (ds.max(l) as f64) * f64::EPSILON * 10.0;
-        let sol = svd.solve(&rhs, tol).map_err(|e| crate::GpError::Invalid(e.to_string()))?;
+        let sol = svd
+            .solve(&rhs, tol)
+            .map_err(|e| crate::GpError::Invalid(e.to_string()))?;
         for i in 0..n {
             let mut sum = 0.0;
             for k in 1..l {

@@ -51,11 +51,16 @@ impl Blr {
         let ms = xk.ncols();
         // A = X Xᵀ / σ² + I (paper's column-stacked X = xkᵀ).
         let a = xk.transpose() * xk / sigma2 + DMatrix::identity(ms, ms);
-        let chol_a = nalgebra::Cholesky::new(a)
-            .ok_or_else(|| crate::GpError::Invalid("A = X Xᵀ/σ² + I not positive definite".into()))?;
+        let chol_a = nalgebra::Cholesky::new(a).ok_or_else(|| {
+            crate::GpError::Invalid("A = X Xᵀ/σ² + I not positive definite".into())
+        })?;
         // M̄ᵀ = A⁻¹ X Yᵀ / σ²  (A symmetric).
         let mean_map_t = chol_a.solve(&(xk.transpose() * yk / sigma2));
-        Ok(Self { mean_map_t, chol_a, sigma2 })
+        Ok(Self {
+            mean_map_t,
+            chol_a,
+            sigma2,
+        })
     }
 
     /// Predictive means `μ_i` (rows, `N x m_t`) and variances `x_iᵀ A⁻¹ x_i` (eq. 4) for the
@@ -105,7 +110,11 @@ pub struct PartFrames<'a> {
 /// Whole-body association cost (eq. 6 as a sum of eq. 5 over parts): fits one [`Blr`] per
 /// part on the key-pose pairs `keys` = `(source frame, target frame)` and returns the
 /// `f_s x f_t` matrix of `-log P_ij`.
-pub fn cost_matrix(parts: &[PartFrames<'_>], keys: &[(usize, usize)], sigma2: f64) -> Result<DMatrix<f64>> {
+pub fn cost_matrix(
+    parts: &[PartFrames<'_>],
+    keys: &[(usize, usize)],
+    sigma2: f64,
+) -> Result<DMatrix<f64>> {
     let Some(first) = parts.first() else {
         return invalid("association cost needs at least one part");
     };
@@ -123,10 +132,16 @@ pub fn cost_matrix(parts: &[PartFrames<'_>], keys: &[(usize, usize)], sigma2: f6
             ));
         }
         if let Some(&(i, j)) = keys.iter().find(|&&(i, j)| i >= fs || j >= ft) {
-            return invalid(format!("key-pose ({i}, {j}) outside the {fs} x {ft} sequences"));
+            return invalid(format!(
+                "key-pose ({i}, {j}) outside the {fs} x {ft} sequences"
+            ));
         }
-        let xk = DMatrix::from_fn(keys.len(), p.source.ncols(), |r, c| p.source[(keys[r].0, c)]);
-        let yk = DMatrix::from_fn(keys.len(), p.target.ncols(), |r, c| p.target[(keys[r].1, c)]);
+        let xk = DMatrix::from_fn(keys.len(), p.source.ncols(), |r, c| {
+            p.source[(keys[r].0, c)]
+        });
+        let yk = DMatrix::from_fn(keys.len(), p.target.ncols(), |r, c| {
+            p.target[(keys[r].1, c)]
+        });
         total += Blr::fit(&xk, &yk, sigma2)?.neg_log_cost(p.source, p.target)?;
     }
     Ok(total)

@@ -45,7 +45,10 @@ pub struct DtwOptions {
 
 impl Default for DtwOptions {
     fn default() -> Self {
-        Self { max_run: PAPER_MAX_RUN, endpoints: Endpoints::Corners }
+        Self {
+            max_run: PAPER_MAX_RUN,
+            endpoints: Endpoints::Corners,
+        }
     }
 }
 
@@ -56,7 +59,11 @@ const NO_PRED: u8 = u8::MAX;
 /// Least-cost path (see the module doc) through `cost` (`f_s x f_t`, finite or `+inf` for a
 /// forbidden node) through every `keys` pair `(i, j)`. Keys must be non-decreasing in both
 /// coordinates once sorted by `i`. Returns the path nodes in order.
-pub fn dtw_path(cost: &DMatrix<f64>, keys: &[(usize, usize)], opts: &DtwOptions) -> Result<Vec<(usize, usize)>> {
+pub fn dtw_path(
+    cost: &DMatrix<f64>,
+    keys: &[(usize, usize)],
+    opts: &DtwOptions,
+) -> Result<Vec<(usize, usize)>> {
     let (fs, ft) = (cost.nrows(), cost.ncols());
     if fs == 0 || ft == 0 {
         return invalid("DTW on an empty cost matrix");
@@ -73,7 +80,9 @@ pub fn dtw_path(cost: &DMatrix<f64>, keys: &[(usize, usize)], opts: &DtwOptions)
     ks.dedup();
     for &(i, j) in &ks {
         if i >= fs || j >= ft {
-            return invalid(format!("key-pose ({i}, {j}) outside the {fs} x {ft} cost matrix"));
+            return invalid(format!(
+                "key-pose ({i}, {j}) outside the {fs} x {ft} cost matrix"
+            ));
         }
     }
     for w in ks.windows(2) {

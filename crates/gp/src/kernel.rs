@@ -89,12 +89,20 @@ impl Kernel {
 
     /// Lower triangle (diagonal included) of the Gram matrix and, if `grad`, of `∂K/∂log l`;
     /// the strict upper triangle is left unspecified. Column-wise so writes are contiguous.
-    pub(crate) fn gram_lower(&self, x: &DMatrix<f64>, grad: bool) -> (DMatrix<f64>, Option<DMatrix<f64>>) {
+    pub(crate) fn gram_lower(
+        &self,
+        x: &DMatrix<f64>,
+        grad: bool,
+    ) -> (DMatrix<f64>, Option<DMatrix<f64>>) {
         let n = x.nrows();
         let mut k = x * x.transpose();
         let r = self.rows(x);
         let want = grad && self.param_names().len() == 2;
-        let mut dl = if want { Some(DMatrix::zeros(n, n)) } else { None };
+        let mut dl = if want {
+            Some(DMatrix::zeros(n, n))
+        } else {
+            None
+        };
         for j in 0..n {
             let kcol = &mut k.as_mut_slice()[j * n..(j + 1) * n];
             match dl.as_mut() {
@@ -129,7 +137,11 @@ fn mirror_lower(m: &mut DMatrix<f64>) {
 impl Kernel {
     /// Eq. 10 with the paper's convention (no bias).
     pub fn neural_network(l: f64, sigma_f: f64) -> Self {
-        Kernel::NeuralNetwork { l, sigma_f, bias: false }
+        Kernel::NeuralNetwork {
+            l,
+            sigma_f,
+            bias: false,
+        }
     }
 
     /// Short name used in reports and file names: `nn`, `se`, `linear`.
@@ -152,7 +164,8 @@ impl Kernel {
     /// Log hyperparameters `(log l, log σf)` (linear: `(log σf)`).
     pub fn log_params(&self) -> Vec<f64> {
         match *self {
-            Kernel::NeuralNetwork { l, sigma_f, .. } | Kernel::SquaredExponential { l, sigma_f } => {
+            Kernel::NeuralNetwork { l, sigma_f, .. }
+            | Kernel::SquaredExponential { l, sigma_f } => {
                 vec![l.ln(), sigma_f.ln()]
             }
             Kernel::Linear { sigma_f } => vec![sigma_f.ln()],
@@ -162,15 +175,24 @@ impl Kernel {
     /// The same kernel with hyperparameters set from log values (`p.len()` must be
     /// `param_names().len()`).
     pub fn with_log_params(&self, p: &[f64]) -> Self {
-        assert_eq!(p.len(), self.param_names().len(), "kernel log-parameter count");
+        assert_eq!(
+            p.len(),
+            self.param_names().len(),
+            "kernel log-parameter count"
+        );
         match *self {
-            Kernel::NeuralNetwork { bias, .. } => {
-                Kernel::NeuralNetwork { l: p[0].exp(), sigma_f: p[1].exp(), bias }
-            }
-            Kernel::SquaredExponential { .. } => {
-                Kernel::SquaredExponential { l: p[0].exp(), sigma_f: p[1].exp() }
-            }
-            Kernel::Linear { .. } => Kernel::Linear { sigma_f: p[0].exp() },
+            Kernel::NeuralNetwork { bias, .. } => Kernel::NeuralNetwork {
+                l: p[0].exp(),
+                sigma_f: p[1].exp(),
+                bias,
+            },
+            Kernel::SquaredExponential { .. } => Kernel::SquaredExponential {
+                l: p[0].exp(),
+                sigma_f: p[1].exp(),
+            },
+            Kernel::Linear { .. } => Kernel::Linear {
+                sigma_f: p[0].exp(),
+            },
         }
     }
 

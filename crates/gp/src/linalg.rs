@@ -40,13 +40,20 @@ impl Cholesky {
     pub fn new(a: &DMatrix<f64>, what: &str, notes: &mut Vec<String>) -> Result<Self> {
         let n = a.nrows();
         if n != a.ncols() {
-            return crate::invalid(format!("{what}: Cholesky of a non-square {n}x{} matrix", a.ncols()));
+            return crate::invalid(format!(
+                "{what}: Cholesky of a non-square {n}x{} matrix",
+                a.ncols()
+            ));
         }
         if let Ok(llt) = view(a).llt(Side::Lower) {
             return Ok(Self { llt, jitter: 0.0 });
         }
         let mean_diag = (0..n).map(|i| a[(i, i)].abs()).sum::<f64>() / n.max(1) as f64;
-        let scale = if mean_diag > 0.0 && mean_diag.is_finite() { mean_diag } else { 1.0 };
+        let scale = if mean_diag > 0.0 && mean_diag.is_finite() {
+            mean_diag
+        } else {
+            1.0
+        };
         let mut jittered = a.clone();
         let mut last = 0.0;
         for c in JITTER_LADDER {
@@ -65,7 +72,10 @@ impl Cholesky {
                 Err(_) => continue,
             }
         }
-        Err(GpError::NotPositiveDefinite { what: what.to_string(), jitter: last })
+        Err(GpError::NotPositiveDefinite {
+            what: what.to_string(),
+            jitter: last,
+        })
     }
 
     /// Dimension of the factorised matrix.
@@ -88,7 +98,8 @@ impl Cholesky {
 
     /// The lower-triangular factor `L` as an nalgebra matrix.
     pub fn lower(&self) -> DMatrix<f64> {
-        to_nalgebra(self.llt.L())
+        let l = self.llt.L();
+        DMatrix::from_fn(l.nrows(), l.ncols(), |i, j| if i >= j { l[(i, j)] } else { 0.0 })
     }
 
     /// `A⁻¹` from the factor (`L⁻ᵀ L⁻¹`, LAPACK `potri`). Only used where the *elements* of

@@ -57,7 +57,14 @@ pub struct CgOptions {
 
 impl Default for CgOptions {
     fn default() -> Self {
-        Self { max_iter: 100, grad_tol: 1e-4, c1: 1e-4, c2: 0.1, max_line_evals: 12, max_step: 1.0 }
+        Self {
+            max_iter: 100,
+            grad_tol: 1e-4,
+            c1: 1e-4,
+            c2: 0.1,
+            max_line_evals: 12,
+            max_step: 1.0,
+        }
     }
 }
 
@@ -105,7 +112,11 @@ impl<F: FnMut(&[f64]) -> (f64, Vec<f64>)> Search<'_, F> {
     fn eval(&mut self, x: Vec<f64>) -> Point {
         let (f, g) = (self.fg)(&x);
         self.evals += 1;
-        let f = if f.is_finite() && g.iter().all(|v| v.is_finite()) { f } else { f64::INFINITY };
+        let f = if f.is_finite() && g.iter().all(|v| v.is_finite()) {
+            f
+        } else {
+            f64::INFINITY
+        };
         let p = Point { x, f, g };
         if p.f.is_finite() && self.best.as_ref().is_none_or(|b| p.f < b.f) {
             self.best = Some(p.clone());
@@ -116,15 +127,29 @@ impl<F: FnMut(&[f64]) -> (f64, Vec<f64>)> Search<'_, F> {
     fn trial(&mut self, x0: &[f64], d: &[f64], alpha: f64) -> Trial {
         let x: Vec<f64> = x0.iter().zip(d).map(|(a, b)| a + alpha * b).collect();
         let p = self.eval(x);
-        let dphi = if p.f.is_finite() { dot(&p.g, d) } else { f64::NAN };
+        let dphi = if p.f.is_finite() {
+            dot(&p.g, d)
+        } else {
+            f64::NAN
+        };
         Trial { alpha, p, dphi }
     }
 
     /// Strong-Wolfe line search from `start` along descent direction `d` (N&W alg. 3.5).
-    fn line_search(&mut self, start: &Point, d: &[f64], alpha0: f64, o: &CgOptions) -> Option<Trial> {
+    fn line_search(
+        &mut self,
+        start: &Point,
+        d: &[f64],
+        alpha0: f64,
+        o: &CgOptions,
+    ) -> Option<Trial> {
         let (f0, dphi0) = (start.f, dot(&start.g, d));
         let armijo = |t: &Trial| t.p.f.is_finite() && t.p.f <= f0 + o.c1 * t.alpha * dphi0;
-        let mut prev = Trial { alpha: 0.0, p: start.clone(), dphi: dphi0 };
+        let mut prev = Trial {
+            alpha: 0.0,
+            p: start.clone(),
+            dphi: dphi0,
+        };
         let mut alpha = alpha0;
         let mut used = 0;
         loop {
@@ -200,7 +225,11 @@ fn interpolate(lo: &Trial, hi: &Trial) -> f64 {
     }
     let d2 = (b - a).signum() * disc.sqrt();
     let x = b - (b - a) * (gb + d2 - d1) / (gb - ga + 2.0 * d2);
-    if x.is_finite() { x } else { mid }
+    if x.is_finite() {
+        x
+    } else {
+        mid
+    }
 }
 
 /// Minimises `f` from `x0` with Polak-Ribière+ conjugate gradients. `fg(x)` returns the value
@@ -212,12 +241,23 @@ pub fn minimize<F>(mut fg: F, x0: &[f64], o: &CgOptions) -> CgReport
 where
     F: FnMut(&[f64]) -> (f64, Vec<f64>),
 {
-    let mut s = Search { fg: &mut fg, evals: 0, best: None };
+    let mut s = Search {
+        fg: &mut fg,
+        evals: 0,
+        best: None,
+    };
     let mut cur = s.eval(x0.to_vec());
     let finish = |s: Search<'_, F>, cur: Point, iterations: usize, exit: ExitState| {
         let evaluations = s.evals;
         let b = s.best.unwrap_or(cur);
-        CgReport { x: b.x, f: b.f, grad: b.g, iterations, evaluations, exit }
+        CgReport {
+            x: b.x,
+            f: b.f,
+            grad: b.g,
+            iterations,
+            evaluations,
+            exit,
+        }
     };
     if !cur.f.is_finite() {
         return finish(s, cur, 0, ExitState::NonFiniteStart);
@@ -260,11 +300,20 @@ where
         let gg = dot(&cur.g, &cur.g);
         let y: Vec<f64> = next.g.iter().zip(&cur.g).map(|(a, b)| a - b).collect();
         let beta = (dot(&next.g, &y) / gg).max(0.0);
-        d = next.g.iter().zip(&d).map(|(g, di)| -g + beta * di).collect();
+        d = next
+            .g
+            .iter()
+            .zip(&d)
+            .map(|(g, di)| -g + beta * di)
+            .collect();
         prev_slope = slope;
         prev_alpha = t.alpha;
         cur = next;
     }
-    let exit = if converged(&cur) { ExitState::Converged } else { ExitState::MaxIterations };
+    let exit = if converged(&cur) {
+        ExitState::Converged
+    } else {
+        ExitState::MaxIterations
+    };
     finish(s, cur, o.max_iter, exit)
 }

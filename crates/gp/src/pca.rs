@@ -50,7 +50,9 @@ impl Pca {
     pub fn fit(data: &DMatrix<f64>, choice: Components) -> Result<Self> {
         let (f, d) = (data.nrows(), data.ncols());
         if f < 2 || d == 0 {
-            return invalid(format!("PCA needs at least 2 frames and 1 dimension, got {f} x {d}"));
+            return invalid(format!(
+                "PCA needs at least 2 frames and 1 dimension, got {f} x {d}"
+            ));
         }
         check_finite("PCA data", data)?;
         let mean = data.row_mean().transpose();
@@ -67,7 +69,9 @@ impl Pca {
             Components::Count(m) => m.min(rank),
             Components::ExplainedVariance(r) => {
                 if !(r > 0.0 && r <= 1.0) {
-                    return invalid(format!("explained-variance ratio must be in (0, 1], got {r}"));
+                    return invalid(format!(
+                        "explained-variance ratio must be in (0, 1], got {r}"
+                    ));
                 }
                 let mut acc = 0.0;
                 let mut m = rank;
@@ -116,7 +120,10 @@ impl Pca {
 
     fn check_dim(&self, n: usize, what: &str) -> Result<()> {
         if n != self.dim() {
-            return invalid(format!("PCA {what}: data has {n} columns, the basis expects {}", self.dim()));
+            return invalid(format!(
+                "PCA {what}: data has {n} columns, the basis expects {}",
+                self.dim()
+            ));
         }
         Ok(())
     }

@@ -48,7 +48,12 @@ fn key_pose_maps_to_its_target_and_off_span_inputs_are_projected() {
     };
     let on = (sk.row(0) * 0.3 + sk.row(1) * 0.3 + sk.row(2) * 0.4).into_owned();
     let off = &on + normal_offset.transpose();
-    let as_mat = |r: &nalgebra::RowDVector<f64>| nalgebra::DMatrix::from_iterator(1, r.len(), r.iter().copied());
-    let (pon, poff) = (model.predict(&as_mat(&on)).unwrap(), model.predict(&as_mat(&off)).unwrap());
+    let as_mat = |r: &nalgebra::RowDVector<f64>| {
+        nalgebra::DMatrix::from_iterator(1, r.len(), r.iter().copied())
+    };
+    let (pon, poff) = (
+        model.predict(&as_mat(&on)).unwrap(),
+        model.predict(&as_mat(&off)).unwrap(),
+    );
     assert!((pon - poff).amax() < 1e-10);
 }

@@ -12,8 +12,14 @@ fn mean_equals_ridge_regression_and_variance_matches_eq4() {
     let s2 = PAPER_SIGMA2;
     let (xp, yp) = (xk.transpose(), yk.transpose());
     // Ridge: M = Y Xᵀ (X Xᵀ + σ² I)⁻¹ (= Y Xᵀ A⁻¹ / σ²).
-    let ridge = &yp * xp.transpose() * (&xp * xp.transpose() + DMatrix::identity(4, 4) * s2).try_inverse().unwrap();
-    let a_inv = (&xp * xp.transpose() / s2 + DMatrix::identity(4, 4)).try_inverse().unwrap();
+    let ridge = &yp
+        * xp.transpose()
+        * (&xp * xp.transpose() + DMatrix::identity(4, 4) * s2)
+            .try_inverse()
+            .unwrap();
+    let a_inv = (&xp * xp.transpose() / s2 + DMatrix::identity(4, 4))
+        .try_inverse()
+        .unwrap();
     let model = Blr::fit(&xk, &yk, s2).unwrap();
     let xs = rng.matrix(6, 4, 1.0);
     let (mu, var) = model.predict(&xs).unwrap();
@@ -37,12 +43,24 @@ fn whole_body_cost_is_the_sum_over_parts_and_zero_free_at_exact_linear_keys() {
     let keys = [(0, 0), (3, 2), (7, 6)];
     let (s1, t1) = (rng.matrix(8, 3, 1.0), rng.matrix(7, 2, 1.0));
     let (s2, t2) = (rng.matrix(8, 4, 1.0), rng.matrix(7, 4, 1.0));
-    let parts = [PartFrames { source: &s1, target: &t1 }, PartFrames { source: &s2, target: &t2 }];
+    let parts = [
+        PartFrames {
+            source: &s1,
+            target: &t1,
+        },
+        PartFrames {
+            source: &s2,
+            target: &t2,
+        },
+    ];
     let total = cost_matrix(&parts, &keys, 0.01).unwrap();
     let fit = |s: &DMatrix<f64>, t: &DMatrix<f64>| {
         let xk = DMatrix::from_fn(3, s.ncols(), |r, c| s[(keys[r].0, c)]);
         let yk = DMatrix::from_fn(3, t.ncols(), |r, c| t[(keys[r].1, c)]);
-        Blr::fit(&xk, &yk, 0.01).unwrap().neg_log_cost(s, t).unwrap()
+        Blr::fit(&xk, &yk, 0.01)
+            .unwrap()
+            .neg_log_cost(s, t)
+            .unwrap()
     };
     assert!((total - fit(&s1, &t1) - fit(&s2, &t2)).amax() < 1e-9);
     assert!(cost_matrix(&parts, &[(8, 0)], 0.01).is_err());
@@ -55,7 +73,15 @@ fn a_true_linear_relation_makes_the_matching_frame_the_cheapest() {
     let src = rng.matrix(30, 3, 1.0);
     let tgt = &src * m.transpose();
     let keys: Vec<_> = [0usize, 7, 15, 22, 29].iter().map(|&i| (i, i)).collect();
-    let c = cost_matrix(&[PartFrames { source: &src, target: &tgt }], &keys, 0.01).unwrap();
+    let c = cost_matrix(
+        &[PartFrames {
+            source: &src,
+            target: &tgt,
+        }],
+        &keys,
+        0.01,
+    )
+    .unwrap();
     for i in 0..30 {
         let (jmin, _) = c.row(i).transpose().argmin();
         assert_eq!(jmin, i, "row {i}");

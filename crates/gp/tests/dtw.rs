@@ -8,7 +8,12 @@ use proptest::prelude::*;
 
 /// Checks every structural constraint of a path; returns the longest vertical and horizontal
 /// runs.
-fn check_path(path: &[(usize, usize)], fs: usize, ft: usize, keys: &[(usize, usize)]) -> (usize, usize) {
+fn check_path(
+    path: &[(usize, usize)],
+    fs: usize,
+    ft: usize,
+    keys: &[(usize, usize)],
+) -> (usize, usize) {
     assert_eq!(path[0], (0, 0));
     assert_eq!(*path.last().unwrap(), (fs - 1, ft - 1));
     let (mut v, mut h, mut vmax, mut hmax) = (0, 0, 0, 0);
@@ -31,7 +36,18 @@ fn check_path(path: &[(usize, usize)], fs: usize, ft: usize, keys: &[(usize, usi
 
 /// Exhaustive search of the best constrained path (independent of the crate's DP).
 fn brute(c: &DMatrix<f64>, keys: &[(usize, usize)], r: usize) -> f64 {
-    fn go(c: &DMatrix<f64>, keys: &[(usize, usize)], r: usize, i: usize, j: usize, v: usize, h: usize, acc: f64, path: &mut Vec<(usize, usize)>, best: &mut f64) {
+    fn go(
+        c: &DMatrix<f64>,
+        keys: &[(usize, usize)],
+        r: usize,
+        i: usize,
+        j: usize,
+        v: usize,
+        h: usize,
+        acc: f64,
+        path: &mut Vec<(usize, usize)>,
+        best: &mut f64,
+    ) {
         let acc = acc + c[(i, j)];
         path.push((i, j));
         if (i, j) == (c.nrows() - 1, c.ncols() - 1) {
@@ -76,16 +92,30 @@ fn matches_brute_force_on_small_random_matrices() {
         let fs = 3 + (rng.next_u64() % 5) as usize;
         let ft = 3 + (rng.next_u64() % 5) as usize;
         let c = DMatrix::from_fn(fs, ft, |_, _| rng.uniform());
-        let keys = if trial % 2 == 0 { vec![] } else { vec![(fs / 2, ft / 2)] };
+        let keys = if trial % 2 == 0 {
+            vec![]
+        } else {
+            vec![(fs / 2, ft / 2)]
+        };
         let r = 1 + trial % 3;
-        let opts = DtwOptions { max_run: r, ..Default::default() };
+        let opts = DtwOptions {
+            max_run: r,
+            ..Default::default()
+        };
         let expect = brute(&c, &keys, r);
         match dtw_path(&c, &keys, &opts) {
             Ok(p) => {
                 check_path(&p, fs, ft, &keys);
-                assert!((path_cost(&c, &p) - expect).abs() < 1e-12, "trial {trial}: {} vs {expect}", path_cost(&c, &p));
+                assert!(
+                    (path_cost(&c, &p) - expect).abs() < 1e-12,
+                    "trial {trial}: {} vs {expect}",
+                    path_cost(&c, &p)
+                );
             }
-            Err(e) => assert!(expect.is_infinite(), "trial {trial}: {e} but brute force found {expect}"),
+            Err(e) => assert!(
+                expect.is_infinite(),
+                "trial {trial}: {e} but brute force found {expect}"
+            ),
         }
     }
 }
@@ -97,7 +127,10 @@ fn key_poses_are_forced_even_when_expensive() {
     let path = dtw_path(&c, &[(2, 7)], &DtwOptions::default()).unwrap();
     assert!(path.contains(&(2, 7)));
     // With key-pose endpoints the path spans the keys only.
-    let opts = DtwOptions { endpoints: Endpoints::KeyPoses, ..Default::default() };
+    let opts = DtwOptions {
+        endpoints: Endpoints::KeyPoses,
+        ..Default::default()
+    };
     let p = dtw_path(&c, &[(1, 1), (6, 8)], &opts).unwrap();
     assert_eq!((p[0], *p.last().unwrap()), ((1, 1), (6, 8)));
 }
@@ -108,7 +141,12 @@ fn infeasible_and_invalid_inputs_are_errors() {
     assert!(dtw_path(&DMatrix::zeros(50, 10), &[], &DtwOptions::default()).is_err());
     // Ratio 4 is the steepest feasible slope.
     assert!(dtw_path(&DMatrix::zeros(37, 10), &[], &DtwOptions::default()).is_ok());
-    assert!(dtw_path(&DMatrix::zeros(5, 5), &[(1, 3), (3, 1)], &DtwOptions::default()).is_err());
+    assert!(dtw_path(
+        &DMatrix::zeros(5, 5),
+        &[(1, 3), (3, 1)],
+        &DtwOptions::default()
+    )
+    .is_err());
     assert!(dtw_path(&DMatrix::zeros(5, 5), &[(5, 0)], &DtwOptions::default()).is_err());
     let mut c = DMatrix::zeros(4, 4);
     c[(1, 1)] = f64::NAN;

@@ -3,9 +3,7 @@
 //! training behaviour.
 mod common;
 use common::Rng;
-use gp::gpr::{
-    log_marginal_likelihood, log_marginal_likelihood_grad, train_many, Gpr, GprOptions,
-};
+use gp::gpr::{log_marginal_likelihood, log_marginal_likelihood_grad, train_many, Gpr, GprOptions};
 use gp::kernel::Kernel;
 use gp::optim::ExitState;
 use nalgebra::{DMatrix, DVector};
@@ -24,16 +22,33 @@ fn rows(m: &DMatrix<f64>) -> Vec<Vec<f64>> {
 #[test]
 fn posterior_mean_and_variance_match_a_direct_dense_solve() {
     let mut rng = Rng::new(10);
-    let (x, y, xs) = (rng.matrix(8, 3, 1.0), rng.matrix(8, 2, 1.0), rng.matrix(5, 3, 1.0));
+    let (x, y, xs) = (
+        rng.matrix(8, 3, 1.0),
+        rng.matrix(8, 2, 1.0),
+        rng.matrix(5, 3, 1.0),
+    );
     let (l, sf, noise) = (0.9, 1.4, 0.1);
     let (xr, xsr) = (rows(&x), rows(&xs));
-    let ky = DMatrix::from_fn(8, 8, |i, j| nn(l, sf, &xr[i], &xr[j]) + if i == j { noise } else { 0.0 });
+    let ky = DMatrix::from_fn(8, 8, |i, j| {
+        nn(l, sf, &xr[i], &xr[j]) + if i == j { noise } else { 0.0 }
+    });
     let kstar = DMatrix::from_fn(5, 8, |i, j| nn(l, sf, &xsr[i], &xr[j]));
     let lu = ky.clone().lu();
     let expect_mean = &kstar * lu.solve(&y).unwrap();
-    let model = Gpr::fit(Kernel::neural_network(l, sf), noise, &x, &y, &mut Vec::new()).unwrap();
+    let model = Gpr::fit(
+        Kernel::neural_network(l, sf),
+        noise,
+        &x,
+        &y,
+        &mut Vec::new(),
+    )
+    .unwrap();
     let mean = model.predict_mean(&xs).unwrap();
-    assert!((&mean - &expect_mean).amax() < 1e-12, "{}", (&mean - &expect_mean).amax());
+    assert!(
+        (&mean - &expect_mean).amax() < 1e-12,
+        "{}",
+        (&mean - &expect_mean).amax()
+    );
     let (mean2, var) = model.predict_with_variance(&xs, &mut Vec::new()).unwrap();
     assert!((&mean2 - &expect_mean).amax() < 1e-12);
     for i in 0..5 {
@@ -47,9 +62,17 @@ fn posterior_mean_and_variance_match_a_direct_dense_solve() {
 fn tiny_noise_interpolates_training_outputs() {
     let mut rng = Rng::new(11);
     let (x, y) = (rng.matrix(10, 2, 1.0), rng.matrix(10, 3, 1.0));
-    let model =
-        Gpr::fit(Kernel::SquaredExponential { l: 0.5, sigma_f: 1.0 }, 1e-10, &x, &y, &mut Vec::new())
-            .unwrap();
+    let model = Gpr::fit(
+        Kernel::SquaredExponential {
+            l: 0.5,
+            sigma_f: 1.0,
+        },
+        1e-10,
+        &x,
+        &y,
+        &mut Vec::new(),
+    )
+    .unwrap();
     let pred = model.predict_mean(&x).unwrap();
     assert!((&pred - &y).amax() < 1e-6, "{}", (&pred - &y).amax());
     let (_, var) = model.predict_with_variance(&x, &mut Vec::new()).unwrap();
@@ -67,8 +90,14 @@ fn lml_two_point_hand_computed() {
     let expect = -0.5 * (quad(1.0, -1.0) + quad(0.0, 2.0))
         - 0.5 * 2.0 * 2.75f64.ln()
         - 0.5 * 2.0 * 2.0 * (2.0 * std::f64::consts::PI).ln();
-    let got = log_marginal_likelihood(&Kernel::Linear { sigma_f: 1.0 }, 0.5, &x, &y, &mut Vec::new())
-        .unwrap();
+    let got = log_marginal_likelihood(
+        &Kernel::Linear { sigma_f: 1.0 },
+        0.5,
+        &x,
+        &y,
+        &mut Vec::new(),
+    )
+    .unwrap();
     assert!((got - expect).abs() < 1e-13, "{got} vs {expect}");
 }
 
@@ -78,14 +107,23 @@ fn lml_gradient_matches_finite_differences() {
     let (x, y) = (rng.matrix(15, 4, 1.0), rng.matrix(15, 3, 1.0));
     let kernels = [
         Kernel::neural_network(1.3, 0.8),
-        Kernel::NeuralNetwork { l: 0.6, sigma_f: 1.5, bias: true },
-        Kernel::SquaredExponential { l: 0.9, sigma_f: 1.2 },
+        Kernel::NeuralNetwork {
+            l: 0.6,
+            sigma_f: 1.5,
+            bias: true,
+        },
+        Kernel::SquaredExponential {
+            l: 0.9,
+            sigma_f: 1.2,
+        },
         Kernel::Linear { sigma_f: 0.7 },
     ];
     for k in kernels {
         for with_noise in [false, true] {
             let noise = 0.1;
-            let (_, g) = log_marginal_likelihood_grad(&k, noise, with_noise, &x, &y, &mut Vec::new()).unwrap();
+            let (_, g) =
+                log_marginal_likelihood_grad(&k, noise, with_noise, &x, &y, &mut Vec::new())
+                    .unwrap();
             let mut theta = k.log_params();
             if with_noise {
                 theta.push(noise.ln());
@@ -93,7 +131,8 @@ fn lml_gradient_matches_finite_differences() {
             let nk = k.log_params().len();
             let lml = |t: &[f64]| {
                 let n = if with_noise { t[nk].exp() } else { noise };
-                log_marginal_likelihood(&k.with_log_params(&t[..nk]), n, &x, &y, &mut Vec::new()).unwrap()
+                log_marginal_likelihood(&k.with_log_params(&t[..nk]), n, &x, &y, &mut Vec::new())
+                    .unwrap()
             };
             assert_eq!(g.len(), theta.len());
             for i in 0..theta.len() {
@@ -102,7 +141,11 @@ fn lml_gradient_matches_finite_differences() {
                 tp[i] += h;
                 tm[i] -= h;
                 let fd = (lml(&tp) - lml(&tm)) / (2.0 * h);
-                assert!((fd - g[i]).abs() < 1e-6 * fd.abs().max(1.0), "{k:?} noise {with_noise} i {i}: {fd} vs {}", g[i]);
+                assert!(
+                    (fd - g[i]).abs() < 1e-6 * fd.abs().max(1.0),
+                    "{k:?} noise {with_noise} i {i}: {fd} vs {}",
+                    g[i]
+                );
             }
         }
     }
@@ -112,7 +155,11 @@ fn lml_gradient_matches_finite_differences() {
 fn target_fn(x: &DMatrix<f64>) -> DMatrix<f64> {
     DMatrix::from_fn(x.nrows(), 2, |i, j| {
         let r = x.row(i);
-        if j == 0 { (r[0] + 0.5 * r[1]).sin() } else { r[1] * r[2] * 0.5 - r[0] }
+        if j == 0 {
+            (r[0] + 0.5 * r[1]).sin()
+        } else {
+            r[1] * r[2] * 0.5 - r[0]
+        }
     })
 }
 
@@ -127,8 +174,19 @@ fn training_increases_lml_reaches_a_stationary_point_and_generalises() {
     assert!(report.lml >= report.initial_lml, "{report:?}");
     assert_eq!(report.exit, Some(ExitState::Converged), "{report:?}");
     // The gradient at the returned point is (relatively) zero: a stationary point of the LML.
-    let (v, g) = log_marginal_likelihood_grad(&model.kernel, model.noise_var, false, &x, &y, &mut Vec::new()).unwrap();
-    assert!(g.iter().all(|d| d.abs() <= 1e-7 * v.abs().max(1.0)), "{g:?}");
+    let (v, g) = log_marginal_likelihood_grad(
+        &model.kernel,
+        model.noise_var,
+        false,
+        &x,
+        &y,
+        &mut Vec::new(),
+    )
+    .unwrap();
+    assert!(
+        g.iter().all(|d| d.abs() <= 1e-7 * v.abs().max(1.0)),
+        "{g:?}"
+    );
     assert!((v - report.lml).abs() < 1e-9);
     // Held-out error well below the output spread (σn² = 0.1 limits the fit).
     let xt = rng.matrix(50, 3, 1.0);
@@ -145,11 +203,26 @@ fn learnable_noise_finds_the_generating_noise_level() {
     for v in y.iter_mut() {
         *v += 0.2 * rng.normal(); // noise variance 0.04
     }
-    let opts = GprOptions { learn_noise: true, ..Default::default() };
-    let (model, report) =
-        Gpr::train(Kernel::SquaredExponential { l: 1.0, sigma_f: 1.0 }, &x, &y, &opts).unwrap();
+    let opts = GprOptions {
+        learn_noise: true,
+        ..Default::default()
+    };
+    let (model, report) = Gpr::train(
+        Kernel::SquaredExponential {
+            l: 1.0,
+            sigma_f: 1.0,
+        },
+        &x,
+        &y,
+        &opts,
+    )
+    .unwrap();
     assert!(report.exit.is_some());
-    assert!((model.noise_var - 0.04).abs() < 0.015, "noise {}", model.noise_var);
+    assert!(
+        (model.noise_var - 0.04).abs() < 0.015,
+        "noise {}",
+        model.noise_var
+    );
 }
 
 #[test]
@@ -173,7 +246,10 @@ fn models_round_trip_through_bincode_and_train_many_matches_serial() {
         let bytes = bincode::serde::encode_to_vec(&m, bincode::config::standard()).unwrap();
         let (back, _): (Gpr, usize) =
             bincode::serde::decode_from_slice(&bytes, bincode::config::standard()).unwrap();
-        assert_eq!(back.predict_mean(&xt).unwrap(), m.predict_mean(&xt).unwrap());
+        assert_eq!(
+            back.predict_mean(&xt).unwrap(),
+            m.predict_mean(&xt).unwrap()
+        );
     }
 }
 
@@ -186,7 +262,14 @@ fn bad_inputs_are_errors_not_panics() {
     let mut y3 = DMatrix::from_element(3, 1, 1.0);
     y3[(1, 0)] = f64::NAN;
     assert!(Gpr::fit(k, 0.1, &x, &y3, &mut Vec::new()).is_err());
-    let m = Gpr::fit(k, 0.1, &x, &DMatrix::from_element(3, 1, 1.0), &mut Vec::new()).unwrap();
+    let m = Gpr::fit(
+        k,
+        0.1,
+        &x,
+        &DMatrix::from_element(3, 1, 1.0),
+        &mut Vec::new(),
+    )
+    .unwrap();
     assert!(m.predict_mean(&DMatrix::zeros(2, 5)).is_err());
 }
 
@@ -196,7 +279,17 @@ fn duplicate_inputs_without_noise_trigger_logged_jitter() {
     let x = DMatrix::from_row_slice(3, 1, &[1.0, 1.0, 2.0]);
     let y = DMatrix::from_row_slice(3, 1, &[0.5, 0.5, 1.0]);
     let mut notes = Vec::new();
-    let m = Gpr::fit(Kernel::SquaredExponential { l: 1.0, sigma_f: 1.0 }, 0.0, &x, &y, &mut notes).unwrap();
+    let m = Gpr::fit(
+        Kernel::SquaredExponential {
+            l: 1.0,
+            sigma_f: 1.0,
+        },
+        0.0,
+        &x,
+        &y,
+        &mut notes,
+    )
+    .unwrap();
     assert!(m.jitter > 0.0);
     assert_eq!(notes.len(), 1, "{notes:?}");
     assert!(notes[0].contains("jitter"));

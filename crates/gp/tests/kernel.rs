@@ -8,8 +8,15 @@ use nalgebra::DMatrix;
 fn kernels() -> Vec<Kernel> {
     vec![
         Kernel::neural_network(0.7, 1.3),
-        Kernel::NeuralNetwork { l: 2.5, sigma_f: 0.4, bias: true },
-        Kernel::SquaredExponential { l: 1.1, sigma_f: 0.8 },
+        Kernel::NeuralNetwork {
+            l: 2.5,
+            sigma_f: 0.4,
+            bias: true,
+        },
+        Kernel::SquaredExponential {
+            l: 1.1,
+            sigma_f: 0.8,
+        },
         Kernel::Linear { sigma_f: 0.6 },
     ]
 }
@@ -27,7 +34,11 @@ fn fd_check(k: &Kernel, x: &DMatrix<f64>) {
         let fd = (k.with_log_params(&pp).gram(x) - k.with_log_params(&pm).gram(x)) / (2.0 * h);
         let err = (&fd - g).amax();
         let scale = fd.amax().max(1e-3);
-        assert!(err / scale < 1e-6, "{k:?} param {pi}: analytic vs FD rel err {}", err / scale);
+        assert!(
+            err / scale < 1e-6,
+            "{k:?} param {pi}: analytic vs FD rel err {}",
+            err / scale
+        );
     }
 }
 
@@ -76,7 +87,11 @@ fn nn_maps_to_gpy_mlp_parameters() {
     let w = 1.0 / (2.0 * l * l);
     let var = sf * sf * std::f64::consts::PI / 2.0;
     for bias in [false, true] {
-        let k = Kernel::NeuralNetwork { l, sigma_f: sf, bias };
+        let k = Kernel::NeuralNetwork {
+            l,
+            sigma_f: sf,
+            bias,
+        };
         let b = if bias { w } else { 0.0 };
         for _ in 0..20 {
             let x: Vec<f64> = (0..5).map(|_| rng.normal()).collect();
@@ -89,7 +104,10 @@ fn nn_maps_to_gpy_mlp_parameters() {
 
 #[test]
 fn se_and_linear_known_values() {
-    let se = Kernel::SquaredExponential { l: 2.0, sigma_f: 3.0 };
+    let se = Kernel::SquaredExponential {
+        l: 2.0,
+        sigma_f: 3.0,
+    };
     // |x - x'|² = 4 => exp(-4 / 8)
     assert!((se.eval(&[0.0, 0.0], &[2.0, 0.0]) - 9.0 * (-0.5f64).exp()).abs() < 1e-14);
     let lin = Kernel::Linear { sigma_f: 2.0 };
@@ -114,6 +132,9 @@ fn gram_cross_and_diag_agree_with_pointwise_eval() {
                 assert!((c[(i, j)] - k.eval(&row(&xs, i), &row(&x, j))).abs() < 1e-12);
             }
         }
-        assert_eq!(k.with_log_params(&k.log_params()).log_params(), k.log_params());
+        assert_eq!(
+            k.with_log_params(&k.log_params()).log_params(),
+            k.log_params()
+        );
     }
 }

@@ -4,16 +4,27 @@ use gp::optim::{minimize, CgOptions, ExitState};
 fn rosenbrock(x: &[f64]) -> (f64, Vec<f64>) {
     let (a, b) = (x[0], x[1]);
     let f = (1.0 - a).powi(2) + 100.0 * (b - a * a).powi(2);
-    let g = vec![-2.0 * (1.0 - a) - 400.0 * a * (b - a * a), 200.0 * (b - a * a)];
+    let g = vec![
+        -2.0 * (1.0 - a) - 400.0 * a * (b - a * a),
+        200.0 * (b - a * a),
+    ];
     (f, g)
 }
 
 #[test]
 fn rosenbrock_reaches_the_minimum() {
-    let opts = CgOptions { max_iter: 2000, grad_tol: 1e-10, max_step: 10.0, ..Default::default() };
+    let opts = CgOptions {
+        max_iter: 2000,
+        grad_tol: 1e-10,
+        max_step: 10.0,
+        ..Default::default()
+    };
     let r = minimize(rosenbrock, &[-1.2, 1.0], &opts);
     assert_eq!(r.exit, ExitState::Converged, "{r:?}");
-    assert!((r.x[0] - 1.0).abs() < 1e-6 && (r.x[1] - 1.0).abs() < 1e-6, "{r:?}");
+    assert!(
+        (r.x[0] - 1.0).abs() < 1e-6 && (r.x[1] - 1.0).abs() < 1e-6,
+        "{r:?}"
+    );
 }
 
 #[test]
@@ -25,7 +36,12 @@ fn ill_conditioned_quadratic() {
         let v = (0..5).map(|i| 0.5 * c[i] * (x[i] - t[i]).powi(2)).sum();
         (v, (0..5).map(|i| c[i] * (x[i] - t[i])).collect())
     };
-    let opts = CgOptions { max_iter: 500, grad_tol: 1e-10, max_step: 10.0, ..Default::default() };
+    let opts = CgOptions {
+        max_iter: 500,
+        grad_tol: 1e-10,
+        max_step: 10.0,
+        ..Default::default()
+    };
     let r = minimize(f, &[0.0; 5], &opts);
     assert_eq!(r.exit, ExitState::Converged, "{r:?}");
     for i in 0..5 {
@@ -35,10 +51,16 @@ fn ill_conditioned_quadratic() {
 
 #[test]
 fn max_iterations_is_reported_with_best_point() {
-    let opts = CgOptions { max_iter: 3, ..Default::default() };
+    let opts = CgOptions {
+        max_iter: 3,
+        ..Default::default()
+    };
     let r = minimize(rosenbrock, &[-1.2, 1.0], &opts);
     assert_eq!(r.exit, ExitState::MaxIterations);
-    assert!(r.f < rosenbrock(&[-1.2, 1.0]).0, "best point must improve on the start");
+    assert!(
+        r.f < rosenbrock(&[-1.2, 1.0]).0,
+        "best point must improve on the start"
+    );
     assert_eq!(r.f, rosenbrock(&r.x).0);
 }
 
@@ -53,7 +75,11 @@ fn wrong_gradient_gives_line_search_failure_not_a_silent_result() {
 
 #[test]
 fn non_finite_start_and_infinite_regions() {
-    let r = minimize(|_x: &[f64]| (f64::NAN, vec![0.0]), &[0.0], &CgOptions::default());
+    let r = minimize(
+        |_x: &[f64]| (f64::NAN, vec![0.0]),
+        &[0.0],
+        &CgOptions::default(),
+    );
     assert_eq!(r.exit, ExitState::NonFiniteStart);
     // f = (x - 2)² for x < 3, +inf beyond: the line search must back off from infinity.
     let f = |x: &[f64]| {
@@ -63,7 +89,11 @@ fn non_finite_start_and_infinite_regions() {
             (f64::INFINITY, vec![0.0])
         }
     };
-    let opts = CgOptions { max_step: 100.0, grad_tol: 1e-10, ..Default::default() };
+    let opts = CgOptions {
+        max_step: 100.0,
+        grad_tol: 1e-10,
+        ..Default::default()
+    };
     let r = minimize(f, &[-50.0], &opts);
     assert_eq!(r.exit, ExitState::Converged, "{r:?}");
     assert!((r.x[0] - 2.0).abs() < 1e-8);

@@ -25,11 +25,15 @@ fn round_trip_is_exact_when_m_equals_rank() {
 /// shifted by a mean: the sample covariance is exactly diag(9, 4, 1) · 8/7 in that basis.
 fn known_axes_data() -> (DMatrix<f64>, DMatrix<f64>, Vec<f64>) {
     let s = 1.0 / 2f64.sqrt();
-    let axes = DMatrix::from_row_slice(3, 5, &[
-        s, s, 0.0, 0.0, 0.0, //
-        0.0, 0.0, 1.0, 0.0, 0.0, //
-        s, -s, 0.0, 0.0, 0.0,
-    ]);
+    let axes = DMatrix::from_row_slice(
+        3,
+        5,
+        &[
+            s, s, 0.0, 0.0, 0.0, //
+            0.0, 0.0, 1.0, 0.0, 0.0, //
+            s, -s, 0.0, 0.0, 0.0,
+        ],
+    );
     let mean = [1.0, -2.0, 0.5, 3.0, 0.0];
     let sd = [3.0, 2.0, 1.0];
     let mut data = DMatrix::zeros(8, 5);
@@ -53,7 +57,11 @@ fn known_principal_axes_and_variances() {
     let pca = Pca::fit(&data, Components::default()).unwrap();
     assert_eq!(pca.n_components(), 3);
     for k in 0..3 {
-        assert!((pca.variances[k] - variances[k]).abs() < 1e-12, "{:?}", pca.variances);
+        assert!(
+            (pca.variances[k] - variances[k]).abs() < 1e-12,
+            "{:?}",
+            pca.variances
+        );
         let cos = pca.components.row(k).dot(&axes.row(k)).abs();
         assert!((cos - 1.0).abs() < 1e-12, "axis {k}: |cos| = {cos}");
     }
@@ -71,9 +79,24 @@ fn known_principal_axes_and_variances() {
 fn choose_by_explained_variance_and_truncation_error() {
     let (data, _, _) = known_axes_data();
     // Ratios 9/14, 4/14, 1/14: 0.9 needs two components, 0.5 one.
-    assert_eq!(Pca::fit(&data, Components::ExplainedVariance(0.9)).unwrap().n_components(), 2);
-    assert_eq!(Pca::fit(&data, Components::ExplainedVariance(0.5)).unwrap().n_components(), 1);
-    assert_eq!(Pca::fit(&data, Components::ExplainedVariance(1.0)).unwrap().n_components(), 3);
+    assert_eq!(
+        Pca::fit(&data, Components::ExplainedVariance(0.9))
+            .unwrap()
+            .n_components(),
+        2
+    );
+    assert_eq!(
+        Pca::fit(&data, Components::ExplainedVariance(0.5))
+            .unwrap()
+            .n_components(),
+        1
+    );
+    assert_eq!(
+        Pca::fit(&data, Components::ExplainedVariance(1.0))
+            .unwrap()
+            .n_components(),
+        3
+    );
     // Dropping the third axis leaves an error of sd 1 along one of 5 coordinates-worth of
     // norm: per-coordinate rms = sqrt(1 / 5).
     let p2 = Pca::fit(&data, Components::Count(2)).unwrap();

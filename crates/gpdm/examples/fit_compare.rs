@@ -81,7 +81,13 @@ fn main() {
             println!("  reached final value (1e-6 rel) after {e} evals");
         }
         if let Some(dir) = args.get(2) {
-            let tr: Vec<String> = r.trace.iter().map(|(t, f)| format!("[{t}, {f}]")).collect();
+            // Failed evaluations (non-finite) are left out: JSON has no infinity.
+            let tr: Vec<String> = r
+                .trace
+                .iter()
+                .filter(|(_, f)| f.is_finite())
+                .map(|(t, f)| format!("[{t}, {f}]"))
+                .collect();
             let path = std::path::Path::new(dir).join(format!("rust_trace_{name}.json"));
             std::fs::write(path, format!("[{}]", tr.join(","))).unwrap();
         }

@@ -3,7 +3,7 @@
 //! variance, cond(K_Y), optimiser exit, and how well the mean prediction (eq. 8) from the
 //! first frame tracks the 120-frame training cycle (RMS pose error, eq. 12 decoding).
 //!
-//! Usage: noise_floor [D=300]
+//! Usage: noise_floor [D=300] [single]   (`single`: train on the first sequence only)
 
 #[path = "common/synthetic.rs"]
 mod synthetic;
@@ -19,9 +19,14 @@ fn main() {
         .nth(1)
         .map(|s| s.parse().expect("D"))
         .unwrap_or(300);
+    let single = std::env::args().nth(2).as_deref() == Some("single");
+    let keep = if single { 1 } else { 4 };
     for noise in [0.0, 2e-3] {
         let clean = synthetic::synthetic(d_obs, 0.0);
-        let data = synthetic::synthetic(d_obs, noise);
+        let data: Vec<_> = synthetic::synthetic(d_obs, noise)
+            .into_iter()
+            .take(keep)
+            .collect();
         for floor in [None, Some(1e-6)] {
             let config = GpdmConfig {
                 pose_noise_floor: floor,

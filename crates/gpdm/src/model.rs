@@ -370,6 +370,17 @@ impl Gpdm {
         if config.latent_dim == 0 {
             return invalid("latent dimension must be positive");
         }
+        if !(config.first_point_var > 0.0 && config.first_point_var.is_finite()) {
+            return invalid("first-point prior variance must be positive and finite");
+        }
+        for f in [config.pose_noise_floor, config.dyn_noise_floor]
+            .into_iter()
+            .flatten()
+        {
+            if !(f >= 0.0 && f.is_finite()) {
+                return invalid(format!("noise floor {f} must be non-negative and finite"));
+            }
+        }
         let seq_lens: Vec<usize> = sequences.iter().map(|s| s.nrows()).collect();
         Layout::new(&seq_lens)?;
         let n: usize = seq_lens.iter().sum();

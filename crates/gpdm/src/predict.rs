@@ -23,8 +23,10 @@ pub struct Predictor {
     /// Training latents X (N × d).
     x: Mat<f64>,
     chol_y: Cholesky,
-    /// K_Y⁻¹ Y (N × D), Y centred.
+    /// K_Y⁻¹ Y (N × D), Y centred; or K_Y⁻¹ U_r Λ_r^½ (N × r) with a pose basis.
     a_y: Mat<f64>,
+    /// Optional orthonormal pose basis V_rᵀ (r × D): then μ_Y = (k_Yᵀ a_y) V_rᵀ.
+    basis: Option<Mat<f64>>,
     y_mean: DVector<f64>,
     /// Jitter notes from the factorisations (empty when none was needed); callers log these.
     pub notes: Vec<String>,
@@ -59,9 +61,46 @@ impl Predictor {
             x,
             chol_y,
             a_y,
+            basis: None,
             y_mean: model.y_mean.clone(),
             notes,
         })
+    }
+
+    /// Like [`Predictor::new`], but decodes poses through the top-r principal directions of
+    /// the centred training poses, `Y ≈ U_r Λ_r^½ V_rᵀ` (from the N × N eigenproblem of Y Yᵀ),
+    /// with r the smallest rank whose discarded energy `Σ_{k>r} λ_k` is at most
+    /// `rel_tol · Σ_k λ_k`. Eq. 12 then costs `T·N·r + T·r·D` instead of `T·N·D`; with
+    /// `rel_tol = 0` only exactly-zero directions are dropped and the mean is unchanged.
+    /// Returns the kept rank and the RMS reconstruction error of the training poses.
+    pub fn with_pose_basis(model: &Gpdm, rel_tol: f64) -> Result<(Self, usize, f64)> {
+        if !(rel_tol >= 0.0 && rel_tol < 1.0) {
+            return invalid(format!("relative tolerance {rel_tol} outside [0, 1)"));
+        }
+        let mut p = Predictor::new(model)?;
+        let n = model.y.nrows();
+        let s = to_na(crate::linalg::mul_abt(view(&model.y), view(&model.y)).as_ref());
+        let eig = nalgebra::SymmetricEigen::new(s);
+        let mut order: Vec<usize> = (0..n).collect();
+        order.sort_by(|&a, &b| eig.eigenvalues[b].total_cmp(&eig.eigenvalues[a]));
+        let lam: Vec<f64> = order.iter().map(|&k| eig.eigenvalues[k].max(0.0)).collect();
+        let total: f64 = lam.iter().sum();
+        let floor = lam.first().copied().unwrap_or(0.0) * 1e-14;
+        let mut r = 0;
+        let mut rest = total;
+        while r < n && lam[r] > floor && rest > rel_tol * total {
+            rest -= lam[r];
+            r += 1;
+        }
+        let r = r.max(1);
+        let discarded: f64 = lam[r..].iter().sum();
+        // U_r Λ_r^½ (N × r) and V_rᵀ = Λ_r^-½ U_rᵀ Y (r × D).
+        let us = Mat::from_fn(n, r, |i, c| eig.eigenvectors[(i, order[c])] * lam[c].sqrt());
+        let ut = Mat::from_fn(r, n, |c, i| eig.eigenvectors[(i, order[c])] / lam[c].sqrt());
+        p.basis = Some(mul(ut.as_ref(), view(&model.y)));
+        p.a_y = p.chol_y.solve(us.as_ref());
+        let rms = (discarded.max(0.0) / (n * model.y.ncols()) as f64).sqrt();
+        Ok((p, r, rms))
     }
 
     /// Latent dimension d.
@@ -71,7 +110,7 @@ impl Predictor {
 
     /// Pose dimension D.
     pub fn pose_dim(&self) -> usize {
-        self.a_y.ncols()
+        self.y_mean.len()
     }
 
     /// Dynamics kernel.
@@ -146,7 +185,11 @@ impl Predictor {
     pub fn pose_mean(&self, xs: &DMatrix<f64>) -> Result<DMatrix<f64>> {
         self.check_latent(xs)?;
         let kstar = self.ky.cross(view(xs), self.x.as_ref()); // T × N
-        let mut m = to_na(mul(kstar.as_ref(), self.a_y.as_ref()).as_ref());
+        let coef = mul(kstar.as_ref(), self.a_y.as_ref());
+        let mut m = match &self.basis {
+            Some(b) => to_na(mul(coef.as_ref(), b.as_ref()).as_ref()),
+            None => to_na(coef.as_ref()),
+        };
         for mut row in m.row_iter_mut() {
             row += self.y_mean.transpose();
         }

@@ -248,3 +248,28 @@ fn model_serialises_round_trip_and_validates_input() {
     bad[(0, 0)] = f64::NAN;
     assert!(Gpdm::new(&[bad], GpdmConfig::default()).is_err());
 }
+
+#[test]
+fn pose_basis_decoder_matches_exact_decoder() {
+    let (m, _, _) = rotation_model();
+    let exact = Predictor::new(&m).unwrap();
+    let xs = m.x.rows(0, 12).into_owned() * 1.1;
+    let want = exact.pose_mean(&xs).unwrap();
+    // Full rank: identical up to rounding.
+    let (full, r, rms) = Predictor::with_pose_basis(&m, 0.0).unwrap();
+    assert!(r <= 10 && rms < 1e-6, "rank {r}, rms {rms}");
+    assert!((full.pose_mean(&xs).unwrap() - &want).abs().max() < 1e-9);
+    // The data are rank 2 plus 0.01 noise in 10-D: keeping 99.9 % of the energy drops the
+    // noise directions; the decoded poses move by at most about the noise level.
+    let (low, r, rms) = Predictor::with_pose_basis(&m, 1e-3).unwrap();
+    assert!(r < 10, "rank {r}");
+    let diff = (low.pose_mean(&xs).unwrap() - &want)
+        .map(|v| v * v)
+        .mean()
+        .sqrt();
+    assert!(
+        diff < 0.02 && rms < 0.02,
+        "decoded difference {diff}, training rms {rms}"
+    );
+    assert!(Predictor::with_pose_basis(&m, 1.0).is_err());
+}

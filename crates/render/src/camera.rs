@@ -199,8 +199,10 @@ impl Camera {
     ///
     /// Orthographic: the 8 box corners are projected and the scale fits their
     /// extent (the projection of the box lies in the hull of its projected
-    /// corners). Perspective: the box's bounding sphere is fitted inside the
-    /// narrower field of view, so every point of the box is in view.
+    /// corners). Perspective: the eye is placed at the nearest distance where
+    /// all 8 corners project inside the image (bisection from the bounding
+    /// sphere's distance, which always fits); every point of the box is then
+    /// in view, since its image is the hull of the corners' images.
     pub fn frame(
         bbox: &Aabb,
         view: &View,
@@ -258,12 +260,39 @@ impl Camera {
             }
             ProjectionKind::Perspective { fov_y_deg } => {
                 let fov_y = fov_y_deg.clamp(1.0, 170.0).to_radians();
-                let half_y = fov_y * 0.5;
-                let half_x = (half_y.tan() * w / h).atan();
-                // Shrink the usable cone by the margin (in tangent space).
-                let half = (half_y.min(half_x).tan() * (1.0 - 2.0 * MARGIN)).atan();
+                // Usable tangents of the half angles, shrunk by the margin.
+                let ty = (fov_y * 0.5).tan() * (1.0 - 2.0 * MARGIN);
+                let tx = ty * w / h;
+                // Corners in camera axes (z towards the eye), relative to the centre.
+                let corners: Vec<[f64; 3]> = bbox
+                    .corners()
+                    .iter()
+                    .map(|c| {
+                        let d = c - target;
+                        [d.dot(&right), d.dot(&up), d.dot(&back)]
+                    })
+                    .collect();
+                let fits = |dist: f64| {
+                    corners.iter().all(|c| {
+                        let depth = dist - c[2];
+                        depth > 0.0 && c[0].abs() <= tx * depth && c[1].abs() <= ty * depth
+                    })
+                };
+                // The bounding sphere always fits; bisect down to the nearest eye
+                // distance at which all 8 corners (hence the whole box, whose
+                // image is the hull of theirs) are in the image.
                 let r = ((bbox.max - bbox.min).norm() * 0.5).max(1e-9);
-                let distance = r / half.sin();
+                let mut hi = r / tx.min(ty).atan().sin() * (1.0 + 1e-9);
+                let mut lo = 0.0;
+                for _ in 0..60 {
+                    let mid = 0.5 * (lo + hi);
+                    if fits(mid) {
+                        hi = mid;
+                    } else {
+                        lo = mid;
+                    }
+                }
+                let distance = hi;
                 cam.projection = Projection::Perspective {
                     fov_y_deg: fov_y.to_degrees(),
                     distance,
@@ -435,6 +464,35 @@ mod tests {
                     }
                 }
             }
+        }
+    }
+
+    #[test]
+    fn perspective_framing_is_tight() {
+        // Some corner lies on the 5% margin (within a pixel): the eye is no
+        // further away than it must be.
+        let b = Aabb {
+            min: Vector3::new(-0.3, 0.0, -0.2),
+            max: Vector3::new(0.4, 1.8, 0.3),
+        };
+        for view in [View::FRONT, View::THREE_QUARTER] {
+            let kind = ProjectionKind::Perspective { fov_y_deg: 40.0 };
+            let cam = Camera::frame(&b, &view, &Axis::PLUS_Y, kind, 300, 200);
+            let gap = b
+                .corners()
+                .iter()
+                .map(|c| {
+                    let q = cam.project(c).unwrap();
+                    (q[0] - 15.0)
+                        .min(285.0 - q[0])
+                        .min(q[1] - 10.0)
+                        .min(190.0 - q[1])
+                })
+                .fold(f64::INFINITY, f64::min);
+            assert!(
+                (-1e-6..1.0).contains(&gap),
+                "{view:?}: closest corner {gap} px inside the margin"
+            );
         }
     }
 

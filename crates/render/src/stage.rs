@@ -88,6 +88,9 @@ pub struct Args {
     /// Do not write anim.gif
     #[arg(long)]
     pub no_gif: bool,
+    /// Camera follows the first sequence across the ground (keeps travelling motions large in frame)
+    #[arg(long)]
+    pub follow: bool,
 }
 
 fn parse_view(s: &str) -> Result<View, String> {
@@ -114,6 +117,31 @@ fn parse_size(s: &str) -> Result<(u32, u32), String> {
     };
     r.ok_or_else(|| "expected N or WxH with each side in 8..=4096".into())
 }
+/// Moves every frame of every sequence so that the first sequence's centroid
+/// stays above the origin of the ground plane (the plane orthogonal to `up`):
+/// the camera then follows the subject while the relative placement of the
+/// overlaid sequences, and all vertical motion, is kept.
+pub fn follow_first(seqs: &mut [MeshSequence], up: &nalgebra::Vector3<f64>) {
+    let Some(first) = seqs.first() else { return };
+    let offsets: Vec<nalgebra::Vector3<f64>> = first
+        .frames
+        .iter()
+        .map(|f| {
+            let c = f.iter().sum::<nalgebra::Vector3<f64>>() / f.len().max(1) as f64;
+            c - up * up.dot(&c)
+        })
+        .collect();
+    let Some(&last) = offsets.last() else { return };
+    for s in seqs.iter_mut() {
+        for (i, frame) in s.frames.iter_mut().enumerate() {
+            let o = offsets.get(i).copied().unwrap_or(last);
+            for p in frame.iter_mut() {
+                *p -= o;
+            }
+        }
+    }
+}
+
 /// Runs the stage (after `args.common.init()`).
 pub fn run(args: &Args) -> anyhow::Result<()> {
     let n_seq = args.seq_dirs.len();
@@ -136,11 +164,14 @@ pub fn run(args: &Args) -> anyhow::Result<()> {
         }
     }
     // Everything is read and checked before anything is written.
-    let seqs: Vec<MeshSequence> = args
+    let mut seqs: Vec<MeshSequence> = args
         .seq_dirs
         .iter()
         .map(MeshSequence::load_dir)
         .collect::<Result<_, _>>()?;
+    if args.follow {
+        follow_first(&mut seqs, &args.up.vector());
+    }
     let lens: Vec<usize> = seqs.iter().map(|s| s.frames.len()).collect();
     let longest = *lens.iter().max().unwrap_or(&0);
     if lens.iter().any(|&l| l != longest) {
@@ -267,6 +298,9 @@ pub fn run(args: &Args) -> anyhow::Result<()> {
             bar.inc(chunk.len() as u64);
         }
         bar.finish_and_clear();
+        if want_frames {
+            remove_stale_frames(&frames_dir, chosen.len())?;
+        }
     }
     if let Some(g) = gif {
         let path = out.join("anim.gif");
@@ -315,6 +349,30 @@ pub fn run(args: &Args) -> anyhow::Result<()> {
     Ok(())
 }
 
+/// Removes `NNNNNN.png` files numbered `n` or above left in `dir` by an
+/// earlier, longer run, so `frames/` holds exactly this run's frames.
+fn remove_stale_frames(dir: &std::path::Path, n: usize) -> anyhow::Result<()> {
+    let entries =
+        std::fs::read_dir(dir).with_context(|| format!("{}: cannot list", dir.display()))?;
+    for entry in entries {
+        let path = entry
+            .with_context(|| format!("{}: cannot list", dir.display()))?
+            .path();
+        let stale = path.extension().is_some_and(|e| e == "png")
+            && path
+                .file_stem()
+                .and_then(|s| s.to_str())
+                .filter(|s| !s.is_empty() && s.bytes().all(|b| b.is_ascii_digit()))
+                .and_then(|s| s.parse::<usize>().ok())
+                .is_some_and(|k| k >= n);
+        if stale {
+            std::fs::remove_file(&path)
+                .with_context(|| format!("{}: cannot remove stale frame", path.display()))?;
+        }
+    }
+    Ok(())
+}
+
 /// A folder's last component (for default row labels).
 fn short_name(p: &std::path::Path) -> String {
     p.file_name()
@@ -328,5 +386,25 @@ fn draw_legend(img: &mut RgbImage, legend: &[(String, Rgb)]) {
     for (k, (text, c)) in legend.iter().enumerate() {
         let y = (4 + k as u32 * (font::GLYPH_H + 3)) * s;
         font::draw_text(img, 4 * s as i64, y as i64, text, s, *c);
+    }
+}
+
+#[cfg(test)]
+mod follow_tests {
+    use super::*;
+    use nalgebra::Vector3;
+
+    #[test]
+    fn follow_removes_ground_travel_but_keeps_height_and_relative_offsets() {
+        let tri = vec![[0u32, 1, 2]];
+        let frame = |x: f64, y: f64| vec![Vector3::new(x, y, 0.0), Vector3::new(x + 1.0, y, 0.0), Vector3::new(x, y + 1.0, 0.0)];
+        let a = MeshSequence::new(tri.clone(), vec![frame(0.0, 0.0), frame(5.0, 2.0)]);
+        let b = MeshSequence::new(tri, vec![frame(1.0, 0.0), frame(6.0, 0.0)]);
+        let mut seqs = vec![a, b];
+        follow_first(&mut seqs, &Vector3::y());
+        let c = |f: &Vec<Vector3<f64>>| f.iter().sum::<Vector3<f64>>() / 3.0;
+        assert!((c(&seqs[0].frames[0]).x - c(&seqs[0].frames[1]).x).abs() < 1e-12);
+        assert!((c(&seqs[0].frames[1]).y - (2.0 + 1.0 / 3.0)).abs() < 1e-12, "height kept");
+        assert!((c(&seqs[1].frames[1]).x - c(&seqs[0].frames[1]).x - 1.0).abs() < 1e-12, "relative offset kept");
     }
 }

@@ -159,6 +159,25 @@ fn options_select_outputs_and_frames() {
     assert_eq!(files(&out), ["frames"]);
     assert_eq!(files(&out.join("frames")), ["000000.png", "000001.png"]);
     assert_eq!(png_size(&out.join("frames/000000.png")), (40, 40));
+
+    // A longer earlier run's frames do not linger after a shorter run.
+    let run = |extra: &[&str]| {
+        let o = Command::new(BIN)
+            .arg(&a)
+            .args(["--out", out.to_str().unwrap(), "--size", "24", "--no-gif"])
+            .args(extra)
+            .output()
+            .unwrap();
+        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    };
+    std::fs::write(out.join("frames/notes.txt"), "mine").unwrap();
+    run(&[]);
+    assert_eq!(files(&out.join("frames")).len(), 6);
+    run(&["--stride", "3"]);
+    assert_eq!(
+        files(&out.join("frames")),
+        ["000000.png", "000001.png", "notes.txt"]
+    );
 }
 
 /// Runs the binary expecting exit 1 with exactly one `render: ...` line that contains `needle`.

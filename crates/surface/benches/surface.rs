@@ -18,7 +18,9 @@ use surface::poisson::PoissonSolver;
 use surface::stitch::{Part, PartLayout, Stitcher};
 
 fn hash01(i: u64) -> f64 {
-    let mut x = i.wrapping_mul(0x9E3779B97F4A7C15).wrapping_add(0x632BE59BD9B4E019);
+    let mut x = i
+        .wrapping_mul(0x9E3779B97F4A7C15)
+        .wrapping_add(0x632BE59BD9B4E019);
     x ^= x >> 31;
     x = x.wrapping_mul(0xBF58476D1CE4E5B9);
     (x >> 11) as f64 / (1u64 << 53) as f64
@@ -26,7 +28,13 @@ fn hash01(i: u64) -> f64 {
 
 fn pose(v: &[Vector3<f64>], a: f64) -> Vec<Vector3<f64>> {
     v.iter()
-        .map(|p| p + Vector3::new(a * (0.6 * p.y).sin(), 0.0, 0.5 * a * (0.9 * p.y).cos() * p.x))
+        .map(|p| {
+            p + Vector3::new(
+                a * (0.6 * p.y).sin(),
+                0.0,
+                0.5 * a * (0.9 * p.y).cos() * p.x,
+            )
+        })
         .collect()
 }
 
@@ -47,64 +55,125 @@ fn setup() -> Setup {
     let mut p4 = rings(161, last);
     p4.push(layout.top_pole());
     let parts = vec![
-        Part { vertices: rings(70, 132), parent: None },
-        Part { vertices: rings(36, 75), parent: Some(0) },
-        Part { vertices: p2, parent: Some(1) },
-        Part { vertices: rings(127, 166), parent: Some(0) },
-        Part { vertices: p4, parent: Some(3) },
+        Part {
+            vertices: rings(70, 132),
+            parent: None,
+        },
+        Part {
+            vertices: rings(36, 75),
+            parent: Some(0),
+        },
+        Part {
+            vertices: p2,
+            parent: Some(1),
+        },
+        Part {
+            vertices: rings(127, 166),
+            parent: Some(0),
+        },
+        Part {
+            vertices: p4,
+            parent: Some(3),
+        },
     ];
     let mut correctors = Vec::new();
     let mut predictions = Vec::new();
     for part in &parts {
         let mut local = vec![u32::MAX; mesh.vertices.len()];
-        part.vertices.iter().enumerate().for_each(|(i, &v)| local[v as usize] = i as u32);
+        part.vertices
+            .iter()
+            .enumerate()
+            .for_each(|(i, &v)| local[v as usize] = i as u32);
         let faces: Vec<[u32; 3]> = mesh
             .faces
             .iter()
             .filter(|f| f.iter().all(|&v| local[v as usize] != u32::MAX))
             .map(|f| f.map(|v| local[v as usize]))
             .collect();
-        let rest: Vec<Vector3<f64>> = part.vertices.iter().map(|&v| mesh.vertices[v as usize]).collect();
+        let rest: Vec<Vector3<f64>> = part
+            .vertices
+            .iter()
+            .map(|&v| mesh.vertices[v as usize])
+            .collect();
         let training: Vec<_> = (0..10).map(|k| pose(&rest, 0.05 * k as f64)).collect();
         let pred: Vec<_> = pose(&rest, 0.23)
             .iter()
             .enumerate()
-            .map(|(i, p)| p * 0.95 + 0.002 * Vector3::new(hash01(3 * i as u64), hash01(3 * i as u64 + 1), 0.0))
+            .map(|(i, p)| {
+                p * 0.95 + 0.002 * Vector3::new(hash01(3 * i as u64), hash01(3 * i as u64 + 1), 0.0)
+            })
             .collect();
         correctors.push(Corrector::new(faces, training).unwrap());
         predictions.push(pred);
     }
-    Setup { faces: mesh.faces.clone(), vertices: mesh.vertices.clone(), parts, correctors, predictions }
+    Setup {
+        faces: mesh.faces.clone(),
+        vertices: mesh.vertices.clone(),
+        parts,
+        correctors,
+        predictions,
+    }
 }
 
 fn benches(c: &mut Criterion) {
     faer::set_global_parallelism(faer::Par::Seq);
     let s = setup();
-    eprintln!("mesh: {} vertices, {} faces", s.vertices.len(), s.faces.len());
+    eprintln!(
+        "mesh: {} vertices, {} faces",
+        s.vertices.len(),
+        s.faces.len()
+    );
 
     let op = GradientOperator::new(&s.vertices, &s.faces);
     let l = op.stiffness();
     let rhs = op.divergence(&op.gradient(&s.vertices));
     let mut solver = PoissonSolver::new(&l, &[0]).unwrap();
-    c.bench_function("poisson_solve_3rhs_13k", |b| b.iter(|| solver.solve(&rhs, &[s.vertices[0]]).unwrap()));
-    c.bench_function("poisson_refactor_13k", |b| b.iter(|| solver.refactor(&l, &[0]).unwrap()));
-    c.bench_function("poisson_symbolic_and_factor_13k", |b| b.iter(|| PoissonSolver::new(&l, &[0]).unwrap()));
+    c.bench_function("poisson_solve_3rhs_13k", |b| {
+        b.iter(|| solver.solve(&rhs, &[s.vertices[0]]).unwrap())
+    });
+    c.bench_function("poisson_refactor_13k", |b| {
+        b.iter(|| solver.refactor(&l, &[0]).unwrap())
+    });
+    c.bench_function("poisson_symbolic_and_factor_13k", |b| {
+        b.iter(|| PoissonSolver::new(&l, &[0]).unwrap())
+    });
 
-    let mut stitcher = Stitcher::new(PartLayout::new(s.vertices.len(), s.faces.clone(), s.parts.clone()).unwrap());
+    let mut stitcher =
+        Stitcher::new(PartLayout::new(s.vertices.len(), s.faces.clone(), s.parts.clone()).unwrap());
     let frame = |stitcher: &mut Stitcher| {
-        let corrected: Vec<_> =
-            s.correctors.iter().zip(&s.predictions).map(|(c, p)| c.correct(p, 3).unwrap()).collect();
+        let corrected: Vec<_> = s
+            .correctors
+            .iter()
+            .zip(&s.predictions)
+            .map(|(c, p)| c.correct(p, 3).unwrap())
+            .collect();
         stitcher.stitch(&corrected).unwrap()
     };
     frame(&mut stitcher); // warm-up: per-training-mesh factorisations are cached
     c.bench_function("correct_parts_13k", |b| {
-        b.iter(|| s.correctors.iter().zip(&s.predictions).map(|(c, p)| c.correct(p, 3).unwrap()).count())
+        b.iter(|| {
+            s.correctors
+                .iter()
+                .zip(&s.predictions)
+                .map(|(c, p)| c.correct(p, 3).unwrap())
+                .count()
+        })
     });
-    let corrected: Vec<_> = s.correctors.iter().zip(&s.predictions).map(|(c, p)| c.correct(p, 3).unwrap()).collect();
-    c.bench_function("stitch_frame_13k", |b| b.iter(|| stitcher.stitch(&corrected).unwrap()));
-    c.bench_function("correct_and_stitch_frame_13k", |b| b.iter(|| frame(&mut stitcher)));
+    let corrected: Vec<_> = s
+        .correctors
+        .iter()
+        .zip(&s.predictions)
+        .map(|(c, p)| c.correct(p, 3).unwrap())
+        .collect();
+    c.bench_function("stitch_frame_13k", |b| {
+        b.iter(|| stitcher.stitch(&corrected).unwrap())
+    });
+    c.bench_function("correct_and_stitch_frame_13k", |b| {
+        b.iter(|| frame(&mut stitcher))
+    });
     // Throughput over a sequence: two frames in flight, one Stitcher (factorisation) each.
-    let mut other = Stitcher::new(PartLayout::new(s.vertices.len(), s.faces.clone(), s.parts.clone()).unwrap());
+    let mut other =
+        Stitcher::new(PartLayout::new(s.vertices.len(), s.faces.clone(), s.parts.clone()).unwrap());
     frame(&mut other);
     c.bench_function("correct_and_stitch_2_frames_in_parallel_13k", |b| {
         b.iter(|| rayon::join(|| frame(&mut stitcher), || frame(&mut other)))

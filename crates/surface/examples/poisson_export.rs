@@ -23,12 +23,24 @@ fn write_rows<const N: usize>(path: &std::path::Path, rows: impl Iterator<Item =
 }
 
 fn main() {
-    let dir = std::path::PathBuf::from(std::env::args().nth(1).expect("usage: poisson_export <dir>"));
+    let dir = std::path::PathBuf::from(
+        std::env::args()
+            .nth(1)
+            .expect("usage: poisson_export <dir>"),
+    );
     std::fs::create_dir_all(&dir).expect("output directory");
     let (mesh, _) = capsule_body(170, 64, 1.0, 17.0);
     let (v, f) = (&mesh.vertices, &mesh.faces);
-    let x: Vec<Vector3<f64>> =
-        v.iter().map(|p| p + Vector3::new(0.3 * (0.4 * p.y).sin(), 0.05 * p.x * p.y, 0.2 * (0.7 * p.y).cos())).collect();
+    let x: Vec<Vector3<f64>> = v
+        .iter()
+        .map(|p| {
+            p + Vector3::new(
+                0.3 * (0.4 * p.y).sin(),
+                0.05 * p.x * p.y,
+                0.2 * (0.7 * p.y).cos(),
+            )
+        })
+        .collect();
     let fixed: Vec<usize> = vec![0, v.len() / 2, v.len() - 1];
     let op = GradientOperator::new(v, f);
     let rhs = op.divergence(&op.gradient(&x));
@@ -36,14 +48,31 @@ fn main() {
     let t0 = Instant::now();
     let solver = PoissonSolver::new(&l, &fixed).expect("factorisation");
     let t1 = Instant::now();
-    let sol = solver.solve(&rhs, &fixed.iter().map(|&i| x[i]).collect::<Vec<_>>()).expect("solve");
+    let sol = solver
+        .solve(&rhs, &fixed.iter().map(|&i| x[i]).collect::<Vec<_>>())
+        .expect("solve");
     let t2 = Instant::now();
     let e = |a: f64| format!("{a:.17e}");
-    write_rows(&dir.join("V.txt"), v.iter().map(|p| [e(p.x), e(p.y), e(p.z)]));
-    write_rows(&dir.join("X.txt"), x.iter().map(|p| [e(p.x), e(p.y), e(p.z)]));
-    write_rows(&dir.join("solution.txt"), sol.iter().map(|p| [e(p.x), e(p.y), e(p.z)]));
-    write_rows(&dir.join("F.txt"), f.iter().map(|t| t.map(|i| i.to_string())));
-    write_rows(&dir.join("fixed.txt"), fixed.iter().map(|i| [i.to_string()]));
+    write_rows(
+        &dir.join("V.txt"),
+        v.iter().map(|p| [e(p.x), e(p.y), e(p.z)]),
+    );
+    write_rows(
+        &dir.join("X.txt"),
+        x.iter().map(|p| [e(p.x), e(p.y), e(p.z)]),
+    );
+    write_rows(
+        &dir.join("solution.txt"),
+        sol.iter().map(|p| [e(p.x), e(p.y), e(p.z)]),
+    );
+    write_rows(
+        &dir.join("F.txt"),
+        f.iter().map(|t| t.map(|i| i.to_string())),
+    );
+    write_rows(
+        &dir.join("fixed.txt"),
+        fixed.iter().map(|i| [i.to_string()]),
+    );
     let timing = format!(
         "{{\"factor_s\": {}, \"solve_s\": {}, \"n_vertices\": {}}}\n",
         (t1 - t0).as_secs_f64(),

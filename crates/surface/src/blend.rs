@@ -34,7 +34,10 @@ pub struct Blender {
 
 /// Linear vertex blending, the baseline: `(1-w) a + w b`.
 pub fn linear_blend(a: &[Vector3<f64>], b: &[Vector3<f64>], w: f64) -> Vec<Vector3<f64>> {
-    a.iter().zip(b).map(|(p, q)| p * (1.0 - w) + q * w).collect()
+    a.iter()
+        .zip(b)
+        .map(|(p, q)| p * (1.0 - w) + q * w)
+        .collect()
 }
 
 impl Blender {
@@ -47,7 +50,13 @@ impl Blender {
         let op = GradientOperator::new(&rest, &faces);
         let solver = PoissonSolver::new(&op.stiffness(), &[0])?;
         let rest_gradient = op.gradient(&rest);
-        Ok(Blender { rest, faces, op, rest_gradient, solver })
+        Ok(Blender {
+            rest,
+            faces,
+            op,
+            rest_gradient,
+            solver,
+        })
     }
 
     /// Per-face polar decomposition of the deformation from the rest mesh to `pose`.
@@ -57,14 +66,26 @@ impl Blender {
             .iter()
             .map(|d| {
                 let (r, s) = polar(d);
-                (UnitQuaternion::from_rotation_matrix(&Rotation3::from_matrix_unchecked(r)), s)
+                (
+                    UnitQuaternion::from_rotation_matrix(&Rotation3::from_matrix_unchecked(r)),
+                    s,
+                )
             })
             .unzip();
-        Ok(PoseGradients { rotations, stretches, centroid: centroid(pose) })
+        Ok(PoseGradients {
+            rotations,
+            stretches,
+            centroid: centroid(pose),
+        })
     }
 
     /// Interpolates two decomposed poses at weight `w` and reconstructs the mesh.
-    pub fn interpolate(&self, a: &PoseGradients, b: &PoseGradients, w: f64) -> Result<Vec<Vector3<f64>>> {
+    pub fn interpolate(
+        &self,
+        a: &PoseGradients,
+        b: &PoseGradients,
+        w: f64,
+    ) -> Result<Vec<Vector3<f64>>> {
         let field: Vec<Matrix3<f64>> = (0..self.faces.len())
             .map(|f| {
                 let (q0, mut q1) = (a.rotations[f], b.rotations[f]);
@@ -76,14 +97,21 @@ impl Blender {
                 q.to_rotation_matrix().into_inner() * s * self.rest_gradient[f]
             })
             .collect();
-        let mut x = self.solver.solve(&self.op.divergence(&field), &[self.rest[0]])?;
+        let mut x = self
+            .solver
+            .solve(&self.op.divergence(&field), &[self.rest[0]])?;
         let shift = a.centroid * (1.0 - w) + b.centroid * w - centroid(&x);
         x.iter_mut().for_each(|v| *v += shift);
         Ok(x)
     }
 
     /// Blends two poses at weight `w` (0 gives `a`, 1 gives `b`).
-    pub fn blend(&self, a: &[Vector3<f64>], b: &[Vector3<f64>], w: f64) -> Result<Vec<Vector3<f64>>> {
+    pub fn blend(
+        &self,
+        a: &[Vector3<f64>],
+        b: &[Vector3<f64>],
+        w: f64,
+    ) -> Result<Vec<Vector3<f64>>> {
         self.interpolate(&self.decompose(a)?, &self.decompose(b)?, w)
     }
 
@@ -95,7 +123,11 @@ impl Blender {
         w: f64,
     ) -> Result<Vec<Vec<Vector3<f64>>>> {
         if a.len() != b.len() {
-            return Err(Error::invalid(format!("blend: sequences have {} and {} frames", a.len(), b.len())));
+            return Err(Error::invalid(format!(
+                "blend: sequences have {} and {} frames",
+                a.len(),
+                b.len()
+            )));
         }
         a.iter().zip(b).map(|(p, q)| self.blend(p, q, w)).collect()
     }

@@ -44,7 +44,9 @@ pub struct Corrector {
 /// Weights `w_k ∝ 1/d_k`, normalised; an exact match (`d ≤ tol`) takes all the weight.
 pub fn distance_weights(distances: &[f64], tol: f64) -> Vec<f64> {
     if let Some(k) = distances.iter().position(|&d| d <= tol) {
-        return (0..distances.len()).map(|j| if j == k { 1.0 } else { 0.0 }).collect();
+        return (0..distances.len())
+            .map(|j| if j == k { 1.0 } else { 0.0 })
+            .collect();
     }
     let inv: Vec<f64> = distances.iter().map(|d| 1.0 / d).collect();
     let s: f64 = inv.iter().sum();
@@ -53,19 +55,31 @@ pub fn distance_weights(distances: &[f64], tol: f64) -> Vec<f64> {
 
 /// Root-mean-square vertex distance.
 pub fn vertex_distance(a: &[Vector3<f64>], b: &[Vector3<f64>]) -> f64 {
-    (a.iter().zip(b).map(|(p, q)| (p - q).norm_squared()).sum::<f64>() / a.len().max(1) as f64).sqrt()
+    (a.iter()
+        .zip(b)
+        .map(|(p, q)| (p - q).norm_squared())
+        .sum::<f64>()
+        / a.len().max(1) as f64)
+        .sqrt()
 }
 
 impl Corrector {
     /// Checks the training meshes against `faces` (equal vertex counts, finite, valid indices).
     pub fn new(faces: Vec<[u32; 3]>, training: Vec<Vec<Vector3<f64>>>) -> Result<Self> {
-        let n = training.first().ok_or_else(|| Error::invalid("correct: no training meshes"))?.len();
+        let n = training
+            .first()
+            .ok_or_else(|| Error::invalid("correct: no training meshes"))?
+            .len();
         check_faces(n, &faces, "correct: part faces")?;
         for (k, t) in training.iter().enumerate() {
             check_vertices(t, n, &format!("correct: training mesh {k}"))?;
         }
         let prepared = (0..training.len()).map(|_| OnceLock::new()).collect();
-        Ok(Corrector { faces, training, prepared })
+        Ok(Corrector {
+            faces,
+            training,
+            prepared,
+        })
     }
 
     pub fn n_vertices(&self) -> usize {
@@ -77,8 +91,12 @@ impl Corrector {
 
     /// The `m` nearest training meshes to `prediction`: (index, distance), nearest first.
     pub fn nearest(&self, prediction: &[Vector3<f64>], m: usize) -> Vec<(usize, f64)> {
-        let mut d: Vec<(usize, f64)> =
-            self.training.iter().enumerate().map(|(k, t)| (k, vertex_distance(prediction, t))).collect();
+        let mut d: Vec<(usize, f64)> = self
+            .training
+            .iter()
+            .enumerate()
+            .map(|(k, t)| (k, vertex_distance(prediction, t)))
+            .collect();
         d.sort_by(|a, b| a.1.total_cmp(&b.1).then(a.0.cmp(&b.0)));
         d.truncate(m.max(1));
         d
@@ -89,9 +107,14 @@ impl Corrector {
             .get_or_init(|| {
                 let n = &self.training[k];
                 let op = GradientOperator::new(n, &self.faces);
-                let solver = PoissonSolver::new(&op.stiffness(), &[0]).map_err(|e| e.to_string())?;
+                let solver =
+                    PoissonSolver::new(&op.stiffness(), &[0]).map_err(|e| e.to_string())?;
                 let own_gradient = op.gradient(n);
-                Ok(Prepared { op, solver, own_gradient })
+                Ok(Prepared {
+                    op,
+                    solver,
+                    own_gradient,
+                })
             })
             .as_ref()
             .map_err(|e| Error::invalid(format!("correct: training mesh {k}: {e}")))
@@ -99,7 +122,11 @@ impl Corrector {
 
     /// Training mesh `k` deformed by the per-face rotations of its polar decompositions towards
     /// `prediction` (steps 3-4), centred on the prediction's centroid.
-    pub fn rotate_towards(&self, k: usize, prediction: &[Vector3<f64>]) -> Result<Vec<Vector3<f64>>> {
+    pub fn rotate_towards(
+        &self,
+        k: usize,
+        prediction: &[Vector3<f64>],
+    ) -> Result<Vec<Vector3<f64>>> {
         let p = self.prepared(k)?;
         let nk = &self.training[k];
         let field: Vec<Matrix3<f64>> = self
@@ -123,11 +150,22 @@ impl Corrector {
     pub fn correct(&self, prediction: &[Vector3<f64>], m: usize) -> Result<Vec<Vector3<f64>>> {
         check_vertices(prediction, self.n_vertices(), "correct: prediction")?;
         let near = self.nearest(prediction, m);
-        let size = prediction.iter().map(|v| v.norm()).fold(0.0, f64::max).max(f64::MIN_POSITIVE);
+        let size = prediction
+            .iter()
+            .map(|v| v.norm())
+            .fold(0.0, f64::max)
+            .max(f64::MIN_POSITIVE);
         let w = distance_weights(&near.iter().map(|x| x.1).collect::<Vec<_>>(), 1e-12 * size);
-        let used: Vec<(usize, f64)> = near.iter().zip(w).filter(|x| x.1 > 0.0).map(|(n, w)| (n.0, w)).collect();
-        let shapes: Vec<Vec<Vector3<f64>>> =
-            used.par_iter().map(|&(k, _)| self.rotate_towards(k, prediction)).collect::<Result<_>>()?;
+        let used: Vec<(usize, f64)> = near
+            .iter()
+            .zip(w)
+            .filter(|x| x.1 > 0.0)
+            .map(|(n, w)| (n.0, w))
+            .collect();
+        let shapes: Vec<Vec<Vector3<f64>>> = used
+            .par_iter()
+            .map(|&(k, _)| self.rotate_towards(k, prediction))
+            .collect::<Result<_>>()?;
         let mut out = vec![Vector3::zeros(); prediction.len()];
         for (x, (_, wk)) in shapes.iter().zip(&used) {
             out.iter_mut().zip(x).for_each(|(o, v)| *o += *wk * v);

@@ -43,7 +43,9 @@ impl GradientOperator {
     /// G on the geometry `vertices`. Panics on out-of-range face indices
     /// (check with [`crate::check_faces`]).
     pub fn new(vertices: &[Vector3<f64>], faces: &[[u32; 3]]) -> Self {
-        Self::from_triangles(vertices.len(), faces, |f| faces[f].map(|i| vertices[i as usize]))
+        Self::from_triangles(vertices.len(), faces, |f| {
+            faces[f].map(|i| vertices[i as usize])
+        })
     }
 
     /// G where face `f` takes its reference triangle from `triangle(f)`: each face may come
@@ -53,8 +55,15 @@ impl GradientOperator {
         faces: &[[u32; 3]],
         triangle: impl Fn(usize) -> [Vector3<f64>; 3],
     ) -> Self {
-        let (grads, areas) = (0..faces.len()).map(|f| hat_gradients(&triangle(f))).unzip();
-        GradientOperator { n_vertices, faces: faces.to_vec(), grads, areas }
+        let (grads, areas) = (0..faces.len())
+            .map(|f| hat_gradients(&triangle(f)))
+            .unzip();
+        GradientOperator {
+            n_vertices,
+            faces: faces.to_vec(),
+            grads,
+            areas,
+        }
     }
 
     pub fn n_vertices(&self) -> usize {
@@ -75,7 +84,9 @@ impl GradientOperator {
     /// Gradient of face `f` of a field given by its three corner values.
     pub fn face_gradient(&self, f: usize, corners: &[Vector3<f64>; 3]) -> Matrix3<f64> {
         let g = &self.grads[f];
-        corners[0] * g[0].transpose() + corners[1] * g[1].transpose() + corners[2] * g[2].transpose()
+        corners[0] * g[0].transpose()
+            + corners[1] * g[1].transpose()
+            + corners[2] * g[2].transpose()
     }
 
     /// Per-face gradients `J_f = Σ_i X_i g_iᵀ` of a per-vertex field.
@@ -119,7 +130,11 @@ impl GradientOperator {
         for (f, face) in self.faces.iter().enumerate() {
             for k in 0..3 {
                 for d in 0..3 {
-                    t.push(Triplet::new(3 * f + d, face[k] as usize, self.grads[f][k][d]));
+                    t.push(Triplet::new(
+                        3 * f + d,
+                        face[k] as usize,
+                        self.grads[f][k][d],
+                    ));
                 }
             }
         }
@@ -145,7 +160,13 @@ impl StiffnessPattern {
             .collect();
         let matrix = crate::laplacian::assemble(n_vertices, e);
         let (cp, ri) = (matrix.symbolic().col_ptr(), matrix.symbolic().row_idx());
-        let slot = |i: usize, j: usize| cp[j] + ri[cp[j]..cp[j + 1]].iter().position(|&r| r == i).expect("in pattern");
+        let slot = |i: usize, j: usize| {
+            cp[j]
+                + ri[cp[j]..cp[j + 1]]
+                    .iter()
+                    .position(|&r| r == i)
+                    .expect("in pattern")
+        };
         let slots = faces
             .iter()
             .map(|f| std::array::from_fn(|k| slot(f[k / 3] as usize, f[k % 3] as usize)))
@@ -155,7 +176,11 @@ impl StiffnessPattern {
 
     /// Fills the pattern with `op`'s `Gᵀ A G` (same faces as at construction).
     pub fn fill(&mut self, op: &GradientOperator) -> &SparseColMat<usize, f64> {
-        assert_eq!(op.faces.len(), self.slots.len(), "stiffness pattern built for other faces");
+        assert_eq!(
+            op.faces.len(),
+            self.slots.len(),
+            "stiffness pattern built for other faces"
+        );
         let vals = self.matrix.val_mut();
         vals.iter_mut().for_each(|v| *v = 0.0);
         for (f, sl) in self.slots.iter().enumerate() {
@@ -178,7 +203,10 @@ fn frame(t: &[Vector3<f64>; 3]) -> Matrix3<f64> {
 
 /// Deformation gradient `D = V' V⁻¹` mapping the `rest` triangle onto `deformed`
 /// (4th-vertex frame, module doc). `None` for a degenerate triangle.
-pub fn triangle_deformation(rest: &[Vector3<f64>; 3], deformed: &[Vector3<f64>; 3]) -> Option<Matrix3<f64>> {
+pub fn triangle_deformation(
+    rest: &[Vector3<f64>; 3],
+    deformed: &[Vector3<f64>; 3],
+) -> Option<Matrix3<f64>> {
     let (v, vd) = (frame(rest), frame(deformed));
     if !v.iter().chain(vd.iter()).all(|x| x.is_finite()) {
         return None;
@@ -189,7 +217,11 @@ pub fn triangle_deformation(rest: &[Vector3<f64>; 3], deformed: &[Vector3<f64>; 
 }
 
 /// Deformation gradients of every face from `rest` to `deformed`; identity for degenerate faces.
-pub fn face_deformations(rest: &[Vector3<f64>], deformed: &[Vector3<f64>], faces: &[[u32; 3]]) -> Vec<Matrix3<f64>> {
+pub fn face_deformations(
+    rest: &[Vector3<f64>],
+    deformed: &[Vector3<f64>],
+    faces: &[[u32; 3]],
+) -> Vec<Matrix3<f64>> {
     faces
         .iter()
         .map(|f| {

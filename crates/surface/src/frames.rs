@@ -21,21 +21,37 @@ pub struct Frames {
 pub fn read_frames(path: &Path) -> Result<Frames> {
     if path.is_dir() {
         let s = MeshSequence::load_dir(path)?;
-        Ok(Frames { faces: s.faces, frames: s.frames, is_dir: true })
+        Ok(Frames {
+            faces: s.faces,
+            frames: s.frames,
+            is_dir: true,
+        })
     } else {
         let m = read_mesh(path)?;
-        Ok(Frames { faces: m.faces, frames: vec![m.vertices], is_dir: false })
+        Ok(Frames {
+            faces: m.faces,
+            frames: vec![m.vertices],
+            is_dir: false,
+        })
     }
 }
 
 /// Writes a frame directory (`as_dir`) or a single mesh file (exactly one frame).
-pub fn write_frames(path: &Path, faces: &[[u32; 3]], frames: Vec<Vec<Vector3<f64>>>, as_dir: bool) -> Result<()> {
+pub fn write_frames(
+    path: &Path,
+    faces: &[[u32; 3]],
+    frames: Vec<Vec<Vector3<f64>>>,
+    as_dir: bool,
+) -> Result<()> {
     if as_dir {
         return MeshSequence::new(faces.to_vec(), frames).write_dir(path);
     }
-    let [vertices]: [Vec<Vector3<f64>>; 1] = frames
-        .try_into()
-        .map_err(|v: Vec<_>| Error::file(path, format!("{} frames cannot go into one mesh file", v.len())))?;
+    let [vertices]: [Vec<Vector3<f64>>; 1] = frames.try_into().map_err(|v: Vec<_>| {
+        Error::file(
+            path,
+            format!("{} frames cannot go into one mesh file", v.len()),
+        )
+    })?;
     write_mesh(path, &TriMesh::new(vertices, faces.to_vec()))
 }
 

@@ -12,7 +12,10 @@ use nalgebra::Vector3;
 /// Assembles a symmetric n x n matrix from (row, col, value) entries (duplicates summed).
 /// Every diagonal entry is present in the pattern, even if zero.
 pub(crate) fn assemble(n: usize, entries: Vec<(usize, usize, f64)>) -> SparseColMat<usize, f64> {
-    let mut t: Vec<Triplet<usize, usize, f64>> = entries.into_iter().map(|(r, c, v)| Triplet::new(r, c, v)).collect();
+    let mut t: Vec<Triplet<usize, usize, f64>> = entries
+        .into_iter()
+        .map(|(r, c, v)| Triplet::new(r, c, v))
+        .collect();
     t.extend((0..n).map(|i| Triplet::new(i, i, 0.0)));
     SparseColMat::try_new_from_triplets(n, n, &t).expect("indices checked by the caller")
 }
@@ -30,11 +33,18 @@ fn cot_at(pk: &Vector3<f64>, pi: &Vector3<f64>, pj: &Vector3<f64>) -> f64 {
 
 /// The cotangent Laplacian (PSD convention, see module doc). Degenerate faces contribute nothing.
 /// Panics if a face index is out of range (check with [`crate::check_faces`]).
-pub fn cotangent_laplacian(vertices: &[Vector3<f64>], faces: &[[u32; 3]]) -> SparseColMat<usize, f64> {
+pub fn cotangent_laplacian(
+    vertices: &[Vector3<f64>],
+    faces: &[[u32; 3]],
+) -> SparseColMat<usize, f64> {
     let mut e = Vec::with_capacity(faces.len() * 12);
     for f in faces {
         for k in 0..3 {
-            let (i, j, o) = (f[k] as usize, f[(k + 1) % 3] as usize, f[(k + 2) % 3] as usize);
+            let (i, j, o) = (
+                f[k] as usize,
+                f[(k + 1) % 3] as usize,
+                f[(k + 2) % 3] as usize,
+            );
             let w = 0.5 * cot_at(&vertices[o], &vertices[i], &vertices[j]);
             e.push((i, j, -w));
             e.push((j, i, -w));

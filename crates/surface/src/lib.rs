@@ -40,7 +40,9 @@ pub fn check_faces(n_vertices: usize, faces: &[[u32; 3]], what: &str) -> Result<
             }
         }
         if face[0] == face[1] || face[1] == face[2] || face[0] == face[2] {
-            return Err(Error::invalid(format!("{what}: face {f} repeats a vertex: {face:?}")));
+            return Err(Error::invalid(format!(
+                "{what}: face {f} repeats a vertex: {face:?}"
+            )));
         }
     }
     Ok(())
@@ -49,7 +51,10 @@ pub fn check_faces(n_vertices: usize, faces: &[[u32; 3]], what: &str) -> Result<
 /// Checks that a vertex array has the expected length and only finite coordinates.
 pub fn check_vertices(v: &[Vector3<f64>], n: usize, what: &str) -> Result<()> {
     if v.len() != n {
-        return Err(Error::invalid(format!("{what}: {} vertices, expected {n}", v.len())));
+        return Err(Error::invalid(format!(
+            "{what}: {} vertices, expected {n}",
+            v.len()
+        )));
     }
     if let Some(i) = v.iter().position(|p| !p.iter().all(|c| c.is_finite())) {
         return Err(Error::invalid(format!("{what}: vertex {i} is not finite")));

@@ -16,8 +16,8 @@
 //! wind an odd number `> 1` of times are never cheaper with positive weights.
 
 use crate::topo::ordered_fan;
-use mesh_core::topology::Topology;
 use crate::{Error, Result};
+use mesh_core::topology::Topology;
 use nalgebra::Vector3;
 use std::cmp::Reverse;
 use std::collections::{BinaryHeap, HashSet};
@@ -50,17 +50,28 @@ impl Ord for Key {
 
 /// The cheapest loop around the band. `positions` give edge lengths, `faces` the band faces
 /// (indices into `positions`), `cost` the per-vertex discrepancy.
-pub fn optimal_loop(positions: &[Vector3<f64>], faces: &[[u32; 3]], cost: &[f64]) -> Result<BoundaryLoop> {
+pub fn optimal_loop(
+    positions: &[Vector3<f64>],
+    faces: &[[u32; 3]],
+    cost: &[f64],
+) -> Result<BoundaryLoop> {
     crate::check_faces(positions.len(), faces, "overlap band")?;
     optimal_loop_in(&Topology::new(positions.len(), faces), positions, cost)
 }
 
 /// [`optimal_loop`] on a band whose topology is already built (reused across frames).
-pub fn optimal_loop_in(topo: &Topology, positions: &[Vector3<f64>], cost: &[f64]) -> Result<BoundaryLoop> {
+pub fn optimal_loop_in(
+    topo: &Topology,
+    positions: &[Vector3<f64>],
+    cost: &[f64],
+) -> Result<BoundaryLoop> {
     let n = positions.len();
     let faces = topo.faces();
-    if topo.n_vertices() != n || cost.len() != n || cost.iter().any(|c| !c.is_finite() || *c < 0.0) {
-        return Err(Error::invalid("overlap band: positions and discrepancy must be finite, one per vertex"));
+    if topo.n_vertices() != n || cost.len() != n || cost.iter().any(|c| !c.is_finite() || *c < 0.0)
+    {
+        return Err(Error::invalid(
+            "overlap band: positions and discrepancy must be finite, one per vertex",
+        ));
     }
     let loops = topo.boundary_loops();
     if loops.len() != 2 {
@@ -75,7 +86,9 @@ pub fn optimal_loop_in(topo: &Topology, positions: &[Vector3<f64>], cost: &[f64]
 
     let mean = cost.iter().sum::<f64>() / n as f64;
     let delta = if mean > 0.0 { 1e-3 * mean } else { 1.0 };
-    let weight = |u: usize, v: usize| (positions[u] - positions[v]).norm() * (0.5 * (cost[u] + cost[v]) + delta);
+    let weight = |u: usize, v: usize| {
+        (positions[u] - positions[v]).norm() * (0.5 * (cost[u] + cost[v]) + delta)
+    };
 
     let mut best: Option<BoundaryLoop> = None;
     let mut dist = vec![f64::INFINITY; 2 * n];
@@ -117,7 +130,10 @@ pub fn optimal_loop_in(topo: &Topology, positions: &[Vector3<f64>], cost: &[f64]
             }
             vertices.push(s);
             vertices.reverse();
-            best = Some(BoundaryLoop { vertices, cost: dist[dst] });
+            best = Some(BoundaryLoop {
+                vertices,
+                cost: dist[dst],
+            });
         }
     }
     best.ok_or_else(|| Error::invalid("overlap band: no loop around the band found"))
@@ -154,7 +170,9 @@ fn cut_path(topo: &Topology, a: &[u32], b: &[u32]) -> Result<Vec<usize>> {
             }
         }
     }
-    Err(Error::invalid("overlap band: its two boundaries are not connected"))
+    Err(Error::invalid(
+        "overlap band: its two boundaries are not connected",
+    ))
 }
 
 /// For each cut vertex, its neighbours on the cut's right side (the sheet-switching edges);

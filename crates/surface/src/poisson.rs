@@ -41,8 +41,9 @@ impl PoissonSolver {
         if laplacian.ncols() != n {
             return Err(Error::invalid("poisson: system matrix is not square"));
         }
-        let symbolic = SymbolicLlt::try_new(laplacian.symbolic(), Side::Lower)
-            .map_err(|e| Error::invalid(format!("poisson: symbolic factorisation failed: {e:?}")))?;
+        let symbolic = SymbolicLlt::try_new(laplacian.symbolic(), Side::Lower).map_err(|e| {
+            Error::invalid(format!("poisson: symbolic factorisation failed: {e:?}"))
+        })?;
         let (llt, parts) = factor(&symbolic, laplacian, fixed)?;
         Ok(PoissonSolver {
             n,
@@ -59,7 +60,11 @@ impl PoissonSolver {
 
     /// Refactorises for new values and/or a new fixed set. The symbolic factorisation is
     /// reused when the sparsity pattern is unchanged (same topology), recomputed otherwise.
-    pub fn refactor(&mut self, laplacian: &SparseColMat<usize, f64>, fixed: &[usize]) -> Result<()> {
+    pub fn refactor(
+        &mut self,
+        laplacian: &SparseColMat<usize, f64>,
+        fixed: &[usize],
+    ) -> Result<()> {
         let same = laplacian.nrows() == self.n
             && laplacian.ncols() == self.n
             && laplacian.symbolic().col_ptr() == self.col_ptr.as_slice()
@@ -92,7 +97,11 @@ impl PoissonSolver {
 
     /// Solves `L x = rhs` on the free vertices with `x[fixed[k]] = values[k]`, for the three
     /// coordinates at once.
-    pub fn solve(&self, rhs: &[Vector3<f64>], values: &[Vector3<f64>]) -> Result<Vec<Vector3<f64>>> {
+    pub fn solve(
+        &self,
+        rhs: &[Vector3<f64>],
+        values: &[Vector3<f64>],
+    ) -> Result<Vec<Vector3<f64>>> {
         if rhs.len() != self.n || values.len() != self.fixed.len() {
             return Err(Error::invalid(format!(
                 "poisson: right-hand side has {} rows and {} fixed values, expected {} and {}",
@@ -119,7 +128,9 @@ impl PoissonSolver {
             }
         }
         self.llt.solve_in_place(b.as_mut());
-        let x: Vec<Vector3<f64>> = (0..self.n).map(|i| Vector3::new(b[(i, 0)], b[(i, 1)], b[(i, 2)])).collect();
+        let x: Vec<Vector3<f64>> = (0..self.n)
+            .map(|i| Vector3::new(b[(i, 0)], b[(i, 1)], b[(i, 2)]))
+            .collect();
         if x.iter().any(|p| !p.iter().all(|c| c.is_finite())) {
             return Err(Error::invalid("poisson: solution is not finite"));
         }
@@ -144,7 +155,9 @@ fn factor(
     let mut slot = vec![usize::MAX; n];
     for (k, &v) in fixed.iter().enumerate() {
         if v >= n {
-            return Err(Error::invalid(format!("poisson: fixed vertex {v} out of range ({n} vertices)")));
+            return Err(Error::invalid(format!(
+                "poisson: fixed vertex {v} out of range ({n} vertices)"
+            )));
         }
         if slot[v] != usize::MAX {
             return Err(Error::invalid(format!("poisson: vertex {v} fixed twice")));
@@ -183,7 +196,9 @@ fn factor(
     }
     check_anchored(n, &cp, &ri, &slot)?;
     if let Some(j) = diag_pos.iter().position(|&p| p == usize::MAX) {
-        return Err(Error::invalid(format!("poisson: diagonal entry {j} missing from the sparsity pattern")));
+        return Err(Error::invalid(format!(
+            "poisson: diagonal entry {j} missing from the sparsity pattern"
+        )));
     }
     let mut jitter = 0.0;
     for attempt in 0..6 {
@@ -194,7 +209,14 @@ fn factor(
                         "surface: poisson: system not positive definite, factorised with diagonal jitter {jitter:.3e}"
                     );
                 }
-                return Ok((llt, Parts { coupling, fixed_diag, jitter }));
+                return Ok((
+                    llt,
+                    Parts {
+                        coupling,
+                        fixed_diag,
+                        jitter,
+                    },
+                ));
             }
             Err(_) => {
                 let add = max_diag.max(1.0) * 1e-12 * 100f64.powi(attempt);

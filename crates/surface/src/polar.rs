@@ -40,7 +40,10 @@ fn triangle_frame(t: &[Vector3<f64>; 3]) -> Option<(Matrix3<f64>, [f64; 3])> {
     let nh = n / ln;
     let t2 = nh.cross(&t1);
     // Local coordinates: e_1 = (l1, 0), e_2 = (e2·t1, e2·t2).
-    Some((Matrix3::from_columns(&[t1, t2, nh]), [l1, e2.dot(&t1), e2.dot(&t2)]))
+    Some((
+        Matrix3::from_columns(&[t1, t2, nh]),
+        [l1, e2.dot(&t1), e2.dot(&t2)],
+    ))
 }
 
 /// Rotation factor of the polar decomposition of the Sumner deformation gradient `D` from
@@ -53,7 +56,10 @@ fn triangle_frame(t: &[Vector3<f64>; 3]) -> Option<(Matrix3<f64>, [f64; 3])> {
 /// triangle whose normal turned over). The polar rotation is therefore exactly
 /// `F' diag(R_θ, 1) Fᵀ` with `θ = atan2(a_21 - a_12, a_11 + a_22)` (closest 2D rotation),
 /// about 10x cheaper than a 3x3 SVD. `None` for a degenerate triangle.
-pub fn triangle_rotation(rest: &[Vector3<f64>; 3], deformed: &[Vector3<f64>; 3]) -> Option<Matrix3<f64>> {
+pub fn triangle_rotation(
+    rest: &[Vector3<f64>; 3],
+    deformed: &[Vector3<f64>; 3],
+) -> Option<Matrix3<f64>> {
     let (f, [r11, r12, r22]) = triangle_frame(rest)?;
     let (g, [d11, d12, d22]) = triangle_frame(deformed)?;
     // A = P_d P_r⁻¹ with upper-triangular P = [[p11, p12], [0, p22]] (back substitution).

@@ -38,19 +38,28 @@ impl Segmentation {
     /// Part order with every parent before its children (root first), as indices into
     /// `self.parts`.
     pub fn tree_order(&self) -> Result<Vec<usize>> {
-        let roots: Vec<usize> = (0..self.parts.len()).filter(|&k| self.parts[k].parent.is_none()).collect();
+        let roots: Vec<usize> = (0..self.parts.len())
+            .filter(|&k| self.parts[k].parent.is_none())
+            .collect();
         if roots.len() != 1 {
-            return Err(Error::invalid(format!("segmentation has {} root parts, expected 1", roots.len())));
+            return Err(Error::invalid(format!(
+                "segmentation has {} root parts, expected 1",
+                roots.len()
+            )));
         }
         let mut order = roots;
         let mut i = 0;
         while i < order.len() {
             let name = &self.parts[order[i]].name;
-            order.extend((0..self.parts.len()).filter(|&k| self.parts[k].parent.as_ref() == Some(name)));
+            order.extend(
+                (0..self.parts.len()).filter(|&k| self.parts[k].parent.as_ref() == Some(name)),
+            );
             i += 1;
         }
         if order.len() != self.parts.len() {
-            return Err(Error::invalid("segmentation: some parts are not connected to the root"));
+            return Err(Error::invalid(
+                "segmentation: some parts are not connected to the root",
+            ));
         }
         Ok(order)
     }
@@ -65,9 +74,14 @@ impl Segmentation {
                 let p = &self.parts[k];
                 let parent = match &p.parent {
                     None => None,
-                    Some(n) => Some(pos(n).ok_or_else(|| Error::invalid(format!("part '{}': unknown parent '{n}'", p.name)))?),
+                    Some(n) => Some(pos(n).ok_or_else(|| {
+                        Error::invalid(format!("part '{}': unknown parent '{n}'", p.name))
+                    })?),
                 };
-                Ok(Part { vertices: p.vertices.clone(), parent })
+                Ok(Part {
+                    vertices: p.vertices.clone(),
+                    parent,
+                })
             })
             .collect::<Result<Vec<_>>>()?;
         PartLayout::new(self.n_vertices, template_faces, parts)

@@ -57,49 +57,82 @@ impl PartLayout {
     pub fn new(n_vertices: usize, faces: Vec<[u32; 3]>, parts: Vec<Part>) -> Result<Self> {
         check_faces(n_vertices, &faces, "stitch: template")?;
         if parts.is_empty() || parts[0].parent.is_some() {
-            return Err(Error::invalid("stitch: part 0 must be the root (no parent)"));
+            return Err(Error::invalid(
+                "stitch: part 0 must be the root (no parent)",
+            ));
         }
         let mut local = Vec::with_capacity(parts.len());
         for (k, p) in parts.iter().enumerate() {
             if k > 0 && !matches!(p.parent, Some(q) if q < k) {
-                return Err(Error::invalid(format!("stitch: part {k} must name an earlier part as parent")));
+                return Err(Error::invalid(format!(
+                    "stitch: part {k} must name an earlier part as parent"
+                )));
             }
             let mut map = vec![ABSENT; n_vertices];
             for (i, &v) in p.vertices.iter().enumerate() {
                 let slot = map.get_mut(v as usize).ok_or_else(|| {
-                    Error::invalid(format!("stitch: part {k} uses vertex {v}, template has {n_vertices}"))
+                    Error::invalid(format!(
+                        "stitch: part {k} uses vertex {v}, template has {n_vertices}"
+                    ))
                 })?;
                 if *slot != ABSENT {
-                    return Err(Error::invalid(format!("stitch: part {k} lists vertex {v} twice")));
+                    return Err(Error::invalid(format!(
+                        "stitch: part {k} lists vertex {v} twice"
+                    )));
                 }
                 *slot = i as u32;
             }
             local.push(map);
         }
         let mut in_face = vec![false; n_vertices];
-        faces.iter().flatten().for_each(|&v| in_face[v as usize] = true);
-        if let Some(v) = (0..n_vertices).find(|&v| in_face[v] && local.iter().all(|m| m[v] == ABSENT)) {
-            return Err(Error::invalid(format!("stitch: template vertex {v} belongs to no part")));
+        faces
+            .iter()
+            .flatten()
+            .for_each(|&v| in_face[v as usize] = true);
+        if let Some(v) =
+            (0..n_vertices).find(|&v| in_face[v] && local.iter().all(|m| m[v] == ABSENT))
+        {
+            return Err(Error::invalid(format!(
+                "stitch: template vertex {v} belongs to no part"
+            )));
         }
         let mut bands = vec![None];
         for (k, p) in parts.iter().enumerate().skip(1) {
             let q = p.parent.expect("checked");
-            let vertices: Vec<u32> = p.vertices.iter().copied().filter(|&v| local[q][v as usize] != ABSENT).collect();
+            let vertices: Vec<u32> = p
+                .vertices
+                .iter()
+                .copied()
+                .filter(|&v| local[q][v as usize] != ABSENT)
+                .collect();
             let mut band_index = vec![ABSENT; n_vertices];
-            vertices.iter().enumerate().for_each(|(i, &v)| band_index[v as usize] = i as u32);
+            vertices
+                .iter()
+                .enumerate()
+                .for_each(|(i, &v)| band_index[v as usize] = i as u32);
             let bfaces: Vec<[u32; 3]> = faces
                 .iter()
                 .filter(|f| f.iter().all(|&v| band_index[v as usize] != ABSENT))
                 .map(|f| f.map(|v| band_index[v as usize]))
                 .collect();
             if bfaces.is_empty() {
-                return Err(Error::invalid(format!("stitch: part {k} does not overlap its parent part {q}")));
+                return Err(Error::invalid(format!(
+                    "stitch: part {k} does not overlap its parent part {q}"
+                )));
             }
             let topology = Topology::new(vertices.len(), &bfaces);
             bands.push(Some(Band { vertices, topology }));
         }
         let topology = Topology::new(n_vertices, &faces);
-        Ok(PartLayout { n_vertices, faces, parts, local, bands, topology, in_face })
+        Ok(PartLayout {
+            n_vertices,
+            faces,
+            parts,
+            local,
+            bands,
+            topology,
+            in_face,
+        })
     }
 
     pub fn n_vertices(&self) -> usize {
@@ -134,7 +167,11 @@ pub struct Stitcher {
 impl Stitcher {
     pub fn new(layout: PartLayout) -> Self {
         let pattern = StiffnessPattern::new(layout.n_vertices, &layout.faces);
-        Stitcher { layout, pattern, solver: None }
+        Stitcher {
+            layout,
+            pattern,
+            solver: None,
+        }
     }
     pub fn layout(&self) -> &PartLayout {
         &self.layout
@@ -144,7 +181,11 @@ impl Stitcher {
     pub fn stitch(&mut self, parts: &[Vec<Vector3<f64>>]) -> Result<Stitched> {
         let lay = &self.layout;
         if parts.len() != lay.parts.len() {
-            return Err(Error::invalid(format!("stitch: {} part meshes for {} parts", parts.len(), lay.parts.len())));
+            return Err(Error::invalid(format!(
+                "stitch: {} part meshes for {} parts",
+                parts.len(),
+                lay.parts.len()
+            )));
         }
         for (k, (x, p)) in parts.iter().zip(&lay.parts).enumerate() {
             check_vertices(x, p.vertices.len(), &format!("stitch: part {k}"))?;
@@ -161,14 +202,25 @@ impl Stitcher {
         for k in 1..parts.len() {
             let q = lay.parts[k].parent.expect("checked");
             let band = lay.bands[k].as_ref().expect("checked");
-            let at = |part: usize, x: &[Vector3<f64>], v: u32| x[lay.local[part][v as usize] as usize];
-            let in_parent: Vec<Vector3<f64>> = band.vertices.iter().map(|&v| at(q, &aligned[q], v)).collect();
-            let in_child: Vec<Vector3<f64>> = band.vertices.iter().map(|&v| at(k, &parts[k], v)).collect();
+            let at =
+                |part: usize, x: &[Vector3<f64>], v: u32| x[lay.local[part][v as usize] as usize];
+            let in_parent: Vec<Vector3<f64>> = band
+                .vertices
+                .iter()
+                .map(|&v| at(q, &aligned[q], v))
+                .collect();
+            let in_child: Vec<Vector3<f64>> =
+                band.vertices.iter().map(|&v| at(k, &parts[k], v)).collect();
             let motion = procrustes(&in_child, &in_parent, None);
             let child = motion.apply_all(&parts[k]);
-            let in_child: Vec<Vector3<f64>> = band.vertices.iter().map(|&v| at(k, &child, v)).collect();
-            let bl = optimal_loop_in(&band.topology, &in_parent, &discrepancy(&in_parent, &in_child))
-                .map_err(|e| Error::invalid(format!("stitch: part {k}: {e}")))?;
+            let in_child: Vec<Vector3<f64>> =
+                band.vertices.iter().map(|&v| at(k, &child, v)).collect();
+            let bl = optimal_loop_in(
+                &band.topology,
+                &in_parent,
+                &discrepancy(&in_parent, &in_child),
+            )
+            .map_err(|e| Error::invalid(format!("stitch: part {k}: {e}")))?;
             for &i in &bl.vertices {
                 let v = band.vertices[i] as usize;
                 on_loop[v] = true;
@@ -193,8 +245,15 @@ impl Stitcher {
                     }
                 }
             }
-            let template_loop = bl.vertices.iter().map(|&i| band.vertices[i] as usize).collect();
-            loops.push(Some(BoundaryLoop { vertices: template_loop, cost: bl.cost }));
+            let template_loop = bl
+                .vertices
+                .iter()
+                .map(|&i| band.vertices[i] as usize)
+                .collect();
+            loops.push(Some(BoundaryLoop {
+                vertices: template_loop,
+                cost: bl.cost,
+            }));
             aligned.push(child);
             alignments.push(motion);
         }
@@ -202,16 +261,26 @@ impl Stitcher {
         // Source part of every face: the owner of its first vertex off the loops.
         let mut src = Vec::with_capacity(lay.faces.len());
         for (f, face) in lay.faces.iter().enumerate() {
-            let v = face.iter().map(|&v| v as usize).find(|&v| !on_loop[v]).unwrap_or(face[0] as usize);
+            let v = face
+                .iter()
+                .map(|&v| v as usize)
+                .find(|&v| !on_loop[v])
+                .unwrap_or(face[0] as usize);
             let o = owner[v];
             if face.iter().any(|&v| lay.local[o][v as usize] == ABSENT) {
-                return Err(Error::invalid(format!("stitch: template face {f} is not inside its source part {o}")));
+                return Err(Error::invalid(format!(
+                    "stitch: template face {f} is not inside its source part {o}"
+                )));
             }
             src.push(o);
         }
-        let tri = |f: usize| lay.faces[f].map(|v| aligned[src[f]][lay.local[src[f]][v as usize] as usize]);
+        let tri = |f: usize| {
+            lay.faces[f].map(|v| aligned[src[f]][lay.local[src[f]][v as usize] as usize])
+        };
         let op = GradientOperator::from_triangles(n, &lay.faces, tri);
-        let field: Vec<_> = (0..lay.faces.len()).map(|f| op.face_gradient(f, &tri(f))).collect();
+        let field: Vec<_> = (0..lay.faces.len())
+            .map(|f| op.face_gradient(f, &tri(f)))
+            .collect();
 
         let mut fixed = Vec::new();
         let mut values = Vec::new();
@@ -228,7 +297,11 @@ impl Stitcher {
         }
         if fixed.iter().all(|&v| !lay.in_face[v]) {
             // No loop (a single part): anchor one vertex of the root.
-            let v = lay.parts[0].vertices.iter().map(|&v| v as usize).find(|&v| lay.in_face[v]);
+            let v = lay.parts[0]
+                .vertices
+                .iter()
+                .map(|&v| v as usize)
+                .find(|&v| lay.in_face[v]);
             if let Some(v) = v {
                 fixed.push(v);
                 values.push(aligned[0][lay.local[0][v] as usize]);
@@ -239,7 +312,15 @@ impl Stitcher {
             Some(s) => s.refactor(l, &fixed)?,
             None => self.solver = Some(PoissonSolver::new(l, &fixed)?),
         }
-        let vertices = self.solver.as_ref().expect("set above").solve(&op.divergence(&field), &values)?;
-        Ok(Stitched { vertices, loops, alignments })
+        let vertices = self
+            .solver
+            .as_ref()
+            .expect("set above")
+            .solve(&op.divergence(&field), &values)?;
+        Ok(Stitched {
+            vertices,
+            loops,
+            alignments,
+        })
     }
 }

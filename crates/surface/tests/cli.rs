@@ -7,10 +7,18 @@ use mesh_core::TriMesh;
 use std::process::Command;
 use surface::blend::Blender;
 use surface::correct::Corrector;
+use surface::segmentation::{SegmentPart, Segmentation};
 
 fn run(bin: &str, args: &[&str]) -> (i32, String) {
-    let out = Command::new(bin).args(args).env("OPENBLAS_NUM_THREADS", "1").output().unwrap();
-    (out.status.code().unwrap_or(-1), String::from_utf8_lossy(&out.stderr).into_owned())
+    let out = Command::new(bin)
+        .args(args)
+        .env("OPENBLAS_NUM_THREADS", "1")
+        .output()
+        .unwrap();
+    (
+        out.status.code().unwrap_or(-1),
+        String::from_utf8_lossy(&out.stderr).into_owned(),
+    )
 }
 
 #[test]
@@ -18,7 +26,11 @@ fn blend_binary_matches_library_and_fails_cleanly() {
     let dir = tempfile::tempdir().unwrap();
     let (rest, f) = tube(16, 21, 0.5, 0.1, true);
     let bent = bend(&rest, 0.5, 0.8, 1.6);
-    let (pa, pb, po) = (dir.path().join("a.ply"), dir.path().join("b.ply"), dir.path().join("o.ply"));
+    let (pa, pb, po) = (
+        dir.path().join("a.ply"),
+        dir.path().join("b.ply"),
+        dir.path().join("o.ply"),
+    );
     write_mesh(&pa, &TriMesh::new(rest.clone(), f.clone())).unwrap();
     write_mesh(&pb, &TriMesh::new(bent.clone(), f.clone())).unwrap();
     let bin = env!("CARGO_BIN_EXE_blend");
@@ -27,15 +39,24 @@ fn blend_binary_matches_library_and_fails_cleanly() {
     assert_eq!(code, 0, "{err}");
     assert!(err.is_empty(), "quiet on success: {err}");
     let got = read_mesh(&po).unwrap();
-    let want = Blender::new(rest.clone(), f.clone()).unwrap().blend(&rest, &bent, 0.25).unwrap();
+    let want = Blender::new(rest.clone(), f.clone())
+        .unwrap()
+        .blend(&rest, &bent, 0.25)
+        .unwrap();
     assert!(max_dist(&got.vertices, &want) < 1e-9);
     assert_eq!(got.faces, f);
 
     let (code, err) = run(bin, &[&s(&pa), &s(&pb), "-w", "1.5", "-o", &s(&po)]);
     assert_eq!((code, err.lines().count()), (1, 1), "{err}");
-    assert!(err.starts_with("blend: ") && err.contains("weight"), "{err}");
+    assert!(
+        err.starts_with("blend: ") && err.contains("weight"),
+        "{err}"
+    );
     let missing = dir.path().join("nope.ply");
-    let (code, err) = run(bin, &[&s(&pa), &s(&missing), "-o", &s(&dir.path().join("x.ply"))]);
+    let (code, err) = run(
+        bin,
+        &[&s(&pa), &s(&missing), "-o", &s(&dir.path().join("x.ply"))],
+    );
     assert_eq!((code, err.lines().count()), (1, 1), "{err}");
     assert!(err.contains("nope.ply"), "{err}");
     assert!(!dir.path().join("x.ply").exists(), "no output on failure");
@@ -44,24 +65,46 @@ fn blend_binary_matches_library_and_fails_cleanly() {
     write_mesh(&other, &TriMesh::new(v2, f2)).unwrap();
     let (code, err) = run(bin, &[&s(&pa), &s(&other), "-o", &s(&po)]);
     assert_eq!(code, 1);
-    assert!(err.contains("other.ply") && err.contains("topology"), "{err}");
+    assert!(
+        err.contains("other.ply") && err.contains("topology"),
+        "{err}"
+    );
 }
 
 #[test]
 fn correct_binary_processes_a_frame_directory() {
     let dir = tempfile::tempdir().unwrap();
     let (rest, f) = tube(12, 15, 0.5, 0.1, true);
-    let training: Vec<_> = (0..5).map(|k| bend(&rest, 0.3, 0.8, 0.3 * k as f64)).collect();
-    MeshSequence::new(f.clone(), training.clone()).write_dir(dir.path().join("train")).unwrap();
+    let training: Vec<_> = (0..5)
+        .map(|k| bend(&rest, 0.3, 0.8, 0.3 * k as f64))
+        .collect();
+    MeshSequence::new(f.clone(), training.clone())
+        .write_dir(dir.path().join("train"))
+        .unwrap();
     let preds: Vec<_> = [0.45, 0.75]
         .iter()
-        .map(|&a| bend(&rest, 0.3, 0.8, a).iter().map(|p| p * 0.92).collect::<Vec<_>>())
+        .map(|&a| {
+            bend(&rest, 0.3, 0.8, a)
+                .iter()
+                .map(|p| p * 0.92)
+                .collect::<Vec<_>>()
+        })
         .collect();
-    MeshSequence::new(f.clone(), preds.clone()).write_dir(dir.path().join("pred")).unwrap();
+    MeshSequence::new(f.clone(), preds.clone())
+        .write_dir(dir.path().join("pred"))
+        .unwrap();
     let p = |x: &str| dir.path().join(x).to_str().unwrap().to_string();
     let (code, err) = run(
         env!("CARGO_BIN_EXE_correct"),
-        &["--training", &p("train"), &p("pred"), "-m", "2", "-o", &p("out")],
+        &[
+            "--training",
+            &p("train"),
+            &p("pred"),
+            "-m",
+            "2",
+            "-o",
+            &p("out"),
+        ],
     );
     assert_eq!(code, 0, "{err}");
     let got = MeshSequence::load_dir(dir.path().join("out")).unwrap();
@@ -69,7 +112,112 @@ fn correct_binary_processes_a_frame_directory() {
     for (g, pr) in got.frames.iter().zip(&preds) {
         assert!(max_dist(g, &c.correct(pr, 2).unwrap()) < 1e-9);
     }
-    let (code, err) = run(env!("CARGO_BIN_EXE_correct"), &["--training", &p("pred/000000.ply"), &p("pred"), "-o", &p("o2")]);
+    let (code, err) = run(
+        env!("CARGO_BIN_EXE_correct"),
+        &[
+            "--training",
+            &p("pred/000000.ply"),
+            &p("pred"),
+            "-o",
+            &p("o2"),
+        ],
+    );
     assert_eq!((code, err.lines().count()), (1, 1), "{err}");
-    assert!(err.starts_with("correct: ") && err.contains("000000.ply"), "{err}");
+    assert!(
+        err.starts_with("correct: ") && err.contains("000000.ply"),
+        "{err}"
+    );
+}
+
+#[test]
+fn stitch_binary_merges_parts_from_a_segmentation() {
+    use mesh_core::artifact::{Artifact, Header};
+    let dir = tempfile::tempdir().unwrap();
+    let (around, rings) = (12, 20);
+    let (v, f) = tube(around, rings, 0.5, 0.1, true);
+    let ring = |a: usize, b: usize| (a * around..(b + 1) * around).map(|i| i as u32);
+    // Child listed before its root, as `segment` orders parts by name.
+    let parts = vec![
+        (
+            Some("torso".to_string()),
+            "arm",
+            ring(8, rings - 1)
+                .chain([(rings * around + 1) as u32])
+                .collect::<Vec<u32>>(),
+        ),
+        (
+            None,
+            "torso",
+            ring(0, 11)
+                .chain([(rings * around) as u32])
+                .collect::<Vec<u32>>(),
+        ),
+    ];
+    let seg = Segmentation {
+        n_vertices: v.len(),
+        parts: parts
+            .iter()
+            .map(|(parent, name, vs)| SegmentPart {
+                name: name.to_string(),
+                parent: parent.clone(),
+                vertices: vs.clone(),
+                faces: vec![],
+                overlap: vec![],
+                loops: vec![],
+            })
+            .collect(),
+    };
+    seg.save(dir.path().join("parts.seg"), &Header::new("test", "0"))
+        .unwrap();
+    write_mesh(
+        dir.path().join("template.ply"),
+        &TriMesh::new(v.clone(), f.clone()),
+    )
+    .unwrap();
+    std::fs::create_dir(dir.path().join("p")).unwrap();
+    let r = rot([0.0, 1.0, 1.0], 0.4);
+    for (parent, name, vs) in &parts {
+        let pos = vs
+            .iter()
+            .map(|&i| {
+                if parent.is_some() {
+                    r * v[i as usize]
+                } else {
+                    v[i as usize]
+                }
+            })
+            .collect();
+        write_mesh(
+            dir.path().join(format!("p/{name}.ply")),
+            &TriMesh::new(pos, vec![]),
+        )
+        .unwrap();
+    }
+    let p = |x: &str| dir.path().join(x).to_str().unwrap().to_string();
+    let bin = env!("CARGO_BIN_EXE_stitch");
+    let args = [
+        "--segmentation",
+        &p("parts.seg"),
+        "--template",
+        &p("template.ply"),
+        &p("p"),
+        "-o",
+        &p("out.ply"),
+    ];
+    let (code, err) = run(bin, &args);
+    assert_eq!(code, 0, "{err}");
+    let got = read_mesh(dir.path().join("out.ply")).unwrap();
+    assert!(
+        max_dist(&got.vertices, &v) < 1e-6,
+        "{}",
+        max_dist(&got.vertices, &v)
+    );
+    assert_eq!(got.faces, f);
+    std::fs::remove_file(dir.path().join("p/arm.ply")).unwrap();
+    let (code, err) = run(bin, &args);
+    assert_eq!((code, err.lines().count()), (1, 1), "{err}");
+    assert!(
+        err.starts_with("stitch: ") && err.contains("arm.ply"),
+        "{err}"
+    );
 }

@@ -4,7 +4,7 @@ use common::*;
 use faer::sparse::SparseColMat;
 use nalgebra::{Matrix3, Vector3};
 use std::collections::HashMap;
-use surface::deformation_gradient::{triangle_deformation, GradientOperator};
+use surface::deformation_gradient::{triangle_deformation, GradientOperator, StiffnessPattern};
 use surface::laplacian::{cotangent_laplacian, lumped_mass};
 use surface::poisson::{reconstruct, PoissonSolver};
 use surface::polar::{polar, triangle_rotation};
@@ -48,7 +48,9 @@ fn laplacian_of_linear_function_vanishes_inside_flat_mesh() {
     // Not trivially zero: the boundary rows carry the flux of the linear function.
     assert!(boundary > 1.0, "{boundary}");
     // Constants are in the kernel everywhere, and the Dirichlet energy of x is the area.
-    assert!(matvec(&l, &vec![1.0; v.len()]).iter().all(|y| y.abs() < 1e-12));
+    assert!(matvec(&l, &vec![1.0; v.len()])
+        .iter()
+        .all(|y| y.abs() < 1e-12));
     let x: Vec<f64> = v.iter().map(|p| p.x).collect();
     let energy: f64 = matvec(&l, &x).iter().zip(&x).map(|(a, b)| a * b).sum();
     assert!((energy - 1.0).abs() < 1e-12, "{energy}");
@@ -59,11 +61,26 @@ fn laplacian_of_linear_function_vanishes_inside_flat_mesh() {
 #[test]
 fn gradient_operator_matches_cotangent_formula() {
     let (mut v, f) = tube(9, 6, 1.0, 0.4, true);
-    v.iter_mut().enumerate().for_each(|(i, p)| p.x += 0.1 * hash01(i as u64));
+    v.iter_mut()
+        .enumerate()
+        .for_each(|(i, p)| p.x += 0.1 * hash01(i as u64));
     let op = GradientOperator::new(&v, &f);
-    let (k, l) = (entries(&op.stiffness()), entries(&cotangent_laplacian(&v, &f)));
+    let (k, l) = (
+        entries(&op.stiffness()),
+        entries(&cotangent_laplacian(&v, &f)),
+    );
     for (key, val) in &l {
-        assert!((k.get(key).copied().unwrap_or(0.0) - val).abs() < 1e-12, "{key:?}");
+        assert!(
+            (k.get(key).copied().unwrap_or(0.0) - val).abs() < 1e-12,
+            "{key:?}"
+        );
+    }
+    // The reusable pattern refills to the same matrix, also for a second geometry.
+    let mut pattern = StiffnessPattern::new(v.len(), &f);
+    for geometry in [v.clone(), bend(&v, 0.5, 1.0, 0.8)] {
+        let o = GradientOperator::new(&geometry, &f);
+        let (a, b) = (entries(pattern.fill(&o)), entries(&o.stiffness()));
+        assert!(b.iter().all(|(key, val)| (a[key] - val).abs() < 1e-12));
     }
     // Gᵀ A G through the explicit sparse G.
     let g = entries(&op.matrix());
@@ -81,7 +98,10 @@ fn gradient_operator_matches_cotangent_formula() {
         }
     }
     for (key, val) in &gtag {
-        assert!((l.get(key).copied().unwrap_or(0.0) - val).abs() < 1e-12, "{key:?}");
+        assert!(
+            (l.get(key).copied().unwrap_or(0.0) - val).abs() < 1e-12,
+            "{key:?}"
+        );
     }
 }
 
@@ -89,7 +109,10 @@ fn gradient_operator_matches_cotangent_formula() {
 fn gradient_of_positions_maps_edges_and_kills_normal() {
     let (v, f) = tube(7, 4, 1.0, 0.5, false);
     let op = GradientOperator::new(&v, &f);
-    let moved: Vec<Vector3<f64>> = v.iter().map(|p| rot([1.0, 2.0, 0.5], 0.7) * p * 1.3).collect();
+    let moved: Vec<Vector3<f64>> = v
+        .iter()
+        .map(|p| rot([1.0, 2.0, 0.5], 0.7) * p * 1.3)
+        .collect();
     let j = op.gradient(&moved);
     for (fi, t) in f.iter().enumerate() {
         let [a, b, c] = t.map(|i| v[i as usize]);
@@ -103,8 +126,16 @@ fn gradient_of_positions_maps_edges_and_kills_normal() {
 
 #[test]
 fn deformation_gradient_of_similarity_is_the_similarity() {
-    let t = [Vector3::new(0.1, 0.2, 0.3), Vector3::new(1.0, 0.1, -0.2), Vector3::new(0.3, 0.9, 0.4)];
-    let (r, s, off) = (rot([0.3, -1.0, 0.2], 1.1), 0.8, Vector3::new(3.0, -1.0, 2.0));
+    let t = [
+        Vector3::new(0.1, 0.2, 0.3),
+        Vector3::new(1.0, 0.1, -0.2),
+        Vector3::new(0.3, 0.9, 0.4),
+    ];
+    let (r, s, off) = (
+        rot([0.3, -1.0, 0.2], 1.1),
+        0.8,
+        Vector3::new(3.0, -1.0, 2.0),
+    );
     let d = triangle_deformation(&t, &t.map(|p| s * r * p + off)).unwrap();
     assert!((d - s * r).norm() < 1e-12);
     let flat = [Vector3::zeros(), Vector3::x(), 2.0 * Vector3::x()];
@@ -114,7 +145,14 @@ fn deformation_gradient_of_similarity_is_the_similarity() {
 #[test]
 fn poisson_reproduces_mesh_from_its_own_gradients() {
     let (mut v, f) = tube(24, 20, 1.0, 0.25, true);
-    v.iter_mut().enumerate().for_each(|(i, p)| *p += 0.05 * Vector3::new(hash01(3 * i as u64), hash01(3 * i as u64 + 1), hash01(3 * i as u64 + 2)));
+    v.iter_mut().enumerate().for_each(|(i, p)| {
+        *p += 0.05
+            * Vector3::new(
+                hash01(3 * i as u64),
+                hash01(3 * i as u64 + 1),
+                hash01(3 * i as u64 + 2),
+            )
+    });
     let op = GradientOperator::new(&v, &f);
     let x = reconstruct(&op, &op.gradient(&v), &[5], &[v[5]]).unwrap();
     assert!(max_dist(&x, &v) < 1e-10, "{}", max_dist(&x, &v));
@@ -129,10 +167,16 @@ fn poisson_reproduces_mesh_from_its_own_gradients() {
     // Same pattern, other fixed set: symbolic factorisation reused, answer unchanged.
     let fixed = [3usize, 100, 200];
     solver.refactor(&op.stiffness(), &fixed).unwrap();
-    let y2 = solver.solve(&op.divergence(&j), &fixed.map(|i| target[i])).unwrap();
+    let y2 = solver
+        .solve(&op.divergence(&j), &fixed.map(|i| target[i]))
+        .unwrap();
     assert!(max_dist(&y2, &target) < 1e-10);
     // Dirichlet values are honoured exactly when they disagree with the gradients.
-    let shifted = [target[3] + Vector3::new(0.0, 0.0, 0.5), target[100], target[200]];
+    let shifted = [
+        target[3] + Vector3::new(0.0, 0.0, 0.5),
+        target[100],
+        target[200],
+    ];
     let y3 = solver.solve(&op.divergence(&j), &shifted).unwrap();
     assert!((y3[3] - shifted[0]).norm() < 1e-12 && max_dist(&y3, &target) > 0.1);
 }
@@ -141,7 +185,9 @@ fn poisson_reproduces_mesh_from_its_own_gradients() {
 fn poisson_without_anchor_is_refused() {
     let (v, f) = tube(8, 5, 1.0, 0.5, true);
     let op = GradientOperator::new(&v, &f);
-    let e = PoissonSolver::new(&op.stiffness(), &[]).err().expect("singular system accepted");
+    let e = PoissonSolver::new(&op.stiffness(), &[])
+        .err()
+        .expect("singular system accepted");
     assert!(e.to_string().contains("no fixed vertex"), "{e}");
     // Two components, one anchored: still refused.
     let mut f2 = f.clone();
@@ -157,7 +203,14 @@ fn poisson_without_anchor_is_refused() {
 #[test]
 fn polar_recovers_rotation_and_stretch() {
     for k in 0..20u64 {
-        let r = rot([hash01(k) - 0.5, hash01(k + 100) - 0.5, hash01(k + 200) - 0.5], 3.0 * hash01(k + 300));
+        let r = rot(
+            [
+                hash01(k) - 0.5,
+                hash01(k + 100) - 0.5,
+                hash01(k + 200) - 0.5,
+            ],
+            3.0 * hash01(k + 300),
+        );
         let b = Matrix3::from_fn(|i, j| hash01(k * 9 + (3 * i + j) as u64 + 1000) - 0.5);
         let s = b * b.transpose() + Matrix3::identity() * 0.1;
         let (r2, s2) = polar(&(r * s));
@@ -173,7 +226,9 @@ fn polar_handles_reflections() {
     assert!((s - Matrix3::from_diagonal(&Vector3::new(2.0, 3.0, -0.5))).norm() < 1e-12);
     for k in 0..10u64 {
         let q = rot([hash01(k), 1.0, hash01(k + 7)], 2.0 * hash01(k + 11));
-        let a = q * Matrix3::from_diagonal(&Vector3::new(1.5, 1.0, -0.3)) * rot([1.0, hash01(k + 3), 0.0], 0.4);
+        let a = q
+            * Matrix3::from_diagonal(&Vector3::new(1.5, 1.0, -0.3))
+            * rot([1.0, hash01(k + 3), 0.0], 0.4);
         let (r, s) = polar(&a);
         assert!((r.determinant() - 1.0).abs() < 1e-12);
         assert!((r.transpose() * r - Matrix3::identity()).norm() < 1e-12);
@@ -181,7 +236,10 @@ fn polar_handles_reflections() {
         // Closest rotation: no sampled rotation is nearer to A.
         let best = (a - r).norm();
         for m in 0..300u64 {
-            let c = rot([hash01(m) - 0.5, hash01(m + 1) - 0.5, hash01(m + 2) - 0.5], 3.14 * hash01(m + 3));
+            let c = rot(
+                [hash01(m) - 0.5, hash01(m + 1) - 0.5, hash01(m + 2) - 0.5],
+                3.14 * hash01(m + 3),
+            );
             assert!((a - c).norm() >= best - 1e-12);
         }
     }
@@ -189,7 +247,15 @@ fn polar_handles_reflections() {
 
 #[test]
 fn closed_form_triangle_rotation_equals_svd_polar() {
-    let tri = |k: u64| [0, 1, 2].map(|i| Vector3::new(hash01(k * 9 + 3 * i), hash01(k * 9 + 3 * i + 1), hash01(k * 9 + 3 * i + 2)));
+    let tri = |k: u64| {
+        [0, 1, 2].map(|i| {
+            Vector3::new(
+                hash01(k * 9 + 3 * i),
+                hash01(k * 9 + 3 * i + 1),
+                hash01(k * 9 + 3 * i + 2),
+            )
+        })
+    };
     let mut flipped = 0;
     for k in 0..500u64 {
         let (a, b) = (tri(k), tri(k + 1000));
@@ -199,7 +265,10 @@ fn closed_form_triangle_rotation_equals_svd_polar() {
         let n = |t: &[Vector3<f64>; 3]| (t[1] - t[0]).cross(&(t[2] - t[0]));
         flipped += (n(&a).dot(&n(&b)) < 0.0) as usize;
     }
-    assert!(flipped > 0, "triangles whose normal turned over are covered");
+    assert!(
+        flipped > 0,
+        "triangles whose normal turned over are covered"
+    );
     let flat = [Vector3::zeros(), Vector3::x(), 2.0 * Vector3::x()];
     assert!(triangle_rotation(&flat, &tri(1)).is_none());
 }

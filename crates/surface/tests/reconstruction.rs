@@ -17,7 +17,11 @@ fn rolled_sheet(kappa: f64) -> (Vec<Vector3<f64>>, Vec<[u32; 3]>) {
             if kappa.abs() < 1e-12 {
                 Vector3::new(u, p.y, 0.0)
             } else {
-                Vector3::new((kappa * u).sin() / kappa, p.y, (1.0 - (kappa * u).cos()) / kappa)
+                Vector3::new(
+                    (kappa * u).sin() / kappa,
+                    p.y,
+                    (1.0 - (kappa * u).cos()) / kappa,
+                )
             }
         })
         .collect();
@@ -49,7 +53,10 @@ fn correct_restores_size_of_shrunk_rotated_prediction() {
     let truth = &training[3];
     let r = rot([0.2, 1.0, 0.3], 0.5);
     let c = surface::centroid(truth);
-    let prediction: Vec<_> = truth.iter().map(|p| r * ((p - c) * 0.9) + c + Vector3::new(0.1, 0.0, 0.0)).collect();
+    let prediction: Vec<_> = truth
+        .iter()
+        .map(|p| r * ((p - c) * 0.9) + c + Vector3::new(0.1, 0.0, 0.0))
+        .collect();
     let (m0, _) = mean_edge_ratio(&prediction, truth, &f);
     assert!((m0 - 0.9).abs() < 1e-9);
     for m in [1, 3] {
@@ -58,8 +65,15 @@ fn correct_restores_size_of_shrunk_rotated_prediction() {
         assert!((mean - 1.0).abs() < 0.01, "M={m}: mean edge ratio {mean}");
         assert!(worst < 0.03, "M={m}: worst edge ratio error {worst}");
         // The shape follows the prediction: rigidly aligned to the truth rotated by r.
-        let want: Vec<_> = truth.iter().map(|p| r * (p - c) + surface::centroid(&prediction)).collect();
-        assert!(max_dist(&out, &want) < 0.05, "M={m}: {}", max_dist(&out, &want));
+        let want: Vec<_> = truth
+            .iter()
+            .map(|p| r * (p - c) + surface::centroid(&prediction))
+            .collect();
+        assert!(
+            max_dist(&out, &want) < 0.05,
+            "M={m}: {}",
+            max_dist(&out, &want)
+        );
         assert!((surface::centroid(&out) - surface::centroid(&prediction)).norm() < 1e-12);
     }
     // An exact training mesh is returned unchanged.
@@ -76,7 +90,11 @@ fn correct_rejects_bad_input() {
     assert!(c.correct(&v[1..], 1).is_err());
     let mut nan = v.clone();
     nan[3].x = f64::NAN;
-    assert!(c.correct(&nan, 1).unwrap_err().to_string().contains("vertex 3"));
+    assert!(c
+        .correct(&nan, 1)
+        .unwrap_err()
+        .to_string()
+        .contains("vertex 3"));
 }
 
 /// Tube band of `rings` rings; vertices of `ring` have zero discrepancy, all others positive.
@@ -84,10 +102,18 @@ fn correct_rejects_bad_input() {
 fn optimal_loop_finds_the_zero_discrepancy_ring() {
     let (around, rings) = (16, 9);
     let (mut v, f) = tube(around, rings, 1.0, 0.2, false);
-    v.iter_mut().enumerate().for_each(|(i, p)| p.z += 0.05 * hash01(i as u64));
+    v.iter_mut()
+        .enumerate()
+        .for_each(|(i, p)| p.z += 0.05 * hash01(i as u64));
     for target in [0, 3, 5, 8] {
         let cost: Vec<f64> = (0..v.len())
-            .map(|i| if i / around == target { 0.0 } else { 0.2 + hash01(i as u64 + 77) })
+            .map(|i| {
+                if i / around == target {
+                    0.0
+                } else {
+                    0.2 + hash01(i as u64 + 77)
+                }
+            })
             .collect();
         let l = optimal_loop(&v, &f, &cost).unwrap();
         let mut got = l.vertices.clone();
@@ -107,7 +133,9 @@ fn optimal_loop_finds_the_zero_discrepancy_ring() {
             cheap.push(k * around + j);
         }
     }
-    let cost: Vec<f64> = (0..v.len()).map(|i| if cheap.contains(&i) { 0.0 } else { 1.0 }).collect();
+    let cost: Vec<f64> = (0..v.len())
+        .map(|i| if cheap.contains(&i) { 0.0 } else { 1.0 })
+        .collect();
     let l = optimal_loop(&v, &f, &cost).unwrap();
     let mut got = l.vertices.clone();
     got.sort_unstable();
@@ -118,13 +146,31 @@ fn optimal_loop_finds_the_zero_discrepancy_ring() {
     assert!(optimal_loop(&g, &gf, &vec![1.0; g.len()]).is_err());
 }
 
-fn halves(around: usize, rings: usize, lo: usize, hi: usize) -> (Vec<Vector3<f64>>, Vec<[u32; 3]>, Vec<Part>) {
+fn halves(
+    around: usize,
+    rings: usize,
+    lo: usize,
+    hi: usize,
+) -> (Vec<Vector3<f64>>, Vec<[u32; 3]>, Vec<Part>) {
     let (v, f) = tube(around, rings, 1.0, 0.2, true);
     let (bot, top) = ((rings * around) as u32, (rings * around + 1) as u32);
     let ring = |a: usize, b: usize| (a * around..(b + 1) * around).map(|i| i as u32);
     let root: Vec<u32> = ring(0, hi).chain([bot]).collect();
     let child: Vec<u32> = ring(lo, rings - 1).chain([top]).collect();
-    (v, f, vec![Part { vertices: root, parent: None }, Part { vertices: child, parent: Some(0) }])
+    (
+        v,
+        f,
+        vec![
+            Part {
+                vertices: root,
+                parent: None,
+            },
+            Part {
+                vertices: child,
+                parent: Some(0),
+            },
+        ],
+    )
 }
 
 #[test]
@@ -137,18 +183,32 @@ fn stitch_puts_rigidly_moved_half_back() {
     let t = Vector3::new(5.0, -2.0, 1.0);
     let pos: Vec<Vec<Vector3<f64>>> = vec![
         parts[0].vertices.iter().map(|&i| v[i as usize]).collect(),
-        parts[1].vertices.iter().map(|&i| r * v[i as usize] + t).collect(),
+        parts[1]
+            .vertices
+            .iter()
+            .map(|&i| r * v[i as usize] + t)
+            .collect(),
     ];
     let out = stitcher.stitch(&pos).unwrap();
-    assert!(max_dist(&out.vertices, &v) < 1e-9, "{}", max_dist(&out.vertices, &v));
+    assert!(
+        max_dist(&out.vertices, &v) < 1e-9,
+        "{}",
+        max_dist(&out.vertices, &v)
+    );
     let lp = out.loops[1].as_ref().unwrap();
     assert!(lp.vertices.iter().all(|&i| (10 * 20..17 * 20).contains(&i)));
     // Second frame reuses the factorisation; a deformed child still gives a closed mesh
     // that follows the root on its side and the child on the other.
-    let noisy: Vec<Vector3<f64>> =
-        pos[1].iter().enumerate().map(|(i, p)| p + 0.01 * Vector3::new(hash01(i as u64), 0.0, 0.0)).collect();
+    let noisy: Vec<Vector3<f64>> = pos[1]
+        .iter()
+        .enumerate()
+        .map(|(i, p)| p + 0.01 * Vector3::new(hash01(i as u64), 0.0, 0.0))
+        .collect();
     let out2 = stitcher.stitch(&[pos[0].clone(), noisy]).unwrap();
-    assert!(out2.vertices.iter().all(|p| p.iter().all(|c| c.is_finite())));
+    assert!(out2
+        .vertices
+        .iter()
+        .all(|p| p.iter().all(|c| c.is_finite())));
     assert!((out2.vertices[0] - v[0]).norm() < 0.02 && max_dist(&out2.vertices, &v) < 0.05);
 }
 
@@ -158,7 +218,10 @@ fn stitch_rejects_bad_layouts() {
     parts[1].parent = None;
     assert!(PartLayout::new(v.len(), f.clone(), parts.clone()).is_err());
     let (v, f, mut parts) = halves(12, 10, 7, 6);
-    assert!(PartLayout::new(v.len(), f.clone(), parts.clone()).is_err(), "no overlap");
+    assert!(
+        PartLayout::new(v.len(), f.clone(), parts.clone()).is_err(),
+        "no overlap"
+    );
     parts[0].vertices.push(99999);
     assert!(PartLayout::new(v.len(), f, parts).is_err());
 }
@@ -181,15 +244,105 @@ fn blend_keeps_edges_and_volume_where_linear_blend_collapses() {
     let (el, _) = mean_edge_ratio(&lin, &rest, &f);
     let (e1, _) = mean_edge_ratio(&bent, &rest, &f);
     eprintln!("volume rest {v0:.4} bent {v1:.4} blend {vh:.4} linear {vl:.4}; edge ratio bent {e1:.4} blend {eh:.4} linear {el:.4}");
-    assert!((vh / vref - 1.0).abs() < 0.03, "blend volume {vh} vs {vref}");
+    assert!(
+        (vh / vref - 1.0).abs() < 0.03,
+        "blend volume {vh} vs {vref}"
+    );
     assert!((eh - 1.0).abs() < 0.03, "blend edges {eh}");
-    assert!((vl / vref - 1.0).abs() > 0.05 || (el - 1.0).abs() > 0.05, "linear {vl} {el}");
+    assert!(
+        (vl / vref - 1.0).abs() > 0.05 || (el - 1.0).abs() > 0.05,
+        "linear {vl} {el}"
+    );
     // The far end turned by about half the angle: tip axis direction at 67.5 degrees.
     let top = rest.len() - 1;
     let ring = |x: &[Vector3<f64>], k: usize| surface::centroid(&x[k * 24..(k + 1) * 24]);
     let dir = (half[top] - ring(&half, 32)).normalize();
     let angle = dir.z.acos().to_degrees();
     assert!((angle - 67.5).abs() < 3.0, "tip angle {angle}");
-    let seq = blender.blend_sequences(&[rest.clone(), bent.clone()], &[bent.clone(), rest.clone()], 1.0).unwrap();
+    let seq = blender
+        .blend_sequences(
+            &[rest.clone(), bent.clone()],
+            &[bent.clone(), rest.clone()],
+            1.0,
+        )
+        .unwrap();
     assert!(max_dist(&seq[0], &bent) < 1e-9 && max_dist(&seq[1], &rest) < 1e-9);
+}
+
+#[test]
+fn stitch_of_non_rigidly_different_parts_has_no_seam() {
+    let (around, rings) = (16, 40);
+    let (v, f, parts) = halves(around, rings, 16, 22);
+    // The child bends from z = 3.6 (ring 18) on: in the band it agrees with the
+    // root up to ring 18 and departs from it beyond.
+    let child_shape = bend(&v, 3.6, 3.0, 0.4);
+    let r = rot([0.3, 1.0, 0.0], 0.6);
+    let child: Vec<Vector3<f64>> = parts[1]
+        .vertices
+        .iter()
+        .map(|&i| r * child_shape[i as usize] + Vector3::new(1.0, 2.0, 3.0))
+        .collect();
+    let root: Vec<Vector3<f64>> = parts[0].vertices.iter().map(|&i| v[i as usize]).collect();
+    let mut st = Stitcher::new(PartLayout::new(v.len(), f.clone(), parts.clone()).unwrap());
+    let out = st.stitch(&[root, child.clone()]).unwrap();
+    let lp = out.loops[1].as_ref().unwrap();
+    // The loop is no more expensive than any ring of the band (same cost formula).
+    let c = |i: usize| {
+        let aligned = out.alignments[1].apply(&(r * child_shape[i] + Vector3::new(1.0, 2.0, 3.0)));
+        (aligned - v[i]).norm()
+    };
+    let delta = 1e-3 * (16 * around..23 * around).map(c).sum::<f64>() / (7 * around) as f64;
+    for k in 16..23 {
+        let ring_cost: f64 = (0..around)
+            .map(|j| {
+                let (a, b) = (k * around + j, k * around + (j + 1) % around);
+                (v[a] - v[b]).norm() * (0.5 * (c(a) + c(b)) + delta)
+            })
+            .sum();
+        assert!(
+            lp.cost <= ring_cost + 1e-12,
+            "ring {k}: {ring_cost} < loop {}",
+            lp.cost
+        );
+    }
+    assert!(
+        lp.vertices
+            .iter()
+            .all(|&i| (16 * around..20 * around).contains(&i)),
+        "{:?}",
+        lp.vertices
+    );
+    // No seam: every edge keeps the length it has in the part(s) it comes from (5 %).
+    let (in_root, in_child) = (
+        |i: u32| (i as usize) < 23 * around || i as usize == rings * around,
+        |i: u32| (i as usize) >= 16 * around,
+    );
+    let len = |x: &[Vector3<f64>], a: u32, b: u32| (x[a as usize] - x[b as usize]).norm();
+    let mut worst: f64 = 0.0;
+    for t in &f {
+        for k in 0..3 {
+            let (a, b) = (t[k], t[(k + 1) % 3]);
+            let got = len(&out.vertices, a, b);
+            let mut refs = vec![];
+            if in_root(a) && in_root(b) {
+                refs.push(len(&v, a, b));
+            }
+            if in_child(a) && in_child(b) {
+                refs.push(len(&child_shape, a, b));
+            }
+            let lo = refs.iter().cloned().fold(f64::INFINITY, f64::min);
+            let hi = refs.iter().cloned().fold(0.0, f64::max);
+            worst = worst.max((lo / got - 1.0).max(got / hi - 1.0));
+        }
+    }
+    assert!(worst < 0.05, "edge length off by {worst}");
+    // The far end follows the (aligned) child.
+    let motion = &out.alignments[1];
+    let tip = rings * around + 1;
+    let want = motion.apply(&(r * child_shape[tip] + Vector3::new(1.0, 2.0, 3.0)));
+    assert!(
+        (out.vertices[tip] - want).norm() < 0.05,
+        "{}",
+        (out.vertices[tip] - want).norm()
+    );
 }

@@ -398,6 +398,9 @@ pub fn parse_bvh(path: &Path, name: &str) -> Result<Clip> {
         root.push(pos + joints[0].offset);
         globals.push(g);
     }
+    if n_frames == 0 {
+        return Err(bad("no frames"));
+    }
     if times.len() != n_frames {
         return Err(bad(&format!(
             "header says {n_frames} frames, file holds {}",

@@ -9,6 +9,11 @@
 //! onto them: Procrustes of the part's copies of the shared vertices onto the
 //! positions they already have. Vertices covered by several parts get the mean
 //! of their aligned copies.
+//!
+//! Finally the assembled mesh is rigidly aligned to the whole template
+//! (Procrustes, as `align` does for captured frames): the world poses of the
+//! placement are defined for whole-body-aligned frames, while the assembly
+//! leaves the root part where its own reference is.
 
 use mesh_core::rigid::procrustes;
 use mesh_core::{Error, Result};
@@ -35,6 +40,8 @@ pub struct AssemblyPlan {
     pub steps: Vec<AssemblyStep>,
     /// How many parts cover each template vertex.
     pub coverage: Vec<u32>,
+    /// The template (from the parts' references), for the final alignment.
+    pub template: Vec<Vector3<f64>>,
 }
 
 /// Plans the assembly of `pca`'s parts; every template vertex must be in a
@@ -53,6 +60,12 @@ pub fn plan(pca: &PcaModel) -> Result<AssemblyPlan> {
     }
     if let Some(v) = coverage.iter().position(|&c| c == 0) {
         return Err(Error::invalid(format!("template vertex {v} is in no part")));
+    }
+    let mut template = vec![Vector3::zeros(); n];
+    for p in &pca.parts {
+        for (&v, r) in p.vertices.iter().zip(&p.reference) {
+            template[v as usize] = *r;
+        }
     }
     let mut placed = vec![false; n];
     let mut done = vec![false; pca.parts.len()];
@@ -90,7 +103,7 @@ pub fn plan(pca: &PcaModel) -> Result<AssemblyPlan> {
         done[k] = true;
         steps.push(AssemblyStep { part: k, anchor_local, anchor_global });
     }
-    Ok(AssemblyPlan { n_vertices: n, steps, coverage })
+    Ok(AssemblyPlan { n_vertices: n, steps, coverage, template })
 }
 
 /// Assembles one frame from its decoded parts (`parts[k]` in part-local order).
@@ -118,7 +131,8 @@ pub fn assemble_frame(plan: &AssemblyPlan, pca: &PcaModel, parts: &[&[Vector3<f6
             sum[v] += q;
         }
     }
-    sum.iter().zip(&plan.coverage).map(|(s, &c)| s / c as f64).collect()
+    let mean: Vec<Vector3<f64>> = sum.iter().zip(&plan.coverage).map(|(s, &c)| s / c as f64).collect();
+    procrustes(&mean, &plan.template, None).apply_all(&mean)
 }
 
 /// Assembles every frame: `decoded[part][frame]` as from `PcaModel::decode`.

@@ -345,18 +345,27 @@ pub fn plot_all(dir: &Path, points: &[CurvePoint]) -> Result<Vec<std::path::Path
                 .collect();
             let title = format!("{d}: {title}");
             let name = format!("{}-{stem}", d.replace("->", "-to-"));
-            for ext in ["png", "svg"] {
-                let path = dir.join(format!("{name}.{ext}"));
-                let tmp = dir.join(format!(".{name}.tmp.{ext}"));
-                let result = if ext == "png" {
-                    draw(BitMapBackend::new(&tmp, (800, 560)).into_drawing_area(), &title, &series)
-                } else {
-                    draw(SVGBackend::new(&tmp, (800, 560)).into_drawing_area(), &title, &series)
-                };
-                result.map_err(|m| Error::file(&path, format!("cannot draw the plot: {m}")))?;
-                std::fs::rename(&tmp, &path).map_err(|e| Error::io(&path, e))?;
-                written.push(path);
+            let (w, h) = (800u32, 560u32);
+            let png_path = dir.join(format!("{name}.png"));
+            let mut pixels = vec![0u8; (w * h * 3) as usize];
+            draw(BitMapBackend::with_buffer(&mut pixels, (w, h)).into_drawing_area(), &title, &series)
+                .map_err(|m| Error::file(&png_path, format!("cannot draw the plot: {m}")))?;
+            let mut bytes = Vec::new();
+            {
+                let mut enc = png::Encoder::new(&mut bytes, w, h);
+                enc.set_color(png::ColorType::Rgb);
+                enc.set_depth(png::BitDepth::Eight);
+                let mut writer = enc.write_header().map_err(|e| Error::file(&png_path, e.to_string()))?;
+                writer.write_image_data(&pixels).map_err(|e| Error::file(&png_path, e.to_string()))?;
             }
+            mesh_core::atomic::write_bytes_atomic(&png_path, &bytes)?;
+            written.push(png_path);
+            let svg_path = dir.join(format!("{name}.svg"));
+            let mut svg = String::new();
+            draw(SVGBackend::with_string(&mut svg, (w, h)).into_drawing_area(), &title, &series)
+                .map_err(|m| Error::file(&svg_path, format!("cannot draw the plot: {m}")))?;
+            mesh_core::atomic::write_bytes_atomic(&svg_path, svg.as_bytes())?;
+            written.push(svg_path);
         }
     }
     Ok(written)

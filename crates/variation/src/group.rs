@@ -93,9 +93,14 @@ pub struct GroupSpec {
     /// Blend weights `W` (each in (0, 1)) between the first two present motions.
     pub blend_weights: Vec<f64>,
     pub prealign: PrealignOptions,
+    /// Model the whole body as one part instead of the subject's segmentation.
+    pub whole_body: bool,
+    /// When the segmentation fails, model the whole body (reported in the notes) instead of failing.
+    pub fallback_whole_body: bool,
 }
 
-/// Loads, aligns, prealigns and blends the group. Returns the group and the skipped motions.
+/// Loads, aligns, prealigns and blends the group. Returns the group and notes (skipped
+/// motions, segmentation fallback).
 pub fn build(set: &CaptureSet, spec: &GroupSpec) -> Result<(Group, Vec<String>)> {
     let subject = set.subject(&spec.subject)?;
     let template = &subject.template;
@@ -140,8 +145,22 @@ pub fn build(set: &CaptureSet, spec: &GroupSpec) -> Result<(Group, Vec<String>)>
         let contacts = c.as_ref().map(|c| apply_contacts(c, &map));
         sequences.push(GroupSequence { name, blend: None, motion: apply(&motion, &map), contacts, map });
     }
-    let seg = transfer::segment::segment(template, &subject.spec)
-        .map_err(|e| Error::file(set.subject_json(&spec.subject), e.to_string()))?;
+    let mut notes: Vec<String> = skipped.iter().map(|m| format!("motion '{m}' is not in the set: skipped")).collect();
+    let seg = if spec.whole_body {
+        transfer::part_pca::whole_body(template.n_vertices())
+    } else {
+        match transfer::segment::segment(template, &subject.spec) {
+            Ok(s) => s,
+            Err(e) if spec.fallback_whole_body => {
+                notes.push(format!(
+                    "{}: {e}: body parts unusable, modelling the whole body as one part",
+                    set.subject_json(&spec.subject).display()
+                ));
+                transfer::part_pca::whole_body(template.n_vertices())
+            }
+            Err(e) => return Err(Error::file(set.subject_json(&spec.subject), e.to_string())),
+        }
+    };
     let parts = seg
         .parts
         .iter()
@@ -164,17 +183,15 @@ pub fn build(set: &CaptureSet, spec: &GroupSpec) -> Result<(Group, Vec<String>)>
         sequences,
         pair,
     };
-    if !spec.blend_weights.is_empty() {
-        let Some((a, b)) = pair else {
-            return Err(Error::invalid(format!("group '{}': blending needs two motions", spec.name)));
-        };
+    // A group with one motion gets no blends (the caller warns).
+    if let (false, Some((a, b))) = (spec.blend_weights.is_empty(), pair) {
         let blender = surface::blend::Blender::new(group.template.clone(), group.faces.clone())?;
         for &w in &spec.blend_weights {
             let s = blend_sequences(&blender, &group.sequences[a], &group.sequences[b], w)?;
             group.sequences.push(s);
         }
     }
-    Ok((group, skipped))
+    Ok((group, notes))
 }
 
 /// The pre-blended sequence `Y_w` of two time-aligned sequences (module doc).

@@ -15,4 +15,5 @@ pub mod plots;
 pub mod prealign;
 pub mod reconstruct;
 pub mod sample;
+pub mod synthesize;
 pub mod train;

@@ -11,6 +11,13 @@
 //! this scale displacement and deformation weigh equally in the torso's likelihood (eq. 3).
 //! Scales fall back to 1 when a triple has no variance. The first frame's displacement
 //! (identity by construction) is replaced by the second's so it is not an outlier.
+//!
+//! **Gravity values (deviation from the paper).** Integrating sampled displacements is a random
+//! walk: sampled variations drifted upwards and tilted within a second. The torso vector
+//! therefore also carries 4 absolute values per frame: the height of the frame's world pose
+//! (`up · t_i`, scaled like translations) and the world up axis in body coordinates
+//! (`R_iᵀ up`, scaled like rotations). [`crate::reconstruct::place`] keeps the integrated
+//! heading and horizontal travel but takes height and tilt from these.
 
 use mesh_core::rigid::procrustes;
 use nalgebra::{DMatrix, Vector3};
@@ -80,24 +87,49 @@ pub fn displacement_scale(torso: &[DMatrix<f64>], disp: &[Vec<[f64; 6]>]) -> Dis
     DisplacementScale { translation: s(v_t), rotation: s(v_h) }
 }
 
-/// Appends the scaled displacement columns to torso rows.
-pub fn with_displacement(rows: &DMatrix<f64>, disp: &[[f64; 6]], scale: DisplacementScale) -> DMatrix<f64> {
+/// Columns appended to the torso vector: 6 displacement values, height, body-frame up axis.
+pub const TORSO_EXTRA: usize = 10;
+
+/// Per frame `[height, (R_iᵀ up)_x, _y, _z]` of a motion's world poses (module doc).
+pub fn gravity(motion: &AlignedMotion, up: &Vector3<f64>) -> Vec<[f64; 4]> {
+    motion
+        .poses
+        .iter()
+        .map(|p| {
+            let u = p.rotation.inverse() * up;
+            [p.translation.dot(up), u.x, u.y, u.z]
+        })
+        .collect()
+}
+
+fn extra_scale(k: usize, scale: DisplacementScale) -> f64 {
+    if matches!(k, 0..=2 | 6) {
+        scale.translation
+    } else {
+        scale.rotation
+    }
+}
+
+/// Appends the scaled displacement and gravity columns to torso rows.
+pub fn with_displacement(rows: &DMatrix<f64>, disp: &[[f64; 6]], grav: &[[f64; 4]], scale: DisplacementScale) -> DMatrix<f64> {
     let d = rows.ncols();
-    let mut m = rows.clone().resize_horizontally(d + 6, 0.0);
-    for (t, r) in disp.iter().enumerate() {
-        for k in 0..6 {
-            m[(t, d + k)] = r[k] * if k < 3 { scale.translation } else { scale.rotation };
+    let mut m = rows.clone().resize_horizontally(d + TORSO_EXTRA, 0.0);
+    for (t, (r, g)) in disp.iter().zip(grav).enumerate() {
+        for k in 0..TORSO_EXTRA {
+            let v = if k < 6 { r[k] } else { g[k - 6] };
+            m[(t, d + k)] = v * extra_scale(k, scale);
         }
     }
     m
 }
 
-/// Splits a torso pose row back into vertices and the unscaled displacement.
-pub fn split_torso(row: &[f64], scale: DisplacementScale) -> (Vec<Vector3<f64>>, [f64; 6]) {
-    let d = row.len() - 6;
+/// Splits a torso pose row back into vertices, the unscaled displacement and gravity values.
+pub fn split_torso(row: &[f64], scale: DisplacementScale) -> (Vec<Vector3<f64>>, [f64; 6], [f64; 4]) {
+    let d = row.len() - TORSO_EXTRA;
     let verts = unflatten(&row[..d]);
-    let disp = std::array::from_fn(|k| row[d + k] / if k < 3 { scale.translation } else { scale.rotation });
-    (verts, disp)
+    let disp = std::array::from_fn(|k| row[d + k] / extra_scale(k, scale));
+    let grav = std::array::from_fn(|k| row[d + 6 + k] / extra_scale(6 + k, scale));
+    (verts, disp, grav)
 }
 
 /// `(x_1, y_1, z_1, ...)` to points.

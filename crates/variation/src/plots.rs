@@ -1,6 +1,6 @@
 //! Latent trajectory plots: the training sequences of one part (paper fig. 3) and sampled
 //! variations of one sequence (fig. 5), projected on the first two latent coordinates; PNG
-//! written atomically (temporary file, then rename).
+//! written atomically.
 
 use std::path::Path;
 
@@ -24,10 +24,11 @@ pub const COLOURS: [(u8, u8, u8); 8] =
 pub fn latent_plot(path: &Path, title: &str, series: &[(String, DMatrix<f64>)]) -> Result<()> {
     use plotters::prelude::*;
     register_font();
-    let tmp = path.with_extension("tmp.png");
     let e = |x: &dyn std::fmt::Debug| Error::file(path, format!("plot: {x:?}"));
+    let (w, h) = (720u32, 560u32);
+    let mut pixels = vec![0u8; (w * h * 3) as usize];
     {
-        let root = BitMapBackend::new(&tmp, (720, 560)).into_drawing_area();
+        let root = BitMapBackend::with_buffer(&mut pixels, (w, h)).into_drawing_area();
         root.fill(&WHITE).map_err(|x| e(&x))?;
         let pts = series.iter().flat_map(|(_, m)| (0..m.nrows()).map(move |t| (m[(t, 0)], m[(t, 1.min(m.ncols() - 1))])));
         let (mut x0, mut x1, mut y0, mut y1) = (f64::INFINITY, f64::NEG_INFINITY, f64::INFINITY, f64::NEG_INFINITY);
@@ -73,5 +74,13 @@ pub fn latent_plot(path: &Path, title: &str, series: &[(String, DMatrix<f64>)]) 
         }
         root.present().map_err(|x| e(&x))?;
     }
-    std::fs::rename(&tmp, path).map_err(|x| Error::io(path, x))
+    let mut bytes = Vec::new();
+    {
+        let mut enc = png::Encoder::new(&mut bytes, w, h);
+        enc.set_color(png::ColorType::Rgb);
+        enc.set_depth(png::BitDepth::Eight);
+        let mut writer = enc.write_header().map_err(|x| e(&x))?;
+        writer.write_image_data(&pixels).map_err(|x| e(&x))?;
+    }
+    mesh_core::atomic::write_bytes_atomic(path, &bytes)
 }

@@ -10,7 +10,7 @@
 //! (as `transfer::assemble`), about 100 times cheaper, used for bulk decoding and statistics.
 
 use gpdm::predict::Predictor;
-use mesh_core::rigid::{integrate, procrustes, RigidMotion};
+use mesh_core::rigid::{procrustes, RigidMotion};
 use mesh_core::{Error, Result};
 use nalgebra::{DMatrix, Vector3, Vector6};
 use rand::Rng;
@@ -32,6 +32,8 @@ pub enum Assembly {
 pub struct DecodedParts {
     pub parts: Vec<Vec<Vec<Vector3<f64>>>>,
     pub displacements: Vec<[f64; 6]>,
+    /// Per frame `[height, body-frame up axis]` (see [`crate::part_data`]).
+    pub gravity: Vec<[f64; 4]>,
 }
 
 /// Factorised predictors of every part, plus the averaging plan.
@@ -85,22 +87,24 @@ impl<'a> Decoder<'a> {
         }
         let mut parts = Vec::with_capacity(latents.len());
         let mut displacements = Vec::new();
+        let mut gravity = Vec::new();
         for (k, (pr, x)) in self.predictors.iter().zip(latents).enumerate() {
             let y = pr.reconstruct(x, rng.as_deref_mut()).map_err(|e| Error::invalid(format!("part {k}: {e}")))?;
             let mut frames = Vec::with_capacity(y.nrows());
             for t in 0..y.nrows() {
                 let row: Vec<f64> = y.row(t).iter().copied().collect();
                 if k == 0 {
-                    let (v, d) = split_torso(&row, self.model.scale);
+                    let (v, d, g) = split_torso(&row, self.model.scale);
                     frames.push(v);
                     displacements.push(d);
+                    gravity.push(g);
                 } else {
                     frames.push(unflatten(&row));
                 }
             }
             parts.push(frames);
         }
-        Ok(DecodedParts { parts, displacements })
+        Ok(DecodedParts { parts, displacements, gravity })
     }
 
     /// Aligns children to parents on the bands and averages shared vertices (one frame).
@@ -168,14 +172,40 @@ impl<'a> Decoder<'a> {
     ) -> Result<Vec<Vec<Vector3<f64>>>> {
         let decoded = self.part_poses(latents, rng)?;
         let body = self.assemble(&decoded, how)?;
-        Ok(place(&body, &decoded.displacements, start))
+        Ok(place(&body, &decoded.displacements, &decoded.gravity, &self.model.up, start))
     }
 }
 
-/// World frames: `P_0 = start`, `P_t = P_{t−1} ∘ D_t` (the first displacement is ignored).
-pub fn place(body: &[Vec<Vector3<f64>>], displacements: &[[f64; 6]], start: &RigidMotion) -> Vec<Vec<Vector3<f64>>> {
-    let rel: Vec<RigidMotion> =
-        displacements.iter().skip(1).map(|d| RigidMotion::from_6vec(&Vector6::from_row_slice(d))).collect();
-    let poses = integrate(start, &rel);
+/// World frames: `P_0 = start`, `P_t = G_t(P_{t−1} ∘ D_t)` (the first displacement is
+/// ignored), where `G_t` is the gravity correction (deviation, see [`crate::part_data`]): the
+/// smallest world rotation about the body origin taking the pose's body-frame up axis to the
+/// decoded one, then the height set to the decoded height. Heading and horizontal travel stay
+/// integrated. With `gravity` empty, plain integration.
+pub fn place(
+    body: &[Vec<Vector3<f64>>],
+    displacements: &[[f64; 6]],
+    gravity: &[[f64; 4]],
+    up: &Vector3<f64>,
+    start: &RigidMotion,
+) -> Vec<Vec<Vector3<f64>>> {
+    let mut poses = Vec::with_capacity(body.len());
+    let mut cur = *start;
+    for t in 0..body.len() {
+        if t > 0 {
+            cur = cur.compose(&RigidMotion::from_6vec(&Vector6::from_row_slice(&displacements[t])));
+            if let Some(g) = gravity.get(t) {
+                let u = Vector3::new(g[1], g[2], g[3]);
+                if u.norm() > 1e-9 {
+                    // World direction the decoded body-up axis currently points to; rotate it onto `up`.
+                    let now = cur.rotation * u.normalize();
+                    if let Some(q) = nalgebra::Rotation3::rotation_between(&now, up) {
+                        cur.rotation = q * cur.rotation;
+                    }
+                }
+                cur.translation += up * (g[0] - cur.translation.dot(up));
+            }
+        }
+        poses.push(cur);
+    }
     body.iter().zip(&poses).map(|(f, p)| p.apply_all(f)).collect()
 }

@@ -103,7 +103,7 @@ pub struct PartTrainReport {
 }
 
 /// Per-part training matrices: `data[k][s]` is part `k`'s `T × D_k` rows of sequence `s`
-/// (torso rows with the scaled displacement), and the displacement scale.
+/// (torso rows with the scaled displacement and gravity values), and the displacement scale.
 pub fn training_data(group: &Group) -> (Vec<Vec<DMatrix<f64>>>, DisplacementScale) {
     let mut data: Vec<Vec<DMatrix<f64>>> = group
         .parts
@@ -115,8 +115,8 @@ pub fn training_data(group: &Group) -> (Vec<Vec<DMatrix<f64>>>, DisplacementScal
         .collect();
     let disp: Vec<Vec<[f64; 6]>> = group.sequences.iter().map(|s| part_data::model_displacements(&s.motion)).collect();
     let scale = part_data::displacement_scale(&data[0], &disp);
-    for (m, d) in data[0].iter_mut().zip(&disp) {
-        *m = part_data::with_displacement(m, d, scale);
+    for ((m, d), s) in data[0].iter_mut().zip(&disp).zip(&group.sequences) {
+        *m = part_data::with_displacement(m, d, &part_data::gravity(&s.motion, &group.up), scale);
     }
     (data, scale)
 }

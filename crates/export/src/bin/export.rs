@@ -46,18 +46,32 @@ fn main() -> ExitCode {
     run_stage("export", || {
         args.common.init()?;
         let seq = MeshSequence::load_dir(&args.input)?;
-        let ext = args.out.extension().and_then(|e| e.to_str()).map(str::to_ascii_lowercase);
+        let ext = args
+            .out
+            .extension()
+            .and_then(|e| e.to_str())
+            .map(str::to_ascii_lowercase);
         match ext.as_deref() {
             Some("glb") => {
                 let opts = GlbOptions {
                     stride: args.stride as usize,
                     fps: args.fps,
-                    interpolation: if args.linear { Interpolation::Linear } else { Interpolation::Step },
+                    interpolation: if args.linear {
+                        Interpolation::Linear
+                    } else {
+                        Interpolation::Step
+                    },
                     quantize: args.quantize,
                 };
                 export::glb::write_glb(&args.out, &seq, &opts)?;
             }
-            Some("pc2") => export::pc2::write_obj_pc2(&args.out.with_extension("obj"), &args.out, &seq)?,
+            Some("pc2") => {
+                export::pc2::write_obj_pc2(&args.out.with_extension("obj"), &args.out, &seq)?
+            }
+            Some(other) if !args.out.is_dir() => anyhow::bail!(
+                "{}: unknown output format '.{other}' (expected NAME.glb, NAME.pc2 or a folder)",
+                args.out.display()
+            ),
             _ => export::frames::write_frames(&args.out, &seq, args.frame_format)?,
         }
         mesh_core::info!("wrote {} frames to {}", seq.n_frames(), args.out.display());

@@ -30,10 +30,21 @@ fn main() -> ExitCode {
     let args = Args::parse();
     run_stage("import", || {
         args.common.init()?;
-        let is_pc2 = args.input.extension().is_some_and(|e| e.eq_ignore_ascii_case("pc2"));
+        let is_pc2 = args
+            .input
+            .extension()
+            .is_some_and(|e| e.eq_ignore_ascii_case("pc2"));
         let seq = if is_pc2 {
-            let template = args.template.clone().unwrap_or_else(|| args.input.with_extension("obj"));
+            let template = args
+                .template
+                .clone()
+                .unwrap_or_else(|| args.input.with_extension("obj"));
             export::pc2::read_obj_pc2(&template, &args.input)?
+        } else if args.input.is_file() {
+            anyhow::bail!(
+                "{}: cannot import this file (import reads a .pc2 point cache or a folder of numbered OBJ/PLY frames)",
+                args.input.display()
+            )
         } else {
             export::frames::read_frames(&args.input)?
         };

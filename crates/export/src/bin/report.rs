@@ -39,7 +39,9 @@ struct Args {
 
 fn parse_view(s: &str) -> Result<(String, PathBuf), String> {
     match s.split_once('=') {
-        Some((label, dir)) if !label.is_empty() && !dir.is_empty() => Ok((label.to_string(), dir.into())),
+        Some((label, dir)) if !label.is_empty() && !dir.is_empty() => {
+            Ok((label.to_string(), dir.into()))
+        }
         _ => Err(format!("expected LABEL=DIR, got '{s}'")),
     }
 }
@@ -54,7 +56,10 @@ fn main() -> ExitCode {
             title: args.title.clone(),
             fps: args.fps,
             max_frames: args.max_frames as usize,
-            three_dir: args.three.clone().unwrap_or_else(|| export::viewer::DEFAULT_THREE_DIR.into()),
+            three_dir: args
+                .three
+                .clone()
+                .unwrap_or_else(|| export::viewer::DEFAULT_THREE_DIR.into()),
         })?;
         mesh_core::info!("wrote {}", page.display());
         Ok(())

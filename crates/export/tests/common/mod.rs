@@ -13,7 +13,8 @@ pub fn bending_capsule(n_frames: usize, amp: f64, phase0: f64) -> MeshSequence {
     let (mesh, _) = mesh_core::shapes::capsule_body(10, 16, 0.12, 1.0);
     let frames = (0..n_frames)
         .map(|t| {
-            let theta = amp * (phase0 + 2.0 * std::f64::consts::PI * t as f64 / n_frames as f64).sin();
+            let theta =
+                amp * (phase0 + 2.0 * std::f64::consts::PI * t as f64 / n_frames as f64).sin();
             let shift = 0.01 * t as f64;
             mesh.vertices
                 .iter()
@@ -37,12 +38,19 @@ pub fn web_dir() -> PathBuf {
 pub fn node(script: &str, args: &[&Path]) -> std::process::Output {
     let web = web_dir();
     assert!(
-        web.join("node_modules/gltf-validator").is_dir() && web.join("node_modules/playwright-core").is_dir(),
+        web.join("node_modules/gltf-validator").is_dir()
+            && web.join("node_modules/playwright-core").is_dir(),
         "npm packages missing in {}: run scripts/setup-web (npm ci --prefix crates/export/web)",
         web.display()
     );
-    match Command::new("node").arg(web.join(script)).args(args).output() {
+    match Command::new("node")
+        .arg(web.join(script))
+        .args(args)
+        .output()
+    {
         Ok(out) => out,
-        Err(e) => panic!("cannot run node (install Node.js >= 18; scripts/setup-web checks it): {e}"),
+        Err(e) => {
+            panic!("cannot run node (install Node.js >= 18; scripts/setup-web checks it): {e}")
+        }
     }
 }

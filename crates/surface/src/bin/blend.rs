@@ -46,7 +46,13 @@ fn main() -> ExitCode {
         let (a, b) = (read_frames(&args.a)?, read_frames(&args.b)?);
         check_same_topology(&a, &args.a, &b, &args.b)?;
         if a.frames.len() != b.frames.len() {
-            bail!("{}: {} frames but {} has {}", args.b.display(), b.frames.len(), args.a.display(), a.frames.len());
+            bail!(
+                "{}: {} frames but {} has {}",
+                args.b.display(),
+                b.frames.len(),
+                args.a.display(),
+                a.frames.len()
+            );
         }
         let rest = match &args.rest {
             Some(p) => {
@@ -58,10 +64,18 @@ fn main() -> ExitCode {
         };
         let w = args.weight;
         let out: Vec<_> = if args.linear {
-            a.frames.iter().zip(&b.frames).map(|(p, q)| linear_blend(p, q, w)).collect()
+            a.frames
+                .iter()
+                .zip(&b.frames)
+                .map(|(p, q)| linear_blend(p, q, w))
+                .collect()
         } else {
             let blender = Blender::new(rest, a.faces.clone()).context("rest mesh")?;
-            a.frames.par_iter().zip(&b.frames).map(|(p, q)| blender.blend(p, q, w)).collect::<Result<_, _>>()?
+            a.frames
+                .par_iter()
+                .zip(&b.frames)
+                .map(|(p, q)| blender.blend(p, q, w))
+                .collect::<Result<_, _>>()?
         };
         write_frames(&args.out, &a.faces, out, a.is_dir)?;
         Ok(())

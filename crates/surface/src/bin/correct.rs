@@ -37,13 +37,19 @@ fn main() -> ExitCode {
         args.common.init()?;
         let training = read_frames(&args.training)?;
         if !training.is_dir {
-            bail!("{}: --training must be a directory of frames", args.training.display());
+            bail!(
+                "{}: --training must be a directory of frames",
+                args.training.display()
+            );
         }
         let pred = read_frames(&args.prediction)?;
         check_same_topology(&training, &args.training, &pred, &args.prediction)?;
         let corrector = Corrector::new(training.faces.clone(), training.frames)?;
-        let out: Vec<_> =
-            pred.frames.par_iter().map(|p| corrector.correct(p, args.neighbours as usize)).collect::<Result<_, _>>()?;
+        let out: Vec<_> = pred
+            .frames
+            .par_iter()
+            .map(|p| corrector.correct(p, args.neighbours as usize))
+            .collect::<Result<_, _>>()?;
         write_frames(&args.out, &pred.faces, out, pred.is_dir)?;
         Ok(())
     })

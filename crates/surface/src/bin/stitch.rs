@@ -39,30 +39,56 @@ fn main() -> ExitCode {
         let seg = Segmentation::load(&args.segmentation)?;
         let template = read_mesh(&args.template)?;
         if template.vertices.len() != seg.n_vertices {
-            bail!("{}: {} vertices but the segmentation has {}", args.template.display(), template.vertices.len(), seg.n_vertices);
+            bail!(
+                "{}: {} vertices but the segmentation has {}",
+                args.template.display(),
+                template.vertices.len(),
+                seg.n_vertices
+            );
         }
-        let order = seg.tree_order().with_context(|| args.segmentation.display().to_string())?;
-        let mut stitcher =
-            Stitcher::new(seg.layout(template.faces.clone()).with_context(|| args.segmentation.display().to_string())?);
+        let order = seg
+            .tree_order()
+            .with_context(|| args.segmentation.display().to_string())?;
+        let mut stitcher = Stitcher::new(
+            seg.layout(template.faces.clone())
+                .with_context(|| args.segmentation.display().to_string())?,
+        );
         let mut parts = Vec::new();
         for &k in &order {
             let name = &seg.parts[k].name;
             let dir = args.parts.join(name);
-            let path = if dir.is_dir() { dir } else { args.parts.join(format!("{name}.ply")) };
+            let path = if dir.is_dir() {
+                dir
+            } else {
+                args.parts.join(format!("{name}.ply"))
+            };
             let f = read_frames(&path)?;
             if f.frames[0].len() != seg.parts[k].vertices.len() {
-                bail!("{}: {} vertices but part '{name}' has {}", path.display(), f.frames[0].len(), seg.parts[k].vertices.len());
+                bail!(
+                    "{}: {} vertices but part '{name}' has {}",
+                    path.display(),
+                    f.frames[0].len(),
+                    seg.parts[k].vertices.len()
+                );
             }
             parts.push(f);
         }
         let n_frames = parts[0].frames.len();
         if let Some(p) = parts.iter().find(|p| p.frames.len() != n_frames) {
-            bail!("part inputs disagree on the number of frames ({} vs {n_frames})", p.frames.len());
+            bail!(
+                "part inputs disagree on the number of frames ({} vs {n_frames})",
+                p.frames.len()
+            );
         }
         let mut out = Vec::with_capacity(n_frames);
         for i in 0..n_frames {
             let frame: Vec<_> = parts.iter().map(|p| p.frames[i].clone()).collect();
-            out.push(stitcher.stitch(&frame).with_context(|| format!("frame {i}"))?.vertices);
+            out.push(
+                stitcher
+                    .stitch(&frame)
+                    .with_context(|| format!("frame {i}"))?
+                    .vertices,
+            );
         }
         write_frames(&args.out, &template.faces, out, parts[0].is_dir)?;
         Ok(())

@@ -6,7 +6,9 @@ use nalgebra::{Matrix3, Rotation3, Unit, Vector3};
 
 /// Deterministic pseudo-random number in [0, 1) from an integer.
 pub fn hash01(i: u64) -> f64 {
-    let mut x = i.wrapping_mul(0x9E3779B97F4A7C15).wrapping_add(0x632BE59BD9B4E019);
+    let mut x = i
+        .wrapping_mul(0x9E3779B97F4A7C15)
+        .wrapping_add(0x632BE59BD9B4E019);
     x ^= x >> 31;
     x = x.wrapping_mul(0xBF58476D1CE4E5B9);
     x ^= x >> 29;
@@ -26,11 +28,18 @@ pub fn grid(nx: usize, ny: usize, jitter: f64) -> (Vec<Vector3<f64>>, Vec<[u32; 
             let inside = i > 0 && i < nx && j > 0 && j < ny;
             let k = (j * (nx + 1) + i) as u64;
             let (dx, dy) = if inside {
-                (jitter * (hash01(2 * k) - 0.5), jitter * (hash01(2 * k + 1) - 0.5))
+                (
+                    jitter * (hash01(2 * k) - 0.5),
+                    jitter * (hash01(2 * k + 1) - 0.5),
+                )
             } else {
                 (0.0, 0.0)
             };
-            v.push(Vector3::new((i as f64 + dx) / nx as f64, (j as f64 + dy) / ny as f64, 0.0));
+            v.push(Vector3::new(
+                (i as f64 + dx) / nx as f64,
+                (j as f64 + dy) / ny as f64,
+                0.0,
+            ));
             interior.push(inside);
         }
     }
@@ -48,7 +57,13 @@ pub fn grid(nx: usize, ny: usize, jitter: f64) -> (Vec<Vector3<f64>>, Vec<[u32; 
 /// Tube along +z: `rings` rings of `around` vertices (index ring*around + j), radius r, ring
 /// spacing h, outward-facing triangles; with `capped`, two centre vertices close the ends
 /// (bottom = rings*around, top = rings*around + 1).
-pub fn tube(around: usize, rings: usize, r: f64, h: f64, capped: bool) -> (Vec<Vector3<f64>>, Vec<[u32; 3]>) {
+pub fn tube(
+    around: usize,
+    rings: usize,
+    r: f64,
+    h: f64,
+    capped: bool,
+) -> (Vec<Vector3<f64>>, Vec<[u32; 3]>) {
     let mut v = Vec::new();
     for k in 0..rings {
         for j in 0..around {
@@ -115,5 +130,8 @@ pub fn edge_lengths(v: &[Vector3<f64>], f: &[[u32; 3]]) -> Vec<f64> {
 }
 
 pub fn max_dist(a: &[Vector3<f64>], b: &[Vector3<f64>]) -> f64 {
-    a.iter().zip(b).map(|(p, q)| (p - q).norm()).fold(0.0, f64::max)
+    a.iter()
+        .zip(b)
+        .map(|(p, q)| (p - q).norm())
+        .fold(0.0, f64::max)
 }

@@ -1,0 +1,210 @@
+//! End to end on the synthetic capture set of `common`: every stage binary of
+//! the crate, run as a user would, against known answers.
+
+mod common;
+
+use std::path::{Path, PathBuf};
+use std::process::Command;
+
+use mesh_core::sequence::MeshSequence;
+use transfer::evaluate::{rms_errors, EvalRecord};
+
+fn bin(name: &str) -> &'static str {
+    match name {
+        "align" => env!("CARGO_BIN_EXE_align"),
+        "segment" => env!("CARGO_BIN_EXE_segment"),
+        "pca-fit" => env!("CARGO_BIN_EXE_pca-fit"),
+        "dtw-densify" => env!("CARGO_BIN_EXE_dtw-densify"),
+        "gpr-train" => env!("CARGO_BIN_EXE_gpr-train"),
+        "gpr-predict" => env!("CARGO_BIN_EXE_gpr-predict"),
+        "evaluate" => env!("CARGO_BIN_EXE_evaluate"),
+        "learning-curves" => env!("CARGO_BIN_EXE_learning-curves"),
+        _ => unreachable!(),
+    }
+}
+
+fn run(name: &str, args: &[&str]) -> String {
+    let out = Command::new(bin(name)).args(args).env("OPENBLAS_NUM_THREADS", "1").output().unwrap();
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(out.status.success(), "{name} {args:?} failed: {err}");
+    String::from_utf8_lossy(&out.stdout).into_owned()
+}
+
+fn p(path: &Path) -> &str {
+    path.to_str().unwrap()
+}
+
+struct Work {
+    set: PathBuf,
+    w: PathBuf,
+}
+
+impl Work {
+    fn path(&self, rel: &str) -> PathBuf {
+        self.w.join(rel)
+    }
+
+    /// align, segment, pca-fit (parts and whole body), dtw-densify.
+    fn prepare(&self) -> Vec<String> {
+        let mut pairs = Vec::new();
+        let train: Vec<&str> = common::TRAIN.iter().map(|(n, _)| *n).collect();
+        for s in ["A", "B"] {
+            let tpl = self.set.join(s).join("walk").join("000000.ply");
+            std::fs::create_dir_all(self.w.join(s)).unwrap();
+            let mut motions: Vec<&str> = train.clone();
+            if s == "A" {
+                motions.push(common::TEST.0);
+            }
+            for m in &motions {
+                let out = self.path(&format!("{s}/{m}.aligned"));
+                run("align", &["-q", "--template", p(&tpl), p(&self.set.join(s).join(m)), "--out", p(&out)]);
+            }
+            let seg = self.path(&format!("{s}/parts.seg"));
+            run("segment", &["-q", p(&self.set.join(s).join("subject.json")), "--template", p(&tpl), "--out", p(&seg)]);
+            let aligned: Vec<String> = train.iter().map(|m| p(&self.path(&format!("{s}/{m}.aligned"))).to_string()).collect();
+            let mut args = vec!["-q", "--template", p(&tpl), "--parts", p(&seg), "--out"];
+            let pca = self.path(&format!("{s}/pca.model"));
+            args.push(p(&pca));
+            args.extend(aligned.iter().map(|s| s.as_str()));
+            run("pca-fit", &args);
+            let whole = self.path(&format!("{s}/pca-whole.model"));
+            let mut args = vec!["-q", "--whole-body", "--template", p(&tpl), "--out", p(&whole)];
+            args.extend(aligned.iter().map(|s| s.as_str()));
+            run("pca-fit", &args);
+        }
+        for m in &train {
+            let corr = self.path(&format!("{m}.corr"));
+            run(
+                "dtw-densify",
+                &[
+                    "-q", "--set", p(&self.set.join("set.json")), "--pair", m, "--source-pca", p(&self.path("A/pca.model")),
+                    "--target-pca", p(&self.path("B/pca.model")), p(&self.path(&format!("A/{m}.aligned"))),
+                    p(&self.path(&format!("B/{m}.aligned"))), "--out", p(&corr),
+                ],
+            );
+            pairs.extend([
+                "--pair".to_string(),
+                p(&self.path(&format!("A/{m}.aligned"))).to_string(),
+                p(&self.path(&format!("B/{m}.aligned"))).to_string(),
+                p(&corr).to_string(),
+            ]);
+        }
+        pairs
+    }
+}
+
+/// The error of standing still in the rest pose at the true world poses:
+/// what a transfer that learnt nothing about the pose would score.
+fn rest_pose_error(truth: &MeshSequence) -> f64 {
+    let b = common::body_b();
+    let rest = MeshSequence::new(truth.faces.clone(), vec![b.mesh.vertices.clone(); truth.n_frames()]);
+    rms_errors(&rest, truth).unwrap().0
+}
+
+#[test]
+fn transfer_pipeline_on_a_known_synthetic_set() {
+    // TRANSFER_TEST_DIR=<dir> keeps the set and the outputs for inspection.
+    let tmp = tempfile::tempdir().unwrap();
+    let root = std::env::var_os("TRANSFER_TEST_DIR").map(PathBuf::from).unwrap_or_else(|| tmp.path().to_path_buf());
+    let work = Work { set: root.join("set"), w: root.join("work") };
+    common::write_set(&work.set);
+    let pairs = work.prepare();
+    let pair_args: Vec<&str> = pairs.iter().map(|s| s.as_str()).collect();
+    let truth_dir = work.set.join("truth/B").join(common::TEST.0);
+    let truth = MeshSequence::load_dir(&truth_dir).unwrap();
+    let baseline = rest_pose_error(&truth);
+
+    let mut results: Vec<EvalRecord> = Vec::new();
+    for method in ["gpr-nn", "gpr-linear", "keypose-affine"] {
+        let model = work.path(&format!("{method}.model"));
+        let mut args = vec![
+            "-q", "--method", method, "--source-pca", p(&work.path("A/pca.model")).to_owned().leak(),
+            "--target-pca", p(&work.path("B/pca.model")).to_owned().leak(), "--source-fps", "25", "--target-fps", "50",
+            "--out", p(&model).to_owned().leak(),
+        ];
+        args.extend(&pair_args);
+        run("gpr-train", &args);
+        for placement in ["regressed", "scaled-source", "blended"] {
+            let out = work.path(&format!("out/{method}/{placement}"));
+            run(
+                "gpr-predict",
+                &[
+                    "-q", "--model", p(&model), "--source-pca", p(&work.path("A/pca.model")), "--target-pca",
+                    p(&work.path("B/pca.model")), "--target-template", p(&work.set.join("B/walk/000000.ply")),
+                    "--placement", placement, p(&work.path(&format!("A/{}.aligned", common::TEST.0))), "--out", p(&out),
+                ],
+            );
+            let pred = MeshSequence::load_dir(&out).unwrap();
+            assert_eq!(pred.n_frames(), common::N_SOURCE, "one output frame per source frame");
+            assert_eq!(pred.faces, truth.faces, "the target's topology");
+            let json = run(
+                "evaluate",
+                &[
+                    "-q", p(&out), p(&truth_dir), "--direction", "A->B", "--motion", common::TEST.0, "--method", method,
+                    "--placement", placement,
+                ],
+            );
+            results.push(serde_json::from_str(&json).unwrap());
+        }
+    }
+    for r in &results {
+        eprintln!("{} {:<15} {:<14} pose {:.4} m placed {:.4} m", r.direction, r.method, r.placement, r.rms_pose_m, r.rms_placed_m);
+    }
+    eprintln!("rest-pose baseline: {baseline:.4} m");
+    let get = |m: &str, pl: &str| results.iter().find(|r| r.method == m && r.placement == pl).unwrap();
+    let nn = get("gpr-nn", "regressed");
+    // The pose transfer must explain most of the deformation the rest pose misses.
+    assert!(nn.rms_pose_m < 0.3 * baseline, "gpr-nn pose error {} vs rest pose {baseline}", nn.rms_pose_m);
+    // The displacement mapping here is linear in the source displacement, so the
+    // regressed placement must land near the truth after 1.2 s of travel.
+    assert!(nn.rms_placed_m < 0.1, "gpr-nn placed error {}", nn.rms_placed_m);
+    // The pose is the same whatever the placement.
+    assert!((get("gpr-nn", "blended").rms_pose_m - nn.rms_pose_m).abs() < 1e-9);
+
+    // Reverse direction trains from the same pairs and predicts B's frames onto A.
+    let model = work.path("rev.model");
+    let mut args = vec![
+        "-q", "--reverse", "--source-pca", p(&work.path("B/pca.model")).to_owned().leak(), "--target-pca",
+        p(&work.path("A/pca.model")).to_owned().leak(), "--source-fps", "50", "--target-fps", "25", "--out",
+        p(&model).to_owned().leak(),
+    ];
+    args.extend(&pair_args);
+    run("gpr-train", &args);
+    let out = work.path("out/rev");
+    run(
+        "gpr-predict",
+        &[
+            "-q", "--model", p(&model), "--source-pca", p(&work.path("B/pca.model")), "--target-pca",
+            p(&work.path("A/pca.model")), "--target-template", p(&work.set.join("A/walk/000000.ply")),
+            p(&work.path("B/walk.aligned")), "--out", p(&out),
+        ],
+    );
+    // B's walk (61 frames) mapped back onto A: A's own walk at the matching frames.
+    let pred = MeshSequence::load_dir(&out).unwrap();
+    assert_eq!(pred.n_frames(), 2 * common::N_SOURCE - 1);
+    let a_walk = MeshSequence::load_dir(work.set.join("A/walk")).unwrap();
+    let matched = MeshSequence::new(a_walk.faces.clone(), (0..pred.n_frames()).step_by(2).map(|j| pred.frames[j].clone()).collect());
+    let (pose, _) = rms_errors(&matched, &a_walk).unwrap();
+    assert!(pose < 0.02, "reverse transfer of a training motion: pose error {pose}");
+
+    // Learning curves: CSV and both plot formats for both directions.
+    let lc = work.path("curves");
+    let mut args = vec![
+        "-q", "--source-pca", p(&work.path("A/pca.model")).to_owned().leak(), "--target-pca",
+        p(&work.path("B/pca.model")).to_owned().leak(), "--source-whole", p(&work.path("A/pca-whole.model")).to_owned().leak(),
+        "--target-whole", p(&work.path("B/pca-whole.model")).to_owned().leak(), "--source-fps", "25", "--target-fps", "50",
+        "--steps", "3", "--max-iter", "20", "--out", p(&lc).to_owned().leak(),
+    ];
+    args.extend(&pair_args);
+    run("learning-curves", &args);
+    let csv = std::fs::read_to_string(lc.join("learning_curves.csv")).unwrap();
+    assert!(csv.lines().count() > 10, "{csv}");
+    for d in ["A-to-B", "B-to-A"] {
+        for f in ["fig7-kernels", "fig8-dense-vs-keyposes", "fig9-parts-vs-whole"] {
+            for ext in ["png", "svg"] {
+                let path = lc.join(format!("{d}-{f}.{ext}"));
+                assert!(std::fs::metadata(&path).map(|m| m.len() > 1000).unwrap_or(false), "{}", path.display());
+            }
+        }
+    }
+}

@@ -1,0 +1,81 @@
+use std::path::PathBuf;
+use std::process::ExitCode;
+
+use clap::Parser;
+use mesh_core::artifact::Artifact;
+use mesh_core::capture_set::CaptureSet;
+use mesh_core::cli::{run_stage, CommonArgs};
+use variation::group::{build, GroupSpec};
+use variation::prealign::PrealignOptions;
+
+/// Time-align the motions of one movement group to a reference by contact-guided DTW and add pre-blended sequences
+#[derive(Parser, Debug)]
+#[command(
+    name = "prealign",
+    version,
+    after_help = "e.g.: prealign --set out/demo/set --subject A --group locomotion --motions walk,run --blend-weights 0.5 --out out/work/variation/locomotion.group"
+)]
+struct Args {
+    #[command(flatten)]
+    common: CommonArgs,
+    /// Capture-set folder
+    #[arg(long)]
+    set: PathBuf,
+    /// Subject (default: the set's source subject)
+    #[arg(long)]
+    subject: Option<String>,
+    /// Group name (e.g. locomotion)
+    #[arg(long)]
+    group: String,
+    /// Motions of the group, comma-separated; missing motions are skipped with a warning
+    #[arg(long, value_delimiter = ',', required = true)]
+    motions: Vec<String>,
+    /// Reference motion [default: the first present]
+    #[arg(long)]
+    reference: Option<String>,
+    /// Blend weights W between the first two motions (non-linear mesh blends), comma-separated
+    #[arg(long, value_delimiter = ',', default_value = "0.5")]
+    blend_weights: Vec<f64>,
+    /// Cost of one foot-contact disagreement in the DTW (metres) [default: median pose cost]
+    #[arg(long)]
+    contact_weight: Option<f64>,
+    /// Model the whole body as one part (no segmentation)
+    #[arg(long)]
+    whole_body: bool,
+    /// Fail when the subject's curves do not give usable body parts [default: warn and model the whole body]
+    #[arg(long)]
+    strict_parts: bool,
+    /// Output artifact (kind variation-group)
+    #[arg(short, long)]
+    out: PathBuf,
+}
+
+fn main() -> ExitCode {
+    let args = Args::parse();
+    run_stage("prealign", || {
+        args.common.init()?;
+        let set = CaptureSet::open(&args.set)?;
+        let subject = args.subject.clone().unwrap_or_else(|| set.spec.source.clone());
+        let spec = GroupSpec {
+            name: args.group.clone(),
+            subject,
+            motions: args.motions.clone(),
+            reference: args.reference.clone(),
+            blend_weights: args.blend_weights.clone(),
+            prealign: PrealignOptions { contact_weight: args.contact_weight, ..Default::default() },
+            whole_body: args.whole_body,
+            fallback_whole_body: !args.strict_parts,
+        };
+        let (group, notes) = build(&set, &spec)?;
+        for n in notes {
+            mesh_core::warn!("{n}");
+        }
+        let blends = if group.sequences.len() < 2 { Vec::new() } else { args.blend_weights.clone() };
+        if group.sequences.iter().filter(|s| s.blend.is_none()).count() < 2 && !args.blend_weights.is_empty() {
+            mesh_core::warn!("group '{}' has one motion: no blends", group.name);
+        }
+        let header = args.common.header("prealign", env!("CARGO_PKG_VERSION")).with_input(set.set_json())?.with_params(&blends)?;
+        group.save(&args.out, &header)?;
+        Ok(())
+    })
+}
