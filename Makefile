@@ -28,7 +28,8 @@ setup:
 build: setup
 	$(CARGO) build --release --workspace --quiet
 
-test: build assets
+# assets: synth's tests use the real bodies; setup-web: glTF validator + headless Chromium tests.
+test: build assets setup-web
 	$(CARGO) test --release --workspace
 
 clean-out:

@@ -11,8 +11,5 @@ REPORT_TITLE ?= surfcap report: $(OUT)
 setup-web:
 	@scripts/setup-web
 
-# The glTF-validator and headless-browser tests of crates/export need setup-web.
-test: setup-web
-
 report: build setup-web
 	$(BIN)/report $(OUT) --title "$(REPORT_TITLE)" $(foreach v,$(REPORT_VIEWS),--view $(v))

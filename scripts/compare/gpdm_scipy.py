@@ -2,12 +2,14 @@
 """Compare gpdm-train's optimiser (Rust, crates/gpdm) with numpy/scipy L-BFGS-B on the same
 GPDM objective (paper eqs. 3-7, same log/noise-floor parametrisation) from the same start.
 
-Usage: gpdm_scipy.py [--dim D] [--maxiter K] [--workdir DIR] [--bin PATH]
+Usage: gpdm_scipy.py [--dim D] [--maxiter K] [--workdir DIR] [--bin PATH] [--raw]
 e.g.:  OPENBLAS_NUM_THREADS=1 python3 scripts/compare/gpdm_scipy.py --dim 15000
 
 Runs `fit_compare D DIR` (built by `cargo test --release -p gpdm`), which exports Y, theta0
 and meta.json and writes the Rust traces; then minimises with scipy and reports both optima
 and the time each needs to reach the scipy optimum. Needs numpy and scipy.
+--raw: scipy optimises the raw hyperparameters (α, β > 0 and 1/α3 >= floor as L-BFGS-B
+bounds), as a plain numpy GPDM would, instead of the Rust log/floor coordinates.
 """
 import argparse
 import json
@@ -88,7 +90,37 @@ def make_objective(meta, y):
         val += np.log([a1, a2, a3, b1, b2, b3, b4]).sum()
         return val, np.concatenate([gX.T.ravel(), ga, gb])
 
-    return f
+    def to_raw(theta):
+        ta, tb = theta[n * d : n * d + 3], theta[n * d + 3 :]
+        a = [np.exp(ta[0]), np.exp(ta[1]), 1.0 / (floor + np.exp(ta[2]))]
+        b = [np.exp(tb[0]), np.exp(tb[1]), np.exp(tb[2]), 1.0 / np.exp(tb[3])]
+        return np.concatenate([theta[: n * d], a, b])
+
+    def from_raw(r):
+        a, b = r[n * d : n * d + 3], r[n * d + 3 :]
+        ta = [np.log(a[0]), np.log(a[1]), np.log(max(1.0 / a[2] - floor, 1e-300))]
+        tb = [np.log(b[0]), np.log(b[1]), np.log(b[2]), np.log(1.0 / b[3])]
+        return np.concatenate([r[: n * d], ta, tb])
+
+    def f_raw(r):
+        # Chain rule from the theta gradient: d theta / d raw, per hyperparameter.
+        th = from_raw(r)
+        v, g = f(th)
+        a, b = r[n * d : n * d + 3], r[n * d + 3 :]
+        gr = g.copy()
+        k = n * d
+        gr[k] = g[k] / a[0]
+        gr[k + 1] = g[k + 1] / a[1]
+        gr[k + 2] = g[k + 2] * (-1.0 / a[2] ** 2) / (1.0 / a[2] - floor)
+        gr[k + 3] = g[k + 3] / b[0]
+        gr[k + 4] = g[k + 4] / b[1]
+        gr[k + 5] = g[k + 5] / b[2]
+        gr[k + 6] = g[k + 6] * (-1.0 / b[3])
+        return v, gr
+
+    bounds = [(None, None)] * (n * d) + [(1e-12, None), (1e-12, None), (1e-12, 1.0 / floor if floor > 0 else None)] \
+        + [(1e-12, None)] * 4
+    return f, f_raw, to_raw, bounds
 
 
 def main():
@@ -96,6 +128,7 @@ def main():
     ap.add_argument("--dim", type=int, default=15000)
     ap.add_argument("--maxiter", type=int, default=1000)
     ap.add_argument("--workdir", default="/tmp/gpdm_compare")
+    ap.add_argument("--raw", action="store_true")
     ap.add_argument("--bin", default=os.path.join(os.path.dirname(__file__), "../../target/release/examples/fit_compare"))
     a = ap.parse_args()
     env = dict(os.environ, OPENBLAS_NUM_THREADS="1")
@@ -104,7 +137,7 @@ def main():
         sys.exit(f"gpdm_scipy: {a.bin}: {out.stderr.strip()}")
     print(out.stdout, end="")
     meta, y, theta0 = load(a.workdir)
-    f = make_objective(meta, y)
+    f, f_raw, to_raw, bounds = make_objective(meta, y)
     # Same objective at the start (independent implementation check).
     f0, g0 = f(theta0)
     reps = 5
@@ -115,16 +148,18 @@ def main():
     trace = []
     t0 = time.perf_counter()
 
+    obj, start, bnds = (f_raw, to_raw(theta0), bounds) if a.raw else (f, theta0, None)
+
     def wrapped(th):
-        v, g = f(th)
+        v, g = obj(th)
         trace.append((time.perf_counter() - t0, v))
         return v, g
 
-    res = minimize(wrapped, theta0, jac=True, method="L-BFGS-B",
+    res = minimize(wrapped, start, jac=True, method="L-BFGS-B", bounds=bnds,
                    options={"maxiter": a.maxiter, "maxfun": 3 * a.maxiter, "gtol": 1e-6, "ftol": 1e-12})
     t_scipy = trace[-1][0]
     f_scipy = min(v for _, v in trace)
-    print(f"scipy: f0 = {f0:.6f}, {per_eval*1e3:.1f} ms per objective+gradient, "
+    print(f"scipy ({'raw' if a.raw else 'log'} hyperparameters): f0 = {f0:.6f}, {per_eval*1e3:.1f} ms per objective+gradient, "
           f"{res.nfev} evals, {t_scipy:.2f} s, optimum {f_scipy:.6f} ({res.message})")
     target = f_scipy + 1e-6 * abs(f_scipy)
     t_scipy_hit = next(t for t, v in trace if v <= target)

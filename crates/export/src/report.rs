@@ -40,6 +40,9 @@ pub struct ReportOptions {
     pub fps: f64,
     /// Frames kept at most per sequence in the viewer.
     pub max_frames: usize,
+    /// Bytes of packed positions kept at most in the viewer (fewer frames
+    /// are kept when `max_frames` would exceed it; at least 2).
+    pub max_data_bytes: usize,
     /// Folder of the npm package `three`.
     pub three_dir: PathBuf,
 }
@@ -183,6 +186,12 @@ pub fn write_report(opts: &ReportOptions) -> Result<PathBuf> {
             "is not a folder (the pipeline output to report on)",
         ));
     }
+    if !(opts.fps.is_finite() && opts.fps > 0.0) {
+        return Err(Error::invalid(format!(
+            "--fps must be a positive number, got {}",
+            opts.fps
+        )));
+    }
     let mut views = Vec::new();
     for (label, dir) in &opts.views {
         let seq = MeshSequence::load_dir(dir)?;
@@ -197,7 +206,12 @@ pub fn write_report(opts: &ReportOptions) -> Result<PathBuf> {
 
     let mut head_extra = String::new();
     if !views.is_empty() {
-        let data = view_data_js(&views, opts.fps, opts.max_frames);
+        let per_frame: usize = views.iter().map(|v| 6 * v.seq.n_vertices()).sum();
+        let max_frames = opts
+            .max_frames
+            .min(opts.max_data_bytes / per_frame.max(1))
+            .max(2);
+        let data = view_data_js(&views, opts.fps, max_frames);
         mesh_core::atomic::write_bytes_atomic(
             &out.join(ASSETS_DIR).join("view-data.js"),
             data.as_bytes(),
@@ -213,7 +227,7 @@ pub fn write_report(opts: &ReportOptions) -> Result<PathBuf> {
              <script src=\"{ASSETS_DIR}/view-data.js\"></script>\
              <script type=\"module\">{}</script>",
             legend.join(""),
-            opts.max_frames,
+            max_frames,
             VIEWER_JS.replace("</script", "<\\/script")
         );
     }

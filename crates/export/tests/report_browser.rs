@@ -94,6 +94,7 @@ fn page_lists_what_the_run_produced() {
         title: "walk <test>".into(),
         fps: 30.0,
         max_frames: 10,
+        max_data_bytes: 12_000_000,
         three_dir: export::viewer::DEFAULT_THREE_DIR.into(),
     })
     .unwrap();
@@ -137,6 +138,7 @@ fn page_works_in_headless_chromium_from_disk() {
         title: "surfcap report test".into(),
         fps: 30.0,
         max_frames: 60,
+        max_data_bytes: 12_000_000,
         three_dir: export::viewer::DEFAULT_THREE_DIR.into(),
     })
     .unwrap();
@@ -153,5 +155,27 @@ fn page_works_in_headless_chromium_from_disk() {
     assert!(
         var > 10.0,
         "screenshot of the canvas is blank (luminance variance {var})"
+    );
+}
+
+#[test]
+fn data_budget_limits_the_viewer_frames() {
+    let dir = tempfile::tempdir().unwrap();
+    let (out, views) = fake_run(dir.path());
+    // 3 sequences x 290 vertices x 6 bytes = 5220 bytes per frame: 20000 bytes keep 3 frames.
+    write_report(&ReportOptions {
+        out: out.clone(),
+        views,
+        title: "budget".into(),
+        fps: 30.0,
+        max_frames: 60,
+        max_data_bytes: 20_000,
+        three_dir: export::viewer::DEFAULT_THREE_DIR.into(),
+    })
+    .unwrap();
+    let data = std::fs::read_to_string(out.join("report-assets/view-data.js")).unwrap();
+    assert!(
+        data.contains("\"nFrames\":3,"),
+        "24 frames under a 3-frame budget"
     );
 }

@@ -126,19 +126,6 @@ impl Cholesky {
     }
 }
 
-/// `(A + Aᵀ)/2`.
-pub fn symmetrise(mut a: Mat<f64>) -> Mat<f64> {
-    let n = a.nrows();
-    for j in 0..n {
-        for i in 0..j {
-            let v = 0.5 * (a[(i, j)] + a[(j, i)]);
-            a[(i, j)] = v;
-            a[(j, i)] = v;
-        }
-    }
-    a
-}
-
 /// `A Bᵀ`, sequential.
 pub fn mul_abt(a: MatRef<'_, f64>, b: MatRef<'_, f64>) -> Mat<f64> {
     let mut out = Mat::zeros(a.nrows(), b.nrows());

@@ -12,6 +12,7 @@
 //! * [`optimal_boundary`]: cheapest closed loop in an overlap band (§6.2, Huang et al. 2007).
 //! * [`stitch`]: Poisson merging of the parts along the optimal loops (§6.2).
 //! * [`blend`]: non-linear interpolation of two poses (rotation by log/exp, stretch linearly).
+//! * [`frames`], [`segmentation`]: file plumbing for the `correct`, `stitch` and `blend` binaries.
 
 pub mod blend;
 pub mod correct;

@@ -153,7 +153,8 @@ pub struct Stitched {
     pub vertices: Vec<Vector3<f64>>,
     /// Per part (None for the root): the merging loop in template indices, and its cost.
     pub loops: Vec<Option<BoundaryLoop>>,
-    /// Per part: the rigid motion applied to align it to its parent (identity for the root).
+    /// Per part: the rigid motion taking its input positions into the root part's frame
+    /// (fitted on the band to its already aligned parent; identity for the root).
     pub alignments: Vec<RigidMotion>,
 }
 

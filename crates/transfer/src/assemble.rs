@@ -146,3 +146,70 @@ pub fn assemble(plan: &AssemblyPlan, pca: &PcaModel, decoded: &[Vec<Vec<Vector3<
         })
         .collect()
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::part_pca::PartPca;
+    use gp::pca::{Components, Pca};
+    use mesh_core::rigid::{so3_exp, RigidMotion};
+    use nalgebra::DMatrix;
+
+    /// Parts cut from one mesh, each moved by its own rigid motion (as PCA
+    /// decoding leaves them in their reference frames), assemble back into
+    /// the mesh, exactly, in the template's frame.
+    #[test]
+    fn reassembles_rigidly_moved_parts() {
+        let (mesh, l) = mesh_core::shapes::capsule_body(12, 8, 0.2, 2.0);
+        let n = mesh.n_vertices();
+        let ring = |r: usize| l.ring(l.body_ring(r))[0] as usize;
+        // torso: up to body ring 7; limb: from body ring 4 up; tip: from ring 9 up.
+        let torso: Vec<u32> = (0..n as u32).filter(|&v| (v as usize) < ring(8)).collect();
+        let limb: Vec<u32> = (0..n as u32).filter(|&v| (v as usize) >= ring(4) && (v as usize) < ring(10)).collect();
+        let tip: Vec<u32> = (0..n as u32).filter(|&v| (v as usize) >= ring(9)).collect();
+        let dummy = Pca::fit(&DMatrix::from_fn(2, 3, |i, j| (i + j) as f64), Components::Count(1)).unwrap();
+        let part = |name: &str, vs: &Vec<u32>| PartPca {
+            name: name.into(),
+            vertices: vs.clone(),
+            reference: vs.iter().map(|&v| mesh.vertices[v as usize]).collect(),
+            pca: dummy.clone(),
+        };
+        // The tip is listed before the limb: the plan must place the limb first.
+        let pca = PcaModel { n_vertices: n, parts: vec![part("torso", &torso), part("tip", &tip), part("limb", &limb)] };
+        let plan = plan(&pca).unwrap();
+        assert_eq!(plan.steps.iter().map(|s| s.part).collect::<Vec<_>>(), vec![0, 2, 1]);
+        // A deformed frame: bend the upper half.
+        let frame: Vec<Vector3<f64>> = mesh
+            .vertices
+            .iter()
+            .map(|v| if v.y > 1.0 { so3_exp(&Vector3::new(0.0, 0.0, 0.4)) * (v - Vector3::new(0.0, 1.0, 0.0)) + Vector3::new(0.0, 1.0, 0.0) } else { *v })
+            .collect();
+        let moves = [
+            RigidMotion::new(so3_exp(&Vector3::new(0.1, 0.2, 0.3)), Vector3::new(1.0, 2.0, 3.0)),
+            RigidMotion::new(so3_exp(&Vector3::new(-0.5, 0.0, 0.1)), Vector3::new(0.0, -2.0, 0.5)),
+            RigidMotion::new(so3_exp(&Vector3::new(0.0, 1.0, 0.0)), Vector3::new(0.3, 0.0, 0.0)),
+        ];
+        let parts: Vec<Vec<Vector3<f64>>> = pca
+            .parts
+            .iter()
+            .zip(&moves)
+            .map(|(p, m)| p.vertices.iter().map(|&v| m.apply(&frame[v as usize])).collect())
+            .collect();
+        let refs: Vec<&[Vector3<f64>]> = parts.iter().map(|p| p.as_slice()).collect();
+        let out = assemble_frame(&plan, &pca, &refs);
+        // Same shape as the frame, in the template's frame: equal to the frame
+        // aligned to the template.
+        let want = procrustes(&frame, &mesh.vertices, None).apply_all(&frame);
+        for (a, b) in out.iter().zip(&want) {
+            assert!((a - b).norm() < 1e-9, "{a} vs {b}");
+        }
+    }
+
+    #[test]
+    fn rejects_parts_that_do_not_overlap() {
+        let dummy = Pca::fit(&DMatrix::from_fn(2, 3, |i, j| (i + j) as f64), Components::Count(1)).unwrap();
+        let p = |name: &str, vs: Vec<u32>| PartPca { name: name.into(), reference: vec![Vector3::zeros(); vs.len()], vertices: vs, pca: dummy.clone() };
+        let pca = PcaModel { n_vertices: 6, parts: vec![p("a", vec![0, 1, 2]), p("b", vec![3, 4, 5])] };
+        assert!(plan(&pca).unwrap_err().to_string().contains("part 'b' shares 0 vertices"));
+    }
+}

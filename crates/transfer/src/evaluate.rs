@@ -67,3 +67,47 @@ pub fn rms_errors(pred: &MeshSequence, truth: &MeshSequence) -> Result<(f64, f64
     let n = (pred.n_frames() * pred.n_vertices()) as f64;
     Ok(((pose / n).sqrt(), (placed / n).sqrt()))
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn seq(frames: Vec<Vec<[f64; 3]>>) -> MeshSequence {
+        MeshSequence::new(
+            vec![[0, 1, 2]],
+            frames.into_iter().map(|f| f.into_iter().map(|p| Vector3::new(p[0], p[1], p[2])).collect()).collect(),
+        )
+    }
+
+    /// Hand-computed: frame 0 is the truth stretched along x (pose error
+    /// remains after alignment), frame 1 is the truth shifted by 0.3 m (no
+    /// pose error, only placement error).
+    #[test]
+    fn hand_computed_case() {
+        let truth = seq(vec![
+            vec![[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [2.0, 0.0, 0.0]],
+            vec![[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]],
+        ]);
+        let pred = seq(vec![
+            // Stretched by 2 about the origin: centroid 2 vs 1; after the
+            // optimal rigid alignment (a translation by -1 along x) the points
+            // are (-1, 1, 3) vs (0, 1, 2): squared errors 1, 0, 1.
+            vec![[0.0, 0.0, 0.0], [2.0, 0.0, 0.0], [4.0, 0.0, 0.0]],
+            vec![[0.3, 0.0, 0.0], [1.3, 0.0, 0.0], [0.3, 1.0, 0.0]],
+        ]);
+        let (pose, placed) = rms_errors(&pred, &truth).unwrap();
+        // Pose: (1 + 0 + 1 + 0) / 6 vertices.
+        assert!((pose - (2.0f64 / 6.0).sqrt()).abs() < 1e-9, "{pose}");
+        // Placed: frame 0 squared errors 0, 1, 4; frame 1: 3 x 0.09.
+        assert!((placed - ((5.0 + 0.27) / 6.0f64).sqrt()).abs() < 1e-12, "{placed}");
+    }
+
+    #[test]
+    fn rejects_mismatched_sequences() {
+        let a = seq(vec![vec![[0.0; 3]; 3]]);
+        let b = seq(vec![vec![[0.0; 3]; 3], vec![[0.0; 3]; 3]]);
+        assert!(rms_errors(&a, &b).unwrap_err().to_string().contains("1 frames but the truth 2"));
+        let c = MeshSequence::new(vec![[0, 1, 2]], vec![vec![Vector3::zeros(); 4]]);
+        assert!(rms_errors(&a, &c).unwrap_err().to_string().contains("not the target's topology"));
+    }
+}

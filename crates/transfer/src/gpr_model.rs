@@ -394,3 +394,69 @@ pub fn train(
         reports,
     })
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Pure translation at constant speed: one source interval is `q` target
+    /// steps, for integer and fractional `q` (above and below 1).
+    #[test]
+    fn target_step_spans_one_source_interval() {
+        let d = vec![[0.0; 6], [0.01, 0.0, 0.02, 0.0, 0.0, 0.0], [0.01, 0.0, 0.02, 0.0, 0.0, 0.0], [0.01, 0.0, 0.02, 0.0, 0.0, 0.0]];
+        for q in [2.0, 1.5, 0.8, 1.0, 3.0] {
+            let s = target_step(&d, 3, q);
+            assert!((s[0] - 0.01 * q).abs() < 1e-12 && (s[2] - 0.02 * q).abs() < 1e-12, "q = {q}: {s:?}");
+        }
+        // Pure rotation about a fixed axis composes exactly too.
+        let r = vec![[0.0, 0.0, 0.0, 0.0, 0.1, 0.0]; 4];
+        let s = target_step(&r, 3, 2.0);
+        assert!((s[4] - 0.2).abs() < 1e-12 && s[3].abs() < 1e-12);
+        // Near the start, frames before 0 count as the identity.
+        assert!((target_step(&d, 1, 3.0)[0] - 0.01).abs() < 1e-12);
+    }
+
+    fn pair(f: usize, map: &dyn Fn(f64) -> f64) -> PairData {
+        let xs = DMatrix::from_fn(f, 2, |i, c| ((i as f64) * 0.37 + c as f64).sin());
+        let ys = DMatrix::from_fn(f, 3, |i, c| map(xs[(i, c % 2)]) * (c + 1) as f64);
+        let disp: Vec<[f64; 6]> = (0..f).map(|i| [0.01 * (i as f64 * 0.2).cos(), 0.0, 0.02, 0.0, 0.01, 0.0]).collect();
+        PairData {
+            source_coeffs: vec![xs],
+            target_coeffs: vec![ys],
+            source_disp: disp.clone(),
+            target_disp: disp,
+            pairs: (0..f).map(|i| [i, i]).collect(),
+            keyposes: vec![[0, 0], [f / 2, f / 2], [f - 1, f - 1]],
+        }
+    }
+
+    /// A linear map is learnt exactly by the linear-kernel GP (up to the
+    /// noise's shrinkage), and a smooth non-linear one by the NN kernel.
+    #[test]
+    fn learns_known_maps_and_reverses() {
+        let names = vec!["p".to_string()];
+        let opts = GprOptions { noise_var: 1e-4, ..Default::default() };
+        let lin = pair(60, &|x| 0.5 * x);
+        let m = train(Method::GprLinear, &names, &[lin.clone()], 1.0, false, &opts).unwrap();
+        // Between two training samples on the input curve (i = 40.5).
+        let (x0, x1) = ((0.37f64 * 40.5).sin(), (0.37f64 * 40.5 + 1.0).sin());
+        let x = DMatrix::from_row_slice(1, 2, &[x0, x1]);
+        let y = m.parts[0].predict(&x).unwrap();
+        for (c, want) in [0.5 * x0, 2.0 * 0.5 * x1, 3.0 * 0.5 * x0].iter().enumerate() {
+            assert!((y[c] - want).abs() < 1e-3, "{c}: {} vs {want}", y[c]);
+        }
+        let nl = pair(80, &|x| x.tanh() + 0.3 * x * x);
+        let m = train(Method::GprNn, &names, &[nl], 1.0, false, &opts).unwrap();
+        let y = m.parts[0].predict(&x).unwrap();
+        let want0 = x0.tanh() + 0.3 * x0 * x0;
+        assert!((y[0] - want0).abs() < 0.02, "{} vs {want0}", y[0]);
+        assert_eq!(m.n_train, 80);
+        // The affine baseline uses the key-poses only.
+        let m = train(Method::KeyposeAffine, &names, &[lin.clone()], 1.0, false, &opts).unwrap();
+        assert_eq!(m.n_train, 3);
+        // Reversal swaps roles and pairs.
+        let r = lin.clone().reversed();
+        assert_eq!(r.source_coeffs[0], lin.target_coeffs[0]);
+        assert_eq!(r.keyposes[1], [30, 30]);
+    }
+}

@@ -81,3 +81,33 @@ pub fn poses(start: &RigidMotion, steps: &[[f64; 6]]) -> Vec<RigidMotion> {
 pub fn place(poses: &[RigidMotion], frames: &[Vec<Vector3<f64>>]) -> Vec<Vec<Vector3<f64>>> {
     frames.iter().zip(poses).map(|(f, p)| p.apply_all(f)).collect()
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use mesh_core::rigid::so3_exp;
+
+    /// Constant body-frame steps of 0.1 m forward and a quarter turn per
+    /// frame trace a square: after 4 steps the body is back at the start.
+    #[test]
+    fn integrates_a_square_path() {
+        let start = RigidMotion::new(so3_exp(&Vector3::new(0.0, 0.3, 0.0)), Vector3::new(1.0, 0.0, 2.0));
+        let step = [0.0, 0.0, 0.1, 0.0, std::f64::consts::FRAC_PI_2, 0.0];
+        let p = poses(&start, &[[9.0; 6], step, step, step, step]);
+        assert_eq!(p.len(), 5);
+        assert!((p[0].translation - start.translation).norm() < 1e-12, "D_0 is ignored");
+        assert!((p[4].translation - start.translation).norm() < 1e-12);
+        assert!((p[1].translation - p[0].translation).norm() - 0.1 < 1e-12);
+        assert!((p[2].translation - p[0].translation).norm() - 0.1 * 2f64.sqrt() < 1e-12);
+    }
+
+    #[test]
+    fn scaling_and_blending() {
+        let d = [[0.1, 0.2, 0.3, 0.01, 0.02, 0.03]];
+        assert_eq!(scaled_source(&d, 2.0), vec![[0.2, 0.4, 0.6, 0.01, 0.02, 0.03]]);
+        let (a, b) = ([[1.0; 6]], [[3.0; 6]]);
+        assert_eq!(blend(&a, &b, &[0.0]), a.to_vec());
+        assert_eq!(blend(&a, &b, &[1.0]), b.to_vec());
+        assert_eq!(blend(&a, &b, &[0.25]), vec![[1.5; 6]]);
+    }
+}

@@ -8,7 +8,7 @@
 //! nearer endpoint's (`w < 0.5`: the first).
 
 use mesh_core::artifact::Artifact;
-use mesh_core::capture_set::CaptureSet;
+use mesh_core::capture_set::{CaptureSet, SubjectSpec};
 use mesh_core::rigid::{integrate, RigidMotion};
 use mesh_core::sequence::MeshSequence;
 use mesh_core::{Error, Result};
@@ -102,8 +102,9 @@ pub struct GroupSpec {
 /// Loads, aligns, prealigns and blends the group. Returns the group and notes (skipped
 /// motions, segmentation fallback).
 pub fn build(set: &CaptureSet, spec: &GroupSpec) -> Result<(Group, Vec<String>)> {
-    let subject = set.subject(&spec.subject)?;
-    let template = &subject.template;
+    // Spec and template without curve validation: `segment` validates them (or we fall back).
+    let subject_spec = SubjectSpec::load(set.subject_json(&spec.subject))?;
+    let template = &mesh_core::io::read_mesh(set.template_path(&spec.subject, &subject_spec)?)?;
     let available = set.motions(&spec.subject)?;
     let (present, skipped): (Vec<String>, Vec<String>) =
         spec.motions.iter().cloned().partition(|m| available.contains(m));
@@ -127,7 +128,7 @@ pub fn build(set: &CaptureSet, spec: &GroupSpec) -> Result<(Group, Vec<String>)>
         let dir = set.motion_dir(&spec.subject, m);
         let seq = MeshSequence::load_dir(&dir)?;
         let aligned = align_motion(template, &seq).map_err(|e| Error::invalid(format!("{}: {e}", dir.display())))?;
-        let c = contacts::from_subject(&subject.spec, m, aligned.n_frames())
+        let c = contacts::from_subject(&subject_spec, m, aligned.n_frames())
             .map_err(|e| Error::file(set.subject_json(&spec.subject), e.to_string()))?;
         loaded.push((m.clone(), aligned, c));
     }
@@ -149,7 +150,7 @@ pub fn build(set: &CaptureSet, spec: &GroupSpec) -> Result<(Group, Vec<String>)>
     let seg = if spec.whole_body {
         transfer::part_pca::whole_body(template.n_vertices())
     } else {
-        match transfer::segment::segment(template, &subject.spec) {
+        match transfer::segment::segment(template, &subject_spec) {
             Ok(s) => s,
             Err(e) if spec.fallback_whole_body => {
                 notes.push(format!(
@@ -174,8 +175,8 @@ pub fn build(set: &CaptureSet, spec: &GroupSpec) -> Result<(Group, Vec<String>)>
     let mut group = Group {
         name: spec.name.clone(),
         subject: spec.subject.clone(),
-        fps: subject.spec.fps,
-        up: subject.spec.up_vector().unwrap_or(Vector3::y()),
+        fps: subject_spec.fps,
+        up: subject_spec.up_vector().unwrap_or(Vector3::y()),
         template: template.vertices.clone(),
         faces: template.faces.clone(),
         parts,

@@ -8,6 +8,7 @@
 //! (eqs. 11-13, stitching, displacement integration) -> [`metrics`] and [`plots`].
 
 pub mod contacts;
+pub mod evaluate;
 pub mod group;
 pub mod metrics;
 pub mod part_data;

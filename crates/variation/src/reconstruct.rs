@@ -133,7 +133,8 @@ impl<'a> Decoder<'a> {
     pub fn assemble(&self, decoded: &DecodedParts, how: Assembly) -> Result<Vec<Vec<Vector3<f64>>>> {
         let n_frames = decoded.displacements.len();
         let mut stitcher = match how {
-            Assembly::Stitch => {
+            // A single part needs no merging.
+            Assembly::Stitch if self.model.parts.len() > 1 => {
                 let parts = self
                     .model
                     .parts
@@ -143,7 +144,7 @@ impl<'a> Decoder<'a> {
                 let layout = surface::stitch::PartLayout::new(self.model.template.len(), self.model.faces.clone(), parts)?;
                 Some(surface::stitch::Stitcher::new(layout))
             }
-            Assembly::Average => None,
+            _ => None,
         };
         (0..n_frames)
             .map(|t| {

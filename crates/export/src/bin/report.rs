@@ -32,6 +32,9 @@ struct Args {
     /// Frames kept at most per sequence in the 3D view (evenly subsampled)
     #[arg(long, default_value_t = 60, value_name = "N", value_parser = clap::value_parser!(u32).range(1..))]
     max_frames: u32,
+    /// Megabytes of packed positions at most in the 3D view (fewer frames are kept beyond it)
+    #[arg(long, default_value_t = 12, value_name = "MB", value_parser = clap::value_parser!(u32).range(1..))]
+    max_data_mb: u32,
     /// Folder of the npm package `three` [default: crates/export/web/node_modules/three]
     #[arg(long, value_name = "DIR")]
     three: Option<PathBuf>,
@@ -56,6 +59,7 @@ fn main() -> ExitCode {
             title: args.title.clone(),
             fps: args.fps,
             max_frames: args.max_frames as usize,
+            max_data_bytes: args.max_data_mb as usize * 1_000_000,
             three_dir: args
                 .three
                 .clone()

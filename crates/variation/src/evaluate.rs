@@ -1,0 +1,216 @@
+//! `variation-eval`: the model-level figures of issue 6.
+//!
+//! - **Fig. 4**: reconstruction error of the training poses, GPDM (eq. 12 at the learned
+//!   latent points) against PCA with the same dimension d, as the mean per-vertex distance in
+//!   each part's template frame (torso displacement columns excluded).
+//! - **Fig. 7b**: for w ∈ {0.25, 0.75}, the non-linear mesh blend `Y_w` of the pair is the
+//!   truth; the latent interpolation *guided* by the learned intermediate trajectory
+//!   (`blend_pair` of the bounding learned trajectories, e.g. X₁ and X_0.5) and the *unguided*
+//!   one (`(1 − w) X₁ + w X₂`) are decoded (eq. 12) and compared per frame with the truth.
+//! - **Mean prediction**: from each training sequence's first latent point, the mean
+//!   dynamics (eqs. 8-10) over the sequence length, decoded, against the sequence: shows
+//!   whether the learned dynamics stay on the cycle (issue 6, noise floor).
+//! - Latent plots (figs. 3 and 5) via [`crate::plots`].
+
+use std::path::Path;
+
+use gp::pca::{Components, Pca};
+use gpdm::blend::blend_pair;
+use gpdm::hmc::HmcOptions;
+use mesh_core::{Error, Result};
+use nalgebra::DMatrix;
+use serde::{Deserialize, Serialize};
+
+use crate::group::{blend_sequences, Group};
+use crate::metrics::mean_row_distance;
+use crate::part_data;
+use crate::reconstruct::Decoder;
+use crate::sample::sequence_variations;
+use crate::train::VariationModel;
+
+/// Fig. 4 entry of one part.
+#[derive(Clone, Debug, Serialize, Deserialize)]
+pub struct ReconstructionError {
+    pub part: String,
+    pub vertices: usize,
+    pub gpdm_m: f64,
+    pub pca_m: f64,
+}
+
+/// Fig. 7b for one weight.
+#[derive(Clone, Debug, Serialize, Deserialize)]
+pub struct LatentBlendError {
+    pub w: f64,
+    /// Bounding learned weights used by the guided interpolation.
+    pub guided_from: (f64, f64),
+    /// Mean per-vertex distance to the non-linear blend, per frame (all parts, vertex-weighted).
+    pub guided_per_frame_m: Vec<f64>,
+    pub unguided_per_frame_m: Vec<f64>,
+    pub guided_m: f64,
+    pub unguided_m: f64,
+}
+
+/// Mean-prediction tracking of one sequence.
+#[derive(Clone, Debug, Serialize, Deserialize)]
+pub struct MeanPrediction {
+    pub sequence: String,
+    /// Mean per-vertex distance (all parts) between the decoded mean prediction and the data.
+    pub error_m: f64,
+}
+
+/// Everything `variation-eval` reports.
+#[derive(Clone, Debug, Serialize, Deserialize)]
+pub struct EvalReport {
+    pub group: String,
+    pub latent_dim: usize,
+    pub reconstruction: Vec<ReconstructionError>,
+    pub reconstruction_gpdm_m: f64,
+    pub reconstruction_pca_m: f64,
+    pub latent_blend: Vec<LatentBlendError>,
+    pub mean_prediction: Vec<MeanPrediction>,
+    pub plots: Vec<String>,
+}
+
+fn vertex_count(model: &VariationModel, k: usize) -> usize {
+    model.parts[k].part.vertices.len()
+}
+
+/// Decoded part rows (`T × D_k`) of latent trajectories, one per part.
+fn decode_rows(dec: &Decoder, latents: &[DMatrix<f64>]) -> Result<Vec<DMatrix<f64>>> {
+    dec.predictors
+        .iter()
+        .zip(latents)
+        .map(|(p, x)| p.pose_mean(x).map_err(|e| Error::invalid(e.to_string())))
+        .collect()
+}
+
+fn weighted(model: &VariationModel, per_part: &[f64]) -> f64 {
+    let n: usize = (0..model.parts.len()).map(|k| vertex_count(model, k)).sum();
+    per_part.iter().enumerate().map(|(k, e)| e * vertex_count(model, k) as f64).sum::<f64>() / n.max(1) as f64
+}
+
+/// Runs the evaluation; plots go to `plots` (if given).
+pub fn evaluate(model: &VariationModel, group: &Group, plots: Option<&Path>, seed: u64) -> Result<EvalReport> {
+    let mut notes = Vec::new();
+    let dec = Decoder::new(model, &mut notes)?;
+    let d = model.parts[0].gpdm.config.latent_dim;
+    // Fig. 4.
+    let mut reconstruction = Vec::new();
+    for (k, pm) in model.parts.iter().enumerate() {
+        let g = &pm.gpdm;
+        let mut y = g.y.clone();
+        for mut row in y.row_iter_mut() {
+            row += g.y_mean.transpose();
+        }
+        let rec = dec.predictors[k].pose_mean(&g.x).map_err(|e| Error::invalid(e.to_string()))?;
+        let nv = vertex_count(model, k);
+        let pca = Pca::fit(&y, Components::Count(d)).map_err(|e| Error::invalid(e.to_string()))?;
+        let pr = pca.decode(&pca.encode(&y).map_err(|e| Error::invalid(e.to_string()))?).map_err(|e| Error::invalid(e.to_string()))?;
+        reconstruction.push(ReconstructionError {
+            part: pm.part.name.clone(),
+            vertices: nv,
+            gpdm_m: mean_row_distance(&rec, &y, nv),
+            pca_m: mean_row_distance(&pr, &y, nv),
+        });
+    }
+    let reconstruction_gpdm_m = weighted(model, &reconstruction.iter().map(|r| r.gpdm_m).collect::<Vec<_>>());
+    let reconstruction_pca_m = weighted(model, &reconstruction.iter().map(|r| r.pca_m).collect::<Vec<_>>());
+
+    // Fig. 7b.
+    let mut latent_blend = Vec::new();
+    if let Some((a, b)) = model.pair {
+        let learned: Vec<(f64, usize)> = {
+            let mut v = vec![(0.0, a), (1.0, b)];
+            v.extend(model.sequences.iter().enumerate().filter_map(|(i, s)| s.blend.map(|w| (w, i))));
+            v.sort_by(|x, y| x.0.total_cmp(&y.0));
+            v
+        };
+        let blender = surface::blend::Blender::new(group.template.clone(), group.faces.clone())?;
+        for w in [0.25, 0.75] {
+            let i2 = learned.iter().position(|&(v, _)| v > w).unwrap_or(learned.len() - 1);
+            let (lo, hi) = (learned[i2 - 1], learned[i2]);
+            let truth = blend_sequences(&blender, &group.sequences[a], &group.sequences[b], w)?;
+            let xa = model.latents(a);
+            let xb = model.latents(b);
+            let (xl, xh) = (model.latents(lo.1), model.latents(hi.1));
+            let guided: Vec<DMatrix<f64>> = (0..model.parts.len()).map(|k| blend_pair(&xl[k], lo.0, &xh[k], hi.0, w)).collect();
+            let unguided: Vec<DMatrix<f64>> = (0..model.parts.len()).map(|k| &xa[k] * (1.0 - w) + &xb[k] * w).collect();
+            let (rg, ru) = (decode_rows(&dec, &guided)?, decode_rows(&dec, &unguided)?);
+            let t_n = truth.motion.n_frames();
+            let mut gpf = vec![0.0; t_n];
+            let mut upf = vec![0.0; t_n];
+            let total: usize = (0..model.parts.len()).map(|k| vertex_count(model, k)).sum();
+            for (k, pm) in model.parts.iter().enumerate() {
+                let r = part_data::reference(&model.template, &pm.part);
+                let yt = part_data::part_rows(&truth.motion, &pm.part, &r);
+                let nv = vertex_count(model, k);
+                for t in 0..t_n {
+                    let one = |m: &DMatrix<f64>| mean_row_distance(&m.rows(t, 1).into_owned(), &yt.rows(t, 1).into_owned(), nv);
+                    gpf[t] += one(&rg[k]) * nv as f64 / total as f64;
+                    upf[t] += one(&ru[k]) * nv as f64 / total as f64;
+                }
+            }
+            let mean = |v: &[f64]| v.iter().sum::<f64>() / v.len().max(1) as f64;
+            latent_blend.push(LatentBlendError {
+                w,
+                guided_from: (lo.0, hi.0),
+                guided_m: mean(&gpf),
+                unguided_m: mean(&upf),
+                guided_per_frame_m: gpf,
+                unguided_per_frame_m: upf,
+            });
+        }
+    }
+
+    // Mean prediction.
+    let mut mean_prediction = Vec::new();
+    for (s, info) in model.sequences.iter().enumerate() {
+        let lat = model.latents(s);
+        let mut per = Vec::new();
+        for (k, pm) in model.parts.iter().enumerate() {
+            let x1: Vec<f64> = lat[k].row(0).iter().copied().collect();
+            let xm = dec.predictors[k].mean_trajectory(&x1, lat[k].nrows()).map_err(|e| Error::invalid(e.to_string()))?;
+            let rec = dec.predictors[k].pose_mean(&xm).map_err(|e| Error::invalid(e.to_string()))?;
+            let start: usize = pm.gpdm.seq_lens[..s].iter().sum();
+            let mut y = pm.gpdm.y.rows(start, lat[k].nrows()).into_owned();
+            for mut row in y.row_iter_mut() {
+                row += pm.gpdm.y_mean.transpose();
+            }
+            per.push(mean_row_distance(&rec, &y, vertex_count(model, k)));
+        }
+        mean_prediction.push(MeanPrediction { sequence: info.name.clone(), error_m: weighted(model, &per) });
+    }
+
+    // Figs. 3 and 5.
+    let mut written = Vec::new();
+    if let Some(dir) = plots {
+        std::fs::create_dir_all(dir).map_err(|e| Error::io(dir, e))?;
+        for (k, pm) in model.parts.iter().enumerate() {
+            let series: Vec<(String, DMatrix<f64>)> =
+                model.sequences.iter().enumerate().map(|(s, i)| (i.name.clone(), model.latents(s)[k].clone())).collect();
+            let p = dir.join(format!("fig3-latent-{}.png", pm.part.name));
+            crate::plots::latent_plot(&p, &format!("{}: learned latent trajectories ({})", model.group, pm.part.name), &series)?;
+            written.push(p.display().to_string());
+        }
+        let hmc = HmcOptions { n_samples: 20, burn_in: 200, thin: 10, seed, ..HmcOptions::default() };
+        let (vars, _) = sequence_variations(&dec, 0, &hmc)?;
+        let series: Vec<(String, DMatrix<f64>)> = vars.iter().enumerate().map(|(i, v)| (format!("var{i}"), v[0].clone())).collect();
+        let p = dir.join(format!("fig5-variations-{}-{}.png", model.sequences[0].name, model.parts[0].part.name));
+        crate::plots::latent_plot(
+            &p,
+            &format!("{}: 20 HMC variations of {} ({})", model.group, model.sequences[0].name, model.parts[0].part.name),
+            &series,
+        )?;
+        written.push(p.display().to_string());
+    }
+    Ok(EvalReport {
+        group: model.group.clone(),
+        latent_dim: d,
+        reconstruction,
+        reconstruction_gpdm_m,
+        reconstruction_pca_m,
+        latent_blend,
+        mean_prediction,
+        plots: written,
+    })
+}
