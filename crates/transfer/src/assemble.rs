@@ -53,7 +53,10 @@ pub fn plan(pca: &PcaModel) -> Result<AssemblyPlan> {
         for &v in &p.vertices {
             let v = v as usize;
             if v >= n {
-                return Err(Error::invalid(format!("part '{}' has vertex {v} beyond the {n} template vertices", p.name)));
+                return Err(Error::invalid(format!(
+                    "part '{}' has vertex {v} beyond the {n} template vertices",
+                    p.name
+                )));
             }
             coverage[v] += 1;
         }
@@ -77,14 +80,23 @@ pub fn plan(pca: &PcaModel) -> Result<AssemblyPlan> {
         placed[v as usize] = true;
     }
     done[0] = true;
-    steps.push(AssemblyStep { part: 0, anchor_local: Vec::new(), anchor_global: Vec::new() });
+    steps.push(AssemblyStep {
+        part: 0,
+        anchor_local: Vec::new(),
+        anchor_global: Vec::new(),
+    });
     while steps.len() < pca.parts.len() {
         let best = pca
             .parts
             .iter()
             .enumerate()
             .filter(|(k, _)| !done[*k])
-            .map(|(k, p)| (k, p.vertices.iter().filter(|&&v| placed[v as usize]).count()))
+            .map(|(k, p)| {
+                (
+                    k,
+                    p.vertices.iter().filter(|&&v| placed[v as usize]).count(),
+                )
+            })
             .max_by_key(|&(k, c)| (c, std::cmp::Reverse(k)))
             .expect("an unplaced part remains");
         let (k, shared) = best;
@@ -95,19 +107,37 @@ pub fn plan(pca: &PcaModel) -> Result<AssemblyPlan> {
             )));
         }
         let part = &pca.parts[k];
-        let (anchor_local, anchor_global) =
-            part.vertices.iter().enumerate().filter(|(_, &v)| placed[v as usize]).map(|(i, &v)| (i, v)).unzip();
+        let (anchor_local, anchor_global) = part
+            .vertices
+            .iter()
+            .enumerate()
+            .filter(|(_, &v)| placed[v as usize])
+            .map(|(i, &v)| (i, v))
+            .unzip();
         for &v in &part.vertices {
             placed[v as usize] = true;
         }
         done[k] = true;
-        steps.push(AssemblyStep { part: k, anchor_local, anchor_global });
+        steps.push(AssemblyStep {
+            part: k,
+            anchor_local,
+            anchor_global,
+        });
     }
-    Ok(AssemblyPlan { n_vertices: n, steps, coverage, template })
+    Ok(AssemblyPlan {
+        n_vertices: n,
+        steps,
+        coverage,
+        template,
+    })
 }
 
 /// Assembles one frame from its decoded parts (`parts[k]` in part-local order).
-pub fn assemble_frame(plan: &AssemblyPlan, pca: &PcaModel, parts: &[&[Vector3<f64>]]) -> Vec<Vector3<f64>> {
+pub fn assemble_frame(
+    plan: &AssemblyPlan,
+    pca: &PcaModel,
+    parts: &[&[Vector3<f64>]],
+) -> Vec<Vector3<f64>> {
     let n = plan.n_vertices;
     let mut first: Vec<Option<Vector3<f64>>> = vec![None; n];
     let mut sum = vec![Vector3::zeros(); n];
@@ -118,8 +148,11 @@ pub fn assemble_frame(plan: &AssemblyPlan, pca: &PcaModel, parts: &[&[Vector3<f6
             mesh_core::rigid::RigidMotion::identity()
         } else {
             let src: Vec<Vector3<f64>> = step.anchor_local.iter().map(|&i| verts[i]).collect();
-            let dst: Vec<Vector3<f64>> =
-                step.anchor_global.iter().map(|&v| first[v as usize].expect("anchor placed")).collect();
+            let dst: Vec<Vector3<f64>> = step
+                .anchor_global
+                .iter()
+                .map(|&v| first[v as usize].expect("anchor placed"))
+                .collect();
             procrustes(&src, &dst, None)
         };
         for (p, &v) in verts.iter().zip(index) {
@@ -131,12 +164,20 @@ pub fn assemble_frame(plan: &AssemblyPlan, pca: &PcaModel, parts: &[&[Vector3<f6
             sum[v] += q;
         }
     }
-    let mean: Vec<Vector3<f64>> = sum.iter().zip(&plan.coverage).map(|(s, &c)| s / c as f64).collect();
+    let mean: Vec<Vector3<f64>> = sum
+        .iter()
+        .zip(&plan.coverage)
+        .map(|(s, &c)| s / c as f64)
+        .collect();
     procrustes(&mean, &plan.template, None).apply_all(&mean)
 }
 
 /// Assembles every frame: `decoded[part][frame]` as from `PcaModel::decode`.
-pub fn assemble(plan: &AssemblyPlan, pca: &PcaModel, decoded: &[Vec<Vec<Vector3<f64>>>]) -> Vec<Vec<Vector3<f64>>> {
+pub fn assemble(
+    plan: &AssemblyPlan,
+    pca: &PcaModel,
+    decoded: &[Vec<Vec<Vector3<f64>>>],
+) -> Vec<Vec<Vector3<f64>>> {
     let n_frames = decoded.first().map_or(0, |d| d.len());
     (0..n_frames)
         .into_par_iter()
@@ -165,9 +206,15 @@ mod tests {
         let ring = |r: usize| l.ring(l.body_ring(r))[0] as usize;
         // torso: up to body ring 7; limb: from body ring 4 up; tip: from ring 9 up.
         let torso: Vec<u32> = (0..n as u32).filter(|&v| (v as usize) < ring(8)).collect();
-        let limb: Vec<u32> = (0..n as u32).filter(|&v| (v as usize) >= ring(4) && (v as usize) < ring(10)).collect();
+        let limb: Vec<u32> = (0..n as u32)
+            .filter(|&v| (v as usize) >= ring(4) && (v as usize) < ring(10))
+            .collect();
         let tip: Vec<u32> = (0..n as u32).filter(|&v| (v as usize) >= ring(9)).collect();
-        let dummy = Pca::fit(&DMatrix::from_fn(2, 3, |i, j| (i + j) as f64), Components::Count(1)).unwrap();
+        let dummy = Pca::fit(
+            &DMatrix::from_fn(2, 3, |i, j| (i + j) as f64),
+            Components::Count(1),
+        )
+        .unwrap();
         let part = |name: &str, vs: &Vec<u32>| PartPca {
             name: name.into(),
             vertices: vs.clone(),
@@ -175,25 +222,56 @@ mod tests {
             pca: dummy.clone(),
         };
         // The tip is listed before the limb: the plan must place the limb first.
-        let pca = PcaModel { n_vertices: n, parts: vec![part("torso", &torso), part("tip", &tip), part("limb", &limb)] };
+        let pca = PcaModel {
+            n_vertices: n,
+            parts: vec![
+                part("torso", &torso),
+                part("tip", &tip),
+                part("limb", &limb),
+            ],
+        };
         let plan = plan(&pca).unwrap();
-        assert_eq!(plan.steps.iter().map(|s| s.part).collect::<Vec<_>>(), vec![0, 2, 1]);
+        assert_eq!(
+            plan.steps.iter().map(|s| s.part).collect::<Vec<_>>(),
+            vec![0, 2, 1]
+        );
         // A deformed frame: bend the upper half.
         let frame: Vec<Vector3<f64>> = mesh
             .vertices
             .iter()
-            .map(|v| if v.y > 1.0 { so3_exp(&Vector3::new(0.0, 0.0, 0.4)) * (v - Vector3::new(0.0, 1.0, 0.0)) + Vector3::new(0.0, 1.0, 0.0) } else { *v })
+            .map(|v| {
+                if v.y > 1.0 {
+                    so3_exp(&Vector3::new(0.0, 0.0, 0.4)) * (v - Vector3::new(0.0, 1.0, 0.0))
+                        + Vector3::new(0.0, 1.0, 0.0)
+                } else {
+                    *v
+                }
+            })
             .collect();
         let moves = [
-            RigidMotion::new(so3_exp(&Vector3::new(0.1, 0.2, 0.3)), Vector3::new(1.0, 2.0, 3.0)),
-            RigidMotion::new(so3_exp(&Vector3::new(-0.5, 0.0, 0.1)), Vector3::new(0.0, -2.0, 0.5)),
-            RigidMotion::new(so3_exp(&Vector3::new(0.0, 1.0, 0.0)), Vector3::new(0.3, 0.0, 0.0)),
+            RigidMotion::new(
+                so3_exp(&Vector3::new(0.1, 0.2, 0.3)),
+                Vector3::new(1.0, 2.0, 3.0),
+            ),
+            RigidMotion::new(
+                so3_exp(&Vector3::new(-0.5, 0.0, 0.1)),
+                Vector3::new(0.0, -2.0, 0.5),
+            ),
+            RigidMotion::new(
+                so3_exp(&Vector3::new(0.0, 1.0, 0.0)),
+                Vector3::new(0.3, 0.0, 0.0),
+            ),
         ];
         let parts: Vec<Vec<Vector3<f64>>> = pca
             .parts
             .iter()
             .zip(&moves)
-            .map(|(p, m)| p.vertices.iter().map(|&v| m.apply(&frame[v as usize])).collect())
+            .map(|(p, m)| {
+                p.vertices
+                    .iter()
+                    .map(|&v| m.apply(&frame[v as usize]))
+                    .collect()
+            })
             .collect();
         let refs: Vec<&[Vector3<f64>]> = parts.iter().map(|p| p.as_slice()).collect();
         let out = assemble_frame(&plan, &pca, &refs);
@@ -207,9 +285,24 @@ mod tests {
 
     #[test]
     fn rejects_parts_that_do_not_overlap() {
-        let dummy = Pca::fit(&DMatrix::from_fn(2, 3, |i, j| (i + j) as f64), Components::Count(1)).unwrap();
-        let p = |name: &str, vs: Vec<u32>| PartPca { name: name.into(), reference: vec![Vector3::zeros(); vs.len()], vertices: vs, pca: dummy.clone() };
-        let pca = PcaModel { n_vertices: 6, parts: vec![p("a", vec![0, 1, 2]), p("b", vec![3, 4, 5])] };
-        assert!(plan(&pca).unwrap_err().to_string().contains("part 'b' shares 0 vertices"));
+        let dummy = Pca::fit(
+            &DMatrix::from_fn(2, 3, |i, j| (i + j) as f64),
+            Components::Count(1),
+        )
+        .unwrap();
+        let p = |name: &str, vs: Vec<u32>| PartPca {
+            name: name.into(),
+            reference: vec![Vector3::zeros(); vs.len()],
+            vertices: vs,
+            pca: dummy.clone(),
+        };
+        let pca = PcaModel {
+            n_vertices: 6,
+            parts: vec![p("a", vec![0, 1, 2]), p("b", vec![3, 4, 5])],
+        };
+        assert!(plan(&pca)
+            .unwrap_err()
+            .to_string()
+            .contains("part 'b' shares 0 vertices"));
     }
 }

@@ -75,7 +75,14 @@ mod tests {
     fn seq(frames: Vec<Vec<[f64; 3]>>) -> MeshSequence {
         MeshSequence::new(
             vec![[0, 1, 2]],
-            frames.into_iter().map(|f| f.into_iter().map(|p| Vector3::new(p[0], p[1], p[2])).collect()).collect(),
+            frames
+                .into_iter()
+                .map(|f| {
+                    f.into_iter()
+                        .map(|p| Vector3::new(p[0], p[1], p[2]))
+                        .collect()
+                })
+                .collect(),
         )
     }
 
@@ -99,15 +106,24 @@ mod tests {
         // Pose: (1 + 0 + 1 + 0) / 6 vertices.
         assert!((pose - (2.0f64 / 6.0).sqrt()).abs() < 1e-9, "{pose}");
         // Placed: frame 0 squared errors 0, 1, 4; frame 1: 3 x 0.09.
-        assert!((placed - ((5.0 + 0.27) / 6.0f64).sqrt()).abs() < 1e-12, "{placed}");
+        assert!(
+            (placed - ((5.0 + 0.27) / 6.0f64).sqrt()).abs() < 1e-12,
+            "{placed}"
+        );
     }
 
     #[test]
     fn rejects_mismatched_sequences() {
         let a = seq(vec![vec![[0.0; 3]; 3]]);
         let b = seq(vec![vec![[0.0; 3]; 3], vec![[0.0; 3]; 3]]);
-        assert!(rms_errors(&a, &b).unwrap_err().to_string().contains("1 frames but the truth 2"));
+        assert!(rms_errors(&a, &b)
+            .unwrap_err()
+            .to_string()
+            .contains("1 frames but the truth 2"));
         let c = MeshSequence::new(vec![[0, 1, 2]], vec![vec![Vector3::zeros(); 4]]);
-        assert!(rms_errors(&a, &c).unwrap_err().to_string().contains("not the target's topology"));
+        assert!(rms_errors(&a, &c)
+            .unwrap_err()
+            .to_string()
+            .contains("not the target's topology"));
     }
 }

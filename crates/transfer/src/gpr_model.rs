@@ -45,8 +45,13 @@ pub enum Method {
 }
 
 impl Method {
-    pub const ALL: [Method; 5] =
-        [Method::GprNn, Method::GprSe, Method::GprLinear, Method::KeyposeAffine, Method::WholeBody];
+    pub const ALL: [Method; 5] = [
+        Method::GprNn,
+        Method::GprSe,
+        Method::GprLinear,
+        Method::KeyposeAffine,
+        Method::WholeBody,
+    ];
 
     /// The name used on the command line, in file paths and in results.json.
     pub fn name(&self) -> &'static str {
@@ -65,10 +70,21 @@ impl Method {
 
     /// The kernel of the pose GPs (`None` for the affine baseline). Starting
     /// hyperparameters are replaced by `gp::gpr::initial_kernel` when training.
-    pub fn kernel(&self) -> Option<Kernel> {
+    /// `nn_bias` selects the NN kernel with the bias input (R&W eq. 4.29):
+    /// eq. 10 as printed has none, which makes every function of the GP odd,
+    /// `f(-x) = -f(x)` (asin is odd), so it cannot learn even components of a
+    /// mapping between centred PCA coefficients.
+    pub fn kernel(&self, nn_bias: bool) -> Option<Kernel> {
         match self {
-            Method::GprNn | Method::WholeBody => Some(Kernel::neural_network(1.0, 1.0)),
-            Method::GprSe => Some(Kernel::SquaredExponential { l: 1.0, sigma_f: 1.0 }),
+            Method::GprNn | Method::WholeBody => Some(Kernel::NeuralNetwork {
+                l: 1.0,
+                sigma_f: 1.0,
+                bias: nn_bias,
+            }),
+            Method::GprSe => Some(Kernel::SquaredExponential {
+                l: 1.0,
+                sigma_f: 1.0,
+            }),
             Method::GprLinear => Some(Kernel::Linear { sigma_f: 1.0 }),
             Method::KeyposeAffine => None,
         }
@@ -79,7 +95,10 @@ impl Method {
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub enum Regressor {
     /// A GP trained on outputs divided by `y_scale`.
-    Gp { gpr: Gpr, y_scale: f64 },
+    Gp {
+        gpr: Gpr,
+        y_scale: f64,
+    },
     Affine(AffineKeypose),
 }
 
@@ -152,6 +171,8 @@ pub struct GprModel {
     /// Target frames per source frame `q = fps_target / fps_source`.
     pub frame_ratio: f64,
     pub keyposes_only: bool,
+    /// NN kernel with the bias input (see [`Method::kernel`]).
+    pub nn_bias: bool,
     pub reports: Vec<RegressorReport>,
 }
 
@@ -239,14 +260,20 @@ pub fn target_step(disp: &[[f64; 6]], j: usize, q: f64) -> [f64; 6] {
     let steps: Vec<RigidMotion> = (first..=j)
         .map(|f| RigidMotion::from_6vec(&Vector6::from_column_slice(&disp[f])))
         .collect();
-    let composed = *integrate(&RigidMotion::identity(), &steps).last().expect("integrate returns the start");
+    let composed = *integrate(&RigidMotion::identity(), &steps)
+        .last()
+        .expect("integrate returns the start");
     let v = composed.to_6vec() * (q / c as f64);
     v.into()
 }
 
 /// Stacks the training rows of all pairs: pose rows for every dense pair (or
 /// key-pose pair when `keyposes_only`), displacement rows `(D^s_i, target_step(j))`.
-pub fn training_set(pairs: &[PairData], frame_ratio: f64, keyposes_only: bool) -> Result<TrainingSet> {
+pub fn training_set(
+    pairs: &[PairData],
+    frame_ratio: f64,
+    keyposes_only: bool,
+) -> Result<TrainingSet> {
     let n_parts = pairs.first().map_or(0, |p| p.source_coeffs.len());
     if pairs.is_empty() || n_parts == 0 {
         return Err(Error::invalid("no training pairs or no parts"));
@@ -254,10 +281,16 @@ pub fn training_set(pairs: &[PairData], frame_ratio: f64, keyposes_only: bool) -
     let mut rows: Vec<(usize, usize, usize)> = Vec::new();
     for (p, pair) in pairs.iter().enumerate() {
         if pair.source_coeffs.len() != n_parts || pair.target_coeffs.len() != n_parts {
-            return Err(Error::invalid(format!("training pair {p}: part counts differ")));
+            return Err(Error::invalid(format!(
+                "training pair {p}: part counts differ"
+            )));
         }
         let (fs, ft) = (pair.source_disp.len(), pair.target_disp.len());
-        let chosen = if keyposes_only { &pair.keyposes } else { &pair.pairs };
+        let chosen = if keyposes_only {
+            &pair.keyposes
+        } else {
+            &pair.pairs
+        };
         for &[i, j] in chosen {
             if i >= fs || j >= ft {
                 return Err(Error::invalid(format!(
@@ -285,10 +318,18 @@ pub fn training_set(pairs: &[PairData], frame_ratio: f64, keyposes_only: bool) -
         x_parts.push(gather(ms, &|p, i, _, c| pairs[p].source_coeffs[k][(i, c)]));
         y_parts.push(gather(mt, &|p, _, j, c| pairs[p].target_coeffs[k][(j, c)]));
     }
-    let steps: Vec<[f64; 6]> = rows.iter().map(|&(p, _, j)| target_step(&pairs[p].target_disp, j, frame_ratio)).collect();
+    let steps: Vec<[f64; 6]> = rows
+        .iter()
+        .map(|&(p, _, j)| target_step(&pairs[p].target_disp, j, frame_ratio))
+        .collect();
     let x_disp = gather(6, &|p, i, _, c| pairs[p].source_disp[i][c]);
     let y_disp = DMatrix::from_fn(n, 6, |r, c| steps[r][c]);
-    Ok(TrainingSet { x_parts, y_parts, x_disp, y_disp })
+    Ok(TrainingSet {
+        x_parts,
+        y_parts,
+        x_disp,
+        y_disp,
+    })
 }
 
 fn rms(m: &DMatrix<f64>) -> f64 {
@@ -299,15 +340,20 @@ fn rms(m: &DMatrix<f64>) -> f64 {
 /// key-pose rows for the affine baseline.
 fn train_parts(
     method: Method,
+    nn_bias: bool,
     names: &[String],
     data: &TrainingSet,
     keys: &TrainingSet,
     opts: &GprOptions,
 ) -> Result<(Vec<Regressor>, Vec<RegressorReport>)> {
-    match method.kernel() {
+    match method.kernel(nn_bias) {
         Some(kernel) => {
-            let problems: Vec<(DMatrix<f64>, DMatrix<f64>)> =
-                data.x_parts.iter().cloned().zip(data.y_parts.iter().cloned()).collect();
+            let problems: Vec<(DMatrix<f64>, DMatrix<f64>)> = data
+                .x_parts
+                .iter()
+                .cloned()
+                .zip(data.y_parts.iter().cloned())
+                .collect();
             let trained = gp::gpr::train_many(kernel, &problems, opts);
             let mut regs = Vec::new();
             let mut reports = Vec::new();
@@ -341,19 +387,34 @@ fn train_parts(
 }
 
 /// Trains the displacement GP (`gpr-nn`, outputs scaled to unit RMS).
-pub fn train_displacement(data: &TrainingSet, opts: &GprOptions) -> Result<(Regressor, RegressorReport)> {
+pub fn train_displacement(
+    data: &TrainingSet,
+    nn_bias: bool,
+    opts: &GprOptions,
+) -> Result<(Regressor, RegressorReport)> {
     let y_scale = rms(&data.y_disp).max(1e-9);
     let y = &data.y_disp / y_scale;
-    let (gpr, r) = Gpr::train(Kernel::neural_network(1.0, 1.0), &data.x_disp, &y, opts)
-        .map_err(|e| Error::invalid(format!("displacement: {e}")))?;
+    let (gpr, r) = Gpr::train(
+        Kernel::NeuralNetwork {
+            l: 1.0,
+            sigma_f: 1.0,
+            bias: nn_bias,
+        },
+        &data.x_disp,
+        &y,
+        opts,
+    )
+    .map_err(|e| Error::invalid(format!("displacement: {e}")))?;
     let report = RegressorReport::from_train("displacement", &gpr, &r);
     Ok((Regressor::Gp { gpr, y_scale }, report))
 }
 
 /// Trains a transfer model: the pose mapping of `method` per part and the
 /// displacement GP. `part_names` are the parts of both PCA models (equal).
+/// `nn_bias`: see [`Method::kernel`].
 pub fn train(
     method: Method,
+    nn_bias: bool,
     part_names: &[String],
     pairs: &[PairData],
     frame_ratio: f64,
@@ -361,7 +422,9 @@ pub fn train(
     opts: &GprOptions,
 ) -> Result<GprModel> {
     if !(frame_ratio > 0.0 && frame_ratio.is_finite()) {
-        return Err(Error::invalid(format!("frame-rate ratio must be positive, got {frame_ratio}")));
+        return Err(Error::invalid(format!(
+            "frame-rate ratio must be positive, got {frame_ratio}"
+        )));
     }
     let data = training_set(pairs, frame_ratio, keyposes_only)?;
     if data.x_parts.len() != part_names.len() {
@@ -377,8 +440,8 @@ pub fn train(
         data.clone()
     };
     let (parts, disp) = rayon::join(
-        || train_parts(method, part_names, &data, &keys, opts),
-        || train_displacement(&data, opts),
+        || train_parts(method, nn_bias, part_names, &data, &keys, opts),
+        || train_displacement(&data, nn_bias, opts),
     );
     let (parts, mut reports) = parts?;
     let (displacement, disp_report) = disp?;
@@ -388,9 +451,14 @@ pub fn train(
         part_names: part_names.to_vec(),
         parts,
         displacement,
-        n_train: if method == Method::KeyposeAffine { keys.len() } else { data.len() },
+        n_train: if method == Method::KeyposeAffine {
+            keys.len()
+        } else {
+            data.len()
+        },
         frame_ratio,
         keyposes_only,
+        nn_bias,
         reports,
     })
 }
@@ -403,10 +471,18 @@ mod tests {
     /// steps, for integer and fractional `q` (above and below 1).
     #[test]
     fn target_step_spans_one_source_interval() {
-        let d = vec![[0.0; 6], [0.01, 0.0, 0.02, 0.0, 0.0, 0.0], [0.01, 0.0, 0.02, 0.0, 0.0, 0.0], [0.01, 0.0, 0.02, 0.0, 0.0, 0.0]];
+        let d = vec![
+            [0.0; 6],
+            [0.01, 0.0, 0.02, 0.0, 0.0, 0.0],
+            [0.01, 0.0, 0.02, 0.0, 0.0, 0.0],
+            [0.01, 0.0, 0.02, 0.0, 0.0, 0.0],
+        ];
         for q in [2.0, 1.5, 0.8, 1.0, 3.0] {
             let s = target_step(&d, 3, q);
-            assert!((s[0] - 0.01 * q).abs() < 1e-12 && (s[2] - 0.02 * q).abs() < 1e-12, "q = {q}: {s:?}");
+            assert!(
+                (s[0] - 0.01 * q).abs() < 1e-12 && (s[2] - 0.02 * q).abs() < 1e-12,
+                "q = {q}: {s:?}"
+            );
         }
         // Pure rotation about a fixed axis composes exactly too.
         let r = vec![[0.0, 0.0, 0.0, 0.0, 0.1, 0.0]; 4];
@@ -419,7 +495,9 @@ mod tests {
     fn pair(f: usize, map: &dyn Fn(f64) -> f64) -> PairData {
         let xs = DMatrix::from_fn(f, 2, |i, c| ((i as f64) * 0.37 + c as f64).sin());
         let ys = DMatrix::from_fn(f, 3, |i, c| map(xs[(i, c % 2)]) * (c + 1) as f64);
-        let disp: Vec<[f64; 6]> = (0..f).map(|i| [0.01 * (i as f64 * 0.2).cos(), 0.0, 0.02, 0.0, 0.01, 0.0]).collect();
+        let disp: Vec<[f64; 6]> = (0..f)
+            .map(|i| [0.01 * (i as f64 * 0.2).cos(), 0.0, 0.02, 0.0, 0.01, 0.0])
+            .collect();
         PairData {
             source_coeffs: vec![xs],
             target_coeffs: vec![ys],
@@ -435,24 +513,68 @@ mod tests {
     #[test]
     fn learns_known_maps_and_reverses() {
         let names = vec!["p".to_string()];
-        let opts = GprOptions { noise_var: 1e-4, ..Default::default() };
+        let opts = GprOptions {
+            noise_var: 1e-4,
+            ..Default::default()
+        };
         let lin = pair(60, &|x| 0.5 * x);
-        let m = train(Method::GprLinear, &names, &[lin.clone()], 1.0, false, &opts).unwrap();
+        let m = train(
+            Method::GprLinear,
+            false,
+            &names,
+            &[lin.clone()],
+            1.0,
+            false,
+            &opts,
+        )
+        .unwrap();
         // Between two training samples on the input curve (i = 40.5).
         let (x0, x1) = ((0.37f64 * 40.5).sin(), (0.37f64 * 40.5 + 1.0).sin());
         let x = DMatrix::from_row_slice(1, 2, &[x0, x1]);
         let y = m.parts[0].predict(&x).unwrap();
-        for (c, want) in [0.5 * x0, 2.0 * 0.5 * x1, 3.0 * 0.5 * x0].iter().enumerate() {
+        for (c, want) in [0.5 * x0, 2.0 * 0.5 * x1, 3.0 * 0.5 * x0]
+            .iter()
+            .enumerate()
+        {
             assert!((y[c] - want).abs() < 1e-3, "{c}: {} vs {want}", y[c]);
         }
+        // A smooth non-linear map with an even part: eq. 10 as printed (no
+        // bias) can only represent odd functions and misses it; with the bias
+        // input it is learnt.
         let nl = pair(80, &|x| x.tanh() + 0.3 * x * x);
-        let m = train(Method::GprNn, &names, &[nl], 1.0, false, &opts).unwrap();
-        let y = m.parts[0].predict(&x).unwrap();
         let want0 = x0.tanh() + 0.3 * x0 * x0;
+        let odd = train(
+            Method::GprNn,
+            false,
+            &names,
+            &[nl.clone()],
+            1.0,
+            false,
+            &opts,
+        )
+        .unwrap();
+        let y_odd = odd.parts[0].predict(&x).unwrap()[0];
+        let y_neg = odd.parts[0].predict(&(-&x)).unwrap()[0];
+        assert!(
+            (y_odd + y_neg).abs() < 1e-12,
+            "no-bias NN GP is odd: {y_odd} {y_neg}"
+        );
+        let m = train(Method::GprNn, true, &names, &[nl], 1.0, false, &opts).unwrap();
+        let y = m.parts[0].predict(&x).unwrap();
         assert!((y[0] - want0).abs() < 0.02, "{} vs {want0}", y[0]);
+        assert!((y_odd - want0).abs() > 0.05, "{y_odd} vs {want0}");
         assert_eq!(m.n_train, 80);
         // The affine baseline uses the key-poses only.
-        let m = train(Method::KeyposeAffine, &names, &[lin.clone()], 1.0, false, &opts).unwrap();
+        let m = train(
+            Method::KeyposeAffine,
+            false,
+            &names,
+            &[lin.clone()],
+            1.0,
+            false,
+            &opts,
+        )
+        .unwrap();
         assert_eq!(m.n_train, 3);
         // Reversal swaps roles and pairs.
         let r = lin.clone().reversed();

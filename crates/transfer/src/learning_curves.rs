@@ -62,12 +62,36 @@ impl Curve {
 
 /// The curves of figures 7, 8 and 9 (the first is shared).
 pub const CURVES: [Curve; 6] = [
-    Curve { method: Method::GprNn, rows: Rows::Dense, parts: true },
-    Curve { method: Method::GprSe, rows: Rows::Dense, parts: true },
-    Curve { method: Method::GprLinear, rows: Rows::Dense, parts: true },
-    Curve { method: Method::KeyposeAffine, rows: Rows::Dense, parts: true },
-    Curve { method: Method::GprNn, rows: Rows::KeyposesFirst, parts: true },
-    Curve { method: Method::WholeBody, rows: Rows::Dense, parts: false },
+    Curve {
+        method: Method::GprNn,
+        rows: Rows::Dense,
+        parts: true,
+    },
+    Curve {
+        method: Method::GprSe,
+        rows: Rows::Dense,
+        parts: true,
+    },
+    Curve {
+        method: Method::GprLinear,
+        rows: Rows::Dense,
+        parts: true,
+    },
+    Curve {
+        method: Method::KeyposeAffine,
+        rows: Rows::Dense,
+        parts: true,
+    },
+    Curve {
+        method: Method::GprNn,
+        rows: Rows::KeyposesFirst,
+        parts: true,
+    },
+    Curve {
+        method: Method::WholeBody,
+        rows: Rows::Dense,
+        parts: false,
+    },
 ];
 
 /// One point of one curve.
@@ -140,7 +164,11 @@ pub fn sizes(min: usize, max: usize, count: usize) -> Vec<usize> {
 /// Per-vertex RMS error between predicted and true target coefficients.
 pub fn coefficient_rms(pred: &[DMatrix<f64>], truth: &[DMatrix<f64>], vertices: &[usize]) -> f64 {
     let rows = truth.first().map_or(0, |t| t.nrows()).max(1) as f64;
-    let sq: f64 = pred.iter().zip(truth).map(|(p, t)| (p - t).norm_squared()).sum();
+    let sq: f64 = pred
+        .iter()
+        .zip(truth)
+        .map(|(p, t)| (p - t).norm_squared())
+        .sum();
     (sq / (rows * vertices.iter().sum::<usize>().max(1) as f64)).sqrt()
 }
 
@@ -156,11 +184,19 @@ fn part_error(model: &GprModel, data: &TrainingSet, vertices: &[usize]) -> Resul
 
 /// All points of all [`CURVES`] for one direction. `train_sizes` larger than
 /// the training side are skipped.
-pub fn run_direction(dir: &DirectionData, train_sizes: &[usize], opts: &GprOptions, seed: u64) -> Result<Vec<CurvePoint>> {
+pub fn run_direction(
+    dir: &DirectionData,
+    train_sizes: &[usize],
+    nn_bias: bool,
+    opts: &GprOptions,
+    seed: u64,
+) -> Result<Vec<CurvePoint>> {
     let parts_set = crate::gpr_model::training_set(&dir.parts, dir.frame_ratio, false)?;
     let whole_set = crate::gpr_model::training_set(&dir.whole, dir.frame_ratio, false)?;
     if parts_set.len() != whole_set.len() {
-        return Err(Error::invalid("per-part and whole-body training sets differ in length"));
+        return Err(Error::invalid(
+            "per-part and whole-body training sets differ in length",
+        ));
     }
     let keys = key_rows(&dir.parts);
     let (train_side, held_out) = split(parts_set.len(), &keys, seed);
@@ -178,9 +214,17 @@ pub fn run_direction(dir: &DirectionData, train_sizes: &[usize], opts: &GprOptio
     let mut points = Vec::new();
     for curve in CURVES {
         let (set, names, vertices): (&TrainingSet, Vec<String>, Vec<usize>) = if curve.parts {
-            (&parts_set, dir.part_names.clone(), dir.part_vertices.clone())
+            (
+                &parts_set,
+                dir.part_names.clone(),
+                dir.part_vertices.clone(),
+            )
         } else {
-            (&whole_set, vec!["body".to_string()], vec![dir.whole_vertices])
+            (
+                &whole_set,
+                vec!["body".to_string()],
+                vec![dir.whole_vertices],
+            )
         };
         let test = set.subset(&held_out);
         for &n in train_sizes {
@@ -195,14 +239,32 @@ pub fn run_direction(dir: &DirectionData, train_sizes: &[usize], opts: &GprOptio
             let model = if curve.method == Method::KeyposeAffine {
                 // Baran et al. use the key-poses only, whatever the size.
                 let key_set = set.subset(&keys);
-                fit_on(curve.method, &names, &key_set, dir.frame_ratio, opts)?
+                fit_on(
+                    curve.method,
+                    nn_bias,
+                    &names,
+                    &key_set,
+                    dir.frame_ratio,
+                    opts,
+                )?
             } else {
-                fit_on(curve.method, &names, &train_rows, dir.frame_ratio, opts)?
+                fit_on(
+                    curve.method,
+                    nn_bias,
+                    &names,
+                    &train_rows,
+                    dir.frame_ratio,
+                    opts,
+                )?
             };
             points.push(CurvePoint {
                 direction: dir.label.clone(),
                 curve: curve.label(),
-                n_train: if curve.method == Method::KeyposeAffine { keys.len() } else { n },
+                n_train: if curve.method == Method::KeyposeAffine {
+                    keys.len()
+                } else {
+                    n
+                },
                 train_rms_m: part_error(&model, &train_rows, &vertices)?,
                 test_rms_m: part_error(&model, &test, &vertices)?,
             });
@@ -213,24 +275,36 @@ pub fn run_direction(dir: &DirectionData, train_sizes: &[usize], opts: &GprOptio
 
 /// Trains the pose regressors of `method` on the rows of `set` (every row a
 /// "key-pose", so that the affine baseline uses them all).
-fn fit_on(method: Method, names: &[String], set: &TrainingSet, ratio: f64, opts: &GprOptions) -> Result<GprModel> {
+fn fit_on(
+    method: Method,
+    nn_bias: bool,
+    names: &[String],
+    set: &TrainingSet,
+    ratio: f64,
+    opts: &GprOptions,
+) -> Result<GprModel> {
     let n = set.len();
     let one = PairData {
         source_coeffs: set.x_parts.clone(),
         target_coeffs: set.y_parts.clone(),
-        source_disp: (0..n).map(|r| std::array::from_fn(|c| set.x_disp[(r, c)])).collect(),
+        source_disp: (0..n)
+            .map(|r| std::array::from_fn(|c| set.x_disp[(r, c)]))
+            .collect(),
         target_disp: vec![[0.0; 6]; n],
         pairs: (0..n).map(|r| [r, r]).collect(),
         keyposes: (0..n).map(|r| [r, r]).collect(),
     };
-    train(method, names, &[one], ratio.max(1e-9), false, opts)
+    train(method, nn_bias, names, &[one], ratio.max(1e-9), false, opts)
 }
 
 /// Writes the points as CSV.
 pub fn write_csv(path: &Path, points: &[CurvePoint]) -> Result<()> {
     let mut text = String::from("direction,curve,n_train,train_rms_m,test_rms_m\n");
     for p in points {
-        text.push_str(&format!("{},{},{},{:.6},{:.6}\n", p.direction, p.curve, p.n_train, p.train_rms_m, p.test_rms_m));
+        text.push_str(&format!(
+            "{},{},{},{:.6},{:.6}\n",
+            p.direction, p.curve, p.n_train, p.train_rms_m, p.test_rms_m
+        ));
     }
     mesh_core::atomic::write_bytes_atomic(path, text.as_bytes())
 }
@@ -239,9 +313,21 @@ pub fn write_csv(path: &Path, points: &[CurvePoint]) -> Result<()> {
 pub fn figures() -> Vec<(&'static str, &'static str, Vec<String>)> {
     let l = |i: usize| CURVES[i].label();
     vec![
-        ("fig7-kernels", "Kernels and key-pose affine baseline", vec![l(0), l(1), l(2), l(3)]),
-        ("fig8-dense-vs-keyposes", "Dense pairs vs key-poses first", vec![l(0), l(4)]),
-        ("fig9-parts-vs-whole", "Parts vs whole body", vec![l(0), l(5)]),
+        (
+            "fig7-kernels",
+            "Kernels and key-pose affine baseline",
+            vec![l(0), l(1), l(2), l(3)],
+        ),
+        (
+            "fig8-dense-vs-keyposes",
+            "Dense pairs vs key-poses first",
+            vec![l(0), l(4)],
+        ),
+        (
+            "fig9-parts-vs-whole",
+            "Parts vs whole body",
+            vec![l(0), l(5)],
+        ),
     ]
 }
 
@@ -251,7 +337,8 @@ fn register_font() {
     static ONCE: std::sync::Once = std::sync::Once::new();
     ONCE.call_once(|| {
         // The font is compiled in: registration cannot fail on a valid TTF.
-        let _ = plotters::style::register_font("sans-serif", plotters::style::FontStyle::Normal, FONT);
+        let _ =
+            plotters::style::register_font("sans-serif", plotters::style::FontStyle::Normal, FONT);
     });
 }
 
@@ -298,17 +385,28 @@ fn draw<DB: plotters::prelude::DrawingBackend>(
     for (i, (name, pts)) in series.iter().enumerate() {
         let c = COLOURS[i % COLOURS.len()];
         chart
-            .draw_series(LineSeries::new(pts.iter().map(|p| (p.0, p.2 * 1000.0)), c.stroke_width(2)))
+            .draw_series(LineSeries::new(
+                pts.iter().map(|p| (p.0, p.2 * 1000.0)),
+                c.stroke_width(2),
+            ))
             .map_err(|x| e(&x))?
             .label(format!("{name} (held out)"))
             .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 18, y)], c.stroke_width(2)));
         chart
-            .draw_series(LineSeries::new(pts.iter().map(|p| (p.0, p.1 * 1000.0)), c.mix(0.5).stroke_width(1)))
+            .draw_series(LineSeries::new(
+                pts.iter().map(|p| (p.0, p.1 * 1000.0)),
+                c.mix(0.5).stroke_width(1),
+            ))
             .map_err(|x| e(&x))?
             .label(format!("{name} (training)"))
-            .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 18, y)], c.mix(0.5).stroke_width(1)));
+            .legend(move |(x, y)| {
+                PathElement::new(vec![(x, y), (x + 18, y)], c.mix(0.5).stroke_width(1))
+            });
         chart
-            .draw_series(pts.iter().map(|p| Circle::new((p.0, p.1 * 1000.0), 3, c.mix(0.5).filled())))
+            .draw_series(
+                pts.iter()
+                    .map(|p| Circle::new((p.0, p.1 * 1000.0), 3, c.mix(0.5).filled())),
+            )
             .map_err(|x| e(&x))?;
     }
     chart
@@ -348,22 +446,34 @@ pub fn plot_all(dir: &Path, points: &[CurvePoint]) -> Result<Vec<std::path::Path
             let (w, h) = (800u32, 560u32);
             let png_path = dir.join(format!("{name}.png"));
             let mut pixels = vec![0u8; (w * h * 3) as usize];
-            draw(BitMapBackend::with_buffer(&mut pixels, (w, h)).into_drawing_area(), &title, &series)
-                .map_err(|m| Error::file(&png_path, format!("cannot draw the plot: {m}")))?;
+            draw(
+                BitMapBackend::with_buffer(&mut pixels, (w, h)).into_drawing_area(),
+                &title,
+                &series,
+            )
+            .map_err(|m| Error::file(&png_path, format!("cannot draw the plot: {m}")))?;
             let mut bytes = Vec::new();
             {
                 let mut enc = png::Encoder::new(&mut bytes, w, h);
                 enc.set_color(png::ColorType::Rgb);
                 enc.set_depth(png::BitDepth::Eight);
-                let mut writer = enc.write_header().map_err(|e| Error::file(&png_path, e.to_string()))?;
-                writer.write_image_data(&pixels).map_err(|e| Error::file(&png_path, e.to_string()))?;
+                let mut writer = enc
+                    .write_header()
+                    .map_err(|e| Error::file(&png_path, e.to_string()))?;
+                writer
+                    .write_image_data(&pixels)
+                    .map_err(|e| Error::file(&png_path, e.to_string()))?;
             }
             mesh_core::atomic::write_bytes_atomic(&png_path, &bytes)?;
             written.push(png_path);
             let svg_path = dir.join(format!("{name}.svg"));
             let mut svg = String::new();
-            draw(SVGBackend::with_string(&mut svg, (w, h)).into_drawing_area(), &title, &series)
-                .map_err(|m| Error::file(&svg_path, format!("cannot draw the plot: {m}")))?;
+            draw(
+                SVGBackend::with_string(&mut svg, (w, h)).into_drawing_area(),
+                &title,
+                &series,
+            )
+            .map_err(|m| Error::file(&svg_path, format!("cannot draw the plot: {m}")))?;
             mesh_core::atomic::write_bytes_atomic(&svg_path, svg.as_bytes())?;
             written.push(svg_path);
         }

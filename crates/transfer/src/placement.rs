@@ -46,14 +46,26 @@ impl Placement {
 /// Extent along +y of a subject's template, from the union of the PCA parts'
 /// reference vertices (each part's reference is the template part).
 pub fn template_height(pca: &PcaModel) -> f64 {
-    let ys = pca.parts.iter().flat_map(|p| p.reference.iter().map(|v| v.y));
-    let (lo, hi) = ys.fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), y| (lo.min(y), hi.max(y)));
-    if hi > lo { hi - lo } else { 0.0 }
+    let ys = pca
+        .parts
+        .iter()
+        .flat_map(|p| p.reference.iter().map(|v| v.y));
+    let (lo, hi) = ys.fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), y| {
+        (lo.min(y), hi.max(y))
+    });
+    if hi > lo {
+        hi - lo
+    } else {
+        0.0
+    }
 }
 
 /// The source displacements with translation scaled by `ratio`.
 pub fn scaled_source(source_disp: &[[f64; 6]], ratio: f64) -> Vec<[f64; 6]> {
-    source_disp.iter().map(|d| [d[0] * ratio, d[1] * ratio, d[2] * ratio, d[3], d[4], d[5]]).collect()
+    source_disp
+        .iter()
+        .map(|d| [d[0] * ratio, d[1] * ratio, d[2] * ratio, d[3], d[4], d[5]])
+        .collect()
 }
 
 /// `(1 - w_i) a_i + w_i b_i` per frame.
@@ -72,14 +84,20 @@ pub fn poses(start: &RigidMotion, steps: &[[f64; 6]]) -> Vec<RigidMotion> {
     if steps.is_empty() {
         return Vec::new();
     }
-    let rel: Vec<RigidMotion> =
-        steps[1..].iter().map(|d| RigidMotion::from_6vec(&Vector6::from_column_slice(d))).collect();
+    let rel: Vec<RigidMotion> = steps[1..]
+        .iter()
+        .map(|d| RigidMotion::from_6vec(&Vector6::from_column_slice(d)))
+        .collect();
     integrate(start, &rel)
 }
 
 /// Applies each frame's pose to its (template-frame) vertices.
 pub fn place(poses: &[RigidMotion], frames: &[Vec<Vector3<f64>>]) -> Vec<Vec<Vector3<f64>>> {
-    frames.iter().zip(poses).map(|(f, p)| p.apply_all(f)).collect()
+    frames
+        .iter()
+        .zip(poses)
+        .map(|(f, p)| p.apply_all(f))
+        .collect()
 }
 
 #[cfg(test)]
@@ -91,11 +109,17 @@ mod tests {
     /// frame trace a square: after 4 steps the body is back at the start.
     #[test]
     fn integrates_a_square_path() {
-        let start = RigidMotion::new(so3_exp(&Vector3::new(0.0, 0.3, 0.0)), Vector3::new(1.0, 0.0, 2.0));
+        let start = RigidMotion::new(
+            so3_exp(&Vector3::new(0.0, 0.3, 0.0)),
+            Vector3::new(1.0, 0.0, 2.0),
+        );
         let step = [0.0, 0.0, 0.1, 0.0, std::f64::consts::FRAC_PI_2, 0.0];
         let p = poses(&start, &[[9.0; 6], step, step, step, step]);
         assert_eq!(p.len(), 5);
-        assert!((p[0].translation - start.translation).norm() < 1e-12, "D_0 is ignored");
+        assert!(
+            (p[0].translation - start.translation).norm() < 1e-12,
+            "D_0 is ignored"
+        );
         assert!((p[4].translation - start.translation).norm() < 1e-12);
         assert!((p[1].translation - p[0].translation).norm() - 0.1 < 1e-12);
         assert!((p[2].translation - p[0].translation).norm() - 0.1 * 2f64.sqrt() < 1e-12);
@@ -104,7 +128,10 @@ mod tests {
     #[test]
     fn scaling_and_blending() {
         let d = [[0.1, 0.2, 0.3, 0.01, 0.02, 0.03]];
-        assert_eq!(scaled_source(&d, 2.0), vec![[0.2, 0.4, 0.6, 0.01, 0.02, 0.03]]);
+        assert_eq!(
+            scaled_source(&d, 2.0),
+            vec![[0.2, 0.4, 0.6, 0.01, 0.02, 0.03]]
+        );
         let (a, b) = ([[1.0; 6]], [[3.0; 6]]);
         assert_eq!(blend(&a, &b, &[0.0]), a.to_vec());
         assert_eq!(blend(&a, &b, &[1.0]), b.to_vec());

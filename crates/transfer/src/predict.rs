@@ -47,7 +47,10 @@ pub fn predict(
         .par_iter()
         .zip(source_coeffs)
         .zip(&model.part_names)
-        .map(|((reg, x), name)| reg.predict(x).map_err(|e| Error::invalid(format!("part '{name}': {e}"))))
+        .map(|((reg, x), name)| {
+            reg.predict(x)
+                .map_err(|e| Error::invalid(format!("part '{name}': {e}")))
+        })
         .collect::<Result<Vec<_>>>()?;
     let (displacement, variance_ratio) = match (&model.displacement, with_variance) {
         (Regressor::Gp { gpr, y_scale }, true) => {
@@ -59,12 +62,26 @@ pub fn predict(
                 mesh_core::warn!("displacement GP: {n}");
             }
             let prior = gpr.kernel.diag(source_disp);
-            let ratio = var.iter().zip(prior.iter()).map(|(v, p)| if *p > 0.0 { (v / p).clamp(0.0, 1.0) } else { 1.0 }).collect();
+            let ratio = var
+                .iter()
+                .zip(prior.iter())
+                .map(|(v, p)| {
+                    if *p > 0.0 {
+                        (v / p).clamp(0.0, 1.0)
+                    } else {
+                        1.0
+                    }
+                })
+                .collect();
             (mean * *y_scale, Some(ratio))
         }
         (reg, _) => (reg.predict(source_disp)?, None),
     };
-    Ok(TargetPrediction { coeffs, displacement, variance_ratio })
+    Ok(TargetPrediction {
+        coeffs,
+        displacement,
+        variance_ratio,
+    })
 }
 
 /// Wall-clock seconds of the steps of [`transfer_motion`].
@@ -109,15 +126,25 @@ pub fn transfer_motion(
     let decoded = target_pca.decode(&pred.coeffs)?;
     let plan = crate::assemble::plan(target_pca)?;
     let frames = crate::assemble::assemble(&plan, target_pca, &decoded);
-    let regressed: Vec<[f64; 6]> =
-        pred.displacement.row_iter().map(|r| std::array::from_fn(|c| r[c])).collect();
+    let regressed: Vec<[f64; 6]> = pred
+        .displacement
+        .row_iter()
+        .map(|r| std::array::from_fn(|c| r[c]))
+        .collect();
     let hs = template_height(source_pca);
-    let ratio = if hs > 0.0 { template_height(target_pca) / hs } else { 1.0 };
+    let ratio = if hs > 0.0 {
+        template_height(target_pca) / hs
+    } else {
+        1.0
+    };
     let steps = match placement {
         Placement::Regressed => regressed,
         Placement::ScaledSource => scaled_source(&motion.displacements, ratio),
         Placement::Blended => {
-            let w = pred.variance_ratio.clone().unwrap_or_else(|| vec![0.0; regressed.len()]);
+            let w = pred
+                .variance_ratio
+                .clone()
+                .unwrap_or_else(|| vec![0.0; regressed.len()]);
             blend(&regressed, &scaled_source(&motion.displacements, ratio), &w)
         }
     };
@@ -125,5 +152,13 @@ pub fn transfer_motion(
     let world_poses = poses(&start, &steps);
     let frames = place(&world_poses, &frames);
     let decode_s = t2.elapsed().as_secs_f64();
-    Ok(Transferred { frames, poses: world_poses, timing: Timing { encode_s, gp_s, decode_s } })
+    Ok(Transferred {
+        frames,
+        poses: world_poses,
+        timing: Timing {
+            encode_s,
+            gp_s,
+            decode_s,
+        },
+    })
 }

@@ -24,7 +24,11 @@ fn bin(name: &str) -> &'static str {
 }
 
 fn run(name: &str, args: &[&str]) -> String {
-    let out = Command::new(bin(name)).args(args).env("OPENBLAS_NUM_THREADS", "1").output().unwrap();
+    let out = Command::new(bin(name))
+        .args(args)
+        .env("OPENBLAS_NUM_THREADS", "1")
+        .output()
+        .unwrap();
     let err = String::from_utf8_lossy(&out.stderr);
     assert!(out.status.success(), "{name} {args:?} failed: {err}");
     String::from_utf8_lossy(&out.stdout).into_owned()
@@ -57,18 +61,48 @@ impl Work {
             }
             for m in &motions {
                 let out = self.path(&format!("{s}/{m}.aligned"));
-                run("align", &["-q", "--template", p(&tpl), p(&self.set.join(s).join(m)), "--out", p(&out)]);
+                run(
+                    "align",
+                    &[
+                        "-q",
+                        "--template",
+                        p(&tpl),
+                        p(&self.set.join(s).join(m)),
+                        "--out",
+                        p(&out),
+                    ],
+                );
             }
             let seg = self.path(&format!("{s}/parts.seg"));
-            run("segment", &["-q", p(&self.set.join(s).join("subject.json")), "--template", p(&tpl), "--out", p(&seg)]);
-            let aligned: Vec<String> = train.iter().map(|m| p(&self.path(&format!("{s}/{m}.aligned"))).to_string()).collect();
+            run(
+                "segment",
+                &[
+                    "-q",
+                    p(&self.set.join(s).join("subject.json")),
+                    "--template",
+                    p(&tpl),
+                    "--out",
+                    p(&seg),
+                ],
+            );
+            let aligned: Vec<String> = train
+                .iter()
+                .map(|m| p(&self.path(&format!("{s}/{m}.aligned"))).to_string())
+                .collect();
             let mut args = vec!["-q", "--template", p(&tpl), "--parts", p(&seg), "--out"];
             let pca = self.path(&format!("{s}/pca.model"));
             args.push(p(&pca));
             args.extend(aligned.iter().map(|s| s.as_str()));
             run("pca-fit", &args);
             let whole = self.path(&format!("{s}/pca-whole.model"));
-            let mut args = vec!["-q", "--whole-body", "--template", p(&tpl), "--out", p(&whole)];
+            let mut args = vec![
+                "-q",
+                "--whole-body",
+                "--template",
+                p(&tpl),
+                "--out",
+                p(&whole),
+            ];
             args.extend(aligned.iter().map(|s| s.as_str()));
             run("pca-fit", &args);
         }
@@ -77,9 +111,19 @@ impl Work {
             run(
                 "dtw-densify",
                 &[
-                    "-q", "--set", p(&self.set.join("set.json")), "--pair", m, "--source-pca", p(&self.path("A/pca.model")),
-                    "--target-pca", p(&self.path("B/pca.model")), p(&self.path(&format!("A/{m}.aligned"))),
-                    p(&self.path(&format!("B/{m}.aligned"))), "--out", p(&corr),
+                    "-q",
+                    "--set",
+                    p(&self.set.join("set.json")),
+                    "--pair",
+                    m,
+                    "--source-pca",
+                    p(&self.path("A/pca.model")),
+                    "--target-pca",
+                    p(&self.path("B/pca.model")),
+                    p(&self.path(&format!("A/{m}.aligned"))),
+                    p(&self.path(&format!("B/{m}.aligned"))),
+                    "--out",
+                    p(&corr),
                 ],
             );
             pairs.extend([
@@ -97,7 +141,10 @@ impl Work {
 /// what a transfer that learnt nothing about the pose would score.
 fn rest_pose_error(truth: &MeshSequence) -> f64 {
     let b = common::body_b();
-    let rest = MeshSequence::new(truth.faces.clone(), vec![b.mesh.vertices.clone(); truth.n_frames()]);
+    let rest = MeshSequence::new(
+        truth.faces.clone(),
+        vec![b.mesh.vertices.clone(); truth.n_frames()],
+    );
     rms_errors(&rest, truth).unwrap().0
 }
 
@@ -105,8 +152,13 @@ fn rest_pose_error(truth: &MeshSequence) -> f64 {
 fn transfer_pipeline_on_a_known_synthetic_set() {
     // TRANSFER_TEST_DIR=<dir> keeps the set and the outputs for inspection.
     let tmp = tempfile::tempdir().unwrap();
-    let root = std::env::var_os("TRANSFER_TEST_DIR").map(PathBuf::from).unwrap_or_else(|| tmp.path().to_path_buf());
-    let work = Work { set: root.join("set"), w: root.join("work") };
+    let root = std::env::var_os("TRANSFER_TEST_DIR")
+        .map(PathBuf::from)
+        .unwrap_or_else(|| tmp.path().to_path_buf());
+    let work = Work {
+        set: root.join("set"),
+        w: root.join("work"),
+    };
     common::write_set(&work.set);
     let pairs = work.prepare();
     let pair_args: Vec<&str> = pairs.iter().map(|s| s.as_str()).collect();
@@ -118,9 +170,19 @@ fn transfer_pipeline_on_a_known_synthetic_set() {
     for method in ["gpr-nn", "gpr-linear", "keypose-affine"] {
         let model = work.path(&format!("{method}.model"));
         let mut args = vec![
-            "-q", "--method", method, "--source-pca", p(&work.path("A/pca.model")).to_owned().leak(),
-            "--target-pca", p(&work.path("B/pca.model")).to_owned().leak(), "--source-fps", "25", "--target-fps", "50",
-            "--out", p(&model).to_owned().leak(),
+            "-q",
+            "--method",
+            method,
+            "--source-pca",
+            p(&work.path("A/pca.model")).to_owned().leak(),
+            "--target-pca",
+            p(&work.path("B/pca.model")).to_owned().leak(),
+            "--source-fps",
+            "25",
+            "--target-fps",
+            "50",
+            "--out",
+            p(&model).to_owned().leak(),
         ];
         args.extend(&pair_args);
         run("gpr-train", &args);
@@ -129,44 +191,91 @@ fn transfer_pipeline_on_a_known_synthetic_set() {
             run(
                 "gpr-predict",
                 &[
-                    "-q", "--model", p(&model), "--source-pca", p(&work.path("A/pca.model")), "--target-pca",
-                    p(&work.path("B/pca.model")), "--target-template", p(&work.set.join("B/walk/000000.ply")),
-                    "--placement", placement, p(&work.path(&format!("A/{}.aligned", common::TEST.0))), "--out", p(&out),
+                    "-q",
+                    "--model",
+                    p(&model),
+                    "--source-pca",
+                    p(&work.path("A/pca.model")),
+                    "--target-pca",
+                    p(&work.path("B/pca.model")),
+                    "--target-template",
+                    p(&work.set.join("B/walk/000000.ply")),
+                    "--placement",
+                    placement,
+                    p(&work.path(&format!("A/{}.aligned", common::TEST.0))),
+                    "--out",
+                    p(&out),
                 ],
             );
             let pred = MeshSequence::load_dir(&out).unwrap();
-            assert_eq!(pred.n_frames(), common::N_SOURCE, "one output frame per source frame");
+            assert_eq!(
+                pred.n_frames(),
+                common::N_SOURCE,
+                "one output frame per source frame"
+            );
             assert_eq!(pred.faces, truth.faces, "the target's topology");
             let json = run(
                 "evaluate",
                 &[
-                    "-q", p(&out), p(&truth_dir), "--direction", "A->B", "--motion", common::TEST.0, "--method", method,
-                    "--placement", placement,
+                    "-q",
+                    p(&out),
+                    p(&truth_dir),
+                    "--direction",
+                    "A->B",
+                    "--motion",
+                    common::TEST.0,
+                    "--method",
+                    method,
+                    "--placement",
+                    placement,
                 ],
             );
             results.push(serde_json::from_str(&json).unwrap());
         }
     }
     for r in &results {
-        eprintln!("{} {:<15} {:<14} pose {:.4} m placed {:.4} m", r.direction, r.method, r.placement, r.rms_pose_m, r.rms_placed_m);
+        eprintln!(
+            "{} {:<15} {:<14} pose {:.4} m placed {:.4} m",
+            r.direction, r.method, r.placement, r.rms_pose_m, r.rms_placed_m
+        );
     }
     eprintln!("rest-pose baseline: {baseline:.4} m");
-    let get = |m: &str, pl: &str| results.iter().find(|r| r.method == m && r.placement == pl).unwrap();
+    let get = |m: &str, pl: &str| {
+        results
+            .iter()
+            .find(|r| r.method == m && r.placement == pl)
+            .unwrap()
+    };
     let nn = get("gpr-nn", "regressed");
     // The pose transfer must explain most of the deformation the rest pose misses.
-    assert!(nn.rms_pose_m < 0.3 * baseline, "gpr-nn pose error {} vs rest pose {baseline}", nn.rms_pose_m);
+    assert!(
+        nn.rms_pose_m < 0.3 * baseline,
+        "gpr-nn pose error {} vs rest pose {baseline}",
+        nn.rms_pose_m
+    );
     // Placement: the integrated displacements must follow the truth's path far
     // better than not travelling at all (the RMS distance of the truth's
     // centroid from where it starts, about 1 m here). The synthetic bodies'
     // large bends make the whole-body alignment wobble, which the
     // displacement-to-displacement GP cannot fully predict: errors of ~0.1 m.
-    let centroid = |f: &Vec<nalgebra::Vector3<f64>>| f.iter().sum::<nalgebra::Vector3<f64>>() / f.len() as f64;
+    let centroid =
+        |f: &Vec<nalgebra::Vector3<f64>>| f.iter().sum::<nalgebra::Vector3<f64>>() / f.len() as f64;
     let c0 = centroid(&truth.frames[0]);
-    let travel = (truth.frames.iter().map(|f| (centroid(f) - c0).norm_squared()).sum::<f64>() / truth.n_frames() as f64).sqrt();
+    let travel = (truth
+        .frames
+        .iter()
+        .map(|f| (centroid(f) - c0).norm_squared())
+        .sum::<f64>()
+        / truth.n_frames() as f64)
+        .sqrt();
     eprintln!("truth travel (RMS centroid distance from start): {travel:.4} m");
     for pl in ["regressed", "scaled-source", "blended"] {
         let r = get("gpr-nn", pl);
-        assert!(r.rms_placed_m < 0.25 * travel, "{pl}: placed error {} vs travel {travel}", r.rms_placed_m);
+        assert!(
+            r.rms_placed_m < 0.25 * travel,
+            "{pl}: placed error {} vs travel {travel}",
+            r.rms_placed_m
+        );
     }
     // The pose is the same whatever the placement.
     assert!((get("gpr-nn", "blended").rms_pose_m - nn.rms_pose_m).abs() < 1e-9);
@@ -174,8 +283,17 @@ fn transfer_pipeline_on_a_known_synthetic_set() {
     // Reverse direction trains from the same pairs and predicts B's frames onto A.
     let model = work.path("rev.model");
     let mut args = vec![
-        "-q", "--reverse", "--source-pca", p(&work.path("B/pca.model")).to_owned().leak(), "--target-pca",
-        p(&work.path("A/pca.model")).to_owned().leak(), "--source-fps", "50", "--target-fps", "25", "--out",
+        "-q",
+        "--reverse",
+        "--source-pca",
+        p(&work.path("B/pca.model")).to_owned().leak(),
+        "--target-pca",
+        p(&work.path("A/pca.model")).to_owned().leak(),
+        "--source-fps",
+        "50",
+        "--target-fps",
+        "25",
+        "--out",
         p(&model).to_owned().leak(),
     ];
     args.extend(&pair_args);
@@ -184,36 +302,79 @@ fn transfer_pipeline_on_a_known_synthetic_set() {
     run(
         "gpr-predict",
         &[
-            "-q", "--model", p(&model), "--source-pca", p(&work.path("B/pca.model")), "--target-pca",
-            p(&work.path("A/pca.model")), "--target-template", p(&work.set.join("A/walk/000000.ply")),
-            p(&work.path("B/walk.aligned")), "--out", p(&out),
+            "-q",
+            "--model",
+            p(&model),
+            "--source-pca",
+            p(&work.path("B/pca.model")),
+            "--target-pca",
+            p(&work.path("A/pca.model")),
+            "--target-template",
+            p(&work.set.join("A/walk/000000.ply")),
+            p(&work.path("B/walk.aligned")),
+            "--out",
+            p(&out),
         ],
     );
     // B's walk (61 frames) mapped back onto A: A's own walk at the matching frames.
     let pred = MeshSequence::load_dir(&out).unwrap();
     assert_eq!(pred.n_frames(), 2 * common::N_SOURCE - 1);
     let a_walk = MeshSequence::load_dir(work.set.join("A/walk")).unwrap();
-    let matched = MeshSequence::new(a_walk.faces.clone(), (0..pred.n_frames()).step_by(2).map(|j| pred.frames[j].clone()).collect());
+    let matched = MeshSequence::new(
+        a_walk.faces.clone(),
+        (0..pred.n_frames())
+            .step_by(2)
+            .map(|j| pred.frames[j].clone())
+            .collect(),
+    );
     let (pose, _) = rms_errors(&matched, &a_walk).unwrap();
-    assert!(pose < 0.02, "reverse transfer of a training motion: pose error {pose}");
+    assert!(
+        pose < 0.02,
+        "reverse transfer of a training motion: pose error {pose}"
+    );
 
     // Learning curves: CSV and both plot formats for both directions.
     let lc = work.path("curves");
     let mut args = vec![
-        "-q", "--source-pca", p(&work.path("A/pca.model")).to_owned().leak(), "--target-pca",
-        p(&work.path("B/pca.model")).to_owned().leak(), "--source-whole", p(&work.path("A/pca-whole.model")).to_owned().leak(),
-        "--target-whole", p(&work.path("B/pca-whole.model")).to_owned().leak(), "--source-fps", "25", "--target-fps", "50",
-        "--steps", "3", "--max-iter", "20", "--out", p(&lc).to_owned().leak(),
+        "-q",
+        "--source-pca",
+        p(&work.path("A/pca.model")).to_owned().leak(),
+        "--target-pca",
+        p(&work.path("B/pca.model")).to_owned().leak(),
+        "--source-whole",
+        p(&work.path("A/pca-whole.model")).to_owned().leak(),
+        "--target-whole",
+        p(&work.path("B/pca-whole.model")).to_owned().leak(),
+        "--source-fps",
+        "25",
+        "--target-fps",
+        "50",
+        "--steps",
+        "3",
+        "--max-iter",
+        "20",
+        "--out",
+        p(&lc).to_owned().leak(),
     ];
     args.extend(&pair_args);
     run("learning-curves", &args);
     let csv = std::fs::read_to_string(lc.join("learning_curves.csv")).unwrap();
     assert!(csv.lines().count() > 10, "{csv}");
     for d in ["A-to-B", "B-to-A"] {
-        for f in ["fig7-kernels", "fig8-dense-vs-keyposes", "fig9-parts-vs-whole"] {
+        for f in [
+            "fig7-kernels",
+            "fig8-dense-vs-keyposes",
+            "fig9-parts-vs-whole",
+        ] {
             for ext in ["png", "svg"] {
                 let path = lc.join(format!("{d}-{f}.{ext}"));
-                assert!(std::fs::metadata(&path).map(|m| m.len() > 1000).unwrap_or(false), "{}", path.display());
+                assert!(
+                    std::fs::metadata(&path)
+                        .map(|m| m.len() > 1000)
+                        .unwrap_or(false),
+                    "{}",
+                    path.display()
+                );
             }
         }
     }

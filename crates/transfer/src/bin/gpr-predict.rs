@@ -53,11 +53,23 @@ fn main() -> ExitCode {
     run_stage("gpr-predict", || {
         args.common.init()?;
         let model = GprModel::load(&args.model)?;
-        let (src_pca, tgt_pca) = (PcaModel::load(&args.source_pca)?, PcaModel::load(&args.target_pca)?);
+        let (src_pca, tgt_pca) = (
+            PcaModel::load(&args.source_pca)?,
+            PcaModel::load(&args.target_pca)?,
+        );
         for (pca, path) in [(&src_pca, &args.source_pca), (&tgt_pca, &args.target_pca)] {
             let names: Vec<&String> = pca.parts.iter().map(|p| &p.name).collect();
-            if names.iter().map(|s| s.as_str()).ne(model.part_names.iter().map(|s| s.as_str())) {
-                bail!("{}: parts {:?} differ from the model's {:?}", path.display(), names, model.part_names);
+            if names
+                .iter()
+                .map(|s| s.as_str())
+                .ne(model.part_names.iter().map(|s| s.as_str()))
+            {
+                bail!(
+                    "{}: parts {:?} differ from the model's {:?}",
+                    path.display(),
+                    names,
+                    model.part_names
+                );
             }
         }
         let motion = AlignedMotion::load(&args.motion)?;
@@ -95,9 +107,11 @@ fn main() -> ExitCode {
                 "gp_frames_per_s": n / result.timing.gp_s.max(1e-12), "decode_assemble_s": result.timing.decode_s,
                 "total_s": total, "frames_per_s_without_writing": n / total.max(1e-12), "ply_write_s": write,
             });
-            mesh_core::atomic::write_bytes_atomic(path, serde_json::to_string_pretty(&json)?.as_bytes())?;
+            mesh_core::atomic::write_bytes_atomic(
+                path,
+                serde_json::to_string_pretty(&json)?.as_bytes(),
+            )?;
         }
         Ok(())
     })
 }
-

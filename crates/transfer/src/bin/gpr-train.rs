@@ -45,6 +45,9 @@ struct Args {
     /// Train on the key-pose pairs only (instead of the dense DTW pairs)
     #[arg(long)]
     keyposes_only: bool,
+    /// Neural-network kernel with the bias input (R&W eq. 4.29); eq. 10 as printed has none, which limits the GP to odd functions
+    #[arg(long)]
+    nn_bias: bool,
     /// Observation-noise variance σn² (the paper's 0.1)
     #[arg(long, default_value_t = PAPER_NOISE_VAR)]
     noise_var: f64,
@@ -61,28 +64,52 @@ fn main() -> ExitCode {
     run_stage("gpr-train", || {
         args.common.init()?;
         let Some(method) = Method::from_name(&args.method) else {
-            bail!("unknown method '{}' (gpr-nn, gpr-se, gpr-linear, keypose-affine, whole-body)", args.method);
+            bail!(
+                "unknown method '{}' (gpr-nn, gpr-se, gpr-linear, keypose-affine, whole-body)",
+                args.method
+            );
         };
-        let (src_pca, tgt_pca) = (PcaModel::load(&args.source_pca)?, PcaModel::load(&args.target_pca)?);
+        let (src_pca, tgt_pca) = (
+            PcaModel::load(&args.source_pca)?,
+            PcaModel::load(&args.target_pca)?,
+        );
         let names: Vec<String> = src_pca.parts.iter().map(|p| p.name.clone()).collect();
         let tgt_names: Vec<String> = tgt_pca.parts.iter().map(|p| p.name.clone()).collect();
         if names != tgt_names {
-            bail!("{}: parts {:?} differ from the target's {:?}", args.source_pca.display(), names, tgt_names);
+            bail!(
+                "{}: parts {:?} differ from the target's {:?}",
+                args.source_pca.display(),
+                names,
+                tgt_names
+            );
         }
         if method == Method::WholeBody && names.len() != 1 {
-            mesh_core::warn!("method whole-body with a {}-part PCA model (expected pca-fit --whole-body)", names.len());
+            mesh_core::warn!(
+                "method whole-body with a {}-part PCA model (expected pca-fit --whole-body)",
+                names.len()
+            );
         }
         let mut pairs = Vec::new();
         for chunk in args.pair.chunks(3) {
-            let [s, t, c] = chunk else { bail!("--pair takes three files") };
+            let [s, t, c] = chunk else {
+                bail!("--pair takes three files")
+            };
             let (src, tgt) = (AlignedMotion::load(s)?, AlignedMotion::load(t)?);
             let corr = Correspondences::load(c)?;
             // The files are in the set's order (set source, set target); the PCA
             // models are in the direction's order.
-            let (src_model, tgt_model) = if args.reverse { (&tgt_pca, &src_pca) } else { (&src_pca, &tgt_pca) };
+            let (src_model, tgt_model) = if args.reverse {
+                (&tgt_pca, &src_pca)
+            } else {
+                (&src_pca, &tgt_pca)
+            };
             let data = PairData {
-                source_coeffs: src_model.encode(&src).with_context(|| s.display().to_string())?,
-                target_coeffs: tgt_model.encode(&tgt).with_context(|| t.display().to_string())?,
+                source_coeffs: src_model
+                    .encode(&src)
+                    .with_context(|| s.display().to_string())?,
+                target_coeffs: tgt_model
+                    .encode(&tgt)
+                    .with_context(|| t.display().to_string())?,
                 source_disp: src.displacements,
                 target_disp: tgt.displacements,
                 pairs: corr.pairs,
@@ -93,13 +120,29 @@ fn main() -> ExitCode {
         }
         let opts = GprOptions {
             noise_var: args.noise_var,
-            cg: gp::optim::CgOptions { max_iter: args.max_iter, ..Default::default() },
+            cg: gp::optim::CgOptions {
+                max_iter: args.max_iter,
+                ..Default::default()
+            },
             ..Default::default()
         };
         let ratio = args.target_fps / args.source_fps;
         let start = std::time::Instant::now();
-        let model: GprModel = train(method, &names, &pairs, ratio, args.keyposes_only, &opts)?;
-        mesh_core::info!("trained {} on {} pairs in {:.3} s", method.name(), model.n_train, start.elapsed().as_secs_f64());
+        let model: GprModel = train(
+            method,
+            args.nn_bias,
+            &names,
+            &pairs,
+            ratio,
+            args.keyposes_only,
+            &opts,
+        )?;
+        mesh_core::info!(
+            "trained {} on {} pairs in {:.3} s",
+            method.name(),
+            model.n_train,
+            start.elapsed().as_secs_f64()
+        );
         for r in &model.reports {
             mesh_core::info!("{}", r.line());
             for n in &r.notes {
@@ -110,7 +153,7 @@ fn main() -> ExitCode {
             .common
             .header("gpr-train", env!("CARGO_PKG_VERSION"))
             .with_params(&serde_json::json!({
-                "method": method.name(), "keyposes_only": args.keyposes_only, "noise_var": args.noise_var,
+                "method": method.name(), "nn_bias": args.nn_bias, "keyposes_only": args.keyposes_only, "noise_var": args.noise_var,
                 "reverse": args.reverse, "source_fps": args.source_fps, "target_fps": args.target_fps,
             }))?
             .with_input(&args.source_pca)?

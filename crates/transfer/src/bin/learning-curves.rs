@@ -53,6 +53,9 @@ struct Args {
     /// Number of training-subset sizes
     #[arg(long, default_value_t = 6)]
     steps: usize,
+    /// Neural-network kernel with the bias input (R&W eq. 4.29); eq. 10 as printed has none, which limits the GP to odd functions
+    #[arg(long)]
+    nn_bias: bool,
     /// Observation-noise variance σn²
     #[arg(long, default_value_t = PAPER_NOISE_VAR)]
     noise_var: f64,
@@ -69,15 +72,30 @@ fn main() -> ExitCode {
     run_stage("learning-curves", || {
         args.common.init()?;
         let load = |p: &PathBuf| PcaModel::load(p);
-        let (sp, tp, sw, tw) = (load(&args.source_pca)?, load(&args.target_pca)?, load(&args.source_whole)?, load(&args.target_whole)?);
+        let (sp, tp, sw, tw) = (
+            load(&args.source_pca)?,
+            load(&args.target_pca)?,
+            load(&args.source_whole)?,
+            load(&args.target_whole)?,
+        );
         let names: Vec<String> = sp.parts.iter().map(|p| p.name.clone()).collect();
         if tp.parts.iter().map(|p| &p.name).ne(names.iter()) {
-            bail!("{}: the part names differ from the source's {:?}", args.target_pca.display(), names);
+            bail!(
+                "{}: the part names differ from the source's {:?}",
+                args.target_pca.display(),
+                names
+            );
         }
         let (mut parts, mut whole) = (Vec::new(), Vec::new());
         for chunk in args.pair.chunks(3) {
-            let [s, t, c] = chunk else { bail!("--pair takes three files") };
-            let (src, tgt, corr) = (AlignedMotion::load(s)?, AlignedMotion::load(t)?, Correspondences::load(c)?);
+            let [s, t, c] = chunk else {
+                bail!("--pair takes three files")
+            };
+            let (src, tgt, corr) = (
+                AlignedMotion::load(s)?,
+                AlignedMotion::load(t)?,
+                Correspondences::load(c)?,
+            );
             for (out, spca, tpca) in [(&mut parts, &sp, &tp), (&mut whole, &sw, &tw)] {
                 out.push(PairData {
                     source_coeffs: spca.encode(&src).with_context(|| s.display().to_string())?,
@@ -91,12 +109,17 @@ fn main() -> ExitCode {
         }
         let opts = GprOptions {
             noise_var: args.noise_var,
-            cg: gp::optim::CgOptions { max_iter: args.max_iter, ..Default::default() },
+            cg: gp::optim::CgOptions {
+                max_iter: args.max_iter,
+                ..Default::default()
+            },
             ..Default::default()
         };
         let n_keys = parts.iter().map(|p| p.keyposes.len()).sum::<usize>();
         let n_rows = parts.iter().map(|p| p.pairs.len()).sum::<usize>();
-        let train_max = args.max_train.min(n_rows - (n_rows.saturating_sub(n_keys) as f64 * 0.3).round() as usize);
+        let train_max = args
+            .max_train
+            .min(n_rows - (n_rows.saturating_sub(n_keys) as f64 * 0.3).round() as usize);
         let train_sizes = sizes(n_keys.max(10), train_max, args.steps);
         let forward = DirectionData {
             label: format!("{}->{}", args.source_name, args.target_name),
@@ -119,8 +142,19 @@ fn main() -> ExitCode {
         let mut points = Vec::new();
         for d in [&forward, &reverse] {
             let t = std::time::Instant::now();
-            points.extend(run_direction(d, &train_sizes, &opts, args.common.seed)?);
-            mesh_core::info!("{}: sizes {:?} in {:.1} s", d.label, train_sizes, t.elapsed().as_secs_f64());
+            points.extend(run_direction(
+                d,
+                &train_sizes,
+                args.nn_bias,
+                &opts,
+                args.common.seed,
+            )?);
+            mesh_core::info!(
+                "{}: sizes {:?} in {:.1} s",
+                d.label,
+                train_sizes,
+                t.elapsed().as_secs_f64()
+            );
         }
         std::fs::create_dir_all(&args.out).with_context(|| args.out.display().to_string())?;
         let plots = plot_all(&args.out, &points)?;

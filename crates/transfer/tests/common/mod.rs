@@ -32,12 +32,26 @@ pub struct Body {
 
 pub fn body_a() -> Body {
     let (mesh, l) = capsule_body(60, 24, 0.15, 1.6);
-    Body { mesh, height: 1.6, near: l.ring(l.body_ring(25)), far: l.ring(l.body_ring(35)), pivot: 1.6 * 25.0 / 59.0, fps: 25.0 }
+    Body {
+        mesh,
+        height: 1.6,
+        near: l.ring(l.body_ring(25)),
+        far: l.ring(l.body_ring(35)),
+        pivot: 1.6 * 25.0 / 59.0,
+        fps: 25.0,
+    }
 }
 
 pub fn body_b() -> Body {
     let (mesh, l) = capsule_body(50, 20, 0.2, 1.9);
-    Body { mesh, height: 1.9, near: l.ring(l.body_ring(20)), far: l.ring(l.body_ring(30)), pivot: 1.9 * 20.0 / 49.0, fps: 50.0 }
+    Body {
+        mesh,
+        height: 1.9,
+        near: l.ring(l.body_ring(20)),
+        far: l.ring(l.body_ring(30)),
+        pivot: 1.9 * 20.0 / 49.0,
+        fps: 50.0,
+    }
 }
 
 /// A motion's latent trajectory: bend angle, bulge, heading rate, speed.
@@ -84,28 +98,96 @@ pub fn pose(body: &Body, theta: f64, phi: f64) -> Vec<Vector3<f64>> {
 
 /// World pose at time `t` for a subject moving `scale` times the source's speed.
 fn world(l: &Latent, t: f64, scale: f64) -> RigidMotion {
-    RigidMotion::new(so3_exp(&Vector3::new(0.0, l.omega * t, 0.0)), Vector3::new(l.speed * scale * t, 0.0, 0.3 * l.speed * scale * t))
+    RigidMotion::new(
+        so3_exp(&Vector3::new(0.0, l.omega * t, 0.0)),
+        Vector3::new(l.speed * scale * t, 0.0, 0.3 * l.speed * scale * t),
+    )
 }
 
 /// Frames of `body` performing `l` in its style (`target` or not) at times `times`.
-pub fn frames(body: &Body, l: &Latent, times: &[f64], target: bool, scale: f64) -> Vec<Vec<Vector3<f64>>> {
+pub fn frames(
+    body: &Body,
+    l: &Latent,
+    times: &[f64],
+    target: bool,
+    scale: f64,
+) -> Vec<Vec<Vector3<f64>>> {
     times
         .iter()
         .map(|&t| {
             let (th, ph) = (l.theta(t), l.phi(t));
-            let (th, ph) = if target { (1.2 * th + 0.25 * th * th, 0.8 * ph) } else { (th, ph) };
+            let (th, ph) = if target {
+                (1.2 * th + 0.25 * th * th, 0.8 * ph)
+            } else {
+                (th, ph)
+            };
             world(l, t, scale).apply_all(&pose(body, th, ph))
         })
         .collect()
 }
 
 pub const TRAIN: [(&str, Latent); 4] = [
-    ("walk", Latent { a: 0.6, f: 1.0, p: 0.0, b: 0.5, g: 1.0, omega: 0.0, speed: 1.0 }),
-    ("run", Latent { a: 0.9, f: 1.6, p: 0.5, b: -0.6, g: 0.7, omega: 0.3, speed: 2.0 }),
-    ("wave", Latent { a: 1.1, f: 0.8, p: 1.0, b: 0.8, g: 1.3, omega: -0.4, speed: 0.3 }),
-    ("turn", Latent { a: 0.4, f: 1.2, p: 2.0, b: -0.3, g: 0.5, omega: 1.0, speed: 0.6 }),
+    (
+        "walk",
+        Latent {
+            a: 0.6,
+            f: 1.0,
+            p: 0.0,
+            b: 0.5,
+            g: 1.0,
+            omega: 0.0,
+            speed: 1.0,
+        },
+    ),
+    (
+        "run",
+        Latent {
+            a: 0.9,
+            f: 1.6,
+            p: 0.5,
+            b: -0.6,
+            g: 0.7,
+            omega: 0.3,
+            speed: 2.0,
+        },
+    ),
+    (
+        "wave",
+        Latent {
+            a: 1.1,
+            f: 0.8,
+            p: 1.0,
+            b: 0.8,
+            g: 1.3,
+            omega: -0.4,
+            speed: 0.3,
+        },
+    ),
+    (
+        "turn",
+        Latent {
+            a: 0.4,
+            f: 1.2,
+            p: 2.0,
+            b: -0.3,
+            g: 0.5,
+            omega: 1.0,
+            speed: 0.6,
+        },
+    ),
 ];
-pub const TEST: (&str, Latent) = ("probe", Latent { a: 0.8, f: 1.1, p: 0.7, b: 0.4, g: 0.9, omega: 0.2, speed: 1.2 });
+pub const TEST: (&str, Latent) = (
+    "probe",
+    Latent {
+        a: 0.8,
+        f: 1.1,
+        p: 0.7,
+        b: 0.4,
+        g: 0.9,
+        omega: 0.2,
+        speed: 1.2,
+    },
+);
 
 /// Source frames (frame `i` at `i / 25` s): 31 per motion; target 61 (`j = 2 i`).
 pub const N_SOURCE: usize = 31;
@@ -117,11 +199,17 @@ pub fn write_set(dir: &Path) {
     let ts: Vec<f64> = (0..N_SOURCE).map(|i| i as f64 / a.fps).collect();
     let tt: Vec<f64> = (0..2 * N_SOURCE - 1).map(|j| j as f64 / b.fps).collect();
     for (name, l) in TRAIN {
-        MeshSequence::new(a.mesh.faces.clone(), frames(&a, &l, &ts, false, 1.0)).write_dir(dir.join("A").join(name)).unwrap();
-        MeshSequence::new(b.mesh.faces.clone(), frames(&b, &l, &tt, true, ratio)).write_dir(dir.join("B").join(name)).unwrap();
+        MeshSequence::new(a.mesh.faces.clone(), frames(&a, &l, &ts, false, 1.0))
+            .write_dir(dir.join("A").join(name))
+            .unwrap();
+        MeshSequence::new(b.mesh.faces.clone(), frames(&b, &l, &tt, true, ratio))
+            .write_dir(dir.join("B").join(name))
+            .unwrap();
     }
     let (name, l) = TEST;
-    MeshSequence::new(a.mesh.faces.clone(), frames(&a, &l, &ts, false, 1.0)).write_dir(dir.join("A").join(name)).unwrap();
+    MeshSequence::new(a.mesh.faces.clone(), frames(&a, &l, &ts, false, 1.0))
+        .write_dir(dir.join("A").join(name))
+        .unwrap();
     MeshSequence::new(b.mesh.faces.clone(), frames(&b, &l, &ts, true, ratio))
         .write_dir(dir.join("truth").join("B").join(name))
         .unwrap();
