@@ -29,10 +29,6 @@ fn view_mut(a: &mut DMatrix<f64>) -> MatMut<'_, f64> {
     MatMut::from_column_major_slice_mut(a.as_mut_slice(), r, c)
 }
 
-fn to_nalgebra(m: MatRef<'_, f64>) -> DMatrix<f64> {
-    DMatrix::from_fn(m.nrows(), m.ncols(), |i, j| m[(i, j)])
-}
-
 impl Cholesky {
     /// Factorises the symmetric matrix `a` (only its lower triangle is read). If the plain
     /// factorisation fails, retries with `jitter = c * mean(diag a)` for `c` in 1e-10..1e-3,
@@ -107,7 +103,12 @@ impl Cholesky {
     /// `tr(A⁻¹ ∂A/∂θ)`), never to solve a system.
     pub fn inverse_elements(&self) -> DMatrix<f64> {
         let inv: Mat<f64> = self.llt.inverse();
-        to_nalgebra(inv.as_ref())
+        let n = inv.nrows();
+        let mut out = DMatrix::zeros(n, n);
+        for (j, col) in out.as_mut_slice().chunks_exact_mut(n.max(1)).enumerate() {
+            col.copy_from_slice(inv.col_as_slice(j));
+        }
+        out
     }
 }
 

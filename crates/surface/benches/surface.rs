@@ -134,11 +134,6 @@ fn benches(c: &mut Criterion) {
     c.bench_function("poisson_refactor_13k", |b| {
         b.iter(|| solver.refactor(&l, &[0]).unwrap())
     });
-    faer::set_global_parallelism(faer::Par::rayon(2));
-    c.bench_function("poisson_refactor_13k_par2", |b| b.iter(|| solver.refactor(&l, &[0]).unwrap()));
-    faer::set_global_parallelism(faer::Par::Seq);
-    c.bench_function("poisson_refactor_13k_again", |b| b.iter(|| solver.refactor(&l, &[0]).unwrap()));
-    if std::env::var("ONLY_PAR").is_ok() { return; }
     c.bench_function("poisson_symbolic_and_factor_13k", |b| {
         b.iter(|| PoissonSolver::new(&l, &[0]).unwrap())
     });

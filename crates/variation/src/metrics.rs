@@ -20,6 +20,11 @@ pub fn mean_vertex_distance(a: &[Vec<Vector3<f64>>], b: &[Vec<Vector3<f64>>]) ->
     s / n as f64
 }
 
+/// Frames rigidly aligned to `template` (pose only: no travel, no heading).
+pub fn normalise(frames: &[Vec<Vector3<f64>>], template: &[Vector3<f64>]) -> Vec<Vec<Vector3<f64>>> {
+    frames.iter().map(|f| procrustes(f, template, None).apply_all(f)).collect()
+}
+
 /// Mean per-vertex distance between rows of two pose matrices (rows `(x, y, z, ...)`), ignoring
 /// columns beyond `3 × n_vertices`.
 pub fn mean_row_distance(a: &DMatrix<f64>, b: &DMatrix<f64>, n_vertices: usize) -> f64 {
@@ -36,10 +41,7 @@ pub fn mean_row_distance(a: &DMatrix<f64>, b: &DMatrix<f64>, n_vertices: usize) 
 /// Timing offset in frames: mean `|i − j|` along the DTW path between the two sequences' poses
 /// (each frame rigidly aligned to `template` first, so travel does not count).
 pub fn timing_offset(a: &[Vec<Vector3<f64>>], b: &[Vec<Vector3<f64>>], template: &[Vector3<f64>]) -> f64 {
-    let norm = |s: &[Vec<Vector3<f64>>]| -> Vec<Vec<Vector3<f64>>> {
-        s.iter().map(|f| procrustes(f, template, None).apply_all(f)).collect()
-    };
-    let (a, b) = (norm(a), norm(b));
+    let (a, b) = (normalise(a, template), normalise(b, template));
     let cost = crate::prealign::pose_cost(&a, &b, 400);
     match dtw_path(&cost, &[], &DtwOptions::default()) {
         Ok(p) => p.iter().map(|&(i, j)| (i as f64 - j as f64).abs()).sum::<f64>() / p.len().max(1) as f64,
@@ -83,6 +85,9 @@ pub fn edge_distortion(frames: &[Vec<Vector3<f64>>], rest: &[Vector3<f64>], edge
 /// lowest template vertex along `up` (left first if named `*_l`).
 pub fn soles(parts: &[PartDef], template: &[Vector3<f64>], up: &Vector3<f64>, tol: f64) -> Vec<Vec<u32>> {
     let mut legs: Vec<&PartDef> = parts.iter().filter(|p| p.name.starts_with("leg")).collect();
+    if legs.is_empty() {
+        return split_soles(template, up, tol);
+    }
     legs.sort_by_key(|p| !p.name.ends_with('l'));
     legs.iter()
         .map(|p| {
@@ -91,6 +96,27 @@ pub fn soles(parts: &[PartDef], template: &[Vector3<f64>], up: &Vector3<f64>, to
             p.vertices.iter().copied().filter(|&v| h(v) <= lo + tol).collect()
         })
         .collect()
+}
+
+/// Without leg parts: the template vertices within `tol` of the lowest, split in two by the
+/// horizontal axis along which they spread most (the feet stand apart).
+fn split_soles(template: &[Vector3<f64>], up: &Vector3<f64>, tol: f64) -> Vec<Vec<u32>> {
+    let lo = template.iter().map(|p| p.dot(up)).fold(f64::INFINITY, f64::min);
+    let low: Vec<u32> = (0..template.len() as u32).filter(|&v| template[v as usize].dot(up) <= lo + tol).collect();
+    if low.is_empty() {
+        return Vec::new();
+    }
+    let c = low.iter().map(|&v| template[v as usize]).sum::<Vector3<f64>>() / low.len() as f64;
+    let axes = [Vector3::x(), Vector3::y(), Vector3::z()];
+    let spread = |a: &Vector3<f64>| low.iter().map(|&v| (template[v as usize] - c).dot(a).powi(2)).sum::<f64>();
+    let axis = axes
+        .iter()
+        .filter(|a| a.dot(up).abs() < 0.5)
+        .max_by(|a, b| spread(a).total_cmp(&spread(b)))
+        .copied()
+        .unwrap_or(Vector3::x());
+    let (l, r): (Vec<u32>, Vec<u32>) = low.iter().partition(|&&v| (template[v as usize] - c).dot(&axis) > 0.0);
+    vec![l, r]
 }
 
 /// Foot sliding (m per frame): mean horizontal motion of each sole's centroid between

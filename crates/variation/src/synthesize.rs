@@ -42,8 +42,10 @@ pub struct SequenceReport {
     pub label: String,
     pub blend: Option<f64>,
     pub frames: usize,
-    /// Mean per-vertex distance of each variation to the source (m).
+    /// Mean per-vertex distance of each variation to the source, world coordinates (m).
     pub distance_to_source_m: Vec<f64>,
+    /// The same after rigidly aligning every frame to the template: pose only (m).
+    pub pose_distance_to_source_m: Vec<f64>,
     /// Mean |i − j| along the DTW path between variation and source (frames).
     pub timing_offset_frames: Vec<f64>,
     /// Mean per-vertex distance between pairs of variations (m).
@@ -79,7 +81,8 @@ fn measure(
     let edges = metrics::edges(&model.faces);
     let soles = metrics::soles(&model.parts.iter().map(|p| p.part.clone()).collect::<Vec<_>>(), &model.template, &model.up, 0.015);
     let slide = |f: &[Vec<Vector3<f64>>]| metrics::foot_sliding(f, &soles, &model.up, 0.02);
-    let per: Vec<(f64, f64, f64, Option<f64>)> = vars
+    let source_pose = metrics::normalise(source, &model.template);
+    let per: Vec<(f64, f64, f64, Option<f64>, f64)> = vars
         .par_iter()
         .map(|v| {
             (
@@ -87,6 +90,7 @@ fn measure(
                 metrics::timing_offset(v, source, &model.template),
                 metrics::edge_distortion(v, &model.template, &edges),
                 slide(v),
+                metrics::mean_vertex_distance(&metrics::normalise(v, &model.template), &source_pose),
             )
         })
         .collect();
@@ -101,6 +105,7 @@ fn measure(
         blend,
         frames: source.len(),
         distance_to_source_m: per.iter().map(|p| p.0).collect(),
+        pose_distance_to_source_m: per.iter().map(|p| p.4).collect(),
         timing_offset_frames: per.iter().map(|p| p.1).collect(),
         pairwise_distance_m: Stats::of(&pair),
         edge_distortion: per.iter().map(|p| p.2).collect(),
