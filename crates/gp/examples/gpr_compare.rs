@@ -2,7 +2,7 @@
 //! prediction on synthetic pairs, and optionally dumps every problem as CSV with our results
 //! for `scripts/compare/gpr_gpy.py`.
 //!
-//! Usage: `gpr_compare [--pairs N] [--kernel nn|se|linear] [--dump DIR] [--grad-tol X]`
+//! Usage: `gpr_compare [--pairs N] [--kernel nn|se|linear] [--dump DIR] [--grad-tol X] [--c2 X] [--max-step X]`
 //! e.g.: `OPENBLAS_NUM_THREADS=1 cargo run --release -p gp --example gpr_compare -- --pairs 1100 --dump /tmp/gpr1100`
 #[path = "../benches/synthetic_pairs.rs"]
 mod synthetic_pairs;
@@ -52,6 +52,12 @@ fn main() {
     let mut opts = GprOptions::default();
     if let Some(v) = get("--grad-tol") {
         opts.cg.grad_tol = v.parse().expect("--grad-tol X");
+    }
+    if let Some(v) = get("--c2") {
+        opts.cg.c2 = v.parse().expect("--c2 X");
+    }
+    if let Some(v) = get("--max-step") {
+        opts.cg.max_step = v.parse().expect("--max-step X");
     }
     let problems = synthetic_pairs::both_directions(n, 7);
     let t0 = Instant::now();

@@ -95,7 +95,11 @@ impl Cholesky {
     /// The lower-triangular factor `L` as an nalgebra matrix.
     pub fn lower(&self) -> DMatrix<f64> {
         let l = self.llt.L();
-        DMatrix::from_fn(l.nrows(), l.ncols(), |i, j| if i >= j { l[(i, j)] } else { 0.0 })
+        DMatrix::from_fn(
+            l.nrows(),
+            l.ncols(),
+            |i, j| if i >= j { l[(i, j)] } else { 0.0 },
+        )
     }
 
     /// `A⁻¹` from the factor (`L⁻ᵀ L⁻¹`, LAPACK `potri`). Only used where the *elements* of
