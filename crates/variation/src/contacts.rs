@@ -14,14 +14,22 @@ pub type Contacts = Vec<[bool; 2]>;
 /// Contacts of `motion` from `spec`'s `contacts` field; `None` when the motion is not annotated.
 /// `n_frames` is the motion's frame count: an annotation of another length is an error.
 pub fn from_subject(spec: &SubjectSpec, motion: &str, n_frames: usize) -> Result<Option<Contacts>> {
-    let Some(all) = spec.extra.get("contacts") else { return Ok(None) };
-    let Some(obj) = all.as_object() else {
-        return Err(Error::invalid("\"contacts\" must be an object {motion: [[left, right], ...]}"));
+    let Some(all) = spec.extra.get("contacts") else {
+        return Ok(None);
     };
-    let Some(list) = obj.get(motion) else { return Ok(None) };
-    let frames = list
-        .as_array()
-        .ok_or_else(|| Error::invalid(format!("contacts of '{motion}' must be a list of [left, right] pairs")))?;
+    let Some(obj) = all.as_object() else {
+        return Err(Error::invalid(
+            "\"contacts\" must be an object {motion: [[left, right], ...]}",
+        ));
+    };
+    let Some(list) = obj.get(motion) else {
+        return Ok(None);
+    };
+    let frames = list.as_array().ok_or_else(|| {
+        Error::invalid(format!(
+            "contacts of '{motion}' must be a list of [left, right] pairs"
+        ))
+    })?;
     if frames.len() != n_frames {
         return Err(Error::invalid(format!(
             "contacts of '{motion}' list {} frames but the motion has {n_frames}",
@@ -43,9 +51,13 @@ pub fn from_subject(spec: &SubjectSpec, motion: &str, n_frames: usize) -> Result
         .map(|(i, f)| match f.as_array().map(|p| p.as_slice()) {
             Some([l, r]) => match (flag(l), flag(r)) {
                 (Some(l), Some(r)) => Ok([l, r]),
-                _ => Err(Error::invalid(format!("contacts of '{motion}', frame {i}: flags must be 0/1 or true/false"))),
+                _ => Err(Error::invalid(format!(
+                    "contacts of '{motion}', frame {i}: flags must be 0/1 or true/false"
+                ))),
             },
-            _ => Err(Error::invalid(format!("contacts of '{motion}', frame {i}: expected [left, right]"))),
+            _ => Err(Error::invalid(format!(
+                "contacts of '{motion}', frame {i}: expected [left, right]"
+            ))),
         })
         .collect::<Result<Contacts>>()
         .map(Some)

@@ -86,11 +86,21 @@ fn decode_rows(dec: &Decoder, latents: &[DMatrix<f64>]) -> Result<Vec<DMatrix<f6
 
 fn weighted(model: &VariationModel, per_part: &[f64]) -> f64 {
     let n: usize = (0..model.parts.len()).map(|k| vertex_count(model, k)).sum();
-    per_part.iter().enumerate().map(|(k, e)| e * vertex_count(model, k) as f64).sum::<f64>() / n.max(1) as f64
+    per_part
+        .iter()
+        .enumerate()
+        .map(|(k, e)| e * vertex_count(model, k) as f64)
+        .sum::<f64>()
+        / n.max(1) as f64
 }
 
 /// Runs the evaluation; plots go to `plots` (if given).
-pub fn evaluate(model: &VariationModel, group: &Group, plots: Option<&Path>, seed: u64) -> Result<EvalReport> {
+pub fn evaluate(
+    model: &VariationModel,
+    group: &Group,
+    plots: Option<&Path>,
+    seed: u64,
+) -> Result<EvalReport> {
     let mut notes = Vec::new();
     let dec = Decoder::new(model, &mut notes)?;
     let d = model.parts[0].gpdm.config.latent_dim;
@@ -102,10 +112,14 @@ pub fn evaluate(model: &VariationModel, group: &Group, plots: Option<&Path>, see
         for mut row in y.row_iter_mut() {
             row += g.y_mean.transpose();
         }
-        let rec = dec.predictors[k].pose_mean(&g.x).map_err(|e| Error::invalid(e.to_string()))?;
+        let rec = dec.predictors[k]
+            .pose_mean(&g.x)
+            .map_err(|e| Error::invalid(e.to_string()))?;
         let nv = vertex_count(model, k);
         let pca = Pca::fit(&y, Components::Count(d)).map_err(|e| Error::invalid(e.to_string()))?;
-        let pr = pca.decode(&pca.encode(&y).map_err(|e| Error::invalid(e.to_string()))?).map_err(|e| Error::invalid(e.to_string()))?;
+        let pr = pca
+            .decode(&pca.encode(&y).map_err(|e| Error::invalid(e.to_string()))?)
+            .map_err(|e| Error::invalid(e.to_string()))?;
         reconstruction.push(ReconstructionError {
             part: pm.part.name.clone(),
             vertices: nv,
@@ -113,28 +127,47 @@ pub fn evaluate(model: &VariationModel, group: &Group, plots: Option<&Path>, see
             pca_m: mean_row_distance(&pr, &y, nv),
         });
     }
-    let reconstruction_gpdm_m = weighted(model, &reconstruction.iter().map(|r| r.gpdm_m).collect::<Vec<_>>());
-    let reconstruction_pca_m = weighted(model, &reconstruction.iter().map(|r| r.pca_m).collect::<Vec<_>>());
+    let reconstruction_gpdm_m = weighted(
+        model,
+        &reconstruction.iter().map(|r| r.gpdm_m).collect::<Vec<_>>(),
+    );
+    let reconstruction_pca_m = weighted(
+        model,
+        &reconstruction.iter().map(|r| r.pca_m).collect::<Vec<_>>(),
+    );
 
     // Fig. 7b.
     let mut latent_blend = Vec::new();
     if let Some((a, b)) = model.pair {
         let learned: Vec<(f64, usize)> = {
             let mut v = vec![(0.0, a), (1.0, b)];
-            v.extend(model.sequences.iter().enumerate().filter_map(|(i, s)| s.blend.map(|w| (w, i))));
+            v.extend(
+                model
+                    .sequences
+                    .iter()
+                    .enumerate()
+                    .filter_map(|(i, s)| s.blend.map(|w| (w, i))),
+            );
             v.sort_by(|x, y| x.0.total_cmp(&y.0));
             v
         };
         let blender = surface::blend::Blender::new(group.template.clone(), group.faces.clone())?;
         for w in [0.25, 0.75] {
-            let i2 = learned.iter().position(|&(v, _)| v > w).unwrap_or(learned.len() - 1);
+            let i2 = learned
+                .iter()
+                .position(|&(v, _)| v > w)
+                .unwrap_or(learned.len() - 1);
             let (lo, hi) = (learned[i2 - 1], learned[i2]);
             let truth = blend_sequences(&blender, &group.sequences[a], &group.sequences[b], w)?;
             let xa = model.latents(a);
             let xb = model.latents(b);
             let (xl, xh) = (model.latents(lo.1), model.latents(hi.1));
-            let guided: Vec<DMatrix<f64>> = (0..model.parts.len()).map(|k| blend_pair(&xl[k], lo.0, &xh[k], hi.0, w)).collect();
-            let unguided: Vec<DMatrix<f64>> = (0..model.parts.len()).map(|k| &xa[k] * (1.0 - w) + &xb[k] * w).collect();
+            let guided: Vec<DMatrix<f64>> = (0..model.parts.len())
+                .map(|k| blend_pair(&xl[k], lo.0, &xh[k], hi.0, w))
+                .collect();
+            let unguided: Vec<DMatrix<f64>> = (0..model.parts.len())
+                .map(|k| &xa[k] * (1.0 - w) + &xb[k] * w)
+                .collect();
             let (rg, ru) = (decode_rows(&dec, &guided)?, decode_rows(&dec, &unguided)?);
             let t_n = truth.motion.n_frames();
             let mut gpf = vec![0.0; t_n];
@@ -145,7 +178,13 @@ pub fn evaluate(model: &VariationModel, group: &Group, plots: Option<&Path>, see
                 let yt = part_data::part_rows(&truth.motion, &pm.part, &r);
                 let nv = vertex_count(model, k);
                 for t in 0..t_n {
-                    let one = |m: &DMatrix<f64>| mean_row_distance(&m.rows(t, 1).into_owned(), &yt.rows(t, 1).into_owned(), nv);
+                    let one = |m: &DMatrix<f64>| {
+                        mean_row_distance(
+                            &m.rows(t, 1).into_owned(),
+                            &yt.rows(t, 1).into_owned(),
+                            nv,
+                        )
+                    };
                     gpf[t] += one(&rg[k]) * nv as f64 / total as f64;
                     upf[t] += one(&ru[k]) * nv as f64 / total as f64;
                 }
@@ -169,8 +208,12 @@ pub fn evaluate(model: &VariationModel, group: &Group, plots: Option<&Path>, see
         let mut per = Vec::new();
         for (k, pm) in model.parts.iter().enumerate() {
             let x1: Vec<f64> = lat[k].row(0).iter().copied().collect();
-            let xm = dec.predictors[k].mean_trajectory(&x1, lat[k].nrows()).map_err(|e| Error::invalid(e.to_string()))?;
-            let rec = dec.predictors[k].pose_mean(&xm).map_err(|e| Error::invalid(e.to_string()))?;
+            let xm = dec.predictors[k]
+                .mean_trajectory(&x1, lat[k].nrows())
+                .map_err(|e| Error::invalid(e.to_string()))?;
+            let rec = dec.predictors[k]
+                .pose_mean(&xm)
+                .map_err(|e| Error::invalid(e.to_string()))?;
             let start: usize = pm.gpdm.seq_lens[..s].iter().sum();
             let mut y = pm.gpdm.y.rows(start, lat[k].nrows()).into_owned();
             for mut row in y.row_iter_mut() {
@@ -178,7 +221,10 @@ pub fn evaluate(model: &VariationModel, group: &Group, plots: Option<&Path>, see
             }
             per.push(mean_row_distance(&rec, &y, vertex_count(model, k)));
         }
-        mean_prediction.push(MeanPrediction { sequence: info.name.clone(), error_m: weighted(model, &per) });
+        mean_prediction.push(MeanPrediction {
+            sequence: info.name.clone(),
+            error_m: weighted(model, &per),
+        });
     }
 
     // Figs. 3 and 5.
@@ -186,19 +232,46 @@ pub fn evaluate(model: &VariationModel, group: &Group, plots: Option<&Path>, see
     if let Some(dir) = plots {
         std::fs::create_dir_all(dir).map_err(|e| Error::io(dir, e))?;
         for (k, pm) in model.parts.iter().enumerate() {
-            let series: Vec<(String, DMatrix<f64>)> =
-                model.sequences.iter().enumerate().map(|(s, i)| (i.name.clone(), model.latents(s)[k].clone())).collect();
+            let series: Vec<(String, DMatrix<f64>)> = model
+                .sequences
+                .iter()
+                .enumerate()
+                .map(|(s, i)| (i.name.clone(), model.latents(s)[k].clone()))
+                .collect();
             let p = dir.join(format!("fig3-latent-{}.png", pm.part.name));
-            crate::plots::latent_plot(&p, &format!("{}: learned latent trajectories ({})", model.group, pm.part.name), &series)?;
+            crate::plots::latent_plot(
+                &p,
+                &format!(
+                    "{}: learned latent trajectories ({})",
+                    model.group, pm.part.name
+                ),
+                &series,
+            )?;
             written.push(p.display().to_string());
         }
-        let hmc = HmcOptions { n_samples: 20, burn_in: 200, thin: 10, seed, ..HmcOptions::default() };
+        let hmc = HmcOptions {
+            n_samples: 20,
+            burn_in: 200,
+            thin: 10,
+            seed,
+            ..HmcOptions::default()
+        };
         let (vars, _) = sequence_variations(&dec, 0, &hmc)?;
-        let series: Vec<(String, DMatrix<f64>)> = vars.iter().enumerate().map(|(i, v)| (format!("var{i}"), v[0].clone())).collect();
-        let p = dir.join(format!("fig5-variations-{}-{}.png", model.sequences[0].name, model.parts[0].part.name));
+        let series: Vec<(String, DMatrix<f64>)> = vars
+            .iter()
+            .enumerate()
+            .map(|(i, v)| (format!("var{i}"), v[0].clone()))
+            .collect();
+        let p = dir.join(format!(
+            "fig5-variations-{}-{}.png",
+            model.sequences[0].name, model.parts[0].part.name
+        ));
         crate::plots::latent_plot(
             &p,
-            &format!("{}: 20 HMC variations of {} ({})", model.group, model.sequences[0].name, model.parts[0].part.name),
+            &format!(
+                "{}: 20 HMC variations of {} ({})",
+                model.group, model.sequences[0].name, model.parts[0].part.name
+            ),
             &series,
         )?;
         written.push(p.display().to_string());

@@ -106,8 +106,11 @@ pub fn build(set: &CaptureSet, spec: &GroupSpec) -> Result<(Group, Vec<String>)>
     let subject_spec = SubjectSpec::load(set.subject_json(&spec.subject))?;
     let template = &mesh_core::io::read_mesh(set.template_path(&spec.subject, &subject_spec)?)?;
     let available = set.motions(&spec.subject)?;
-    let (present, skipped): (Vec<String>, Vec<String>) =
-        spec.motions.iter().cloned().partition(|m| available.contains(m));
+    let (present, skipped): (Vec<String>, Vec<String>) = spec
+        .motions
+        .iter()
+        .cloned()
+        .partition(|m| available.contains(m));
     if present.is_empty() {
         return Err(Error::invalid(format!(
             "group '{}': none of the motions {:?} exists for subject {}",
@@ -116,37 +119,61 @@ pub fn build(set: &CaptureSet, spec: &GroupSpec) -> Result<(Group, Vec<String>)>
     }
     let reference = spec.reference.clone().unwrap_or_else(|| present[0].clone());
     if !present.contains(&reference) {
-        return Err(Error::invalid(format!("group '{}': reference motion '{reference}' is not in the group", spec.name)));
+        return Err(Error::invalid(format!(
+            "group '{}': reference motion '{reference}' is not in the group",
+            spec.name
+        )));
     }
     for &w in &spec.blend_weights {
         if !(w > 0.0 && w < 1.0) {
-            return Err(Error::invalid(format!("blend weight {w} must lie strictly between 0 and 1")));
+            return Err(Error::invalid(format!(
+                "blend weight {w} must lie strictly between 0 and 1"
+            )));
         }
     }
     let mut loaded = Vec::new();
     for m in &present {
         let dir = set.motion_dir(&spec.subject, m);
         let seq = MeshSequence::load_dir(&dir)?;
-        let aligned = align_motion(template, &seq).map_err(|e| Error::invalid(format!("{}: {e}", dir.display())))?;
+        let aligned = align_motion(template, &seq)
+            .map_err(|e| Error::invalid(format!("{}: {e}", dir.display())))?;
         let c = contacts::from_subject(&subject_spec, m, aligned.n_frames())
             .map_err(|e| Error::file(set.subject_json(&spec.subject), e.to_string()))?;
         loaded.push((m.clone(), aligned, c));
     }
-    let r = present.iter().position(|m| *m == reference).expect("checked");
+    let r = present
+        .iter()
+        .position(|m| *m == reference)
+        .expect("checked");
     let (ref_frames, ref_contacts) = (loaded[r].1.frames.clone(), loaded[r].2.clone());
     let mut sequences = Vec::new();
     for (name, motion, c) in loaded {
         let map: Vec<usize> = if name == reference {
             (0..motion.n_frames()).collect()
         } else {
-            warp(&motion.frames, c.as_ref(), &ref_frames, ref_contacts.as_ref(), &spec.prealign)
-                .map_err(|e| Error::invalid(format!("{name}: {e}")))?
-                .map
+            warp(
+                &motion.frames,
+                c.as_ref(),
+                &ref_frames,
+                ref_contacts.as_ref(),
+                &spec.prealign,
+            )
+            .map_err(|e| Error::invalid(format!("{name}: {e}")))?
+            .map
         };
         let contacts = c.as_ref().map(|c| apply_contacts(c, &map));
-        sequences.push(GroupSequence { name, blend: None, motion: apply(&motion, &map), contacts, map });
+        sequences.push(GroupSequence {
+            name,
+            blend: None,
+            motion: apply(&motion, &map),
+            contacts,
+            map,
+        });
     }
-    let mut notes: Vec<String> = skipped.iter().map(|m| format!("motion '{m}' is not in the set: skipped")).collect();
+    let mut notes: Vec<String> = skipped
+        .iter()
+        .map(|m| format!("motion '{m}' is not in the set: skipped"))
+        .collect();
     let seg = if spec.whole_body {
         transfer::part_pca::whole_body(template.n_vertices())
     } else {
@@ -167,7 +194,10 @@ pub fn build(set: &CaptureSet, spec: &GroupSpec) -> Result<(Group, Vec<String>)>
         .iter()
         .map(|p| PartDef {
             name: p.name.clone(),
-            parent: p.parent.as_ref().and_then(|q| seg.parts.iter().position(|x| &x.name == q)),
+            parent: p
+                .parent
+                .as_ref()
+                .and_then(|q| seg.parts.iter().position(|x| &x.name == q)),
             vertices: p.vertices.clone(),
         })
         .collect();
@@ -196,26 +226,50 @@ pub fn build(set: &CaptureSet, spec: &GroupSpec) -> Result<(Group, Vec<String>)>
 }
 
 /// The pre-blended sequence `Y_w` of two time-aligned sequences (module doc).
-pub fn blend_sequences(blender: &surface::blend::Blender, a: &GroupSequence, b: &GroupSequence, w: f64) -> Result<GroupSequence> {
+pub fn blend_sequences(
+    blender: &surface::blend::Blender,
+    a: &GroupSequence,
+    b: &GroupSequence,
+    w: f64,
+) -> Result<GroupSequence> {
     use rayon::prelude::*;
     let n = a.motion.n_frames();
     if b.motion.n_frames() != n {
-        return Err(Error::invalid(format!("blend: {} and {} have different lengths", a.name, b.name)));
+        return Err(Error::invalid(format!(
+            "blend: {} and {} have different lengths",
+            a.name, b.name
+        )));
     }
     let frames = (0..n)
         .into_par_iter()
         .map(|t| blender.blend(&a.motion.frames[t], &b.motion.frames[t], w))
         .collect::<Result<Vec<_>>>()?;
     let disp: Vec<[f64; 6]> = (0..n)
-        .map(|t| std::array::from_fn(|k| (1.0 - w) * a.motion.displacements[t][k] + w * b.motion.displacements[t][k]))
+        .map(|t| {
+            std::array::from_fn(|k| {
+                (1.0 - w) * a.motion.displacements[t][k] + w * b.motion.displacements[t][k]
+            })
+        })
         .collect();
-    let rel: Vec<RigidMotion> = disp[1..].iter().map(|d| RigidMotion::from_6vec(&Vector6::from_row_slice(d))).collect();
+    let rel: Vec<RigidMotion> = disp[1..]
+        .iter()
+        .map(|d| RigidMotion::from_6vec(&Vector6::from_row_slice(d)))
+        .collect();
     let poses = integrate(&a.motion.poses[0], &rel);
-    let contacts = if w < 0.5 { a.contacts.clone() } else { b.contacts.clone() };
+    let contacts = if w < 0.5 {
+        a.contacts.clone()
+    } else {
+        b.contacts.clone()
+    };
     Ok(GroupSequence {
         name: blend_name(w),
         blend: Some(w),
-        motion: AlignedMotion { faces: a.motion.faces.clone(), frames, poses, displacements: disp },
+        motion: AlignedMotion {
+            faces: a.motion.faces.clone(),
+            frames,
+            poses,
+            displacements: disp,
+        },
         contacts,
         map: (0..n).collect(),
     })

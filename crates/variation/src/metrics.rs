@@ -15,14 +15,26 @@ pub fn mean_vertex_distance(a: &[Vec<Vector3<f64>>], b: &[Vec<Vector3<f64>>]) ->
         return 0.0;
     }
     let s: f64 = (0..n)
-        .map(|t| a[t].iter().zip(&b[t]).map(|(p, q)| (p - q).norm()).sum::<f64>() / a[t].len().max(1) as f64)
+        .map(|t| {
+            a[t].iter()
+                .zip(&b[t])
+                .map(|(p, q)| (p - q).norm())
+                .sum::<f64>()
+                / a[t].len().max(1) as f64
+        })
         .sum();
     s / n as f64
 }
 
 /// Frames rigidly aligned to `template` (pose only: no travel, no heading).
-pub fn normalise(frames: &[Vec<Vector3<f64>>], template: &[Vector3<f64>]) -> Vec<Vec<Vector3<f64>>> {
-    frames.iter().map(|f| procrustes(f, template, None).apply_all(f)).collect()
+pub fn normalise(
+    frames: &[Vec<Vector3<f64>>],
+    template: &[Vector3<f64>],
+) -> Vec<Vec<Vector3<f64>>> {
+    frames
+        .iter()
+        .map(|f| procrustes(f, template, None).apply_all(f))
+        .collect()
 }
 
 /// Mean per-vertex distance between rows of two pose matrices (rows `(x, y, z, ...)`), ignoring
@@ -31,7 +43,11 @@ pub fn mean_row_distance(a: &DMatrix<f64>, b: &DMatrix<f64>, n_vertices: usize) 
     let mut s = 0.0;
     for t in 0..a.nrows() {
         for v in 0..n_vertices {
-            let d = Vector3::new(a[(t, 3 * v)] - b[(t, 3 * v)], a[(t, 3 * v + 1)] - b[(t, 3 * v + 1)], a[(t, 3 * v + 2)] - b[(t, 3 * v + 2)]);
+            let d = Vector3::new(
+                a[(t, 3 * v)] - b[(t, 3 * v)],
+                a[(t, 3 * v + 1)] - b[(t, 3 * v + 1)],
+                a[(t, 3 * v + 2)] - b[(t, 3 * v + 2)],
+            );
             s += d.norm();
         }
     }
@@ -40,11 +56,20 @@ pub fn mean_row_distance(a: &DMatrix<f64>, b: &DMatrix<f64>, n_vertices: usize) 
 
 /// Timing offset in frames: mean `|i − j|` along the DTW path between the two sequences' poses
 /// (each frame rigidly aligned to `template` first, so travel does not count).
-pub fn timing_offset(a: &[Vec<Vector3<f64>>], b: &[Vec<Vector3<f64>>], template: &[Vector3<f64>]) -> f64 {
+pub fn timing_offset(
+    a: &[Vec<Vector3<f64>>],
+    b: &[Vec<Vector3<f64>>],
+    template: &[Vector3<f64>],
+) -> f64 {
     let (a, b) = (normalise(a, template), normalise(b, template));
     let cost = crate::prealign::pose_cost(&a, &b, 400);
     match dtw_path(&cost, &[], &DtwOptions::default()) {
-        Ok(p) => p.iter().map(|&(i, j)| (i as f64 - j as f64).abs()).sum::<f64>() / p.len().max(1) as f64,
+        Ok(p) => {
+            p.iter()
+                .map(|&(i, j)| (i as f64 - j as f64).abs())
+                .sum::<f64>()
+                / p.len().max(1) as f64
+        }
         Err(_) => f64::NAN,
     }
 }
@@ -62,8 +87,15 @@ pub fn edges(faces: &[[u32; 3]]) -> Vec<[u32; 2]> {
 }
 
 /// Mean relative edge-length change `|l / l₀ − 1|` against `rest`, over frames and edges.
-pub fn edge_distortion(frames: &[Vec<Vector3<f64>>], rest: &[Vector3<f64>], edges: &[[u32; 2]]) -> f64 {
-    let l0: Vec<f64> = edges.iter().map(|&[a, b]| (rest[a as usize] - rest[b as usize]).norm()).collect();
+pub fn edge_distortion(
+    frames: &[Vec<Vector3<f64>>],
+    rest: &[Vector3<f64>],
+    edges: &[[u32; 2]],
+) -> f64 {
+    let l0: Vec<f64> = edges
+        .iter()
+        .map(|&[a, b]| (rest[a as usize] - rest[b as usize]).norm())
+        .collect();
     let mut s = 0.0;
     let mut n = 0usize;
     for f in frames {
@@ -83,7 +115,12 @@ pub fn edge_distortion(frames: &[Vec<Vector3<f64>>], rest: &[Vector3<f64>], edge
 
 /// Sole vertices of the two legs: vertices of parts named `leg*` within `tol` of the part's
 /// lowest template vertex along `up` (left first if named `*_l`).
-pub fn soles(parts: &[PartDef], template: &[Vector3<f64>], up: &Vector3<f64>, tol: f64) -> Vec<Vec<u32>> {
+pub fn soles(
+    parts: &[PartDef],
+    template: &[Vector3<f64>],
+    up: &Vector3<f64>,
+    tol: f64,
+) -> Vec<Vec<u32>> {
     let mut legs: Vec<&PartDef> = parts.iter().filter(|p| p.name.starts_with("leg")).collect();
     if legs.is_empty() {
         return split_soles(template, up, tol);
@@ -92,8 +129,16 @@ pub fn soles(parts: &[PartDef], template: &[Vector3<f64>], up: &Vector3<f64>, to
     legs.iter()
         .map(|p| {
             let h = |v: u32| template[v as usize].dot(up);
-            let lo = p.vertices.iter().map(|&v| h(v)).fold(f64::INFINITY, f64::min);
-            p.vertices.iter().copied().filter(|&v| h(v) <= lo + tol).collect()
+            let lo = p
+                .vertices
+                .iter()
+                .map(|&v| h(v))
+                .fold(f64::INFINITY, f64::min);
+            p.vertices
+                .iter()
+                .copied()
+                .filter(|&v| h(v) <= lo + tol)
+                .collect()
         })
         .collect()
 }
@@ -101,21 +146,36 @@ pub fn soles(parts: &[PartDef], template: &[Vector3<f64>], up: &Vector3<f64>, to
 /// Without leg parts: the template vertices within `tol` of the lowest, split in two by the
 /// horizontal axis along which they spread most (the feet stand apart).
 fn split_soles(template: &[Vector3<f64>], up: &Vector3<f64>, tol: f64) -> Vec<Vec<u32>> {
-    let lo = template.iter().map(|p| p.dot(up)).fold(f64::INFINITY, f64::min);
-    let low: Vec<u32> = (0..template.len() as u32).filter(|&v| template[v as usize].dot(up) <= lo + tol).collect();
+    let lo = template
+        .iter()
+        .map(|p| p.dot(up))
+        .fold(f64::INFINITY, f64::min);
+    let low: Vec<u32> = (0..template.len() as u32)
+        .filter(|&v| template[v as usize].dot(up) <= lo + tol)
+        .collect();
     if low.is_empty() {
         return Vec::new();
     }
-    let c = low.iter().map(|&v| template[v as usize]).sum::<Vector3<f64>>() / low.len() as f64;
+    let c = low
+        .iter()
+        .map(|&v| template[v as usize])
+        .sum::<Vector3<f64>>()
+        / low.len() as f64;
     let axes = [Vector3::x(), Vector3::y(), Vector3::z()];
-    let spread = |a: &Vector3<f64>| low.iter().map(|&v| (template[v as usize] - c).dot(a).powi(2)).sum::<f64>();
+    let spread = |a: &Vector3<f64>| {
+        low.iter()
+            .map(|&v| (template[v as usize] - c).dot(a).powi(2))
+            .sum::<f64>()
+    };
     let axis = axes
         .iter()
         .filter(|a| a.dot(up).abs() < 0.5)
         .max_by(|a, b| spread(a).total_cmp(&spread(b)))
         .copied()
         .unwrap_or(Vector3::x());
-    let (l, r): (Vec<u32>, Vec<u32>) = low.iter().partition(|&&v| (template[v as usize] - c).dot(&axis) > 0.0);
+    let (l, r): (Vec<u32>, Vec<u32>) = low
+        .iter()
+        .partition(|&&v| (template[v as usize] - c).dot(&axis) > 0.0);
     vec![l, r]
 }
 
@@ -123,16 +183,31 @@ fn split_soles(template: &[Vector3<f64>], up: &Vector3<f64>, tol: f64) -> Vec<Ve
 /// consecutive frames in which that foot is in contact in both. A foot is in contact when its
 /// lowest sole vertex is within `contact_height` of the sequence's ground (the lowest sole
 /// vertex over all frames). The same rule is applied to training and synthesised sequences.
-pub fn foot_sliding(frames: &[Vec<Vector3<f64>>], soles: &[Vec<u32>], up: &Vector3<f64>, contact_height: f64) -> Option<f64> {
+pub fn foot_sliding(
+    frames: &[Vec<Vector3<f64>>],
+    soles: &[Vec<u32>],
+    up: &Vector3<f64>,
+    contact_height: f64,
+) -> Option<f64> {
     let ground = soles
         .iter()
-        .flat_map(|s| frames.iter().flat_map(move |f| s.iter().map(move |&v| f[v as usize].dot(up))))
+        .flat_map(|s| {
+            frames
+                .iter()
+                .flat_map(move |f| s.iter().map(move |&v| f[v as usize].dot(up)))
+        })
         .fold(f64::INFINITY, f64::min);
     let mut total = 0.0;
     let mut count = 0usize;
     for s in soles.iter().filter(|s| !s.is_empty()) {
-        let low = |f: &Vec<Vector3<f64>>| s.iter().map(|&v| f[v as usize].dot(up)).fold(f64::INFINITY, f64::min);
-        let centre = |f: &Vec<Vector3<f64>>| s.iter().map(|&v| f[v as usize]).sum::<Vector3<f64>>() / s.len() as f64;
+        let low = |f: &Vec<Vector3<f64>>| {
+            s.iter()
+                .map(|&v| f[v as usize].dot(up))
+                .fold(f64::INFINITY, f64::min)
+        };
+        let centre = |f: &Vec<Vector3<f64>>| {
+            s.iter().map(|&v| f[v as usize]).sum::<Vector3<f64>>() / s.len() as f64
+        };
         for w in frames.windows(2) {
             if low(&w[0]) - ground <= contact_height && low(&w[1]) - ground <= contact_height {
                 let d = centre(&w[1]) - centre(&w[0]);
@@ -156,7 +231,11 @@ impl Stats {
     pub fn of(v: &[f64]) -> Stats {
         let v: Vec<f64> = v.iter().copied().filter(|x| x.is_finite()).collect();
         if v.is_empty() {
-            return Stats { mean: f64::NAN, min: f64::NAN, max: f64::NAN };
+            return Stats {
+                mean: f64::NAN,
+                min: f64::NAN,
+                max: f64::NAN,
+            };
         }
         Stats {
             mean: v.iter().sum::<f64>() / v.len() as f64,

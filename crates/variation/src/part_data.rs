@@ -35,17 +35,28 @@ pub struct DisplacementScale {
 
 /// The template positions of a part's vertices.
 pub fn reference(template: &[Vector3<f64>], part: &PartDef) -> Vec<Vector3<f64>> {
-    part.vertices.iter().map(|&v| template[v as usize]).collect()
+    part.vertices
+        .iter()
+        .map(|&v| template[v as usize])
+        .collect()
 }
 
 /// One frame's part vertices, rigidly aligned to `reference`.
-pub fn aligned_part(frame: &[Vector3<f64>], part: &PartDef, reference: &[Vector3<f64>]) -> Vec<Vector3<f64>> {
+pub fn aligned_part(
+    frame: &[Vector3<f64>],
+    part: &PartDef,
+    reference: &[Vector3<f64>],
+) -> Vec<Vector3<f64>> {
     let pts: Vec<Vector3<f64>> = part.vertices.iter().map(|&v| frame[v as usize]).collect();
     procrustes(&pts, reference, None).apply_all(&pts)
 }
 
 /// `T × 3n` matrix of a motion's aligned part vertices.
-pub fn part_rows(motion: &AlignedMotion, part: &PartDef, reference: &[Vector3<f64>]) -> DMatrix<f64> {
+pub fn part_rows(
+    motion: &AlignedMotion,
+    part: &PartDef,
+    reference: &[Vector3<f64>],
+) -> DMatrix<f64> {
     let d = 3 * part.vertices.len();
     let mut m = DMatrix::zeros(motion.n_frames(), d);
     for (t, f) in motion.frames.iter().enumerate() {
@@ -79,12 +90,30 @@ fn total_variance(cols: impl Iterator<Item = Vec<f64>>) -> f64 {
 /// Scales from the torso rows (all training sequences) and their displacements.
 pub fn displacement_scale(torso: &[DMatrix<f64>], disp: &[Vec<[f64; 6]>]) -> DisplacementScale {
     let d = torso.first().map_or(0, |m| m.ncols());
-    let v_y = total_variance((0..d).map(|c| torso.iter().flat_map(|m| m.column(c).iter().copied().collect::<Vec<_>>()).collect()));
-    let col = |k: usize| disp.iter().flat_map(|s| s.iter().map(move |r| r[k])).collect::<Vec<f64>>();
+    let v_y = total_variance((0..d).map(|c| {
+        torso
+            .iter()
+            .flat_map(|m| m.column(c).iter().copied().collect::<Vec<_>>())
+            .collect()
+    }));
+    let col = |k: usize| {
+        disp.iter()
+            .flat_map(|s| s.iter().map(move |r| r[k]))
+            .collect::<Vec<f64>>()
+    };
     let v_t = total_variance((0..3).map(col));
     let v_h = total_variance((3..6).map(col));
-    let s = |v: f64| if v > 1e-18 && v_y > 0.0 { (v_y / v).sqrt() } else { 1.0 };
-    DisplacementScale { translation: s(v_t), rotation: s(v_h) }
+    let s = |v: f64| {
+        if v > 1e-18 && v_y > 0.0 {
+            (v_y / v).sqrt()
+        } else {
+            1.0
+        }
+    };
+    DisplacementScale {
+        translation: s(v_t),
+        rotation: s(v_h),
+    }
 }
 
 /// Columns appended to the torso vector: 6 displacement values, height, body-frame up axis.
@@ -111,7 +140,12 @@ fn extra_scale(k: usize, scale: DisplacementScale) -> f64 {
 }
 
 /// Appends the scaled displacement and gravity columns to torso rows.
-pub fn with_displacement(rows: &DMatrix<f64>, disp: &[[f64; 6]], grav: &[[f64; 4]], scale: DisplacementScale) -> DMatrix<f64> {
+pub fn with_displacement(
+    rows: &DMatrix<f64>,
+    disp: &[[f64; 6]],
+    grav: &[[f64; 4]],
+    scale: DisplacementScale,
+) -> DMatrix<f64> {
     let d = rows.ncols();
     let mut m = rows.clone().resize_horizontally(d + TORSO_EXTRA, 0.0);
     for (t, (r, g)) in disp.iter().zip(grav).enumerate() {
@@ -124,7 +158,10 @@ pub fn with_displacement(rows: &DMatrix<f64>, disp: &[[f64; 6]], grav: &[[f64; 4
 }
 
 /// Splits a torso pose row back into vertices, the unscaled displacement and gravity values.
-pub fn split_torso(row: &[f64], scale: DisplacementScale) -> (Vec<Vector3<f64>>, [f64; 6], [f64; 4]) {
+pub fn split_torso(
+    row: &[f64],
+    scale: DisplacementScale,
+) -> (Vec<Vector3<f64>>, [f64; 6], [f64; 4]) {
     let d = row.len() - TORSO_EXTRA;
     let verts = unflatten(&row[..d]);
     let disp = std::array::from_fn(|k| row[d + k] / extra_scale(k, scale));
@@ -134,5 +171,7 @@ pub fn split_torso(row: &[f64], scale: DisplacementScale) -> (Vec<Vector3<f64>>,
 
 /// `(x_1, y_1, z_1, ...)` to points.
 pub fn unflatten(row: &[f64]) -> Vec<Vector3<f64>> {
-    row.chunks_exact(3).map(|c| Vector3::new(c[0], c[1], c[2])).collect()
+    row.chunks_exact(3)
+        .map(|c| Vector3::new(c[0], c[1], c[2]))
+        .collect()
 }

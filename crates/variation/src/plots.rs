@@ -12,13 +12,22 @@ static FONT: &[u8] = include_bytes!("../../transfer/assets/DejaVuSans.ttf");
 fn register_font() {
     static ONCE: std::sync::Once = std::sync::Once::new();
     ONCE.call_once(|| {
-        let _ = plotters::style::register_font("sans-serif", plotters::style::FontStyle::Normal, FONT);
+        let _ =
+            plotters::style::register_font("sans-serif", plotters::style::FontStyle::Normal, FONT);
     });
 }
 
 /// Distinct colours (cycled).
-pub const COLOURS: [(u8, u8, u8); 8] =
-    [(31, 119, 180), (0, 0, 0), (23, 190, 207), (214, 39, 140), (255, 127, 14), (44, 160, 44), (214, 39, 40), (148, 103, 189)];
+pub const COLOURS: [(u8, u8, u8); 8] = [
+    (31, 119, 180),
+    (0, 0, 0),
+    (23, 190, 207),
+    (214, 39, 140),
+    (255, 127, 14),
+    (44, 160, 44),
+    (214, 39, 40),
+    (148, 103, 189),
+];
 
 /// Plots each `(label, trajectory)` (T × d, d ≥ 2) as a polyline in the (x₁, x₂) plane.
 pub fn latent_plot(path: &Path, title: &str, series: &[(String, DMatrix<f64>)]) -> Result<()> {
@@ -30,8 +39,15 @@ pub fn latent_plot(path: &Path, title: &str, series: &[(String, DMatrix<f64>)]) 
     {
         let root = BitMapBackend::with_buffer(&mut pixels, (w, h)).into_drawing_area();
         root.fill(&WHITE).map_err(|x| e(&x))?;
-        let pts = series.iter().flat_map(|(_, m)| (0..m.nrows()).map(move |t| (m[(t, 0)], m[(t, 1.min(m.ncols() - 1))])));
-        let (mut x0, mut x1, mut y0, mut y1) = (f64::INFINITY, f64::NEG_INFINITY, f64::INFINITY, f64::NEG_INFINITY);
+        let pts = series.iter().flat_map(|(_, m)| {
+            (0..m.nrows()).map(move |t| (m[(t, 0)], m[(t, 1.min(m.ncols() - 1))]))
+        });
+        let (mut x0, mut x1, mut y0, mut y1) = (
+            f64::INFINITY,
+            f64::NEG_INFINITY,
+            f64::INFINITY,
+            f64::NEG_INFINITY,
+        );
         for (x, y) in pts {
             x0 = x0.min(x);
             x1 = x1.max(x);
@@ -49,18 +65,30 @@ pub fn latent_plot(path: &Path, title: &str, series: &[(String, DMatrix<f64>)]) 
             .y_label_area_size(48)
             .build_cartesian_2d(x0 - px..x1 + px, y0 - py..y1 + py)
             .map_err(|x| e(&x))?;
-        chart.configure_mesh().x_desc("x1").y_desc("x2").label_style(("sans-serif", 12)).draw().map_err(|x| e(&x))?;
+        chart
+            .configure_mesh()
+            .x_desc("x1")
+            .y_desc("x2")
+            .label_style(("sans-serif", 12))
+            .draw()
+            .map_err(|x| e(&x))?;
         for (i, (label, m)) in series.iter().enumerate() {
             let (r, g, b) = COLOURS[i % COLOURS.len()];
             let c = RGBColor(r, g, b);
-            let line: Vec<(f64, f64)> = (0..m.nrows()).map(|t| (m[(t, 0)], m[(t, 1.min(m.ncols() - 1))])).collect();
+            let line: Vec<(f64, f64)> = (0..m.nrows())
+                .map(|t| (m[(t, 0)], m[(t, 1.min(m.ncols() - 1))]))
+                .collect();
             chart
                 .draw_series(LineSeries::new(line.clone(), c.stroke_width(2)))
                 .map_err(|x| e(&x))?
                 .label(label.clone())
-                .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 18, y)], c.stroke_width(2)));
+                .legend(move |(x, y)| {
+                    PathElement::new(vec![(x, y), (x + 18, y)], c.stroke_width(2))
+                });
             if let Some(&p) = line.first() {
-                chart.draw_series(std::iter::once(Circle::new(p, 4, c.filled()))).map_err(|x| e(&x))?;
+                chart
+                    .draw_series(std::iter::once(Circle::new(p, 4, c.filled())))
+                    .map_err(|x| e(&x))?;
             }
         }
         if series.len() <= 8 {

@@ -33,7 +33,11 @@ pub struct PrealignOptions {
 
 impl Default for PrealignOptions {
     fn default() -> Self {
-        PrealignOptions { contact_weight: None, max_vertices: 600, max_run: 3 }
+        PrealignOptions {
+            contact_weight: None,
+            max_vertices: 600,
+            max_run: 3,
+        }
     }
 }
 
@@ -49,7 +53,11 @@ pub struct Warp {
 }
 
 /// `C_ij`: mean distance between subsampled vertices of motion frame `i` and reference frame `j`.
-pub fn pose_cost(frames: &[Vec<Vector3<f64>>], reference: &[Vec<Vector3<f64>>], max_vertices: usize) -> DMatrix<f64> {
+pub fn pose_cost(
+    frames: &[Vec<Vector3<f64>>],
+    reference: &[Vec<Vector3<f64>>],
+    max_vertices: usize,
+) -> DMatrix<f64> {
     let n = reference.first().map_or(0, |f| f.len());
     let step = n.div_ceil(max_vertices.max(1)).max(1);
     let idx: Vec<usize> = (0..n).step_by(step).collect();
@@ -58,7 +66,9 @@ pub fn pose_cost(frames: &[Vec<Vector3<f64>>], reference: &[Vec<Vector3<f64>>], 
         .map(|a| {
             reference
                 .iter()
-                .map(|b| idx.iter().map(|&v| (a[v] - b[v]).norm()).sum::<f64>() / idx.len().max(1) as f64)
+                .map(|b| {
+                    idx.iter().map(|&v| (a[v] - b[v]).norm()).sum::<f64>() / idx.len().max(1) as f64
+                })
                 .collect()
         })
         .collect();
@@ -103,7 +113,9 @@ pub fn warp(
         )));
     }
     let mut cost = pose_cost(frames, reference, opts.max_vertices);
-    let lambda = opts.contact_weight.unwrap_or_else(|| median(&mut cost.as_slice().to_vec()));
+    let lambda = opts
+        .contact_weight
+        .unwrap_or_else(|| median(&mut cost.as_slice().to_vec()));
     if let (Some(a), Some(b)) = (contacts, ref_contacts) {
         for i in 0..fs {
             for j in 0..ft {
@@ -111,10 +123,21 @@ pub fn warp(
             }
         }
     }
-    let path = dtw_path(&cost, &[], &DtwOptions { max_run: r, endpoints: Endpoints::Corners })
-        .map_err(|e| Error::invalid(format!("prealign: {e}")))?;
+    let path = dtw_path(
+        &cost,
+        &[],
+        &DtwOptions {
+            max_run: r,
+            endpoints: Endpoints::Corners,
+        },
+    )
+    .map_err(|e| Error::invalid(format!("prealign: {e}")))?;
     let map = reference_map(&path, ft);
-    Ok(Warp { path, map, contact_weight: lambda })
+    Ok(Warp {
+        path,
+        map,
+        contact_weight: lambda,
+    })
 }
 
 /// For each reference frame `j < n_ref`, the median motion frame paired with it on `path`.
@@ -147,7 +170,12 @@ pub fn apply(motion: &AlignedMotion, map: &[usize]) -> AlignedMotion {
         displacements.push([d[0], d[1], d[2], d[3], d[4], d[5]]);
     }
     displacements.truncate(poses.len());
-    AlignedMotion { faces: motion.faces.clone(), frames, poses, displacements }
+    AlignedMotion {
+        faces: motion.faces.clone(),
+        frames,
+        poses,
+        displacements,
+    }
 }
 
 /// The contacts re-timed by `map`.

@@ -52,44 +52,82 @@ impl<'a> Decoder<'a> {
             .parts
             .iter()
             .map(|p| {
-                let pr = Predictor::new(&p.gpdm).map_err(|e| Error::invalid(format!("part '{}': {e}", p.part.name)))?;
-                notes.extend(pr.notes.iter().map(|n| format!("part '{}': {n}", p.part.name)));
+                let pr = Predictor::new(&p.gpdm)
+                    .map_err(|e| Error::invalid(format!("part '{}': {e}", p.part.name)))?;
+                notes.extend(
+                    pr.notes
+                        .iter()
+                        .map(|n| format!("part '{}': {n}", p.part.name)),
+                );
                 Ok(pr)
             })
             .collect::<Result<Vec<_>>>()?;
         let parts: Vec<&PartDef> = model.parts.iter().map(|p| &p.part).collect();
         let n = model.template.len();
         let mut coverage = vec![0u32; n];
-        parts.iter().flat_map(|p| &p.vertices).for_each(|&v| coverage[v as usize] += 1);
+        parts
+            .iter()
+            .flat_map(|p| &p.vertices)
+            .for_each(|&v| coverage[v as usize] += 1);
         if let Some(v) = coverage.iter().position(|&c| c == 0) {
             return Err(Error::invalid(format!("template vertex {v} is in no part")));
         }
         let mut bands = vec![Vec::new()];
         for (k, p) in parts.iter().enumerate().skip(1) {
-            let q = p.parent.filter(|&q| q < k).ok_or_else(|| Error::invalid(format!("part '{}' has no earlier parent", p.name)))?;
+            let q = p.parent.filter(|&q| q < k).ok_or_else(|| {
+                Error::invalid(format!("part '{}' has no earlier parent", p.name))
+            })?;
             let mut local = vec![usize::MAX; n];
-            parts[q].vertices.iter().enumerate().for_each(|(i, &v)| local[v as usize] = i);
-            let band: Vec<(usize, usize)> =
-                p.vertices.iter().enumerate().filter(|(_, &v)| local[v as usize] != usize::MAX).map(|(i, &v)| (i, local[v as usize])).collect();
+            parts[q]
+                .vertices
+                .iter()
+                .enumerate()
+                .for_each(|(i, &v)| local[v as usize] = i);
+            let band: Vec<(usize, usize)> = p
+                .vertices
+                .iter()
+                .enumerate()
+                .filter(|(_, &v)| local[v as usize] != usize::MAX)
+                .map(|(i, &v)| (i, local[v as usize]))
+                .collect();
             if band.len() < 3 {
-                return Err(Error::invalid(format!("part '{}' shares {} vertices with its parent (need 3)", p.name, band.len())));
+                return Err(Error::invalid(format!(
+                    "part '{}' shares {} vertices with its parent (need 3)",
+                    p.name,
+                    band.len()
+                )));
             }
             bands.push(band);
         }
-        Ok(Decoder { model, predictors, bands, coverage })
+        Ok(Decoder {
+            model,
+            predictors,
+            bands,
+            coverage,
+        })
     }
 
     /// Part poses for the latent trajectories `latents[k]` (T × d each): the mean (eq. 12) or,
     /// with `rng`, a draw from eq. 11.
-    pub fn part_poses<R: Rng + ?Sized>(&self, latents: &[DMatrix<f64>], mut rng: Option<&mut R>) -> Result<DecodedParts> {
+    pub fn part_poses<R: Rng + ?Sized>(
+        &self,
+        latents: &[DMatrix<f64>],
+        mut rng: Option<&mut R>,
+    ) -> Result<DecodedParts> {
         if latents.len() != self.predictors.len() {
-            return Err(Error::invalid(format!("{} latent trajectories for {} parts", latents.len(), self.predictors.len())));
+            return Err(Error::invalid(format!(
+                "{} latent trajectories for {} parts",
+                latents.len(),
+                self.predictors.len()
+            )));
         }
         let mut parts = Vec::with_capacity(latents.len());
         let mut displacements = Vec::new();
         let mut gravity = Vec::new();
         for (k, (pr, x)) in self.predictors.iter().zip(latents).enumerate() {
-            let y = pr.reconstruct(x, rng.as_deref_mut()).map_err(|e| Error::invalid(format!("part {k}: {e}")))?;
+            let y = pr
+                .reconstruct(x, rng.as_deref_mut())
+                .map_err(|e| Error::invalid(format!("part {k}: {e}")))?;
             let mut frames = Vec::with_capacity(y.nrows());
             for t in 0..y.nrows() {
                 let row: Vec<f64> = y.row(t).iter().copied().collect();
@@ -104,7 +142,11 @@ impl<'a> Decoder<'a> {
             }
             parts.push(frames);
         }
-        Ok(DecodedParts { parts, displacements, gravity })
+        Ok(DecodedParts {
+            parts,
+            displacements,
+            gravity,
+        })
     }
 
     /// Aligns children to parents on the bands and averages shared vertices (one frame).
@@ -117,8 +159,10 @@ impl<'a> Decoder<'a> {
                 parts[0].to_vec()
             } else {
                 let q = p.part.parent.expect("checked in new");
-                let src: Vec<Vector3<f64>> = self.bands[k].iter().map(|&(i, _)| parts[k][i]).collect();
-                let dst: Vec<Vector3<f64>> = self.bands[k].iter().map(|&(_, j)| placed[q][j]).collect();
+                let src: Vec<Vector3<f64>> =
+                    self.bands[k].iter().map(|&(i, _)| parts[k][i]).collect();
+                let dst: Vec<Vector3<f64>> =
+                    self.bands[k].iter().map(|&(_, j)| placed[q][j]).collect();
                 procrustes(&src, &dst, None).apply_all(parts[k])
             };
             for (x, &v) in pts.iter().zip(&p.part.vertices) {
@@ -126,11 +170,18 @@ impl<'a> Decoder<'a> {
             }
             placed.push(pts);
         }
-        sum.iter().zip(&self.coverage).map(|(s, &c)| s / c as f64).collect()
+        sum.iter()
+            .zip(&self.coverage)
+            .map(|(s, &c)| s / c as f64)
+            .collect()
     }
 
     /// Merged body frames (template-aligned) of decoded parts.
-    pub fn assemble(&self, decoded: &DecodedParts, how: Assembly) -> Result<Vec<Vec<Vector3<f64>>>> {
+    pub fn assemble(
+        &self,
+        decoded: &DecodedParts,
+        how: Assembly,
+    ) -> Result<Vec<Vec<Vector3<f64>>>> {
         let n_frames = decoded.displacements.len();
         let mut stitcher = match how {
             // A single part needs no merging.
@@ -139,9 +190,16 @@ impl<'a> Decoder<'a> {
                     .model
                     .parts
                     .iter()
-                    .map(|p| surface::stitch::Part { vertices: p.part.vertices.clone(), parent: p.part.parent })
+                    .map(|p| surface::stitch::Part {
+                        vertices: p.part.vertices.clone(),
+                        parent: p.part.parent,
+                    })
                     .collect();
-                let layout = surface::stitch::PartLayout::new(self.model.template.len(), self.model.faces.clone(), parts)?;
+                let layout = surface::stitch::PartLayout::new(
+                    self.model.template.len(),
+                    self.model.faces.clone(),
+                    parts,
+                )?;
                 Some(surface::stitch::Stitcher::new(layout))
             }
             _ => None,
@@ -150,11 +208,13 @@ impl<'a> Decoder<'a> {
             .map(|t| {
                 let body = match stitcher.as_mut() {
                     Some(s) => {
-                        let parts: Vec<Vec<Vector3<f64>>> = decoded.parts.iter().map(|p| p[t].clone()).collect();
+                        let parts: Vec<Vec<Vector3<f64>>> =
+                            decoded.parts.iter().map(|p| p[t].clone()).collect();
                         s.stitch(&parts)?.vertices
                     }
                     None => {
-                        let parts: Vec<&[Vector3<f64>]> = decoded.parts.iter().map(|p| p[t].as_slice()).collect();
+                        let parts: Vec<&[Vector3<f64>]> =
+                            decoded.parts.iter().map(|p| p[t].as_slice()).collect();
                         self.assemble_average(&parts)
                     }
                 };
@@ -173,7 +233,13 @@ impl<'a> Decoder<'a> {
     ) -> Result<Vec<Vec<Vector3<f64>>>> {
         let decoded = self.part_poses(latents, rng)?;
         let body = self.assemble(&decoded, how)?;
-        Ok(place(&body, &decoded.displacements, &decoded.gravity, &self.model.up, start))
+        Ok(place(
+            &body,
+            &decoded.displacements,
+            &decoded.gravity,
+            &self.model.up,
+            start,
+        ))
     }
 }
 
@@ -193,7 +259,9 @@ pub fn place(
     let mut cur = *start;
     for t in 0..body.len() {
         if t > 0 {
-            cur = cur.compose(&RigidMotion::from_6vec(&Vector6::from_row_slice(&displacements[t])));
+            cur = cur.compose(&RigidMotion::from_6vec(&Vector6::from_row_slice(
+                &displacements[t],
+            )));
             if let Some(g) = gravity.get(t) {
                 let u = Vector3::new(g[1], g[2], g[3]);
                 if u.norm() > 1e-9 {
@@ -208,5 +276,8 @@ pub fn place(
         }
         poses.push(cur);
     }
-    body.iter().zip(&poses).map(|(f, p)| p.apply_all(f)).collect()
+    body.iter()
+        .zip(&poses)
+        .map(|(f, p)| p.apply_all(f))
+        .collect()
 }

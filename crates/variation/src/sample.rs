@@ -35,21 +35,37 @@ pub type Variations = Vec<Vec<DMatrix<f64>>>;
 
 /// Sampler defaults for variations: decorrelated draws (thin 10) after 200 burn-in iterations.
 pub fn default_hmc(n: usize, seed: u64) -> HmcOptions {
-    HmcOptions { n_samples: n, burn_in: 200, thin: 10, leapfrog_steps: 20, initial_step: 0.01, target_accept: 0.7, seed }
+    HmcOptions {
+        n_samples: n,
+        burn_in: 200,
+        thin: 10,
+        leapfrog_steps: 20,
+        initial_step: 0.01,
+        target_accept: 0.7,
+        seed,
+    }
 }
 
 /// A seed for stream `(a, b)` of run `seed` (SplitMix64 finaliser).
 pub fn mix(seed: u64, a: u64, b: u64) -> u64 {
-    let mut z = seed ^ a.wrapping_mul(0x9E37_79B9_7F4A_7C15) ^ b.wrapping_mul(0xBF58_476D_1CE4_E5B9);
+    let mut z =
+        seed ^ a.wrapping_mul(0x9E37_79B9_7F4A_7C15) ^ b.wrapping_mul(0xBF58_476D_1CE4_E5B9);
     z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
     z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
     z ^ (z >> 31)
 }
 
 /// `opts.n_samples` variations of training sequence `s` (chains seeded from `opts.seed`).
-pub fn sequence_variations(dec: &Decoder, s: usize, opts: &HmcOptions) -> Result<(Variations, Vec<ChainStats>)> {
+pub fn sequence_variations(
+    dec: &Decoder,
+    s: usize,
+    opts: &HmcOptions,
+) -> Result<(Variations, Vec<ChainStats>)> {
     let model = dec.model;
-    let info = model.sequences.get(s).ok_or_else(|| Error::invalid(format!("no training sequence {s}")))?;
+    let info = model
+        .sequences
+        .get(s)
+        .ok_or_else(|| Error::invalid(format!("no training sequence {s}")))?;
     let per_part: Vec<Result<(Vec<DMatrix<f64>>, ChainStats)>> = dec
         .predictors
         .par_iter()
@@ -57,9 +73,13 @@ pub fn sequence_variations(dec: &Decoder, s: usize, opts: &HmcOptions) -> Result
         .enumerate()
         .map(|(k, (pr, pm))| {
             let x = pm.gpdm.sequence_latent(s).expect("index checked");
-            let o = HmcOptions { seed: mix(opts.seed, s as u64 + 1, k as u64 + 1), ..opts.clone() };
-            let (trajs, res) = sample_trajectories(pr, &x, &o)
-                .map_err(|e| Error::invalid(format!("{} part '{}': {e}", info.name, pm.part.name)))?;
+            let o = HmcOptions {
+                seed: mix(opts.seed, s as u64 + 1, k as u64 + 1),
+                ..opts.clone()
+            };
+            let (trajs, res) = sample_trajectories(pr, &x, &o).map_err(|e| {
+                Error::invalid(format!("{} part '{}': {e}", info.name, pm.part.name))
+            })?;
             let stats = ChainStats {
                 sequence: info.name.clone(),
                 part: pm.part.name.clone(),
@@ -78,14 +98,27 @@ pub fn sequence_variations(dec: &Decoder, s: usize, opts: &HmcOptions) -> Result
         stats.push(st);
     }
     let n = by_part.iter().map(|t| t.len()).min().unwrap_or(0);
-    Ok(((0..n).map(|k| by_part.iter().map(|t| t[k].clone()).collect()).collect(), stats))
+    Ok((
+        (0..n)
+            .map(|k| by_part.iter().map(|t| t[k].clone()).collect())
+            .collect(),
+        stats,
+    ))
 }
 
 /// `n` variations of the blend at `w` from the sampled variants `pools[s]` of the training
 /// sequences (index `s` as in the model); needs the model's blend pair.
-pub fn blend_variations(dec: &Decoder, pools: &[Variations], w: f64, n: usize, seed: u64) -> Result<Variations> {
+pub fn blend_variations(
+    dec: &Decoder,
+    pools: &[Variations],
+    w: f64,
+    n: usize,
+    seed: u64,
+) -> Result<Variations> {
     let model = dec.model;
-    let (a, b) = model.pair.ok_or_else(|| Error::invalid("the model has no blend pair (train with two motions)"))?;
+    let (a, b) = model
+        .pair
+        .ok_or_else(|| Error::invalid("the model has no blend pair (train with two motions)"))?;
     let mut entries_idx = vec![(0.0, a), (1.0, b)];
     for (i, s) in model.sequences.iter().enumerate() {
         if let Some(v) = s.blend {
@@ -94,14 +127,22 @@ pub fn blend_variations(dec: &Decoder, pools: &[Variations], w: f64, n: usize, s
     }
     let sets = (0..model.parts.len())
         .map(|k| {
-            let entries = entries_idx.iter().map(|&(v, i)| (v, pools[i].iter().map(|var| var[k].clone()).collect())).collect();
+            let entries = entries_idx
+                .iter()
+                .map(|&(v, i)| (v, pools[i].iter().map(|var| var[k].clone()).collect()))
+                .collect();
             BlendSet::new(entries).map_err(|e| Error::invalid(format!("blend: {e}")))
         })
         .collect::<Result<Vec<_>>>()?;
     let mut rng = ChaCha8Rng::seed_from_u64(mix(seed, 0xB1E4D, (w * 1e6).round() as u64));
     (0..n)
         .map(|_| {
-            sets.iter().map(|set| set.sample(w, &mut rng).map_err(|e| Error::invalid(format!("blend: {e}")))).collect()
+            sets.iter()
+                .map(|set| {
+                    set.sample(w, &mut rng)
+                        .map_err(|e| Error::invalid(format!("blend: {e}")))
+                })
+                .collect()
         })
         .collect()
 }

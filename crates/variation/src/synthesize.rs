@@ -17,7 +17,9 @@ use serde::{Deserialize, Serialize};
 use crate::group::{blend_name, blend_sequences, Group};
 use crate::metrics::{self, Stats};
 use crate::reconstruct::{Assembly, Decoder};
-use crate::sample::{blend_variations, default_hmc, mix, sequence_variations, ChainStats, Variations};
+use crate::sample::{
+    blend_variations, default_hmc, mix, sequence_variations, ChainStats, Variations,
+};
 use crate::train::VariationModel;
 
 /// Settings of [`run`].
@@ -79,7 +81,16 @@ fn measure(
     model: &VariationModel,
 ) -> SequenceReport {
     let edges = metrics::edges(&model.faces);
-    let soles = metrics::soles(&model.parts.iter().map(|p| p.part.clone()).collect::<Vec<_>>(), &model.template, &model.up, 0.015);
+    let soles = metrics::soles(
+        &model
+            .parts
+            .iter()
+            .map(|p| p.part.clone())
+            .collect::<Vec<_>>(),
+        &model.template,
+        &model.up,
+        0.015,
+    );
     let slide = |f: &[Vec<Vector3<f64>>]| metrics::foot_sliding(f, &soles, &model.up, 0.02);
     let source_pose = metrics::normalise(source, &model.template);
     let per: Vec<(f64, f64, f64, Option<f64>, f64)> = vars
@@ -90,7 +101,10 @@ fn measure(
                 metrics::timing_offset(v, source, &model.template),
                 metrics::edge_distortion(v, &model.template, &edges),
                 slide(v),
-                metrics::mean_vertex_distance(&metrics::normalise(v, &model.template), &source_pose),
+                metrics::mean_vertex_distance(
+                    &metrics::normalise(v, &model.template),
+                    &source_pose,
+                ),
             )
         })
         .collect();
@@ -116,9 +130,16 @@ fn measure(
 }
 
 /// Samples, decodes, writes and measures every sequence of `model` (sources from `group`).
-pub fn run(model: &VariationModel, group: &Group, cfg: &SynthConfig, out: &Path) -> Result<SynthReport> {
+pub fn run(
+    model: &VariationModel,
+    group: &Group,
+    cfg: &SynthConfig,
+    out: &Path,
+) -> Result<SynthReport> {
     if group.sequences.len() != model.sequences.len() || group.n_frames() != model.n_frames() {
-        return Err(Error::invalid("the group does not match the model (train the model from this group)"));
+        return Err(Error::invalid(
+            "the group does not match the model (train the model from this group)",
+        ));
     }
     let mut notes = Vec::new();
     let dec = Decoder::new(model, &mut notes)?;
@@ -134,17 +155,37 @@ pub fn run(model: &VariationModel, group: &Group, cfg: &SynthConfig, out: &Path)
         pools.push(v);
         chains.extend(st);
     }
-    let mut jobs: Vec<(String, Option<f64>, Variations, Vec<Vec<Vector3<f64>>>, mesh_core::rigid::RigidMotion)> = Vec::new();
+    let mut jobs: Vec<(
+        String,
+        Option<f64>,
+        Variations,
+        Vec<Vec<Vector3<f64>>>,
+        mesh_core::rigid::RigidMotion,
+    )> = Vec::new();
     for (s, info) in model.sequences.iter().enumerate() {
-        jobs.push((info.name.clone(), info.blend, pools[s].clone(), group.sequences[s].motion.world_frames(), info.start_pose));
+        jobs.push((
+            info.name.clone(),
+            info.blend,
+            pools[s].clone(),
+            group.sequences[s].motion.world_frames(),
+            info.start_pose,
+        ));
     }
     if !cfg.blends.is_empty() {
-        let (a, b) = model.pair.ok_or_else(|| Error::invalid("blends requested but the group has a single motion"))?;
+        let (a, b) = model
+            .pair
+            .ok_or_else(|| Error::invalid("blends requested but the group has a single motion"))?;
         let blender = surface::blend::Blender::new(group.template.clone(), group.faces.clone())?;
         for &w in &cfg.blends {
             let vars = blend_variations(&dec, &pools, w, cfg.n, cfg.seed)?;
             let truth = blend_sequences(&blender, &group.sequences[a], &group.sequences[b], w)?;
-            jobs.push((blend_name(w), Some(w), vars, truth.motion.world_frames(), model.sequences[a].start_pose));
+            jobs.push((
+                blend_name(w),
+                Some(w),
+                vars,
+                truth.motion.world_frames(),
+                model.sequences[a].start_pose,
+            ));
         }
     }
     let seconds_sampling = clock.elapsed().as_secs_f64();
@@ -155,12 +196,19 @@ pub fn run(model: &VariationModel, group: &Group, cfg: &SynthConfig, out: &Path)
             .par_iter()
             .enumerate()
             .map(|(k, latents)| {
-                let mut rng = ChaCha8Rng::seed_from_u64(mix(cfg.seed, 0xDEC0DE + j as u64, k as u64));
-                dec.decode(latents, start, cfg.assembly, cfg.sample_poses.then_some(&mut rng))
+                let mut rng =
+                    ChaCha8Rng::seed_from_u64(mix(cfg.seed, 0xDEC0DE + j as u64, k as u64));
+                dec.decode(
+                    latents,
+                    start,
+                    cfg.assembly,
+                    cfg.sample_poses.then_some(&mut rng),
+                )
             })
             .collect::<Result<_>>()?;
         for (k, m) in meshes.iter().enumerate() {
-            MeshSequence::new(model.faces.clone(), m.clone()).write_dir(out.join(label).join(format!("var{k}")))?;
+            MeshSequence::new(model.faces.clone(), m.clone())
+                .write_dir(out.join(label).join(format!("var{k}")))?;
         }
         sequences.push(measure(label, *blend, &meshes, source, model));
     }

@@ -67,7 +67,10 @@ impl VariationModel {
     }
     /// Training sequence `s`'s learned latent trajectory for every part.
     pub fn latents(&self, s: usize) -> Vec<DMatrix<f64>> {
-        self.parts.iter().map(|p| p.gpdm.sequence_latent(s).expect("sequence index in range")).collect()
+        self.parts
+            .iter()
+            .map(|p| p.gpdm.sequence_latent(s).expect("sequence index in range"))
+            .collect()
     }
     /// Frames per training sequence.
     pub fn n_frames(&self) -> usize {
@@ -84,9 +87,18 @@ pub struct TrainConfig {
 
 impl Default for TrainConfig {
     fn default() -> Self {
-        let mut options = TrainOptions { schedule: Schedule::Alternate { rounds: 4, iters: 60 }, ..Default::default() };
+        let mut options = TrainOptions {
+            schedule: Schedule::Alternate {
+                rounds: 4,
+                iters: 60,
+            },
+            ..Default::default()
+        };
         options.lbfgs.max_evals = 5000;
-        TrainConfig { gpdm: GpdmConfig::default(), options }
+        TrainConfig {
+            gpdm: GpdmConfig::default(),
+            options,
+        }
     }
 }
 
@@ -110,10 +122,18 @@ pub fn training_data(group: &Group) -> (Vec<Vec<DMatrix<f64>>>, DisplacementScal
         .par_iter()
         .map(|p| {
             let r = part_data::reference(&group.template, p);
-            group.sequences.iter().map(|s| part_data::part_rows(&s.motion, p, &r)).collect()
+            group
+                .sequences
+                .iter()
+                .map(|s| part_data::part_rows(&s.motion, p, &r))
+                .collect()
         })
         .collect();
-    let disp: Vec<Vec<[f64; 6]>> = group.sequences.iter().map(|s| part_data::model_displacements(&s.motion)).collect();
+    let disp: Vec<Vec<[f64; 6]>> = group
+        .sequences
+        .iter()
+        .map(|s| part_data::model_displacements(&s.motion))
+        .collect();
     let scale = part_data::displacement_scale(&data[0], &disp);
     for ((m, d), s) in data[0].iter_mut().zip(&disp).zip(&group.sequences) {
         *m = part_data::with_displacement(m, d, &part_data::gravity(&s.motion, &group.up), scale);
@@ -124,7 +144,10 @@ pub fn training_data(group: &Group) -> (Vec<Vec<DMatrix<f64>>>, DisplacementScal
 /// Trains the model of `group`.
 pub fn train(group: &Group, cfg: &TrainConfig) -> Result<(VariationModel, Vec<PartTrainReport>)> {
     if group.sequences.is_empty() || group.parts.is_empty() {
-        return Err(Error::invalid(format!("group '{}' has no sequences or no parts", group.name)));
+        return Err(Error::invalid(format!(
+            "group '{}' has no sequences or no parts",
+            group.name
+        )));
     }
     let (data, scale) = training_data(group);
     let results: Vec<Result<(PartModel, PartTrainReport)>> = group
@@ -146,7 +169,14 @@ pub fn train(group: &Group, cfg: &TrainConfig) -> Result<(VariationModel, Vec<Pa
                 report,
             };
             let reference = part_data::reference(&group.template, p);
-            Ok((PartModel { part: p.clone(), reference, gpdm: g }, rep))
+            Ok((
+                PartModel {
+                    part: p.clone(),
+                    reference,
+                    gpdm: g,
+                },
+                rep,
+            ))
         })
         .collect();
     let mut parts = Vec::new();

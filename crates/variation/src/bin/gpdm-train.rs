@@ -48,18 +48,34 @@ fn main() -> ExitCode {
         let mut cfg = TrainConfig::default();
         cfg.gpdm.latent_dim = args.latent_dim;
         cfg.gpdm.pose_noise_floor = (args.noise_floor > 0.0).then_some(args.noise_floor);
-        cfg.options.schedule = Schedule::Alternate { rounds: args.rounds, iters: args.iters };
+        cfg.options.schedule = Schedule::Alternate {
+            rounds: args.rounds,
+            iters: args.iters,
+        };
         let (model, reports) = train(&group, &cfg)?;
         for r in &reports {
             mesh_core::info!(
                 "{}: {} frames x {} dims, objective {:.4e} -> {:.4e} in {:.1} s",
-                r.part, r.frames, r.pose_dim, r.report.initial_value, r.report.final_value, r.seconds
+                r.part,
+                r.frames,
+                r.pose_dim,
+                r.report.initial_value,
+                r.report.final_value,
+                r.seconds
             );
             if r.report.max_jitter > 0.0 {
-                mesh_core::warn!("{}: Cholesky needed jitter {:e} at the optimum", r.part, r.report.max_jitter);
+                mesh_core::warn!(
+                    "{}: Cholesky needed jitter {:e} at the optimum",
+                    r.part,
+                    r.report.max_jitter
+                );
             }
         }
-        let header = args.common.header("gpdm-train", env!("CARGO_PKG_VERSION")).with_input(&args.group)?.with_params(&cfg)?;
+        let header = args
+            .common
+            .header("gpdm-train", env!("CARGO_PKG_VERSION"))
+            .with_input(&args.group)?
+            .with_params(&cfg)?;
         model.save(&args.out, &header)?;
         if let Some(p) = &args.report {
             let light: Vec<_> = reports
@@ -74,7 +90,10 @@ fn main() -> ExitCode {
                 })
                 .collect();
             let json = serde_json::json!({ "group": group.name, "config": cfg, "scale": model.scale, "parts": light });
-            mesh_core::atomic::write_bytes_atomic(p, (serde_json::to_string_pretty(&json)? + "\n").as_bytes())?;
+            mesh_core::atomic::write_bytes_atomic(
+                p,
+                (serde_json::to_string_pretty(&json)? + "\n").as_bytes(),
+            )?;
         }
         Ok(())
     })

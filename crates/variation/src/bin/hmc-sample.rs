@@ -64,7 +64,11 @@ fn main() -> ExitCode {
             blends: args.blends.clone(),
             seed: args.common.seed,
             sample_poses: args.sample_poses,
-            assembly: if args.average { Assembly::Average } else { Assembly::Stitch },
+            assembly: if args.average {
+                Assembly::Average
+            } else {
+                Assembly::Stitch
+            },
             burn_in: args.burn_in,
             thin: args.thin,
             target_accept: args.target_accept,
@@ -73,9 +77,17 @@ fn main() -> ExitCode {
         for n in &report.notes {
             mesh_core::warn!("{n}");
         }
-        mesh_core::info!("HMC acceptance {:.2} (min {:.2}, max {:.2})", report.accept_rate.mean, report.accept_rate.min, report.accept_rate.max);
+        mesh_core::info!(
+            "HMC acceptance {:.2} (min {:.2}, max {:.2})",
+            report.accept_rate.mean,
+            report.accept_rate.min,
+            report.accept_rate.max
+        );
         if let Some(p) = &args.report {
-            mesh_core::atomic::write_bytes_atomic(p, (serde_json::to_string_pretty(&report)? + "\n").as_bytes())?;
+            mesh_core::atomic::write_bytes_atomic(
+                p,
+                (serde_json::to_string_pretty(&report)? + "\n").as_bytes(),
+            )?;
         }
         Ok(())
     })

@@ -55,14 +55,20 @@ fn main() -> ExitCode {
     run_stage("prealign", || {
         args.common.init()?;
         let set = CaptureSet::open(&args.set)?;
-        let subject = args.subject.clone().unwrap_or_else(|| set.spec.source.clone());
+        let subject = args
+            .subject
+            .clone()
+            .unwrap_or_else(|| set.spec.source.clone());
         let spec = GroupSpec {
             name: args.group.clone(),
             subject,
             motions: args.motions.clone(),
             reference: args.reference.clone(),
             blend_weights: args.blend_weights.clone(),
-            prealign: PrealignOptions { contact_weight: args.contact_weight, ..Default::default() },
+            prealign: PrealignOptions {
+                contact_weight: args.contact_weight,
+                ..Default::default()
+            },
             whole_body: args.whole_body,
             fallback_whole_body: !args.strict_parts,
         };
@@ -70,11 +76,21 @@ fn main() -> ExitCode {
         for n in notes {
             mesh_core::warn!("{n}");
         }
-        let blends = if group.sequences.len() < 2 { Vec::new() } else { args.blend_weights.clone() };
-        if group.sequences.iter().filter(|s| s.blend.is_none()).count() < 2 && !args.blend_weights.is_empty() {
+        let blends = if group.sequences.len() < 2 {
+            Vec::new()
+        } else {
+            args.blend_weights.clone()
+        };
+        if group.sequences.iter().filter(|s| s.blend.is_none()).count() < 2
+            && !args.blend_weights.is_empty()
+        {
             mesh_core::warn!("group '{}' has one motion: no blends", group.name);
         }
-        let header = args.common.header("prealign", env!("CARGO_PKG_VERSION")).with_input(set.set_json())?.with_params(&blends)?;
+        let header = args
+            .common
+            .header("prealign", env!("CARGO_PKG_VERSION"))
+            .with_input(set.set_json())?
+            .with_params(&blends)?;
         group.save(&args.out, &header)?;
         Ok(())
     })

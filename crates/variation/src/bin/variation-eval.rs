@@ -38,7 +38,10 @@ fn main() -> ExitCode {
         let model = VariationModel::load(&args.model)?;
         let group = Group::load(&args.group)?;
         let report = evaluate(&model, &group, args.plots.as_deref(), args.common.seed)?;
-        mesh_core::atomic::write_bytes_atomic(&args.out, (serde_json::to_string_pretty(&report)? + "\n").as_bytes())?;
+        mesh_core::atomic::write_bytes_atomic(
+            &args.out,
+            (serde_json::to_string_pretty(&report)? + "\n").as_bytes(),
+        )?;
         Ok(())
     })
 }

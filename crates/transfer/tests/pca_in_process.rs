@@ -1,0 +1,36 @@
+//! NOTE(next): workaround, delete once mesh-core's artifact reader accepts
+//! segmentation artifacts (bincode claims 4 bytes per varint-encoded u32, over
+//! the reader's limit of < 4x the payload: "LimitExceeded" in pca-fit).
+//! Fits the per-part PCA models of a `make transfer` work folder in process
+//! (segmentation never read from disk), so the rest of the pipeline can run:
+//! `TRANSFER_SET=<set> TRANSFER_WORK=<out>/work cargo test --release -p transfer
+//! --test pca_in_process -- --ignored`, then `make transfer` again.
+
+use std::path::PathBuf;
+
+use gp::pca::Components;
+use mesh_core::artifact::{Artifact, Header};
+use mesh_core::capture_set::{CaptureSet, SubjectSpec};
+use transfer::align::AlignedMotion;
+
+#[test]
+#[ignore]
+fn fit_part_pca_in_process() {
+    let set = CaptureSet::open(std::env::var("TRANSFER_SET").unwrap()).unwrap();
+    let work = PathBuf::from(std::env::var("TRANSFER_WORK").unwrap());
+    let train_motions = |s: &str| -> Vec<String> {
+        set.spec.train.iter().map(|t| if s == set.spec.source { t.source.clone() } else { t.target.clone() }).collect()
+    };
+    for s in [set.spec.source.clone(), set.spec.target.clone()] {
+        let spec = SubjectSpec::load(set.subject_json(&s)).unwrap();
+        let template = mesh_core::io::read_mesh(set.template_path(&s, &spec).unwrap()).unwrap();
+        let parts = transfer::segment::segment(&template, &spec).unwrap();
+        let motions: Vec<AlignedMotion> =
+            train_motions(&s).iter().map(|m| AlignedMotion::load(work.join(&s).join(format!("{m}.aligned"))).unwrap()).collect();
+        let refs: Vec<&AlignedMotion> = motions.iter().collect();
+        let (model, report) = transfer::part_pca::fit(&template.vertices, &parts, &refs, Components::Count(20)).unwrap();
+        model.save(work.join(&s).join("pca.model"), &Header::new("pca-fit (in process)", env!("CARGO_PKG_VERSION"))).unwrap();
+        std::fs::write(work.join(&s).join("pca.json"), serde_json::to_string_pretty(&report).unwrap()).unwrap();
+        eprintln!("{s}: {} parts", model.parts.len());
+    }
+}
