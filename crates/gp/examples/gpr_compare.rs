@@ -69,28 +69,30 @@ fn main() {
         kernel.name(),
         rayon::current_num_threads()
     );
-    let mut total_evals = 0;
+    let (mut total_evals, mut total_grads) = (0, 0);
     let mut trained = Vec::new();
     let mut records = Vec::new();
     for (i, m) in models.into_iter().enumerate() {
         let (model, rep) = m.expect("training");
         println!(
-            "  model {i:2}: lml {:12.4} (start {:12.4}) exit {:?} iters {} evals {} (l, sf) = {:?}",
+            "  model {i:2}: lml {:12.4} (start {:12.4}) exit {:?} iters {} evals {} grads {} (l, sf) = {:?}",
             rep.lml,
             rep.initial_lml,
             rep.exit,
             rep.iterations,
             rep.evaluations,
+            rep.gradient_evaluations,
             l_sf(&model.kernel)
         );
         total_evals += rep.evaluations;
+        total_grads += rep.gradient_evaluations;
         for note in &rep.notes {
             println!("    note: {note}");
         }
         records.push((rep, model.kernel));
         trained.push(model);
     }
-    println!("total evaluations {total_evals}");
+    println!("total evaluations {total_evals}, gradients {total_grads}");
     // Prediction throughput: one direction (5 parts + displacement), many frames at once.
     let frames = 5000;
     let test = synthetic_pairs::pairs(frames, 99);

@@ -15,9 +15,13 @@
 //! the rotated coordinates `(log l, log σf/l)`, see `to_search`), starting from a data-driven
 //! guess ([`initial_kernel`]).
 //!
-//! Cost per likelihood+gradient evaluation: one Cholesky and one `potri`-style inverse of the
-//! `F x F` matrix (the gradient's trace term needs the inverse's elements), plus the kernel
-//! matrices; only lower triangles are formed.
+//! Cost: a likelihood value is one kernel matrix, one Cholesky and one solve; its gradient
+//! adds a `potri`-style inverse of the `F x F` matrix (the trace term needs the inverse's
+//! elements), `∂K/∂log l` and one fused pass over the lower triangles (`W` is never formed).
+//! The optimiser asks for gradients lazily ([`crate::optim::minimize_lazy`]): rejected
+//! line-search trials cost only the value, and the factorisation is reused when the
+//! gradient follows at the same point. Large problems start from the optimum on a subset
+//! ([`GprOptions::warm_start_pairs`]).
 //!
 //! Cross-check (scripts/compare/gpr_gpy.py): GPy's `GPRegression` adds 1e-8 to the noise
 //! variance internally, so its likelihood at identical hyperparameters is lower than ours by
@@ -29,7 +33,7 @@
 
 use crate::kernel::Kernel;
 use crate::linalg::Cholesky;
-use crate::optim::{minimize, CgOptions, ExitState};
+use crate::optim::{minimize_lazy, CgOptions, ExitState};
 use crate::{check_finite, invalid, Result};
 use nalgebra::{DMatrix, DVector};
 use rayon::prelude::*;
@@ -51,6 +55,12 @@ pub struct GprOptions {
     pub data_init: bool,
     /// Conjugate-gradient settings.
     pub cg: CgOptions,
+    /// Warm start: when there are more than twice this many training pairs, first maximise
+    /// the likelihood on this many evenly spaced pairs (cheap: the cost is cubic in the
+    /// count) and start the full optimisation from there. 0 disables it. The full-data
+    /// optimisation then runs to the same tolerance, so only the path to the optimum changes.
+    #[serde(default)]
+    pub warm_start_pairs: usize,
 }
 
 impl Default for GprOptions {
@@ -61,6 +71,7 @@ impl Default for GprOptions {
             optimise: true,
             data_init: true,
             cg: CgOptions::default(),
+            warm_start_pairs: 256,
         }
     }
 }
@@ -71,7 +82,12 @@ pub struct TrainReport {
     /// `None` when hyperparameters were not optimised.
     pub exit: Option<ExitState>,
     pub iterations: usize,
+    /// Likelihood evaluations (one Cholesky each).
     pub evaluations: usize,
+    /// Gradient evaluations (the inverse's elements each); fewer than `evaluations` because
+    /// rejected line-search trials need only the value.
+    #[serde(default)]
+    pub gradient_evaluations: usize,
     /// Log marginal likelihood at the starting hyperparameters.
     pub initial_lml: f64,
     /// Log marginal likelihood of the returned model.
@@ -118,24 +134,6 @@ fn lml_value(chol: &Cholesky, y: &DMatrix<f64>, alpha: &DMatrix<f64>) -> f64 {
     -0.5 * y.dot(alpha) - 0.5 * m * chol.log_det() - 0.5 * m * f * (2.0 * std::f64::consts::PI).ln()
 }
 
-/// `Σ_ij W_ij D_ij` for symmetric `W`, `D` from the lower triangle of `D` only.
-fn sym_lower_dot(w: &DMatrix<f64>, d: &DMatrix<f64>) -> f64 {
-    let n = w.nrows();
-    let (ws, ds) = (w.as_slice(), d.as_slice());
-    let mut total = 0.0;
-    for j in 0..n {
-        let c = j * n;
-        total += ws[c + j] * ds[c + j];
-        let off: f64 = ws[c + j + 1..c + n]
-            .iter()
-            .zip(&ds[c + j + 1..c + n])
-            .map(|(a, b)| a * b)
-            .sum();
-        total += 2.0 * off;
-    }
-    total
-}
-
 /// Log marginal likelihood of `Y` given `X` summed over the output columns.
 pub fn log_marginal_likelihood(
     kernel: &Kernel,
@@ -154,6 +152,95 @@ pub fn log_marginal_likelihood(
     Ok(lml_value(&chol, y, &alpha))
 }
 
+/// The marginal likelihood at one hyperparameter setting, factorised: enough to return the
+/// value at once and the gradient later ([`Factored::gradient`]) without refactorising, so
+/// the optimiser's rejected line-search trials cost one Cholesky ([`crate::optim::minimize_lazy`]).
+struct Factored {
+    kernel: Kernel,
+    noise_var: f64,
+    /// Lower triangle of `K + σn² I`.
+    ky: DMatrix<f64>,
+    chol: Cholesky,
+    alpha: DMatrix<f64>,
+    value: f64,
+}
+
+impl Factored {
+    fn new(
+        kernel: &Kernel,
+        noise_var: f64,
+        x: &DMatrix<f64>,
+        y: &DMatrix<f64>,
+        notes: &mut Vec<String>,
+    ) -> Result<Self> {
+        // Lower triangles only: the Cholesky reads the lower triangle and the contractions
+        // of the gradient are over symmetric products.
+        let ky = noisy_gram(kernel.gram_lower(x, false).0, noise_var);
+        let chol = Cholesky::new(&ky, "K + noise", notes)?;
+        let alpha = chol.solve(y);
+        let value = lml_value(&chol, y, &alpha);
+        Ok(Self {
+            kernel: *kernel,
+            noise_var,
+            ky,
+            chol,
+            alpha,
+            value,
+        })
+    }
+
+    /// Gradient of the log marginal likelihood with respect to the kernel's log
+    /// hyperparameters, then `∂/∂ log σn²` when `with_noise` (R&W eq. 5.9 summed over outputs).
+    ///
+    /// `W = α αᵀ - m (K + σn² I)⁻¹` is never formed: one pass over the lower triangles of
+    /// `α αᵀ`, the inverse, `∂K/∂log l` and `K + σn² I` accumulates `tr(W ∂K/∂log l)`,
+    /// `tr(W (K + σn² I))` and `tr W` (with `∂K/∂log σf = 2K = 2(K + σn² I) - 2σn² I`: every
+    /// kernel's σf is a prefactor σf²). The inverse's elements are needed for the trace term.
+    fn gradient(&self, x: &DMatrix<f64>, with_noise: bool) -> Vec<f64> {
+        let n = self.ky.nrows();
+        let m = self.alpha.ncols() as f64;
+        let inv = self.chol.inverse_lower();
+        let aa = &self.alpha * self.alpha.transpose();
+        let dl = self.kernel.dgram_dlog_l_lower(x);
+        let (mut t_l, mut t_ky, mut t_w) = (0.0, 0.0, 0.0);
+        for j in 0..n {
+            let (ic, ac) = (inv.col_as_slice(j), &aa.as_slice()[j * n..(j + 1) * n]);
+            let kc = &self.ky.as_slice()[j * n..(j + 1) * n];
+            let wjj = ac[j] - m * ic[j];
+            t_w += wjj;
+            t_ky += wjj * kc[j];
+            let (mut off_ky, mut off_l) = (0.0, 0.0);
+            match &dl {
+                Some(dl) => {
+                    let dc = &dl.as_slice()[j * n..(j + 1) * n];
+                    t_l += wjj * dc[j];
+                    for i in j + 1..n {
+                        let w = ac[i] - m * ic[i];
+                        off_ky += w * kc[i];
+                        off_l += w * dc[i];
+                    }
+                }
+                None => {
+                    for i in j + 1..n {
+                        off_ky += (ac[i] - m * ic[i]) * kc[i];
+                    }
+                }
+            }
+            t_ky += 2.0 * off_ky;
+            t_l += 2.0 * off_l;
+        }
+        let mut grad = Vec::with_capacity(3);
+        if dl.is_some() {
+            grad.push(0.5 * t_l);
+        }
+        grad.push(t_ky - self.noise_var * t_w);
+        if with_noise {
+            grad.push(0.5 * self.noise_var * t_w);
+        }
+        grad
+    }
+}
+
 /// Log marginal likelihood and its gradient with respect to the kernel's log
 /// hyperparameters ([`Kernel::log_params`] order), followed by `∂/∂ log σn²` when
 /// `with_noise`.
@@ -166,27 +253,8 @@ pub fn log_marginal_likelihood_grad(
     notes: &mut Vec<String>,
 ) -> Result<(f64, Vec<f64>)> {
     check_xy(x, y)?;
-    // Lower triangles only: the Cholesky reads the lower triangle and the contractions below
-    // are over a symmetric product.
-    let (k, dl) = kernel.gram_lower(x, true);
-    let ky = noisy_gram(k, noise_var);
-    let chol = Cholesky::new(&ky, "K + noise", notes)?;
-    let alpha = chol.solve(y);
-    let value = lml_value(&chol, y, &alpha);
-    // W = α αᵀ - m (K + σn² I)⁻¹; the inverse's elements are needed for the trace term.
-    let mut w = chol.inverse_elements();
-    w *= -(y.ncols() as f64);
-    w.gemm(1.0, &alpha, &alpha.transpose(), 1.0);
-    // ½ tr(W ∂K/∂θ) with ∂K/∂log σf = 2K (every kernel's σf is a prefactor σf²).
-    let mut grad = Vec::with_capacity(3);
-    if let Some(dl) = &dl {
-        grad.push(0.5 * sym_lower_dot(&w, dl));
-    }
-    grad.push(sym_lower_dot(&w, &ky) - noise_var * w.trace());
-    if with_noise {
-        grad.push(0.5 * noise_var * w.trace());
-    }
-    Ok((value, grad))
+    let f = Factored::new(kernel, noise_var, x, y, notes)?;
+    Ok((f.value, f.gradient(x, with_noise)))
 }
 
 /// A data-driven starting point: `l` = root-mean-square input norm (NN) or RMS distance to
@@ -244,6 +312,28 @@ fn from_search(phi: &[f64], valley: bool) -> Vec<f64> {
     }
 }
 
+/// The kernel hyperparameters maximising the likelihood on `opts.warm_start_pairs` evenly
+/// spaced training pairs (see [`GprOptions::warm_start_pairs`]), or `start` unchanged when
+/// the option is off, the data are small, or that fit fails.
+fn warm_start(start: Kernel, x: &DMatrix<f64>, y: &DMatrix<f64>, opts: &GprOptions) -> Kernel {
+    let (n, s) = (x.nrows(), opts.warm_start_pairs);
+    if !opts.optimise || s == 0 || n <= 2 * s {
+        return start;
+    }
+    let rows: Vec<usize> = (0..s).map(|i| i * n / s).collect();
+    let (xs, ys) = (x.select_rows(rows.iter()), y.select_rows(rows.iter()));
+    let sub = GprOptions {
+        learn_noise: false,
+        data_init: false,
+        warm_start_pairs: 0,
+        ..*opts
+    };
+    match Gpr::train(start, &xs, &ys, &sub) {
+        Ok((m, rep)) if rep.lml.is_finite() => m.kernel,
+        _ => start,
+    }
+}
+
 fn summarise_notes(mut notes: Vec<String>) -> Vec<String> {
     const KEEP: usize = 5;
     if notes.len() > KEEP {
@@ -298,7 +388,15 @@ impl Gpr {
         } else {
             kernel
         };
-        let initial_lml = log_marginal_likelihood(&start, opts.noise_var, x, y, &mut notes)?;
+        if !(opts.noise_var >= 0.0 && opts.noise_var.is_finite()) {
+            return invalid(format!(
+                "noise variance must be >= 0, got {}",
+                opts.noise_var
+            ));
+        }
+        let start = warm_start(start, x, y, opts);
+        let mut first = Some(Factored::new(&start, opts.noise_var, x, y, &mut notes)?);
+        let initial_lml = first.as_ref().map_or(f64::NAN, |f| f.value);
         let (kernel, noise_var, exit, iterations, evaluations) = if opts.optimise {
             let nk = start.param_names().len();
             let valley = matches!(start, Kernel::NeuralNetwork { .. });
@@ -306,43 +404,68 @@ impl Gpr {
             if opts.learn_noise {
                 phi0.push(opts.noise_var.ln());
             }
-            let objective = |phi: &[f64]| {
-                let kern = start.with_log_params(&from_search(&phi[..nk], valley));
-                let noise = if opts.learn_noise {
-                    phi[nk].exp()
-                } else {
-                    opts.noise_var
-                };
-                match log_marginal_likelihood_grad(&kern, noise, opts.learn_noise, x, y, &mut notes)
-                {
-                    Ok((v, mut g)) => {
-                        if valley {
-                            g[0] += g[1]; // chain rule for (log l, log σf) = (φ0, φ0 + φ1)
-                        }
-                        (-v, g.into_iter().map(|d| -d).collect())
-                    }
-                    Err(_) => (f64::INFINITY, vec![0.0; phi.len()]),
-                }
+            // The factorisation of the last point asked for, reused when the optimiser then
+            // asks for the gradient at the same point.
+            // Seeded with the starting point, where the optimiser begins (not with a learnt
+            // noise, whose start exp(ln σn²) may differ from σn² in the last bit).
+            let mut last: Option<(Vec<f64>, Result<Factored>)> = match opts.learn_noise {
+                false => first.take().map(|f| (phi0.clone(), Ok(f))),
+                true => None,
             };
-            let r = minimize(objective, &phi0, &opts.cg);
+            let objective = |phi: &[f64], need_grad: bool| {
+                if last.as_ref().is_none_or(|(p, _)| p.as_slice() != phi) {
+                    let kern = start.with_log_params(&from_search(&phi[..nk], valley));
+                    let noise = if opts.learn_noise {
+                        phi[nk].exp()
+                    } else {
+                        opts.noise_var
+                    };
+                    let f = Factored::new(&kern, noise, x, y, &mut notes);
+                    last = Some((phi.to_vec(), f));
+                }
+                let Some((_, Ok(f))) = &last else {
+                    return (f64::INFINITY, None);
+                };
+                if !need_grad {
+                    return (-f.value, None);
+                }
+                let mut g = f.gradient(x, opts.learn_noise);
+                if valley {
+                    g[0] += g[1]; // chain rule for (log l, log σf) = (φ0, φ0 + φ1)
+                }
+                (-f.value, Some(g.into_iter().map(|d| -d).collect()))
+            };
+            let r = minimize_lazy(objective, &phi0, &opts.cg);
             let kern = start.with_log_params(&from_search(&r.x[..nk], valley));
             let noise = if opts.learn_noise {
                 r.x[nk].exp()
             } else {
                 opts.noise_var
             };
-            (kern, noise, Some(r.exit), r.iterations, r.evaluations)
+            let counts = (r.evaluations, r.gradient_evaluations);
+            (kern, noise, Some(r.exit), r.iterations, counts)
         } else {
-            (start, opts.noise_var, None, 0, 0)
+            (start, opts.noise_var, None, 0, (0, 0))
         };
-        let mut fit_notes = Vec::new();
-        let model = Self::fit(kernel, noise_var, x, y, &mut fit_notes)?;
-        let lml = log_marginal_likelihood(&kernel, noise_var, x, y, &mut Vec::new())?;
-        notes.extend(fit_notes);
+        let (evaluations, gradient_evaluations) = evaluations;
+        // Condition on the data with the hyperparameters found (one more factorisation).
+        let fitted = match first {
+            Some(f) if !opts.optimise => f,
+            _ => Factored::new(&kernel, noise_var, x, y, &mut notes)?,
+        };
+        let lml = fitted.value;
+        let model = Self {
+            kernel,
+            noise_var,
+            jitter: fitted.chol.jitter,
+            x: x.clone(),
+            alpha: fitted.alpha,
+        };
         let report = TrainReport {
             exit,
             iterations,
             evaluations,
+            gradient_evaluations,
             initial_lml,
             lml,
             notes: summarise_notes(notes),

@@ -125,6 +125,41 @@ impl Kernel {
     }
 }
 
+impl Kernel {
+    /// Lower triangle of `∂K/∂log l` alone (`None` for kernels without a length scale), for
+    /// a gradient requested after the value: avoids recomputing `K`'s arcsines/exponentials
+    /// where only the derivative is needed (NN: `σf² u / sqrt(1 - u²) (-2 + g_i + g_j)`).
+    pub(crate) fn dgram_dlog_l_lower(&self, x: &DMatrix<f64>) -> Option<DMatrix<f64>> {
+        if self.param_names().len() != 2 {
+            return None;
+        }
+        let n = x.nrows();
+        let mut dl = x * x.transpose();
+        let r = self.rows(x);
+        for j in 0..n {
+            let col = &mut dl.as_mut_slice()[j * n..(j + 1) * n];
+            match *self {
+                Kernel::NeuralNetwork { l, sigma_f, bias } => {
+                    let a = 0.5 / (l * l);
+                    let sf2 = sigma_f * sigma_f;
+                    let (dj, gj) = (r.d[j], r.g[j]);
+                    for i in j..n {
+                        let s = if bias { col[i] + 1.0 } else { col[i] };
+                        let u = (a * s * r.d[i] * dj).clamp(-1.0, 1.0);
+                        col[i] = sf2 * u / (1.0 - u * u).sqrt() * (-2.0 + r.g[i] + gj);
+                    }
+                }
+                _ => {
+                    for i in j..n {
+                        col[i] = self.entry(col[i], &r, i, &r, j, true).1;
+                    }
+                }
+            }
+        }
+        Some(dl)
+    }
+}
+
 fn mirror_lower(m: &mut DMatrix<f64>) {
     let n = m.nrows();
     for j in 0..n {

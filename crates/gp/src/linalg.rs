@@ -114,6 +114,21 @@ impl Cholesky {
         }
         out
     }
+
+    /// Lower triangle (diagonal included) of `A⁻¹` from the factor (`L⁻ᵀ L⁻¹`: triangular
+    /// inverse then triangular product, LAPACK `potri`); the strict upper triangle is 0. For
+    /// contractions with symmetric matrices that read lower triangles only: skips the
+    /// mirroring and the copy of [`Cholesky::inverse_elements`].
+    pub(crate) fn inverse_lower(&self) -> Mat<f64> {
+        use faer::dyn_stack::{MemBuffer, MemStack};
+        use faer::linalg::cholesky::llt::inverse;
+        let par = faer::get_global_parallelism();
+        let n = self.dim();
+        let mut out = Mat::zeros(n, n);
+        let mut mem = MemBuffer::new(inverse::inverse_scratch::<f64>(n, par));
+        inverse::inverse(out.as_mut(), self.llt.L(), par, MemStack::new(&mut mem));
+        out
+    }
 }
 
 /// Eigen-decomposition of a symmetric matrix (lower triangle read), eigenvalues in

@@ -6,6 +6,14 @@
 //! Written here rather than taken from argmin (STACK.md): argmin's CG has no gradient stop
 //! and drops its result when the line search fails. This one always returns the best point
 //! seen and says why it stopped ([`ExitState`]).
+//!
+//! Lazy gradients ([`minimize_lazy`]): a line-search trial first asks for the value only; the
+//! gradient is requested (at the same point, so the objective can reuse its factorisation)
+//! only when the trial passes the sufficient-decrease test and the curvature condition must
+//! be checked. Rejected trials then cost a value evaluation, and the zoom phase interpolates
+//! them with a quadratic (value and slope at the low end, value at the rejected end) instead
+//! of the cubic. For the GP marginal likelihood a value costs one Cholesky, the gradient
+//! additionally the inverse's elements (about 2.5 Choleskys).
 
 use serde::{Deserialize, Serialize};
 
@@ -75,7 +83,11 @@ pub struct CgReport {
     pub f: f64,
     pub grad: Vec<f64>,
     pub iterations: usize,
+    /// Objective values computed (each a fresh point).
     pub evaluations: usize,
+    /// Gradients computed (at most `evaluations`; fewer with [`minimize_lazy`]).
+    #[serde(default)]
+    pub gradient_evaluations: usize,
     pub exit: ExitState,
 }
 
@@ -87,7 +99,7 @@ fn inf_norm(a: &[f64]) -> f64 {
     a.iter().fold(0.0, |m: f64, v| m.max(v.abs()))
 }
 
-/// A point with its value and gradient.
+/// A point with its value and (once computed) gradient; `g` is empty until then.
 #[derive(Clone)]
 struct Point {
     x: Vec<f64>,
@@ -95,7 +107,8 @@ struct Point {
     g: Vec<f64>,
 }
 
-/// Trial point at step `alpha` along `d` with its directional derivative.
+/// Trial point at step `alpha` along `d` with its directional derivative (NaN while the
+/// gradient has not been computed).
 struct Trial {
     alpha: f64,
     p: Point,
@@ -105,34 +118,84 @@ struct Trial {
 struct Search<'a, F> {
     fg: &'a mut F,
     evals: usize,
+    grads: usize,
     best: Option<Point>,
 }
 
-impl<F: FnMut(&[f64]) -> (f64, Vec<f64>)> Search<'_, F> {
-    fn eval(&mut self, x: Vec<f64>) -> Point {
-        let (f, g) = (self.fg)(&x);
-        self.evals += 1;
-        let f = if f.is_finite() && g.iter().all(|v| v.is_finite()) {
-            f
-        } else {
-            f64::INFINITY
-        };
-        let p = Point { x, f, g };
-        if p.f.is_finite() && self.best.as_ref().is_none_or(|b| p.f < b.f) {
+impl<F: FnMut(&[f64], bool) -> (f64, Option<Vec<f64>>)> Search<'_, F> {
+    fn keep_best(&mut self, p: &Point) {
+        if p.f.is_finite() && !p.g.is_empty() && self.best.as_ref().is_none_or(|b| p.f < b.f) {
             self.best = Some(p.clone());
+        }
+    }
+
+    /// Value at `x`, and the gradient too if `need_grad` (or if the objective offers it).
+    fn eval(&mut self, x: Vec<f64>, need_grad: bool) -> Point {
+        let (f, g) = (self.fg)(&x, need_grad);
+        self.evals += 1;
+        let mut p = Point {
+            x,
+            f: if f.is_finite() { f } else { f64::INFINITY },
+            g: Vec::new(),
+        };
+        match g {
+            Some(g) => self.set_grad(&mut p, g),
+            None if need_grad && p.f.is_finite() => self.ensure_grad(&mut p),
+            None => {}
         }
         p
     }
 
+    fn set_grad(&mut self, p: &mut Point, g: Vec<f64>) {
+        self.grads += 1;
+        if g.iter().all(|v| v.is_finite()) {
+            p.g = g;
+            self.keep_best(p);
+        } else {
+            p.f = f64::INFINITY;
+        }
+    }
+
+    /// Computes the gradient at `p` if missing (the objective is asked at the same point).
+    fn ensure_grad(&mut self, p: &mut Point) {
+        if !p.g.is_empty() || !p.f.is_finite() {
+            return;
+        }
+        let (f, g) = (self.fg)(&p.x, true);
+        match g {
+            Some(g) if f.is_finite() => {
+                p.f = f;
+                self.set_grad(p, g);
+            }
+            _ => p.f = f64::INFINITY,
+        }
+    }
+
     fn trial(&mut self, x0: &[f64], d: &[f64], alpha: f64) -> Trial {
         let x: Vec<f64> = x0.iter().zip(d).map(|(a, b)| a + alpha * b).collect();
-        let p = self.eval(x);
-        let dphi = if p.f.is_finite() {
-            dot(&p.g, d)
-        } else {
-            f64::NAN
+        let p = self.eval(x, false);
+        let mut t = Trial {
+            alpha,
+            p,
+            dphi: f64::NAN,
         };
-        Trial { alpha, p, dphi }
+        if !t.p.g.is_empty() {
+            t.dphi = dot(&t.p.g, d);
+        }
+        t
+    }
+
+    /// Makes sure the trial has its gradient and directional derivative; false when the
+    /// gradient turned out non-finite (the trial then counts as "too far").
+    fn trial_grad(&mut self, t: &mut Trial, d: &[f64]) -> bool {
+        self.ensure_grad(&mut t.p);
+        if t.p.f.is_finite() && !t.p.g.is_empty() {
+            t.dphi = dot(&t.p.g, d);
+            true
+        } else {
+            t.dphi = f64::NAN;
+            false
+        }
     }
 
     /// Strong-Wolfe line search from `start` along descent direction `d` (N&W alg. 3.5).
@@ -153,9 +216,10 @@ impl<F: FnMut(&[f64]) -> (f64, Vec<f64>)> Search<'_, F> {
         let mut alpha = alpha0;
         let mut used = 0;
         loop {
-            let t = self.trial(&start.x, d, alpha);
+            let mut t = self.trial(&start.x, d, alpha);
             used += 1;
-            if !armijo(&t) || (prev.alpha > 0.0 && t.p.f >= prev.p.f) {
+            if !armijo(&t) || (prev.alpha > 0.0 && t.p.f >= prev.p.f) || !self.trial_grad(&mut t, d)
+            {
                 return self.zoom(start, d, prev, t, used, o);
             }
             if t.dphi.abs() <= -o.c2 * dphi0 {
@@ -191,9 +255,13 @@ impl<F: FnMut(&[f64]) -> (f64, Vec<f64>)> Search<'_, F> {
                 return None;
             }
             let alpha = interpolate(&lo, &hi).clamp(a.min(b) + 0.1 * width, a.max(b) - 0.1 * width);
-            let t = self.trial(&start.x, d, alpha);
+            let mut t = self.trial(&start.x, d, alpha);
             used += 1;
-            if !t.p.f.is_finite() || t.p.f > f0 + o.c1 * alpha * dphi0 || t.p.f >= lo.p.f {
+            if !t.p.f.is_finite()
+                || t.p.f > f0 + o.c1 * alpha * dphi0
+                || t.p.f >= lo.p.f
+                || !self.trial_grad(&mut t, d)
+            {
                 hi = t;
             } else {
                 if t.dphi.abs() <= -o.c2 * dphi0 {
@@ -209,14 +277,21 @@ impl<F: FnMut(&[f64]) -> (f64, Vec<f64>)> Search<'_, F> {
     }
 }
 
-/// Minimiser of the cubic through `(a, φa, φ'a)`, `(b, φb, φ'b)` (N&W eq. 3.59); the
-/// midpoint when the cubic is degenerate or `b` was not finite.
+/// Minimiser of the cubic through `(a, φa, φ'a)`, `(b, φb, φ'b)` (N&W eq. 3.59), or of the
+/// quadratic through `(a, φa, φ'a)`, `(b, φb)` when `b`'s slope was not computed (lazy
+/// gradients); the midpoint when the model is degenerate or `b` was not finite.
 fn interpolate(lo: &Trial, hi: &Trial) -> f64 {
     let (a, fa, ga) = (lo.alpha, lo.p.f, lo.dphi);
     let (b, fb, gb) = (hi.alpha, hi.p.f, hi.dphi);
     let mid = 0.5 * (a + b);
-    if !(fb.is_finite() && gb.is_finite()) {
+    if !fb.is_finite() {
         return mid;
+    }
+    if !gb.is_finite() {
+        let h = b - a;
+        let curv = fb - fa - ga * h; // = c h² for q(t) = fa + ga (t - a) + c (t - a)²
+        let x = a - ga * h * h / (2.0 * curv);
+        return if curv > 0.0 && x.is_finite() { x } else { mid };
     }
     let d1 = ga + gb - 3.0 * (fa - fb) / (a - b);
     let disc = d1 * d1 - ga * gb;
@@ -241,14 +316,34 @@ pub fn minimize<F>(mut fg: F, x0: &[f64], o: &CgOptions) -> CgReport
 where
     F: FnMut(&[f64]) -> (f64, Vec<f64>),
 {
+    minimize_lazy(
+        |x: &[f64], _need_grad: bool| {
+            let (f, g) = fg(x);
+            (f, Some(g))
+        },
+        x0,
+        o,
+    )
+}
+
+/// [`minimize`] with lazy gradients: `fg(x, need_grad)` returns the value and, when
+/// `need_grad` (it may also when not asked), the gradient. After a value-only call the
+/// optimiser may ask again at the **same** `x` with `need_grad = true`; the objective can
+/// cache its work for that case. Returning `None` when the gradient was asked counts as a
+/// non-finite value.
+pub fn minimize_lazy<F>(mut fg: F, x0: &[f64], o: &CgOptions) -> CgReport
+where
+    F: FnMut(&[f64], bool) -> (f64, Option<Vec<f64>>),
+{
     let mut s = Search {
         fg: &mut fg,
         evals: 0,
+        grads: 0,
         best: None,
     };
-    let mut cur = s.eval(x0.to_vec());
+    let mut cur = s.eval(x0.to_vec(), true);
     let finish = |s: Search<'_, F>, cur: Point, iterations: usize, exit: ExitState| {
-        let evaluations = s.evals;
+        let (evaluations, gradient_evaluations) = (s.evals, s.grads);
         let b = s.best.unwrap_or(cur);
         CgReport {
             x: b.x,
@@ -256,6 +351,7 @@ where
             grad: b.g,
             iterations,
             evaluations,
+            gradient_evaluations,
             exit,
         }
     };

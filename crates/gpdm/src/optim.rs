@@ -118,35 +118,11 @@ fn inf_norm(a: &[f64]) -> f64 {
 /// Minimises `f` by L-BFGS with a strong-Wolfe line search (Nocedal & Wright, alg. 7.4,
 /// 3.5 and 3.6). `f(x, g)` returns the value and writes the gradient, or `None` when it cannot
 /// be evaluated (treated as +∞: the step is shortened).
-pub fn lbfgs<F>(f: F, x0: &[f64], opts: &LbfgsOptions) -> LbfgsResult
-where
-    F: FnMut(&[f64], &mut [f64]) -> Option<f64>,
-{
-    lbfgs_blocks(f, x0, opts, &[])
-}
-
-/// [`lbfgs`] with a block-diagonal initial inverse Hessian `H0 = diag(γ_b I)`: for every
-/// block `b` (a range of coordinates) `γ_b = s_bᵀy_b / y_bᵀy_b` from the latest correction
-/// pair restricted to the block (Barzilai-Borwein scaling per block; the global scalar γ of
-/// Nocedal & Wright eq. 7.20 where `s_bᵀy_b ≤ 0` and for coordinates outside all blocks).
-/// With blocks of very different curvature (GPDM: latent positions vs. kernel
-/// hyperparameters, issue 6) this removes most of the ill-conditioning that the scalar γ
-/// leaves to the quasi-Newton memory. `blocks = &[]` is plain L-BFGS.
-pub fn lbfgs_blocks<F>(
-    mut f: F,
-    x0: &[f64],
-    opts: &LbfgsOptions,
-    blocks: &[std::ops::Range<usize>],
-) -> LbfgsResult
+pub fn lbfgs<F>(mut f: F, x0: &[f64], opts: &LbfgsOptions) -> LbfgsResult
 where
     F: FnMut(&[f64], &mut [f64]) -> Option<f64>,
 {
     let n = x0.len();
-    let blocks: Vec<std::ops::Range<usize>> = blocks
-        .iter()
-        .map(|b| b.start.min(n)..b.end.min(n))
-        .filter(|b| !b.is_empty())
-        .collect();
     let mut evals = 0usize;
     let mut x = x0.to_vec();
     let mut g = vec![0.0; n];
@@ -193,19 +169,6 @@ where
         };
         for v in q.iter_mut() {
             *v *= gamma;
-        }
-        if k > 0 {
-            let (sl, yl) = (&s_hist[k - 1], &y_hist[k - 1]);
-            for b in &blocks {
-                let sy = dot(&sl[b.clone()], &yl[b.clone()]);
-                let yy = dot(&yl[b.clone()], &yl[b.clone()]);
-                if sy > 0.0 && yy > 0.0 && (sy / yy).is_finite() {
-                    let gb = sy / yy;
-                    for v in &mut q[b.clone()] {
-                        *v *= gb / gamma;
-                    }
-                }
-            }
         }
         for i in 0..k {
             let rho = 1.0 / dot(&y_hist[i], &s_hist[i]);
@@ -455,26 +418,6 @@ pub struct TrainReport {
     pub trace: Vec<(f64, f64)>,
 }
 
-/// Scaling blocks of [`lbfgs_blocks`] for the optimised coordinates `idx` (sorted indices
-/// into θ; the first `nx` entries of θ are X): all latent positions form one block and every
-/// hyperparameter its own (their curvatures differ by orders of magnitude, issue 6).
-fn scaling_blocks(idx: &[usize], nx: usize, _n_all: usize) -> Vec<std::ops::Range<usize>> {
-    let mode: usize = std::env::var("GPDM_BLOCKS").ok().and_then(|v| v.parse().ok()).unwrap_or(1);
-    if mode == 0 { return vec![]; }
-    let n_x = idx.iter().filter(|&&i| i < nx).count();
-    let mut blocks = vec![];
-    if n_x > 0 {
-        if mode == 2 {
-            let d = 3; let per = n_x / d;
-            for c in 0..d { blocks.push(c * per..(c + 1) * per); }
-        } else {
-            blocks.push(0..n_x);
-        }
-    }
-    blocks.extend((n_x..idx.len()).map(|k| k..k + 1));
-    blocks
-}
-
 /// Minimises eq. 7 over X, α and β starting from the model's current parameters and stores
 /// the best point found back into `model`.
 pub fn train(model: &mut Gpdm, opts: &TrainOptions) -> Result<TrainReport> {
@@ -511,8 +454,7 @@ pub fn train(model: &mut Gpdm, opts: &TrainOptions) -> Result<TrainReport> {
         let sub0: Vec<f64> = idx.iter().map(|&i| theta[i]).collect();
         let mut o = opts.lbfgs.clone();
         o.max_iter = iters;
-        let blocks = scaling_blocks(&idx, n_all - 7, n_all / 1);
-        let res = lbfgs_blocks(
+        let res = lbfgs(
             |sub, g| {
                 let mut t = base.clone();
                 for (k, &i) in idx.iter().enumerate() {
@@ -529,7 +471,6 @@ pub fn train(model: &mut Gpdm, opts: &TrainOptions) -> Result<TrainReport> {
             },
             &sub0,
             &o,
-            &blocks,
         );
         report.evaluations += res.evaluations;
         report.exits.push(res.exit);

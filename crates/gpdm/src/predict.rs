@@ -6,7 +6,8 @@ use crate::error::{invalid, Result};
 use crate::kernel::RbfLinear;
 use crate::linalg::{mul, to_na, view, Cholesky};
 use crate::model::Gpdm;
-use faer::{Mat, MatRef};
+use faer::linalg::matmul::matmul;
+use faer::{Accum, Mat, MatMut, MatRef, Par};
 use nalgebra::{DMatrix, DVector};
 use rand::RngExt;
 
@@ -51,7 +52,8 @@ impl Predictor {
             }
         }
         let a_x = chol_x.solve(x_out.as_ref());
-        let a_y = chol_y.solve(view(&model.y));
+        let mut a_y = view(&model.y).to_owned();
+        solve_cols_par(&chol_y, a_y.as_mut());
         Ok(Predictor {
             kx,
             ky,
@@ -182,18 +184,37 @@ impl Predictor {
     }
 
     /// Eq. 12 for each row of `xs` (T × d): `μ_Y(x) = Yᵀ K_Y⁻¹ k_Y(x)` plus the data mean.
+    ///
+    /// One GEMM `k_Y(X_*, X) · (K_Y⁻¹ Y)` (T × N × D, or T × N × r then T × r × D with a pose
+    /// basis) accumulated straight into the mean-initialised output; the output columns are
+    /// split across rayon threads (each column block computed identically whatever the thread
+    /// count, so results do not depend on it).
     pub fn pose_mean(&self, xs: &DMatrix<f64>) -> Result<DMatrix<f64>> {
         self.check_latent(xs)?;
+        let t = xs.nrows();
         let kstar = self.ky.cross(view(xs), self.x.as_ref()); // T × N
-        let coef = mul(kstar.as_ref(), self.a_y.as_ref());
-        let mut m = match &self.basis {
-            Some(b) => to_na(mul(coef.as_ref(), b.as_ref()).as_ref()),
-            None => to_na(coef.as_ref()),
-        };
-        for mut row in m.row_iter_mut() {
-            row += self.y_mean.transpose();
+        let mut m = DMatrix::<f64>::zeros(t, self.pose_dim());
+        if t > 0 {
+            for (col, &mu) in m.as_mut_slice().chunks_exact_mut(t).zip(self.y_mean.iter()) {
+                col.fill(mu);
+            }
+        }
+        let out = MatMut::from_column_major_slice_mut(m.as_mut_slice(), t, self.pose_dim());
+        match &self.basis {
+            Some(b) => {
+                let coef = mul(kstar.as_ref(), self.a_y.as_ref()); // T × r
+                gemm_add_cols(out, coef.as_ref(), b.as_ref());
+            }
+            None => gemm_add_cols(out, kstar.as_ref(), self.a_y.as_ref()),
         }
         Ok(m)
+    }
+
+    /// [`Predictor::pose_mean`] for many trajectories, decoded in parallel (rayon, one
+    /// trajectory per task); the output is identical for any number of threads.
+    pub fn pose_means(&self, trajs: &[DMatrix<f64>]) -> Result<Vec<DMatrix<f64>>> {
+        use rayon::prelude::*;
+        trajs.par_iter().map(|t| self.pose_mean(t)).collect()
     }
 
     /// Eq. 13 for each row of `xs`: `σ²_Y(x) = k_Y(x, x) − k_Y(x)ᵀ K_Y⁻¹ k_Y(x)`, with
@@ -230,4 +251,35 @@ impl Predictor {
         }
         Ok(m)
     }
+}
+
+/// `out += a · b`, sequential GEMMs on column blocks of at least 256 columns, split
+/// recursively with `rayon::join` (deterministic: every block is the same sequential GEMM).
+fn gemm_add_cols(out: MatMut<'_, f64>, a: MatRef<'_, f64>, b: MatRef<'_, f64>) {
+    let cols = out.ncols();
+    if cols < 512 || out.nrows() * cols < 1 << 16 {
+        matmul(out, Accum::Add, a, b, 1.0, Par::Seq);
+        return;
+    }
+    let half = cols / 2;
+    let (left, right) = out.split_at_col_mut(half);
+    let (bl, br) = b.split_at_col(half);
+    rayon::join(
+        || gemm_add_cols(left, a, bl),
+        || gemm_add_cols(right, a, br),
+    );
+}
+
+/// `rhs ← K⁻¹ rhs` with the columns split across rayon threads (blocks of ≥ 256 columns).
+fn solve_cols_par(chol: &Cholesky, rhs: MatMut<'_, f64>) {
+    let cols = rhs.ncols();
+    if cols < 512 {
+        chol.solve_in_place(rhs);
+        return;
+    }
+    let (left, right) = rhs.split_at_col_mut(cols / 2);
+    rayon::join(
+        || solve_cols_par(chol, left),
+        || solve_cols_par(chol, right),
+    );
 }

@@ -13,6 +13,7 @@ pub mod topology;
 pub mod io;
 pub mod sequence;
 pub mod capture_set;
+pub mod segmentation;
 pub mod artifact;
 pub mod atomic;
 pub mod rigid;

@@ -7,7 +7,7 @@ use mesh_core::TriMesh;
 use std::process::Command;
 use surface::blend::Blender;
 use surface::correct::Corrector;
-use surface::segmentation::{SegmentPart, Segmentation};
+use mesh_core::segmentation::{Part as SegmentPart, Segmentation};
 
 fn run(bin: &str, args: &[&str]) -> (i32, String) {
     let out = Command::new(bin)

@@ -22,7 +22,8 @@ fn coeffs(frames: usize, seed: f64) -> DMatrix<f64> {
     DMatrix::from_fn(frames, M, |i, c| {
         let t = i as f64 * 0.05;
         let k = c as f64;
-        (2.0 / (1.0 + k)) * ((1.0 + 0.3 * k) * t + seed + k).sin() + 0.3 * (0.7 * t * (1.0 + 0.1 * k) + 2.0 * seed).cos()
+        (2.0 / (1.0 + k)) * ((1.0 + 0.3 * k) * t + seed + k).sin()
+            + 0.3 * (0.7 * t * (1.0 + 0.1 * k) + 2.0 * seed).cos()
     })
 }
 
@@ -30,12 +31,21 @@ fn pair_data(n: usize) -> PairData {
     let disp: Vec<[f64; 6]> = (0..n)
         .map(|i| {
             let t = i as f64 * 0.05;
-            [0.03 * t.sin(), 0.005 * (2.0 * t).cos(), 0.04 + 0.01 * t.cos(), 0.01 * t.sin(), 0.05 * (0.5 * t).sin(), 0.005]
+            [
+                0.03 * t.sin(),
+                0.005 * (2.0 * t).cos(),
+                0.04 + 0.01 * t.cos(),
+                0.01 * t.sin(),
+                0.05 * (0.5 * t).sin(),
+                0.005,
+            ]
         })
         .collect();
     PairData {
         source_coeffs: (0..PARTS).map(|p| coeffs(n, p as f64)).collect(),
-        target_coeffs: (0..PARTS).map(|p| coeffs(n, p as f64 + 0.2).map(|v| 1.2 * v + 0.1 * v * v)).collect(),
+        target_coeffs: (0..PARTS)
+            .map(|p| coeffs(n, p as f64 + 0.2).map(|v| 1.2 * v + 0.1 * v * v))
+            .collect(),
         source_disp: disp.clone(),
         target_disp: disp,
         pairs: (0..n).map(|i| [i, i]).collect(),
@@ -51,12 +61,35 @@ fn bench(c: &mut Criterion) {
     g.sample_size(10);
     for n in [350, 1100] {
         let data = pair_data(n);
-        g.bench_function(format!("{n} pairs, 5 parts + displacement, one direction"), |b| {
-            b.iter(|| train(Method::GprNn, false, &names, std::slice::from_ref(&data), 1.0, false, &opts).unwrap())
-        });
+        g.bench_function(
+            format!("{n} pairs, 5 parts + displacement, one direction"),
+            |b| {
+                b.iter(|| {
+                    train(
+                        Method::GprNn,
+                        false,
+                        &names,
+                        std::slice::from_ref(&data),
+                        1.0,
+                        false,
+                        &opts,
+                    )
+                    .unwrap()
+                })
+            },
+        );
     }
     g.finish();
-    let model = train(Method::GprNn, false, &names, &[pair_data(1100)], 1.0, false, &opts).unwrap();
+    let model = train(
+        Method::GprNn,
+        false,
+        &names,
+        &[pair_data(1100)],
+        1.0,
+        false,
+        &opts,
+    )
+    .unwrap();
     let test = pair_data(1000);
     let xd = displacement_matrix(&test.source_disp);
     let mut g = c.benchmark_group("gpr-predict");

@@ -2,11 +2,10 @@
 //!
 //! Each module is one stage's logic; `src/bin/<stage>.rs` parses arguments
 //! and calls it. Data flows one way: capture set -> [`align`] (per motion)
-//! and [`segment`] (per subject) -> PCA per part -> dense correspondences ->
+//! and `segment` (per subject, `mesh_core::segmentation`) -> PCA per part -> dense correspondences ->
 //! GP models -> predicted target sequences -> evaluation.
 
 pub mod align;
-pub mod segment;
 pub mod part_pca;
 pub mod densify;
 pub mod gpr_model;

@@ -17,7 +17,7 @@ use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 
 use crate::align::AlignedMotion;
-use crate::segment::Segmentation;
+use mesh_core::segmentation::Segmentation;
 
 /// PCA of one part.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
@@ -79,7 +79,7 @@ fn part_rows(motions: &[&AlignedMotion], vertices: &[u32], reference: &[Vector3<
 pub fn whole_body(n_vertices: usize) -> Segmentation {
     Segmentation {
         n_vertices,
-        parts: vec![crate::segment::Part {
+        parts: vec![mesh_core::segmentation::Part {
             name: "body".into(),
             parent: None,
             vertices: (0..n_vertices as u32).collect(),

@@ -177,7 +177,7 @@ pub fn build(set: &CaptureSet, spec: &GroupSpec) -> Result<(Group, Vec<String>)>
     let seg = if spec.whole_body {
         transfer::part_pca::whole_body(template.n_vertices())
     } else {
-        match transfer::segment::segment(template, &subject_spec) {
+        match mesh_core::segmentation::segment(template, &subject_spec) {
             Ok(s) => s,
             Err(e) if spec.fallback_whole_body => {
                 notes.push(format!(

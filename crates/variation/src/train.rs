@@ -89,8 +89,8 @@ impl Default for TrainConfig {
     fn default() -> Self {
         let mut options = TrainOptions {
             schedule: Schedule::Alternate {
-                rounds: 4,
-                iters: 60,
+                rounds: 10,
+                iters: 200,
             },
             ..Default::default()
         };

@@ -6,7 +6,9 @@ use clap::Parser;
 use mesh_core::cli::{run_stage, CommonArgs};
 use mesh_core::io::read_mesh;
 use surface::frames::{read_frames, write_frames};
-use surface::segmentation::Segmentation;
+use mesh_core::artifact::Artifact;
+use mesh_core::segmentation::Segmentation;
+use surface::segmentation::part_layout;
 use surface::stitch::Stitcher;
 
 /// Stitch corrected part meshes into one mesh with the template's topology along optimal loops (transfer paper §6.2)
@@ -50,7 +52,7 @@ fn main() -> ExitCode {
             .tree_order()
             .with_context(|| args.segmentation.display().to_string())?;
         let mut stitcher = Stitcher::new(
-            seg.layout(template.faces.clone())
+            part_layout(&seg, template.faces.clone())
                 .with_context(|| args.segmentation.display().to_string())?,
         );
         let mut parts = Vec::new();

@@ -8,7 +8,7 @@ use mesh_core::cli::{run_stage, CommonArgs};
 use mesh_core::io::read_mesh;
 use transfer::align::AlignedMotion;
 use transfer::part_pca;
-use transfer::segment::Segmentation;
+use mesh_core::segmentation::Segmentation;
 
 /// Fit a PCA per body part on a subject's aligned training motions
 #[derive(Parser, Debug)]

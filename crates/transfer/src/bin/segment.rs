@@ -34,7 +34,7 @@ fn main() -> ExitCode {
         args.common.init()?;
         let subject = SubjectSpec::load(&args.subject)?;
         let template = read_mesh(&args.template)?;
-        let parts = transfer::segment::segment(&template, &subject)
+        let parts = mesh_core::segmentation::segment(&template, &subject)
             .with_context(|| args.subject.display().to_string())?;
         let header = args
             .common

@@ -27,10 +27,10 @@ struct Args {
     #[arg(long, default_value_t = 1e-6)]
     noise_floor: f64,
     /// Alternating rounds of (X, α) and β-only L-BFGS phases
-    #[arg(long, default_value_t = 4)]
+    #[arg(long, default_value_t = 10)]
     rounds: usize,
     /// L-BFGS iterations per phase
-    #[arg(long, default_value_t = 60)]
+    #[arg(long, default_value_t = 200)]
     iters: usize,
     /// Output artifact (kind variation-model)
     #[arg(short, long)]

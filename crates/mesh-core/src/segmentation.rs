@@ -1,5 +1,6 @@
-//! `segment`: cut a subject's template into overlapping body parts from the
-//! user's curves (transfer paper §4, "Body Parts", figure 2).
+//! Overlapping body parts cut from a subject's template by the user's curves
+//! (transfer paper §4, "Body Parts", figure 2). Written by the `segment`
+//! stage; read by transfer (PCA per part), surface (stitching) and variation.
 //!
 //! Every non-root part `c` has two closed loops: `near` (close to its parent)
 //! and `far` (further down the limb). Removing a loop's vertices splits the
@@ -19,10 +20,10 @@
 
 use std::collections::BTreeMap;
 
-use mesh_core::artifact::Artifact;
-use mesh_core::capture_set::SubjectSpec;
-use mesh_core::topology::Topology;
-use mesh_core::{Error, Result, TriMesh};
+use crate::artifact::Artifact;
+use crate::capture_set::SubjectSpec;
+use crate::topology::Topology;
+use crate::{Error, Result, TriMesh};
 use serde::{Deserialize, Serialize};
 
 /// One body part: a sub-mesh of the template with its own local indexing.
@@ -55,6 +56,26 @@ impl Artifact for Segmentation {
 impl Segmentation {
     pub fn part(&self, name: &str) -> Option<&Part> {
         self.parts.iter().find(|p| p.name == name)
+    }
+
+    /// Part indices with every parent before its children (root first).
+    /// Errors unless there is exactly one root and every part hangs from it.
+    pub fn tree_order(&self) -> Result<Vec<usize>> {
+        let roots: Vec<usize> = (0..self.parts.len()).filter(|&k| self.parts[k].parent.is_none()).collect();
+        if roots.len() != 1 {
+            return Err(Error::invalid(format!("segmentation has {} root parts, expected 1", roots.len())));
+        }
+        let mut order = roots;
+        let mut i = 0;
+        while i < order.len() {
+            let name = &self.parts[order[i]].name;
+            order.extend((0..self.parts.len()).filter(|&k| self.parts[k].parent.as_ref() == Some(name)));
+            i += 1;
+        }
+        if order.len() != self.parts.len() {
+            return Err(Error::invalid("segmentation: some parts are not connected to the root"));
+        }
+        Ok(order)
     }
 
     /// Part index of every template vertex, for colouring: a vertex in an
@@ -191,7 +212,7 @@ pub fn segment(template: &TriMesh, subject: &SubjectSpec) -> Result<Segmentation
 #[cfg(test)]
 mod tests {
     use super::*;
-    use mesh_core::shapes::capsule_body;
+    use crate::shapes::capsule_body;
 
     /// A capsule standing on +y with one "limb" part above two rings: the
     /// part sizes follow from the ring layout exactly.
