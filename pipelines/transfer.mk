@@ -129,9 +129,11 @@ $(TRANSFER_RULES): $(SET)/set.json $(wildcard $(SET)/* $(SET)/truth/*) pipelines
 	@mkdir -p $(@D)
 	@python3 -c "$$TRANSFER_RULES_PY" $(SET) $(OUT) "$(TRANSFER_METHODS)" > $@.tmp && mv $@.tmp $@
 
+
+# The generated rules (and the merge below) exist only under `make transfer`, which calls
+# `make transfer-results` once the binaries are built.
 ifneq ($(filter transfer-results,$(MAKECMDGOALS)),)
 include $(TRANSFER_RULES)
-endif
 
 transfer-results: $(OUT)/results.json
 
@@ -139,3 +141,4 @@ transfer-results: $(OUT)/results.json
 $(OUT)/results.json: $(TRANSFER_RECORDS) $(TRANSFER_STAMPS)
 	@python3 -c 'import json, sys; recs = [json.load(open(f)) for f in sys.argv[2:]]; recs.sort(key=lambda r: (r["direction"], r["motion"], r["method"], r.get("training", ""), r.get("placement", ""))); open(sys.argv[1] + ".tmp", "w").write(json.dumps(recs, indent=1) + "\n")' $@ $(TRANSFER_RECORDS)
 	@mv $@.tmp $@
+endif

@@ -2,7 +2,7 @@
 //! prediction on synthetic pairs, and optionally dumps every problem as CSV with our results
 //! for `scripts/compare/gpr_gpy.py`.
 //!
-//! Usage: `gpr_compare [--pairs N] [--kernel nn|se|linear] [--dump DIR] [--grad-tol X] [--c2 X] [--max-step X]`
+//! Usage: `gpr_compare [--pairs N] [--kernel nn|se|linear] [--dump DIR] [--grad-tol X] [--c2 X] [--max-step X] [--warm-start N]`
 //! e.g.: `OPENBLAS_NUM_THREADS=1 cargo run --release -p gp --example gpr_compare -- --pairs 1100 --dump /tmp/gpr1100`
 #[path = "../benches/synthetic_pairs.rs"]
 mod synthetic_pairs;
@@ -21,6 +21,27 @@ fn write_csv(path: &std::path::Path, m: &DMatrix<f64>) -> std::io::Result<()> {
         writeln!(f, "{}", line.join(","))?;
     }
     Ok(())
+}
+
+/// CPU time (user + system, all threads) of this process in seconds, from /proc/self/stat
+/// (Linux; NaN elsewhere): the machine is shared, so wall time alone misleads.
+fn cpu_seconds() -> f64 {
+    let Ok(stat) = std::fs::read_to_string("/proc/self/stat") else {
+        return f64::NAN;
+    };
+    // Fields after the parenthesised command name; utime and stime are fields 14 and 15.
+    let rest = stat.rsplit_once(')').map_or("", |(_, r)| r);
+    let f: Vec<f64> = rest
+        .split_whitespace()
+        .skip(11)
+        .take(2)
+        .filter_map(|v| v.parse().ok())
+        .collect();
+    if f.len() == 2 {
+        (f[0] + f[1]) / 100.0 // USER_HZ is 100 on Linux
+    } else {
+        f64::NAN
+    }
 }
 
 fn l_sf(k: &Kernel) -> (f64, f64) {
@@ -56,15 +77,18 @@ fn main() {
     if let Some(v) = get("--c2") {
         opts.cg.c2 = v.parse().expect("--c2 X");
     }
+    if let Some(v) = get("--warm-start") {
+        opts.warm_start_pairs = v.parse().expect("--warm-start N");
+    }
     if let Some(v) = get("--max-step") {
         opts.cg.max_step = v.parse().expect("--max-step X");
     }
     let problems = synthetic_pairs::both_directions(n, 7);
-    let t0 = Instant::now();
+    let (t0, c0) = (Instant::now(), cpu_seconds());
     let models = train_many(kernel, &problems, &opts);
-    let train_s = t0.elapsed().as_secs_f64();
+    let (train_s, train_cpu) = (t0.elapsed().as_secs_f64(), cpu_seconds() - c0);
     println!(
-        "pairs {n}: trained {} models ({}) in {train_s:.3} s (rayon, {} threads)",
+        "pairs {n}: trained {} models ({}) in {train_s:.3} s wall, {train_cpu:.2} s CPU (rayon, {} threads)",
         models.len(),
         kernel.name(),
         rayon::current_num_threads()

@@ -49,8 +49,9 @@ pub struct CgOptions {
     /// Maximum number of CG iterations (line searches).
     pub max_iter: usize,
     /// Relative gradient tolerance: stop when `‖∇f‖∞ <= grad_tol · max(1, |f|)`. Relative
-    /// because the log marginal likelihood and its gradient both grow with `F · m`; at the
-    /// default 1e-4 the remaining likelihood gain is far below 1e-3 on the benchmark problems.
+    /// because the log marginal likelihood and its gradient both grow with `F · m`. The
+    /// default 1e-5 reaches GPy's optimum (L-BFGS-B) or better on all 24 benchmark models
+    /// (350 and 1100 pairs); 1e-4 stopped up to 0.014 below it on the near-linear ones.
     pub grad_tol: f64,
     /// Sufficient-decrease constant of the Wolfe conditions.
     pub c1: f64,
@@ -67,7 +68,7 @@ impl Default for CgOptions {
     fn default() -> Self {
         Self {
             max_iter: 100,
-            grad_tol: 1e-4,
+            grad_tol: 1e-5,
             c1: 1e-4,
             c2: 0.1,
             max_line_evals: 12,

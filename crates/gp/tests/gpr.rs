@@ -296,3 +296,56 @@ fn duplicate_inputs_without_noise_trigger_logged_jitter() {
     let p = m.predict_mean(&x).unwrap();
     assert!((p - DVector::from_vec(vec![0.5, 0.5, 1.0])).amax() < 1e-3);
 }
+
+#[test]
+fn warm_start_on_a_subset_reaches_the_full_data_optimum() {
+    // 300 pairs > 2 x 60: the optimiser first fits 60 evenly spaced pairs, then the full set
+    // from there. The full-data optimum must be the one a cold start finds (same
+    // likelihood, same hyperparameters, a stationary point). (Whether it saves evaluations is
+    // measured by the `gpr_compare` example, not asserted here.)
+    let mut rng = Rng::new(21);
+    let x = rng.matrix(300, 3, 1.0);
+    let mut y = target_fn(&x);
+    y += rng.matrix(300, 2, 0.1);
+    for kernel in [
+        Kernel::neural_network(1.0, 1.0),
+        Kernel::SquaredExponential {
+            l: 1.0,
+            sigma_f: 1.0,
+        },
+    ] {
+        let mut cold = GprOptions {
+            warm_start_pairs: 0,
+            ..Default::default()
+        };
+        cold.cg.grad_tol = 1e-6;
+        let warm = GprOptions {
+            warm_start_pairs: 60,
+            ..cold
+        };
+        let (mc, rc) = Gpr::train(kernel, &x, &y, &cold).unwrap();
+        let (mw, rw) = Gpr::train(kernel, &x, &y, &warm).unwrap();
+        // |lml| is about 1 here, so a failed line search at floating-point resolution is an
+        // acceptable end; stationarity is checked directly below.
+        assert!(
+            matches!(
+                rw.exit,
+                Some(ExitState::Converged | ExitState::LineSearchFailed)
+            ),
+            "{rw:?}"
+        );
+        let (v, g) =
+            log_marginal_likelihood_grad(&mw.kernel, mw.noise_var, false, &x, &y, &mut Vec::new())
+                .unwrap();
+        assert!(g.iter().all(|d| d.abs() < 1e-5 * v.abs().max(1.0)), "{g:?}");
+        assert!(
+            (rc.lml - rw.lml).abs() < 1e-8 * rc.lml.abs().max(1.0),
+            "{rc:?} {rw:?}"
+        );
+        let (pc, pw) = (mc.kernel.log_params(), mw.kernel.log_params());
+        for (a, b) in pc.iter().zip(&pw) {
+            assert!((a - b).abs() < 1e-3, "{:?} vs {:?}", mc.kernel, mw.kernel);
+        }
+        assert!(rw.gradient_evaluations <= rw.evaluations);
+    }
+}

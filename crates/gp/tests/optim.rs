@@ -1,5 +1,5 @@
 //! The conjugate-gradient optimiser on functions with known minima, and its exit states.
-use gp::optim::{minimize, CgOptions, ExitState};
+use gp::optim::{minimize, minimize_lazy, CgOptions, ExitState};
 
 fn rosenbrock(x: &[f64]) -> (f64, Vec<f64>) {
     let (a, b) = (x[0], x[1]);
@@ -97,4 +97,74 @@ fn non_finite_start_and_infinite_regions() {
     let r = minimize(f, &[-50.0], &opts);
     assert_eq!(r.exit, ExitState::Converged, "{r:?}");
     assert!((r.x[0] - 2.0).abs() < 1e-8);
+}
+
+#[test]
+fn lazy_gradients_reach_the_same_minimum_with_fewer_gradients() {
+    // Rosenbrock through the lazy protocol: the gradient may only be asked at the point of
+    // the previous (value-only) call, which is what lets the GP reuse its factorisation.
+    let opts = CgOptions {
+        max_iter: 2000,
+        grad_tol: 1e-10,
+        max_step: 10.0,
+        ..Default::default()
+    };
+    let (mut values, mut grads) = (0usize, 0usize);
+    let mut last: Option<Vec<f64>> = None;
+    let r = minimize_lazy(
+        |x: &[f64], need_grad: bool| {
+            let (f, g) = rosenbrock(x);
+            if need_grad {
+                if last.as_deref() != Some(x) {
+                    values += 1;
+                }
+                grads += 1;
+                last = Some(x.to_vec());
+                (f, Some(g))
+            } else {
+                values += 1;
+                last = Some(x.to_vec());
+                (f, None)
+            }
+        },
+        &[-1.2, 1.0],
+        &opts,
+    );
+    assert_eq!(r.exit, ExitState::Converged, "{r:?}");
+    assert!(
+        (r.x[0] - 1.0).abs() < 1e-6 && (r.x[1] - 1.0).abs() < 1e-6,
+        "{r:?}"
+    );
+    // The report counts what the objective saw, and some trials were rejected on value alone.
+    assert_eq!(r.evaluations, values, "{r:?}");
+    assert_eq!(r.gradient_evaluations, grads, "{r:?}");
+    assert!(grads < values, "{grads} gradients for {values} values");
+    // The returned gradient is the true gradient at the returned point.
+    assert_eq!(r.grad, rosenbrock(&r.x).1);
+    // The eager wrapper computes a gradient with every value.
+    let e = minimize(rosenbrock, &[-1.2, 1.0], &opts);
+    assert_eq!(e.exit, ExitState::Converged);
+    assert_eq!(e.evaluations, e.gradient_evaluations);
+}
+
+#[test]
+fn lazy_objective_failing_its_gradient_is_treated_as_too_far() {
+    // f = (x - 2)², but the gradient is unavailable (None) beyond x = 3: the search must back
+    // off to the region where it exists and still converge.
+    let opts = CgOptions {
+        max_step: 100.0,
+        grad_tol: 1e-10,
+        ..Default::default()
+    };
+    let r = minimize_lazy(
+        |x: &[f64], need_grad: bool| {
+            let f = (x[0] - 2.0).powi(2);
+            let g = (need_grad && x[0] < 3.0).then(|| vec![2.0 * (x[0] - 2.0)]);
+            (f, g)
+        },
+        &[-50.0],
+        &opts,
+    );
+    assert_eq!(r.exit, ExitState::Converged, "{r:?}");
+    assert!((r.x[0] - 2.0).abs() < 1e-8, "{r:?}");
 }

@@ -1,6 +1,7 @@
 //! Speed of the GPDM numerics (issue 6 targets, numpy reference in brackets):
 //! - objective + gradient of eq. 7 for N = 446 frames, D = 15000 (numpy ~20 ms, one core);
-//! - HMC: 100 samples of a 100-frame latent trajectory (numpy ~11 s).
+//! - HMC: 100 samples of a 100-frame latent trajectory (numpy ~11 s);
+//! - decoding 10,000 frames to D = 3000 poses (a body part), exact and via a pose basis.
 //! Run with `OPENBLAS_NUM_THREADS=1 cargo bench -p gpdm`.
 
 use criterion::{criterion_group, criterion_main, Criterion};
@@ -77,5 +78,26 @@ fn hmc(c: &mut Criterion) {
     group.finish();
 }
 
-criterion_group!(benches, objective, hmc);
+/// Decoding 100 trajectories of 100 frames (eq. 12) at a body part's pose dimension D = 3000,
+/// exactly and through the rank-r pose basis (`Predictor::pose_means`, rayon over trajectories).
+fn decode(c: &mut Criterion) {
+    let m = Gpdm::new(&synthetic(3000), GpdmConfig::default()).unwrap();
+    let exact = Predictor::new(&m).unwrap();
+    let (basis, r, _) = Predictor::with_pose_basis(&m, 1e-6).unwrap();
+    let template = m.sequence_latent(0).unwrap().rows(0, 100).into_owned();
+    let trajs: Vec<DMatrix<f64>> = (0..100)
+        .map(|k| &template * (1.0 + 1e-3 * k as f64))
+        .collect();
+    let mut group = c.benchmark_group("decode");
+    group.sample_size(10);
+    group.bench_function("10000 frames D=3000 exact", |b| {
+        b.iter(|| black_box(exact.pose_means(&trajs).unwrap()))
+    });
+    group.bench_function(format!("10000 frames D=3000 rank-{r} basis"), |b| {
+        b.iter(|| black_box(basis.pose_means(&trajs).unwrap()))
+    });
+    group.finish();
+}
+
+criterion_group!(benches, objective, hmc, decode);
 criterion_main!(benches);

@@ -12,7 +12,6 @@
 //! ±10 % step jitter per iteration; thinning; ChaCha8 RNG seeded by the caller.
 
 use crate::error::{invalid, Result};
-use crate::linalg::mul;
 use crate::predict::Predictor;
 use faer::Mat;
 use nalgebra::DMatrix;
@@ -261,6 +260,10 @@ pub struct TrajectoryEnergy<'a> {
     pred: &'a Predictor,
     x1: Vec<f64>,
     len: usize,
+    /// X_in row-major (M × d).
+    xin_rows: Vec<f64>,
+    /// K_X⁻¹ X_out row-major (M × d).
+    a_rows: Vec<f64>,
 }
 
 impl<'a> TrajectoryEnergy<'a> {
@@ -269,10 +272,20 @@ impl<'a> TrajectoryEnergy<'a> {
         if x1.len() != pred.latent_dim() || len < 2 {
             return invalid("trajectory needs a start point of latent dimension and ≥ 2 frames");
         }
+        let xin = pred.dynamics_inputs();
+        let a = pred.dynamics_weights();
+        let d = x1.len();
+        let rows = |mat: faer::MatRef<'_, f64>| -> Vec<f64> {
+            (0..mat.nrows())
+                .flat_map(|i| (0..d).map(move |c| mat[(i, c)]))
+                .collect()
+        };
         Ok(TrajectoryEnergy {
             pred,
             x1: x1.to_vec(),
             len,
+            xin_rows: rows(xin),
+            a_rows: rows(a),
         })
     }
 
@@ -302,42 +315,55 @@ impl Energy for TrajectoryEnergy<'_> {
         (self.len - 1) * self.x1.len()
     }
 
+    /// Kernel columns `k_X(x_t, X_in)` for the T−1 inputs, then one batched pair of
+    /// triangular solves (`L⁻¹ K*` for the variances, `K_X⁻¹ K*` for their gradients); all
+    /// other loops run on contiguous row-major copies (`X_in`, `K_X⁻¹ X_out` kept from `new`).
     fn energy_grad(&self, q: &[f64], grad: &mut [f64]) -> Option<f64> {
         let d = self.x1.len();
         let steps = self.len - 1;
-        let at = |t: usize, c: usize| {
-            if t == 0 {
-                self.x1[c]
-            } else {
-                q[(t - 1) * d + c]
-            }
-        };
         let k = self.pred.dynamics_kernel();
-        let xin = self.pred.dynamics_inputs();
-        let m = xin.nrows();
-        // Inputs x_1..x_{T-1}.
-        let p = Mat::from_fn(steps, d, |t, c| at(t, c));
-        // RBF and linear parts of k_X(x_t, X_in), M × steps.
-        let mut rbf = Mat::<f64>::zeros(m, steps);
+        let m = self.xin_rows.len() / d;
+        // Inputs x_1..x_{T-1}, row-major (x_1 fixed, then the free coordinates).
+        let mut p = Vec::with_capacity(steps * d);
+        p.extend_from_slice(&self.x1);
+        p.extend_from_slice(&q[..(steps - 1) * d]);
+        // RBF part and full k_X(x_t, X_in), M × steps, column-major (one column per step).
+        let mut rbf = vec![0.0; m * steps];
         let mut kst = Mat::<f64>::zeros(m, steps);
+        let half_gamma = -0.5 * k.gamma;
         for t in 0..steps {
-            for i in 0..m {
-                let mut s = 0.0;
-                let mut dotp = 0.0;
+            let xt = &p[t * d..(t + 1) * d];
+            let rcol = &mut rbf[t * m..(t + 1) * m];
+            let kcol = kst
+                .col_mut(t)
+                .try_as_col_major_mut()
+                .expect("contiguous")
+                .as_slice_mut();
+            for (i, (r, kv)) in rcol.iter_mut().zip(kcol.iter_mut()).enumerate() {
+                let xi = &self.xin_rows[i * d..(i + 1) * d];
+                let (mut s, mut dotp) = (0.0, 0.0);
                 for c in 0..d {
-                    let u = p[(t, c)];
-                    let v = xin[(i, c)];
-                    s += (u - v) * (u - v);
-                    dotp += u * v;
+                    let diff = xt[c] - xi[c];
+                    s += diff * diff;
+                    dotp += xt[c] * xi[c];
                 }
-                let r = k.var * (-0.5 * k.gamma * s).exp();
-                rbf[(i, t)] = r;
-                kst[(i, t)] = r + k.lin * dotp;
+                *r = k.var * (half_gamma * s).exp();
+                *kv = *r + k.lin * dotp;
             }
         }
-        // Means (eq. 9): μ_t = (K_X⁻¹ X_out)ᵀ k_t.
-        let mu = mul(self.pred.dynamics_weights().transpose(), kst.as_ref()); // d × steps
-                                                                              // V = K_X⁻¹ K*, U = L⁻¹ K* for the variances (eq. 10).
+        // Means (eq. 9): μ_t = (K_X⁻¹ X_out)ᵀ k_t, row-major steps × d.
+        let mut mu = vec![0.0; steps * d];
+        for t in 0..steps {
+            let kcol = kst.col(t).try_as_col_major().expect("contiguous").as_slice();
+            let mt = &mut mu[t * d..(t + 1) * d];
+            for (i, kv) in kcol.iter().enumerate() {
+                let ai = &self.a_rows[i * d..(i + 1) * d];
+                for c in 0..d {
+                    mt[c] += ai[c] * kv;
+                }
+            }
+        }
+        // U = L⁻¹ K* gives k*ᵀ K_X⁻¹ k* (eq. 10); V = L⁻ᵀ U = K_X⁻¹ K* its gradient.
         let chol = self.pred.dynamics_cholesky();
         let mut v = kst;
         chol.half_solve_in_place(v.as_mut());
@@ -346,15 +372,18 @@ impl Energy for TrajectoryEnergy<'_> {
 
         grad.iter_mut().for_each(|g| *g = 0.0);
         let mut energy = 0.0;
-        let a = self.pred.dynamics_weights();
-        let mut w = vec![0.0; m];
+        let mut e = vec![0.0; d];
+        let mut acc = vec![0.0; d];
         for t in 0..steps {
-            let xt: Vec<f64> = (0..d).map(|c| p[(t, c)]).collect();
-            let s = k.self_cov(&xt) - kvk[t];
+            let xt = &p[t * d..(t + 1) * d];
+            let s = k.self_cov(xt) - kvk[t];
             if !(s > 0.0) {
                 return None;
             }
-            let e: Vec<f64> = (0..d).map(|c| at(t + 1, c) - mu[(c, t)]).collect();
+            let next = &q[t * d..(t + 1) * d];
+            for c in 0..d {
+                e[c] = next[c] - mu[t * d + c];
+            }
             let e2: f64 = e.iter().map(|v| v * v).sum();
             energy += 0.5 * e2 / s + 0.5 * d as f64 * s.ln();
             // ∂/∂x_{t+1}
@@ -364,20 +393,31 @@ impl Energy for TrajectoryEnergy<'_> {
             if t == 0 {
                 continue; // x_1 is fixed
             }
-            // ∂/∂x_t through μ_t and s_t.
+            // ∂/∂x_t through μ_t and s_t: Σ_i w_i ∂k_i/∂x_t,
+            // w_i = −(A e)_i / s − 2 c_s (K_X⁻¹ k_t)_i.
             let cs = -0.5 * e2 / (s * s) + 0.5 * d as f64 / s;
+            let vcol = v.col(t).try_as_col_major().expect("contiguous").as_slice();
+            let rcol = &rbf[t * m..(t + 1) * m];
+            for c in 0..d {
+                acc[c] = 2.0 * cs * k.lin * xt[c];
+            }
             for i in 0..m {
-                let ai: f64 = (0..d).map(|c| a[(i, c)] * e[c]).sum();
-                w[i] = -ai / s - 2.0 * cs * v[(i, t)];
+                let ai = &self.a_rows[i * d..(i + 1) * d];
+                let xi = &self.xin_rows[i * d..(i + 1) * d];
+                let mut ae = 0.0;
+                for c in 0..d {
+                    ae += ai[c] * e[c];
+                }
+                let w = -ae / s - 2.0 * cs * vcol[i];
+                let wr = -k.gamma * w * rcol[i];
+                let wl = k.lin * w;
+                for c in 0..d {
+                    acc[c] += wr * (xt[c] - xi[c]) + wl * xi[c];
+                }
             }
             let g = &mut grad[(t - 1) * d..t * d];
             for c in 0..d {
-                let mut acc = 2.0 * cs * k.lin * xt[c];
-                for i in 0..m {
-                    acc += w[i]
-                        * (-k.gamma * rbf[(i, t)] * (xt[c] - xin[(i, c)]) + k.lin * xin[(i, c)]);
-                }
-                g[c] += acc;
+                g[c] += acc[c];
             }
         }
         Some(energy)

@@ -62,6 +62,7 @@ impl RbfLinear {
         let mut rbf = Mat::<f64>::zeros(n, n);
         let mut k = Mat::<f64>::zeros(n, n);
         let half_gamma = -0.5 * self.gamma;
+        let noise = 1.0 / self.prec;
         for j in 0..n {
             let xj = &rows[j * d..(j + 1) * d];
             let rcol = &mut rbf
@@ -69,33 +70,28 @@ impl RbfLinear {
                 .try_as_col_major_mut()
                 .expect("contiguous")
                 .as_slice_mut()[j..];
-            for (r, i) in rcol.iter_mut().zip(j..n) {
-                let xi = &rows[i * d..(i + 1) * d];
-                let mut s = 0.0;
-                for c in 0..d {
-                    s += (xi[c] - xj[c]) * (xi[c] - xj[c]);
-                }
-                *r = self.var * (half_gamma * s).exp();
-            }
-            let rcol = &rbf
-                .col(j)
-                .try_as_col_major()
-                .expect("contiguous")
-                .as_slice()[j..];
             let kcol = &mut k
                 .col_mut(j)
                 .try_as_col_major_mut()
                 .expect("contiguous")
                 .as_slice_mut()[j..];
-            for ((kv, r), i) in kcol.iter_mut().zip(rcol).zip(j..n) {
-                let mut v = *r;
-                if self.lin != 0.0 {
-                    let xi = &rows[i * d..(i + 1) * d];
-                    v += self.lin * (0..d).map(|c| xi[c] * xj[c]).sum::<f64>();
+            // One pass: squared distance, RBF value and (optionally) the linear term.
+            for ((r, kv), xi) in rcol
+                .iter_mut()
+                .zip(kcol.iter_mut())
+                .zip(rows[j * d..].chunks_exact(d))
+            {
+                let (mut s, mut dot) = (0.0, 0.0);
+                for (a, b) in xi.iter().zip(xj) {
+                    s += (a - b) * (a - b);
+                    dot += a * b;
                 }
-                *kv = v;
+                let arg = half_gamma * s;
+                // exp underflows below −745; returning 0 early avoids subnormal arithmetic.
+                *r = if arg > -700.0 { self.var * arg.exp() } else { 0.0 };
+                *kv = *r + self.lin * dot;
             }
-            k[(j, j)] += 1.0 / self.prec;
+            kcol[0] += noise;
         }
         Gram { k, rbf }
     }
@@ -103,17 +99,35 @@ impl RbfLinear {
     /// Cross-covariance `k(a_i, b_j)` (no noise term), `n_a × n_b`.
     pub fn cross(&self, a: MatRef<'_, f64>, b: MatRef<'_, f64>) -> Mat<f64> {
         let d = a.ncols();
-        Mat::from_fn(a.nrows(), b.nrows(), |i, j| {
-            let mut s = 0.0;
-            let mut dot = 0.0;
-            for c in 0..d {
-                let u = a[(i, c)];
-                let v = b[(j, c)];
-                s += (u - v) * (u - v);
-                dot += u * v;
+        let row_major = |m: MatRef<'_, f64>| -> Vec<f64> {
+            (0..m.nrows())
+                .flat_map(|i| (0..d).map(move |c| m[(i, c)]))
+                .collect()
+        };
+        let (ar, br) = (row_major(a), row_major(b));
+        let half_gamma = -0.5 * self.gamma;
+        let mut out = Mat::<f64>::zeros(a.nrows(), b.nrows());
+        if d == 0 {
+            return Mat::from_fn(a.nrows(), b.nrows(), |_, _| self.var);
+        }
+        for (j, bj) in br.chunks_exact(d).enumerate() {
+            let col = out
+                .col_mut(j)
+                .try_as_col_major_mut()
+                .expect("contiguous")
+                .as_slice_mut();
+            for (o, ai) in col.iter_mut().zip(ar.chunks_exact(d)) {
+                let (mut s, mut dot) = (0.0, 0.0);
+                for (u, v) in ai.iter().zip(bj) {
+                    s += (u - v) * (u - v);
+                    dot += u * v;
+                }
+                let arg = half_gamma * s;
+                let r = if arg > -700.0 { self.var * arg.exp() } else { 0.0 };
+                *o = r + self.lin * dot;
             }
-            self.var * (-0.5 * self.gamma * s).exp() + self.lin * dot
-        })
+        }
+        out
     }
 
     /// Chain rule through `K(X)`: given `G = ∂L/∂K` (symmetric; its lower triangle is read)

@@ -9,7 +9,8 @@
 //! Choices and deviations from the paper (documented where implemented):
 //! - Y is centred (the GP of eq. 3 has zero mean); the mean is added back in eq. 12.
 //! - Noise-variance floors: `1/α3 ≥ pose_noise_floor` (default 1e-6, squared units of Y) and
-//!   optionally `1/β4 ≥ dyn_noise_floor`, built into the parametrisation ([`model`]).
+//!   optionally `1/β4 ≥ dyn_noise_floor` (recommended 1e-4..1e-3 latent units² on clean
+//!   data, see [`model::GpdmConfig`]), built into the parametrisation ([`model`]).
 //! - Hyperparameters optimised in log coordinates, jointly with X by default ([`optim`]).
 //! - PCA scores scaled to unit variance before training; each sequence's first latent point
 //!   has an N(0, σ0² I) prior (σ0² = 1).

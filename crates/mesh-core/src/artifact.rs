@@ -420,18 +420,24 @@ fn parse_header(json: &[u8]) -> std::result::Result<Header, String> {
     serde_json::from_slice(json).map_err(|e| format!("header is not valid JSON: {e}"))
 }
 
-/// Decodes a bincode payload with a byte limit of the payload length rounded
-/// up to a power of four (at least 4 KiB), i.e. less than 4x the payload. With serde, bincode claims bytes
-/// against the limit only for strings and byte buffers, whose encoding is at
-/// least as long as the claim, so a valid payload always fits; a crafted
-/// length fails instead of allocating. The limit is a const generic in
-/// bincode 2, hence the dispatch over 15 powers of four (a coarser grid
-/// would mean fewer monomorphised copies of `T`'s decoder, a finer one a
-/// tighter bound).
+/// Decodes a bincode payload under a byte limit of [`DECODE_EXPANSION`] times
+/// the payload length, rounded up to a power of four (at least 4 KiB).
+///
+/// bincode 2 claims, against the limit, the in-memory size of every sequence
+/// it is about to allocate (`len * size_of::<T>()`): a `Vec<u32>` stored as
+/// one-byte varints claims 4 bytes per element, a `Vec<usize>` 8, a
+/// `Vec<Vec<_>>` 24 per inner vector. A valid payload therefore needs a limit
+/// well above its own length, while a crafted length still fails before
+/// allocating more than `DECODE_EXPANSION` times what the file holds. The
+/// limit is a const generic in bincode 2, hence the dispatch over powers of
+/// four.
+/// How many bytes of memory one payload byte may decode into (see [`decode_payload`]).
+pub const DECODE_EXPANSION: usize = 32;
+
 fn decode_payload<T: DeserializeOwned>(payload: &[u8]) -> std::result::Result<T, String> {
     macro_rules! dispatch {
         ($($k:literal)*) => {{
-            let need = payload.len().max(1 << 12);
+            let need = payload.len().saturating_mul(DECODE_EXPANSION).max(1 << 12);
             $(
                 if need <= (1usize << $k) {
                     return finish(bincode::serde::decode_from_slice::<T, _>(
@@ -453,5 +459,5 @@ fn decode_payload<T: DeserializeOwned>(payload: &[u8]) -> std::result::Result<T,
         }
         Ok(value)
     }
-    dispatch!(12 14 16 18 20 22 24 26 28 30 32 34 36 38 40)
+    dispatch!(12 14 16 18 20 22 24 26 28 30 32 34 36 38 40 42 44)
 }

@@ -295,3 +295,18 @@ fn failed_writes_leave_no_partial_or_temporary_file() {
     after.sort();
     assert_eq!(before, after, "temporary files left behind");
 }
+
+/// Index lists are stored as one-byte varints but bincode claims their
+/// in-memory size against the decode limit: a payload of many small integers
+/// and many empty inner vectors must still load.
+#[test]
+fn compact_integer_payloads_decode() {
+    use mesh_core::artifact::{read_artifact, write_artifact, Header};
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("ints.bin");
+    let payload: (Vec<u32>, Vec<usize>, Vec<Vec<u32>>, Vec<[u32; 3]>) =
+        ((0..50_000).map(|i| i % 100).collect(), vec![3; 50_000], vec![Vec::new(); 20_000], vec![[1, 2, 3]; 30_000]);
+    write_artifact(&path, "ints", 1, &Header::new("test", "0"), &payload).unwrap();
+    let (_, back): (Header, (Vec<u32>, Vec<usize>, Vec<Vec<u32>>, Vec<[u32; 3]>)) = read_artifact(&path, "ints", 1).unwrap();
+    assert_eq!(back, payload);
+}

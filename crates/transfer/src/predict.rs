@@ -100,6 +100,8 @@ pub struct Timing {
 pub struct Transferred {
     pub frames: Vec<Vec<nalgebra::Vector3<f64>>>,
     pub poses: Vec<mesh_core::rigid::RigidMotion>,
+    /// Per-frame weight of the scaled source in the `blended` placement.
+    pub blend_weights: Option<Vec<f64>>,
     pub timing: Timing,
 }
 
@@ -155,6 +157,7 @@ pub fn transfer_motion(
     Ok(Transferred {
         frames,
         poses: world_poses,
+        blend_weights: pred.variance_ratio,
         timing: Timing {
             encode_s,
             gp_s,

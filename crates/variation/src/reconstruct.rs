@@ -129,15 +129,18 @@ impl<'a> Decoder<'a> {
                 .reconstruct(x, rng.as_deref_mut())
                 .map_err(|e| Error::invalid(format!("part {k}: {e}")))?;
             let mut frames = Vec::with_capacity(y.nrows());
+            // Column-major storage: transpose once so that every frame is contiguous.
+            let yt = y.transpose();
+            let dim = yt.nrows();
             for t in 0..y.nrows() {
-                let row: Vec<f64> = y.row(t).iter().copied().collect();
+                let row = &yt.as_slice()[t * dim..(t + 1) * dim];
                 if k == 0 {
-                    let (v, d, g) = split_torso(&row, self.model.scale);
+                    let (v, d, g) = split_torso(row, self.model.scale);
                     frames.push(v);
                     displacements.push(d);
                     gravity.push(g);
                 } else {
-                    frames.push(unflatten(&row));
+                    frames.push(unflatten(row));
                 }
             }
             parts.push(frames);

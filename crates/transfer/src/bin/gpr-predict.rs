@@ -87,6 +87,13 @@ fn main() -> ExitCode {
         let result = transfer_motion(&model, &src_pca, &tgt_pca, &motion, args.placement)
             .with_context(|| args.motion.display().to_string())?;
         let total = t0.elapsed().as_secs_f64();
+        if let Some(w) = &result.blend_weights {
+            let mean = w.iter().sum::<f64>() / w.len().max(1) as f64;
+            let max = w.iter().cloned().fold(0.0, f64::max);
+            mesh_core::info!(
+                "blended placement: scaled-source weight mean {mean:.3}, max {max:.3}"
+            );
+        }
         let t1 = Instant::now();
         MeshSequence::new(faces, result.frames).write_dir(&args.out)?;
         let write = t1.elapsed().as_secs_f64();

@@ -1,0 +1,53 @@
+//! Splits the cost of one HMC energy+gradient evaluation (100-frame trajectory, M = 442
+//! training transitions) into its two triangular solves and the rest; averages of 200 runs.
+//!
+//! Usage: profile_energy
+
+#[path = "common/synthetic.rs"]
+mod synthetic;
+
+use faer::Mat;
+use gpdm::hmc::{Energy, TrajectoryEnergy};
+use gpdm::optim::{train, LbfgsOptions, TrainOptions};
+use gpdm::predict::Predictor;
+use gpdm::{Gpdm, GpdmConfig};
+use std::time::Instant;
+
+fn main() {
+    let mut m = Gpdm::new(&synthetic::synthetic(30, 1e-3), GpdmConfig::default()).unwrap();
+    let opts = TrainOptions {
+        lbfgs: LbfgsOptions {
+            max_iter: 100,
+            ..Default::default()
+        },
+        ..Default::default()
+    };
+    train(&mut m, &opts).unwrap();
+    let pred = Predictor::new(&m).unwrap();
+    let template = m.sequence_latent(0).unwrap().rows(0, 100).into_owned();
+    let x1: Vec<f64> = template.row(0).iter().copied().collect();
+    let e = TrajectoryEnergy::new(&pred, &x1, 100).unwrap();
+    let q = e.free_coords(&template);
+    let mut g = vec![0.0; q.len()];
+    let reps = 200;
+    let t = Instant::now();
+    for _ in 0..reps {
+        std::hint::black_box(e.energy_grad(&q, &mut g));
+    }
+    let total = t.elapsed().as_secs_f64() * 1e3 / reps as f64;
+    let chol = pred.dynamics_cholesky();
+    let mmat = pred.dynamics_inputs().nrows();
+    let rhs = Mat::from_fn(mmat, 99, |i, j| ((i * 7 + j * 3) as f64).sin());
+    let t = Instant::now();
+    for _ in 0..reps {
+        let mut v = rhs.clone();
+        chol.half_solve_in_place(v.as_mut());
+        chol.half_solve_t_in_place(v.as_mut());
+        std::hint::black_box(&v);
+    }
+    let solves = t.elapsed().as_secs_f64() * 1e3 / reps as f64;
+    println!(
+        "energy+gradient {total:.3} ms; of which two triangular solves ({mmat} x {mmat}, 99 rhs) {solves:.3} ms, rest {:.3} ms",
+        total - solves
+    );
+}
