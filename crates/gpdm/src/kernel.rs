@@ -56,6 +56,10 @@ impl RbfLinear {
     pub fn gram(&self, x: MatRef<'_, f64>) -> Gram {
         let n = x.nrows();
         let d = x.ncols();
+        if d == 0 {
+            // No coordinates: every distance and dot product is 0.
+            return self.gram(Mat::<f64>::zeros(n, 1).as_ref());
+        }
         let rows: Vec<f64> = (0..n)
             .flat_map(|i| (0..d).map(move |c| x[(i, c)]))
             .collect();
@@ -141,6 +145,11 @@ impl RbfLinear {
     ) -> ([f64; 4], Mat<f64>) {
         let n = g.nrows();
         let d = x.ncols();
+        if d == 0 {
+            // No coordinates: same kernel as one all-zero coordinate; no X gradient.
+            let (p, _) = self.gradients(gram, Mat::<f64>::zeros(n, 1).as_ref(), g);
+            return (p, Mat::zeros(n, 0));
+        }
         let rows: Vec<f64> = (0..n)
             .flat_map(|i| (0..d).map(move |c| x[(i, c)]))
             .collect();
@@ -158,13 +167,17 @@ impl RbfLinear {
             let gjj = gcol[0];
             tr += gjj;
             gv += gjj * rcol[0];
-            for (o, i) in (j + 1..n).enumerate() {
-                let gij = gcol[o + 1];
-                let r = rcol[o + 1];
-                let mut s = 0.0;
-                let mut dot = 0.0;
-                for c in 0..d {
-                    let (a, b) = (rows[i * d + c], rows[j * d + c]);
+            let xj = &rows[j * d..(j + 1) * d];
+            let (lo, hi) = dx.split_at_mut((j + 1) * d);
+            let dxj = &mut lo[j * d..];
+            for (((gij, r), xi), dxi) in gcol[1..]
+                .iter()
+                .zip(&rcol[1..])
+                .zip(rows[(j + 1) * d..].chunks_exact(d))
+                .zip(hi.chunks_exact_mut(d))
+            {
+                let (mut s, mut dot) = (0.0, 0.0);
+                for (a, b) in xi.iter().zip(xj) {
                     s += (a - b) * (a - b);
                     dot += a * b;
                 }
@@ -175,9 +188,9 @@ impl RbfLinear {
                 let p = two_gamma * gij * r;
                 let l = 2.0 * self.lin * gij;
                 for c in 0..d {
-                    let (a, b) = (rows[i * d + c], rows[j * d + c]);
-                    dx[i * d + c] += -p * (a - b) + l * b;
-                    dx[j * d + c] += -p * (b - a) + l * a;
+                    let (a, b) = (xi[c], xj[c]);
+                    dxi[c] += -p * (a - b) + l * b;
+                    dxj[c] += -p * (b - a) + l * a;
                 }
             }
             // Diagonal: K_jj = var + lin ‖x_j‖² + 1/prec.
