@@ -1,4 +1,5 @@
-# Motion transfer (transfer paper, sections 4, 5, 7):
+# Motion transfer (transfer paper, sections 4 to 7; gpr-nn also runs gpr-predict --surface correct and
+# correct-stitch, i.e. section 6, recorded as methods gpr-nn+correct and gpr-nn+correct+stitch):
 #   make transfer SET=<capture set> OUT=<dir>     (defaults: SET=$(OUT)/demo/set, OUT=out)
 # Writes $(OUT)/transfer/<src>-to-<tgt>/<motion>/<method>/NNNNNN.ply, contact sheets under
 # $(OUT)/render/, learning curves under $(OUT)/learning-curves/ and $(OUT)/results.json.
@@ -103,6 +104,29 @@ for (src, tgt, rev, tests) in directions:
                          % (B, seq, truth, label, m, method, pl, "keyposes" if keys else "dense"))
                     results.append(rec)
             if name == "gpr-nn":
+                # Paper section 6 after the regression: correction (M = 3), then stitching.
+                for (surf, meth) in (("correct", "gpr-nn+correct"), ("correct-stitch", "gpr-nn+correct+stitch")):
+                    seq = "%s/transfer/%s/%s/%s" % (out, dn, m, meth)
+                    timing = "%s/predict/%s/%s/%s-regressed.json" % (W, dn, m, meth)
+                    training = ["%s/%s/%s.aligned" % (W, tgt, t) for t in train[tgt]]
+                    rule(timing, [B + "/gpr-predict", model, "%s/%s/%s.aligned" % (W, src, m), "%s/%s/parts.seg" % (W, tgt)] + training,
+                         "@mkdir -p $$(@D)",
+                         "%s/gpr-predict -q --model %s --source-pca %s/%s/pca.model --target-pca %s/%s/pca.model --target-template %s --surface %s --segmentation %s/%s/parts.seg %s -m 3 %s/%s/%s.aligned --out %s --timing $$@"
+                         % (B, model, W, src, W, tgt, tpl[tgt], surf, W, tgt, " ".join("--target-training " + t for t in training), W, src, m, seq))
+                    stamps.append(timing)
+                    if os.path.isdir(truth):
+                        rec = "%s/eval/%s/%s/%s-regressed.json" % (W, dn, m, meth)
+                        rule(rec, [B + "/evaluate", timing],
+                             "@mkdir -p $$(@D)",
+                             "%s/evaluate -q %s %s --direction '%s' --motion %s --method %s --placement regressed --training dense --out $$@"
+                             % (B, seq, truth, label, m, meth))
+                        results.append(rec)
+                    sheet = "%s/render/%s/%s/%s/contact.png" % (out, dn, m, meth)
+                    seqs = [os.path.join(set_dir, src, m), seq] + ([truth] if os.path.isdir(truth) else [])
+                    rule(sheet, [B + "/render", timing],
+                         "%s/render -q --separate-rows --no-frames --no-gif --labels source,%s%s --out $$(@D) %s"
+                         % (B, meth, ",truth" if os.path.isdir(truth) else "", " ".join(seqs)))
+                    stamps.append(sheet)
                 sheet = "%s/render/%s/%s/contact.png" % (out, dn, m)
                 seqs = [os.path.join(set_dir, src, m), "%s/transfer/%s/%s/gpr-nn" % (out, dn, m)]
                 labels = "source,transfer"

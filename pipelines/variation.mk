@@ -15,6 +15,9 @@ VARIATION_SUBJECT ?=
 VARIATION_GROUPS ?= locomotion jump
 VARIATION_MOTIONS_locomotion ?= walk,run
 VARIATION_MOTIONS_jump ?= jump,cmu_jump
+# Extra prealign flags per group: locomotion is cut to whole gait cycles before the DTW.
+VARIATION_PREALIGN_FLAGS_locomotion ?= --gait-cycles
+VARIATION_PREALIGN_FLAGS_jump ?=
 VARIATION_W ?= 0.5
 VARIATION_BLENDS ?= 0.25,0.75
 VARIATION_N ?= 5
@@ -33,7 +36,7 @@ variation-results: $(OUT)/variation.json
 define VARIATION_GROUP_RULES
 $(VARIATION_WORK)/$(1).group: $(SET)/set.json $(BIN)/prealign
 	@mkdir -p $$(@D)
-	$(BIN)/prealign -q --set $(SET) $(if $(VARIATION_SUBJECT),--subject $(VARIATION_SUBJECT)) --group $(1) --motions $(VARIATION_MOTIONS_$(1)) --blend-weights $(VARIATION_W) --out $$@
+	$(BIN)/prealign -q --set $(SET) $(if $(VARIATION_SUBJECT),--subject $(VARIATION_SUBJECT)) --group $(1) --motions $(VARIATION_MOTIONS_$(1)) $(VARIATION_PREALIGN_FLAGS_$(1)) --blend-weights $(VARIATION_W) --out $$@
 
 $(VARIATION_WORK)/$(1).model: $(VARIATION_WORK)/$(1).group $(BIN)/gpdm-train
 	$(BIN)/gpdm-train -q $(VARIATION_TRAIN_FLAGS) $$< --out $$@ --report $(VARIATION_WORK)/$(1)-train.json

@@ -3,9 +3,10 @@
 //!   (12 models, rayon over models on the machine's cores): <= 1 s with 350 dense pairs,
 //!   <= 5 s with 1100;
 //! - prediction (eq. 13, 5 parts + displacement): >= 5000 frames/s.
-//! - one log-marginal-likelihood + gradient evaluation (the optimiser's unit of work).
+//! - one log-marginal-likelihood + gradient evaluation, and one value alone (the optimiser's
+//!   units of work: rejected line-search trials need only the value).
 use criterion::{criterion_group, criterion_main, BenchmarkId, Criterion, Throughput};
-use gp::gpr::{log_marginal_likelihood_grad, train_many, GprOptions};
+use gp::gpr::{log_marginal_likelihood, log_marginal_likelihood_grad, train_many, GprOptions};
 use gp::kernel::Kernel;
 use rayon::prelude::*;
 use std::time::Duration;
@@ -35,6 +36,16 @@ fn lml_grad(c: &mut Criterion) {
         let k = Kernel::neural_network(3.0, 1.5);
         g.bench_function(BenchmarkId::from_parameter(n), |b| {
             b.iter(|| log_marginal_likelihood_grad(&k, 0.1, false, x, y, &mut Vec::new()).unwrap())
+        });
+    }
+    g.finish();
+    let mut g = c.benchmark_group("lml_value_one_model");
+    for n in [350usize, 1100] {
+        let p = synthetic_pairs::pairs(n, 7);
+        let (x, y) = &p[0];
+        let k = Kernel::neural_network(3.0, 1.5);
+        g.bench_function(BenchmarkId::from_parameter(n), |b| {
+            b.iter(|| log_marginal_likelihood(&k, 0.1, x, y, &mut Vec::new()).unwrap())
         });
     }
     g.finish();

@@ -539,11 +539,13 @@ impl Gpr {
     }
 }
 
-// NOTE(next): speed at 1100 pairs is ~55 ms CPU per likelihood+gradient evaluation (Cholesky
-// 10 ms, inverse 28 ms, kernel matrices ~12 ms) and ~14 evaluations per model. Possible next
-// steps if the 5 s goal is missed on an idle machine: value-only trials in the line search
-// when the sufficient-decrease test fails, and reusing the factorisation between the value and
-// the gradient at the same point.
+// NOTE(next): at 1100 pairs (h12, loaded machine) a likelihood value costs ~25-35 ms (kernel
+// matrix ~5-10 ms of libm asin, Cholesky ~10-15 ms) and a gradient another ~45-70 ms (the
+// potri-style inverse ~36-48 ms dominates; faer and OpenBLAS dpotri measured alike). Training
+// the 12 benchmark models takes ~140 values and ~70 gradients. Ideas not yet tried: a
+// vectorisable asin (Cephes-style rational approximation) for the NN kernel, a first
+// line-search step from a quadratic model after the warm start, and balancing the 12 models
+// across threads by expected cost (the near-linear ones take more iterations).
 
 /// Trains one GP per `(X, Y)` problem (body parts, displacement) in parallel with rayon,
 /// all with the same kernel family and options. Sets faer to sequential mode (its own

@@ -354,7 +354,11 @@ impl Energy for TrajectoryEnergy<'_> {
         // Means (eq. 9): μ_t = (K_X⁻¹ X_out)ᵀ k_t, row-major steps × d.
         let mut mu = vec![0.0; steps * d];
         for t in 0..steps {
-            let kcol = kst.col(t).try_as_col_major().expect("contiguous").as_slice();
+            let kcol = kst
+                .col(t)
+                .try_as_col_major()
+                .expect("contiguous")
+                .as_slice();
             let mt = &mut mu[t * d..(t + 1) * d];
             for (i, kv) in kcol.iter().enumerate() {
                 let ai = &self.a_rows[i * d..(i + 1) * d];

@@ -92,7 +92,11 @@ impl RbfLinear {
                 }
                 let arg = half_gamma * s;
                 // exp underflows below −745; returning 0 early avoids subnormal arithmetic.
-                *r = if arg > -700.0 { self.var * arg.exp() } else { 0.0 };
+                *r = if arg > -700.0 {
+                    self.var * arg.exp()
+                } else {
+                    0.0
+                };
                 *kv = *r + self.lin * dot;
             }
             kcol[0] += noise;
@@ -127,7 +131,11 @@ impl RbfLinear {
                     dot += u * v;
                 }
                 let arg = half_gamma * s;
-                let r = if arg > -700.0 { self.var * arg.exp() } else { 0.0 };
+                let r = if arg > -700.0 {
+                    self.var * arg.exp()
+                } else {
+                    0.0
+                };
                 *o = r + self.lin * dot;
             }
         }

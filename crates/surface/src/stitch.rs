@@ -163,6 +163,7 @@ pub struct Stitcher {
     layout: PartLayout,
     pattern: StiffnessPattern,
     solver: Option<PoissonSolver>,
+    align_children: bool,
 }
 
 impl Stitcher {
@@ -172,7 +173,15 @@ impl Stitcher {
             layout,
             pattern,
             solver: None,
+            align_children: true,
         }
+    }
+
+    /// With `false`, children are taken as given (already in the root part's frame, e.g. parts
+    /// cut from whole-body-aligned frames) instead of Procrustes-aligned on their band.
+    pub fn with_band_alignment(mut self, align: bool) -> Self {
+        self.align_children = align;
+        self
     }
     pub fn layout(&self) -> &PartLayout {
         &self.layout
@@ -212,7 +221,11 @@ impl Stitcher {
                 .collect();
             let in_child: Vec<Vector3<f64>> =
                 band.vertices.iter().map(|&v| at(k, &parts[k], v)).collect();
-            let motion = procrustes(&in_child, &in_parent, None);
+            let motion = if self.align_children {
+                procrustes(&in_child, &in_parent, None)
+            } else {
+                RigidMotion::identity()
+            };
             let child = motion.apply_all(&parts[k]);
             let in_child: Vec<Vector3<f64>> =
                 band.vertices.iter().map(|&v| at(k, &child, v)).collect();

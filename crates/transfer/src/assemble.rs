@@ -2,8 +2,10 @@
 //! topology (the simple rule used until the `surface` crate's stitching, paper
 //! §6, is wired in).
 //!
-//! Every decoded part is in its own reference frame (pca-fit aligns each part
-//! to the template part). The first part (the root) is kept as decoded. Then,
+//! With `PartAlignment::Body` the decoded parts already share the
+//! whole-body-aligned frame: no part is moved, overlaps are averaged.
+//! With `PartAlignment::Part` every decoded part is in its own reference frame
+//! (pca-fit aligns each part to the template part). The first part (the root) is kept as decoded. Then,
 //! repeatedly, the unplaced part sharing the most template vertices with the
 //! parts already placed (its overlap band with its parent) is rigidly aligned
 //! onto them: Procrustes of the part's copies of the shared vertices onto the
@@ -20,7 +22,7 @@ use mesh_core::{Error, Result};
 use nalgebra::Vector3;
 use rayon::prelude::*;
 
-use crate::part_pca::PcaModel;
+use crate::part_pca::{PartAlignment, PcaModel};
 
 /// One step of the assembly: which part, and which of its local vertices
 /// anchor it on already-placed template vertices.
@@ -144,7 +146,7 @@ pub fn assemble_frame(
     for step in &plan.steps {
         let verts = parts[step.part];
         let index = &pca.parts[step.part].vertices;
-        let motion = if step.anchor_local.is_empty() {
+        let motion = if step.anchor_local.is_empty() || pca.alignment == PartAlignment::Body {
             mesh_core::rigid::RigidMotion::identity()
         } else {
             let src: Vec<Vector3<f64>> = step.anchor_local.iter().map(|&i| verts[i]).collect();
@@ -229,6 +231,7 @@ mod tests {
                 part("tip", &tip),
                 part("limb", &limb),
             ],
+            alignment: PartAlignment::Part,
         };
         let plan = plan(&pca).unwrap();
         assert_eq!(
@@ -299,6 +302,7 @@ mod tests {
         let pca = PcaModel {
             n_vertices: 6,
             parts: vec![p("a", vec![0, 1, 2]), p("b", vec![3, 4, 5])],
+            alignment: PartAlignment::Part,
         };
         assert!(plan(&pca)
             .unwrap_err()

@@ -11,6 +11,8 @@ pub mod densify;
 pub mod gpr_model;
 pub mod predict;
 pub mod assemble;
+pub mod reconstruct;
+pub mod representation;
 pub mod placement;
 pub mod evaluate;
 pub mod learning_curves;

@@ -1,12 +1,17 @@
 //! `pca-fit`: per-part PCA of a subject's aligned training frames (transfer
 //! paper §4, "PCA Dimension Reduction").
 //!
-//! For each part, every aligned frame's part vertices are first rigidly
-//! aligned (Procrustes) to the part as it is in the template, so that PCA
-//! sees only the part's own deformation; then PCA on the stacked coordinates
-//! `(x_1, y_1, z_1, x_2, ...)` gives `m` coefficients per frame (20 by default).
-//! Decoding gives the part in the template part's frame; the parts are put
-//! back together by aligning children to their parent on the overlap bands.
+//! The paper: "all body part sub-meshes for a given subject are first rigidly
+//! aligned and PCA applied". Two readings, chosen by [`PartAlignment`]:
+//! * `body` (default): the part is cut from the whole-body-aligned frame
+//!   (`align`) with no further alignment; decoded parts are then already in one
+//!   common frame and assembly only averages the overlaps;
+//! * `part`: every frame's part is also rigidly aligned (Procrustes) to the
+//!   part as it is in the template, so PCA sees only the part's own
+//!   deformation; assembly must then re-orient children on their overlap band.
+//!
+//! PCA on the stacked coordinates `(x_1, y_1, z_1, x_2, ...)` gives `m`
+//! coefficients per frame (20 by default).
 
 use gp::pca::{Components, Pca};
 use mesh_core::artifact::Artifact;
@@ -18,6 +23,16 @@ use serde::{Deserialize, Serialize};
 
 use crate::align::AlignedMotion;
 use mesh_core::segmentation::Segmentation;
+
+/// How a part is aligned before PCA (see the module documentation).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize, clap::ValueEnum)]
+pub enum PartAlignment {
+    /// Parts cut from the whole-body-aligned frames, no per-part alignment.
+    #[default]
+    Body,
+    /// Each part additionally Procrustes-aligned to the template part.
+    Part,
+}
 
 /// PCA of one part.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
@@ -35,11 +50,13 @@ pub struct PartPca {
 pub struct PcaModel {
     pub n_vertices: usize,
     pub parts: Vec<PartPca>,
+    /// How the parts were aligned before PCA; decoded parts are in that frame.
+    pub alignment: PartAlignment,
 }
 
 impl Artifact for PcaModel {
     const KIND: &'static str = "pca-model";
-    const VERSION: u32 = 1;
+    const VERSION: u32 = 2;
 }
 
 /// Explained variance and reconstruction error of one part on its training data.
@@ -53,23 +70,37 @@ pub struct PartReport {
     pub reconstruction_rms_m: f64,
 }
 
-/// Flattens the part vertices of one frame, rigidly aligned to `reference`.
-fn aligned_part_row(frame: &[Vector3<f64>], vertices: &[u32], reference: &[Vector3<f64>]) -> Vec<f64> {
+/// Flattens the part vertices of one frame, rigidly aligned to `reference`
+/// with [`PartAlignment::Part`], as they are with [`PartAlignment::Body`].
+fn aligned_part_row(
+    frame: &[Vector3<f64>],
+    vertices: &[u32],
+    reference: &[Vector3<f64>],
+    alignment: PartAlignment,
+) -> Vec<f64> {
     let pts: Vec<Vector3<f64>> = vertices.iter().map(|&v| frame[v as usize]).collect();
-    let to_ref = procrustes(&pts, reference, None);
+    let to_ref = match alignment {
+        PartAlignment::Part => procrustes(&pts, reference, None),
+        PartAlignment::Body => mesh_core::rigid::RigidMotion::identity(),
+    };
     pts.iter().flat_map(|p| {
         let q = to_ref.apply(p);
         [q.x, q.y, q.z]
     }).collect()
 }
 
-fn part_rows(motions: &[&AlignedMotion], vertices: &[u32], reference: &[Vector3<f64>]) -> DMatrix<f64> {
+fn part_rows(
+    motions: &[&AlignedMotion],
+    vertices: &[u32],
+    reference: &[Vector3<f64>],
+    alignment: PartAlignment,
+) -> DMatrix<f64> {
     let rows: Vec<Vec<f64>> = motions
         .iter()
         .flat_map(|m| m.frames.iter())
         .collect::<Vec<_>>()
         .par_iter()
-        .map(|f| aligned_part_row(f, vertices, reference))
+        .map(|f| aligned_part_row(f, vertices, reference, alignment))
         .collect();
     let d = 3 * vertices.len();
     DMatrix::from_row_iterator(rows.len(), d, rows.into_iter().flatten())
@@ -97,6 +128,7 @@ pub fn fit(
     parts: &Segmentation,
     motions: &[&AlignedMotion],
     components: Components,
+    alignment: PartAlignment,
 ) -> Result<(PcaModel, Vec<PartReport>)> {
     if template.len() != parts.n_vertices {
         return Err(Error::invalid(format!(
@@ -117,7 +149,7 @@ pub fn fit(
         .par_iter()
         .map(|part| {
             let reference: Vec<Vector3<f64>> = part.vertices.iter().map(|&v| template[v as usize]).collect();
-            let data = part_rows(motions, &part.vertices, &reference);
+            let data = part_rows(motions, &part.vertices, &reference, alignment);
             let pca = Pca::fit(&data, components)
                 .map_err(|e| Error::invalid(format!("part '{}': {e}", part.name)))?;
             let rms = pca.reconstruction_rms(&data).map_err(|e| Error::invalid(e.to_string()))?;
@@ -133,18 +165,27 @@ pub fn fit(
         })
         .collect::<Result<_>>()?;
     let (parts_pca, reports) = fitted.into_iter().unzip();
-    Ok((PcaModel { n_vertices: parts.n_vertices, parts: parts_pca }, reports))
+    Ok((PcaModel { n_vertices: parts.n_vertices, parts: parts_pca, alignment }, reports))
 }
 
 impl PcaModel {
+    /// The part vertices of every frame of `motion` in the frame PCA works in
+    /// (`F x 3n_k` per part), as the model's [`PartAlignment`] prescribes.
+    pub fn part_rows(&self, motion: &AlignedMotion) -> Vec<DMatrix<f64>> {
+        self.parts.par_iter().map(|p| part_rows(&[motion], &p.vertices, &p.reference, self.alignment)).collect()
+    }
+
     /// Coefficients of every frame of `motion`, per part (`F x m_k` each).
     pub fn encode(&self, motion: &AlignedMotion) -> Result<Vec<DMatrix<f64>>> {
+        self.encode_rows(&self.part_rows(motion))
+    }
+
+    /// Coefficients of part rows as from [`PcaModel::part_rows`].
+    pub fn encode_rows(&self, rows: &[DMatrix<f64>]) -> Result<Vec<DMatrix<f64>>> {
         self.parts
             .par_iter()
-            .map(|p| {
-                let data = part_rows(&[motion], &p.vertices, &p.reference);
-                p.pca.encode(&data).map_err(|e| Error::invalid(format!("part '{}': {e}", p.name)))
-            })
+            .zip(rows)
+            .map(|(p, data)| p.pca.encode(data).map_err(|e| Error::invalid(format!("part '{}': {e}", p.name))))
             .collect()
     }
 
@@ -193,7 +234,8 @@ mod tests {
         let seq = MeshSequence::new(t.faces.clone(), frames);
         let aligned = align_motion(&t, &seq).unwrap();
         let seg = whole_body(t.n_vertices());
-        let (model, reports) = fit(&t.vertices, &seg, &[&aligned], Components::Count(20)).unwrap();
+        let (model, reports) =
+            fit(&t.vertices, &seg, &[&aligned], Components::Count(20), PartAlignment::Part).unwrap();
         assert!(reports[0].components <= 11);
         assert!(reports[0].explained_variance > 1.0 - 1e-9);
         assert!(reports[0].reconstruction_rms_m < 1e-9, "{:?}", reports[0]);

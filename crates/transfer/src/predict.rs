@@ -107,13 +107,15 @@ pub struct Transferred {
 
 /// The whole of `gpr-predict` but the file writing: source aligned motion ->
 /// source coefficients -> target coefficients (and displacements) -> target
-/// parts -> assembled target mesh -> placed from the source's first world pose.
+/// parts -> assembled target mesh (or `reconstructor`'s §6 correction and
+/// stitching) -> placed from the source's first world pose.
 pub fn transfer_motion(
     model: &GprModel,
     source_pca: &crate::part_pca::PcaModel,
     target_pca: &crate::part_pca::PcaModel,
     motion: &crate::align::AlignedMotion,
     placement: crate::placement::Placement,
+    reconstructor: Option<&mut crate::reconstruct::Reconstructor>,
 ) -> Result<Transferred> {
     use crate::placement::{blend, place, poses, scaled_source, template_height, Placement};
     use std::time::Instant;
@@ -126,8 +128,13 @@ pub fn transfer_motion(
     let gp_s = t1.elapsed().as_secs_f64();
     let t2 = Instant::now();
     let decoded = target_pca.decode(&pred.coeffs)?;
-    let plan = crate::assemble::plan(target_pca)?;
-    let frames = crate::assemble::assemble(&plan, target_pca, &decoded);
+    let frames = match reconstructor {
+        Some(r) => r.reconstruct(target_pca, &decoded)?,
+        None => {
+            let plan = crate::assemble::plan(target_pca)?;
+            crate::assemble::assemble(&plan, target_pca, &decoded)
+        }
+    };
     let regressed: Vec<[f64; 6]> = pred
         .displacement
         .row_iter()

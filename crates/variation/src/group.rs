@@ -17,7 +17,8 @@ use serde::{Deserialize, Serialize};
 use transfer::align::{align_motion, AlignedMotion};
 
 use crate::contacts::{self, Contacts};
-use crate::prealign::{apply, apply_contacts, warp, PrealignOptions};
+use crate::gait;
+use crate::prealign::{apply, apply_contacts, warp, PrealignOptions, Warp};
 
 /// One body part (transfer paper §4 segmentation, overlap bands included).
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
@@ -38,7 +39,8 @@ pub struct GroupSequence {
     pub blend: Option<f64>,
     pub motion: AlignedMotion,
     pub contacts: Option<Contacts>,
-    /// Motion frame used for each reference frame (identity for the reference and blends).
+    /// Motion frame used for each reference frame (for the reference: its kept frames; for
+    /// blends: the identity).
     pub map: Vec<usize>,
 }
 
@@ -97,6 +99,8 @@ pub struct GroupSpec {
     pub whole_body: bool,
     /// When the segmentation fails, model the whole body (reported in the notes) instead of failing.
     pub fallback_whole_body: bool,
+    /// Cut every motion to the same number of whole gait cycles before the DTW ([`crate::gait`]).
+    pub gait_cycles: bool,
 }
 
 /// Loads, aligns, prealigns and blends the group. Returns the group and notes (skipped
@@ -145,21 +149,72 @@ pub fn build(set: &CaptureSet, spec: &GroupSpec) -> Result<(Group, Vec<String>)>
         .iter()
         .position(|m| *m == reference)
         .expect("checked");
-    let (ref_frames, ref_contacts) = (loaded[r].1.frames.clone(), loaded[r].2.clone());
+    // Windows `[start, start + len)` kept of each motion: everything, or whole gait cycles.
+    let mut windows: Vec<(usize, usize)> = loaded.iter().map(|l| (0, l.1.n_frames())).collect();
+    if spec.gait_cycles {
+        let periods = loaded
+            .iter()
+            .map(|(m, a, _)| {
+                gait::period(&a.frames, &gait::GaitOptions::default()).ok_or_else(|| {
+                    Error::invalid(format!(
+                        "motion '{m}': no gait cycle found (its poses do not repeat); cut cycles only for locomotion groups"
+                    ))
+                })
+            })
+            .collect::<Result<Vec<usize>>>()?;
+        let lp: Vec<(usize, usize)> = loaded
+            .iter()
+            .zip(&periods)
+            .map(|(l, &p)| (l.1.n_frames(), p))
+            .collect();
+        let k = gait::common_cycles(&lp)?;
+        for (w, &p) in windows.iter_mut().zip(&periods) {
+            w.1 = k * p;
+        }
+        for ((m, _, _), p) in loaded.iter().zip(&periods) {
+            mesh_core::info!("{m}: gait period {p} frames, {k} cycle(s) kept");
+        }
+    }
+    let slice =
+        |c: &Option<Contacts>, (s, n): (usize, usize)| c.as_ref().map(|c| c[s..s + n].to_vec());
+    let ref_frames = loaded[r].1.frames[windows[r].0..windows[r].0 + windows[r].1].to_vec();
+    let ref_contacts = slice(&loaded[r].2, windows[r]);
     let mut sequences = Vec::new();
-    for (name, motion, c) in loaded {
-        let map: Vec<usize> = if name == reference {
-            (0..motion.n_frames()).collect()
+    for (q, (name, motion, c)) in loaded.into_iter().enumerate() {
+        let (w0, len) = windows[q];
+        let map: Vec<usize> = if q == r {
+            (w0..w0 + len).collect()
         } else {
-            warp(
-                &motion.frames,
-                c.as_ref(),
-                &ref_frames,
-                ref_contacts.as_ref(),
-                &spec.prealign,
-            )
-            .map_err(|e| Error::invalid(format!("{name}: {e}")))?
-            .map
+            // Whole gait cycles: every start of the window is tried, the cheapest DTW kept,
+            // with one contact weight λ for all (that of the first window).
+            let starts = if spec.gait_cycles {
+                0..=motion.n_frames() - len
+            } else {
+                0..=0
+            };
+            let mut opts = spec.prealign.clone();
+            let mut best: Option<(usize, Warp)> = None;
+            for s in starts {
+                let wp = warp(
+                    &motion.frames[s..s + len],
+                    slice(&c, (s, len)).as_ref(),
+                    &ref_frames,
+                    ref_contacts.as_ref(),
+                    &opts,
+                )
+                .map_err(|e| Error::invalid(format!("{name}: {e}")))?;
+                opts.contact_weight = Some(wp.contact_weight);
+                if best.as_ref().is_none_or(|b| wp.mean_cost < b.1.mean_cost) {
+                    best = Some((s, wp));
+                }
+            }
+            let (s, wp) = best.expect("at least one window");
+            mesh_core::info!(
+                "{name}: frames {s}..{} warped onto the reference (mean DTW cost {:.1} mm)",
+                s + len,
+                wp.mean_cost * 1e3
+            );
+            wp.map.iter().map(|&i| s + i).collect()
         };
         let contacts = c.as_ref().map(|c| apply_contacts(c, &map));
         sequences.push(GroupSequence {

@@ -2,13 +2,14 @@
 //! Surface Motion Capture", 3DV 2017).
 //!
 //! Data flows one way: capture set -> [`prealign`] (contact-guided DTW of one movement group to a
-//! reference, [`contacts`] from the subject description, pre-blended `Y_w` sequences, §7) ->
+//! reference after cutting locomotion to whole [`gait`] cycles, [`contacts`] from the subject description, pre-blended `Y_w` sequences, §7) ->
 //! [`part_data`] (per-part pose vectors, §4) -> [`train`] (one GPDM per part, §5) -> [`sample`]
 //! (mean prediction + HMC over latent trajectories, §6; latent blending, §7) -> [`reconstruct`]
 //! (eqs. 11-13, stitching, displacement integration) -> [`metrics`] and [`plots`].
 
 pub mod contacts;
 pub mod evaluate;
+pub mod gait;
 pub mod group;
 pub mod metrics;
 pub mod part_data;

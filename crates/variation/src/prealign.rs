@@ -50,6 +50,8 @@ pub struct Warp {
     pub map: Vec<usize>,
     /// The contact weight λ used.
     pub contact_weight: f64,
+    /// Mean cost `C_ij` (contact term included) along the path.
+    pub mean_cost: f64,
 }
 
 /// `C_ij`: mean distance between subsampled vertices of motion frame `i` and reference frame `j`.
@@ -133,10 +135,12 @@ pub fn warp(
     )
     .map_err(|e| Error::invalid(format!("prealign: {e}")))?;
     let map = reference_map(&path, ft);
+    let mean_cost = path.iter().map(|&(i, j)| cost[(i, j)]).sum::<f64>() / path.len() as f64;
     Ok(Warp {
         path,
         map,
         contact_weight: lambda,
+        mean_cost,
     })
 }
 

@@ -26,7 +26,8 @@ fn tiny_set_end_to_end() {
         blend_weights: vec![0.5],
         prealign: PrealignOptions::default(),
         whole_body: false,
-        fallback_whole_body: true,
+        fallback_whole_body: false,
+        gait_cycles: true,
     };
     let (group, notes) = build(&set, &spec).unwrap();
     assert!(

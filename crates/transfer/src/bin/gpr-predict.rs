@@ -12,6 +12,8 @@ use transfer::gpr_model::GprModel;
 use transfer::part_pca::PcaModel;
 use transfer::placement::Placement;
 use transfer::predict::transfer_motion;
+use transfer::reconstruct::{Reconstructor, Surface};
+use mesh_core::segmentation::Segmentation;
 
 /// Transfer an aligned source motion to the target subject with a trained model: PLY frames in world coordinates
 #[derive(Parser, Debug)]
@@ -38,6 +40,22 @@ struct Args {
     /// How the poses are placed in the world
     #[arg(long, value_enum, default_value_t = Placement::Regressed)]
     placement: Placement,
+    /// Surface reconstruction after PCA decoding (paper §6): `assemble` averages overlaps,
+    /// `correct` applies §6.1 first, `correct-stitch` also stitches along optimal loops (§6.2)
+    #[arg(long, value_enum, default_value_t = Surface::Assemble)]
+    surface: Surface,
+    /// Target segmentation (from segment; needed unless --surface assemble)
+    #[arg(long, required_if_eq_any([("surface", "correct"), ("surface", "correct-stitch"), ("surface", "stitch")]))]
+    segmentation: Option<PathBuf>,
+    /// Target's aligned training motions: the correction's training part meshes (repeatable)
+    #[arg(long = "target-training", required_if_eq_any([("surface", "correct"), ("surface", "correct-stitch")]))]
+    target_training: Vec<PathBuf>,
+    /// Nearest training part meshes blended by the correction (the paper's M)
+    #[arg(short = 'm', long, default_value_t = surface::correct::DEFAULT_NEIGHBOURS as u16, value_parser = clap::value_parser!(u16).range(1..))]
+    neighbours: u16,
+    /// Use every n-th training frame for the correction
+    #[arg(long, default_value_t = 1, value_parser = clap::value_parser!(u16).range(1..))]
+    correct_stride: u16,
     /// Aligned source motion (from align)
     motion: PathBuf,
     /// Output folder of PLY frames 000000.ply, ... (the target's topology, one frame per source frame)
@@ -83,8 +101,24 @@ fn main() -> ExitCode {
             );
         }
         let faces = template.faces;
+        let mut recon = match (&args.surface, &args.segmentation) {
+            (Surface::Assemble, _) | (_, None) => None,
+            (surface, Some(seg_path)) => {
+                let seg = Segmentation::load(seg_path)?;
+                let training = args
+                    .target_training
+                    .iter()
+                    .map(AlignedMotion::load)
+                    .collect::<Result<Vec<_>, _>>()?;
+                let refs: Vec<&AlignedMotion> = training.iter().collect();
+                Some(
+                    Reconstructor::new(&tgt_pca, &seg, &faces, &refs, *surface, args.neighbours.into(), args.correct_stride.into())
+                        .with_context(|| seg_path.display().to_string())?,
+                )
+            }
+        };
         let t0 = Instant::now();
-        let result = transfer_motion(&model, &src_pca, &tgt_pca, &motion, args.placement)
+        let result = transfer_motion(&model, &src_pca, &tgt_pca, &motion, args.placement, recon.as_mut())
             .with_context(|| args.motion.display().to_string())?;
         let total = t0.elapsed().as_secs_f64();
         if let Some(w) = &result.blend_weights {

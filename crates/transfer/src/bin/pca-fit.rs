@@ -35,6 +35,11 @@ struct Args {
     /// Keep the fewest components explaining this fraction of variance instead
     #[arg(long)]
     variance: Option<f64>,
+    /// How each part is aligned before PCA: `body` = cut from the whole-body-aligned frames
+    /// (assembly averages overlaps); `part` = also Procrustes per part (assembly re-orients
+    /// children on their overlap band)
+    #[arg(long, value_enum, default_value_t = part_pca::PartAlignment::Body)]
+    part_alignment: part_pca::PartAlignment,
     /// Aligned training motions (artifacts from `align`)
     #[arg(required = true)]
     motions: Vec<PathBuf>,
@@ -61,11 +66,11 @@ fn main() -> ExitCode {
             None => Components::Count(args.components),
         };
         let refs: Vec<&AlignedMotion> = motions.iter().collect();
-        let (model, report) = part_pca::fit(&template.vertices, &parts, &refs, choice)?;
+        let (model, report) = part_pca::fit(&template.vertices, &parts, &refs, choice, args.part_alignment)?;
         let mut header = args
             .common
             .header("pca-fit", env!("CARGO_PKG_VERSION"))
-            .with_params(&serde_json::json!({"components": args.components, "variance": args.variance, "whole_body": args.whole_body}))?;
+            .with_params(&serde_json::json!({"components": args.components, "variance": args.variance, "whole_body": args.whole_body, "part_alignment": format!("{:?}", args.part_alignment)}))?;
         for m in &args.motions {
             header = header.with_input(m)?;
         }

@@ -26,6 +26,10 @@ struct Args {
     /// Lower bound on the pose-noise variance 1/α3 in m² (0 = none)
     #[arg(long, default_value_t = 1e-6)]
     noise_floor: f64,
+    /// Lower bound on the dynamics-noise variance 1/β4 in squared latent units (0 = none; without
+    /// it 1/β4 collapses on some parts and HMC returns copies of the source)
+    #[arg(long, default_value_t = variation::train::DYN_NOISE_FLOOR)]
+    dyn_noise_floor: f64,
     /// Alternating rounds of (X, α) and β-only L-BFGS phases
     #[arg(long, default_value_t = 10)]
     rounds: usize,
@@ -48,6 +52,7 @@ fn main() -> ExitCode {
         let mut cfg = TrainConfig::default();
         cfg.gpdm.latent_dim = args.latent_dim;
         cfg.gpdm.pose_noise_floor = (args.noise_floor > 0.0).then_some(args.noise_floor);
+        cfg.gpdm.dyn_noise_floor = (args.dyn_noise_floor > 0.0).then_some(args.dyn_noise_floor);
         cfg.options.schedule = Schedule::Alternate {
             rounds: args.rounds,
             iters: args.iters,

@@ -13,7 +13,7 @@ use variation::prealign::PrealignOptions;
 #[command(
     name = "prealign",
     version,
-    after_help = "e.g.: prealign --set out/demo/set --subject A --group locomotion --motions walk,run --blend-weights 0.5 --out out/work/variation/locomotion.group"
+    after_help = "e.g.: prealign --set out/demo/set --subject A --group locomotion --motions walk,run --gait-cycles --blend-weights 0.5 --out out/work/variation/locomotion.group"
 )]
 struct Args {
     #[command(flatten)]
@@ -42,9 +42,17 @@ struct Args {
     /// Model the whole body as one part (no segmentation)
     #[arg(long)]
     whole_body: bool,
-    /// Fail when the subject's curves do not give usable body parts [default: warn and model the whole body]
+    /// When the subject's curves do not give usable body parts, warn and model the whole body
+    /// [default: fail naming subject.json]
     #[arg(long)]
+    fallback_whole_body: bool,
+    /// Kept for old scripts: failing on unusable parts is now the default
+    #[arg(long, hide = true)]
     strict_parts: bool,
+    /// Cut every motion to the same number of whole gait cycles (period from the poses) before
+    /// the DTW, so locomotion pairs cycle for cycle
+    #[arg(long)]
+    gait_cycles: bool,
     /// Output artifact (kind variation-group)
     #[arg(short, long)]
     out: PathBuf,
@@ -70,7 +78,8 @@ fn main() -> ExitCode {
                 ..Default::default()
             },
             whole_body: args.whole_body,
-            fallback_whole_body: !args.strict_parts,
+            fallback_whole_body: args.fallback_whole_body && !args.strict_parts,
+            gait_cycles: args.gait_cycles,
         };
         let (group, notes) = build(&set, &spec)?;
         for n in notes {
