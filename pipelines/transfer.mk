@@ -8,6 +8,8 @@
 
 SET ?= $(OUT)/demo/set
 TRANSFER_METHODS ?= gpr-nn gpr-se gpr-linear keypose-affine whole-body
+# pca-fit --part-alignment: body (parts cut from whole-body-aligned frames) or part (see h14 results)
+PART_ALIGNMENT ?= body
 TRANSFER_WORK := $(OUT)/work
 TRANSFER_RULES := $(TRANSFER_WORK)/transfer-rules.mk
 TRANSFER_BINS := align segment pca-fit dtw-densify gpr-train gpr-predict evaluate learning-curves render
@@ -53,7 +55,7 @@ for x in (S, T):
          "@mkdir -p $$(@D)", "%s/segment -q %s --template %s --out $$@" % (B, os.path.join(set_dir, x, "subject.json"), tpl[x]))
     aligned = ["%s/%s/%s.aligned" % (W, x, m) for m in train[x]]
     rule("%s/%s/pca.model" % (W, x), [B + "/pca-fit", "%s/%s/parts.seg" % (W, x)] + aligned,
-         "%s/pca-fit -q --template %s --parts %s/%s/parts.seg %s --out $$@ --report %s/%s/pca.json" % (B, tpl[x], W, x, " ".join(aligned), W, x))
+         "%s/pca-fit -q --part-alignment $$(PART_ALIGNMENT) --template %s --parts %s/%s/parts.seg %s --out $$@ --report %s/%s/pca.json" % (B, tpl[x], W, x, " ".join(aligned), W, x))
     rule("%s/%s/pca-whole.model" % (W, x), [B + "/pca-fit"] + aligned,
          "%s/pca-fit -q --whole-body --template %s %s --out $$@ --report %s/%s/pca-whole.json" % (B, tpl[x], " ".join(aligned), W, x))
 pair_args = []

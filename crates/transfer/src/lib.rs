@@ -13,6 +13,7 @@ pub mod predict;
 pub mod assemble;
 pub mod reconstruct;
 pub mod representation;
+pub mod quality;
 pub mod placement;
 pub mod evaluate;
 pub mod learning_curves;

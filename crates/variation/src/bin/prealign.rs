@@ -53,6 +53,10 @@ struct Args {
     /// the DTW, so locomotion pairs cycle for cycle
     #[arg(long)]
     gait_cycles: bool,
+    /// Also write every time-aligned training sequence (pre-blends included) as meshes,
+    /// `<DIR>/<sequence>/NNNNNN.ply` (world coordinates), for inspection
+    #[arg(long, value_name = "DIR")]
+    export: Option<PathBuf>,
     /// Output artifact (kind variation-group)
     #[arg(short, long)]
     out: PathBuf,
@@ -101,6 +105,15 @@ fn main() -> ExitCode {
             .with_input(set.set_json())?
             .with_params(&blends)?;
         group.save(&args.out, &header)?;
+        if let Some(dir) = &args.export {
+            for s in &group.sequences {
+                let seq = mesh_core::sequence::MeshSequence {
+                    faces: group.faces.clone(),
+                    frames: s.motion.world_frames(),
+                };
+                seq.write_dir(dir.join(&s.name))?;
+            }
+        }
         Ok(())
     })
 }
