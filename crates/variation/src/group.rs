@@ -3,16 +3,20 @@
 //! pre-blended sequences `Y_w = blend(Y_1, Y_2, w)` for `w ∈ W` (paper §7), made with the
 //! non-linear mesh interpolation `surface::blend::Blender` on the aligned frames.
 //!
-//! A blend's rigid displacements are the linear blend of the two 6-vectors (they are small
-//! per-frame motions), integrated from the first motion's starting pose; its contacts are the
-//! nearer endpoint's (`w < 0.5`: the first).
+//! A blend's world poses ([`blend_poses`]) interpolate the two motions' poses expressed in
+//! their own ground frame (start position on the ground, start heading about the up axis):
+//! translations linearly, rotations along the geodesic; the result is placed at the first
+//! motion's ground frame and its displacements recomputed. (Blending the body-frame
+//! displacement 6-vectors instead, then integrating, made a walk/run blend climb into the air:
+//! the run's forward lean tilts its body-frame translations.) Its contacts are the nearer
+//! endpoint's (`w < 0.5`: the first).
 
 use mesh_core::artifact::Artifact;
 use mesh_core::capture_set::{CaptureSet, SubjectSpec};
-use mesh_core::rigid::{integrate, RigidMotion};
+use mesh_core::rigid::{relative_in_body_frame, so3_exp, so3_log, RigidMotion};
 use mesh_core::sequence::MeshSequence;
 use mesh_core::{Error, Result};
-use nalgebra::{Vector3, Vector6};
+use nalgebra::{Rotation3, Unit, Vector3};
 use serde::{Deserialize, Serialize};
 use transfer::align::{align_motion, AlignedMotion};
 
@@ -273,7 +277,13 @@ pub fn build(set: &CaptureSet, spec: &GroupSpec) -> Result<(Group, Vec<String>)>
     if let (false, Some((a, b))) = (spec.blend_weights.is_empty(), pair) {
         let blender = surface::blend::Blender::new(group.template.clone(), group.faces.clone())?;
         for &w in &spec.blend_weights {
-            let s = blend_sequences(&blender, &group.sequences[a], &group.sequences[b], w)?;
+            let s = blend_sequences(
+                &blender,
+                &group.sequences[a],
+                &group.sequences[b],
+                w,
+                &group.up,
+            )?;
             group.sequences.push(s);
         }
     }
@@ -286,6 +296,7 @@ pub fn blend_sequences(
     a: &GroupSequence,
     b: &GroupSequence,
     w: f64,
+    up: &Vector3<f64>,
 ) -> Result<GroupSequence> {
     use rayon::prelude::*;
     let n = a.motion.n_frames();
@@ -299,18 +310,12 @@ pub fn blend_sequences(
         .into_par_iter()
         .map(|t| blender.blend(&a.motion.frames[t], &b.motion.frames[t], w))
         .collect::<Result<Vec<_>>>()?;
-    let disp: Vec<[f64; 6]> = (0..n)
-        .map(|t| {
-            std::array::from_fn(|k| {
-                (1.0 - w) * a.motion.displacements[t][k] + w * b.motion.displacements[t][k]
-            })
-        })
-        .collect();
-    let rel: Vec<RigidMotion> = disp[1..]
-        .iter()
-        .map(|d| RigidMotion::from_6vec(&Vector6::from_row_slice(d)))
-        .collect();
-    let poses = integrate(&a.motion.poses[0], &rel);
+    let poses = blend_poses(&a.motion.poses, &b.motion.poses, w, up);
+    let mut disp = vec![[0.0; 6]];
+    for p in poses.windows(2) {
+        let d = relative_in_body_frame(&p[0], &p[1]).to_6vec();
+        disp.push(std::array::from_fn(|k| d[k]));
+    }
     let contacts = if w < 0.5 {
         a.contacts.clone()
     } else {
@@ -328,4 +333,98 @@ pub fn blend_sequences(
         contacts,
         map: (0..n).collect(),
     })
+}
+
+/// The ground frame of a world pose: its position dropped onto the ground plane through the
+/// origin (normal `up`) and its heading, the rotation about `up` closest to the pose's.
+pub fn ground_frame(pose: &RigidMotion, up: &Vector3<f64>) -> RigidMotion {
+    let up = up.normalize();
+    // A template direction orthogonal to up, and where the pose sends it, both made horizontal.
+    let e = if up.x.abs() < 0.9 {
+        Vector3::x()
+    } else {
+        Vector3::z()
+    };
+    let h = |v: Vector3<f64>| v - up * v.dot(&up);
+    let (e0, e1) = (h(e), h(pose.rotation * e));
+    let angle = if e1.norm() < 1e-9 {
+        0.0
+    } else {
+        e0.cross(&e1).dot(&up).atan2(e0.dot(&e1))
+    };
+    RigidMotion::new(
+        Rotation3::from_axis_angle(&Unit::new_normalize(up), angle),
+        h(pose.translation),
+    )
+}
+
+/// World poses of the blend at weight `w` of two time-aligned pose sequences (module doc).
+pub fn blend_poses(
+    a: &[RigidMotion],
+    b: &[RigidMotion],
+    w: f64,
+    up: &Vector3<f64>,
+) -> Vec<RigidMotion> {
+    let (ga, gb) = match (a.first(), b.first()) {
+        (Some(pa), Some(pb)) => (ground_frame(pa, up), ground_frame(pb, up)),
+        _ => return Vec::new(),
+    };
+    let (ia, ib) = (ga.inverse(), gb.inverse());
+    a.iter()
+        .zip(b)
+        .map(|(pa, pb)| {
+            let (qa, qb) = (ia.compose(pa), ib.compose(pb));
+            let r = qa.rotation * so3_exp(&(so3_log(&(qa.rotation.inverse() * qb.rotation)) * w));
+            let t = qa.translation * (1.0 - w) + qb.translation * w;
+            ga.compose(&RigidMotion::new(r, t))
+        })
+        .collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn pose(yaw: f64, tilt: f64, t: [f64; 3]) -> RigidMotion {
+        RigidMotion::new(
+            Rotation3::from_axis_angle(&Vector3::y_axis(), yaw)
+                * Rotation3::from_axis_angle(&Vector3::x_axis(), tilt),
+            Vector3::from(t),
+        )
+    }
+
+    #[test]
+    fn blend_poses_keep_endpoints_and_height() {
+        let up = Vector3::y();
+        // Upright walker heading +x from (1, 0.9, 2); leaning runner elsewhere, another heading.
+        let a: Vec<_> = (0..5)
+            .map(|i| pose(0.0, 0.0, [1.0 + 0.1 * i as f64, 0.9, 2.0]))
+            .collect();
+        let b: Vec<_> = (0..5)
+            .map(|i| {
+                let d = Rotation3::from_axis_angle(&Vector3::y_axis(), 1.0) * Vector3::x();
+                let p = Vector3::new(-3.0, 0.8, 0.5) + d * (0.3 * i as f64);
+                pose(1.0, 0.3, [p.x, p.y, p.z])
+            })
+            .collect();
+        let w0 = blend_poses(&a, &b, 0.0, &up);
+        for (p, q) in w0.iter().zip(&a) {
+            assert!((p.translation - q.translation).norm() < 1e-12);
+            assert!(p.rotation.angle_to(&q.rotation) < 1e-12);
+        }
+        // w = 1: b's motion moved onto a's start; its height, lean and speed are b's.
+        let w1 = blend_poses(&a, &b, 1.0, &up);
+        for (i, p) in w1.iter().enumerate() {
+            assert!((p.translation.y - 0.8).abs() < 1e-12, "{}", p.translation.y);
+            let travelled = (p.translation - w1[0].translation).norm();
+            assert!((travelled - 0.3 * i as f64).abs() < 1e-12);
+            // Travel along a's heading (+x), lean kept.
+            assert!((p.translation.z - 2.0).abs() < 1e-12);
+            assert!((p.rotation.angle_to(&pose(0.0, 0.3, [0.0; 3]).rotation)) < 1e-12);
+        }
+        // Half way: height and speed in between.
+        let wh = blend_poses(&a, &b, 0.5, &up);
+        assert!((wh[4].translation.y - 0.85).abs() < 1e-12);
+        assert!(((wh[4].translation - wh[0].translation).norm() - 0.8).abs() < 1e-12);
+    }
 }
