@@ -42,40 +42,66 @@ fn edges(faces: &[[u32; 3]]) -> Edges {
         for i in 0..3 {
             let (a, b) = (t[i], t[(i + 1) % 3]);
             let key = (a.min(b), a.max(b));
-            map.entry(key).and_modify(|e| e.1 = f).or_insert((f, usize::MAX));
+            map.entry(key)
+                .and_modify(|e| e.1 = f)
+                .or_insert((f, usize::MAX));
         }
     }
-    let mut list: Vec<_> = map.into_iter().map(|((u, v), (a, b))| (u, v, a, b)).collect();
+    let mut list: Vec<_> = map
+        .into_iter()
+        .map(|((u, v), (a, b))| (u, v, a, b))
+        .collect();
     list.sort_unstable();
     Edges { list }
 }
 
 fn normal(x: &[Vector3<f64>], t: &[u32; 3]) -> Vector3<f64> {
     let [a, b, c] = t.map(|i| x[i as usize]);
-    (b - a).cross(&(c - a)).try_normalize(1e-300).unwrap_or_else(Vector3::zeros)
+    (b - a)
+        .cross(&(c - a))
+        .try_normalize(1e-300)
+        .unwrap_or_else(Vector3::zeros)
 }
 
 fn dihedral(x: &[Vector3<f64>], faces: &[[u32; 3]], fa: usize, fb: usize) -> f64 {
-    normal(x, &faces[fa]).dot(&normal(x, &faces[fb])).clamp(-1.0, 1.0).acos()
+    normal(x, &faces[fa])
+        .dot(&normal(x, &faces[fb]))
+        .clamp(-1.0, 1.0)
+        .acos()
 }
 
 /// Signed volume of a (possibly open) part: tetrahedra from its centroid.
 pub fn part_volume(x: &[Vector3<f64>], faces: &[[u32; 3]]) -> f64 {
     let c = x.iter().sum::<Vector3<f64>>() / x.len().max(1) as f64;
-    faces.iter().map(|t| {
-        let [a, b, d] = t.map(|i| x[i as usize] - c);
-        a.dot(&b.cross(&d)) / 6.0
-    }).sum()
+    faces
+        .iter()
+        .map(|t| {
+            let [a, b, d] = t.map(|i| x[i as usize] - c);
+            a.dot(&b.cross(&d)) / 6.0
+        })
+        .sum()
 }
 
 /// Mean edge length over a face list.
 pub fn mean_edge(x: &[Vector3<f64>], faces: &[[u32; 3]]) -> f64 {
-    let s: f64 = faces.iter().map(|t| (0..3).map(|i| (x[t[i] as usize] - x[t[(i + 1) % 3] as usize]).norm()).sum::<f64>()).sum();
+    let s: f64 = faces
+        .iter()
+        .map(|t| {
+            (0..3)
+                .map(|i| (x[t[i] as usize] - x[t[(i + 1) % 3] as usize]).norm())
+                .sum::<f64>()
+        })
+        .sum();
     s / (3 * faces.len()).max(1) as f64
 }
 
 /// Measures `pred` against `truth` (frames of the template's topology `faces`).
-pub fn measure(faces: &[[u32; 3]], seg: &Segmentation, pred: &[Vec<Vector3<f64>>], truth: &[Vec<Vector3<f64>>]) -> Quality {
+pub fn measure(
+    faces: &[[u32; 3]],
+    seg: &Segmentation,
+    pred: &[Vec<Vector3<f64>>],
+    truth: &[Vec<Vector3<f64>>],
+) -> Quality {
     let e = edges(faces);
     let mut in_band = vec![false; seg.n_vertices];
     for p in seg.parts.iter().filter(|p| p.parent.is_some()) {
@@ -83,14 +109,21 @@ pub fn measure(faces: &[[u32; 3]], seg: &Segmentation, pred: &[Vec<Vector3<f64>>
         if let Some(q) = parent {
             let mut inq = vec![false; seg.n_vertices];
             q.vertices.iter().for_each(|&v| inq[v as usize] = true);
-            p.vertices.iter().filter(|&&v| inq[v as usize]).for_each(|&v| in_band[v as usize] = true);
+            p.vertices
+                .iter()
+                .filter(|&&v| inq[v as usize])
+                .for_each(|&v| in_band[v as usize] = true);
         }
     }
     let boundary = e.list.iter().filter(|x| x.3 == usize::MAX).count();
     let (mut sums, mut counts) = ([0.0f64; 4], [0usize; 2]);
     for (p, t) in pred.iter().zip(truth) {
         for &(u, v, fa, fb) in &e.list {
-            let k = if in_band[u as usize] && in_band[v as usize] { 0 } else { 1 };
+            let k = if in_band[u as usize] && in_band[v as usize] {
+                0
+            } else {
+                1
+            };
             let lp = (p[u as usize] - p[v as usize]).norm();
             let lt = (t[u as usize] - t[v as usize]).norm();
             sums[k] += (lp / lt).ln().abs();
@@ -115,10 +148,15 @@ pub fn measure(faces: &[[u32; 3]], seg: &Segmentation, pred: &[Vec<Vector3<f64>>
         boundary_edges: boundary,
         degenerate_faces: pred
             .iter()
-            .map(|p| faces.iter().filter(|t| {
-                let [a, b, c] = t.map(|i| p[i as usize]);
-                0.5 * (b - a).cross(&(c - a)).norm() < 1e-12
-            }).count())
+            .map(|p| {
+                faces
+                    .iter()
+                    .filter(|t| {
+                        let [a, b, c] = t.map(|i| p[i as usize]);
+                        0.5 * (b - a).cross(&(c - a)).norm() < 1e-12
+                    })
+                    .count()
+            })
             .max()
             .unwrap_or(0),
         seam_edge_log_ratio: sums[0] / c(0),
@@ -146,14 +184,32 @@ mod tests {
         let seg = Segmentation {
             n_vertices: n,
             parts: vec![
-                Part { name: "a".into(), parent: None, vertices: all.clone(), faces: m.faces.clone(), overlap: vec![], loops: vec![] },
-                Part { name: "b".into(), parent: Some("a".into()), vertices: all, faces: m.faces.clone(), overlap: vec![], loops: vec![] },
+                Part {
+                    name: "a".into(),
+                    parent: None,
+                    vertices: all.clone(),
+                    faces: m.faces.clone(),
+                    overlap: vec![],
+                    loops: vec![],
+                },
+                Part {
+                    name: "b".into(),
+                    parent: Some("a".into()),
+                    vertices: all,
+                    faces: m.faces.clone(),
+                    overlap: vec![],
+                    loops: vec![],
+                },
             ],
         };
         let truth = vec![m.vertices.clone()];
         let q = measure(&m.faces, &seg, &truth, &truth);
         assert_eq!(q.boundary_edges, 0);
-        assert!(q.seam_edge_log_ratio.abs() < 1e-12 && q.part_volume_err < 1e-12 && q.other_dihedral_err_rad < 1e-12);
+        assert!(
+            q.seam_edge_log_ratio.abs() < 1e-12
+                && q.part_volume_err < 1e-12
+                && q.other_dihedral_err_rad < 1e-12
+        );
         let scaled = vec![m.vertices.iter().map(|v| 0.9 * v).collect::<Vec<_>>()];
         let q = measure(&m.faces, &seg, &scaled, &truth);
         assert!((q.seam_edge_log_ratio - 0.9f64.ln().abs()).abs() < 1e-12);

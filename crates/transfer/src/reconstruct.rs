@@ -40,7 +40,13 @@ pub enum Surface {
 /// Rows `F x 3n` -> one vertex list per frame.
 pub fn rows_to_meshes(rows: &DMatrix<f64>) -> Vec<Vec<Vector3<f64>>> {
     let n = rows.ncols() / 3;
-    rows.row_iter().map(|r| (0..n).map(|i| Vector3::new(r[3 * i], r[3 * i + 1], r[3 * i + 2])).collect()).collect()
+    rows.row_iter()
+        .map(|r| {
+            (0..n)
+                .map(|i| Vector3::new(r[3 * i], r[3 * i + 1], r[3 * i + 2]))
+                .collect()
+        })
+        .collect()
 }
 
 /// Everything needed to rebuild target meshes from decoded parts.
@@ -67,14 +73,22 @@ impl Reconstructor {
     ) -> Result<Self> {
         let plan = plan(pca)?;
         if seg.parts.len() != pca.parts.len()
-            || seg.parts.iter().zip(&pca.parts).any(|(s, p)| s.name != p.name || s.vertices != p.vertices)
+            || seg
+                .parts
+                .iter()
+                .zip(&pca.parts)
+                .any(|(s, p)| s.name != p.name || s.vertices != p.vertices)
         {
-            return Err(Error::invalid("the segmentation's parts differ from the PCA model's"));
+            return Err(Error::invalid(
+                "the segmentation's parts differ from the PCA model's",
+            ));
         }
         let correct = matches!(surface, Surface::Correct | Surface::CorrectStitch);
         let correctors = if correct {
             if training.is_empty() {
-                return Err(Error::invalid("correction needs the target's training motions"));
+                return Err(Error::invalid(
+                    "correction needs the target's training motions",
+                ));
             }
             let mut per_part: Vec<Vec<Vec<Vector3<f64>>>> = vec![Vec::new(); pca.parts.len()];
             for m in training {
@@ -95,42 +109,70 @@ impl Reconstructor {
             // Parts cut from whole-body-aligned frames are already in one frame: re-aligning
             // children on their narrow band would only add orientation error.
             let layout = surface::segmentation::part_layout(seg, faces.to_vec())?;
-            Some((Stitcher::new(layout).with_band_alignment(pca.alignment == PartAlignment::Part), order))
+            Some((
+                Stitcher::new(layout).with_band_alignment(pca.alignment == PartAlignment::Part),
+                order,
+            ))
         } else {
             None
         };
-        Ok(Reconstructor { plan, correctors, neighbours, stitcher })
+        Ok(Reconstructor {
+            plan,
+            correctors,
+            neighbours,
+            stitcher,
+        })
     }
 
     /// §6.1 on every part of every frame: `decoded[part][frame]` in, same shape out.
-    pub fn correct(&self, decoded: &[Vec<Vec<Vector3<f64>>>]) -> Result<Vec<Vec<Vec<Vector3<f64>>>>> {
+    pub fn correct(
+        &self,
+        decoded: &[Vec<Vec<Vector3<f64>>>],
+    ) -> Result<Vec<Vec<Vec<Vector3<f64>>>>> {
         if self.correctors.is_empty() {
             return Ok(decoded.to_vec());
         }
         decoded
             .iter()
             .zip(&self.correctors)
-            .map(|(frames, c)| frames.par_iter().map(|p| c.correct(p, self.neighbours)).collect())
+            .map(|(frames, c)| {
+                frames
+                    .par_iter()
+                    .map(|p| c.correct(p, self.neighbours))
+                    .collect()
+            })
             .collect()
     }
 
     /// One mesh per frame from `decoded[part][frame]` (after [`Reconstructor::correct`]).
-    pub fn merge(&mut self, pca: &PcaModel, parts: &[Vec<Vec<Vector3<f64>>>]) -> Result<Vec<Vec<Vector3<f64>>>> {
+    pub fn merge(
+        &mut self,
+        pca: &PcaModel,
+        parts: &[Vec<Vec<Vector3<f64>>>],
+    ) -> Result<Vec<Vec<Vector3<f64>>>> {
         let Some((stitcher, order)) = &mut self.stitcher else {
             return Ok(assemble(&self.plan, pca, parts));
         };
         let n_frames = parts.first().map_or(0, |p| p.len());
         (0..n_frames)
             .map(|f| {
-                let frame: Vec<Vec<Vector3<f64>>> = order.iter().map(|&k| parts[k][f].clone()).collect();
-                let v = stitcher.stitch(&frame).map_err(|e| Error::invalid(format!("frame {f}: {e}")))?.vertices;
+                let frame: Vec<Vec<Vector3<f64>>> =
+                    order.iter().map(|&k| parts[k][f].clone()).collect();
+                let v = stitcher
+                    .stitch(&frame)
+                    .map_err(|e| Error::invalid(format!("frame {f}: {e}")))?
+                    .vertices;
                 Ok(procrustes(&v, &self.plan.template, None).apply_all(&v))
             })
             .collect()
     }
 
     /// [`Reconstructor::correct`] then [`Reconstructor::merge`].
-    pub fn reconstruct(&mut self, pca: &PcaModel, decoded: &[Vec<Vec<Vector3<f64>>>]) -> Result<Vec<Vec<Vector3<f64>>>> {
+    pub fn reconstruct(
+        &mut self,
+        pca: &PcaModel,
+        decoded: &[Vec<Vec<Vector3<f64>>>],
+    ) -> Result<Vec<Vec<Vector3<f64>>>> {
         let corrected = self.correct(decoded)?;
         self.merge(pca, &corrected)
     }
@@ -154,24 +196,40 @@ mod tests {
         let part = |name: &str, parent: Option<&str>, keep: &dyn Fn(usize) -> bool| {
             let vertices: Vec<u32> = (0..n as u32).filter(|&v| keep(v as usize)).collect();
             let mut local = vec![u32::MAX; n];
-            vertices.iter().enumerate().for_each(|(i, &v)| local[v as usize] = i as u32);
+            vertices
+                .iter()
+                .enumerate()
+                .for_each(|(i, &v)| local[v as usize] = i as u32);
             let faces = mesh
                 .faces
                 .iter()
                 .filter(|f| f.iter().all(|&v| local[v as usize] != u32::MAX))
                 .map(|f| f.map(|v| local[v as usize]))
                 .collect();
-            Part { name: name.into(), parent: parent.map(Into::into), vertices, faces, overlap: Vec::new(), loops: Vec::new() }
+            Part {
+                name: name.into(),
+                parent: parent.map(Into::into),
+                vertices,
+                faces,
+                overlap: Vec::new(),
+                loops: Vec::new(),
+            }
         };
         let seg = Segmentation {
             n_vertices: n,
-            parts: vec![part("torso", None, &|v| v < ring(8)), part("limb", Some("torso"), &|v| v >= ring(4))],
+            parts: vec![
+                part("torso", None, &|v| v < ring(8)),
+                part("limb", Some("torso"), &|v| v >= ring(4)),
+            ],
         };
         let frames: Vec<Vec<Vector3<f64>>> = (0..8)
             .map(|i| {
                 let r = so3_exp(&Vector3::new(0.0, 0.0, 0.15 * i as f64 - 0.5));
                 let c = Vector3::new(0.0, 1.0, 0.0);
-                mesh.vertices.iter().map(|v| if v.y > 1.0 { r * (v - c) + c } else { *v }).collect()
+                mesh.vertices
+                    .iter()
+                    .map(|v| if v.y > 1.0 { r * (v - c) + c } else { *v })
+                    .collect()
             })
             .collect();
         let motion = AlignedMotion {
@@ -192,9 +250,22 @@ mod tests {
     fn exact_parts_rebuild_the_frames_by_every_method() {
         let (mesh, seg, motion) = bending_capsule();
         for alignment in [PartAlignment::Body, PartAlignment::Part] {
-            let (pca, _) = fit(&mesh.vertices, &seg, &[&motion], Components::Count(20), alignment).unwrap();
-            for surface in [Surface::Assemble, Surface::Stitch, Surface::Correct, Surface::CorrectStitch] {
-                let mut r = Reconstructor::new(&pca, &seg, &mesh.faces, &[&motion], surface, 3, 1).unwrap();
+            let (pca, _) = fit(
+                &mesh.vertices,
+                &seg,
+                &[&motion],
+                Components::Count(20),
+                alignment,
+            )
+            .unwrap();
+            for surface in [
+                Surface::Assemble,
+                Surface::Stitch,
+                Surface::Correct,
+                Surface::CorrectStitch,
+            ] {
+                let mut r =
+                    Reconstructor::new(&pca, &seg, &mesh.faces, &[&motion], surface, 3, 1).unwrap();
                 let e = rebuilt_error(&pca, &mut r, &motion, true).unwrap();
                 assert!(e < 1e-8, "{alignment:?} {surface:?}: {e}");
             }
@@ -206,20 +277,35 @@ mod tests {
     #[test]
     fn correction_restores_edge_lengths_of_a_shrunken_part() {
         let (mesh, seg, motion) = bending_capsule();
-        let (pca, _) = fit(&mesh.vertices, &seg, &[&motion], Components::Count(20), PartAlignment::Body).unwrap();
-        let r = Reconstructor::new(&pca, &seg, &mesh.faces, &[&motion], Surface::Correct, 3, 1).unwrap();
-        let mut parts: Vec<Vec<Vec<Vector3<f64>>>> = pca.part_rows(&motion).iter().map(rows_to_meshes).collect();
+        let (pca, _) = fit(
+            &mesh.vertices,
+            &seg,
+            &[&motion],
+            Components::Count(20),
+            PartAlignment::Body,
+        )
+        .unwrap();
+        let r = Reconstructor::new(&pca, &seg, &mesh.faces, &[&motion], Surface::Correct, 3, 1)
+            .unwrap();
+        let mut parts: Vec<Vec<Vec<Vector3<f64>>>> =
+            pca.part_rows(&motion).iter().map(rows_to_meshes).collect();
         let limb = &mut parts[1][5];
         let c = surface::centroid(limb);
         limb.iter_mut().for_each(|v| *v = c + 0.85 * (*v - c));
         let mean_edge = |x: &[Vector3<f64>]| {
             let f = &seg.parts[1].faces;
-            f.iter().map(|t| (x[t[0] as usize] - x[t[1] as usize]).norm()).sum::<f64>() / f.len() as f64
+            f.iter()
+                .map(|t| (x[t[0] as usize] - x[t[1] as usize]).norm())
+                .sum::<f64>()
+                / f.len() as f64
         };
         let want = mean_edge(&rows_to_meshes(&pca.part_rows(&motion)[1])[5]);
         let before = mean_edge(&parts[1][5]) / want;
         let after = mean_edge(&r.correct(&parts).unwrap()[1][5]) / want;
         assert!((before - 0.85).abs() < 1e-9);
-        assert!((after - 1.0).abs() < 0.02, "edge ratio after correction {after}");
+        assert!(
+            (after - 1.0).abs() < 0.02,
+            "edge ratio after correction {after}"
+        );
     }
 }

@@ -26,7 +26,11 @@ pub fn truncation_rms(pca: &PcaModel, truth: &AlignedMotion) -> Result<Vec<(Stri
             let orig = rows_to_meshes(r);
             let (mut s, mut n) = (0.0, 0usize);
             for (a, b) in orig.iter().zip(d) {
-                s += a.iter().zip(b).map(|(x, y)| (x - y).norm_squared()).sum::<f64>();
+                s += a
+                    .iter()
+                    .zip(b)
+                    .map(|(x, y)| (x - y).norm_squared())
+                    .sum::<f64>();
                 n += a.len();
             }
             (p.name.clone(), (s / n.max(1) as f64).sqrt())
@@ -45,7 +49,12 @@ pub struct RepresentationRow {
 }
 
 /// `rms_pose_m` of the truth rebuilt by `recon` (parts through PCA or exact).
-pub fn rebuilt_error(pca: &PcaModel, recon: &mut Reconstructor, truth: &AlignedMotion, through_pca: bool) -> Result<f64> {
+pub fn rebuilt_error(
+    pca: &PcaModel,
+    recon: &mut Reconstructor,
+    truth: &AlignedMotion,
+    through_pca: bool,
+) -> Result<f64> {
     let rows = pca.part_rows(truth);
     let parts = if through_pca {
         pca.decode(&pca.encode_rows(&rows)?)?

@@ -280,6 +280,50 @@ fn transfer_pipeline_on_a_known_synthetic_set() {
     // The pose is the same whatever the placement.
     assert!((get("gpr-nn", "blended").rms_pose_m - nn.rms_pose_m).abs() < 1e-9);
 
+    // Paper section 6 after gpr-nn: correction (M = 3) and stitching give the
+    // target's topology, one frame per source frame, and do not lose the pose.
+    let training: Vec<String> = common::TRAIN
+        .iter()
+        .map(|(m, _)| p(&work.path(&format!("B/{m}.aligned"))).to_string())
+        .collect();
+    for surface in ["correct", "correct-stitch"] {
+        let out = work.path(&format!("out/gpr-nn+{surface}"));
+        let mut args = vec![
+            "-q",
+            "--model",
+            p(&work.path("gpr-nn.model")).to_owned().leak(),
+            "--source-pca",
+            p(&work.path("A/pca.model")).to_owned().leak(),
+            "--target-pca",
+            p(&work.path("B/pca.model")).to_owned().leak(),
+            "--target-template",
+            p(&work.set.join("B/walk/000000.ply")).to_owned().leak(),
+            "--surface",
+            surface,
+            "--segmentation",
+            p(&work.path("B/parts.seg")).to_owned().leak(),
+        ];
+        for t in &training {
+            args.extend(["--target-training", t.as_str()]);
+        }
+        let motion = p(&work.path(&format!("A/{}.aligned", common::TEST.0))).to_owned();
+        args.extend([motion.as_str(), "--out", p(&out)]);
+        run("gpr-predict", &args);
+        let pred = MeshSequence::load_dir(&out).unwrap();
+        assert_eq!(pred.n_frames(), common::N_SOURCE);
+        assert_eq!(pred.faces, truth.faces);
+        let (pose, _) = transfer::evaluate::rms_errors(&pred, &truth).unwrap();
+        eprintln!(
+            "gpr-nn+{surface}: pose {pose:.4} m (gpr-nn {:.4} m)",
+            nn.rms_pose_m
+        );
+        assert!(
+            pose < 1.5 * nn.rms_pose_m + 1e-3,
+            "{surface}: pose error {pose} vs gpr-nn {}",
+            nn.rms_pose_m
+        );
+    }
+
     // Reverse direction trains from the same pairs and predicts B's frames onto A.
     let model = work.path("rev.model");
     let mut args = vec![

@@ -158,7 +158,13 @@ pub fn evaluate(
                 .position(|&(v, _)| v > w)
                 .unwrap_or(learned.len() - 1);
             let (lo, hi) = (learned[i2 - 1], learned[i2]);
-            let truth = blend_sequences(&blender, &group.sequences[a], &group.sequences[b], w)?;
+            let truth = blend_sequences(
+                &blender,
+                &group.sequences[a],
+                &group.sequences[b],
+                w,
+                &group.up,
+            )?;
             let xa = model.latents(a);
             let xb = model.latents(b);
             let (xl, xh) = (model.latents(lo.1), model.latents(hi.1));

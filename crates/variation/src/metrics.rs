@@ -26,6 +26,32 @@ pub fn mean_vertex_distance(a: &[Vec<Vector3<f64>>], b: &[Vec<Vector3<f64>>]) ->
     s / n as f64
 }
 
+/// Distance to the source's pose manifold, blind to timing: the mean over frames of `a` of the
+/// smallest mean per-vertex distance to any frame of `b` (vertices evenly subsampled to at most
+/// `max_vertices`). A variation that stays on the source's cycle scores about the data's own
+/// frame-to-frame spacing; one that leaves it scores its pose error.
+pub fn nearest_frame_distance(
+    a: &[Vec<Vector3<f64>>],
+    b: &[Vec<Vector3<f64>>],
+    max_vertices: usize,
+) -> f64 {
+    let n = a.first().map_or(0, |f| f.len());
+    if a.is_empty() || b.is_empty() || n == 0 {
+        return 0.0;
+    }
+    let step = n.div_ceil(max_vertices.max(1)).max(1);
+    let idx: Vec<usize> = (0..n).step_by(step).collect();
+    a.iter()
+        .map(|fa| {
+            b.iter()
+                .map(|fb| idx.iter().map(|&v| (fa[v] - fb[v]).norm()).sum::<f64>())
+                .fold(f64::INFINITY, f64::min)
+                / idx.len() as f64
+        })
+        .sum::<f64>()
+        / a.len() as f64
+}
+
 /// Frames rigidly aligned to `template` (pose only: no travel, no heading).
 pub fn normalise(
     frames: &[Vec<Vector3<f64>>],

@@ -48,6 +48,10 @@ pub struct SequenceReport {
     pub distance_to_source_m: Vec<f64>,
     /// The same after rigidly aligning every frame to the template: pose only (m).
     pub pose_distance_to_source_m: Vec<f64>,
+    /// Distance to the source's pose manifold whatever the timing
+    /// ([`metrics::nearest_frame_distance`], frames aligned to the template; m): small when a
+    /// variation stays on the source's cycle.
+    pub manifold_distance_m: Vec<f64>,
     /// Mean |i − j| along the DTW path between variation and source (frames).
     pub timing_offset_frames: Vec<f64>,
     /// Mean per-vertex distance between pairs of variations (m).
@@ -93,18 +97,17 @@ fn measure(
     );
     let slide = |f: &[Vec<Vector3<f64>>]| metrics::foot_sliding(f, &soles, &model.up, 0.02);
     let source_pose = metrics::normalise(source, &model.template);
-    let per: Vec<(f64, f64, f64, Option<f64>, f64)> = vars
+    let per: Vec<(f64, f64, f64, Option<f64>, f64, f64)> = vars
         .par_iter()
         .map(|v| {
+            let pose = metrics::normalise(v, &model.template);
             (
                 metrics::mean_vertex_distance(v, source),
                 metrics::timing_offset(v, source, &model.template),
                 metrics::edge_distortion(v, &model.template, &edges),
                 slide(v),
-                metrics::mean_vertex_distance(
-                    &metrics::normalise(v, &model.template),
-                    &source_pose,
-                ),
+                metrics::mean_vertex_distance(&pose, &source_pose),
+                metrics::nearest_frame_distance(&pose, &source_pose, 2000),
             )
         })
         .collect();
@@ -120,6 +123,7 @@ fn measure(
         frames: source.len(),
         distance_to_source_m: per.iter().map(|p| p.0).collect(),
         pose_distance_to_source_m: per.iter().map(|p| p.4).collect(),
+        manifold_distance_m: per.iter().map(|p| p.5).collect(),
         timing_offset_frames: per.iter().map(|p| p.1).collect(),
         pairwise_distance_m: Stats::of(&pair),
         edge_distortion: per.iter().map(|p| p.2).collect(),
@@ -178,7 +182,13 @@ pub fn run(
         let blender = surface::blend::Blender::new(group.template.clone(), group.faces.clone())?;
         for &w in &cfg.blends {
             let vars = blend_variations(&dec, &pools, w, cfg.n, cfg.seed)?;
-            let truth = blend_sequences(&blender, &group.sequences[a], &group.sequences[b], w)?;
+            let truth = blend_sequences(
+                &blender,
+                &group.sequences[a],
+                &group.sequences[b],
+                w,
+                &group.up,
+            )?;
             jobs.push((
                 blend_name(w),
                 Some(w),

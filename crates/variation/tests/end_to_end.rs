@@ -27,8 +27,19 @@ fn tiny_set_end_to_end() {
         prealign: PrealignOptions::default(),
         whole_body: false,
         fallback_whole_body: false,
-        gait_cycles: true,
+        gait_cycles: false,
     };
+    // The tiny clips hold less than one gait cycle: cutting whole cycles is a clean error.
+    let err = build(
+        &set,
+        &GroupSpec {
+            gait_cycles: true,
+            ..spec.clone()
+        },
+    )
+    .unwrap_err()
+    .to_string();
+    assert!(err.contains("no gait cycle"), "{err}");
     let (group, notes) = build(&set, &spec).unwrap();
     assert!(
         notes.iter().any(|n| n.contains("no_such_motion")),

@@ -174,7 +174,7 @@ fn blends_at_zero_and_one_reproduce_the_endpoints() {
     let (a, b) = (make(0.1, "a"), make(0.3, "b"));
     let blender = surface::blend::Blender::new(mesh.vertices.clone(), mesh.faces.clone()).unwrap();
     for (w, end) in [(0.0, &a), (1.0, &b)] {
-        let s = blend_sequences(&blender, &a, &b, w).unwrap();
+        let s = blend_sequences(&blender, &a, &b, w, &nalgebra::Vector3::y()).unwrap();
         let err = metrics::mean_vertex_distance(&s.motion.frames, &end.motion.frames);
         assert!(err < 1e-8, "w = {w}: {err}");
         let pe = s
@@ -186,7 +186,7 @@ fn blends_at_zero_and_one_reproduce_the_endpoints() {
             .fold(0.0, f64::max);
         assert!(pe < 1e-12, "w = {w}: poses differ by {pe}");
     }
-    let mid = blend_sequences(&blender, &a, &b, 0.5).unwrap();
+    let mid = blend_sequences(&blender, &a, &b, 0.5, &nalgebra::Vector3::y()).unwrap();
     assert!(metrics::mean_vertex_distance(&mid.motion.frames, &a.motion.frames) > 1e-3);
     // Latent blending (§7) at the bounding weights gives the bounding trajectories.
     let xa = DMatrix::from_fn(5, 3, |i, j| (i + j) as f64);
@@ -223,4 +223,27 @@ fn torso_vector_round_trips_displacement_and_gravity() {
             assert!((g[k] - grav[t][k]).abs() < 1e-12);
         }
     }
+}
+
+#[test]
+fn manifold_distance_ignores_timing_but_not_pose() {
+    use nalgebra::Vector3;
+    use variation::metrics::nearest_frame_distance;
+    let frame = |t: usize| -> Vec<Vector3<f64>> {
+        let a = std::f64::consts::TAU * t as f64 / 20.0;
+        (0..30)
+            .map(|v| Vector3::new(a.cos() * v as f64 * 0.01, a.sin(), v as f64 * 0.02))
+            .collect()
+    };
+    let source: Vec<_> = (0..40).map(frame).collect();
+    // Same cycle, other phase and speed: on the manifold.
+    let shifted: Vec<_> = (0..25).map(|t| frame(2 * t + 7)).collect();
+    assert!(nearest_frame_distance(&shifted, &source, 1000) < 1e-12);
+    // Every vertex 1 cm off along an axis the cycle never moves: 1 cm off the manifold.
+    let off: Vec<Vec<_>> = shifted
+        .iter()
+        .map(|f| f.iter().map(|p| p + Vector3::new(0.0, 0.0, 0.01)).collect())
+        .collect();
+    let d = nearest_frame_distance(&off, &source, 1000);
+    assert!((d - 0.01).abs() < 1e-12, "{d}");
 }

@@ -6,6 +6,7 @@ use anyhow::{bail, Context};
 use clap::Parser;
 use mesh_core::artifact::Artifact;
 use mesh_core::cli::{run_stage, CommonArgs};
+use mesh_core::segmentation::Segmentation;
 use mesh_core::sequence::MeshSequence;
 use transfer::align::AlignedMotion;
 use transfer::gpr_model::GprModel;
@@ -13,7 +14,6 @@ use transfer::part_pca::PcaModel;
 use transfer::placement::Placement;
 use transfer::predict::transfer_motion;
 use transfer::reconstruct::{Reconstructor, Surface};
-use mesh_core::segmentation::Segmentation;
 
 /// Transfer an aligned source motion to the target subject with a trained model: PLY frames in world coordinates
 #[derive(Parser, Debug)]
@@ -112,14 +112,29 @@ fn main() -> ExitCode {
                     .collect::<Result<Vec<_>, _>>()?;
                 let refs: Vec<&AlignedMotion> = training.iter().collect();
                 Some(
-                    Reconstructor::new(&tgt_pca, &seg, &faces, &refs, *surface, args.neighbours.into(), args.correct_stride.into())
-                        .with_context(|| seg_path.display().to_string())?,
+                    Reconstructor::new(
+                        &tgt_pca,
+                        &seg,
+                        &faces,
+                        &refs,
+                        *surface,
+                        args.neighbours.into(),
+                        args.correct_stride.into(),
+                    )
+                    .with_context(|| seg_path.display().to_string())?,
                 )
             }
         };
         let t0 = Instant::now();
-        let result = transfer_motion(&model, &src_pca, &tgt_pca, &motion, args.placement, recon.as_mut())
-            .with_context(|| args.motion.display().to_string())?;
+        let result = transfer_motion(
+            &model,
+            &src_pca,
+            &tgt_pca,
+            &motion,
+            args.placement,
+            recon.as_mut(),
+        )
+        .with_context(|| args.motion.display().to_string())?;
         let total = t0.elapsed().as_secs_f64();
         if let Some(w) = &result.blend_weights {
             let mean = w.iter().sum::<f64>() / w.len().max(1) as f64;

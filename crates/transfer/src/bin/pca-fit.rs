@@ -6,9 +6,9 @@ use gp::pca::Components;
 use mesh_core::artifact::Artifact;
 use mesh_core::cli::{run_stage, CommonArgs};
 use mesh_core::io::read_mesh;
+use mesh_core::segmentation::Segmentation;
 use transfer::align::AlignedMotion;
 use transfer::part_pca;
-use mesh_core::segmentation::Segmentation;
 
 /// Fit a PCA per body part on a subject's aligned training motions
 #[derive(Parser, Debug)]
@@ -60,13 +60,23 @@ fn main() -> ExitCode {
             Some(p) if !args.whole_body => Segmentation::load(p)?,
             _ => part_pca::whole_body(template.n_vertices()),
         };
-        let motions = args.motions.iter().map(AlignedMotion::load).collect::<Result<Vec<_>, _>>()?;
+        let motions = args
+            .motions
+            .iter()
+            .map(AlignedMotion::load)
+            .collect::<Result<Vec<_>, _>>()?;
         let choice = match args.variance {
             Some(r) => Components::ExplainedVariance(r),
             None => Components::Count(args.components),
         };
         let refs: Vec<&AlignedMotion> = motions.iter().collect();
-        let (model, report) = part_pca::fit(&template.vertices, &parts, &refs, choice, args.part_alignment)?;
+        let (model, report) = part_pca::fit(
+            &template.vertices,
+            &parts,
+            &refs,
+            choice,
+            args.part_alignment,
+        )?;
         let mut header = args
             .common
             .header("pca-fit", env!("CARGO_PKG_VERSION"))

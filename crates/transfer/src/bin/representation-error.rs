@@ -52,19 +52,47 @@ fn main() -> ExitCode {
         args.common.init()?;
         let template = read_mesh(&args.template)?;
         let seg = Segmentation::load(&args.parts)?;
-        let motions = args.motions.iter().map(AlignedMotion::load).collect::<Result<Vec<_>, _>>()?;
+        let motions = args
+            .motions
+            .iter()
+            .map(AlignedMotion::load)
+            .collect::<Result<Vec<_>, _>>()?;
         let refs: Vec<&AlignedMotion> = motions.iter().collect();
         let truth = align_motion(&template, &MeshSequence::load_dir(&args.truth)?)?;
         let mut rows = Vec::new();
         let mut truncation = serde_json::Map::new();
         for alignment in [PartAlignment::Body, PartAlignment::Part] {
-            let (pca, _) = fit(&template.vertices, &seg, &refs, Components::Count(args.components), alignment)?;
-            truncation.insert(format!("{alignment:?}"), serde_json::to_value(truncation_rms(&pca, &truth)?)?);
-            for surface in [Surface::Assemble, Surface::Stitch, Surface::Correct, Surface::CorrectStitch] {
-                let mut recon = Reconstructor::new(&pca, &seg, &template.faces, &refs, surface, args.neighbours, 1)?;
+            let (pca, _) = fit(
+                &template.vertices,
+                &seg,
+                &refs,
+                Components::Count(args.components),
+                alignment,
+            )?;
+            truncation.insert(
+                format!("{alignment:?}"),
+                serde_json::to_value(truncation_rms(&pca, &truth)?)?,
+            );
+            for surface in [
+                Surface::Assemble,
+                Surface::Stitch,
+                Surface::Correct,
+                Surface::CorrectStitch,
+            ] {
+                let mut recon = Reconstructor::new(
+                    &pca,
+                    &seg,
+                    &template.faces,
+                    &refs,
+                    surface,
+                    args.neighbours,
+                    1,
+                )?;
                 for through_pca in [false, true] {
                     let e = rebuilt_error(&pca, &mut recon, &truth, through_pca)?;
-                    mesh_core::info!("{alignment:?} {surface:?} through_pca={through_pca}: rms_pose_m {e:.4}");
+                    mesh_core::info!(
+                        "{alignment:?} {surface:?} through_pca={through_pca}: rms_pose_m {e:.4}"
+                    );
                     rows.push(RepresentationRow {
                         alignment: format!("{alignment:?}"),
                         surface: format!("{surface:?}"),
@@ -75,7 +103,10 @@ fn main() -> ExitCode {
             }
         }
         let json = serde_json::json!({"truth": args.truth, "components": args.components, "rows": rows, "truncation_rms_m": truncation});
-        mesh_core::atomic::write_bytes_atomic(&args.out, serde_json::to_string_pretty(&json)?.as_bytes())?;
+        mesh_core::atomic::write_bytes_atomic(
+            &args.out,
+            serde_json::to_string_pretty(&json)?.as_bytes(),
+        )?;
         Ok(())
     })
 }

@@ -40,18 +40,30 @@ fn main() -> ExitCode {
         let seg = Segmentation::load(&args.segmentation)?;
         let truth = MeshSequence::load_dir(&args.truth)?;
         if truth.n_vertices() != seg.n_vertices {
-            bail!("{}: {} vertices but the segmentation has {}", args.truth.display(), truth.n_vertices(), seg.n_vertices);
+            bail!(
+                "{}: {} vertices but the segmentation has {}",
+                args.truth.display(),
+                truth.n_vertices(),
+                seg.n_vertices
+            );
         }
         let mut recs = Vec::new();
         for p in &args.predictions {
             let pred = MeshSequence::load_dir(p)?;
             if pred.faces != truth.faces || pred.n_frames() != truth.n_frames() {
-                bail!("{}: topology or frame count differs from {}", p.display(), args.truth.display());
+                bail!(
+                    "{}: topology or frame count differs from {}",
+                    p.display(),
+                    args.truth.display()
+                );
             }
             let q = measure(&truth.faces, &seg, &pred.frames, &truth.frames);
             recs.push(serde_json::json!({"prediction": p, "quality": q}));
         }
-        mesh_core::atomic::write_bytes_atomic(&args.out, serde_json::to_string_pretty(&recs)?.as_bytes())?;
+        mesh_core::atomic::write_bytes_atomic(
+            &args.out,
+            serde_json::to_string_pretty(&recs)?.as_bytes(),
+        )?;
         Ok(())
     })
 }
