@@ -14,11 +14,12 @@ TRANSFER_WORK := $(OUT)/work
 TRANSFER_RULES := $(TRANSFER_WORK)/transfer-rules.mk
 TRANSFER_BINS := align segment pca-fit dtw-densify gpr-train gpr-predict evaluate learning-curves render
 
-.PHONY: transfer transfer-results
+.PHONY: transfer transfer-results transfer-report
 transfer:
 	@test -f $(SET)/set.json || { echo "transfer: $(SET)/set.json: no capture set (run 'make demo' or pass SET=<dir>)" >&2; exit 1; }
 	$(CARGO) build --release --workspace --quiet
 	@$(MAKE) --no-print-directory transfer-results SET=$(SET) OUT=$(OUT)
+	@$(MAKE) --no-print-directory transfer-report SET=$(SET) OUT=$(OUT)
 
 # The generated rules: one block per subject, motion, pair, direction and method.
 define TRANSFER_RULES_PY
@@ -144,6 +145,11 @@ rule(lc, [B + "/learning-curves", "%s/%s/pca.model" % (W, S), "%s/%s/pca.model" 
      "%s/learning-curves -q --seed 0 --source-pca %s/%s/pca.model --target-pca %s/%s/pca.model --source-whole %s/%s/pca-whole.model --target-whole %s/%s/pca-whole.model --source-fps %g --target-fps %g --source-name %s --target-name %s %s --out $$(@D)"
      % (B, W, S, W, T, W, S, W, T, fps[S], fps[T], S, T, " ".join(pair_args)))
 stamps.append(lc)
+# The report's 3D view: the first forward test motion, after correction and stitching.
+if directions[0][3]:
+    m0 = directions[0][3][0]
+    print("TRANSFER_REPORT_VIEWS := source=%s transfer=%s/transfer/%s-to-%s/%s/gpr-nn+correct+stitch truth=%s"
+          % (os.path.join(set_dir, S, m0), out, S, T, m0, os.path.join(set_dir, "truth", T, m0)))
 print("TRANSFER_RECORDS := " + " ".join(results))
 print("TRANSFER_STAMPS := " + " ".join(stamps))
 print()
@@ -158,8 +164,12 @@ $(TRANSFER_RULES): $(SET)/set.json $(wildcard $(SET)/* $(SET)/truth/*) pipelines
 
 # The generated rules (and the merge below) exist only under `make transfer`, which calls
 # `make transfer-results` once the binaries are built.
-ifneq ($(filter transfer-results,$(MAKECMDGOALS)),)
+ifneq ($(filter transfer-results transfer-report,$(MAKECMDGOALS)),)
 include $(TRANSFER_RULES)
+
+# The run's HTML report (pipelines/report.mk), with source / transfer / truth in the 3D view.
+transfer-report: $(OUT)/results.json
+	@$(MAKE) --no-print-directory report OUT=$(OUT) REPORT_VIEWS="$(TRANSFER_REPORT_VIEWS)" REPORT_TITLE="surfcap transfer: $(SET)"
 
 transfer-results: $(OUT)/results.json
 
