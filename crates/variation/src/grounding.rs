@@ -1,0 +1,219 @@
+//! Grounding of synthesised variations: a post-process (transfer paper §6, "traditional
+//! post-processing such as foot-contact clean-up") that is not part of the GPDM model.
+//!
+//! Sampled bodies inherit their height from the torso GP's gravity values, which drift over a
+//! trajectory (feet through the floor or floating). Per frame `t` of a variation, its sole
+//! height `h_v(t)` (lowest sole vertex along `up`) is made to follow the source's sole height at
+//! the matching source frame `h_s(m(t))`, where `m` is the DTW correspondence of the two pose
+//! sequences (the mean matched source frame; identity when the DTW fails). The offset
+//! `o(t) = h_s(m(t)) − h_v(t)` is smoothed over time by a Gaussian-weighted local linear fit
+//! (σ frames; linear profiles pass unchanged, even at the ends) so that nothing pops, and the
+//! whole frame is shifted by `o(t) · up`.
+
+use gp::dtw::{dtw_path, DtwOptions};
+use nalgebra::Vector3;
+
+use crate::metrics::normalise;
+
+/// Per-frame height along `up` of the lowest of `vertices` (all vertices when empty).
+pub fn lowest(frames: &[Vec<Vector3<f64>>], vertices: &[u32], up: &Vector3<f64>) -> Vec<f64> {
+    frames
+        .iter()
+        .map(|f| {
+            if vertices.is_empty() {
+                f.iter().map(|p| p.dot(up)).fold(f64::INFINITY, f64::min)
+            } else {
+                vertices
+                    .iter()
+                    .map(|&v| f[v as usize].dot(up))
+                    .fold(f64::INFINITY, f64::min)
+            }
+        })
+        .collect()
+}
+
+/// Gaussian-weighted local linear regression of `values` (window ±3σ frames): the value of the
+/// line fitted around each frame. Reproduces linear profiles exactly; `sigma <= 0` is identity.
+pub fn smooth(values: &[f64], sigma: f64) -> Vec<f64> {
+    if sigma <= 0.0 || values.len() < 3 {
+        return values.to_vec();
+    }
+    let r = (3.0 * sigma).ceil() as isize;
+    let n = values.len() as isize;
+    (0..n)
+        .map(|t| {
+            let (mut s0, mut s1, mut s2, mut sy, mut sxy) = (0.0, 0.0, 0.0, 0.0, 0.0);
+            for j in (t - r).max(0)..=(t + r).min(n - 1) {
+                let x = (j - t) as f64;
+                let w = (-0.5 * (x / sigma).powi(2)).exp();
+                let y = values[j as usize];
+                s0 += w;
+                s1 += w * x;
+                s2 += w * x * x;
+                sy += w * y;
+                sxy += w * x * y;
+            }
+            let det = s0 * s2 - s1 * s1;
+            if det.abs() < 1e-12 * s0 * s0 {
+                sy / s0
+            } else {
+                // Intercept of the weighted least-squares line a + b x at x = 0.
+                (s2 * sy - s1 * sxy) / det
+            }
+        })
+        .collect()
+}
+
+/// Matching source frame (fractional) of every variation frame: the mean source index matched
+/// by DTW on template-aligned poses; the (clamped) same index when the DTW fails.
+pub fn correspondence(
+    var: &[Vec<Vector3<f64>>],
+    source: &[Vec<Vector3<f64>>],
+    template: &[Vector3<f64>],
+) -> Vec<f64> {
+    let identity = || {
+        (0..var.len())
+            .map(|t| t.min(source.len().saturating_sub(1)) as f64)
+            .collect()
+    };
+    if var.is_empty() || source.is_empty() {
+        return identity();
+    }
+    let (a, b) = (normalise(var, template), normalise(source, template));
+    let cost = crate::prealign::pose_cost(&a, &b, 400);
+    let Ok(path) = dtw_path(&cost, &[], &DtwOptions::default()) else {
+        return identity();
+    };
+    let mut sum = vec![0.0; var.len()];
+    let mut count = vec![0usize; var.len()];
+    for (i, j) in path {
+        if i < var.len() {
+            sum[i] += j as f64;
+            count[i] += 1;
+        }
+    }
+    (0..var.len())
+        .map(|i| {
+            if count[i] > 0 {
+                sum[i] / count[i] as f64
+            } else {
+                i.min(source.len() - 1) as f64
+            }
+        })
+        .collect()
+}
+
+/// Linear interpolation of `values` at fractional index `x` (clamped to the ends).
+fn at(values: &[f64], x: f64) -> f64 {
+    let x = x.clamp(0.0, (values.len() - 1) as f64);
+    let i = (x.floor() as usize).min(values.len() - 1);
+    let j = (i + 1).min(values.len() - 1);
+    let f = x - i as f64;
+    values[i] * (1.0 - f) + values[j] * f
+}
+
+/// Smoothed vertical offsets `o(t)` taking the variation's sole heights `var_low` to the
+/// source's `source_low` at the matching frames `matches` (see the module doc).
+pub fn offsets(var_low: &[f64], source_low: &[f64], matches: &[f64], sigma: f64) -> Vec<f64> {
+    if source_low.is_empty() {
+        return vec![0.0; var_low.len()];
+    }
+    let raw: Vec<f64> = var_low
+        .iter()
+        .zip(matches)
+        .map(|(&h, &m)| at(source_low, m) - h)
+        .collect();
+    smooth(&raw, sigma)
+}
+
+/// Grounds `var` on `source` in place (module doc); returns the applied offsets (m).
+pub fn ground(
+    var: &mut [Vec<Vector3<f64>>],
+    source: &[Vec<Vector3<f64>>],
+    soles: &[u32],
+    template: &[Vector3<f64>],
+    up: &Vector3<f64>,
+    sigma: f64,
+) -> Vec<f64> {
+    let matches = correspondence(var, source, template);
+    let o = offsets(
+        &lowest(var, soles, up),
+        &lowest(source, soles, up),
+        &matches,
+        sigma,
+    );
+    for (f, &d) in var.iter_mut().zip(&o) {
+        let shift = up * d;
+        f.iter_mut().for_each(|p| *p += shift);
+    }
+    o
+}
+
+/// Floor contact of a variation against its source, in metres: `penetration` the largest depth
+/// of the variation's lowest point below the floor (the source's lowest point over all frames),
+/// `floating` the largest height of its lowest point above the floor over the frames whose
+/// matching source frame is in contact (source lowest point within `contact_height` of the
+/// floor). Both 0 when perfect.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct FloorContact {
+    pub penetration: f64,
+    pub floating: f64,
+}
+
+/// [`FloorContact`] of per-frame lowest heights `var_low`, `source_low` and the matches.
+pub fn floor_contact(
+    var_low: &[f64],
+    source_low: &[f64],
+    matches: &[f64],
+    contact_height: f64,
+) -> FloorContact {
+    let floor = source_low.iter().copied().fold(f64::INFINITY, f64::min);
+    if !floor.is_finite() {
+        return FloorContact {
+            penetration: 0.0,
+            floating: 0.0,
+        };
+    }
+    let penetration = var_low
+        .iter()
+        .map(|h| floor - h)
+        .fold(0.0_f64, f64::max);
+    let floating = var_low
+        .iter()
+        .zip(matches)
+        .filter(|(_, &m)| source_low[m.round() as usize] - floor <= contact_height)
+        .map(|(h, _)| h - floor)
+        .fold(0.0_f64, f64::max);
+    FloorContact {
+        penetration,
+        floating,
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn smooth_keeps_lines_and_damps_spikes() {
+        let line: Vec<f64> = (0..20).map(|t| 0.3 - 0.01 * t as f64).collect();
+        for (a, b) in smooth(&line, 2.0).iter().zip(&line) {
+            assert!((a - b).abs() < 1e-12);
+        }
+        let mut spike = vec![0.0; 21];
+        spike[10] = 1.0;
+        let s = smooth(&spike, 2.0);
+        assert!(s[10] < 0.4 && s[10] > 0.0, "{}", s[10]);
+    }
+
+    #[test]
+    fn floor_contact_known_answer() {
+        let src = [0.0, 0.0, 0.2, 0.0];
+        let var = [-0.03, 0.05, 0.4, 0.01];
+        let m = [0.0, 1.0, 2.0, 3.0];
+        let c = floor_contact(&var, &src, &m, 0.02);
+        assert!((c.penetration - 0.03).abs() < 1e-12);
+        // Frame 2 is a source flight frame and does not count as floating.
+        assert!((c.floating - 0.05).abs() < 1e-12);
+    }
+}
