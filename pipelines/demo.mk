@@ -1,6 +1,9 @@
-# make demo: fetch real assets, build, synthesise the default capture set and render it.
-#   out/demo/set/                 the capture set (docs/FORMATS.md)
-#   out/demo/render/<subject>/<motion>/{contact.png,anim.gif}
+# make demo: the main job on the default data, from nothing:
+#   fetch the real assets, build, synthesise the demo capture set (out/demo/set), render it
+#   (out/demo/render/<subject>/<motion>/{contact.png,anim.gif}), then run the transfer and variation
+#   pipelines on it; each ends with the HTML report out/index.html (transfer last, so its 3D view
+#   shows source / transfer / truth; the page lists the variation results too).
+# `make demo-data` / `make demo-render` stop earlier.
 DEMO := $(OUT)/demo
 DEMO_SET := $(DEMO)/set
 SEED ?= 0
@@ -8,12 +11,15 @@ SEED ?= 0
 .PHONY: demo demo-data demo-render
 
 demo: demo-render
+	@$(MAKE) --no-print-directory variation SET=$(DEMO_SET) OUT=$(OUT)
+	@$(MAKE) --no-print-directory transfer SET=$(DEMO_SET) OUT=$(OUT)
+	@echo "demo: open $(OUT)/index.html (report), $(DEMO)/render/ (the captures)" >&2
 
 demo-data: $(DEMO_SET)/set.json
 
 $(DEMO_SET)/set.json: | build assets
 	$(BIN)/synth -q --seed $(SEED) $(DEMO_SET)
 
-# One contact sheet + GIF per training motion of each subject (renders in parallel with make -j).
+# One contact sheet + GIF per motion of each subject (renders in parallel with make -j).
 demo-render: demo-data
 	@$(MAKE) --no-print-directory -f pipelines/render-set.mk SET=$(DEMO_SET) RENDER=$(DEMO)/render BIN=$(BIN)

@@ -174,10 +174,7 @@ pub fn floor_contact(
             floating: 0.0,
         };
     }
-    let penetration = var_low
-        .iter()
-        .map(|h| floor - h)
-        .fold(0.0_f64, f64::max);
+    let penetration = var_low.iter().map(|h| floor - h).fold(0.0_f64, f64::max);
     let floating = var_low
         .iter()
         .zip(matches)
@@ -215,5 +212,86 @@ mod tests {
         assert!((c.penetration - 0.03).abs() < 1e-12);
         // Frame 2 is a source flight frame and does not count as floating.
         assert!((c.floating - 0.05).abs() < 1e-12);
+    }
+
+    /// A small articulated "body" (8 points) at frame `t`: a leg swinging by a growing angle
+    /// (every pose distinct), travelling forward, with a jump (height profile) in frames 8-14.
+    fn body(t: usize) -> Vec<Vector3<f64>> {
+        let a = 0.06 * t as f64;
+        let hop = if (8..=14).contains(&t) {
+            0.3 * ((t - 8) as f64 * std::f64::consts::PI / 6.0).sin()
+        } else {
+            0.0
+        };
+        let base = Vector3::new(0.05 * t as f64, 0.0, hop);
+        let mut pts = vec![
+            Vector3::new(0.0, 0.0, 1.0),
+            Vector3::new(0.1, 0.2, 1.5),
+            Vector3::new(-0.1, -0.2, 1.4),
+            Vector3::new(0.0, 0.1, 0.0),
+            Vector3::new(0.05, 0.1, 0.0),
+        ];
+        // Swinging leg: hip at height 1, foot below it.
+        for k in 1..=3 {
+            let r = 0.33 * k as f64;
+            pts.push(Vector3::new(r * a.sin(), -0.1, 1.0 - r * a.cos()));
+        }
+        pts.iter().map(|p| p + base).collect()
+    }
+
+    #[test]
+    fn grounding_recovers_the_source_height() {
+        let up = Vector3::z();
+        let source: Vec<Vec<Vector3<f64>>> = (0..24).map(body).collect();
+        let template = source[0].clone();
+        let soles = [3u32, 4, 7];
+        // Linear drift: recovered exactly (the smoother keeps lines, DTW matches frame to frame).
+        let drift = |t: usize| -0.14 + 0.011 * t as f64;
+        let mut var: Vec<Vec<Vector3<f64>>> = source
+            .iter()
+            .enumerate()
+            .map(|(t, f)| f.iter().map(|p| p + up * drift(t)).collect())
+            .collect();
+        let o = ground(&mut var, &source, &soles, &template, &up, 2.0);
+        for t in 0..source.len() {
+            assert!((o[t] + drift(t)).abs() < 1e-9, "frame {t}: {}", o[t]);
+            for (p, q) in var[t].iter().zip(&source[t]) {
+                assert!((p - q).norm() < 1e-9);
+            }
+        }
+        // Smooth non-linear drift (period 24 frames, 5 cm): back within a few mm.
+        let wave = |t: usize| 0.05 * (t as f64 * std::f64::consts::TAU / 24.0).sin();
+        let mut var: Vec<Vec<Vector3<f64>>> = source
+            .iter()
+            .enumerate()
+            .map(|(t, f)| f.iter().map(|p| p + up * wave(t)).collect())
+            .collect();
+        let before = floor_contact(
+            &lowest(&var, &[], &up),
+            &lowest(&source, &[], &up),
+            &correspondence(&var, &source, &template),
+            0.02,
+        );
+        assert!(
+            before.penetration > 0.04 && before.floating > 0.04,
+            "{before:?}"
+        );
+        ground(&mut var, &source, &soles, &template, &up, 1.5);
+        let err = lowest(&var, &soles, &up)
+            .iter()
+            .zip(lowest(&source, &soles, &up))
+            .map(|(a, b)| (a - b).abs())
+            .fold(0.0, f64::max);
+        assert!(err < 0.005, "height error {err}");
+        let after = floor_contact(
+            &lowest(&var, &[], &up),
+            &lowest(&source, &[], &up),
+            &correspondence(&var, &source, &template),
+            0.02,
+        );
+        assert!(
+            after.penetration < 0.005 && after.floating < 0.005,
+            "{after:?}"
+        );
     }
 }

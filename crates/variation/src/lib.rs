@@ -10,6 +10,7 @@
 pub mod contacts;
 pub mod evaluate;
 pub mod gait;
+pub mod grounding;
 pub mod group;
 pub mod metrics;
 pub mod part_data;
