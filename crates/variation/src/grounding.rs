@@ -2,18 +2,22 @@
 //! post-processing such as foot-contact clean-up") that is not part of the GPDM model.
 //!
 //! Sampled bodies inherit their height from the torso GP's gravity values, which drift over a
-//! trajectory (feet through the floor or floating). Per frame `t` of a variation, its sole
-//! height `h_v(t)` (lowest sole vertex along `up`) is made to follow the source's sole height at
+//! trajectory (feet through the floor or floating). Per frame `t` of a variation, its lowest
+//! point `h_v(t)` (lowest of the given sole vertices along `up`, or of all vertices; `hmc-sample`
+//! uses all, as sampled toes dip below the soles) is made to follow the source's at
 //! the matching source frame `h_s(m(t))`, where `m` is the DTW correspondence of the two pose
 //! sequences (the mean matched source frame; identity when the DTW fails). The offset
 //! `o(t) = h_s(m(t)) − h_v(t)` is smoothed over time by a Gaussian-weighted local linear fit
-//! (σ frames; linear profiles pass unchanged, even at the ends) so that nothing pops, and the
+//! (σ frames, default 1.5 = 60 ms at 25 fps; linear profiles pass unchanged, even at the ends) so that nothing pops, and the
 //! whole frame is shifted by `o(t) · up`.
 
 use gp::dtw::{dtw_path, DtwOptions};
 use nalgebra::Vector3;
 
 use crate::metrics::normalise;
+
+/// Default smoothing width of the offsets (frames).
+pub const SIGMA_FRAMES: f64 = 1.5;
 
 /// Per-frame height along `up` of the lowest of `vertices` (all vertices when empty).
 pub fn lowest(frames: &[Vec<Vector3<f64>>], vertices: &[u32], up: &Vector3<f64>) -> Vec<f64> {

@@ -14,6 +14,7 @@ use rand_chacha::ChaCha8Rng;
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 
+use crate::grounding::{self, FloorContact};
 use crate::group::{blend_name, blend_sequences, Group};
 use crate::metrics::{self, Stats};
 use crate::reconstruct::{Assembly, Decoder};
@@ -36,6 +37,13 @@ pub struct SynthConfig {
     pub burn_in: usize,
     pub thin: usize,
     pub target_accept: f64,
+    /// Ground every variation on its source ([`crate::grounding`]); on by default.
+    #[serde(default = "yes")]
+    pub grounding: bool,
+}
+
+fn yes() -> bool {
+    true
 }
 
 /// Statistics of one synthesised sequence's variations.
@@ -62,6 +70,19 @@ pub struct SequenceReport {
     /// Foot sliding (m per contact frame pair): variations and source.
     pub foot_sliding_m: Vec<Option<f64>>,
     pub source_foot_sliding_m: Option<f64>,
+    /// Largest depth of each variation's lowest point below the floor (the source's lowest
+    /// point), after grounding when on (m; [`grounding::floor_contact`]).
+    #[serde(default)]
+    pub penetration_m: Vec<f64>,
+    /// Largest height of each variation's lowest point above the floor over frames whose
+    /// DTW-matched source frame is in contact (m).
+    #[serde(default)]
+    pub floating_m: Vec<f64>,
+    /// The same two before grounding.
+    #[serde(default)]
+    pub ungrounded_penetration_m: Vec<f64>,
+    #[serde(default)]
+    pub ungrounded_floating_m: Vec<f64>,
 }
 
 /// Everything `hmc-sample` reports.
@@ -77,15 +98,9 @@ pub struct SynthReport {
     pub seconds_decoding: f64,
 }
 
-fn measure(
-    label: &str,
-    blend: Option<f64>,
-    vars: &[Vec<Vec<Vector3<f64>>>],
-    source: &[Vec<Vector3<f64>>],
-    model: &VariationModel,
-) -> SequenceReport {
-    let edges = metrics::edges(&model.faces);
-    let soles = metrics::soles(
+/// Sole vertices of the model's template (both feet, [`metrics::soles`]).
+fn model_soles(model: &VariationModel) -> Vec<Vec<u32>> {
+    metrics::soles(
         &model
             .parts
             .iter()
@@ -94,10 +109,41 @@ fn measure(
         &model.template,
         &model.up,
         0.015,
-    );
-    let slide = |f: &[Vec<Vector3<f64>>]| metrics::foot_sliding(f, &soles, &model.up, 0.02);
+    )
+}
+
+/// Contact height (m) for foot sliding and floating: a foot within it of the ground touches.
+const CONTACT_HEIGHT: f64 = 0.02;
+
+/// [`grounding::floor_contact`] of a variation against its source (lowest points of all
+/// vertices, DTW-matched frames).
+fn floor_contact(
+    v: &[Vec<Vector3<f64>>],
+    source: &[Vec<Vector3<f64>>],
+    model: &VariationModel,
+) -> FloorContact {
+    grounding::floor_contact(
+        &grounding::lowest(v, &[], &model.up),
+        &grounding::lowest(source, &[], &model.up),
+        &grounding::correspondence(v, source, &model.template),
+        CONTACT_HEIGHT,
+    )
+}
+
+fn measure(
+    label: &str,
+    blend: Option<f64>,
+    vars: &[Vec<Vec<Vector3<f64>>>],
+    ungrounded: &[FloorContact],
+    source: &[Vec<Vector3<f64>>],
+    model: &VariationModel,
+) -> SequenceReport {
+    let edges = metrics::edges(&model.faces);
+    let soles = model_soles(model);
+    let slide =
+        |f: &[Vec<Vector3<f64>>]| metrics::foot_sliding(f, &soles, &model.up, CONTACT_HEIGHT);
     let source_pose = metrics::normalise(source, &model.template);
-    let per: Vec<(f64, f64, f64, Option<f64>, f64, f64)> = vars
+    let per: Vec<(f64, f64, f64, Option<f64>, f64, f64, FloorContact)> = vars
         .par_iter()
         .map(|v| {
             let pose = metrics::normalise(v, &model.template);
@@ -108,6 +154,7 @@ fn measure(
                 slide(v),
                 metrics::mean_vertex_distance(&pose, &source_pose),
                 metrics::nearest_frame_distance(&pose, &source_pose, 2000),
+                floor_contact(v, source, model),
             )
         })
         .collect();
@@ -130,6 +177,10 @@ fn measure(
         source_edge_distortion: metrics::edge_distortion(source, &model.template, &edges),
         foot_sliding_m: per.iter().map(|p| p.3).collect(),
         source_foot_sliding_m: slide(source),
+        penetration_m: per.iter().map(|p| p.6.penetration).collect(),
+        floating_m: per.iter().map(|p| p.6.floating).collect(),
+        ungrounded_penetration_m: ungrounded.iter().map(|c| c.penetration).collect(),
+        ungrounded_floating_m: ungrounded.iter().map(|c| c.floating).collect(),
     }
 }
 
@@ -201,26 +252,42 @@ pub fn run(
     let seconds_sampling = clock.elapsed().as_secs_f64();
     let clock = std::time::Instant::now();
     let mut sequences = Vec::new();
+    // Ground on the lowest point of the whole body: sampled feet often point their toes through
+    // the floor while the template soles sit at the right height (h15, render check).
+    let soles: Vec<u32> = Vec::new();
     for (j, (label, blend, vars, source, start)) in jobs.iter().enumerate() {
-        let meshes: Vec<Vec<Vec<Vector3<f64>>>> = vars
+        let decoded: Vec<(Vec<Vec<Vector3<f64>>>, FloorContact)> = vars
             .par_iter()
             .enumerate()
             .map(|(k, latents)| {
                 let mut rng =
                     ChaCha8Rng::seed_from_u64(mix(cfg.seed, 0xDEC0DE + j as u64, k as u64));
-                dec.decode(
+                let mut m = dec.decode(
                     latents,
                     start,
                     cfg.assembly,
                     cfg.sample_poses.then_some(&mut rng),
-                )
+                )?;
+                let before = floor_contact(&m, source, model);
+                if cfg.grounding {
+                    grounding::ground(
+                        &mut m,
+                        source,
+                        &soles,
+                        &model.template,
+                        &model.up,
+                        grounding::SIGMA_FRAMES,
+                    );
+                }
+                Ok((m, before))
             })
             .collect::<Result<_>>()?;
+        let (meshes, ungrounded): (Vec<_>, Vec<_>) = decoded.into_iter().unzip();
         for (k, m) in meshes.iter().enumerate() {
             MeshSequence::new(model.faces.clone(), m.clone())
                 .write_dir(out.join(label).join(format!("var{k}")))?;
         }
-        sequences.push(measure(label, *blend, &meshes, source, model));
+        sequences.push(measure(label, *blend, &meshes, &ungrounded, source, model));
     }
     let rates: Vec<f64> = chains.iter().map(|c| c.accept_rate).collect();
     Ok(SynthReport {

@@ -68,6 +68,7 @@ fn tiny_set_end_to_end() {
         burn_in: 30,
         thin: 3,
         target_accept: 0.7,
+        grounding: true,
     };
     let out1 = dir.path().join("o1");
     let out2 = dir.path().join("o2");
@@ -110,6 +111,24 @@ fn tiny_set_end_to_end() {
             assert!(d < 0.3, "{}: degenerate ({d} m from the source)", s.label);
             assert!(e.is_finite() && e < 1.0, "{}: edge distortion {e}", s.label);
         }
+    }
+    // Grounding: feet no deeper below the floor, nor higher above it during contacts, than
+    // before (up to the smoothing), and everything measured.
+    for s in &r1.sequences {
+        assert_eq!(s.penetration_m.len(), 2);
+        let sum = |v: &[f64]| v.iter().sum::<f64>();
+        assert!(
+            sum(&s.penetration_m) + sum(&s.floating_m)
+                <= sum(&s.ungrounded_penetration_m) + sum(&s.ungrounded_floating_m) + 2e-3,
+            "{}: {:?}",
+            s.label,
+            (
+                &s.penetration_m,
+                &s.floating_m,
+                &s.ungrounded_penetration_m,
+                &s.ungrounded_floating_m
+            )
+        );
     }
     assert_eq!(r1.accept_rate, r2.accept_rate);
     assert_ne!(r1.accept_rate.mean, r3.accept_rate.mean + 1.0);

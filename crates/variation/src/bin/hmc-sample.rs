@@ -45,6 +45,10 @@ struct Args {
     /// Target acceptance rate during burn-in
     #[arg(long, default_value_t = 0.7)]
     target_accept: f64,
+    /// Do not ground the variations (by default each frame is shifted vertically, smoothly in
+    /// time, so that its soles follow the source's at the DTW-matched frame)
+    #[arg(long)]
+    no_grounding: bool,
     /// Output folder: <out>/<sequence>/var<k>/NNNNNN.ply
     #[arg(short, long)]
     out: PathBuf,
@@ -72,6 +76,7 @@ fn main() -> ExitCode {
             burn_in: args.burn_in,
             thin: args.thin,
             target_accept: args.target_accept,
+            grounding: !args.no_grounding,
         };
         let report = run(&model, &group, &cfg, &args.out)?;
         for n in &report.notes {
