@@ -9,6 +9,7 @@
 # and $(OUT)/variation.json (figures 4 and 7b, variation statistics, HMC acceptance).
 
 SET ?= $(OUT)/demo/set
+comma := ,
 VARIATION_WORK := $(OUT)/work/variation
 VARIATION_OUT := $(OUT)/variation
 VARIATION_SUBJECT ?=
@@ -23,6 +24,10 @@ VARIATION_BLENDS ?= 0.25,0.75
 VARIATION_N ?= 5
 VARIATION_SEED ?= 0
 VARIATION_TRAIN_FLAGS ?=
+# The report's 3D view: three variations of the first group's first motion, side by side.
+VARIATION_REPORT_GROUP := $(firstword $(VARIATION_GROUPS))
+VARIATION_REPORT_MOTION := $(firstword $(subst $(comma), ,$(VARIATION_MOTIONS_$(VARIATION_REPORT_GROUP))))
+VARIATION_REPORT_VIEWS ?= $(foreach k,0 1 2,var$(k)=$(VARIATION_OUT)/$(VARIATION_REPORT_GROUP)/$(VARIATION_REPORT_MOTION)/var$(k))
 VARIATION_SAMPLE_FLAGS ?=
 
 .PHONY: variation variation-results
@@ -30,6 +35,7 @@ variation:
 	@test -f $(SET)/set.json || { echo "variation: $(SET)/set.json: no capture set (run 'make demo-data' or pass SET=<dir>)" >&2; exit 1; }
 	$(CARGO) build --release --workspace --quiet
 	@$(MAKE) --no-print-directory variation-results SET=$(SET) OUT=$(OUT)
+	@$(MAKE) --no-print-directory report OUT=$(OUT) REPORT_VIEWS="$(VARIATION_REPORT_VIEWS)" REPORT_TITLE="surfcap variation: $(SET)"
 
 variation-results: $(OUT)/variation.json
 
