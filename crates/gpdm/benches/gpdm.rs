@@ -9,29 +9,15 @@ use gpdm::hmc::{sample_trajectories, HmcOptions};
 use gpdm::predict::Predictor;
 use gpdm::{Gpdm, GpdmConfig};
 use nalgebra::DMatrix;
-use rand::{RngExt, SeedableRng};
-use rand_chacha::ChaCha8Rng;
 use std::hint::black_box;
 
-/// Four cyclic sequences (446 frames in all) of a smooth 3-D latent motion mapped to D
-/// dimensions through random sinusoids, plus 1 mm noise: realistic conditioning, any D.
+// The same synthetic "capture" as the examples (four cyclic sequences, 446 frames).
+#[path = "../examples/common/synthetic.rs"]
+mod synthetic_capture;
+
+/// The examples' synthetic capture with 1 mm noise, at any dimension `d_obs`.
 fn synthetic(d_obs: usize) -> Vec<DMatrix<f64>> {
-    let mut rng = ChaCha8Rng::seed_from_u64(1);
-    let w: Vec<[f64; 4]> = (0..d_obs)
-        .map(|_| std::array::from_fn(|_| rng.sample::<f64, _>(rand_distr::StandardNormal)))
-        .collect();
-    [120usize, 110, 106, 110]
-        .iter()
-        .enumerate()
-        .map(|(s, &len)| {
-            DMatrix::from_fn(len, d_obs, |t, j| {
-                let ph = 0.25 * t as f64 * (1.0 + 0.1 * s as f64) + s as f64;
-                let z = [ph.cos(), ph.sin(), 0.3 * (2.0 * ph).sin()];
-                0.1 * (w[j][0] * z[0] + w[j][1] * z[1] + w[j][2] * z[2] + w[j][3]).sin()
-                    + 1e-3 * ((t * 7919 + j * 104729) % 1000) as f64 / 1000.0
-            })
-        })
-        .collect()
+    synthetic_capture::synthetic(d_obs, 1e-3)
 }
 
 fn objective(c: &mut Criterion) {
