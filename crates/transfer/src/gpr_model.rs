@@ -31,6 +31,11 @@ use gp::kernel::Kernel;
 use mesh_core::artifact::Artifact;
 use mesh_core::rigid::{integrate, RigidMotion};
 use mesh_core::{Error, Result};
+use std::path::PathBuf;
+
+use crate::align::AlignedMotion;
+use crate::densify::Correspondences;
+use crate::part_pca::PcaModel;
 use nalgebra::{DMatrix, Vector6};
 use serde::{Deserialize, Serialize};
 
@@ -211,6 +216,46 @@ impl PairData {
             pairs: swap(self.pairs),
             keyposes: swap(self.keyposes),
         }
+    }
+}
+
+/// One training pair as the stages name it on the command line (`--pair SOURCE TARGET CORR`):
+/// the aligned motions of the set's source and target subjects and their correspondences.
+pub struct PairFiles {
+    pub source: AlignedMotion,
+    pub target: AlignedMotion,
+    pub corr: Correspondences,
+    paths: [PathBuf; 2],
+}
+
+impl PairFiles {
+    /// Loads the three files of one `--pair` (exactly three paths).
+    pub fn load(files: &[PathBuf]) -> Result<PairFiles> {
+        let [s, t, c] = files else {
+            return Err(Error::invalid("--pair takes three files"));
+        };
+        Ok(PairFiles {
+            source: AlignedMotion::load(s)?,
+            target: AlignedMotion::load(t)?,
+            corr: Correspondences::load(c)?,
+            paths: [s.clone(), t.clone()],
+        })
+    }
+
+    /// The pair in coefficients: the set's source motion encoded with `source_pca`, its
+    /// target motion with `target_pca` (set order; [`PairData::reversed`] for B->A).
+    pub fn encode(&self, source_pca: &PcaModel, target_pca: &PcaModel) -> Result<PairData> {
+        let coeffs = |pca: &PcaModel, m: &AlignedMotion, path: &PathBuf| {
+            pca.encode(m).map_err(|e| Error::file(path, e.to_string()))
+        };
+        Ok(PairData {
+            source_coeffs: coeffs(source_pca, &self.source, &self.paths[0])?,
+            target_coeffs: coeffs(target_pca, &self.target, &self.paths[1])?,
+            source_disp: self.source.displacements.clone(),
+            target_disp: self.target.displacements.clone(),
+            pairs: self.corr.pairs.clone(),
+            keyposes: self.corr.keyposes.clone(),
+        })
     }
 }
 

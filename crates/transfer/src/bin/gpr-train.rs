@@ -1,14 +1,12 @@
 use std::path::PathBuf;
 use std::process::ExitCode;
 
-use anyhow::{bail, Context};
+use anyhow::bail;
 use clap::Parser;
 use gp::gpr::{GprOptions, PAPER_NOISE_VAR};
 use mesh_core::artifact::Artifact;
 use mesh_core::cli::{run_stage, CommonArgs};
-use transfer::align::AlignedMotion;
-use transfer::densify::Correspondences;
-use transfer::gpr_model::{train, GprModel, Method, PairData};
+use transfer::gpr_model::{train, GprModel, Method, PairFiles};
 use transfer::part_pca::PcaModel;
 
 /// Train the source-to-target GP regression per body part and for the rigid displacement (eqs. 8-13)
@@ -90,33 +88,16 @@ fn main() -> ExitCode {
             );
         }
         let mut pairs = Vec::new();
-        for chunk in args.pair.chunks(3) {
-            let [s, t, c] = chunk else {
-                bail!("--pair takes three files")
-            };
-            let (src, tgt) = (AlignedMotion::load(s)?, AlignedMotion::load(t)?);
-            let corr = Correspondences::load(c)?;
-            // The files are in the set's order (set source, set target); the PCA
-            // models are in the direction's order.
-            let (src_model, tgt_model) = if args.reverse {
-                (&tgt_pca, &src_pca)
-            } else {
-                (&src_pca, &tgt_pca)
-            };
-            let data = PairData {
-                source_coeffs: src_model
-                    .encode(&src)
-                    .with_context(|| s.display().to_string())?,
-                target_coeffs: tgt_model
-                    .encode(&tgt)
-                    .with_context(|| t.display().to_string())?,
-                source_disp: src.displacements,
-                target_disp: tgt.displacements,
-                pairs: corr.pairs,
-                keyposes: corr.keyposes,
-            };
-            let data = if args.reverse { data.reversed() } else { data };
-            pairs.push(data);
+        // The files are in the set's order (set source, set target); the PCA models are in
+        // the direction's order.
+        let (set_source_pca, set_target_pca) = if args.reverse {
+            (&tgt_pca, &src_pca)
+        } else {
+            (&src_pca, &tgt_pca)
+        };
+        for files in args.pair.chunks(3) {
+            let data = PairFiles::load(files)?.encode(set_source_pca, set_target_pca)?;
+            pairs.push(if args.reverse { data.reversed() } else { data });
         }
         let opts = GprOptions {
             noise_var: args.noise_var,

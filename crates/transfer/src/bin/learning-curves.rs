@@ -6,9 +6,7 @@ use clap::Parser;
 use gp::gpr::{GprOptions, PAPER_NOISE_VAR};
 use mesh_core::artifact::Artifact;
 use mesh_core::cli::{run_stage, CommonArgs};
-use transfer::align::AlignedMotion;
-use transfer::densify::Correspondences;
-use transfer::gpr_model::PairData;
+use transfer::gpr_model::{PairData, PairFiles};
 use transfer::learning_curves::{plot_all, run_direction, sizes, write_csv, DirectionData};
 use transfer::part_pca::PcaModel;
 
@@ -87,25 +85,10 @@ fn main() -> ExitCode {
             );
         }
         let (mut parts, mut whole) = (Vec::new(), Vec::new());
-        for chunk in args.pair.chunks(3) {
-            let [s, t, c] = chunk else {
-                bail!("--pair takes three files")
-            };
-            let (src, tgt, corr) = (
-                AlignedMotion::load(s)?,
-                AlignedMotion::load(t)?,
-                Correspondences::load(c)?,
-            );
-            for (out, spca, tpca) in [(&mut parts, &sp, &tp), (&mut whole, &sw, &tw)] {
-                out.push(PairData {
-                    source_coeffs: spca.encode(&src).with_context(|| s.display().to_string())?,
-                    target_coeffs: tpca.encode(&tgt).with_context(|| t.display().to_string())?,
-                    source_disp: src.displacements.clone(),
-                    target_disp: tgt.displacements.clone(),
-                    pairs: corr.pairs.clone(),
-                    keyposes: corr.keyposes.clone(),
-                });
-            }
+        for files in args.pair.chunks(3) {
+            let pair = PairFiles::load(files)?;
+            parts.push(pair.encode(&sp, &tp)?);
+            whole.push(pair.encode(&sw, &tw)?);
         }
         let opts = GprOptions {
             noise_var: args.noise_var,
