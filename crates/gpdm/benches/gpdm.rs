@@ -1,7 +1,8 @@
 //! Speed of the GPDM numerics (issue 6 targets, numpy reference in brackets):
 //! - objective + gradient of eq. 7 for N = 446 frames, D = 15000 (numpy ~20 ms, one core);
 //! - HMC: 100 samples of a 100-frame latent trajectory (numpy ~11 s);
-//! - decoding 10,000 frames to D = 3000 poses (a body part), exact and via a pose basis.
+//! - decoding 10,000 frames to D = 3000 poses (a body part), exact, via a pose basis, and
+//!   through the bulk column-major path exactly and with a kernel basis.
 //! Run with `OPENBLAS_NUM_THREADS=1 cargo bench -p gpdm`.
 
 use criterion::{criterion_group, criterion_main, Criterion};
@@ -82,6 +83,26 @@ fn decode(c: &mut Criterion) {
     group.bench_function(format!("10000 frames D=3000 rank-{r} basis"), |b| {
         b.iter(|| black_box(basis.pose_means(&trajs).unwrap()))
     });
+    // Bulk path of the body decoder: one column-major GEMM per trajectory into a reused
+    // buffer, kernel basis with a 1 µm certified bound at the training points.
+    let (kb, rk, _) = Predictor::with_kernel_basis(&m, 1e-6).unwrap();
+    for (name, p) in [
+        ("exact", &exact),
+        (&*format!("rank-{rk} kernel basis"), &kb),
+    ] {
+        group.bench_function(format!("10000 frames D=3000 {name}, pose_mean_cols"), |b| {
+            use rayon::prelude::*;
+            b.iter(|| {
+                trajs.par_iter().for_each_init(
+                    || vec![0.0; 3000 * 100],
+                    |buf, t| {
+                        p.pose_mean_cols(t, buf).unwrap();
+                        black_box(&buf);
+                    },
+                )
+            })
+        });
+    }
     group.finish();
 }
 

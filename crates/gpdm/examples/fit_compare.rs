@@ -1,26 +1,76 @@
-//! Fits the GPDM on a synthetic 446-frame problem with both optimisation schedules, prints
-//! objective, evaluations, time and hyperparameters; optionally exports the problem for
+//! Fits the GPDM (gpdm-train's model: pose-noise floor 1e-6, dynamics-noise floor 1e-3, weak
+//! log-normal factor on β1..β3) with several optimiser settings, each stopping by convergence
+//! (value or gradient tolerance), and prints objective, iterations, evaluations, time and
+//! hyperparameters; optionally exports the problem and the traces for
 //! `scripts/compare/gpdm_scipy.py`.
 //!
-//! Usage: fit_compare [D=2000] [export_dir]
+//! Usage: fit_compare [D=2000 | PROBLEM_DIR] [export_dir]
+//! PROBLEM_DIR holds y.f64 (row-major N × D little-endian f64) and meta.json with "n", "d_obs"
+//! and "seq_lens" (e.g. a body part exported by `variation`'s `export_part` example).
+//! RUNS=joint,joint-m10,joint-per-hyper,alternate selects the runs (default joint,joint-m10);
+//! MEMORY=k overrides their L-BFGS memory.
 //! e.g.: OPENBLAS_NUM_THREADS=1 target/release/examples/fit_compare 15000 /tmp/gpdm_problem
 
-use gpdm::optim::{train, LbfgsOptions, Schedule, TrainOptions};
+use gpdm::optim::{train, LbfgsOptions, Scaling, Schedule, TrainOptions};
 use gpdm::{Gpdm, GpdmConfig};
+use nalgebra::DMatrix;
 use std::time::Instant;
 
 #[path = "common/synthetic.rs"]
 mod synthetic;
+
+/// Convergence tolerances shared with scipy (written to meta.json).
+const VALUE_TOL: f64 = 1e-10;
+const GRAD_TOL: f64 = 1e-3;
+/// gpdm-train's dynamics-noise floor (variation::train::DYN_NOISE_FLOOR).
+const DYN_NOISE_FLOOR: f64 = 1e-3;
 
 fn write_f64(path: &std::path::Path, v: &[f64]) {
     let bytes: Vec<u8> = v.iter().flat_map(|x| x.to_le_bytes()).collect();
     std::fs::write(path, bytes).unwrap();
 }
 
+/// Loads a problem exported as y.f64 + meta.json, split into its sequences.
+fn load_problem(dir: &std::path::Path) -> Vec<DMatrix<f64>> {
+    let meta: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(dir.join("meta.json")).unwrap()).unwrap();
+    let d = meta["d_obs"].as_u64().unwrap() as usize;
+    let lens: Vec<usize> = meta["seq_lens"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|v| v.as_u64().unwrap() as usize)
+        .collect();
+    let bytes = std::fs::read(dir.join("y.f64")).unwrap();
+    let v: Vec<f64> = bytes
+        .chunks_exact(8)
+        .map(|c| f64::from_le_bytes(c.try_into().unwrap()))
+        .collect();
+    assert_eq!(v.len(), lens.iter().sum::<usize>() * d, "y.f64 size");
+    let mut start = 0;
+    lens.iter()
+        .map(|&l| {
+            let m = DMatrix::from_row_slice(l, d, &v[start * d..(start + l) * d]);
+            start += l;
+            m
+        })
+        .collect()
+}
+
 fn main() {
     let args: Vec<String> = std::env::args().collect();
-    let d_obs: usize = args.get(1).map(|s| s.parse().expect("D")).unwrap_or(2000);
-    let m0 = Gpdm::new(&synthetic::synthetic(d_obs, 1e-3), GpdmConfig::default()).unwrap();
+    let first = args.get(1).cloned().unwrap_or_else(|| "2000".into());
+    let seqs = if std::path::Path::new(&first).is_dir() {
+        load_problem(std::path::Path::new(&first))
+    } else {
+        synthetic::synthetic(first.parse().expect("D or a problem directory"), 1e-3)
+    };
+    let config = GpdmConfig {
+        dyn_noise_floor: Some(DYN_NOISE_FLOOR),
+        ..GpdmConfig::default()
+    };
+    let m0 = Gpdm::new(&seqs, config).unwrap();
+    let d_obs = m0.y.ncols();
     if let Some(dir) = args.get(2) {
         let dir = std::path::Path::new(dir);
         std::fs::create_dir_all(dir).unwrap();
@@ -28,12 +78,16 @@ fn main() {
         let yt = m0.y.transpose();
         write_f64(&dir.join("y.f64"), yt.as_slice());
         write_f64(&dir.join("theta0.f64"), &m0.theta());
-        let meta = format!(
-            "{{\"n\": {}, \"d_obs\": {}, \"latent_dim\": {}, \"seq_lens\": {:?}, \"pose_noise_floor\": {}, \"first_point_var\": {}}}",
-            m0.y.nrows(), d_obs, m0.config.latent_dim, m0.seq_lens,
-            m0.config.pose_noise_floor.unwrap_or(0.0), m0.config.first_point_var
-        );
-        std::fs::write(dir.join("meta.json"), meta).unwrap();
+        let c = &m0.config;
+        let meta = serde_json::json!({
+            "n": m0.y.nrows(), "d_obs": d_obs, "latent_dim": c.latent_dim,
+            "seq_lens": m0.seq_lens, "pose_noise_floor": c.pose_noise_floor.unwrap_or(0.0),
+            "dyn_noise_floor": c.dyn_noise_floor.unwrap_or(0.0),
+            "beta_log_sd": c.beta_log_sd.unwrap_or(0.0),
+            "fixed_latent_scale": c.fixed_latent_scale,
+            "first_point_var": c.first_point_var, "value_tol": VALUE_TOL, "grad_tol": GRAD_TOL,
+        });
+        std::fs::write(dir.join("meta.json"), meta.to_string()).unwrap();
     }
     let obj = m0.objective().unwrap();
     let th = m0.theta();
@@ -48,38 +102,60 @@ fn main() {
         t.elapsed().as_secs_f64() * 1e3 / reps as f64,
         m0.y.nrows()
     );
-    let schedules = [
-        ("joint", Schedule::Joint),
+    let alternate = Schedule::Alternate {
+        rounds: 10,
+        iters: 200,
+    };
+    // (name, schedule, scaling, L-BFGS memory, value window). "joint" is gpdm-train's setting.
+    let runs = [
+        ("joint", Schedule::Joint, Scaling::Scalar, 100, 10),
+        ("joint-m10", Schedule::Joint, Scaling::Scalar, 10, 1),
         (
-            "alternate",
-            Schedule::Alternate {
-                rounds: 10,
-                iters: 50,
-            },
+            "joint-per-hyper",
+            Schedule::Joint,
+            Scaling::PerHyperparameter,
+            100,
+            10,
         ),
+        ("alternate", alternate, Scaling::Scalar, 10, 1),
     ];
-    for (name, schedule) in schedules {
+    let wanted = std::env::var("RUNS").unwrap_or_else(|_| "joint,joint-m10".into());
+    for (name, schedule, scaling, memory, window) in runs {
+        if !wanted.split(',').any(|r| r == name) {
+            continue;
+        }
         let mut m = m0.clone();
         let t = Instant::now();
         let opts = TrainOptions {
             schedule,
+            scaling,
             lbfgs: LbfgsOptions {
-                max_iter: 1000,
-                max_evals: 3000,
+                max_iter: 10000,
+                max_evals: 20000,
+                grad_tol: GRAD_TOL,
+                value_tol: VALUE_TOL,
+                value_window: window,
+                // MEMORY overrides the memory of every run (experiments).
+                memory: std::env::var("MEMORY").map_or(memory, |v| v.parse().expect("MEMORY")),
                 ..Default::default()
             },
         };
         let r = train(&mut m, &opts).unwrap();
         let secs = t.elapsed().as_secs_f64();
+        let iters = r.history.len() - 1;
         println!(
-            "{name}: {:.6} -> {:.6} in {} evals, {:.2} s; exits {:?}; alpha {:?} beta {:?}; jitter {:e}",
-            r.initial_value, r.final_value, r.evaluations, secs, r.exits.last().unwrap(), m.alpha, m.beta, r.max_jitter
+            "{name}: {:.6} -> {:.6} in {iters} iterations, {} evals, {:.2} s; exits {:?}; alpha {:?} beta {:?}; jitter {:e}",
+            r.initial_value, r.final_value, r.evaluations, secs, r.exits, m.alpha, m.beta, r.max_jitter
         );
-        // Time to reach within 1e-6 relative of the final value.
-        let target = r.final_value + 1e-6 * r.final_value.abs();
-        if let Some(&(e, _)) = r.history.iter().find(|h| h.1 <= target) {
-            println!("  reached final value (1e-6 rel) after {e} evals");
-        }
+        let mut gf = vec![0.0; th.len()];
+        obj.eval(&m.theta(), Some(&mut gf)).unwrap();
+        let nx = th.len() - 7;
+        let gx = gf[..nx].iter().fold(0.0f64, |a, v| a.max(v.abs()));
+        println!(
+            "  final gradient: |X|inf {gx:.3e}, ln alpha {:?}, ln beta {:?}",
+            &gf[nx..nx + 3],
+            &gf[nx + 3..]
+        );
         if let Some(dir) = args.get(2) {
             // Failed evaluations (non-finite) are left out: JSON has no infinity.
             let tr: Vec<String> = r

@@ -13,6 +13,7 @@
 
 use crate::error::{invalid, Result};
 use crate::predict::Predictor;
+use crate::vexp::exp_fast;
 use faer::Mat;
 use nalgebra::DMatrix;
 use rand::{RngExt, SeedableRng};
@@ -260,10 +261,11 @@ pub struct TrajectoryEnergy<'a> {
     pred: &'a Predictor,
     x1: Vec<f64>,
     len: usize,
-    /// X_in row-major (M × d).
-    xin_rows: Vec<f64>,
-    /// K_X⁻¹ X_out row-major (M × d).
-    a_rows: Vec<f64>,
+    /// X_in by coordinate: `xin[c][i]` (d arrays of length M), so that the loops over the M
+    /// training transitions run on contiguous arrays and vectorise.
+    xin: Vec<Vec<f64>>,
+    /// K_X⁻¹ X_out by coordinate (d × M).
+    a: Vec<Vec<f64>>,
 }
 
 impl<'a> TrajectoryEnergy<'a> {
@@ -272,20 +274,17 @@ impl<'a> TrajectoryEnergy<'a> {
         if x1.len() != pred.latent_dim() || len < 2 {
             return invalid("trajectory needs a start point of latent dimension and ≥ 2 frames");
         }
-        let xin = pred.dynamics_inputs();
-        let a = pred.dynamics_weights();
-        let d = x1.len();
-        let rows = |mat: faer::MatRef<'_, f64>| -> Vec<f64> {
-            (0..mat.nrows())
-                .flat_map(|i| (0..d).map(move |c| mat[(i, c)]))
+        let by_coord = |mat: faer::MatRef<'_, f64>| -> Vec<Vec<f64>> {
+            (0..mat.ncols())
+                .map(|c| (0..mat.nrows()).map(|i| mat[(i, c)]).collect())
                 .collect()
         };
         Ok(TrajectoryEnergy {
             pred,
             x1: x1.to_vec(),
             len,
-            xin_rows: rows(xin),
-            a_rows: rows(a),
+            xin: by_coord(pred.dynamics_inputs()),
+            a: by_coord(pred.dynamics_weights()),
         })
     }
 
@@ -316,55 +315,57 @@ impl Energy for TrajectoryEnergy<'_> {
     }
 
     /// Kernel columns `k_X(x_t, X_in)` for the T−1 inputs, then one batched pair of
-    /// triangular solves (`L⁻¹ K*` for the variances, `K_X⁻¹ K*` for their gradients); all
-    /// other loops run on contiguous row-major copies (`X_in`, `K_X⁻¹ X_out` kept from `new`).
+    /// triangular solves (`L⁻¹ K*` for the variances, `K_X⁻¹ K*` for their gradients); the
+    /// loops over the M training transitions run on per-coordinate arrays (see
+    /// [`TrajectoryEnergy`]) and vectorise.
     fn energy_grad(&self, q: &[f64], grad: &mut [f64]) -> Option<f64> {
         let d = self.x1.len();
         let steps = self.len - 1;
         let k = self.pred.dynamics_kernel();
-        let m = self.xin_rows.len() / d;
+        let m = self.xin.first().map_or(0, |v| v.len());
         // Inputs x_1..x_{T-1}, row-major (x_1 fixed, then the free coordinates).
         let mut p = Vec::with_capacity(steps * d);
         p.extend_from_slice(&self.x1);
         p.extend_from_slice(&q[..(steps - 1) * d]);
         // RBF part and full k_X(x_t, X_in), M × steps, column-major (one column per step).
+        // var·exp(a) is computed as exp(a + ln var): a collapsed RBF variance (β1 ~ 1e-320 on
+        // the demo arms) otherwise makes every product subnormal.
+        let ln_var = if k.var > 0.0 {
+            k.var.ln()
+        } else {
+            f64::NEG_INFINITY
+        };
+        let half_gamma = -0.5 * k.gamma;
         let mut rbf = vec![0.0; m * steps];
         let mut kst = Mat::<f64>::zeros(m, steps);
-        let half_gamma = -0.5 * k.gamma;
+        let mut dist = vec![0.0; m];
+        let mut dot = vec![0.0; m];
+        let mut mu = vec![0.0; steps * d];
         for t in 0..steps {
             let xt = &p[t * d..(t + 1) * d];
+            dist.fill(0.0);
+            dot.fill(0.0);
+            for c in 0..d {
+                let xc = xt[c];
+                for ((s, dp), &xi) in dist.iter_mut().zip(dot.iter_mut()).zip(&self.xin[c]) {
+                    let diff = xc - xi;
+                    *s += diff * diff;
+                    *dp += xc * xi;
+                }
+            }
             let rcol = &mut rbf[t * m..(t + 1) * m];
             let kcol = kst
                 .col_mut(t)
                 .try_as_col_major_mut()
                 .expect("contiguous")
                 .as_slice_mut();
-            for (i, (r, kv)) in rcol.iter_mut().zip(kcol.iter_mut()).enumerate() {
-                let xi = &self.xin_rows[i * d..(i + 1) * d];
-                let (mut s, mut dotp) = (0.0, 0.0);
-                for c in 0..d {
-                    let diff = xt[c] - xi[c];
-                    s += diff * diff;
-                    dotp += xt[c] * xi[c];
-                }
-                *r = k.var * (half_gamma * s).exp();
-                *kv = *r + k.lin * dotp;
+            for (((r, kv), &s), &dp) in rcol.iter_mut().zip(kcol.iter_mut()).zip(&dist).zip(&dot) {
+                *r = exp_fast(half_gamma * s + ln_var);
+                *kv = *r + k.lin * dp;
             }
-        }
-        // Means (eq. 9): μ_t = (K_X⁻¹ X_out)ᵀ k_t, row-major steps × d.
-        let mut mu = vec![0.0; steps * d];
-        for t in 0..steps {
-            let kcol = kst
-                .col(t)
-                .try_as_col_major()
-                .expect("contiguous")
-                .as_slice();
-            let mt = &mut mu[t * d..(t + 1) * d];
-            for (i, kv) in kcol.iter().enumerate() {
-                let ai = &self.a_rows[i * d..(i + 1) * d];
-                for c in 0..d {
-                    mt[c] += ai[c] * kv;
-                }
+            // Mean (eq. 9): μ_t = (K_X⁻¹ X_out)ᵀ k_t.
+            for c in 0..d {
+                mu[t * d + c] = kcol.iter().zip(&self.a[c]).map(|(kv, a)| kv * a).sum();
             }
         }
         // U = L⁻¹ K* gives k*ᵀ K_X⁻¹ k* (eq. 10); V = L⁻ᵀ U = K_X⁻¹ K* its gradient.
@@ -377,7 +378,8 @@ impl Energy for TrajectoryEnergy<'_> {
         grad.iter_mut().for_each(|g| *g = 0.0);
         let mut energy = 0.0;
         let mut e = vec![0.0; d];
-        let mut acc = vec![0.0; d];
+        let mut w = vec![0.0; m];
+        let mut wr = vec![0.0; m];
         for t in 0..steps {
             let xt = &p[t * d..(t + 1) * d];
             let s = k.self_cov(xt) - kvk[t];
@@ -397,31 +399,33 @@ impl Energy for TrajectoryEnergy<'_> {
             if t == 0 {
                 continue; // x_1 is fixed
             }
-            // ∂/∂x_t through μ_t and s_t: Σ_i w_i ∂k_i/∂x_t,
-            // w_i = −(A e)_i / s − 2 c_s (K_X⁻¹ k_t)_i.
+            // ∂/∂x_t through μ_t and s_t: Σ_i w_i ∂k_i/∂x_t with
+            // w_i = −(A e)_i / s − 2 c_s (K_X⁻¹ k_t)_i and ∂k_i/∂x_t = −γ r_i (x_t − x_i) + lin x_i.
             let cs = -0.5 * e2 / (s * s) + 0.5 * d as f64 / s;
             let vcol = v.col(t).try_as_col_major().expect("contiguous").as_slice();
             let rcol = &rbf[t * m..(t + 1) * m];
-            for c in 0..d {
-                acc[c] = 2.0 * cs * k.lin * xt[c];
+            for (wi, &vi) in w.iter_mut().zip(vcol) {
+                *wi = -2.0 * cs * vi;
             }
-            for i in 0..m {
-                let ai = &self.a_rows[i * d..(i + 1) * d];
-                let xi = &self.xin_rows[i * d..(i + 1) * d];
-                let mut ae = 0.0;
-                for c in 0..d {
-                    ae += ai[c] * e[c];
+            for c in 0..d {
+                let f = -e[c] / s;
+                for (wi, &ai) in w.iter_mut().zip(&self.a[c]) {
+                    *wi += f * ai;
                 }
-                let w = -ae / s - 2.0 * cs * vcol[i];
-                let wr = -k.gamma * w * rcol[i];
-                let wl = k.lin * w;
-                for c in 0..d {
-                    acc[c] += wr * (xt[c] - xi[c]) + wl * xi[c];
-                }
+            }
+            let mut sum_wr = 0.0;
+            for ((o, &wi), &ri) in wr.iter_mut().zip(&w).zip(rcol) {
+                *o = -k.gamma * wi * ri;
+                sum_wr += *o;
             }
             let g = &mut grad[(t - 1) * d..t * d];
             for c in 0..d {
-                g[c] += acc[c];
+                let (mut wr_x, mut w_x) = (0.0, 0.0);
+                for ((&o, &wi), &xi) in wr.iter().zip(&w).zip(&self.xin[c]) {
+                    wr_x += o * xi;
+                    w_x += wi * xi;
+                }
+                g[c] += sum_wr * xt[c] - wr_x + k.lin * w_x + 2.0 * cs * k.lin * xt[c];
             }
         }
         Some(energy)

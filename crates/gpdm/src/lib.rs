@@ -26,6 +26,7 @@ pub mod linalg;
 pub mod model;
 pub mod optim;
 pub mod predict;
+pub mod vexp;
 
 pub use error::{GpdmError, Result};
 pub use model::{Gpdm, GpdmConfig};

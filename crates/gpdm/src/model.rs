@@ -9,7 +9,28 @@
 //!   + d/2 ln|K_X| + 1/2 tr(K_X⁻¹ X_out X_outᵀ)              eq. 5, K_X = k_X(X_in, X_in)
 //!   + Σ_seq ‖x_first‖² / (2 σ0²)                            isotropic prior on each first point
 //!   + Σ_k ln α_k + Σ_k ln β_k                               priors P(α) = ∏ 1/α_k, P(β) = ∏ 1/β_k
+//!   + Σ_{k=1..3} (ln β_k)² / (2 s²)                          weak log-normal factor (deviation)
 //! ```
+//!
+//! Well-posedness (issue 6, deviation from eq. 7 as printed): with `∏ 1/β` alone the objective
+//! has no minimum whenever the data do not need a dynamics-kernel component: `ln β1`, `ln β2`
+//! (RBF part) or `ln β3` (linear part) then fall without bound (β → 5e-324 in the demo fits)
+//! and an optimiser stops only at its iteration limit. [`GpdmConfig::beta_log_sd`] multiplies
+//! `1/β_k` (k = 1..3) by a log-normal `N(ln β_k; 0, s²)` (centred on the paper's start β = 1,
+//! latents start at unit variance): a proper prior, so the minimum exists; an unused component
+//! settles at `β_k = e^{−s²}` (1.2e-4 for s = 3, below the dynamics-noise floor 1e-3), and a
+//! component the data determine moves by `ln β_k / s²` in gradient, i.e. negligibly. With the
+//! noise floors on `1/α3` and `1/β4` (the latter needed to stop the latent scale from collapsing)
+//! every term is bounded below in the directions the optimiser can reach.
+//!
+//! Latent scale (issue 6, deviation): the pose term is exactly invariant under
+//! `X → cX, α2 → α2/c²`, so the scale of X is set only by the dynamics term and the priors, and
+//! with an absolute dynamics-noise floor they favour `X → 0` (dynamics reduced to noise: on the
+//! synthetic N = 446 problem an optimiser that follows this valley reaches α2 = 6e4, 728 nats
+//! below where plain L-BFGS stalls after 2000 iterations). With
+//! [`GpdmConfig::fixed_latent_scale`] the optimisation coordinates hold `X̃` and the model uses
+//! `X = √(N d) X̃ / ‖X̃‖_F` (unit mean square, the PCA start's scale, the scale the floors are
+//! stated in): one gauge direction removed, every other minimum of eq. 7 kept.
 //!
 //! Optimisation coordinates `θ` (see [`Gpdm::theta`]): X column-major, then `ln α1, ln α2,
 //! ln(1/α3 − floor_Y)`, then `ln β1, ln β2, ln β3, ln(1/β4 − floor_X)`. The noise-variance floor
@@ -42,6 +63,26 @@ pub struct GpdmConfig {
     pub dyn_noise_floor: Option<f64>,
     /// Variance σ0² of the isotropic Gaussian prior on each sequence's first latent point.
     pub first_point_var: f64,
+    /// Standard deviation `s` of the weak log-normal factor on β1, β2, β3 (see the module
+    /// doc; default 3, `None` = the paper's improper `∏ 1/β` as printed, which has no minimum).
+    /// Not stored in model files (the payload layout predates it; prediction does not use it).
+    #[serde(skip, default = "default_beta_log_sd")]
+    pub beta_log_sd: Option<f64>,
+    /// Keep the latent positions at unit mean square (see the module doc; default true).
+    /// Not stored in model files, like `beta_log_sd`.
+    #[serde(skip, default = "default_true")]
+    pub fixed_latent_scale: bool,
+}
+
+fn default_true() -> bool {
+    true
+}
+
+/// Default of [`GpdmConfig::beta_log_sd`].
+pub const BETA_LOG_SD: f64 = 3.0;
+
+fn default_beta_log_sd() -> Option<f64> {
+    Some(BETA_LOG_SD)
 }
 
 impl Default for GpdmConfig {
@@ -51,6 +92,8 @@ impl Default for GpdmConfig {
             pose_noise_floor: Some(1e-6),
             dyn_noise_floor: None,
             first_point_var: 1.0,
+            beta_log_sd: default_beta_log_sd(),
+            fixed_latent_scale: true,
         }
     }
 }
@@ -192,7 +235,24 @@ impl Objective {
                 self.n_params()
             ));
         }
-        let x = MatRef::from_column_major_slice(&theta[..n * d], n, d);
+        // Latent positions: θ's X block, rescaled to unit mean square when the scale is fixed.
+        let x_raw = &theta[..n * d];
+        let norm = x_raw.iter().map(|v| v * v).sum::<f64>().sqrt();
+        let scale = if self.config.fixed_latent_scale {
+            if !(norm > 0.0 && norm.is_finite()) {
+                return invalid("latent positions are all zero or not finite");
+            }
+            ((n * d) as f64).sqrt() / norm
+        } else {
+            1.0
+        };
+        let x_scaled: Vec<f64>;
+        let x = if scale == 1.0 {
+            MatRef::from_column_major_slice(x_raw, n, d)
+        } else {
+            x_scaled = x_raw.iter().map(|v| v * scale).collect();
+            MatRef::from_column_major_slice(&x_scaled, n, d)
+        };
         let ta = &theta[n * d..n * d + 3];
         let tb = &theta[n * d + 3..];
         let alpha = alpha_from_theta(ta, self.config.pose_noise_floor);
@@ -203,9 +263,12 @@ impl Objective {
             || self.dynamics_term(x, beta, want),
         );
         let (py, px) = (py?, px?);
-        // Priors ∏ 1/α_k, ∏ 1/β_k → Σ ln α_k + Σ ln β_k.
-        let prior: f64 =
-            alpha.iter().map(|a| a.ln()).sum::<f64>() + beta.iter().map(|b| b.ln()).sum::<f64>();
+        // Priors ∏ 1/α_k, ∏ 1/β_k → Σ ln α_k + Σ ln β_k, plus the log-normal factor on β1..β3
+        // (in θ, ln β_k = θ_k for k = 1..3).
+        let inv_s2 = self.config.beta_log_sd.map_or(0.0, |s| 1.0 / (s * s));
+        let prior: f64 = alpha.iter().map(|a| a.ln()).sum::<f64>()
+            + beta.iter().map(|b| b.ln()).sum::<f64>()
+            + 0.5 * inv_s2 * tb[..3].iter().map(|t| t * t).sum::<f64>();
         let out = Eval {
             value: py.value + px.value + prior,
             pose: py.value,
@@ -224,14 +287,21 @@ impl Objective {
                 gx_part[i + j * n] = dxy[(i, j)] + dxx[(i, j)];
             }
         }
+        if self.config.fixed_latent_scale {
+            // X = s X̃ with s = √(Nd)/‖X̃‖: ∂L/∂X̃ = s (g − X̂ (X̂ · g)), X̂ = X̃/‖X̃‖.
+            let radial: f64 = gx_part.iter().zip(x_raw).map(|(g, v)| g * v).sum::<f64>() / norm;
+            for (g, v) in gx_part.iter_mut().zip(x_raw) {
+                *g = scale * (*g - v / norm * radial);
+            }
+        }
         let (pa, pb) = (py.dparams, px.dparams);
         // Chain rule to θ, priors included (∂ ln α_k / ∂θ_k = 1 for the log-parametrised ones).
         gh[0] = alpha[0] * pa[0] + 1.0;
         gh[1] = alpha[1] * pa[1] + 1.0;
         gh[2] = (pa[3] + 1.0 / alpha[2]) * (-alpha[2] * alpha[2] * ta[2].exp());
-        gh[3] = beta[0] * pb[0] + 1.0;
-        gh[4] = beta[1] * pb[1] + 1.0;
-        gh[5] = beta[2] * pb[2] + 1.0;
+        gh[3] = beta[0] * pb[0] + 1.0 + inv_s2 * tb[0];
+        gh[4] = beta[1] * pb[1] + 1.0 + inv_s2 * tb[1];
+        gh[5] = beta[2] * pb[2] + 1.0 + inv_s2 * tb[2];
         gh[6] = (pb[3] + 1.0 / beta[3]) * (-beta[3] * beta[3] * tb[3].exp());
         Ok(out)
     }
@@ -389,6 +459,11 @@ impl Gpdm {
                 return invalid(format!("noise floor {f} must be non-negative and finite"));
             }
         }
+        if let Some(sd) = config.beta_log_sd {
+            if !(sd > 0.0 && sd.is_finite()) {
+                return invalid(format!("β log-prior sd {sd} must be positive and finite"));
+            }
+        }
         let seq_lens: Vec<usize> = sequences.iter().map(|s| s.nrows()).collect();
         Layout::new(&seq_lens)?;
         let n: usize = seq_lens.iter().sum();
@@ -443,10 +518,17 @@ impl Gpdm {
         t
     }
 
-    /// Sets the parameters from optimisation coordinates.
+    /// Sets the parameters from optimisation coordinates (X rescaled to unit mean square when
+    /// [`GpdmConfig::fixed_latent_scale`], as the objective sees it).
     pub fn set_theta(&mut self, theta: &[f64]) {
         let nd = self.x.len();
         self.x.as_mut_slice().copy_from_slice(&theta[..nd]);
+        if self.config.fixed_latent_scale {
+            let norm = self.x.norm();
+            if norm > 0.0 && norm.is_finite() {
+                self.x *= (nd as f64).sqrt() / norm;
+            }
+        }
         self.alpha = alpha_from_theta(&theta[nd..nd + 3], self.config.pose_noise_floor);
         self.beta = beta_from_theta(&theta[nd + 3..nd + 7], self.config.dyn_noise_floor);
     }

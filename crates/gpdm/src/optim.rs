@@ -72,8 +72,16 @@ pub struct LbfgsOptions {
     pub max_evals: usize,
     /// Stop when ‖∇f‖∞ ≤ grad_tol.
     pub grad_tol: f64,
-    /// Stop when (f_prev − f) ≤ value_tol · max(|f|, 1).
+    /// Stop when (f_{k−w} − f_k) ≤ w · value_tol · max(|f_k|, 1), w = `value_window`
+    /// iterations (w = 1: scipy's `ftol` test; a longer window does not stop on one short step).
     pub value_tol: f64,
+    /// Window w of the value test (≥ 1).
+    #[serde(default = "one")]
+    pub value_window: usize,
+    /// Largest coordinate change of the first trial step of a line search (`‖p‖∞`; the
+    /// search may still expand it). `None`: no limit.
+    #[serde(default)]
+    pub max_step: Option<f64>,
 }
 
 impl Default for LbfgsOptions {
@@ -84,6 +92,8 @@ impl Default for LbfgsOptions {
             max_evals: 2000,
             grad_tol: 1e-6,
             value_tol: 1e-10,
+            value_window: 1,
+            max_step: None,
         }
     }
 }
@@ -107,6 +117,10 @@ pub struct LbfgsResult {
     pub history: Vec<(usize, f64)>,
 }
 
+fn one() -> usize {
+    1
+}
+
 fn dot(a: &[f64], b: &[f64]) -> f64 {
     a.iter().zip(b).map(|(x, y)| x * y).sum()
 }
@@ -118,7 +132,25 @@ fn inf_norm(a: &[f64]) -> f64 {
 /// Minimises `f` by L-BFGS with a strong-Wolfe line search (Nocedal & Wright, alg. 7.4,
 /// 3.5 and 3.6). `f(x, g)` returns the value and writes the gradient, or `None` when it cannot
 /// be evaluated (treated as +∞: the step is shortened).
-pub fn lbfgs<F>(mut f: F, x0: &[f64], opts: &LbfgsOptions) -> LbfgsResult
+pub fn lbfgs<F>(f: F, x0: &[f64], opts: &LbfgsOptions) -> LbfgsResult
+where
+    F: FnMut(&[f64], &mut [f64]) -> Option<f64>,
+{
+    lbfgs_blocks(f, x0, opts, &[0..x0.len()])
+}
+
+/// [`lbfgs`] with a block-diagonal initial inverse Hessian: in the two-loop recursion each
+/// block `b` of coordinates is scaled by its own secant estimate `γ_b = s_bᵀy_b / y_bᵀy_b`
+/// from the latest correction pair (the global `sᵀy / yᵀy` when `s_bᵀy_b ≤ 0`), instead of one
+/// scalar for all coordinates. For the GPDM the latent positions, α and β have curvatures 1e3 to
+/// 1e13 apart (issue 6): one scalar sized for X makes every β step tiny. Blocks must be
+/// disjoint; coordinates outside every block use the global scalar.
+pub fn lbfgs_blocks<F>(
+    mut f: F,
+    x0: &[f64],
+    opts: &LbfgsOptions,
+    blocks: &[std::ops::Range<usize>],
+) -> LbfgsResult
 where
     F: FnMut(&[f64], &mut [f64]) -> Option<f64>,
 {
@@ -167,8 +199,21 @@ where
         } else {
             1.0 / inf_norm(&g).max(1.0)
         };
-        for v in q.iter_mut() {
-            *v *= gamma;
+        let mut scale = vec![gamma; n];
+        if k > 0 && blocks.len() > 1 {
+            let (s, y) = (&s_hist[k - 1], &y_hist[k - 1]);
+            for b in blocks {
+                let (sy, yy) = (
+                    dot(&s[b.clone()], &y[b.clone()]),
+                    dot(&y[b.clone()], &y[b.clone()]),
+                );
+                if sy > 0.0 && yy > 0.0 {
+                    scale[b.clone()].fill(sy / yy);
+                }
+            }
+        }
+        for (v, c) in q.iter_mut().zip(&scale) {
+            *v *= c;
         }
         for i in 0..k {
             let rho = 1.0 / dot(&y_hist[i], &s_hist[i]);
@@ -187,6 +232,14 @@ where
             p = g.iter().map(|v| -v * sc).collect();
             dg0 = dot(&p, &g);
         }
+        if let Some(cap) = opts.max_step {
+            let big = inf_norm(&p);
+            if big > cap {
+                let sc = cap / big;
+                p.iter_mut().for_each(|v| *v *= sc);
+                dg0 *= sc;
+            }
+        }
         let budget = opts.max_evals.saturating_sub(evals);
         let ls = wolfe_search(&mut f, &x, fx, dg0, &p, c1, c2, budget);
         evals += ls.evals;
@@ -203,13 +256,17 @@ where
                     s_hist.push(s);
                     y_hist.push(yv);
                 }
-                let decrease = fx - fnew;
-                x = xn;
+                let w = opts.value_window.max(1);
+                let decrease = history
+                    .len()
+                    .checked_sub(w)
+                    .map_or(f64::INFINITY, |i| history[i].1 - fnew);
                 g = gn;
                 fx = fnew;
                 history.push((evals, fx));
                 iterations = it + 1;
-                if decrease <= opts.value_tol * fx.abs().max(1.0) {
+                x = xn;
+                if decrease <= w as f64 * opts.value_tol * fx.abs().max(1.0) {
                     exit = Exit::ValueTolerance;
                     break;
                 }
@@ -381,6 +438,17 @@ pub enum Schedule {
     Alternate { rounds: usize, iters: usize },
 }
 
+/// Initial inverse-Hessian scaling of L-BFGS (see [`lbfgs_blocks`]).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+pub enum Scaling {
+    /// One scalar for all coordinates (textbook L-BFGS).
+    Scalar,
+    /// One scalar for X, one for ln α, one for ln β.
+    Blocks,
+    /// One scalar for X and one per hyperparameter.
+    PerHyperparameter,
+}
+
 /// Training options.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct TrainOptions {
@@ -388,6 +456,8 @@ pub struct TrainOptions {
     pub schedule: Schedule,
     /// L-BFGS options (iteration counts are per phase for the joint schedule).
     pub lbfgs: LbfgsOptions,
+    /// Initial inverse-Hessian scaling.
+    pub scaling: Scaling,
 }
 
 impl Default for TrainOptions {
@@ -395,8 +465,30 @@ impl Default for TrainOptions {
         TrainOptions {
             schedule: Schedule::Joint,
             lbfgs: LbfgsOptions::default(),
+            scaling: Scaling::Scalar,
         }
     }
+}
+
+/// Scaling blocks, in phase coordinates, for a phase optimising the θ indices `idx`
+/// (X takes the first `nx` indices of θ, then 3 α and 4 β coordinates).
+fn phase_blocks(idx: &[usize], nx: usize, scaling: Scaling) -> Vec<std::ops::Range<usize>> {
+    let class = |i: usize| match scaling {
+        Scaling::Scalar => 0,
+        Scaling::Blocks if i < nx => 0,
+        Scaling::Blocks if i < nx + 3 => 1,
+        Scaling::Blocks => 2,
+        Scaling::PerHyperparameter if i < nx => 0,
+        Scaling::PerHyperparameter => 1 + i - nx,
+    };
+    let mut out: Vec<std::ops::Range<usize>> = vec![];
+    for (k, &i) in idx.iter().enumerate() {
+        match out.last_mut() {
+            Some(r) if class(idx[r.start]) == class(i) => r.end = k + 1,
+            _ => out.push(k..k + 1),
+        }
+    }
+    out
 }
 
 /// What training did.
@@ -426,6 +518,7 @@ pub fn train(model: &mut Gpdm, opts: &TrainOptions) -> Result<TrainReport> {
     let mut theta = model.theta();
     let n_all = theta.len();
     let start = obj.eval(&theta, None)?;
+    let start_jitter = start.jitter_x.max(start.jitter_y);
     let mut report = TrainReport {
         initial_value: start.value,
         final_value: start.value,
@@ -454,13 +547,19 @@ pub fn train(model: &mut Gpdm, opts: &TrainOptions) -> Result<TrainReport> {
         let sub0: Vec<f64> = idx.iter().map(|&i| theta[i]).collect();
         let mut o = opts.lbfgs.clone();
         o.max_iter = iters;
-        let res = lbfgs(
+        let blocks = phase_blocks(&idx, n_all - 7, opts.scaling);
+        let res = lbfgs_blocks(
             |sub, g| {
                 let mut t = base.clone();
                 for (k, &i) in idx.iter().enumerate() {
                     t[i] = sub[k];
                 }
-                let e = obj.eval(&t, Some(&mut full_grad)).ok();
+                // A point whose kernel matrices need more Cholesky jitter than the start's is
+                // numerically singular: treated as infeasible (the line search backs off).
+                let e = obj
+                    .eval(&t, Some(&mut full_grad))
+                    .ok()
+                    .filter(|e| e.jitter_x.max(e.jitter_y) <= start_jitter);
                 let v = e.as_ref().map(|e| e.value).unwrap_or(f64::INFINITY);
                 report.trace.push((clock.elapsed().as_secs_f64(), v));
                 let e = e?;
@@ -471,6 +570,7 @@ pub fn train(model: &mut Gpdm, opts: &TrainOptions) -> Result<TrainReport> {
             },
             &sub0,
             &o,
+            &blocks,
         );
         report.evaluations += res.evaluations;
         report.exits.push(res.exit);

@@ -6,7 +6,9 @@ use crate::error::{invalid, Result};
 use crate::kernel::RbfLinear;
 use crate::linalg::{mul, to_na, view, Cholesky};
 use crate::model::Gpdm;
+use crate::vexp::exp_fast;
 use faer::linalg::matmul::matmul;
+use faer::reborrow::ReborrowMut;
 use faer::{Accum, Mat, MatMut, MatRef, Par};
 use nalgebra::{DMatrix, DVector};
 use rand::RngExt;
@@ -24,10 +26,15 @@ pub struct Predictor {
     /// Training latents X (N × d).
     x: Mat<f64>,
     chol_y: Cholesky,
-    /// K_Y⁻¹ Y (N × D), Y centred; or K_Y⁻¹ U_r Λ_r^½ (N × r) with a pose basis.
+    /// K_Y⁻¹ Y (N × D), Y centred; or K_Y⁻¹ U_r Λ_r^½ (N × r) with a pose basis; or the
+    /// eigenvectors Q_R (N × R) of K_Y with a kernel basis.
     a_y: Mat<f64>,
-    /// Optional orthonormal pose basis V_rᵀ (r × D): then μ_Y = (k_Yᵀ a_y) V_rᵀ.
+    /// Optional basis B, stored D × r (column-major, the layout the bulk GEMM of
+    /// [`Predictor::pose_mean_cols`] reads), so that μ_Y = ȳ + B (a_yᵀ k_Y): the pose basis
+    /// V_r, or `(K_Y⁻¹ Y)ᵀ Q_R` for a kernel basis.
     basis: Option<Mat<f64>>,
+    /// With a kernel basis ([`Predictor::with_kernel_basis`]): `max_j ‖(K_Y⁻¹ Y)_j‖`.
+    basis_amax: Option<f64>,
     y_mean: DVector<f64>,
     /// Jitter notes from the factorisations (empty when none was needed); callers log these.
     pub notes: Vec<String>,
@@ -64,6 +71,7 @@ impl Predictor {
             chol_y,
             a_y,
             basis: None,
+            basis_amax: None,
             y_mean: model.y_mean.clone(),
             notes,
         })
@@ -99,10 +107,161 @@ impl Predictor {
         // U_r Λ_r^½ (N × r) and V_rᵀ = Λ_r^-½ U_rᵀ Y (r × D).
         let us = Mat::from_fn(n, r, |i, c| eig.eigenvectors[(i, order[c])] * lam[c].sqrt());
         let ut = Mat::from_fn(r, n, |c, i| eig.eigenvectors[(i, order[c])] / lam[c].sqrt());
-        p.basis = Some(mul(ut.as_ref(), view(&model.y)));
+        p.basis = Some(mul(ut.as_ref(), view(&model.y)).transpose().to_owned());
         p.a_y = p.chol_y.solve(us.as_ref());
         let rms = (discarded.max(0.0) / (n * model.y.ncols()) as f64).sqrt();
         Ok((p, r, rms))
+    }
+
+    /// Decoding through the leading eigenvectors of `K_Y` instead of the pose basis: eq. 12,
+    /// `μ_Y(x) = ȳ + (K_Y⁻¹ Y)ᵀ k_Y(x)`, with `k_Y(x)` replaced by its projection `Q_R Q_Rᵀ
+    /// k_Y(x)` onto the top-R eigenvectors `Q_R` of `K_Y` (N × N; a factorisation, no inverse
+    /// is formed: `Q_Rᵀ K_Y⁻¹ Y` comes from the Cholesky solution). The error of coordinate j is
+    /// `a_jᵀ (I − Q_R Q_Rᵀ) k_Y(x)` with `a_j` column j of `K_Y⁻¹ Y`, at most
+    /// `max_j ‖a_j‖ · ‖(I − Q_R Q_Rᵀ) k_Y(x)‖` (Cauchy-Schwarz). R is the smallest rank for
+    /// which this bound is at most `max_abs` at every training latent point (where `k_Y(x_i)`
+    /// is column i of the noise-free Gram matrix, so the residual has the closed form
+    /// `Σ_{l>R} (λ_l − σ²)² q_{l,i}²`); [`Predictor::basis_error_bound`] evaluates it for new
+    /// points. Unlike a basis of Y it does not have to reproduce the training poses' noise,
+    /// which the GP mean smooths. Cost of eq. 12: `T·N·R + T·R·D` instead of `T·N·D`.
+    /// Returns the predictor, R and the bound at the training points.
+    pub fn with_kernel_basis(model: &Gpdm, max_abs: f64) -> Result<(Self, usize, f64)> {
+        if !(max_abs >= 0.0) {
+            return invalid(format!("error bound {max_abs} must be non-negative"));
+        }
+        let mut p = Predictor::new(model)?;
+        let n = p.x.nrows();
+        let g = p.ky.gram(p.x.as_ref()).k; // lower triangle filled
+        let full = DMatrix::from_fn(n, n, |i, j| if i >= j { g[(i, j)] } else { g[(j, i)] });
+        let eig = nalgebra::SymmetricEigen::new(full);
+        let mut order: Vec<usize> = (0..n).collect();
+        order.sort_by(|&a, &b| eig.eigenvalues[b].total_cmp(&eig.eigenvalues[a]));
+        let noise = 1.0 / p.ky.prec + p.chol_y.jitter;
+        let mu: Vec<f64> = order
+            .iter()
+            .map(|&l| (eig.eigenvalues[l] - noise).max(0.0))
+            .collect();
+        let amax = (0..p.a_y.ncols())
+            .map(|j| p.a_y.col(j).squared_norm_l2())
+            .fold(0.0f64, f64::max)
+            .sqrt();
+        // tail[i] = Σ_{l ≥ R} μ_l² q_{l,i}², from R = N downwards.
+        let mut tail = vec![0.0; n];
+        let mut r = n;
+        let mut bound = 0.0;
+        while r > 0 {
+            let l = order[r - 1];
+            let next: Vec<f64> = (0..n)
+                .map(|i| tail[i] + (mu[r - 1] * eig.eigenvectors[(i, l)]).powi(2))
+                .collect();
+            let b = amax * next.iter().fold(0.0f64, |m, &v| m.max(v)).sqrt();
+            if b > max_abs {
+                break;
+            }
+            tail = next;
+            bound = b;
+            r -= 1;
+        }
+        let r = r.max(1);
+        let q = Mat::from_fn(n, r, |i, c| eig.eigenvectors[(i, order[c])]);
+        p.basis = Some(mul(p.a_y.as_ref().transpose(), q.as_ref()));
+        p.a_y = q;
+        p.basis_amax = Some(amax);
+        Ok((p, r, bound))
+    }
+
+    /// For a predictor from [`Predictor::with_kernel_basis`]: the largest certified bound on
+    /// `|μ_Y − μ_Y,exact|` over the coordinates and the rows of `xs`; `None` otherwise.
+    pub fn basis_error_bound(&self, xs: &DMatrix<f64>) -> Option<f64> {
+        let amax = self.basis_amax?;
+        let kstar = self.ky.cross(self.x.as_ref(), view(xs)); // N × T
+        let proj = mul(self.a_y.as_ref().transpose(), kstar.as_ref()); // R × T
+        let worst = (0..xs.nrows())
+            .map(|t| (kstar.col(t).squared_norm_l2() - proj.col(t).squared_norm_l2()).max(0.0))
+            .fold(0.0f64, f64::max);
+        Some(amax * worst.sqrt())
+    }
+
+    /// Rank of the pose basis, if any.
+    pub fn basis_rank(&self) -> Option<usize> {
+        self.basis.as_ref().map(|b| b.ncols())
+    }
+
+    /// Eq. 12 for the rows of `xs` (T × d) written as the columns of `out` (D × T column-major,
+    /// one frame per column, so that each frame's coordinates are contiguous): `out = ȳ 1ᵀ + (K_Y⁻¹ Y)ᵀ
+    /// k_Y(X, X_*)`, or `ȳ 1ᵀ + V_r (k_Y(X_*, X) a_y)ᵀ` with a pose basis. One sequential
+    /// GEMM (callers parallelise over trajectories).
+    pub fn pose_mean_cols(&self, xs: &DMatrix<f64>, out: &mut [f64]) -> Result<()> {
+        self.check_latent(xs)?;
+        let t = xs.nrows();
+        if out.len() != self.pose_dim() * t {
+            return invalid(format!(
+                "output has {} values, expected {} x {t}",
+                out.len(),
+                self.pose_dim()
+            ));
+        }
+        let mut out = MatMut::from_column_major_slice_mut(out, self.pose_dim(), t);
+        let kstar = self.pose_cross(xs); // N × T
+        for j in 0..t {
+            for (o, &m) in out.rb_mut().col_mut(j).iter_mut().zip(self.y_mean.iter()) {
+                *o = m;
+            }
+        }
+        match &self.basis {
+            Some(b) => {
+                let coef = mul(self.a_y.as_ref().transpose(), kstar.as_ref()); // r × T
+                matmul(out, Accum::Add, b.as_ref(), coef.as_ref(), 1.0, Par::Seq);
+            }
+            None => matmul(
+                out,
+                Accum::Add,
+                self.a_y.as_ref().transpose(),
+                kstar.as_ref(),
+                1.0,
+                Par::Seq,
+            ),
+        }
+        Ok(())
+    }
+
+    /// `k_Y(X, X_*)` (N × T) for the rows of `xs`, as `RbfLinear::cross` but with the
+    /// vectorised [`exp_fast`] on per-coordinate arrays, `var·e^a` as `e^(a + ln var)` and 0
+    /// below `e^-700` (no subnormal products).
+    fn pose_cross(&self, xs: &DMatrix<f64>) -> Mat<f64> {
+        let (n, t, d) = (self.x.nrows(), xs.nrows(), xs.ncols());
+        let cols: Vec<Vec<f64>> = (0..d)
+            .map(|c| (0..n).map(|i| self.x[(i, c)]).collect())
+            .collect();
+        let ln_var = if self.ky.var > 0.0 {
+            self.ky.var.ln()
+        } else {
+            f64::NEG_INFINITY
+        };
+        let half_gamma = -0.5 * self.ky.gamma;
+        let mut out = Mat::<f64>::zeros(n, t);
+        let mut dist = vec![0.0; n];
+        let mut dot = vec![0.0; n];
+        for j in 0..t {
+            dist.fill(0.0);
+            dot.fill(0.0);
+            for (c, xc) in cols.iter().enumerate() {
+                let v = xs[(j, c)];
+                for ((s, dp), &xi) in dist.iter_mut().zip(dot.iter_mut()).zip(xc) {
+                    *s += (v - xi) * (v - xi);
+                    *dp += v * xi;
+                }
+            }
+            let col = out
+                .col_mut(j)
+                .try_as_col_major_mut()
+                .expect("contiguous")
+                .as_slice_mut();
+            for ((o, &s), &dp) in col.iter_mut().zip(&dist).zip(&dot) {
+                *o = exp_fast(half_gamma * s + ln_var) + self.ky.lin * dp;
+            }
+        }
+        out
     }
 
     /// Latent dimension d.
@@ -203,7 +362,7 @@ impl Predictor {
         match &self.basis {
             Some(b) => {
                 let coef = mul(kstar.as_ref(), self.a_y.as_ref()); // T × r
-                gemm_add_cols(out, coef.as_ref(), b.as_ref());
+                gemm_add_cols(out, coef.as_ref(), b.as_ref().transpose());
             }
             None => gemm_add_cols(out, kstar.as_ref(), self.a_y.as_ref()),
         }

@@ -88,10 +88,51 @@ fn objective_gradient_without_floor_and_two_dimensional_latent() {
     });
 }
 
+/// Eq. 7 exactly as printed: no log-normal factor on β, latent scale free.
+fn as_printed() -> GpdmConfig {
+    GpdmConfig {
+        beta_log_sd: None,
+        fixed_latent_scale: false,
+        ..GpdmConfig::default()
+    }
+}
+
+#[test]
+fn objective_gradient_as_printed() {
+    check_objective(as_printed());
+}
+
+#[test]
+fn well_posed_terms_match_their_definitions() {
+    // Default model = eq. 7 as printed evaluated at X rescaled to unit mean square, plus
+    // Σ_{k≤3} (ln β_k)² / (2 s²); and invariant to the scale of θ's X block.
+    let m = small_model(GpdmConfig::default());
+    let s = m.config.beta_log_sd.unwrap();
+    let th = m.theta();
+    let e = m.objective().unwrap().eval(&th, None).unwrap();
+    let mut p = small_model(as_printed());
+    let nd = p.x.len();
+    p.x *= (nd as f64).sqrt() / p.x.norm();
+    let ep = p.objective().unwrap().eval(&p.theta(), None).unwrap();
+    let extra: f64 = m.beta[..3].iter().map(|b| b.ln().powi(2)).sum::<f64>() / (2.0 * s * s);
+    assert!(extra > 0.05, "the test point must exercise the factor");
+    assert!((e.pose - ep.pose).abs() < 1e-10 * ep.pose.abs().max(1.0));
+    assert!((e.dynamics - ep.dynamics).abs() < 1e-10 * ep.dynamics.abs().max(1.0));
+    assert!((e.prior - (ep.prior + extra)).abs() < 1e-12);
+    let mut scaled = th.clone();
+    scaled[..nd].iter_mut().for_each(|v| *v *= 3.7);
+    let es = m.objective().unwrap().eval(&scaled, None).unwrap();
+    assert!((es.value - e.value).abs() < 1e-10 * e.value.abs().max(1.0));
+    // The stored model is what the objective saw.
+    let mut m2 = m.clone();
+    m2.set_theta(&scaled);
+    assert!((m2.x.norm_squared() / nd as f64 - 1.0).abs() < 1e-12);
+}
+
 #[test]
 fn objective_matches_direct_formula() {
     // Independent evaluation of eq. 7 with nalgebra (explicit determinants and solves).
-    let m = small_model(GpdmConfig::default());
+    let m = small_model(as_printed());
     let e = m.objective().unwrap().eval(&m.theta(), None).unwrap();
     let x = &m.x;
     let n = x.nrows();

@@ -96,7 +96,7 @@ pub fn write_sequence(
     let (l, r): (Vec<_>, Vec<_>) = feet.into_iter().unzip();
     Ok(Sequence {
         times: times.to_vec(),
-        contacts: truth::contacts(&l, &r, s.def.fps, 0.03, 0.6),
+        contacts: truth::contacts(&l, &r, s.def.fps, &truth::ContactRule::default()),
     })
 }
 

@@ -140,10 +140,23 @@ pub fn ground(
     sigma: f64,
 ) -> Vec<f64> {
     let matches = correspondence(var, source, template);
+    ground_matched(var, source, &matches, soles, up, sigma)
+}
+
+/// [`ground`] with the matching source frames already known (from [`correspondence`], which
+/// vertical and horizontal shifts of the variation leave unchanged).
+pub fn ground_matched(
+    var: &mut [Vec<Vector3<f64>>],
+    source: &[Vec<Vector3<f64>>],
+    matches: &[f64],
+    soles: &[u32],
+    up: &Vector3<f64>,
+    sigma: f64,
+) -> Vec<f64> {
     let o = offsets(
         &lowest(var, soles, up),
         &lowest(source, soles, up),
-        &matches,
+        matches,
         sigma,
     );
     for (f, &d) in var.iter_mut().zip(&o) {

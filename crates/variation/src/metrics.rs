@@ -245,6 +245,38 @@ pub fn foot_sliding(
     (count > 0).then(|| total / count as f64)
 }
 
+/// Foot sliding on annotated contacts (m per frame): mean horizontal motion of each sole's
+/// centroid (`soles` = [left, right]) between consecutive frames in which `contacts` mark that
+/// foot as planted in both. For a source, its own annotations; for a variation, the source's
+/// at the DTW-matched frames (what [`crate::footskate`] pins, so not independent of it).
+pub fn contact_sliding(
+    frames: &[Vec<Vector3<f64>>],
+    soles: &[Vec<u32>],
+    contacts: &[[bool; 2]],
+    up: &Vector3<f64>,
+) -> Option<f64> {
+    let mut total = 0.0;
+    let mut count = 0usize;
+    for (f, s) in soles
+        .iter()
+        .enumerate()
+        .take(2)
+        .filter(|(_, s)| !s.is_empty())
+    {
+        let centre = |fr: &Vec<Vector3<f64>>| {
+            s.iter().map(|&v| fr[v as usize]).sum::<Vector3<f64>>() / s.len() as f64
+        };
+        for t in 1..frames.len().min(contacts.len()) {
+            if contacts[t - 1][f] && contacts[t][f] {
+                let d = centre(&frames[t]) - centre(&frames[t - 1]);
+                total += (d - up * d.dot(up)).norm();
+                count += 1;
+            }
+        }
+    }
+    (count > 0).then(|| total / count as f64)
+}
+
 /// Summary statistics of a list of values.
 #[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
 pub struct Stats {
@@ -268,5 +300,35 @@ impl Stats {
             min: v.iter().copied().fold(f64::INFINITY, f64::min),
             max: v.iter().copied().fold(f64::NEG_INFINITY, f64::max),
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn contact_sliding_counts_annotated_pairs_only() {
+        // Left sole slides 1 cm/frame (plus 5 cm/frame vertically, not counted), right 3 cm/frame;
+        // the left is planted in frames 0-2, the right in frames 2-3.
+        let up = Vector3::y();
+        let frames: Vec<Vec<Vector3<f64>>> = (0..4)
+            .map(|t| {
+                let t = t as f64;
+                vec![
+                    Vector3::new(0.01 * t, 0.05 * t, 0.0),
+                    Vector3::new(0.0, 0.0, 0.03 * t),
+                ]
+            })
+            .collect();
+        let soles = vec![vec![0u32], vec![1u32]];
+        let c = [[true, false], [true, false], [true, true], [false, true]];
+        // Left pairs (0,1), (1,2): 1 cm each; right pair (2,3): 3 cm.
+        let s = contact_sliding(&frames, &soles, &c, &up).unwrap();
+        assert!((s - 0.05 / 3.0).abs() < 1e-12, "{s}");
+        assert_eq!(
+            contact_sliding(&frames, &soles, &[[false; 2]; 4], &up),
+            None
+        );
     }
 }

@@ -131,7 +131,8 @@ pub fn gravity(motion: &AlignedMotion, up: &Vector3<f64>) -> Vec<[f64; 4]> {
         .collect()
 }
 
-fn extra_scale(k: usize, scale: DisplacementScale) -> f64 {
+/// Multiplier of torso extra column `k` (0-2 and 6: translation scale, else rotation scale).
+pub fn extra_scale(k: usize, scale: DisplacementScale) -> f64 {
     if matches!(k, 0..=2 | 6) {
         scale.translation
     } else {

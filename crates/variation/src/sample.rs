@@ -61,23 +61,60 @@ pub fn sequence_variations(
     s: usize,
     opts: &HmcOptions,
 ) -> Result<(Variations, Vec<ChainStats>)> {
+    let len = dec
+        .model
+        .parts
+        .first()
+        .and_then(|p| p.gpdm.seq_lens.get(s).copied())
+        .ok_or_else(|| Error::invalid(format!("no training sequence {s}")))?;
+    sequence_variations_len(dec, s, len, opts, 1)
+}
+
+/// `opts.n_samples` variations of `len` frames of training sequence `s` (started at its first
+/// latent point; `len` may exceed the sequence's length), every part
+/// sampled by `chains` independent chains (each `ceil(n / chains)` samples, its own burn-in).
+/// All (part, chain) pairs run as parallel tasks; chain `c` of part `k` is seeded with
+/// `mix(opts.seed, s + 1, k + 1 + c·2³²)` (chain 0: the single-chain seed) and the samples are
+/// concatenated by chain, so the result is the same for any number of threads.
+pub fn sequence_variations_len(
+    dec: &Decoder,
+    s: usize,
+    len: usize,
+    opts: &HmcOptions,
+    chains: usize,
+) -> Result<(Variations, Vec<ChainStats>)> {
     let model = dec.model;
     let info = model
         .sequences
         .get(s)
         .ok_or_else(|| Error::invalid(format!("no training sequence {s}")))?;
-    let per_part: Vec<Result<(Vec<DMatrix<f64>>, ChainStats)>> = dec
-        .predictors
+    if chains == 0 {
+        return Err(Error::invalid("at least one chain per part is needed"));
+    }
+    let per = opts.n_samples.div_ceil(chains);
+    let tasks: Vec<(usize, usize)> = (0..model.parts.len())
+        .flat_map(|k| (0..chains).map(move |c| (k, c)))
+        .collect();
+    let runs: Vec<Result<(Vec<DMatrix<f64>>, ChainStats)>> = tasks
         .par_iter()
-        .zip(model.parts.par_iter())
-        .enumerate()
-        .map(|(k, (pr, pm))| {
+        .map(|&(k, c)| {
+            let (pr, pm) = (&dec.predictors[k], &model.parts[k]);
             let x = pm.gpdm.sequence_latent(s).expect("index checked");
+            if len < 2 {
+                return Err(Error::invalid(format!(
+                    "{}: {len} frames requested, at least 2 are needed",
+                    info.name
+                )));
+            }
+            // Only the first point and the length are used (the chain starts from the mean
+            // prediction, eq. 8), so a longer motion than the training sequence is fine.
+            let template = DMatrix::from_fn(len, x.ncols(), |t, c| x[(t.min(x.nrows() - 1), c)]);
             let o = HmcOptions {
-                seed: mix(opts.seed, s as u64 + 1, k as u64 + 1),
+                n_samples: per,
+                seed: mix(opts.seed, s as u64 + 1, k as u64 + 1 + ((c as u64) << 32)),
                 ..opts.clone()
             };
-            let (trajs, res) = sample_trajectories(pr, &x, &o).map_err(|e| {
+            let (trajs, res) = sample_trajectories(pr, &template, &o).map_err(|e| {
                 Error::invalid(format!("{} part '{}': {e}", info.name, pm.part.name))
             })?;
             let stats = ChainStats {
@@ -90,14 +127,19 @@ pub fn sequence_variations(
             Ok((trajs, stats))
         })
         .collect();
-    let mut by_part = Vec::new();
+    let mut by_part: Vec<Vec<DMatrix<f64>>> = vec![Vec::new(); model.parts.len()];
     let mut stats = Vec::new();
-    for r in per_part {
+    for (r, &(k, _)) in runs.into_iter().zip(&tasks) {
         let (t, st) = r?;
-        by_part.push(t);
+        by_part[k].extend(t);
         stats.push(st);
     }
-    let n = by_part.iter().map(|t| t.len()).min().unwrap_or(0);
+    let n = by_part
+        .iter()
+        .map(|t| t.len())
+        .min()
+        .unwrap_or(0)
+        .min(opts.n_samples);
     Ok((
         (0..n)
             .map(|k| by_part.iter().map(|t| t[k].clone()).collect())

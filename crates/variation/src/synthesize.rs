@@ -2,7 +2,9 @@
 //! blends ([`crate::sample`]), decoded to meshes ([`crate::reconstruct`]), written as PLY
 //! sequences `<out>/<label>/var<k>/NNNNNN.ply`, and measured against their source
 //! ([`crate::metrics`]): the training sequence, or for a blend the non-linear mesh blend of the
-//! pair at that weight.
+//! pair at that weight. Two post-processes, on by default, follow the decoding: [`grounding`]
+//! (vertical) then [`footskate`] (horizontal), both driven by the DTW correspondence of each
+//! variation to its source.
 
 use std::path::Path;
 
@@ -14,6 +16,8 @@ use rand_chacha::ChaCha8Rng;
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 
+use crate::contacts::Contacts;
+use crate::footskate;
 use crate::grounding::{self, FloorContact};
 use crate::group::{blend_name, blend_sequences, Group};
 use crate::metrics::{self, Stats};
@@ -40,6 +44,17 @@ pub struct SynthConfig {
     /// Ground every variation on its source ([`crate::grounding`]); on by default.
     #[serde(default = "yes")]
     pub grounding: bool,
+    /// Pin planted feet by a horizontal root correction ([`crate::footskate`]), after
+    /// grounding; on by default. Needs the source's contact annotations.
+    #[serde(default = "yes")]
+    pub footskate: bool,
+    /// Weight λ of the correction's second differences ([`footskate::SMOOTHNESS`]).
+    #[serde(default = "footskate_smoothness")]
+    pub footskate_smoothness: f64,
+}
+
+fn footskate_smoothness() -> f64 {
+    footskate::SMOOTHNESS
 }
 
 fn yes() -> bool {
@@ -83,6 +98,21 @@ pub struct SequenceReport {
     pub ungrounded_penetration_m: Vec<f64>,
     #[serde(default)]
     pub ungrounded_floating_m: Vec<f64>,
+    /// Foot sliding before the foot-skating clean-up (after grounding; m per frame).
+    #[serde(default)]
+    pub raw_foot_sliding_m: Vec<Option<f64>>,
+    /// Foot sliding on annotated contacts ([`metrics::contact_sliding`]): variations after and
+    /// before the clean-up (the source's annotations at the DTW-matched frames), and the
+    /// source on its own annotations. Empty / None without annotations.
+    #[serde(default)]
+    pub contact_sliding_m: Vec<Option<f64>>,
+    #[serde(default)]
+    pub raw_contact_sliding_m: Vec<Option<f64>>,
+    #[serde(default)]
+    pub source_contact_sliding_m: Option<f64>,
+    /// Largest horizontal root correction of each variation by the clean-up (m).
+    #[serde(default)]
+    pub footskate_max_m: Vec<f64>,
 }
 
 /// Everything `hmc-sample` reports.
@@ -116,36 +146,57 @@ fn model_soles(model: &VariationModel) -> Vec<Vec<u32>> {
 const CONTACT_HEIGHT: f64 = 0.02;
 
 /// [`grounding::floor_contact`] of a variation against its source (lowest points of all
-/// vertices, DTW-matched frames).
+/// vertices, DTW-matched frames `matches`).
 fn floor_contact(
     v: &[Vec<Vector3<f64>>],
     source: &[Vec<Vector3<f64>>],
+    matches: &[f64],
     model: &VariationModel,
 ) -> FloorContact {
     grounding::floor_contact(
         &grounding::lowest(v, &[], &model.up),
         &grounding::lowest(source, &[], &model.up),
-        &grounding::correspondence(v, source, &model.template),
+        matches,
         CONTACT_HEIGHT,
     )
 }
 
-fn measure(
-    label: &str,
+/// One decoded variation with what the post-processes saw and did.
+struct Decoded {
+    meshes: Vec<Vec<Vector3<f64>>>,
+    /// DTW-matched source frame of every frame.
+    matches: Vec<f64>,
+    ungrounded: FloorContact,
+    /// Foot sliding before the clean-up (geometric, annotated).
+    raw_sliding: (Option<f64>, Option<f64>),
+    /// Contacts transferred from the source (None without annotations).
+    contacts: Option<Contacts>,
+    footskate_max: f64,
+}
+
+/// A sequence to synthesise: label, blend weight, latent variations, source frames, start
+/// pose and the source's contacts.
+struct Job {
+    label: String,
     blend: Option<f64>,
-    vars: &[Vec<Vec<Vector3<f64>>>],
-    ungrounded: &[FloorContact],
-    source: &[Vec<Vector3<f64>>],
-    model: &VariationModel,
-) -> SequenceReport {
+    vars: Variations,
+    source: Vec<Vec<Vector3<f64>>>,
+    start: mesh_core::rigid::RigidMotion,
+    contacts: Option<Contacts>,
+}
+
+fn measure(job: &Job, decoded: &[Decoded], model: &VariationModel) -> SequenceReport {
+    let (label, blend, source) = (&job.label, job.blend, &job.source);
+    let vars: Vec<&Vec<Vec<Vector3<f64>>>> = decoded.iter().map(|d| &d.meshes).collect();
     let edges = metrics::edges(&model.faces);
     let soles = model_soles(model);
     let slide =
         |f: &[Vec<Vector3<f64>>]| metrics::foot_sliding(f, &soles, &model.up, CONTACT_HEIGHT);
     let source_pose = metrics::normalise(source, &model.template);
-    let per: Vec<(f64, f64, f64, Option<f64>, f64, f64, FloorContact)> = vars
+    let per: Vec<(f64, f64, f64, Option<f64>, f64, f64, FloorContact)> = decoded
         .par_iter()
-        .map(|v| {
+        .map(|d| {
+            let v = &d.meshes;
             let pose = metrics::normalise(v, &model.template);
             (
                 metrics::mean_vertex_distance(v, source),
@@ -154,7 +205,7 @@ fn measure(
                 slide(v),
                 metrics::mean_vertex_distance(&pose, &source_pose),
                 metrics::nearest_frame_distance(&pose, &source_pose, 2000),
-                floor_contact(v, source, model),
+                floor_contact(v, source, &d.matches, model),
             )
         })
         .collect();
@@ -164,6 +215,10 @@ fn measure(
             pair.push(metrics::mean_vertex_distance(&vars[i], &vars[j]));
         }
     }
+    let contact_sliding = |f: &[Vec<Vector3<f64>>], c: &Option<Contacts>| {
+        c.as_ref()
+            .and_then(|c| metrics::contact_sliding(f, &soles, c, &model.up))
+    };
     SequenceReport {
         label: label.to_string(),
         blend,
@@ -179,8 +234,16 @@ fn measure(
         source_foot_sliding_m: slide(source),
         penetration_m: per.iter().map(|p| p.6.penetration).collect(),
         floating_m: per.iter().map(|p| p.6.floating).collect(),
-        ungrounded_penetration_m: ungrounded.iter().map(|c| c.penetration).collect(),
-        ungrounded_floating_m: ungrounded.iter().map(|c| c.floating).collect(),
+        ungrounded_penetration_m: decoded.iter().map(|d| d.ungrounded.penetration).collect(),
+        ungrounded_floating_m: decoded.iter().map(|d| d.ungrounded.floating).collect(),
+        raw_foot_sliding_m: decoded.iter().map(|d| d.raw_sliding.0).collect(),
+        contact_sliding_m: decoded
+            .iter()
+            .map(|d| contact_sliding(&d.meshes, &d.contacts))
+            .collect(),
+        raw_contact_sliding_m: decoded.iter().map(|d| d.raw_sliding.1).collect(),
+        source_contact_sliding_m: contact_sliding(source, &job.contacts),
+        footskate_max_m: decoded.iter().map(|d| d.footskate_max).collect(),
     }
 }
 
@@ -210,21 +273,16 @@ pub fn run(
         pools.push(v);
         chains.extend(st);
     }
-    let mut jobs: Vec<(
-        String,
-        Option<f64>,
-        Variations,
-        Vec<Vec<Vector3<f64>>>,
-        mesh_core::rigid::RigidMotion,
-    )> = Vec::new();
+    let mut jobs: Vec<Job> = Vec::new();
     for (s, info) in model.sequences.iter().enumerate() {
-        jobs.push((
-            info.name.clone(),
-            info.blend,
-            pools[s].clone(),
-            group.sequences[s].motion.world_frames(),
-            info.start_pose,
-        ));
+        jobs.push(Job {
+            label: info.name.clone(),
+            blend: info.blend,
+            vars: pools[s].clone(),
+            source: group.sequences[s].motion.world_frames(),
+            start: info.start_pose,
+            contacts: group.sequences[s].contacts.clone(),
+        });
     }
     if !cfg.blends.is_empty() {
         let (a, b) = model
@@ -240,13 +298,14 @@ pub fn run(
                 w,
                 &group.up,
             )?;
-            jobs.push((
-                blend_name(w),
-                Some(w),
+            jobs.push(Job {
+                label: blend_name(w),
+                blend: Some(w),
                 vars,
-                truth.motion.world_frames(),
-                model.sequences[a].start_pose,
-            ));
+                source: truth.motion.world_frames(),
+                start: model.sequences[a].start_pose,
+                contacts: truth.contacts,
+            });
         }
     }
     let seconds_sampling = clock.elapsed().as_secs_f64();
@@ -254,9 +313,27 @@ pub fn run(
     let mut sequences = Vec::new();
     // Ground on the lowest point of the whole body: sampled feet often point their toes through
     // the floor while the template soles sit at the right height (h15, render check).
-    let soles: Vec<u32> = Vec::new();
-    for (j, (label, blend, vars, source, start)) in jobs.iter().enumerate() {
-        let decoded: Vec<(Vec<Vec<Vector3<f64>>>, FloorContact)> = vars
+    let ground_soles: Vec<u32> = Vec::new();
+    let all_soles = model_soles(model);
+    let feet: Option<[Vec<u32>; 2]> = match all_soles.as_slice() {
+        [l, r] if !l.is_empty() && !r.is_empty() => Some([l.clone(), r.clone()]),
+        _ => None,
+    };
+    if cfg.footskate && feet.is_none() {
+        notes.push("foot-skating clean-up skipped: no left and right soles found".into());
+    }
+    for (j, job) in jobs.iter().enumerate() {
+        if cfg.footskate && job.contacts.is_none() {
+            notes.push(format!(
+                "{}: the source has no contact annotations: foot-skating clean-up skipped",
+                job.label
+            ));
+        }
+        let slide = |f: &[Vec<Vector3<f64>>]| {
+            metrics::foot_sliding(f, &all_soles, &model.up, CONTACT_HEIGHT)
+        };
+        let decoded: Vec<(Decoded, Vec<String>)> = job
+            .vars
             .par_iter()
             .enumerate()
             .map(|(k, latents)| {
@@ -264,30 +341,69 @@ pub fn run(
                     ChaCha8Rng::seed_from_u64(mix(cfg.seed, 0xDEC0DE + j as u64, k as u64));
                 let mut m = dec.decode(
                     latents,
-                    start,
+                    &job.start,
                     cfg.assembly,
                     cfg.sample_poses.then_some(&mut rng),
                 )?;
-                let before = floor_contact(&m, source, model);
+                // Rigid shifts of the variation leave the (pose-normalised) DTW unchanged.
+                let matches = grounding::correspondence(&m, &job.source, &model.template);
+                let ungrounded = floor_contact(&m, &job.source, &matches, model);
                 if cfg.grounding {
-                    grounding::ground(
+                    grounding::ground_matched(
                         &mut m,
-                        source,
-                        &soles,
-                        &model.template,
+                        &job.source,
+                        &matches,
+                        &ground_soles,
                         &model.up,
                         grounding::SIGMA_FRAMES,
                     );
                 }
-                Ok((m, before))
+                let contacts = job
+                    .contacts
+                    .as_ref()
+                    .map(|c| footskate::transfer_contacts(c, &matches));
+                let raw_sliding = (
+                    slide(&m),
+                    match (&contacts, &feet) {
+                        (Some(c), Some(f)) => metrics::contact_sliding(&m, f, c, &model.up),
+                        _ => None,
+                    },
+                );
+                let mut notes = Vec::new();
+                let mut footskate_max = 0.0;
+                if let (true, Some(c), Some(f)) = (cfg.footskate, &contacts, &feet) {
+                    let d = footskate::clean(
+                        &mut m,
+                        f,
+                        c,
+                        &model.up,
+                        cfg.footskate_smoothness,
+                        &mut notes,
+                    )?;
+                    footskate_max = d.iter().map(|v| v.norm()).fold(0.0, f64::max);
+                }
+                Ok((
+                    Decoded {
+                        meshes: m,
+                        matches,
+                        ungrounded,
+                        raw_sliding,
+                        contacts,
+                        footskate_max,
+                    },
+                    notes,
+                ))
             })
             .collect::<Result<_>>()?;
-        let (meshes, ungrounded): (Vec<_>, Vec<_>) = decoded.into_iter().unzip();
-        for (k, m) in meshes.iter().enumerate() {
-            MeshSequence::new(model.faces.clone(), m.clone())
-                .write_dir(out.join(label).join(format!("var{k}")))?;
+        let (decoded, var_notes): (Vec<Decoded>, Vec<Vec<String>>) = decoded.into_iter().unzip();
+        for (k, n) in var_notes.into_iter().enumerate() {
+            notes.extend(n.into_iter().map(|n| format!("{} var{k}: {n}", job.label)));
         }
-        sequences.push(measure(label, *blend, &meshes, &ungrounded, source, model));
+        for (k, d) in decoded.iter().enumerate() {
+            MeshSequence::new(model.faces.clone(), d.meshes.clone())
+                .write_dir(out.join(&job.label).join(format!("var{k}")))?;
+        }
+        sequences.push(measure(job, &decoded, model));
     }
     let rates: Vec<f64> = chains.iter().map(|c| c.accept_rate).collect();
     Ok(SynthReport {

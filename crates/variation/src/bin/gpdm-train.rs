@@ -2,7 +2,7 @@ use std::path::PathBuf;
 use std::process::ExitCode;
 
 use clap::Parser;
-use gpdm::optim::Schedule;
+use gpdm::optim::{Exit, Schedule};
 use mesh_core::artifact::Artifact;
 use mesh_core::cli::{run_stage, CommonArgs};
 use variation::group::Group;
@@ -30,12 +30,15 @@ struct Args {
     /// it 1/β4 collapses on some parts and HMC returns copies of the source)
     #[arg(long, default_value_t = variation::train::DYN_NOISE_FLOOR)]
     dyn_noise_floor: f64,
-    /// Alternating rounds of (X, α) and β-only L-BFGS phases
-    #[arg(long, default_value_t = 10)]
+    /// Alternating rounds of (X, α) and β-only L-BFGS phases (0 = one joint fit, the default)
+    #[arg(long, default_value_t = 0)]
     rounds: usize,
-    /// L-BFGS iterations per phase
+    /// L-BFGS iterations per phase (with --rounds > 0)
     #[arg(long, default_value_t = 200)]
     iters: usize,
+    /// L-BFGS iteration limit of the joint fit (it normally stops by convergence first)
+    #[arg(long, default_value_t = 10000)]
+    max_iter: usize,
     /// Output artifact (kind variation-model)
     #[arg(short, long)]
     out: PathBuf,
@@ -53,10 +56,13 @@ fn main() -> ExitCode {
         cfg.gpdm.latent_dim = args.latent_dim;
         cfg.gpdm.pose_noise_floor = (args.noise_floor > 0.0).then_some(args.noise_floor);
         cfg.gpdm.dyn_noise_floor = (args.dyn_noise_floor > 0.0).then_some(args.dyn_noise_floor);
-        cfg.options.schedule = Schedule::Alternate {
-            rounds: args.rounds,
-            iters: args.iters,
-        };
+        if args.rounds > 0 {
+            cfg.options.schedule = Schedule::Alternate {
+                rounds: args.rounds,
+                iters: args.iters,
+            };
+        }
+        cfg.options.lbfgs.max_iter = args.max_iter;
         let (model, reports) = train(&group, &cfg)?;
         for r in &reports {
             mesh_core::info!(
@@ -68,6 +74,14 @@ fn main() -> ExitCode {
                 r.report.final_value,
                 r.seconds
             );
+            if let Some(e) = r
+                .report
+                .exits
+                .last()
+                .filter(|e| !matches!(e, Exit::GradientTolerance | Exit::ValueTolerance))
+            {
+                mesh_core::warn!("{}: L-BFGS stopped by {e:?}, not by convergence", r.part);
+            }
             if r.report.max_jitter > 0.0 {
                 mesh_core::warn!(
                     "{}: Cholesky needed jitter {:e} at the optimum",
@@ -90,6 +104,8 @@ fn main() -> ExitCode {
                         "part": r.part, "frames": r.frames, "pose_dim": r.pose_dim, "seconds": r.seconds,
                         "alpha": r.alpha, "beta": r.beta, "initial_value": r.report.initial_value,
                         "final_value": r.report.final_value, "evaluations": r.report.evaluations,
+                        "iterations": r.report.history.len() - 1,
+                        "beta_log_sd": cfg.gpdm.beta_log_sd, "fixed_latent_scale": cfg.gpdm.fixed_latent_scale,
                         "exits": r.report.exits, "max_jitter": r.report.max_jitter,
                     })
                 })

@@ -28,8 +28,8 @@ struct Args {
     #[arg(short, long, default_value_t = 5)]
     n: usize,
     /// Blend weights w* in [0, 1] to synthesise, comma-separated (empty: none)
-    #[arg(long, value_delimiter = ',', default_value = "0.25,0.75")]
-    blends: Vec<f64>,
+    #[arg(long, default_value = "0.25,0.75", value_parser = parse_weights)]
+    blends: Weights,
     /// Draw poses from the predictive distribution (eq. 11) instead of its mean (eq. 12)
     #[arg(long)]
     sample_poses: bool,
@@ -49,12 +49,36 @@ struct Args {
     /// time, so that its soles follow the source's at the DTW-matched frame)
     #[arg(long)]
     no_grounding: bool,
+    /// Do not clean up foot skating (by default each frame is shifted horizontally, smoothly in
+    /// time, so that feet planted in the source at the DTW-matched frame stay put)
+    #[arg(long)]
+    no_footskate: bool,
+    /// Smoothness λ of the foot-skating correction (weight of its second differences against
+    /// the contact residuals; larger: smoother root, feet pinned less tightly)
+    #[arg(long, default_value_t = variation::footskate::SMOOTHNESS)]
+    footskate_smoothness: f64,
     /// Output folder: <out>/<sequence>/var<k>/NNNNNN.ply
     #[arg(short, long)]
     out: PathBuf,
     /// Statistics (JSON)
     #[arg(long)]
     report: Option<PathBuf>,
+}
+
+/// Comma-separated weights; the empty string is an empty list.
+#[derive(Clone, Debug)]
+struct Weights(Vec<f64>);
+
+fn parse_weights(s: &str) -> Result<Weights, String> {
+    s.split(',')
+        .map(str::trim)
+        .filter(|w| !w.is_empty())
+        .map(|w| {
+            w.parse::<f64>()
+                .map_err(|_| format!("'{w}' is not a number"))
+        })
+        .collect::<Result<_, _>>()
+        .map(Weights)
 }
 
 fn main() -> ExitCode {
@@ -65,7 +89,7 @@ fn main() -> ExitCode {
         let group = Group::load(&args.group)?;
         let cfg = SynthConfig {
             n: args.n,
-            blends: args.blends.clone(),
+            blends: args.blends.0.clone(),
             seed: args.common.seed,
             sample_poses: args.sample_poses,
             assembly: if args.average {
@@ -77,6 +101,8 @@ fn main() -> ExitCode {
             thin: args.thin,
             target_accept: args.target_accept,
             grounding: !args.no_grounding,
+            footskate: !args.no_footskate,
+            footskate_smoothness: args.footskate_smoothness,
         };
         let report = run(&model, &group, &cfg, &args.out)?;
         for n in &report.notes {

@@ -1,0 +1,198 @@
+//! The bulk decoding path (`Decoder::decode_average_into`, kernel-basis predictors) against
+//! `Decoder::decode` with `Assembly::Average`, and multi-chain sampling determinism.
+
+use gpdm::hmc::HmcOptions;
+use gpdm::{Gpdm, GpdmConfig};
+use mesh_core::rigid::RigidMotion;
+use nalgebra::{DMatrix, Rotation3, Vector3};
+use variation::group::PartDef;
+use variation::part_data::{DisplacementScale, TORSO_EXTRA};
+use variation::reconstruct::{Assembly, DecodeScratch, Decoder};
+use variation::sample::sequence_variations_len;
+use variation::train::{PartModel, SequenceInfo, VariationModel};
+
+/// A 162-vertex sphere in two overlapping parts (upper = torso, lower = child), two 30-frame
+/// sequences in which the child also rotates, so that the band alignment is not trivial.
+fn model() -> VariationModel {
+    let mesh = mesh_core::shapes::icosphere(2);
+    let n = mesh.vertices.len() as u32;
+    let upper: Vec<u32> = (0..n)
+        .filter(|&v| mesh.vertices[v as usize].y > -0.3)
+        .collect();
+    let lower: Vec<u32> = (0..n)
+        .filter(|&v| mesh.vertices[v as usize].y < 0.1)
+        .collect();
+    let pose = |t: usize, s: usize, p: &Vector3<f64>, child: bool| {
+        let ph = 0.25 * t as f64 * (1.0 + 0.3 * s as f64);
+        let q = p * (1.0 + 0.05 * (ph + 3.0 * p.x).sin());
+        if child {
+            Rotation3::from_euler_angles(0.2 * ph.sin(), 0.0, 0.1 * ph.cos()) * q
+                + Vector3::new(0.01 * ph.cos(), 0.0, 0.0)
+        } else {
+            q
+        }
+    };
+    let rows = |verts: &[u32], child: bool, s: usize| {
+        let extra = if child { 0 } else { TORSO_EXTRA };
+        DMatrix::from_fn(30, 3 * verts.len() + extra, |t, c| {
+            if c < 3 * verts.len() {
+                pose(t, s, &mesh.vertices[verts[c / 3] as usize], child)[c % 3]
+            } else {
+                let ph = 0.25 * t as f64;
+                [0.02, 0.0, 0.03, 0.0, 0.05, 0.0, 1.0, 0.05, 1.0, 0.0][c - 3 * verts.len()]
+                    + 0.01 * (ph + c as f64).sin()
+            }
+        })
+    };
+    let part = |name: &str, parent, vertices: &[u32], child| {
+        let seqs = vec![rows(vertices, child, 0), rows(vertices, child, 1)];
+        let mut gpdm = Gpdm::new(&seqs, GpdmConfig::default()).unwrap();
+        gpdm.alpha = [0.01, 0.5, 1e4];
+        gpdm.beta = [1.0, 1.0, 0.1, 1e3];
+        PartModel {
+            part: PartDef {
+                name: name.into(),
+                parent,
+                vertices: vertices.to_vec(),
+            },
+            reference: vertices
+                .iter()
+                .map(|&v| mesh.vertices[v as usize])
+                .collect(),
+            gpdm,
+        }
+    };
+    let info = |name: &str| SequenceInfo {
+        name: name.into(),
+        blend: None,
+        start_pose: RigidMotion::new(
+            Rotation3::from_euler_angles(0.0, 0.3, 0.0),
+            Vector3::new(0.5, 1.0, -0.2),
+        ),
+        contacts: None,
+    };
+    VariationModel {
+        group: "test".into(),
+        subject: "sphere".into(),
+        fps: 25.0,
+        up: Vector3::y(),
+        template: mesh.vertices.clone(),
+        faces: mesh.faces.clone(),
+        parts: vec![
+            part("upper", None, &upper, false),
+            part("lower", Some(0), &lower, true),
+        ],
+        scale: DisplacementScale {
+            translation: 2.0,
+            rotation: 3.0,
+        },
+        sequences: vec![info("a"), info("b")],
+        pair: Some((0, 1)),
+    }
+}
+
+fn max_dev(fast: &[Vector3<f64>], old: &[Vec<Vector3<f64>>]) -> f64 {
+    old.iter()
+        .flatten()
+        .zip(fast)
+        .map(|(a, b)| (a - b).abs().max())
+        .fold(0.0, f64::max)
+}
+
+#[test]
+fn fast_average_decoding_matches_decode() {
+    let m = model();
+    let nv = m.template.len();
+    let start = m.sequences[1].start_pose;
+    // Latents: the training trajectories, and the same scaled (off the training points).
+    let lat: Vec<Vec<DMatrix<f64>>> = [1.0, 1.1]
+        .iter()
+        .map(|f| m.latents(1).iter().map(|x| x * *f).collect())
+        .collect();
+    let exact = Decoder::new(&m, &mut Vec::new()).unwrap();
+    let mut scratch = DecodeScratch::default();
+    let mut out = vec![Vector3::zeros(); 30 * nv];
+    for x in &lat {
+        let old = exact
+            .decode::<rand_chacha::ChaCha8Rng>(x, &start, Assembly::Average, None)
+            .unwrap();
+        exact
+            .decode_average_into(x, &start, &mut scratch, &mut out)
+            .unwrap();
+        let dev = max_dev(&out, &old);
+        assert!(dev < 1e-10, "exact predictors: deviation {dev}");
+        // The motion is not trivial: bodies move between frames.
+        assert!((old[0][0] - old[29][0]).norm() > 1e-3);
+    }
+    // Kernel basis: close to the exact decoding (the certified part bound is per coordinate
+    // before assembly; the body stays within a small multiple of it).
+    let (fast, info) = Decoder::with_pose_basis(&m, 1e-9, &mut Vec::new()).unwrap();
+    assert!(info.iter().all(|&(r, b)| r >= 1 && b <= 1e-9));
+    for x in &lat {
+        let old = exact
+            .decode::<rand_chacha::ChaCha8Rng>(x, &start, Assembly::Average, None)
+            .unwrap();
+        fast.decode_average_into(x, &start, &mut scratch, &mut out)
+            .unwrap();
+        let dev = max_dev(&out, &old);
+        assert!(dev < 1e-6, "kernel basis: deviation {dev}");
+    }
+    // Many at once, in parallel: the same bodies as one by one.
+    let got = std::sync::Mutex::new(vec![Vec::new(); lat.len()]);
+    exact
+        .decode_average_many(&lat, &start, |k, f| got.lock().unwrap()[k] = f.to_vec())
+        .unwrap();
+    for (k, x) in lat.iter().enumerate() {
+        exact
+            .decode_average_into(x, &start, &mut scratch, &mut out)
+            .unwrap();
+        assert_eq!(got.lock().unwrap()[k], out);
+    }
+    // Bad input: wrong part count or output size.
+    assert!(exact
+        .decode_average_into(&lat[0][..1], &start, &mut scratch, &mut out)
+        .is_err());
+    assert!(exact
+        .decode_average_into(&lat[0], &start, &mut scratch, &mut out[1..])
+        .is_err());
+}
+
+#[test]
+fn multi_chain_variations_are_reproducible_for_any_thread_count() {
+    let m = model();
+    let dec = Decoder::new(&m, &mut Vec::new()).unwrap();
+    let opts = HmcOptions {
+        n_samples: 5,
+        burn_in: 6,
+        thin: 1,
+        leapfrog_steps: 3,
+        seed: 11,
+        ..Default::default()
+    };
+    let run = |threads: usize, opts: &HmcOptions| {
+        rayon::ThreadPoolBuilder::new()
+            .num_threads(threads)
+            .build()
+            .unwrap()
+            .install(|| sequence_variations_len(&dec, 0, 40, opts, 2).unwrap())
+    };
+    let (a, stats) = run(1, &opts);
+    let (b, _) = run(2, &opts);
+    assert_eq!(a, b, "1 vs 2 threads");
+    assert_eq!(a.len(), 5);
+    assert_eq!(stats.len(), 4, "2 parts x 2 chains");
+    assert!(a.iter().all(|v| v.len() == 2 && v[0].shape() == (40, 3)));
+    // Samples start at the sequence's first latent point and differ from one another.
+    let x1 = m.parts[0]
+        .gpdm
+        .sequence_latent(0)
+        .unwrap()
+        .row(0)
+        .into_owned();
+    assert!(a.iter().all(|v| v[0].row(0) == x1));
+    assert!((&a[0][0] - &a[3][0]).norm() > 1e-6, "chains 0 and 1 differ");
+    let (c, _) = run(2, &HmcOptions { seed: 12, ..opts });
+    assert_ne!(a, c, "another seed, other samples");
+    assert!(sequence_variations_len(&dec, 0, 1, &HmcOptions::default(), 1).is_err());
+    assert!(sequence_variations_len(&dec, 0, 40, &HmcOptions::default(), 0).is_err());
+}
