@@ -18,6 +18,7 @@
 //!   ([`hmc`]); k(x, x) in eqs. 10 and 13 includes the noise term.
 //! - No per-dimension output scaling W (the paper does not use it).
 
+pub mod ancestral;
 pub mod blend;
 pub mod error;
 pub mod hmc;

@@ -111,22 +111,9 @@ fn lbfgs_reports_unevaluable_start() {
     assert_eq!(r.exit, Exit::StartFailed);
 }
 
-fn rotation_model() -> (Gpdm, Vec<DMatrix<f64>>, gpdm::optim::TrainReport) {
-    let omega = std::f64::consts::TAU / 16.0;
-    let (c1, y1) = common::rotation_system(40, omega, 0.0, 0.01, 1);
-    let (c2, y2) = common::rotation_system(30, omega, 1.0, 0.01, 2);
-    let config = GpdmConfig {
-        latent_dim: 2,
-        ..GpdmConfig::default()
-    };
-    let mut m = Gpdm::new(&[y1, y2], config).unwrap();
-    let rep = train(&mut m, &TrainOptions::default()).unwrap();
-    (m, vec![c1, c2], rep)
-}
-
 #[test]
 fn learned_dynamics_predict_the_next_state_of_a_rotation() {
-    let (m, clean, rep) = rotation_model();
+    let (m, clean, rep) = common::rotation_model();
     eprintln!(
         "objective {} -> {} in {} evaluations, exits {:?}",
         rep.initial_value, rep.final_value, rep.evaluations, rep.exits
@@ -222,7 +209,7 @@ fn both_schedules_move_beta_and_lower_the_objective() {
 
 #[test]
 fn pose_reconstruction_interpolates_training_poses() {
-    let (m, _, _) = rotation_model();
+    let (m, _, _) = common::rotation_model();
     let pred = Predictor::new(&m).unwrap();
     let mean = pred.pose_mean(&m.x).unwrap();
     let mut y = m.y.clone();
@@ -246,7 +233,7 @@ fn pose_reconstruction_interpolates_training_poses() {
 
 #[test]
 fn hmc_variations_stay_near_the_cycle_and_differ() {
-    let (m, clean, _) = rotation_model();
+    let (m, clean, _) = common::rotation_model();
     let pred = Predictor::new(&m).unwrap();
     let template = m.sequence_latent(0).unwrap();
     let opts = HmcOptions {
@@ -320,7 +307,7 @@ fn model_serialises_round_trip_and_validates_input() {
 
 #[test]
 fn pose_basis_decoder_matches_exact_decoder() {
-    let (m, _, _) = rotation_model();
+    let (m, _, _) = common::rotation_model();
     let exact = Predictor::new(&m).unwrap();
     let xs = m.x.rows(0, 12).into_owned() * 1.1;
     let want = exact.pose_mean(&xs).unwrap();

@@ -33,3 +33,18 @@ pub fn rotation_system(
     let noisy = &clean + randn(len, 10, seed) * noise;
     (clean, noisy)
 }
+
+/// A GPDM (latent dimension 2, default training) of two noisy rotation sequences (40 and 30
+/// frames, 16 frames per turn); returns the model, the clean poses and the training report.
+pub fn rotation_model() -> (gpdm::Gpdm, Vec<DMatrix<f64>>, gpdm::optim::TrainReport) {
+    let omega = std::f64::consts::TAU / 16.0;
+    let (c1, y1) = rotation_system(40, omega, 0.0, 0.01, 1);
+    let (c2, y2) = rotation_system(30, omega, 1.0, 0.01, 2);
+    let config = gpdm::GpdmConfig {
+        latent_dim: 2,
+        ..gpdm::GpdmConfig::default()
+    };
+    let mut m = gpdm::Gpdm::new(&[y1, y2], config).unwrap();
+    let rep = gpdm::optim::train(&mut m, &gpdm::optim::TrainOptions::default()).unwrap();
+    (m, vec![c1, c2], rep)
+}

@@ -1,0 +1,111 @@
+//! Ancestral sampling of the one-step-predictive trajectory density, checked against the
+//! predictive itself and against the HMC sampler, which targets the same density.
+
+mod common;
+
+use gpdm::ancestral::sample_trajectories_ancestral;
+use gpdm::hmc::{sample_trajectories, HmcOptions};
+use gpdm::predict::Predictor;
+use nalgebra::DMatrix;
+
+/// Per coordinate (mean, variance) of row `t` over the trajectories.
+fn moments(trajs: &[DMatrix<f64>], t: usize) -> Vec<(f64, f64)> {
+    let n = trajs.len() as f64;
+    (0..trajs[0].ncols())
+        .map(|c| {
+            let mean = trajs.iter().map(|x| x[(t, c)]).sum::<f64>() / n;
+            let var = trajs
+                .iter()
+                .map(|x| (x[(t, c)] - mean).powi(2))
+                .sum::<f64>()
+                / (n - 1.0);
+            (mean, var)
+        })
+        .collect()
+}
+
+#[test]
+fn first_step_follows_the_one_step_predictive() {
+    let (m, _, _) = common::rotation_model();
+    let pred = Predictor::new(&m).unwrap();
+    let x1: Vec<f64> = m
+        .sequence_latent(0)
+        .unwrap()
+        .row(5)
+        .iter()
+        .copied()
+        .collect();
+    let (mu, var) = pred.dynamics(&x1);
+    let n = 4000;
+    let trajs = sample_trajectories_ancestral(&pred, &x1, 2, n, 11).unwrap();
+    for t in &trajs {
+        assert_eq!(t.row(0).iter().copied().collect::<Vec<_>>(), x1);
+    }
+    let se = (var / n as f64).sqrt();
+    for (c, (mean, v)) in moments(&trajs, 1).into_iter().enumerate() {
+        assert!(
+            (mean - mu[c]).abs() < 4.0 * se,
+            "mean {mean} vs {} (se {se})",
+            mu[c]
+        );
+        // Sample variance of n normal draws: relative sd sqrt(2/n) = 2.2 %.
+        assert!((v / var - 1.0).abs() < 0.09, "variance {v} vs {var}");
+    }
+}
+
+#[test]
+fn hmc_and_ancestral_sampling_agree_on_the_trajectory_density() {
+    let (m, _, _) = common::rotation_model();
+    let pred = Predictor::new(&m).unwrap();
+    let template = m.sequence_latent(0).unwrap().rows(0, 6).into_owned();
+    let x1: Vec<f64> = template.row(0).iter().copied().collect();
+    let exact = sample_trajectories_ancestral(&pred, &x1, 6, 4000, 5).unwrap();
+    let opts = HmcOptions {
+        n_samples: 2000,
+        burn_in: 300,
+        thin: 5,
+        leapfrog_steps: 10,
+        seed: 9,
+        ..Default::default()
+    };
+    let (chain, res) = sample_trajectories(&pred, &template, &opts).unwrap();
+    assert!(res.accept_rate > 0.3, "acceptance {}", res.accept_rate);
+    // The spread grows along the trajectory; compare the last point, where the two samplers
+    // would differ most if the HMC energy and the ancestral draws disagreed.
+    let (a, b) = (moments(&exact, 5), moments(&chain, 5));
+    for ((ma, va), (mb, vb)) in a.iter().zip(&b) {
+        let sd = va.sqrt();
+        eprintln!(
+            "last point: ancestral {ma:.4} ± {sd:.4}, HMC {mb:.4} ± {:.4}",
+            vb.sqrt()
+        );
+        assert!((ma - mb).abs() < 0.15 * sd, "means {ma} vs {mb} (sd {sd})");
+        assert!((vb / va - 1.0).abs() < 0.25, "variances {va} vs {vb}");
+    }
+}
+
+#[test]
+fn same_seed_same_trajectories_on_any_number_of_threads() {
+    let (m, _, _) = common::rotation_model();
+    let pred = Predictor::new(&m).unwrap();
+    let x1: Vec<f64> = m
+        .sequence_latent(1)
+        .unwrap()
+        .row(0)
+        .iter()
+        .copied()
+        .collect();
+    let run = |threads: usize, seed: u64| {
+        rayon::ThreadPoolBuilder::new()
+            .num_threads(threads)
+            .build()
+            .unwrap()
+            .install(|| sample_trajectories_ancestral(&pred, &x1, 30, 8, seed).unwrap())
+    };
+    let one = run(1, 3);
+    assert_eq!(one, run(2, 3));
+    assert_ne!(one, run(2, 4));
+    assert!(one.windows(2).all(|w| w[0] != w[1]), "trajectories repeat");
+    assert!(sample_trajectories_ancestral(&pred, &x1, 1, 8, 3).is_err());
+    assert!(sample_trajectories_ancestral(&pred, &x1[..1], 30, 8, 3).is_err());
+}
