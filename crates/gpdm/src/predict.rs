@@ -29,9 +29,9 @@ pub struct Predictor {
     /// K_Y⁻¹ Y (N × D), Y centred; or K_Y⁻¹ U_r Λ_r^½ (N × r) with a pose basis; or the
     /// eigenvectors Q_R (N × R) of K_Y with a kernel basis.
     a_y: Mat<f64>,
-    /// Optional basis B, stored D × r (column-major, the layout the bulk GEMM of
-    /// [`Predictor::pose_mean_cols`] reads), so that μ_Y = ȳ + B (a_yᵀ k_Y): the pose basis
-    /// V_r, or `(K_Y⁻¹ Y)ᵀ Q_R` for a kernel basis.
+    /// Optional basis B with the mean appended, `[B | ȳ]` stored D × (r+1) (column-major, the
+    /// layout the bulk GEMM of [`Predictor::pose_mean_cols`] reads), so that
+    /// μ_Y = ȳ + B (a_yᵀ k_Y): B is the pose basis V_r, or `(K_Y⁻¹ Y)ᵀ Q_R` for a kernel basis.
     basis: Option<Mat<f64>>,
     /// With a kernel basis ([`Predictor::with_kernel_basis`]): `max_j ‖(K_Y⁻¹ Y)_j‖`.
     basis_amax: Option<f64>,
@@ -107,7 +107,10 @@ impl Predictor {
         // U_r Λ_r^½ (N × r) and V_rᵀ = Λ_r^-½ U_rᵀ Y (r × D).
         let us = Mat::from_fn(n, r, |i, c| eig.eigenvectors[(i, order[c])] * lam[c].sqrt());
         let ut = Mat::from_fn(r, n, |c, i| eig.eigenvectors[(i, order[c])] / lam[c].sqrt());
-        p.basis = Some(mul(ut.as_ref(), view(&model.y)).transpose().to_owned());
+        p.basis = Some(with_mean_col(
+            mul(ut.as_ref(), view(&model.y)).transpose(),
+            &model.y_mean,
+        ));
         p.a_y = p.chol_y.solve(us.as_ref());
         let rms = (discarded.max(0.0) / (n * model.y.ncols()) as f64).sqrt();
         Ok((p, r, rms))
@@ -164,7 +167,10 @@ impl Predictor {
         }
         let r = r.max(1);
         let q = Mat::from_fn(n, r, |i, c| eig.eigenvectors[(i, order[c])]);
-        p.basis = Some(mul(p.a_y.as_ref().transpose(), q.as_ref()));
+        p.basis = Some(with_mean_col(
+            mul(p.a_y.as_ref().transpose(), q.as_ref()).as_ref(),
+            &p.y_mean,
+        ));
         p.a_y = q;
         p.basis_amax = Some(amax);
         Ok((p, r, bound))
@@ -184,7 +190,7 @@ impl Predictor {
 
     /// Rank of the pose basis, if any.
     pub fn basis_rank(&self) -> Option<usize> {
-        self.basis.as_ref().map(|b| b.ncols())
+        self.basis.as_ref().map(|b| b.ncols() - 1)
     }
 
     /// Eq. 12 for the rows of `xs` (T × d) written as the columns of `out` (D × T column-major,
@@ -203,25 +209,43 @@ impl Predictor {
         }
         let mut out = MatMut::from_column_major_slice_mut(out, self.pose_dim(), t);
         let kstar = self.pose_cross(xs); // N × T
+        if let Some(b) = &self.basis {
+            // [B | ȳ] · [coef; 1ᵀ]: the mean rides in the GEMM, so the D × T output is written
+            // once (the separate fill pass cost as much as the GEMM: the output is memory-bound).
+            let r = b.ncols() - 1;
+            let mut coef = Mat::<f64>::zeros(r + 1, t);
+            matmul(
+                coef.as_mut().subrows_mut(0, r),
+                Accum::Replace,
+                self.a_y.as_ref().transpose(),
+                kstar.as_ref(),
+                1.0,
+                Par::Seq,
+            );
+            coef.as_mut().row_mut(r).fill(1.0);
+            matmul(
+                out,
+                Accum::Replace,
+                b.as_ref(),
+                coef.as_ref(),
+                1.0,
+                Par::Seq,
+            );
+            return Ok(());
+        }
         for j in 0..t {
             for (o, &m) in out.rb_mut().col_mut(j).iter_mut().zip(self.y_mean.iter()) {
                 *o = m;
             }
         }
-        match &self.basis {
-            Some(b) => {
-                let coef = mul(self.a_y.as_ref().transpose(), kstar.as_ref()); // r × T
-                matmul(out, Accum::Add, b.as_ref(), coef.as_ref(), 1.0, Par::Seq);
-            }
-            None => matmul(
-                out,
-                Accum::Add,
-                self.a_y.as_ref().transpose(),
-                kstar.as_ref(),
-                1.0,
-                Par::Seq,
-            ),
-        }
+        matmul(
+            out,
+            Accum::Add,
+            self.a_y.as_ref().transpose(),
+            kstar.as_ref(),
+            1.0,
+            Par::Seq,
+        );
         Ok(())
     }
 
@@ -362,7 +386,8 @@ impl Predictor {
         match &self.basis {
             Some(b) => {
                 let coef = mul(kstar.as_ref(), self.a_y.as_ref()); // T × r
-                gemm_add_cols(out, coef.as_ref(), b.as_ref().transpose());
+                let r = b.ncols() - 1;
+                gemm_add_cols(out, coef.as_ref(), b.as_ref().subcols(0, r).transpose());
             }
             None => gemm_add_cols(out, kstar.as_ref(), self.a_y.as_ref()),
         }
@@ -441,4 +466,14 @@ fn solve_cols_par(chol: &Cholesky, rhs: MatMut<'_, f64>) {
         || solve_cols_par(chol, left),
         || solve_cols_par(chol, right),
     );
+}
+
+/// `[b | mean]` (D × (r+1)), column-major.
+fn with_mean_col(b: MatRef<'_, f64>, mean: &DVector<f64>) -> Mat<f64> {
+    let r = b.ncols();
+    Mat::from_fn(
+        b.nrows(),
+        r + 1,
+        |i, j| if j < r { b[(i, j)] } else { mean[i] },
+    )
 }
