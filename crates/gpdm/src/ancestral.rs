@@ -13,17 +13,20 @@
 //! thinning. HMC (the paper's sampler, [`crate::hmc`]) targets the same density with correlated
 //! draws; `hmc-sample --sampler` chooses between them.
 
+use faer::Mat;
 use nalgebra::DMatrix;
 use rand::{RngExt, SeedableRng};
 use rand_chacha::ChaCha8Rng;
-use rayon::prelude::*;
 
 use crate::error::{invalid, Result};
+use crate::linalg::mul;
 use crate::predict::Predictor;
 
 /// `n` independent trajectories of `len` points (each `len × d`, first row `x1`) drawn from
-/// the product of one-step predictives. Trajectory `k` uses its own ChaCha8 stream `k` of
-/// `seed`, so the result does not depend on the number of threads.
+/// the product of one-step predictives. The trajectories advance in lockstep, so each step is
+/// one kernel evaluation and one triangular solve with `n` right-hand sides (eqs. 9-10 for all
+/// of them at once). Trajectory `k` draws its noise from its own ChaCha8 stream `k` of `seed`,
+/// so the result does not depend on `n`'s batching or on threads.
 pub fn sample_trajectories_ancestral(
     pred: &Predictor,
     x1: &[f64],
@@ -41,31 +44,43 @@ pub fn sample_trajectories_ancestral(
     if len < 2 {
         return invalid(format!("trajectory length {len}: at least 2 points needed"));
     }
-    (0..n)
-        .into_par_iter()
+    let mut rngs: Vec<ChaCha8Rng> = (0..n)
         .map(|k| {
             let mut rng = ChaCha8Rng::seed_from_u64(seed);
             rng.set_stream(k as u64);
-            let mut traj = DMatrix::zeros(len, d);
-            for (c, &v) in x1.iter().enumerate() {
-                traj[(0, c)] = v;
-            }
-            let mut x = x1.to_vec();
-            for t in 1..len {
-                let (mu, var) = pred.dynamics(&x);
-                if !(var.is_finite() && var > 0.0) {
-                    return invalid(format!(
-                        "one-step predictive variance {var:e} at frame {t} is not positive"
-                    ));
-                }
-                let sd = var.sqrt();
-                for c in 0..d {
-                    let z: f64 = rng.sample(rand_distr::StandardNormal);
-                    x[c] = mu[c] + sd * z;
-                    traj[(t, c)] = x[c];
-                }
-            }
-            Ok(traj)
+            rng
         })
-        .collect()
+        .collect();
+    let mut trajs = vec![DMatrix::zeros(len, d); n];
+    // Current points, one row per trajectory.
+    let mut x = Mat::from_fn(n, d, |_, c| x1[c]);
+    for traj in trajs.iter_mut() {
+        for (c, &v) in x1.iter().enumerate() {
+            traj[(0, c)] = v;
+        }
+    }
+    let (kx, x_in) = (pred.dynamics_kernel(), pred.dynamics_inputs());
+    for t in 1..len {
+        let kstar = kx.cross(x_in, x.as_ref()); // M × n
+        let mu = mul(pred.dynamics_weights().transpose(), kstar.as_ref()); // d × n
+        let mut v = kstar;
+        pred.dynamics_cholesky().half_solve_in_place(v.as_mut());
+        for (k, (rng, traj)) in rngs.iter_mut().zip(trajs.iter_mut()).enumerate() {
+            let xk: Vec<f64> = (0..d).map(|c| x[(k, c)]).collect();
+            let var = kx.self_cov(&xk) - v.col(k).squared_norm_l2();
+            if !(var.is_finite() && var > 0.0) {
+                return invalid(format!(
+                    "one-step predictive variance {var:e} at frame {t} is not positive"
+                ));
+            }
+            let sd = var.sqrt();
+            for c in 0..d {
+                let z: f64 = rng.sample(rand_distr::StandardNormal);
+                let next = mu[(c, k)] + sd * z;
+                x[(k, c)] = next;
+                traj[(t, c)] = next;
+            }
+        }
+    }
+    Ok(trajs)
 }

@@ -7,7 +7,8 @@
 //! per-variation `Decoder::decode`) and the fast path, measured back to back.
 //!
 //! Usage: body_budget [model] [--old-samples N] [--skip-old]
-//! Options: --fast burn_in,thin,leapfrog,chains (default 30,1,5,2); --tol metres (kernel-basis
+//! Options: --ancestral (fast path samples by `Sampler::Ancestral` instead of HMC);
+//! --fast burn_in,thin,leapfrog,chains (default 30,1,5,2); --tol metres (kernel-basis
 //! bound at the training points, default 2e-7); --hmc burn_in,thin,leapfrog,chains (sweep).
 //! e.g.: OPENBLAS_NUM_THREADS=1 target/release/examples/body_budget out/work/variation/locomotion.model
 
@@ -18,7 +19,7 @@ use mesh_core::artifact::Artifact;
 use nalgebra::DMatrix;
 use rayon::prelude::*;
 use variation::reconstruct::{Assembly, Decoder};
-use variation::sample::{default_hmc, sequence_variations_len};
+use variation::sample::{default_hmc, sequence_variations_len, Sampler};
 use variation::train::VariationModel;
 
 /// CPU seconds of this process so far (user + system, /proc/self/stat, 100 ticks/s): with
@@ -131,7 +132,7 @@ fn main() {
             };
             let t = Instant::now();
             let (vars, stats) = pool
-                .install(|| sequence_variations_len(&dec, s, len, &opts, chains))
+                .install(|| sequence_variations_len(&dec, s, len, Sampler::Hmc, &opts, chains))
                 .unwrap();
             let secs = t.elapsed().as_secs_f64();
             let (pair, to_mean) = diversity(&vars, &starts);
@@ -174,9 +175,15 @@ fn main() {
             leapfrog_steps: leapfrog,
             ..default_hmc(n, 0)
         };
+        let sampler = if args.iter().any(|a| a == "--ancestral") {
+            Sampler::Ancestral
+        } else {
+            Sampler::Hmc
+        };
+        println!("fast path sampler: {sampler:?}");
         let (t, c) = (Instant::now(), cpu());
         let (vars, _) = pool
-            .install(|| sequence_variations_len(&dec, s, len, &opts, chains))
+            .install(|| sequence_variations_len(&dec, s, len, sampler, &opts, chains))
             .unwrap();
         let (hmc, hmc_cpu) = (t.elapsed().as_secs_f64(), cpu() - c);
         {
@@ -251,7 +258,7 @@ fn main() {
         let opts = default_hmc(old_n, 0);
         let (t, c) = (Instant::now(), cpu());
         let (vars, _) = pool
-            .install(|| sequence_variations_len(&dec, s, len, &opts, 1))
+            .install(|| sequence_variations_len(&dec, s, len, Sampler::Hmc, &opts, 1))
             .unwrap();
         let (hmc, hmc_cpu) = (t.elapsed().as_secs_f64(), cpu() - c);
         let burn = opts.burn_in as f64;

@@ -25,7 +25,7 @@ use crate::group::{blend_sequences, Group};
 use crate::metrics::mean_row_distance;
 use crate::part_data;
 use crate::reconstruct::Decoder;
-use crate::sample::sequence_variations;
+use crate::sample::{sequence_variations, Sampler};
 use crate::train::VariationModel;
 
 /// Fig. 4 entry of one part.
@@ -262,7 +262,7 @@ pub fn evaluate(
             seed,
             ..HmcOptions::default()
         };
-        let (vars, _) = sequence_variations(&dec, 0, &hmc)?;
+        let (vars, _) = sequence_variations(&dec, 0, Sampler::Hmc, &hmc)?;
         let series: Vec<(String, DMatrix<f64>)> = vars
             .iter()
             .enumerate()

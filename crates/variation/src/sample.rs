@@ -9,6 +9,7 @@
 //! `W ∪ {0, 1}` gives `X̃_{w*}` from random variants of the bounding trajectories.
 //! Every chain has its own seed derived from `(seed, sequence, part)`: same seed, same samples.
 
+use gpdm::ancestral::sample_trajectories_ancestral;
 use gpdm::blend::BlendSet;
 use gpdm::hmc::{sample_trajectories, HmcOptions};
 use mesh_core::{Error, Result};
@@ -28,6 +29,29 @@ pub struct ChainStats {
     pub accept_rate: f64,
     pub burn_in_accept_rate: f64,
     pub step_size: f64,
+}
+
+/// How trajectories are drawn from the density of a part's GPDM dynamics given the first point.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Sampler {
+    /// Hybrid Monte Carlo (the paper's sampler): burn-in with step-size adaptation, thinning.
+    #[default]
+    Hmc,
+    /// Exact independent draws of the same density, one forward pass each
+    /// (`gpdm::ancestral`); burn-in, thinning and chains do not apply.
+    Ancestral,
+}
+
+impl Sampler {
+    /// From its command-line name (`hmc`, `ancestral`).
+    pub fn from_name(name: &str) -> Option<Sampler> {
+        match name {
+            "hmc" => Some(Sampler::Hmc),
+            "ancestral" => Some(Sampler::Ancestral),
+            _ => None,
+        }
+    }
 }
 
 /// `variations[k][part]`: latent trajectory (T × d) of part `part` in variation `k`.
@@ -59,6 +83,7 @@ pub fn mix(seed: u64, a: u64, b: u64) -> u64 {
 pub fn sequence_variations(
     dec: &Decoder,
     s: usize,
+    sampler: Sampler,
     opts: &HmcOptions,
 ) -> Result<(Variations, Vec<ChainStats>)> {
     let len = dec
@@ -67,7 +92,7 @@ pub fn sequence_variations(
         .first()
         .and_then(|p| p.gpdm.seq_lens.get(s).copied())
         .ok_or_else(|| Error::invalid(format!("no training sequence {s}")))?;
-    sequence_variations_len(dec, s, len, opts, 1)
+    sequence_variations_len(dec, s, len, sampler, opts, 1)
 }
 
 /// `opts.n_samples` variations of `len` frames of training sequence `s` (started at its first
@@ -75,11 +100,15 @@ pub fn sequence_variations(
 /// sampled by `chains` independent chains (each `ceil(n / chains)` samples, its own burn-in).
 /// All (part, chain) pairs run as parallel tasks; chain `c` of part `k` is seeded with
 /// `mix(opts.seed, s + 1, k + 1 + c·2³²)` (chain 0: the single-chain seed) and the samples are
-/// concatenated by chain, so the result is the same for any number of threads.
+/// concatenated by chain, so the result is the same for any number of threads. With
+/// [`Sampler::Ancestral`] every part is one task of `opts.n_samples` independent draws (seeded
+/// the same way; `chains` and the HMC settings other than the seed are not used), and its
+/// statistics report acceptance 1 and step size 0.
 pub fn sequence_variations_len(
     dec: &Decoder,
     s: usize,
     len: usize,
+    sampler: Sampler,
     opts: &HmcOptions,
     chains: usize,
 ) -> Result<(Variations, Vec<ChainStats>)> {
@@ -91,7 +120,10 @@ pub fn sequence_variations_len(
     if chains == 0 {
         return Err(Error::invalid("at least one chain per part is needed"));
     }
-    let per = opts.n_samples.div_ceil(chains);
+    let (chains, per) = match sampler {
+        Sampler::Hmc => (chains, opts.n_samples.div_ceil(chains)),
+        Sampler::Ancestral => (1, opts.n_samples),
+    };
     let tasks: Vec<(usize, usize)> = (0..model.parts.len())
         .flat_map(|k| (0..chains).map(move |c| (k, c)))
         .collect();
@@ -114,15 +146,32 @@ pub fn sequence_variations_len(
                 seed: mix(opts.seed, s as u64 + 1, k as u64 + 1 + ((c as u64) << 32)),
                 ..opts.clone()
             };
-            let (trajs, res) = sample_trajectories(pr, &template, &o).map_err(|e| {
+            let fail = |e: gpdm::GpdmError| {
                 Error::invalid(format!("{} part '{}': {e}", info.name, pm.part.name))
-            })?;
+            };
+            let (trajs, accept_rate, burn_in_accept_rate, step_size) = match sampler {
+                Sampler::Hmc => {
+                    let (trajs, res) = sample_trajectories(pr, &template, &o).map_err(fail)?;
+                    (
+                        trajs,
+                        res.accept_rate,
+                        res.burn_in_accept_rate,
+                        res.step_size,
+                    )
+                }
+                Sampler::Ancestral => {
+                    let x1: Vec<f64> = template.row(0).iter().copied().collect();
+                    let trajs =
+                        sample_trajectories_ancestral(pr, &x1, len, per, o.seed).map_err(fail)?;
+                    (trajs, 1.0, 1.0, 0.0)
+                }
+            };
             let stats = ChainStats {
                 sequence: info.name.clone(),
                 part: pm.part.name.clone(),
-                accept_rate: res.accept_rate,
-                burn_in_accept_rate: res.burn_in_accept_rate,
-                step_size: res.step_size,
+                accept_rate,
+                burn_in_accept_rate,
+                step_size,
             };
             Ok((trajs, stats))
         })

@@ -23,7 +23,7 @@ use crate::group::{blend_name, blend_sequences, Group};
 use crate::metrics::{self, Stats};
 use crate::reconstruct::{Assembly, Decoder};
 use crate::sample::{
-    blend_variations, default_hmc, mix, sequence_variations, ChainStats, Variations,
+    blend_variations, default_hmc, mix, sequence_variations, ChainStats, Sampler, Variations,
 };
 use crate::train::VariationModel;
 
@@ -38,6 +38,9 @@ pub struct SynthConfig {
     /// Draw poses from eq. 11 instead of the mean (eq. 12).
     pub sample_poses: bool,
     pub assembly: Assembly,
+    /// Trajectory sampler (HMC, the paper's, by default).
+    #[serde(default)]
+    pub sampler: Sampler,
     pub burn_in: usize,
     pub thin: usize,
     pub target_accept: f64,
@@ -269,7 +272,7 @@ pub fn run(
     let mut pools: Vec<Variations> = Vec::new();
     let mut chains = Vec::new();
     for s in 0..model.sequences.len() {
-        let (v, st) = sequence_variations(&dec, s, &hmc)?;
+        let (v, st) = sequence_variations(&dec, s, cfg.sampler, &hmc)?;
         pools.push(v);
         chains.extend(st);
     }

@@ -8,6 +8,7 @@ use mesh_core::sequence::MeshSequence;
 use variation::group::{build, GroupSpec};
 use variation::prealign::PrealignOptions;
 use variation::reconstruct::Assembly;
+use variation::sample::Sampler;
 use variation::synthesize::{run, SynthConfig};
 use variation::train::{train, TrainConfig};
 
@@ -65,6 +66,7 @@ fn tiny_set_end_to_end() {
         seed: 7,
         sample_poses: false,
         assembly: Assembly::Average,
+        sampler: Sampler::Hmc,
         burn_in: 30,
         thin: 3,
         target_accept: 0.7,

@@ -8,7 +8,7 @@ use nalgebra::{DMatrix, Rotation3, Vector3};
 use variation::group::PartDef;
 use variation::part_data::{DisplacementScale, TORSO_EXTRA};
 use variation::reconstruct::{Assembly, DecodeScratch, Decoder};
-use variation::sample::sequence_variations_len;
+use variation::sample::{sequence_variations_len, Sampler};
 use variation::train::{PartModel, SequenceInfo, VariationModel};
 
 /// A 162-vertex sphere in two overlapping parts (upper = torso, lower = child), two 30-frame
@@ -169,13 +169,14 @@ fn multi_chain_variations_are_reproducible_for_any_thread_count() {
         seed: 11,
         ..Default::default()
     };
-    let run = |threads: usize, opts: &HmcOptions| {
+    let run_with = |sampler: Sampler, threads: usize, opts: &HmcOptions| {
         rayon::ThreadPoolBuilder::new()
             .num_threads(threads)
             .build()
             .unwrap()
-            .install(|| sequence_variations_len(&dec, 0, 40, opts, 2).unwrap())
+            .install(|| sequence_variations_len(&dec, 0, 40, sampler, opts, 2).unwrap())
     };
+    let run = |threads: usize, opts: &HmcOptions| run_with(Sampler::Hmc, threads, opts);
     let (a, stats) = run(1, &opts);
     let (b, _) = run(2, &opts);
     assert_eq!(a, b, "1 vs 2 threads");
@@ -193,6 +194,21 @@ fn multi_chain_variations_are_reproducible_for_any_thread_count() {
     assert!((&a[0][0] - &a[3][0]).norm() > 1e-6, "chains 0 and 1 differ");
     let (c, _) = run(2, &HmcOptions { seed: 12, ..opts });
     assert_ne!(a, c, "another seed, other samples");
-    assert!(sequence_variations_len(&dec, 0, 1, &HmcOptions::default(), 1).is_err());
-    assert!(sequence_variations_len(&dec, 0, 40, &HmcOptions::default(), 0).is_err());
+    // Ancestral draws: one task per part, same answer on 1 or 2 threads, first point kept.
+    let (e, estats) = run_with(Sampler::Ancestral, 1, &opts);
+    assert_eq!(
+        e,
+        run_with(Sampler::Ancestral, 2, &opts).0,
+        "ancestral: 1 vs 2 threads"
+    );
+    assert_eq!((e.len(), estats.len()), (5, 2));
+    assert!(e.iter().all(|v| v[0].row(0) == x1));
+    assert!(
+        (&e[0][0] - &e[1][0]).norm() > 1e-6,
+        "ancestral draws differ"
+    );
+    let h = HmcOptions::default();
+    assert!(sequence_variations_len(&dec, 0, 1, Sampler::Hmc, &h, 1).is_err());
+    assert!(sequence_variations_len(&dec, 0, 40, Sampler::Hmc, &h, 0).is_err());
+    assert!(sequence_variations_len(&dec, 0, 1, Sampler::Ancestral, &h, 1).is_err());
 }

@@ -6,6 +6,7 @@ use mesh_core::artifact::Artifact;
 use mesh_core::cli::{run_stage, CommonArgs};
 use variation::group::Group;
 use variation::reconstruct::Assembly;
+use variation::sample::Sampler;
 use variation::synthesize::{run, SynthConfig};
 use variation::train::VariationModel;
 
@@ -36,6 +37,10 @@ struct Args {
     /// Merge parts by averaging on the overlap bands instead of optimal-boundary Poisson stitching
     #[arg(long)]
     average: bool,
+    /// Trajectory sampler: hmc (the paper's Hybrid Monte Carlo) or ancestral (exact independent
+    /// draws of the same density, one forward pass each; burn-in and thinning do not apply)
+    #[arg(long, default_value = "hmc", value_parser = parse_sampler)]
+    sampler: Sampler,
     /// HMC burn-in iterations (step size adapted)
     #[arg(long, default_value_t = 200)]
     burn_in: usize,
@@ -63,6 +68,10 @@ struct Args {
     /// Statistics (JSON)
     #[arg(long)]
     report: Option<PathBuf>,
+}
+
+fn parse_sampler(s: &str) -> Result<Sampler, String> {
+    Sampler::from_name(s).ok_or_else(|| format!("unknown sampler '{s}' (hmc, ancestral)"))
 }
 
 /// Comma-separated weights; the empty string is an empty list.
@@ -97,6 +106,7 @@ fn main() -> ExitCode {
             } else {
                 Assembly::Stitch
             },
+            sampler: args.sampler,
             burn_in: args.burn_in,
             thin: args.thin,
             target_accept: args.target_accept,
