@@ -23,6 +23,10 @@ VARIATION_W ?= 0.5
 VARIATION_BLENDS ?= 0.25,0.75
 VARIATION_N ?= 5
 VARIATION_SEED ?= 0
+# Scale of the sampled dynamics' one-step variances (hmc-sample --variance-scale; 1 = the model's
+# density as in the paper). 0.3 keeps the variations' foot sliding and scatter near the captures'
+# while they still differ from their source (docs/RESULTS.md, "Variance scale").
+VARIATION_VARIANCE_SCALE ?= 0.3
 VARIATION_TRAIN_FLAGS ?=
 # The report's 3D view: three variations of the first group's first motion, side by side.
 VARIATION_REPORT_GROUP := $(firstword $(VARIATION_GROUPS))
@@ -49,7 +53,7 @@ $(VARIATION_WORK)/$(1).model: $(VARIATION_WORK)/$(1).group $(BIN)/gpdm-train
 
 $(VARIATION_WORK)/$(1)-samples.json: $(VARIATION_WORK)/$(1).model $(BIN)/hmc-sample $(BIN)/render
 	rm -rf $(VARIATION_OUT)/$(1) $(VARIATION_OUT)/render/$(1)
-	$(BIN)/hmc-sample -q --seed $(VARIATION_SEED) -n $(VARIATION_N) --blends $(VARIATION_BLENDS) $(VARIATION_SAMPLE_FLAGS) --group $(VARIATION_WORK)/$(1).group $$< --out $(VARIATION_OUT)/$(1) --report $$@.tmp
+	$(BIN)/hmc-sample -q --seed $(VARIATION_SEED) -n $(VARIATION_N) --variance-scale $(VARIATION_VARIANCE_SCALE) --blends $(VARIATION_BLENDS) $(VARIATION_SAMPLE_FLAGS) --group $(VARIATION_WORK)/$(1).group $$< --out $(VARIATION_OUT)/$(1) --report $$@.tmp
 	for d in $(VARIATION_OUT)/$(1)/*/; do s=$$$$(basename $$$$d); \
 	  $(BIN)/render -q --no-frames --stride 2 --labels $$$$(cd $$$$d && ls -d var* | paste -sd,) --out $(VARIATION_OUT)/render/$(1)/$$$$s $$$$d/var*; done
 	mv $$@.tmp $$@

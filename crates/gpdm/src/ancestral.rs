@@ -26,14 +26,20 @@ use crate::predict::Predictor;
 /// the product of one-step predictives. The trajectories advance in lockstep, so each step is
 /// one kernel evaluation and one triangular solve with `n` right-hand sides (eqs. 9-10 for all
 /// of them at once). Trajectory `k` draws its noise from its own ChaCha8 stream `k` of `seed`,
-/// so the result does not depend on `n`'s batching or on threads.
+/// so the result does not depend on `n`'s batching or on threads. `variance_scale` κ scales
+/// every one-step variance as in [`crate::hmc::TrajectoryEnergy::with_variance_scale`] (1: the
+/// model's density).
 pub fn sample_trajectories_ancestral(
     pred: &Predictor,
     x1: &[f64],
     len: usize,
     n: usize,
     seed: u64,
+    variance_scale: f64,
 ) -> Result<Vec<DMatrix<f64>>> {
+    if !(variance_scale > 0.0 && variance_scale.is_finite()) {
+        return invalid(format!("variance scale {variance_scale} must be positive"));
+    }
     let d = pred.latent_dim();
     if x1.len() != d {
         return invalid(format!(
@@ -67,7 +73,7 @@ pub fn sample_trajectories_ancestral(
         pred.dynamics_cholesky().half_solve_in_place(v.as_mut());
         for (k, (rng, traj)) in rngs.iter_mut().zip(trajs.iter_mut()).enumerate() {
             let xk: Vec<f64> = (0..d).map(|c| x[(k, c)]).collect();
-            let var = kx.self_cov(&xk) - v.col(k).squared_norm_l2();
+            let var = variance_scale * (kx.self_cov(&xk) - v.col(k).squared_norm_l2());
             if !(var.is_finite() && var > 0.0) {
                 return invalid(format!(
                     "one-step predictive variance {var:e} at frame {t} is not positive"

@@ -266,6 +266,9 @@ pub struct TrajectoryEnergy<'a> {
     xin: Vec<Vec<f64>>,
     /// K_X⁻¹ X_out by coordinate (d × M).
     a: Vec<Vec<f64>>,
+    /// κ: every one-step variance is κ σ²_X(x_t) (1: the model's; see
+    /// [`TrajectoryEnergy::with_variance_scale`]).
+    variance_scale: f64,
 }
 
 impl<'a> TrajectoryEnergy<'a> {
@@ -285,7 +288,18 @@ impl<'a> TrajectoryEnergy<'a> {
             len,
             xin: by_coord(pred.dynamics_inputs()),
             a: by_coord(pred.dynamics_weights()),
+            variance_scale: 1.0,
         })
+    }
+
+    /// The same density with every one-step variance scaled by `kappa > 0` (κ < 1: trajectories
+    /// that keep closer to the learned dynamics, with less frame-to-frame jitter; κ = 1: the model).
+    pub fn with_variance_scale(mut self, kappa: f64) -> Result<Self> {
+        if !(kappa > 0.0 && kappa.is_finite()) {
+            return invalid(format!("variance scale {kappa} must be positive"));
+        }
+        self.variance_scale = kappa;
+        Ok(self)
     }
 
     /// Free coordinates of a full trajectory (T × d).
@@ -382,7 +396,7 @@ impl Energy for TrajectoryEnergy<'_> {
         let mut wr = vec![0.0; m];
         for t in 0..steps {
             let xt = &p[t * d..(t + 1) * d];
-            let s = k.self_cov(xt) - kvk[t];
+            let s = self.variance_scale * (k.self_cov(xt) - kvk[t]);
             if !(s > 0.0) {
                 return None;
             }
@@ -401,7 +415,8 @@ impl Energy for TrajectoryEnergy<'_> {
             }
             // ∂/∂x_t through μ_t and s_t: Σ_i w_i ∂k_i/∂x_t with
             // w_i = −(A e)_i / s − 2 c_s (K_X⁻¹ k_t)_i and ∂k_i/∂x_t = −γ r_i (x_t − x_i) + lin x_i.
-            let cs = -0.5 * e2 / (s * s) + 0.5 * d as f64 / s;
+            // ∂E/∂s times ∂s/∂s_raw = κ (s = κ s_raw; the terms below differentiate s_raw).
+            let cs = (-0.5 * e2 / (s * s) + 0.5 * d as f64 / s) * self.variance_scale;
             let vcol = v.col(t).try_as_col_major().expect("contiguous").as_slice();
             let rcol = &rbf[t * m..(t + 1) * m];
             for (wi, &vi) in w.iter_mut().zip(vcol) {
@@ -440,9 +455,21 @@ pub fn sample_trajectories(
     template: &DMatrix<f64>,
     opts: &HmcOptions,
 ) -> Result<(Vec<DMatrix<f64>>, HmcResult)> {
+    sample_trajectories_scaled(pred, template, opts, 1.0)
+}
+
+/// [`sample_trajectories`] with every one-step variance scaled by `variance_scale`
+/// ([`TrajectoryEnergy::with_variance_scale`]).
+pub fn sample_trajectories_scaled(
+    pred: &Predictor,
+    template: &DMatrix<f64>,
+    opts: &HmcOptions,
+    variance_scale: f64,
+) -> Result<(Vec<DMatrix<f64>>, HmcResult)> {
     let x1: Vec<f64> = template.row(0).iter().copied().collect();
     let start = pred.mean_trajectory(&x1, template.nrows())?;
-    let energy = TrajectoryEnergy::new(pred, &x1, template.nrows())?;
+    let energy =
+        TrajectoryEnergy::new(pred, &x1, template.nrows())?.with_variance_scale(variance_scale)?;
     let res = sample(&energy, &energy.free_coords(&start), opts)?;
     let trajs = res.samples.iter().map(|q| energy.trajectory(q)).collect();
     Ok((trajs, res))

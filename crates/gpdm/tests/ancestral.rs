@@ -4,7 +4,7 @@
 mod common;
 
 use gpdm::ancestral::sample_trajectories_ancestral;
-use gpdm::hmc::{sample_trajectories, HmcOptions};
+use gpdm::hmc::{sample_trajectories_scaled, HmcOptions};
 use gpdm::predict::Predictor;
 use nalgebra::DMatrix;
 
@@ -35,21 +35,27 @@ fn first_step_follows_the_one_step_predictive() {
         .iter()
         .copied()
         .collect();
-    let (mu, var) = pred.dynamics(&x1);
+    let (mu, var1) = pred.dynamics(&x1);
     let n = 4000;
-    let trajs = sample_trajectories_ancestral(&pred, &x1, 2, n, 11).unwrap();
-    for t in &trajs {
-        assert_eq!(t.row(0).iter().copied().collect::<Vec<_>>(), x1);
-    }
-    let se = (var / n as f64).sqrt();
-    for (c, (mean, v)) in moments(&trajs, 1).into_iter().enumerate() {
-        assert!(
-            (mean - mu[c]).abs() < 4.0 * se,
-            "mean {mean} vs {} (se {se})",
-            mu[c]
-        );
-        // Sample variance of n normal draws: relative sd sqrt(2/n) = 2.2 %.
-        assert!((v / var - 1.0).abs() < 0.09, "variance {v} vs {var}");
+    for kappa in [1.0, 0.5] {
+        let var = kappa * var1;
+        let trajs = sample_trajectories_ancestral(&pred, &x1, 2, n, 11, kappa).unwrap();
+        for t in &trajs {
+            assert_eq!(t.row(0).iter().copied().collect::<Vec<_>>(), x1);
+        }
+        let se = (var / n as f64).sqrt();
+        for (c, (mean, v)) in moments(&trajs, 1).into_iter().enumerate() {
+            assert!(
+                (mean - mu[c]).abs() < 4.0 * se,
+                "mean {mean} vs {} (se {se})",
+                mu[c]
+            );
+            // Sample variance of n normal draws: relative sd sqrt(2/n) = 2.2 %.
+            assert!(
+                (v / var - 1.0).abs() < 0.09,
+                "κ = {kappa}: variance {v} vs {var}"
+            );
+        }
     }
 }
 
@@ -59,28 +65,30 @@ fn hmc_and_ancestral_sampling_agree_on_the_trajectory_density() {
     let pred = Predictor::new(&m).unwrap();
     let template = m.sequence_latent(0).unwrap().rows(0, 6).into_owned();
     let x1: Vec<f64> = template.row(0).iter().copied().collect();
-    let exact = sample_trajectories_ancestral(&pred, &x1, 6, 4000, 5).unwrap();
-    let opts = HmcOptions {
-        n_samples: 2000,
-        burn_in: 300,
-        thin: 5,
-        leapfrog_steps: 10,
-        seed: 9,
-        ..Default::default()
-    };
-    let (chain, res) = sample_trajectories(&pred, &template, &opts).unwrap();
-    assert!(res.accept_rate > 0.3, "acceptance {}", res.accept_rate);
-    // The spread grows along the trajectory; compare the last point, where the two samplers
-    // would differ most if the HMC energy and the ancestral draws disagreed.
-    let (a, b) = (moments(&exact, 5), moments(&chain, 5));
-    for ((ma, va), (mb, vb)) in a.iter().zip(&b) {
-        let sd = va.sqrt();
-        eprintln!(
-            "last point: ancestral {ma:.4} ± {sd:.4}, HMC {mb:.4} ± {:.4}",
-            vb.sqrt()
-        );
-        assert!((ma - mb).abs() < 0.15 * sd, "means {ma} vs {mb} (sd {sd})");
-        assert!((vb / va - 1.0).abs() < 0.25, "variances {va} vs {vb}");
+    for kappa in [1.0, 0.3] {
+        let exact = sample_trajectories_ancestral(&pred, &x1, 6, 4000, 5, kappa).unwrap();
+        let opts = HmcOptions {
+            n_samples: 2000,
+            burn_in: 300,
+            thin: 5,
+            leapfrog_steps: 10,
+            seed: 9,
+            ..Default::default()
+        };
+        let (chain, res) = sample_trajectories_scaled(&pred, &template, &opts, kappa).unwrap();
+        assert!(res.accept_rate > 0.3, "acceptance {}", res.accept_rate);
+        // The spread grows along the trajectory; compare the last point, where the two
+        // samplers would differ most if the HMC energy and the ancestral draws disagreed.
+        let (a, b) = (moments(&exact, 5), moments(&chain, 5));
+        for ((ma, va), (mb, vb)) in a.iter().zip(&b) {
+            let sd = va.sqrt();
+            eprintln!(
+                "κ = {kappa}, last point: ancestral {ma:.4} ± {sd:.4}, HMC {mb:.4} ± {:.4}",
+                vb.sqrt()
+            );
+            assert!((ma - mb).abs() < 0.15 * sd, "means {ma} vs {mb} (sd {sd})");
+            assert!((vb / va - 1.0).abs() < 0.25, "variances {va} vs {vb}");
+        }
     }
 }
 
@@ -100,12 +108,13 @@ fn same_seed_same_trajectories_on_any_number_of_threads() {
             .num_threads(threads)
             .build()
             .unwrap()
-            .install(|| sample_trajectories_ancestral(&pred, &x1, 30, 8, seed).unwrap())
+            .install(|| sample_trajectories_ancestral(&pred, &x1, 30, 8, seed, 1.0).unwrap())
     };
     let one = run(1, 3);
     assert_eq!(one, run(2, 3));
     assert_ne!(one, run(2, 4));
     assert!(one.windows(2).all(|w| w[0] != w[1]), "trajectories repeat");
-    assert!(sample_trajectories_ancestral(&pred, &x1, 1, 8, 3).is_err());
-    assert!(sample_trajectories_ancestral(&pred, &x1[..1], 30, 8, 3).is_err());
+    assert!(sample_trajectories_ancestral(&pred, &x1, 1, 8, 3, 1.0).is_err());
+    assert!(sample_trajectories_ancestral(&pred, &x1[..1], 30, 8, 3, 1.0).is_err());
+    assert!(sample_trajectories_ancestral(&pred, &x1, 30, 8, 3, -1.0).is_err());
 }

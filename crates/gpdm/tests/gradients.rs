@@ -177,31 +177,41 @@ fn trajectory_energy_gradient_and_value() {
     let m = small_model(GpdmConfig::default());
     let pred = Predictor::new(&m).unwrap();
     let x1: Vec<f64> = m.x.row(0).iter().copied().collect();
-    let energy = TrajectoryEnergy::new(&pred, &x1, 6).unwrap();
-    let traj = m.x.rows(0, 6).into_owned() + common::randn(6, 3, 9) * 0.1;
-    let q = energy.free_coords(&traj);
-    let mut g = vec![0.0; q.len()];
-    let e = energy.energy_grad(&q, &mut g).unwrap();
-    // Value: sum of -log N(x_{t+1}; μ(x_t), σ²(x_t) I) (constants dropped) from eqs. 9-10.
-    let full = energy.trajectory(&q);
-    let mut direct = 0.0;
-    for t in 0..5 {
-        let xt: Vec<f64> = full.row(t).iter().copied().collect();
-        let (mu, s) = pred.dynamics(&xt);
-        let e2: f64 = (0..3).map(|c| (full[(t + 1, c)] - mu[c]).powi(2)).sum();
-        direct += 0.5 * e2 / s + 1.5 * s.ln();
+    // κ = 1 is the model's density; κ = 0.4 scales every one-step variance.
+    for kappa in [1.0, 0.4] {
+        let energy = TrajectoryEnergy::new(&pred, &x1, 6)
+            .unwrap()
+            .with_variance_scale(kappa)
+            .unwrap();
+        let traj = m.x.rows(0, 6).into_owned() + common::randn(6, 3, 9) * 0.1;
+        let q = energy.free_coords(&traj);
+        let mut g = vec![0.0; q.len()];
+        let e = energy.energy_grad(&q, &mut g).unwrap();
+        // Value: sum of -log N(x_{t+1}; μ(x_t), κ σ²(x_t) I) (constants dropped), eqs. 9-10.
+        let full = energy.trajectory(&q);
+        let mut direct = 0.0;
+        for t in 0..5 {
+            let xt: Vec<f64> = full.row(t).iter().copied().collect();
+            let (mu, s) = pred.dynamics(&xt);
+            let s = kappa * s;
+            let e2: f64 = (0..3).map(|c| (full[(t + 1, c)] - mu[c]).powi(2)).sum();
+            direct += 0.5 * e2 / s + 1.5 * s.ln();
+        }
+        assert!(
+            (e - direct).abs() < 1e-10 * direct.abs().max(1.0),
+            "κ = {kappa}: {e} vs {direct}"
+        );
+        let scratch = vec![0.0; q.len()];
+        check_fd(
+            &|t| energy.energy_grad(t, &mut scratch.clone()).unwrap(),
+            &q,
+            &g,
+            1e-6,
+            1e-6,
+        );
     }
-    assert!(
-        (e - direct).abs() < 1e-10 * direct.abs().max(1.0),
-        "{e} vs {direct}"
-    );
-    let mut scratch = vec![0.0; q.len()];
-    check_fd(
-        &|t| energy.energy_grad(t, &mut scratch.clone()).unwrap(),
-        &q,
-        &g,
-        1e-6,
-        1e-6,
-    );
-    scratch.clear();
+    assert!(TrajectoryEnergy::new(&pred, &x1, 6)
+        .unwrap()
+        .with_variance_scale(0.0)
+        .is_err());
 }

@@ -132,7 +132,7 @@ fn main() {
             };
             let t = Instant::now();
             let (vars, stats) = pool
-                .install(|| sequence_variations_len(&dec, s, len, Sampler::Hmc, &opts, chains))
+                .install(|| sequence_variations_len(&dec, s, len, Sampler::Hmc, 1.0, &opts, chains))
                 .unwrap();
             let secs = t.elapsed().as_secs_f64();
             let (pair, to_mean) = diversity(&vars, &starts);
@@ -183,7 +183,7 @@ fn main() {
         println!("fast path sampler: {sampler:?}");
         let (t, c) = (Instant::now(), cpu());
         let (vars, _) = pool
-            .install(|| sequence_variations_len(&dec, s, len, sampler, &opts, chains))
+            .install(|| sequence_variations_len(&dec, s, len, sampler, 1.0, &opts, chains))
             .unwrap();
         let (hmc, hmc_cpu) = (t.elapsed().as_secs_f64(), cpu() - c);
         {
@@ -258,7 +258,7 @@ fn main() {
         let opts = default_hmc(old_n, 0);
         let (t, c) = (Instant::now(), cpu());
         let (vars, _) = pool
-            .install(|| sequence_variations_len(&dec, s, len, Sampler::Hmc, &opts, 1))
+            .install(|| sequence_variations_len(&dec, s, len, Sampler::Hmc, 1.0, &opts, 1))
             .unwrap();
         let (hmc, hmc_cpu) = (t.elapsed().as_secs_f64(), cpu() - c);
         let burn = opts.burn_in as f64;

@@ -262,7 +262,7 @@ pub fn evaluate(
             seed,
             ..HmcOptions::default()
         };
-        let (vars, _) = sequence_variations(&dec, 0, Sampler::Hmc, &hmc)?;
+        let (vars, _) = sequence_variations(&dec, 0, Sampler::Hmc, 1.0, &hmc)?;
         let series: Vec<(String, DMatrix<f64>)> = vars
             .iter()
             .enumerate()

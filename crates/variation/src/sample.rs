@@ -11,7 +11,7 @@
 
 use gpdm::ancestral::sample_trajectories_ancestral;
 use gpdm::blend::BlendSet;
-use gpdm::hmc::{sample_trajectories, HmcOptions};
+use gpdm::hmc::{sample_trajectories_scaled, HmcOptions};
 use mesh_core::{Error, Result};
 use nalgebra::DMatrix;
 use rand::SeedableRng;
@@ -84,6 +84,7 @@ pub fn sequence_variations(
     dec: &Decoder,
     s: usize,
     sampler: Sampler,
+    variance_scale: f64,
     opts: &HmcOptions,
 ) -> Result<(Variations, Vec<ChainStats>)> {
     let len = dec
@@ -92,7 +93,7 @@ pub fn sequence_variations(
         .first()
         .and_then(|p| p.gpdm.seq_lens.get(s).copied())
         .ok_or_else(|| Error::invalid(format!("no training sequence {s}")))?;
-    sequence_variations_len(dec, s, len, sampler, opts, 1)
+    sequence_variations_len(dec, s, len, sampler, variance_scale, opts, 1)
 }
 
 /// `opts.n_samples` variations of `len` frames of training sequence `s` (started at its first
@@ -103,12 +104,14 @@ pub fn sequence_variations(
 /// concatenated by chain, so the result is the same for any number of threads. With
 /// [`Sampler::Ancestral`] every part is one task of `opts.n_samples` independent draws (seeded
 /// the same way; `chains` and the HMC settings other than the seed are not used), and its
-/// statistics report acceptance 1 and step size 0.
+/// statistics report acceptance 1 and step size 0. `variance_scale` κ scales every one-step
+/// variance of the dynamics (1: the model's density; `hmc-sample --variance-scale`).
 pub fn sequence_variations_len(
     dec: &Decoder,
     s: usize,
     len: usize,
     sampler: Sampler,
+    variance_scale: f64,
     opts: &HmcOptions,
     chains: usize,
 ) -> Result<(Variations, Vec<ChainStats>)> {
@@ -151,7 +154,9 @@ pub fn sequence_variations_len(
             };
             let (trajs, accept_rate, burn_in_accept_rate, step_size) = match sampler {
                 Sampler::Hmc => {
-                    let (trajs, res) = sample_trajectories(pr, &template, &o).map_err(fail)?;
+                    let (trajs, res) =
+                        sample_trajectories_scaled(pr, &template, &o, variance_scale)
+                            .map_err(fail)?;
                     (
                         trajs,
                         res.accept_rate,
@@ -162,7 +167,8 @@ pub fn sequence_variations_len(
                 Sampler::Ancestral => {
                     let x1: Vec<f64> = template.row(0).iter().copied().collect();
                     let trajs =
-                        sample_trajectories_ancestral(pr, &x1, len, per, o.seed).map_err(fail)?;
+                        sample_trajectories_ancestral(pr, &x1, len, per, o.seed, variance_scale)
+                            .map_err(fail)?;
                     (trajs, 1.0, 1.0, 0.0)
                 }
             };

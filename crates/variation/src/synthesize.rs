@@ -41,6 +41,9 @@ pub struct SynthConfig {
     /// Trajectory sampler (HMC, the paper's, by default).
     #[serde(default)]
     pub sampler: Sampler,
+    /// κ: every one-step variance of the sampled dynamics is κ σ²_X (1: the model's).
+    #[serde(default = "one")]
+    pub variance_scale: f64,
     pub burn_in: usize,
     pub thin: usize,
     pub target_accept: f64,
@@ -58,6 +61,10 @@ pub struct SynthConfig {
 
 fn footskate_smoothness() -> f64 {
     footskate::SMOOTHNESS
+}
+
+fn one() -> f64 {
+    1.0
 }
 
 fn yes() -> bool {
@@ -272,7 +279,7 @@ pub fn run(
     let mut pools: Vec<Variations> = Vec::new();
     let mut chains = Vec::new();
     for s in 0..model.sequences.len() {
-        let (v, st) = sequence_variations(&dec, s, cfg.sampler, &hmc)?;
+        let (v, st) = sequence_variations(&dec, s, cfg.sampler, cfg.variance_scale, &hmc)?;
         pools.push(v);
         chains.extend(st);
     }

@@ -67,6 +67,7 @@ fn tiny_set_end_to_end() {
         sample_poses: false,
         assembly: Assembly::Average,
         sampler: Sampler::Hmc,
+        variance_scale: 1.0,
         burn_in: 30,
         thin: 3,
         target_accept: 0.7,

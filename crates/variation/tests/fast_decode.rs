@@ -174,7 +174,7 @@ fn multi_chain_variations_are_reproducible_for_any_thread_count() {
             .num_threads(threads)
             .build()
             .unwrap()
-            .install(|| sequence_variations_len(&dec, 0, 40, sampler, opts, 2).unwrap())
+            .install(|| sequence_variations_len(&dec, 0, 40, sampler, 1.0, opts, 2).unwrap())
     };
     let run = |threads: usize, opts: &HmcOptions| run_with(Sampler::Hmc, threads, opts);
     let (a, stats) = run(1, &opts);
@@ -208,7 +208,7 @@ fn multi_chain_variations_are_reproducible_for_any_thread_count() {
         "ancestral draws differ"
     );
     let h = HmcOptions::default();
-    assert!(sequence_variations_len(&dec, 0, 1, Sampler::Hmc, &h, 1).is_err());
-    assert!(sequence_variations_len(&dec, 0, 40, Sampler::Hmc, &h, 0).is_err());
-    assert!(sequence_variations_len(&dec, 0, 1, Sampler::Ancestral, &h, 1).is_err());
+    assert!(sequence_variations_len(&dec, 0, 1, Sampler::Hmc, 1.0, &h, 1).is_err());
+    assert!(sequence_variations_len(&dec, 0, 40, Sampler::Hmc, 1.0, &h, 0).is_err());
+    assert!(sequence_variations_len(&dec, 0, 1, Sampler::Ancestral, 1.0, &h, 1).is_err());
 }

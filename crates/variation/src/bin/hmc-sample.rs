@@ -41,6 +41,10 @@ struct Args {
     /// draws of the same density, one forward pass each; burn-in and thinning do not apply)
     #[arg(long, default_value = "hmc", value_parser = parse_sampler)]
     sampler: Sampler,
+    /// Scale κ of every one-step variance of the sampled dynamics (1: the model's density, as in
+    /// the paper; below 1: trajectories closer to the learned dynamics, less frame-to-frame jitter)
+    #[arg(long, default_value_t = 1.0)]
+    variance_scale: f64,
     /// HMC burn-in iterations (step size adapted)
     #[arg(long, default_value_t = 200)]
     burn_in: usize,
@@ -107,6 +111,7 @@ fn main() -> ExitCode {
                 Assembly::Stitch
             },
             sampler: args.sampler,
+            variance_scale: args.variance_scale,
             burn_in: args.burn_in,
             thin: args.thin,
             target_accept: args.target_accept,
