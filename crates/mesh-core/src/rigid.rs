@@ -221,11 +221,23 @@ pub fn procrustes(
     for i in 0..src.len() {
         h += (src[i] - cs) * (dst[i] - cd).transpose() * w(i);
     }
+    rigid_from_moments(&cs, &cd, &h)
+}
+
+/// The rotation and translation of [`procrustes`] from its moments: source centroid `cs`,
+/// target centroid `cd`, cross-covariance `h = Σ w_i (s_i − cs)(d_i − cd)ᵀ` (Kabsch with the
+/// reflection guard). Non-finite moments or a failed SVD give a NaN motion.
+pub fn rigid_from_moments(cs: &Vector3<f64>, cd: &Vector3<f64>, h: &Matrix3<f64>) -> RigidMotion {
     let nan = || RigidMotion {
         rotation: Rotation3::from_matrix_unchecked(Matrix3::from_element(f64::NAN)),
         translation: Vector3::from_element(f64::NAN),
     };
-    if !h.iter().all(|x| x.is_finite()) || !cs.iter().chain(cd.iter()).all(|x| x.is_finite()) {
+    if !h
+        .iter()
+        .chain(cs.iter())
+        .chain(cd.iter())
+        .all(|x| x.is_finite())
+    {
         return nan();
     }
     let Some(svd) = h.try_svd(true, true, f64::EPSILON, 10_000) else {

@@ -10,7 +10,7 @@
 //! (as `transfer::assemble`), about 100 times cheaper, used for bulk decoding and statistics.
 
 use gpdm::predict::Predictor;
-use mesh_core::rigid::{procrustes, RigidMotion};
+use mesh_core::rigid::{procrustes, rigid_from_moments, RigidMotion};
 use mesh_core::{Error, Result};
 use nalgebra::{DMatrix, Vector3, Vector6};
 use rand::Rng;
@@ -470,43 +470,6 @@ impl Decoder<'_> {
                 Ok(())
             },
         )
-    }
-}
-
-/// The rotation and translation of [`procrustes`] from its moments: source centroid `cs`,
-/// target centroid `cd`, cross-covariance `h = Σ (s_i − cs)(d_i − cd)ᵀ` (same reflection guard).
-fn rigid_from_moments(
-    cs: &Vector3<f64>,
-    cd: &Vector3<f64>,
-    h: &nalgebra::Matrix3<f64>,
-) -> RigidMotion {
-    let nan = || RigidMotion {
-        rotation: nalgebra::Rotation3::from_matrix_unchecked(nalgebra::Matrix3::from_element(
-            f64::NAN,
-        )),
-        translation: Vector3::from_element(f64::NAN),
-    };
-    if !h
-        .iter()
-        .chain(cs.iter())
-        .chain(cd.iter())
-        .all(|x| x.is_finite())
-    {
-        return nan();
-    }
-    let Some(svd) = h.try_svd(true, true, f64::EPSILON, 10_000) else {
-        return nan();
-    };
-    let (Some(u), Some(v_t)) = (svd.u, svd.v_t) else {
-        return nan();
-    };
-    let v = v_t.transpose();
-    let d = (v * u.transpose()).determinant().signum();
-    let r = v * nalgebra::Matrix3::from_diagonal(&Vector3::new(1.0, 1.0, d)) * u.transpose();
-    let rotation = nalgebra::Rotation3::from_matrix_unchecked(r);
-    RigidMotion {
-        rotation,
-        translation: cd - rotation * cs,
     }
 }
 
