@@ -9,7 +9,9 @@
 //! Usage: body_budget [model] [--old-samples N] [--skip-old]
 //! Options: --ancestral (fast path samples by `Sampler::Ancestral` instead of HMC);
 //! --fast burn_in,thin,leapfrog,chains (default 30,1,5,2); --tol metres (kernel-basis
-//! bound at the training points, default 2e-7); --hmc burn_in,thin,leapfrog,chains (sweep).
+//! bound at the training points, default 2e-7); --hmc burn_in,thin,leapfrog,chains (sweep);
+//! --batch N (variations per fused GEMM, default 1); --block N (vertices per fused block); --fused-only N (after sampling, only
+//! the fused decoding, N times: a profiling aid).
 //! e.g.: OPENBLAS_NUM_THREADS=1 target/release/examples/body_budget out/work/variation/locomotion.model
 
 use std::time::Instant;
@@ -156,6 +158,16 @@ fn main() {
             [v[0], v[1], v[2], v[3]]
         })
         .unwrap_or([30, 1, 5, 2]);
+    let batch: usize = args
+        .iter()
+        .position(|a| a == "--batch")
+        .map(|i| args[i + 1].parse().expect("--batch N"))
+        .unwrap_or(1);
+    let block: usize = args
+        .iter()
+        .position(|a| a == "--block")
+        .map(|i| args[i + 1].parse().expect("--block N"))
+        .unwrap_or(variation::reconstruct::FUSED_BLOCK_VERTICES);
     let tol: f64 = args
         .iter()
         .position(|a| a == "--tol")
@@ -211,6 +223,28 @@ fn main() {
                 first * 1e3
             );
         }
+        if let Some(i) = args.iter().position(|a| a == "--fused-only") {
+            // Profiling aid (perf): only the fused decoding, repeated.
+            let reps: usize = args[i + 1].parse().expect("--fused-only N");
+            let fused = pool
+                .install(|| dec.fused(&mut Vec::new()))
+                .unwrap()
+                .with_block_vertices(block);
+            let t = Instant::now();
+            for _ in 0..reps {
+                pool.install(|| {
+                    fused.decode_average_many(&vars, &start, batch, |_, f| {
+                        std::hint::black_box(f);
+                    })
+                })
+                .unwrap();
+            }
+            println!(
+                "fused only: {:.3} s per 100 variations",
+                t.elapsed().as_secs_f64() / reps as f64
+            );
+            return;
+        }
         let sum = std::sync::Mutex::new(0.0);
         let first = std::sync::Mutex::new(Vec::new());
         let (t, c) = (Instant::now(), cpu());
@@ -225,6 +259,57 @@ fn main() {
         })
         .unwrap();
         let (decode, decode_cpu) = (t.elapsed().as_secs_f64(), cpu() - c);
+        // Fused, vertex-blocked decoding (no D × T intermediate), same variations.
+        let t = Instant::now();
+        let fused = pool
+            .install(|| dec.fused(&mut Vec::new()))
+            .unwrap()
+            .with_block_vertices(block);
+        let fsetup = t.elapsed().as_secs_f64();
+        {
+            let mut scratch = variation::reconstruct::FusedScratch::default();
+            let mut out = vec![nalgebra::Vector3::zeros(); len * model.template.len()];
+            fused
+                .decode_average_into(&vars[0], &start, &mut scratch, &mut out)
+                .unwrap();
+            let t = Instant::now();
+            fused
+                .decode_average_into(&vars[1], &start, &mut scratch, &mut out)
+                .unwrap();
+            println!(
+                "fused: one variation, one thread: {:.1} ms",
+                t.elapsed().as_secs_f64() * 1e3
+            );
+        }
+        let fsum = std::sync::Mutex::new(0.0);
+        let ffirst = std::sync::Mutex::new(Vec::new());
+        let (t, c) = (Instant::now(), cpu());
+        pool.install(|| {
+            fused.decode_average_many(&vars, &start, batch, |k, frames| {
+                let s: f64 = frames.iter().map(|v| v.x + v.y + v.z).sum();
+                *fsum.lock().unwrap() += s;
+                if k == 0 {
+                    *ffirst.lock().unwrap() = frames.to_vec();
+                }
+            })
+        })
+        .unwrap();
+        let (fdecode, fdecode_cpu) = (t.elapsed().as_secs_f64(), cpu() - c);
+        let fdev = first
+            .lock()
+            .unwrap()
+            .iter()
+            .zip(ffirst.lock().unwrap().iter())
+            .map(|(a, b)| (a - b).abs().max())
+            .fold(0.0, f64::max);
+        println!(
+            "fused (batch {batch}): setup {fsetup:.2} s; decode+assemble {} variations {fdecode:.3} s (CPU {fdecode_cpu:.2} s) vs bulk {decode:.3} s (CPU {decode_cpu:.2} s): {:.2}x wall; max |fused - bulk| variation 0: {fdev:.2e} m; checksum difference {:.2e}; total with sampling {:.3} s (CPU {:.2} s)",
+            vars.len(),
+            decode / fdecode,
+            (*fsum.lock().unwrap() - *sum.lock().unwrap()).abs(),
+            hmc + fdecode,
+            hmc_cpu + fdecode_cpu
+        );
         let exact = Decoder::new(&model, &mut Vec::new()).unwrap();
         let old0 = exact
             .decode::<rand_chacha::ChaCha8Rng>(&vars[0], &start, Assembly::Average, None)
@@ -240,7 +325,7 @@ fn main() {
             .collect();
         println!("variation 0: max deviation frame 0 {:.4} mm, all frames {:.4} mm; certified part bounds (mm) {bounds:?}", dev0 * 1e3, dev * 1e3);
         println!(
-            "fast: setup {setup:.2} s (kernel bases: rank, bound at training points mm {:?}); HMC burn-in {burn_in}, thin {thin}, {leapfrog} leapfrog, {chains} chains/part: {hmc:.3} s (CPU {hmc_cpu:.2} s); decode+assemble {} variations x {len} frames x {} vertices {decode:.3} s (CPU {decode_cpu:.2} s; max deviation from exact decoding {:.4} mm); total {:.3} s (CPU {:.2} s)",
+            "fast: setup {setup:.2} s (kernel bases: rank, bound at training points mm {:?}); sampling {sampler:?} (HMC settings: burn-in {burn_in}, thin {thin}, {leapfrog} leapfrog, {chains} chains/part) {hmc:.3} s (CPU {hmc_cpu:.2} s); decode+assemble {} variations x {len} frames x {} vertices {decode:.3} s (CPU {decode_cpu:.2} s; max deviation from exact decoding {:.4} mm); total {:.3} s (CPU {:.2} s)",
             info.iter().map(|(r, e)| (*r, (e * 1e4).round() / 10.0)).collect::<Vec<_>>(),
             vars.len(),
             model.template.len(),

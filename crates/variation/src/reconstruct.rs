@@ -75,12 +75,6 @@ impl<'a> Decoder<'a> {
         // ([`place`]): they are decoded exactly (10 columns, same kernel) so that basis errors
         // do not accumulate into the world placement, and the torso's basis covers its vertex
         // columns only (the scaled extra columns would dominate the bound's max_j ‖a_j‖).
-        let columns = |g: &gpdm::Gpdm, from: usize, n: usize| {
-            let mut c = g.clone();
-            c.y = g.y.columns(from, n).into_owned();
-            c.y_mean = g.y_mean.rows(from, n).into_owned();
-            c
-        };
         let torso = &model.parts[0].gpdm;
         let split = torso.y.ncols() > TORSO_EXTRA;
         let d0 = torso.y.ncols() - if split { TORSO_EXTRA } else { 0 };
@@ -440,12 +434,6 @@ impl Decoder<'_> {
         Ok(())
     }
 
-    // NOTE(next): issue 6's 1 s budget needs this fused per vertex block: per-frame transforms
-    // first (band rows of the part GEMMs, and the template moments in coefficient space, which
-    // are linear in the basis coefficients), then GEMM + transform + average per block of
-    // vertex rows while it is in L2, instead of materialising D × T per part (33 MB per
-    // variation). See /work/notes/h17-results.md.
-
     /// [`Decoder::decode_average_into`] for many variations in parallel (rayon, one variation
     /// per task, buffers reused within a thread); `consume(k, frames)` receives variation `k`'s
     /// bodies, frame-major (`T · V` vertices), from whichever thread decoded it.
@@ -471,6 +459,697 @@ impl Decoder<'_> {
             },
         )
     }
+}
+
+/// Vertices per block of the fused decoding: the block's basis rows (3·128 × (R+1)) and its
+/// poses for 100 frames (3·128 × 100) take about 0.65 MB together, within one core's L2
+/// (2 MB here; 96-192 measured within noise of each other on the demo body, 256 and 512
+/// 5-15 % slower).
+pub const FUSED_BLOCK_VERTICES: usize = 128;
+
+/// One part's eq. 12 as an affine map of coefficients: the poses of latent points `x_*` are
+/// `[B | ȳ] · [c(x_*); 1]` with `c(x_*) = Pᵀ k_Y(X, x_*)`. Exact predictor: `P = I` and
+/// `B = (K_Y⁻¹ Y)ᵀ`; kernel basis of rank R (`Predictor::with_kernel_basis`): `P = Q_R`, the
+/// top-R eigenvectors of `K_Y`, and `B = Yᵀ (K_Y⁻¹ Q_R)` (a Cholesky solve, no inverse).
+///
+/// NOTE(next): this rebuilds what `gpdm::predict::Predictor` holds privately (its `a_y` and
+/// `[B | ȳ]`); two read accessors there (coefficients of `xs`, and the basis) would remove the
+/// duplicate factorisation and eigen-decomposition.
+struct PartMap {
+    ky: gpdm::kernel::RbfLinear,
+    /// Training latents X (N × d).
+    x: faer::Mat<f64>,
+    /// `P` (N × R); `None` for the identity (exact predictor).
+    proj: Option<faer::Mat<f64>>,
+    /// `[B | ȳ]`, D × (R+1), column-major.
+    basis: faer::Mat<f64>,
+}
+
+impl PartMap {
+    /// The map of `g`'s predictor: exact when `rank` is `None`, else the kernel basis of that
+    /// rank (the eigen-decomposition and ordering of `Predictor::with_kernel_basis`).
+    fn new(g: &gpdm::Gpdm, rank: Option<usize>, notes: &mut Vec<String>) -> Result<Self> {
+        use gpdm::linalg::{mul, view, Cholesky};
+        let fail = |e: gpdm::GpdmError| Error::invalid(format!("fused decoding: {e}"));
+        let ky = gpdm::kernel::RbfLinear::pose(g.alpha);
+        let x = view(&g.x).to_owned();
+        let n = x.nrows();
+        let gram = ky.gram(x.as_ref()).k; // lower triangle filled
+        let chol = Cholesky::factor(gram.as_ref(), "K_Y").map_err(fail)?;
+        if chol.jitter > 0.0 {
+            notes.push(format!("K_Y: Cholesky needed jitter {:e}", chol.jitter));
+        }
+        let (proj, b) = match rank {
+            None => (None, chol.solve(view(&g.y)).transpose().to_owned()),
+            Some(r) => {
+                let r = r.clamp(1, n);
+                let full = DMatrix::from_fn(
+                    n,
+                    n,
+                    |i, j| {
+                        if i >= j {
+                            gram[(i, j)]
+                        } else {
+                            gram[(j, i)]
+                        }
+                    },
+                );
+                let eig = nalgebra::SymmetricEigen::new(full);
+                let mut order: Vec<usize> = (0..n).collect();
+                order.sort_by(|&a, &b| eig.eigenvalues[b].total_cmp(&eig.eigenvalues[a]));
+                let q = faer::Mat::from_fn(n, r, |i, c| eig.eigenvectors[(i, order[c])]);
+                let z = chol.solve(q.as_ref());
+                let b = mul(view(&g.y).transpose(), z.as_ref());
+                (Some(q), b)
+            }
+        };
+        let r = b.ncols();
+        let basis = faer::Mat::from_fn(b.nrows(), r + 1, |i, j| {
+            if j < r {
+                b[(i, j)]
+            } else {
+                g.y_mean[i]
+            }
+        });
+        Ok(PartMap { ky, x, proj, basis })
+    }
+
+    /// `[c(x_*); 1]` for the rows of `xs` (T × d), (R+1) × T.
+    fn coefficients(&self, xs: &DMatrix<f64>) -> Result<faer::Mat<f64>> {
+        if xs.ncols() != self.x.ncols() {
+            return Err(Error::invalid(format!(
+                "latent points of dimension {}, model has {}",
+                xs.ncols(),
+                self.x.ncols()
+            )));
+        }
+        let kstar = self.cross(xs); // N × T
+        let r = self.basis.ncols() - 1;
+        let mut c = faer::Mat::<f64>::zeros(r + 1, xs.nrows());
+        match &self.proj {
+            Some(q) => gemm(
+                c.as_mut().subrows_mut(0, r),
+                q.as_ref().transpose(),
+                kstar.as_ref(),
+            ),
+            None => c.as_mut().subrows_mut(0, r).copy_from(kstar.as_ref()),
+        }
+        c.as_mut().row_mut(r).fill(1.0);
+        Ok(c)
+    }
+}
+
+impl PartMap {
+    /// `k_Y(X, X_*)` (N × T), as `RbfLinear::cross` but with the vectorised
+    /// `gpdm::vexp::exp_fast` over per-coordinate arrays and `var·e^a` as `e^(a + ln var)`
+    /// (as `Predictor::pose_mean_cols`: libm's `exp` on the demo's near-zero kernel values
+    /// took a third of the fused decoding).
+    fn cross(&self, xs: &DMatrix<f64>) -> faer::Mat<f64> {
+        let (n, t) = (self.x.nrows(), xs.nrows());
+        let cols: Vec<Vec<f64>> = (0..xs.ncols())
+            .map(|c| (0..n).map(|i| self.x[(i, c)]).collect())
+            .collect();
+        let ln_var = if self.ky.var > 0.0 {
+            self.ky.var.ln()
+        } else {
+            f64::NEG_INFINITY
+        };
+        let half_gamma = -0.5 * self.ky.gamma;
+        let mut out = faer::Mat::<f64>::zeros(n, t);
+        let (mut dist, mut dot) = (vec![0.0; n], vec![0.0; n]);
+        for j in 0..t {
+            dist.fill(0.0);
+            dot.fill(0.0);
+            for (c, xc) in cols.iter().enumerate() {
+                let v = xs[(j, c)];
+                for ((s, dp), &xi) in dist.iter_mut().zip(dot.iter_mut()).zip(xc) {
+                    *s += (v - xi) * (v - xi);
+                    *dp += v * xi;
+                }
+            }
+            for (i, (&s, &dp)) in dist.iter().zip(&dot).enumerate() {
+                out[(i, j)] = gpdm::vexp::exp_fast(half_gamma * s + ln_var) + self.ky.lin * dp;
+            }
+        }
+        out
+    }
+}
+
+/// `out = a · b`, sequential.
+fn gemm(out: faer::MatMut<'_, f64>, a: faer::MatRef<'_, f64>, b: faer::MatRef<'_, f64>) {
+    faer::linalg::matmul::matmul(out, faer::Accum::Replace, a, b, 1.0, faer::Par::Seq);
+}
+
+/// The rows of `[B | ȳ]` of the given part vertices (3 per vertex).
+fn vertex_rows(basis: &faer::Mat<f64>, verts: impl Iterator<Item = usize>) -> faer::Mat<f64> {
+    let idx: Vec<usize> = verts.flat_map(|i| [3 * i, 3 * i + 1, 3 * i + 2]).collect();
+    faer::Mat::from_fn(idx.len(), basis.ncols(), |r, c| basis[(idx[r], c)])
+}
+
+/// Fused, vertex-blocked form of [`Decoder::decode_average_into`] (same result up to
+/// rounding; the `D × T` part poses never exist). Everything the per-vertex pass needs is
+/// first computed per frame from the coefficients `[c(x_t); 1]` alone:
+/// - the child-to-parent band alignments (Procrustes on the band rows only: `3·|band|` rows of
+///   `[B | ȳ]` per child and parent);
+/// - the body's alignment to the template, from moments that are linear in the coefficients:
+///   with `b_v = Σ_{k∋v} w_v (R_k p_{k,v} + t_k)` (`w_v = 1/coverage`) and `e_v = τ_v − τ̄`,
+///   `Σ_v b_v = Σ_k R_k S_k c + t_k Σ w` and `H = Σ_v b_v e_vᵀ = Σ_k R_k M_k c + t_k (Σ w e)ᵀ`,
+///   where `S_k = Σ_v w_v [B | ȳ]_v` (3 rows) and `M_k = Σ_v w_v e_v[b] [B | ȳ]_{v,a}` (9 rows)
+///   are precomputed;
+/// - the composed world ∘ template-alignment ∘ band transform `F_{k,t}` of every part.
+///
+/// Then, per block of [`FUSED_BLOCK_VERTICES`] part vertices, one GEMM of the block's basis
+/// rows with all frames' coefficients (in L2), and `w_v F_{k,t}(p)` written (first part of a
+/// vertex) or added (later parts) straight into the output. Each part's vertex rows are
+/// stored reordered: vertices in no other part first (written without weight or branch), and
+/// within a block all x rows, then all y, then all z, so that the transform loop runs over
+/// contiguous arrays.
+pub struct FusedDecoder<'d, 'a> {
+    dec: &'d Decoder<'a>,
+    maps: Vec<PartMap>,
+    /// Per child part: band rows of `[B | ȳ]` of the child, and of its parent.
+    band_child: Vec<faer::Mat<f64>>,
+    band_parent: Vec<faer::Mat<f64>>,
+    /// Per part: the 12 moment rows (`S_k`, then `M_k` row-major), `Σ w` and `Σ w e`.
+    moments: Vec<faer::Mat<f64>>,
+    wsum: Vec<f64>,
+    esum: Vec<Vector3<f64>>,
+    /// Per part, in the reordered vertex order (type doc): template vertex, averaging weight,
+    /// whether this part writes it first, and the count of vertices in this part only.
+    verts: Vec<Vec<u32>>,
+    weight: Vec<Vec<f64>>,
+    first: Vec<Vec<bool>>,
+    singles: Vec<usize>,
+    /// Per part: the reordered vertex rows of `[B | ȳ]`, blocked (type doc).
+    vbasis: Vec<faer::Mat<f64>>,
+    /// Per part: reordered position → local vertex index.
+    order: Vec<Vec<usize>>,
+    cd: Vector3<f64>,
+    block: usize,
+}
+
+/// Per-thread buffer of [`FusedDecoder::decode_average_into`].
+#[derive(Default)]
+pub struct FusedScratch {
+    block: Vec<f64>,
+}
+
+impl<'a> Decoder<'a> {
+    /// The fused bulk decoder of this decoder's predictors (exact, or kernel bases from
+    /// [`Decoder::with_pose_basis`]); jitter notes go to `notes`.
+    pub fn fused(&self, notes: &mut Vec<String>) -> Result<FusedDecoder<'_, 'a>> {
+        use rayon::prelude::*;
+        let model = self.model;
+        let nv = model.template.len();
+        let built = model
+            .parts
+            .par_iter()
+            .zip(&self.predictors)
+            .enumerate()
+            .map(|(k, (p, pr))| {
+                let mut n = Vec::new();
+                let g = &p.gpdm;
+                let m = if k == 0 && self.torso_extra.is_some() {
+                    let d0 = g.y.ncols() - TORSO_EXTRA;
+                    PartMap::new(&columns(g, 0, d0), pr.basis_rank(), &mut n)
+                } else {
+                    PartMap::new(g, pr.basis_rank(), &mut n)
+                };
+                let n = n
+                    .into_iter()
+                    .map(|s| format!("part '{}': {s}", p.part.name))
+                    .collect::<Vec<_>>();
+                m.map(|m| (m, n))
+            })
+            .collect::<Result<Vec<_>>>()?;
+        let mut maps = Vec::with_capacity(built.len());
+        for (m, n) in built {
+            notes.extend(n);
+            maps.push(m);
+        }
+        for (m, p) in maps.iter().zip(&model.parts) {
+            if m.basis.nrows() < 3 * p.part.vertices.len() {
+                return Err(Error::invalid(format!(
+                    "part '{}': {} pose values for {} vertices",
+                    p.part.name,
+                    m.basis.nrows(),
+                    p.part.vertices.len()
+                )));
+            }
+        }
+        let tpl = &model.template;
+        let cd = tpl.iter().sum::<Vector3<f64>>() / nv.max(1) as f64;
+        let mut seen = vec![false; nv];
+        let (mut weight, mut first, mut order) = (Vec::new(), Vec::new(), Vec::new());
+        let (mut vlist, mut singles) = (Vec::new(), Vec::new());
+        let (mut moments, mut wsum, mut esum) = (Vec::new(), Vec::new(), Vec::new());
+        let (mut band_child, mut band_parent) = (Vec::new(), Vec::new());
+        for (k, p) in model.parts.iter().enumerate() {
+            let verts = &p.part.vertices;
+            let w: Vec<f64> = verts
+                .iter()
+                .map(|&v| 1.0 / self.coverage[v as usize] as f64)
+                .collect();
+            first.push(
+                verts
+                    .iter()
+                    .map(|&v| !std::mem::replace(&mut seen[v as usize], true))
+                    .collect::<Vec<bool>>(),
+            );
+            let b = &maps[k].basis;
+            let mut mom = faer::Mat::<f64>::zeros(12, b.ncols());
+            let (mut ws, mut es) = (0.0, Vector3::zeros());
+            for (i, (&v, &wi)) in verts.iter().zip(&w).enumerate() {
+                let e = tpl[v as usize] - cd;
+                ws += wi;
+                es += wi * e;
+                for c in 0..b.ncols() {
+                    for a in 0..3 {
+                        let x = wi * b[(3 * i + a, c)];
+                        mom[(a, c)] += x;
+                        for (bb, eb) in e.iter().enumerate() {
+                            mom[(3 + 3 * a + bb, c)] += x * eb;
+                        }
+                    }
+                }
+            }
+            moments.push(mom);
+            wsum.push(ws);
+            esum.push(es);
+            // Vertices in this part only first (stable), then the shared ones.
+            let single = |i: usize| self.coverage[verts[i] as usize] == 1;
+            let mut o: Vec<usize> = (0..verts.len()).filter(|&i| single(i)).collect();
+            singles.push(o.len());
+            o.extend((0..verts.len()).filter(|&i| !single(i)));
+            let fk = first.last_mut().expect("pushed above");
+            *fk = o.iter().map(|&i| fk[i]).collect();
+            weight.push(o.iter().map(|&i| w[i]).collect());
+            vlist.push(o.iter().map(|&i| verts[i]).collect());
+            order.push(o);
+            if k == 0 {
+                band_child.push(faer::Mat::zeros(0, b.ncols()));
+                band_parent.push(faer::Mat::zeros(0, b.ncols()));
+            } else {
+                let q = p.part.parent.expect("checked in new");
+                band_child.push(vertex_rows(b, self.bands[k].iter().map(|&(i, _)| i)));
+                band_parent.push(vertex_rows(
+                    &maps[q].basis,
+                    self.bands[k].iter().map(|&(_, j)| j),
+                ));
+            }
+        }
+        Ok(FusedDecoder {
+            dec: self,
+            maps,
+            band_child,
+            band_parent,
+            moments,
+            wsum,
+            esum,
+            verts: vlist,
+            weight,
+            first,
+            singles,
+            vbasis: Vec::new(),
+            order,
+            cd,
+            block: 0,
+        }
+        .with_block_vertices(FUSED_BLOCK_VERTICES))
+    }
+}
+
+impl FusedDecoder<'_, '_> {
+    /// Sets the number of vertices per block (at least 1; the default suits a 2 MB L2).
+    pub fn with_block_vertices(mut self, n: usize) -> Self {
+        self.block = n.max(1);
+        self.vbasis = self
+            .maps
+            .iter()
+            .zip(&self.order)
+            .map(|(m, o)| {
+                let b = &m.basis;
+                let mut rows = Vec::with_capacity(3 * o.len());
+                for blk in o.chunks(self.block) {
+                    for a in 0..3 {
+                        rows.extend(blk.iter().map(|&i| 3 * i + a));
+                    }
+                }
+                faer::Mat::from_fn(rows.len(), b.ncols(), |r, c| b[(rows[r], c)])
+            })
+            .collect();
+        self
+    }
+
+    /// [`Decoder::decode_average_into`], fused (type doc): frame `t`'s body into
+    /// `out[t·V..(t+1)·V]`.
+    pub fn decode_average_into(
+        &self,
+        latents: &[DMatrix<f64>],
+        start: &RigidMotion,
+        scratch: &mut FusedScratch,
+        out: &mut [Vector3<f64>],
+    ) -> Result<()> {
+        self.decode_batch(&[latents], start, scratch, &mut [out])
+    }
+
+    /// Several variations at once, all of the same length: their coefficients side by side,
+    /// so that each block's basis rows are read once for the whole batch (one GEMM of
+    /// `batch · T` columns). `outs[b]` receives variation `b` as in
+    /// [`FusedDecoder::decode_average_into`].
+    pub fn decode_batch(
+        &self,
+        variations: &[&[DMatrix<f64>]],
+        start: &RigidMotion,
+        scratch: &mut FusedScratch,
+        outs: &mut [&mut [Vector3<f64>]],
+    ) -> Result<()> {
+        let k_parts = self.maps.len();
+        let nv = self.dec.model.template.len();
+        let t_len = variations
+            .first()
+            .and_then(|v| v.first())
+            .map_or(0, |l| l.nrows());
+        if variations.len() != outs.len()
+            || outs.iter().any(|o| o.len() != t_len * nv)
+            || variations
+                .iter()
+                .any(|v| v.iter().any(|l| l.nrows() != t_len))
+        {
+            return Err(Error::invalid(
+                "latent trajectories of different lengths or output of the wrong size",
+            ));
+        }
+        let mut coef: Vec<faer::Mat<f64>> = self
+            .maps
+            .iter()
+            .map(|m| faer::Mat::zeros(m.basis.ncols(), variations.len() * t_len))
+            .collect();
+        let mut frames: Vec<Vec<RigidMotion>> = vec![Vec::new(); k_parts];
+        for (b, latents) in variations.iter().enumerate() {
+            let (c, f) = self.frame_transforms(latents, start)?;
+            for k in 0..k_parts {
+                coef[k]
+                    .as_mut()
+                    .subcols_mut(b * t_len, t_len)
+                    .copy_from(c[k].as_ref());
+                frames[k].extend_from_slice(&f[k]);
+            }
+        }
+        self.write_bodies(&coef, &frames, t_len, scratch, outs);
+        Ok(())
+    }
+
+    /// Per part, the coefficients `[c(x_t); 1]` ((R+1) × T) and the composed transforms
+    /// `F_{k,t}` of one variation (type doc).
+    fn frame_transforms(
+        &self,
+        latents: &[DMatrix<f64>],
+        start: &RigidMotion,
+    ) -> Result<(Vec<faer::Mat<f64>>, Vec<Vec<RigidMotion>>)> {
+        let dec = self.dec;
+        let k_parts = self.maps.len();
+        if latents.len() != k_parts {
+            return Err(Error::invalid(format!(
+                "{} latent trajectories for {k_parts} parts",
+                latents.len()
+            )));
+        }
+        let t_len = latents[0].nrows();
+        let nv = dec.model.template.len();
+        let coef = self
+            .maps
+            .iter()
+            .zip(latents)
+            .enumerate()
+            .map(|(k, (m, x))| {
+                m.coefficients(x)
+                    .map_err(|e| Error::invalid(format!("part {k}: {e}")))
+            })
+            .collect::<Result<Vec<_>>>()?;
+        // Displacement and gravity values (unscaled), TORSO_EXTRA × T.
+        let mut tail = faer::Mat::<f64>::zeros(TORSO_EXTRA, t_len);
+        match &dec.torso_extra {
+            Some(pr) => {
+                let mut buf = vec![0.0; TORSO_EXTRA * t_len];
+                pr.pose_mean_cols(&latents[0], &mut buf)
+                    .map_err(|e| Error::invalid(format!("part 0: {e}")))?;
+                tail = faer::Mat::from_fn(TORSO_EXTRA, t_len, |i, t| buf[t * TORSO_EXTRA + i]);
+            }
+            None => {
+                let b = &self.maps[0].basis;
+                if b.nrows() < TORSO_EXTRA {
+                    return Err(Error::invalid("torso has no displacement columns"));
+                }
+                let rows = b.as_ref().subrows(b.nrows() - TORSO_EXTRA, TORSO_EXTRA);
+                gemm(tail.as_mut(), rows, coef[0].as_ref());
+            }
+        }
+        let extra = |t: usize, k: usize| tail[(k, t)] / extra_scale(k, dec.model.scale);
+        let disp: Vec<[f64; 6]> = (0..t_len)
+            .map(|t| std::array::from_fn(|k| extra(t, k)))
+            .collect();
+        let grav: Vec<[f64; 4]> = (0..t_len)
+            .map(|t| std::array::from_fn(|k| extra(t, 6 + k)))
+            .collect();
+        let world = world_poses(t_len, &disp, &grav, &dec.model.up, start);
+        // Band rows and moments of every frame.
+        let small = |m: &faer::Mat<f64>, c: &faer::Mat<f64>| {
+            let mut o = faer::Mat::<f64>::zeros(m.nrows(), c.ncols());
+            gemm(o.as_mut(), m.as_ref(), c.as_ref());
+            o
+        };
+        let parent = |k: usize| dec.model.parts[k].part.parent.expect("checked in new");
+        let bc: Vec<faer::Mat<f64>> = (0..k_parts)
+            .map(|k| small(&self.band_child[k], &coef[k]))
+            .collect();
+        let bp: Vec<faer::Mat<f64>> = (0..k_parts)
+            .map(|k| {
+                let q = if k == 0 { 0 } else { parent(k) };
+                small(&self.band_parent[k], &coef[q])
+            })
+            .collect();
+        let mom: Vec<faer::Mat<f64>> = (0..k_parts)
+            .map(|k| small(&self.moments[k], &coef[k]))
+            .collect();
+        // F_{k,t} = world_t ∘ align_t ∘ band_{k,t}, stored [k][t].
+        let mut frames: Vec<Vec<RigidMotion>> = vec![Vec::with_capacity(t_len); k_parts];
+        let mut placed: Vec<RigidMotion> = Vec::with_capacity(k_parts);
+        let (mut src, mut dst) = (Vec::new(), Vec::new());
+        let vtx = |m: &faer::Mat<f64>, i: usize, t: usize| {
+            Vector3::new(m[(3 * i, t)], m[(3 * i + 1, t)], m[(3 * i + 2, t)])
+        };
+        for t in 0..t_len {
+            placed.clear();
+            placed.push(RigidMotion::identity());
+            for k in 1..k_parts {
+                let q = parent(k);
+                src.clear();
+                dst.clear();
+                for i in 0..self.band_child[k].nrows() / 3 {
+                    src.push(vtx(&bc[k], i, t));
+                    dst.push(placed[q].apply(&vtx(&bp[k], i, t)));
+                }
+                placed.push(procrustes(&src, &dst, None));
+            }
+            let mut cs = Vector3::zeros();
+            let mut h = nalgebra::Matrix3::zeros();
+            for (k, pk) in placed.iter().enumerate() {
+                let m = &mom[k];
+                let s = Vector3::new(m[(0, t)], m[(1, t)], m[(2, t)]);
+                let mk = nalgebra::Matrix3::from_fn(|a, b| m[(3 + 3 * a + b, t)]);
+                cs += pk.rotation * s + pk.translation * self.wsum[k];
+                h += pk.rotation.matrix() * mk + pk.translation * self.esum[k].transpose();
+            }
+            cs /= nv as f64;
+            let g = world[t].compose(&rigid_from_moments(&cs, &self.cd, &h));
+            for (f, pk) in frames.iter_mut().zip(&placed) {
+                f.push(g.compose(pk));
+            }
+        }
+        Ok((coef, frames))
+    }
+
+    /// The per-block pass (type doc): `coef[k]` and `frames[k]` hold the columns of every
+    /// variation of `outs`, `t_len` each.
+    fn write_bodies(
+        &self,
+        coef: &[faer::Mat<f64>],
+        frames: &[Vec<RigidMotion>],
+        t_len: usize,
+        scratch: &mut FusedScratch,
+        outs: &mut [&mut [Vector3<f64>]],
+    ) {
+        let nv = self.dec.model.template.len();
+        let cols = t_len * outs.len();
+        for k in 0..self.maps.len() {
+            let verts = &self.verts[k];
+            let basis = self.vbasis[k].as_ref();
+            for i0 in (0..verts.len()).step_by(self.block) {
+                let n = self.block.min(verts.len() - i0);
+                scratch.block.resize(3 * n * cols, 0.0);
+                let blk =
+                    faer::MatMut::from_column_major_slice_mut(&mut scratch.block, 3 * n, cols);
+                gemm(blk, basis.subrows(3 * i0, 3 * n), coef[k].as_ref());
+                let (vs, ws, fs) = (
+                    &verts[i0..i0 + n],
+                    &self.weight[k][i0..i0 + n],
+                    &self.first[k][i0..i0 + n],
+                );
+                let ns = self.singles[k].saturating_sub(i0).min(n);
+                for (j, col) in scratch.block.chunks_exact(3 * n).enumerate() {
+                    let f = &frames[k][j];
+                    let r = f.rotation.matrix();
+                    let t = j % t_len;
+                    let o = &mut outs[j / t_len][t * nv..(t + 1) * nv];
+                    let (xs, rest) = col.split_at(n);
+                    let (ys, zs) = rest.split_at(n);
+                    place_singles(o, &vs[..ns], [&xs[..ns], &ys[..ns], &zs[..ns]], f);
+                    for i in ns..n {
+                        let p = Vector3::new(xs[i], ys[i], zs[i]);
+                        let y = ws[i] * (r * p + f.translation);
+                        if fs[i] {
+                            o[vs[i] as usize] = y;
+                        } else {
+                            o[vs[i] as usize] += y;
+                        }
+                    }
+                }
+            }
+        }
+    }
+
+    /// [`Decoder::decode_average_many`] through the fused path: rayon tasks of `batch`
+    /// consecutive variations ([`FusedDecoder::decode_batch`]; variations of different
+    /// lengths go one by one), buffers reused within a thread. The batches do not depend on
+    /// the thread count, so neither do the results. `consume(k, frames)` receives variation
+    /// `k`'s bodies, frame-major. On the demo body `batch = 1` was fastest (2 and 4: 0-15 %
+    /// slower; the output writes, not the basis reads, are the memory traffic that counts).
+    pub fn decode_average_many<F>(
+        &self,
+        variations: &[Vec<DMatrix<f64>>],
+        start: &RigidMotion,
+        batch: usize,
+        consume: F,
+    ) -> Result<()>
+    where
+        F: Fn(usize, &[Vector3<f64>]) + Sync,
+    {
+        use rayon::prelude::*;
+        let nv = self.dec.model.template.len();
+        let len = |v: &Vec<DMatrix<f64>>| v.first().map_or(0, |l| l.nrows());
+        // Buffers go back to a shared pool when rayon drops a job's state, so that the
+        // 32 MB outputs are allocated (and page-faulted) about once per thread, not per job.
+        let pool = std::sync::Mutex::new(Vec::new());
+        variations
+            .par_chunks(batch.max(1))
+            .enumerate()
+            .try_for_each_init(
+                || Pooled::take(&pool),
+                |state, (c, chunk)| {
+                    let (scratch, bufs) = state.get();
+                    let t = len(&chunk[0]);
+                    let groups: Vec<&[Vec<DMatrix<f64>>]> = if chunk.iter().all(|v| len(v) == t) {
+                        vec![chunk]
+                    } else {
+                        chunk.chunks(1).collect()
+                    };
+                    let mut k0 = c * batch.max(1);
+                    for g in groups {
+                        let t = len(&g[0]);
+                        bufs.resize_with(g.len(), Vec::new);
+                        let mut outs: Vec<&mut [Vector3<f64>]> = bufs
+                            .iter_mut()
+                            .map(|b| {
+                                b.resize(t * nv, Vector3::zeros());
+                                &mut b[..]
+                            })
+                            .collect();
+                        let lat: Vec<&[DMatrix<f64>]> = g.iter().map(|v| &v[..]).collect();
+                        self.decode_batch(&lat, start, scratch, &mut outs)?;
+                        for (i, o) in outs.iter().enumerate() {
+                            consume(k0 + i, o);
+                        }
+                        k0 += g.len();
+                    }
+                    Ok(())
+                },
+            )
+    }
+}
+
+/// Per-thread buffers of [`FusedDecoder::decode_average_many`].
+type Buffers = (FusedScratch, Vec<Vec<Vector3<f64>>>);
+
+/// Buffers borrowed from a pool and returned to it on drop.
+struct Pooled<'p> {
+    pool: &'p std::sync::Mutex<Vec<Buffers>>,
+    item: Option<Buffers>,
+}
+
+impl<'p> Pooled<'p> {
+    fn take(pool: &'p std::sync::Mutex<Vec<Buffers>>) -> Self {
+        let item = pool.lock().ok().and_then(|mut p| p.pop());
+        Pooled {
+            pool,
+            item: Some(item.unwrap_or_default()),
+        }
+    }
+
+    fn get(&mut self) -> (&mut FusedScratch, &mut Vec<Vec<Vector3<f64>>>) {
+        let (s, b) = self.item.get_or_insert_with(Default::default);
+        (s, b)
+    }
+}
+
+impl Drop for Pooled<'_> {
+    fn drop(&mut self) {
+        if let (Some(item), Ok(mut p)) = (self.item.take(), self.pool.lock()) {
+            p.push(item);
+        }
+    }
+}
+
+/// `o[v_i] = F(x_i, y_i, z_i)` for the vertices of a block that are in one part only; with
+/// AVX2 when the CPU has it (the same arithmetic, no FMA contraction: identical results).
+fn place_singles(o: &mut [Vector3<f64>], vs: &[u32], p: [&[f64]; 3], f: &RigidMotion) {
+    #[cfg(target_arch = "x86_64")]
+    if std::arch::is_x86_feature_detected!("avx2") {
+        // SAFETY: the CPU supports AVX2 (checked just above).
+        unsafe { place_singles_avx2(o, vs, p, f) };
+        return;
+    }
+    place_singles_soa(o, vs, p, f)
+}
+
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2")]
+fn place_singles_avx2(o: &mut [Vector3<f64>], vs: &[u32], p: [&[f64]; 3], f: &RigidMotion) {
+    place_singles_soa(o, vs, p, f)
+}
+
+#[inline(always)]
+fn place_singles_soa(o: &mut [Vector3<f64>], vs: &[u32], p: [&[f64]; 3], f: &RigidMotion) {
+    let r = f.rotation.matrix();
+    let t = f.translation;
+    let [xs, ys, zs] = p;
+    let n = vs.len().min(xs.len()).min(ys.len()).min(zs.len());
+    for i in 0..n {
+        let (x, y, z) = (xs[i], ys[i], zs[i]);
+        o[vs[i] as usize] = Vector3::new(
+            r[(0, 0)] * x + r[(0, 1)] * y + r[(0, 2)] * z + t[0],
+            r[(1, 0)] * x + r[(1, 1)] * y + r[(1, 2)] * z + t[1],
+            r[(2, 0)] * x + r[(2, 1)] * y + r[(2, 2)] * z + t[2],
+        );
+    }
+}
+
+/// The columns `from..from + n` of a GPDM's poses (same latents and hyperparameters).
+fn columns(g: &gpdm::Gpdm, from: usize, n: usize) -> gpdm::Gpdm {
+    let mut c = g.clone();
+    c.y = g.y.columns(from, n).into_owned();
+    c.y_mean = g.y_mean.rows(from, n).into_owned();
+    c
 }
 
 /// World poses `P_t` of [`place`] (module doc there) for `n` frames.

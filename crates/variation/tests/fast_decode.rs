@@ -7,7 +7,7 @@ use mesh_core::rigid::RigidMotion;
 use nalgebra::{DMatrix, Rotation3, Vector3};
 use variation::group::PartDef;
 use variation::part_data::{DisplacementScale, TORSO_EXTRA};
-use variation::reconstruct::{Assembly, DecodeScratch, Decoder};
+use variation::reconstruct::{Assembly, DecodeScratch, Decoder, FusedScratch};
 use variation::sample::{sequence_variations_len, Sampler};
 use variation::train::{PartModel, SequenceInfo, VariationModel};
 
@@ -211,4 +211,108 @@ fn multi_chain_variations_are_reproducible_for_any_thread_count() {
     assert!(sequence_variations_len(&dec, 0, 1, Sampler::Hmc, 1.0, &h, 1).is_err());
     assert!(sequence_variations_len(&dec, 0, 40, Sampler::Hmc, 1.0, &h, 0).is_err());
     assert!(sequence_variations_len(&dec, 0, 1, Sampler::Ancestral, 1.0, &h, 1).is_err());
+}
+
+/// Max coordinate difference of two body sequences of the same layout.
+fn max_diff(a: &[Vector3<f64>], b: &[Vector3<f64>]) -> f64 {
+    assert_eq!(a.len(), b.len());
+    a.iter()
+        .zip(b)
+        .map(|(x, y)| (x - y).abs().max())
+        .fold(0.0, f64::max)
+}
+
+#[test]
+fn fused_decoding_matches_bulk_decoding() {
+    let m = model();
+    let nv = m.template.len();
+    let start = m.sequences[1].start_pose;
+    let lat: Vec<Vec<DMatrix<f64>>> = [1.0, 1.1, 0.9]
+        .iter()
+        .map(|f| m.latents(1).iter().map(|x| x * *f).collect())
+        .collect();
+    let exact = Decoder::new(&m, &mut Vec::new()).unwrap();
+    let (basis, _) = Decoder::with_pose_basis(&m, 1e-9, &mut Vec::new()).unwrap();
+    let mut scratch = DecodeScratch::default();
+    let mut fscratch = FusedScratch::default();
+    let (mut want, mut got) = (
+        vec![Vector3::zeros(); 30 * nv],
+        vec![Vector3::zeros(); 30 * nv],
+    );
+    for dec in [&exact, &basis] {
+        let fused = dec.fused(&mut Vec::new()).unwrap();
+        // One block per part, and blocks of 7 vertices (several blocks, a short last one).
+        for f in [
+            fused.with_block_vertices(1000),
+            dec.fused(&mut Vec::new()).unwrap().with_block_vertices(7),
+        ] {
+            for x in &lat {
+                dec.decode_average_into(x, &start, &mut scratch, &mut want)
+                    .unwrap();
+                got.fill(Vector3::new(9.0, 9.0, 9.0)); // stale values must be overwritten
+                f.decode_average_into(x, &start, &mut fscratch, &mut got)
+                    .unwrap();
+                let d = max_diff(&got, &want);
+                assert!(d < 1e-10, "fused vs bulk: {d}");
+            }
+        }
+    }
+    // Many variations: the same bodies on 1 and 2 threads, and as one by one.
+    let fused = basis
+        .fused(&mut Vec::new())
+        .unwrap()
+        .with_block_vertices(16);
+    let run = |threads: usize| {
+        let got = std::sync::Mutex::new(vec![Vec::new(); lat.len()]);
+        rayon::ThreadPoolBuilder::new()
+            .num_threads(threads)
+            .build()
+            .unwrap()
+            .install(|| {
+                fused.decode_average_many(&lat, &start, 2, |k, f| {
+                    got.lock().unwrap()[k] = f.to_vec()
+                })
+            })
+            .unwrap();
+        got.into_inner().unwrap()
+    };
+    let one = run(1);
+    assert_eq!(one, run(2), "1 vs 2 threads");
+    for (k, x) in lat.iter().enumerate() {
+        fused
+            .decode_average_into(x, &start, &mut fscratch, &mut got)
+            .unwrap();
+        let d = max_diff(&one[k], &got);
+        assert!(d < 1e-12, "batch vs one by one: {d}");
+    }
+    // A batch with a shorter variation goes one by one: same bodies.
+    let short: Vec<DMatrix<f64>> = lat[2].iter().map(|x| x.rows(0, 20).into_owned()).collect();
+    let mixed = vec![lat[0].clone(), short.clone()];
+    let got2 = std::sync::Mutex::new(vec![Vec::new(); 2]);
+    fused
+        .decode_average_many(&mixed, &start, 2, |k, f| {
+            got2.lock().unwrap()[k] = f.to_vec()
+        })
+        .unwrap();
+    let got2 = got2.into_inner().unwrap();
+    let mut s_out = vec![Vector3::zeros(); 20 * nv];
+    fused
+        .decode_average_into(&short, &start, &mut fscratch, &mut s_out)
+        .unwrap();
+    assert_eq!(got2[1], s_out);
+    assert!(max_diff(&got2[0], &one[0]) < 1e-12);
+    // Bad input: wrong part count, output size, latent dimension.
+    assert!(fused
+        .decode_average_into(&lat[0][..1], &start, &mut fscratch, &mut got)
+        .is_err());
+    assert!(fused
+        .decode_average_into(&lat[0], &start, &mut fscratch, &mut got[1..])
+        .is_err());
+    let wide: Vec<DMatrix<f64>> = lat[0]
+        .iter()
+        .map(|x| x.clone().insert_column(0, 0.0))
+        .collect();
+    assert!(fused
+        .decode_average_into(&wide, &start, &mut fscratch, &mut got)
+        .is_err());
 }
