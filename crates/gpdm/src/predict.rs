@@ -193,6 +193,54 @@ impl Predictor {
         self.basis.as_ref().map(|b| b.ncols() - 1)
     }
 
+    /// Eq. 12 factored as `μ_Y(x_t) = [B | ȳ] [c(x_t); 1]`: the coefficients `[c(x_t); 1]`
+    /// ((R+1) × T) of the rows of `xs`, `c = a_yᵀ k_Y(X, x_t)` with a basis and `c = k_Y(X, x_t)`
+    /// (R = N) for the exact predictor. With [`Predictor::pose_basis`], callers that need only
+    /// some pose coordinates (a block of vertices) multiply only those rows.
+    pub fn pose_coefficients(&self, xs: &DMatrix<f64>) -> Result<Mat<f64>> {
+        self.check_latent(xs)?;
+        let kstar = self.pose_cross(xs); // N × T
+        let t = xs.nrows();
+        let r = if self.basis.is_some() {
+            self.a_y.ncols()
+        } else {
+            kstar.nrows()
+        };
+        let mut coef = Mat::<f64>::zeros(r + 1, t);
+        if self.basis.is_some() {
+            matmul(
+                coef.as_mut().subrows_mut(0, r),
+                Accum::Replace,
+                self.a_y.as_ref().transpose(),
+                kstar.as_ref(),
+                1.0,
+                Par::Seq,
+            );
+        } else {
+            coef.as_mut().subrows_mut(0, r).copy_from(kstar.as_ref());
+        }
+        coef.as_mut().row_mut(r).fill(1.0);
+        Ok(coef)
+    }
+
+    /// `[B | ȳ]` (D × (R+1), column-major) of [`Predictor::pose_coefficients`]: the stored basis,
+    /// or `[(K_Y⁻¹ Y)ᵀ | ȳ]` for the exact predictor (built here: call once, not per frame).
+    pub fn pose_basis(&self) -> Mat<f64> {
+        match &self.basis {
+            Some(b) => b.clone(),
+            None => {
+                let n = self.a_y.nrows();
+                Mat::from_fn(self.a_y.ncols(), n + 1, |i, j| {
+                    if j < n {
+                        self.a_y[(j, i)]
+                    } else {
+                        self.y_mean[i]
+                    }
+                })
+            }
+        }
+    }
+
     /// Eq. 12 for the rows of `xs` (T × d) written as the columns of `out` (D × T column-major,
     /// one frame per column, so that each frame's coordinates are contiguous): `out = ȳ 1ᵀ + (K_Y⁻¹ Y)ᵀ
     /// k_Y(X, X_*)`, or `ȳ 1ᵀ + V_r (k_Y(X_*, X) a_y)ᵀ` with a pose basis. One sequential
@@ -208,21 +256,10 @@ impl Predictor {
             ));
         }
         let mut out = MatMut::from_column_major_slice_mut(out, self.pose_dim(), t);
-        let kstar = self.pose_cross(xs); // N × T
         if let Some(b) = &self.basis {
             // [B | ȳ] · [coef; 1ᵀ]: the mean rides in the GEMM, so the D × T output is written
             // once (the separate fill pass cost as much as the GEMM: the output is memory-bound).
-            let r = b.ncols() - 1;
-            let mut coef = Mat::<f64>::zeros(r + 1, t);
-            matmul(
-                coef.as_mut().subrows_mut(0, r),
-                Accum::Replace,
-                self.a_y.as_ref().transpose(),
-                kstar.as_ref(),
-                1.0,
-                Par::Seq,
-            );
-            coef.as_mut().row_mut(r).fill(1.0);
+            let coef = self.pose_coefficients(xs)?;
             matmul(
                 out,
                 Accum::Replace,
@@ -233,6 +270,7 @@ impl Predictor {
             );
             return Ok(());
         }
+        let kstar = self.pose_cross(xs); // N × T
         for j in 0..t {
             for (o, &m) in out.rb_mut().col_mut(j).iter_mut().zip(self.y_mean.iter()) {
                 *o = m;

@@ -327,18 +327,13 @@ impl Decoder<'_> {
         out: &mut [Vector3<f64>],
     ) -> Result<()> {
         let k_parts = self.predictors.len();
-        if latents.len() != k_parts {
-            return Err(Error::invalid(format!(
-                "{} latent trajectories for {k_parts} parts",
-                latents.len()
-            )));
-        }
-        let t_len = latents[0].nrows();
+        let t_len = variation_frames(latents, k_parts)?;
         let nv = self.model.template.len();
-        if latents.iter().any(|l| l.nrows() != t_len) || out.len() != t_len * nv {
-            return Err(Error::invalid(
-                "latent trajectories of different lengths or output of the wrong size",
-            ));
+        if out.len() != t_len * nv {
+            return Err(Error::invalid(format!(
+                "output of {} vertices for {t_len} frames of {nv}",
+                out.len()
+            )));
         }
         scratch.parts.resize_with(k_parts, Vec::new);
         for (k, (pr, x)) in self.predictors.iter().zip(latents).enumerate() {
@@ -468,131 +463,12 @@ impl Decoder<'_> {
 pub const FUSED_BLOCK_VERTICES: usize = 128;
 
 /// One part's eq. 12 as an affine map of coefficients: the poses of latent points `x_*` are
-/// `[B | ȳ] · [c(x_*); 1]` with `c(x_*) = Pᵀ k_Y(X, x_*)`. Exact predictor: `P = I` and
-/// `B = (K_Y⁻¹ Y)ᵀ`; kernel basis of rank R (`Predictor::with_kernel_basis`): `P = Q_R`, the
-/// top-R eigenvectors of `K_Y`, and `B = Yᵀ (K_Y⁻¹ Q_R)` (a Cholesky solve, no inverse).
-///
-/// NOTE(next): this rebuilds what `gpdm::predict::Predictor` holds privately (its `a_y` and
-/// `[B | ȳ]`); two read accessors there (coefficients of `xs`, and the basis) would remove the
-/// duplicate factorisation and eigen-decomposition.
+/// `[B | ȳ] · [c(x_*); 1]` (`Predictor::pose_coefficients` and `Predictor::pose_basis`: exact,
+/// `c = k_Y(X, x_*)` and `B = (K_Y⁻¹ Y)ᵀ`; kernel basis of rank R, `c = Q_Rᵀ k_Y(X, x_*)` and
+/// `B = (K_Y⁻¹ Y)ᵀ Q_R`). The fused decoder multiplies `[B | ȳ]` one block of vertex rows at a time.
 struct PartMap {
-    ky: gpdm::kernel::RbfLinear,
-    /// Training latents X (N × d).
-    x: faer::Mat<f64>,
-    /// `P` (N × R); `None` for the identity (exact predictor).
-    proj: Option<faer::Mat<f64>>,
-    /// `[B | ȳ]`, D × (R+1), column-major.
+    /// `[B | ȳ]`, D × (R+1), column-major (the torso without its displacement rows).
     basis: faer::Mat<f64>,
-}
-
-impl PartMap {
-    /// The map of `g`'s predictor: exact when `rank` is `None`, else the kernel basis of that
-    /// rank (the eigen-decomposition and ordering of `Predictor::with_kernel_basis`).
-    fn new(g: &gpdm::Gpdm, rank: Option<usize>, notes: &mut Vec<String>) -> Result<Self> {
-        use gpdm::linalg::{mul, view, Cholesky};
-        let fail = |e: gpdm::GpdmError| Error::invalid(format!("fused decoding: {e}"));
-        let ky = gpdm::kernel::RbfLinear::pose(g.alpha);
-        let x = view(&g.x).to_owned();
-        let n = x.nrows();
-        let gram = ky.gram(x.as_ref()).k; // lower triangle filled
-        let chol = Cholesky::factor(gram.as_ref(), "K_Y").map_err(fail)?;
-        if chol.jitter > 0.0 {
-            notes.push(format!("K_Y: Cholesky needed jitter {:e}", chol.jitter));
-        }
-        let (proj, b) = match rank {
-            None => (None, chol.solve(view(&g.y)).transpose().to_owned()),
-            Some(r) => {
-                let r = r.clamp(1, n);
-                let full = DMatrix::from_fn(
-                    n,
-                    n,
-                    |i, j| {
-                        if i >= j {
-                            gram[(i, j)]
-                        } else {
-                            gram[(j, i)]
-                        }
-                    },
-                );
-                let eig = nalgebra::SymmetricEigen::new(full);
-                let mut order: Vec<usize> = (0..n).collect();
-                order.sort_by(|&a, &b| eig.eigenvalues[b].total_cmp(&eig.eigenvalues[a]));
-                let q = faer::Mat::from_fn(n, r, |i, c| eig.eigenvectors[(i, order[c])]);
-                let z = chol.solve(q.as_ref());
-                let b = mul(view(&g.y).transpose(), z.as_ref());
-                (Some(q), b)
-            }
-        };
-        let r = b.ncols();
-        let basis = faer::Mat::from_fn(b.nrows(), r + 1, |i, j| {
-            if j < r {
-                b[(i, j)]
-            } else {
-                g.y_mean[i]
-            }
-        });
-        Ok(PartMap { ky, x, proj, basis })
-    }
-
-    /// `[c(x_*); 1]` for the rows of `xs` (T × d), (R+1) × T.
-    fn coefficients(&self, xs: &DMatrix<f64>) -> Result<faer::Mat<f64>> {
-        if xs.ncols() != self.x.ncols() {
-            return Err(Error::invalid(format!(
-                "latent points of dimension {}, model has {}",
-                xs.ncols(),
-                self.x.ncols()
-            )));
-        }
-        let kstar = self.cross(xs); // N × T
-        let r = self.basis.ncols() - 1;
-        let mut c = faer::Mat::<f64>::zeros(r + 1, xs.nrows());
-        match &self.proj {
-            Some(q) => gemm(
-                c.as_mut().subrows_mut(0, r),
-                q.as_ref().transpose(),
-                kstar.as_ref(),
-            ),
-            None => c.as_mut().subrows_mut(0, r).copy_from(kstar.as_ref()),
-        }
-        c.as_mut().row_mut(r).fill(1.0);
-        Ok(c)
-    }
-}
-
-impl PartMap {
-    /// `k_Y(X, X_*)` (N × T), as `RbfLinear::cross` but with the vectorised
-    /// `gpdm::vexp::exp_fast` over per-coordinate arrays and `var·e^a` as `e^(a + ln var)`
-    /// (as `Predictor::pose_mean_cols`: libm's `exp` on the demo's near-zero kernel values
-    /// took a third of the fused decoding).
-    fn cross(&self, xs: &DMatrix<f64>) -> faer::Mat<f64> {
-        let (n, t) = (self.x.nrows(), xs.nrows());
-        let cols: Vec<Vec<f64>> = (0..xs.ncols())
-            .map(|c| (0..n).map(|i| self.x[(i, c)]).collect())
-            .collect();
-        let ln_var = if self.ky.var > 0.0 {
-            self.ky.var.ln()
-        } else {
-            f64::NEG_INFINITY
-        };
-        let half_gamma = -0.5 * self.ky.gamma;
-        let mut out = faer::Mat::<f64>::zeros(n, t);
-        let (mut dist, mut dot) = (vec![0.0; n], vec![0.0; n]);
-        for j in 0..t {
-            dist.fill(0.0);
-            dot.fill(0.0);
-            for (c, xc) in cols.iter().enumerate() {
-                let v = xs[(j, c)];
-                for ((s, dp), &xi) in dist.iter_mut().zip(dot.iter_mut()).zip(xc) {
-                    *s += (v - xi) * (v - xi);
-                    *dp += v * xi;
-                }
-            }
-            for (i, (&s, &dp)) in dist.iter().zip(&dot).enumerate() {
-                out[(i, j)] = gpdm::vexp::exp_fast(half_gamma * s + ln_var) + self.ky.lin * dp;
-            }
-        }
-        out
-    }
 }
 
 /// `out = a · b`, sequential.
@@ -656,37 +532,27 @@ pub struct FusedScratch {
 
 impl<'a> Decoder<'a> {
     /// The fused bulk decoder of this decoder's predictors (exact, or kernel bases from
-    /// [`Decoder::with_pose_basis`]); jitter notes go to `notes`.
-    pub fn fused(&self, notes: &mut Vec<String>) -> Result<FusedDecoder<'_, 'a>> {
-        use rayon::prelude::*;
+    /// [`Decoder::with_pose_basis`]).
+    pub fn fused(&self) -> Result<FusedDecoder<'_, 'a>> {
         let model = self.model;
         let nv = model.template.len();
-        let built = model
+        let maps: Vec<PartMap> = model
             .parts
-            .par_iter()
+            .iter()
             .zip(&self.predictors)
             .enumerate()
             .map(|(k, (p, pr))| {
-                let mut n = Vec::new();
-                let g = &p.gpdm;
-                let m = if k == 0 && self.torso_extra.is_some() {
-                    let d0 = g.y.ncols() - TORSO_EXTRA;
-                    PartMap::new(&columns(g, 0, d0), pr.basis_rank(), &mut n)
+                let basis = pr.pose_basis();
+                let rows = if k == 0 && self.torso_extra.is_some() {
+                    p.gpdm.y.ncols() - TORSO_EXTRA
                 } else {
-                    PartMap::new(g, pr.basis_rank(), &mut n)
+                    basis.nrows()
                 };
-                let n = n
-                    .into_iter()
-                    .map(|s| format!("part '{}': {s}", p.part.name))
-                    .collect::<Vec<_>>();
-                m.map(|m| (m, n))
+                PartMap {
+                    basis: basis.as_ref().subrows(0, rows).to_owned(),
+                }
             })
-            .collect::<Result<Vec<_>>>()?;
-        let mut maps = Vec::with_capacity(built.len());
-        for (m, n) in built {
-            notes.extend(n);
-            maps.push(m);
-        }
+            .collect();
         for (m, p) in maps.iter().zip(&model.parts) {
             if m.basis.nrows() < 3 * p.part.vertices.len() {
                 return Err(Error::invalid(format!(
@@ -869,21 +735,15 @@ impl FusedDecoder<'_, '_> {
     ) -> Result<(Vec<faer::Mat<f64>>, Vec<Vec<RigidMotion>>)> {
         let dec = self.dec;
         let k_parts = self.maps.len();
-        if latents.len() != k_parts {
-            return Err(Error::invalid(format!(
-                "{} latent trajectories for {k_parts} parts",
-                latents.len()
-            )));
-        }
-        let t_len = latents[0].nrows();
+        let t_len = variation_frames(latents, k_parts)?;
         let nv = dec.model.template.len();
-        let coef = self
-            .maps
+        let coef = dec
+            .predictors
             .iter()
             .zip(latents)
             .enumerate()
-            .map(|(k, (m, x))| {
-                m.coefficients(x)
+            .map(|(k, (pr, x))| {
+                pr.pose_coefficients(x)
                     .map_err(|e| Error::invalid(format!("part {k}: {e}")))
             })
             .collect::<Result<Vec<_>>>()?;
@@ -1145,6 +1005,22 @@ fn place_singles_soa(o: &mut [Vector3<f64>], vs: &[u32], p: [&[f64]; 3], f: &Rig
 }
 
 /// The columns `from..from + n` of a GPDM's poses (same latents and hyperparameters).
+/// Frames of one variation given as one latent trajectory per part: checks there are `parts`
+/// of them, all of one length.
+fn variation_frames(latents: &[DMatrix<f64>], parts: usize) -> Result<usize> {
+    if latents.len() != parts || parts == 0 {
+        return Err(Error::invalid(format!(
+            "{} latent trajectories for {parts} parts",
+            latents.len()
+        )));
+    }
+    let t_len = latents[0].nrows();
+    if latents.iter().any(|l| l.nrows() != t_len) {
+        return Err(Error::invalid("latent trajectories of different lengths"));
+    }
+    Ok(t_len)
+}
+
 fn columns(g: &gpdm::Gpdm, from: usize, n: usize) -> gpdm::Gpdm {
     let mut c = g.clone();
     c.y = g.y.columns(from, n).into_owned();

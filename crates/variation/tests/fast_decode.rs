@@ -240,11 +240,11 @@ fn fused_decoding_matches_bulk_decoding() {
         vec![Vector3::zeros(); 30 * nv],
     );
     for dec in [&exact, &basis] {
-        let fused = dec.fused(&mut Vec::new()).unwrap();
+        let fused = dec.fused().unwrap();
         // One block per part, and blocks of 7 vertices (several blocks, a short last one).
         for f in [
             fused.with_block_vertices(1000),
-            dec.fused(&mut Vec::new()).unwrap().with_block_vertices(7),
+            dec.fused().unwrap().with_block_vertices(7),
         ] {
             for x in &lat {
                 dec.decode_average_into(x, &start, &mut scratch, &mut want)
@@ -258,10 +258,7 @@ fn fused_decoding_matches_bulk_decoding() {
         }
     }
     // Many variations: the same bodies on 1 and 2 threads, and as one by one.
-    let fused = basis
-        .fused(&mut Vec::new())
-        .unwrap()
-        .with_block_vertices(16);
+    let fused = basis.fused().unwrap().with_block_vertices(16);
     let run = |threads: usize| {
         let got = std::sync::Mutex::new(vec![Vec::new(); lat.len()]);
         rayon::ThreadPoolBuilder::new()
