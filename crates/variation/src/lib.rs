@@ -6,10 +6,12 @@
 //! [`part_data`] (per-part pose vectors, §4) -> [`train`] (one GPDM per part, §5) -> [`sample`]
 //! (mean prediction + HMC over latent trajectories, §6; latent blending, §7) -> [`reconstruct`]
 //! (eqs. 11-13, stitching, displacement integration) -> [`grounding`] (feet on the source's floor, a
-//! post-process) -> [`footskate`] (planted feet kept in place, a post-process) -> [`metrics`] and [`plots`].
+//! post-process) -> [`footskate`] (planted feet kept in place by a root shift, a post-process) ->
+//! [`foot_lock`] (the rest of each planted sole's slide absorbed by its leg) -> [`metrics`] and [`plots`].
 
 pub mod contacts;
 pub mod evaluate;
+pub mod foot_lock;
 pub mod footskate;
 pub mod gait;
 pub mod grounding;

@@ -2,9 +2,9 @@
 //! blends ([`crate::sample`]), decoded to meshes ([`crate::reconstruct`]), written as PLY
 //! sequences `<out>/<label>/var<k>/NNNNNN.ply`, and measured against their source
 //! ([`crate::metrics`]): the training sequence, or for a blend the non-linear mesh blend of the
-//! pair at that weight. Two post-processes, on by default, follow the decoding: [`grounding`]
-//! (vertical) then [`footskate`] (horizontal), both driven by the DTW correspondence of each
-//! variation to its source.
+//! pair at that weight. Post-processes, on by default, follow the decoding: [`grounding`]
+//! (vertical) then [`footskate`] (horizontal root shift), both driven by the DTW correspondence
+//! of each variation to its source, then [`foot_lock`] (planted soles pinned by their legs).
 
 use std::path::Path;
 
@@ -17,6 +17,7 @@ use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 
 use crate::contacts::Contacts;
+use crate::foot_lock;
 use crate::footskate;
 use crate::grounding::{self, FloorContact};
 use crate::group::{blend_name, blend_sequences, Group};
@@ -57,6 +58,10 @@ pub struct SynthConfig {
     /// Weight λ of the correction's second differences ([`footskate::SMOOTHNESS`]).
     #[serde(default = "footskate_smoothness")]
     pub footskate_smoothness: f64,
+    /// After the root clean-up, pin each planted sole by deforming its leg
+    /// ([`crate::foot_lock`]); on by default.
+    #[serde(default = "yes")]
+    pub foot_lock: bool,
 }
 
 fn footskate_smoothness() -> f64 {
@@ -150,6 +155,26 @@ fn model_soles(model: &VariationModel) -> Vec<Vec<u32>> {
         &model.up,
         0.015,
     )
+}
+
+/// [`foot_lock::leg_weights`] of the model's two leg parts (None without them).
+fn model_leg_weights(
+    model: &VariationModel,
+    soles: &[Vec<u32>; 2],
+) -> Option<[Vec<(u32, f64)>; 2]> {
+    let parts: Vec<_> = model.parts.iter().map(|p| p.part.clone()).collect();
+    match foot_lock::leg_parts(&parts).as_slice() {
+        [l, r] => Some([0, 1].map(|f| {
+            foot_lock::leg_weights(
+                &[l, r][f].vertices,
+                &soles[f],
+                &model.template,
+                &model.faces,
+                &model.up,
+            )
+        })),
+        _ => None,
+    }
 }
 
 /// Contact height (m) for foot sliding and floating: a foot within it of the ground touches.
@@ -329,6 +354,10 @@ pub fn run(
         [l, r] if !l.is_empty() && !r.is_empty() => Some([l.clone(), r.clone()]),
         _ => None,
     };
+    let leg_weights = feet.as_ref().and_then(|f| model_leg_weights(model, f));
+    if cfg.foot_lock && cfg.footskate && feet.is_some() && leg_weights.is_none() {
+        notes.push("foot lock skipped: the segmentation has no left and right leg parts".into());
+    }
     if cfg.footskate && feet.is_none() {
         notes.push("foot-skating clean-up skipped: no left and right soles found".into());
     }
@@ -391,6 +420,9 @@ pub fn run(
                         &mut notes,
                     )?;
                     footskate_max = d.iter().map(|v| v.norm()).fold(0.0, f64::max);
+                    if let (true, Some(legs)) = (cfg.foot_lock, &leg_weights) {
+                        foot_lock::lock(&mut m, legs, f, c, &model.up);
+                    }
                 }
                 Ok((
                     Decoded {

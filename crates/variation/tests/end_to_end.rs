@@ -74,6 +74,7 @@ fn tiny_set_end_to_end() {
         grounding: true,
         footskate: true,
         footskate_smoothness: variation::footskate::SMOOTHNESS,
+        foot_lock: true,
     };
     let out1 = dir.path().join("o1");
     let out2 = dir.path().join("o2");

@@ -66,6 +66,11 @@ struct Args {
     /// the contact residuals; larger: smoother root, feet pinned less tightly)
     #[arg(long, default_value_t = variation::footskate::SMOOTHNESS)]
     footskate_smoothness: f64,
+    /// Do not lock planted feet by deforming the legs (by default, after the root clean-up,
+    /// each planted sole's remaining slide is removed by shifting its leg, weighted from the
+    /// sole up to the hip)
+    #[arg(long)]
+    no_foot_lock: bool,
     /// Output folder: <out>/<sequence>/var<k>/NNNNNN.ply
     #[arg(short, long)]
     out: PathBuf,
@@ -118,6 +123,7 @@ fn main() -> ExitCode {
             grounding: !args.no_grounding,
             footskate: !args.no_footskate,
             footskate_smoothness: args.footskate_smoothness,
+            foot_lock: !args.no_foot_lock,
         };
         let report = run(&model, &group, &cfg, &args.out)?;
         for n in &report.notes {

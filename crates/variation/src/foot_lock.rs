@@ -1,0 +1,249 @@
+//! Leg-deforming foot lock: a post-process after the root clean-up of [`crate::footskate`]
+//! (the variation paper's "traditional post-processing such as foot-skating correction"; not
+//! part of the GPDM model).
+//!
+//! A root shift can pin only a compromise of the two feet; sampled legs also jitter against
+//! the body. So, per foot `f` and contact interval `I = [s, e)`, the residual horizontal offset
+//! of the sole centroid from the interval's anchor `a_I` (its mean horizontal position over
+//! `I`),
+//!
+//! `δ(t) = a_I − p_f(t)` (horizontal part, `t ∈ I`),
+//!
+//! is removed by displacing every vertex `v` of that leg by `w(v) δ(t)`. The weight is a
+//! smoothstep of the template height along the leg: `w = 1` on the sole vertices (so the sole
+//! centroid lands exactly on `a_I`), `w = 0` at and above the lowest vertex of the leg part's
+//! boundary loop (the hip seam with the torso, so the seam never opens). Between contacts the
+//! displacement is eased out over [`EASE_FRAMES`] `= R` frames with the smoothstep `S`, or
+//! interpolated across gaps too short for that ([`displacements`]): no popping when a contact
+//! starts or ends.
+
+use crate::footskate::{feet_tracks, intervals};
+use crate::group::PartDef;
+use nalgebra::Vector3;
+use std::collections::HashSet;
+
+/// Frames `R` over which the displacement is eased in before and out after each contact.
+pub const EASE_FRAMES: usize = 4;
+
+/// Smoothstep `3x² − 2x³` of `x` clamped to `[0, 1]`.
+fn smoothstep(x: f64) -> f64 {
+    let x = x.clamp(0.0, 1.0);
+    x * x * (3.0 - 2.0 * x)
+}
+
+/// Leg weights `(vertex, w(v))` with `w > 0`, one list per foot (module doc). `leg` is the leg
+/// part's vertices, `sole` its sole vertices; heights are template positions along `up`.
+pub fn leg_weights(
+    leg: &[u32],
+    sole: &[u32],
+    template: &[Vector3<f64>],
+    faces: &[[u32; 3]],
+    up: &Vector3<f64>,
+) -> Vec<(u32, f64)> {
+    let h = |v: u32| template[v as usize].dot(up);
+    let in_leg: HashSet<u32> = leg.iter().copied().collect();
+    let is_sole: HashSet<u32> = sole.iter().copied().collect();
+    // Boundary loop: leg vertices sharing a face with a vertex outside the leg.
+    let mut top = f64::INFINITY;
+    for f in faces {
+        if f.iter().any(|v| in_leg.contains(v)) && f.iter().any(|v| !in_leg.contains(v)) {
+            for &v in f.iter().filter(|v| in_leg.contains(v)) {
+                top = top.min(h(v));
+            }
+        }
+    }
+    if !top.is_finite() {
+        top = leg.iter().map(|&v| h(v)).fold(f64::NEG_INFINITY, f64::max);
+    }
+    let bottom = sole.iter().map(|&v| h(v)).fold(f64::NEG_INFINITY, f64::max);
+    let span = top - bottom;
+    leg.iter()
+        .filter_map(|&v| {
+            let w = if is_sole.contains(&v) {
+                1.0
+            } else if span > 0.0 {
+                1.0 - smoothstep((h(v) - bottom) / span)
+            } else {
+                0.0
+            };
+            (w > 0.0).then_some((v, w))
+        })
+        .collect()
+}
+
+/// Leg parts of a segmentation in the order of [`crate::metrics::soles`] (left first).
+pub fn leg_parts(parts: &[PartDef]) -> Vec<&PartDef> {
+    let mut legs: Vec<&PartDef> = parts.iter().filter(|p| p.name.starts_with("leg")).collect();
+    legs.sort_by_key(|p| !p.name.ends_with('l'));
+    legs
+}
+
+/// Per-frame horizontal displacement `D_f(t)` of foot `f` (module doc): `δ(t)` inside contacts;
+/// in a gap `(p, s)` between the last contact frame `p` and the next contact start `s`,
+/// `δ(p) (1 − S((t − p) / (R + 1))) + δ(s) (1 − S((s − t) / (R + 1)))` (a missing side counts
+/// as 0), or, when the gap is too short for both ramps (`s − p ≤ 2 (R + 1)`), the smoothstep
+/// interpolation `δ(p) + (δ(s) − δ(p)) S((t − p) / (s − p))`. Continuous at every contact end.
+pub fn displacements(
+    track: &[Vector3<f64>],
+    contact: &[bool],
+    up: &Vector3<f64>,
+) -> Vec<Vector3<f64>> {
+    let n = track.len().min(contact.len());
+    let horizontal = |p: Vector3<f64>| p - up * up.dot(&p);
+    let mut inside: Vec<Option<Vector3<f64>>> = vec![None; n];
+    for (s, e) in intervals(&contact[..n]) {
+        let anchor = (s..e).map(|t| track[t]).sum::<Vector3<f64>>() / (e - s) as f64;
+        for (t, d) in inside.iter_mut().enumerate().take(e).skip(s) {
+            *d = Some(horizontal(anchor - track[t]));
+        }
+    }
+    let free: Vec<bool> = inside.iter().map(Option::is_none).collect();
+    let ramp = (EASE_FRAMES + 1) as f64;
+    let mut d: Vec<Vector3<f64>> = inside.iter().map(|x| x.unwrap_or_default()).collect();
+    for (a, b) in intervals(&free) {
+        let before = a.checked_sub(1).map(|p| (p, d[p]));
+        let after = (b < n).then(|| (b, d[b]));
+        for (t, dt) in d.iter_mut().enumerate().take(b).skip(a) {
+            *dt = match (before, after) {
+                (Some((p, da)), Some((s, ds))) if (s - p) as f64 <= 2.0 * ramp => {
+                    da + (ds - da) * smoothstep((t - p) as f64 / (s - p) as f64)
+                }
+                _ => {
+                    let fade = |k: usize| 1.0 - smoothstep(k as f64 / ramp);
+                    before.map_or(Vector3::zeros(), |(p, da)| da * fade(t - p))
+                        + after.map_or(Vector3::zeros(), |(s, ds)| ds * fade(s - t))
+                }
+            };
+        }
+    }
+    d
+}
+
+/// Locks planted feet in place (module doc), in place; returns the largest displacement.
+/// `legs[f]` are the weights of [`leg_weights`], `soles[f]` the sole vertices, `contacts[t][f]`.
+pub fn lock(
+    frames: &mut [Vec<Vector3<f64>>],
+    legs: &[Vec<(u32, f64)>; 2],
+    soles: &[Vec<u32>; 2],
+    contacts: &[[bool; 2]],
+    up: &Vector3<f64>,
+) -> f64 {
+    let tracks = feet_tracks(frames, soles);
+    let mut max: f64 = 0.0;
+    for f in 0..2 {
+        let flags: Vec<bool> = contacts.iter().map(|c| c[f]).collect();
+        let d = displacements(&tracks[f], &flags, up);
+        for (frame, dt) in frames.iter_mut().zip(&d) {
+            max = max.max(dt.norm());
+            for &(v, w) in &legs[f] {
+                frame[v as usize] += dt * w;
+            }
+        }
+    }
+    max
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A leg strip: vertex `i` at height `0.1 i` (i = 0..=10), plus a "torso" vertex 11 at
+    /// height 1.0 sharing a face with the top leg vertex 10 (the seam). Sole: vertex 0.
+    fn leg() -> (Vec<Vector3<f64>>, Vec<[u32; 3]>, Vec<u32>, Vec<u32>) {
+        let mut t: Vec<_> = (0..=10)
+            .map(|i| Vector3::new(0.0, 0.1 * i as f64, 0.0))
+            .collect();
+        t.push(Vector3::new(0.1, 1.0, 0.0));
+        let mut faces: Vec<[u32; 3]> = (0..9).map(|i| [i, i + 1, i + 2]).collect();
+        faces.push([9, 10, 11]);
+        (t, faces, (0..=10).collect(), vec![0])
+    }
+
+    #[test]
+    fn weights_run_from_sole_to_seam() {
+        let (t, faces, legv, sole) = leg();
+        let w = leg_weights(&legv, &sole, &t, &faces, &Vector3::y());
+        let get = |v: u32| w.iter().find(|p| p.0 == v).map_or(0.0, |p| p.1);
+        assert_eq!(get(0), 1.0);
+        // Boundary loop: vertices 9 and 10 share a face with the torso; the lowest, 9 (0.9),
+        // is the top of the ramp: height 0.45 is half-way, smoothstep(0.5) = 0.5.
+        assert_eq!(get(9), 0.0);
+        assert_eq!(get(10), 0.0);
+        assert!((get(4) - (1.0 - smoothstep(0.4 / 0.9))).abs() < 1e-12);
+        for v in 1..9 {
+            assert!(get(v) < get(v - 1), "weights decrease upwards");
+        }
+    }
+
+    #[test]
+    fn a_drifting_planted_sole_comes_back_pinned() {
+        // Frames 0-19; the foot is planted in frames 5-14 and its sole drifts there by
+        // 1 cm/frame along x and 0.5 cm/frame along z (plus a vertical bob that is kept).
+        let (t, faces, legv, sole) = leg();
+        let up = Vector3::y();
+        let drift = |k: usize| {
+            let s = (k.clamp(5, 14) - 5) as f64;
+            Vector3::new(0.01 * s, 0.002 * (k as f64).sin(), 0.005 * s)
+        };
+        let orig: Vec<Vec<Vector3<f64>>> = (0..20)
+            .map(|k| {
+                let mut f = t.clone();
+                f[0] += drift(k);
+                f[1] += drift(k) * 0.5;
+                f
+            })
+            .collect();
+        let contacts: Vec<[bool; 2]> = (0..20).map(|k| [(5..15).contains(&k), false]).collect();
+        let legs = [leg_weights(&legv, &sole, &t, &faces, &up), Vec::new()];
+        let mut frames = orig.clone();
+        lock(&mut frames, &legs, &[sole.clone(), vec![]], &contacts, &up);
+        // Known answer: the anchor is the mean drift over the interval (4.5 cm, 2.25 cm).
+        let anchor = Vector3::new(0.045, 0.0, 0.0225);
+        for k in 5..15 {
+            let p = frames[k][0];
+            assert!((p.x - anchor.x).abs() < 1e-12 && (p.z - anchor.z).abs() < 1e-12);
+            assert!((p.y - orig[k][0].y).abs() < 1e-15, "heights are kept");
+        }
+        for k in 0..20 {
+            // w = 0 vertices (the seam and the torso) are untouched.
+            for v in [9, 10, 11] {
+                assert_eq!(frames[k][v], orig[k][v]);
+            }
+            // Far from the contact nothing moves.
+            if !(5 - EASE_FRAMES..15 + EASE_FRAMES).contains(&k) {
+                assert_eq!(frames[k], orig[k]);
+            }
+        }
+        // Eased: the sole never jumps by more than the 4.5 cm anchor offset spread over the ramp.
+        for k in 1..20 {
+            let step = (frames[k][0] - frames[k - 1][0]).norm();
+            assert!(step < 0.02, "frame {k}: step {step}");
+        }
+    }
+
+    #[test]
+    fn short_gaps_are_bridged_without_popping() {
+        // Contacts [0, 5) and [7, 12) with a 2-frame gap; the raw track drifts 1 cm/frame
+        // throughout. Contact frames are pinned to their anchors, the gap interpolates.
+        let up = Vector3::y();
+        let track: Vec<_> = (0..12)
+            .map(|t| Vector3::new(0.01 * t as f64, 0.0, 0.0))
+            .collect();
+        let contact: Vec<bool> = (0..12).map(|t| !(5..7).contains(&t)).collect();
+        let d = displacements(&track, &contact, &up);
+        let pinned: Vec<f64> = (0..12).map(|t| track[t].x + d[t].x).collect();
+        for t in 0..5 {
+            assert!((pinned[t] - 0.02).abs() < 1e-12, "frame {t}: {}", pinned[t]);
+        }
+        for t in 7..12 {
+            assert!((pinned[t] - 0.09).abs() < 1e-12, "frame {t}: {}", pinned[t]);
+        }
+        // Gap: smoothstep of δ from −0.02 (frame 4) to +0.02 (frame 7), thirds of the way.
+        assert!((d[5].x - (-0.02 + 0.04 * smoothstep(1.0 / 3.0))).abs() < 1e-12);
+        assert!((d[6].x - (-0.02 + 0.04 * smoothstep(2.0 / 3.0))).abs() < 1e-12);
+        // No contact at all: nothing moves.
+        assert!(displacements(&track, &[false; 12], &up)
+            .iter()
+            .all(|v| v.norm() == 0.0));
+    }
+}
