@@ -8,7 +8,8 @@
 //! PROBLEM_DIR holds y.f64 (row-major N × D little-endian f64) and meta.json with "n", "d_obs"
 //! and "seq_lens" (e.g. a body part exported by `variation`'s `export_part` example).
 //! RUNS=joint,joint-m10,joint-per-hyper,alternate selects the runs (default joint,joint-m10);
-//! MEMORY=k overrides their L-BFGS memory.
+//! MEMORY=k overrides their L-BFGS memory; TARGETS=f1,f2 prints the evaluation at which each
+//! objective value was first reached; OVERHEAD=1 times the optimiser's own work per iteration.
 //! e.g.: OPENBLAS_NUM_THREADS=1 target/release/examples/fit_compare 15000 /tmp/gpdm_problem
 
 use gpdm::optim::{train, LbfgsOptions, Scaling, Schedule, TrainOptions};
@@ -57,6 +58,66 @@ fn load_problem(dir: &std::path::Path) -> Vec<DMatrix<f64>> {
         .collect()
 }
 
+/// TARGETS=f1,f2,...: prints the evaluation at which the objective first reached each value
+/// (deterministic, unlike times), and how many iterations needed more than one evaluation.
+fn report_targets(name: &str, r: &gpdm::optim::TrainReport) {
+    let Ok(targets) = std::env::var("TARGETS") else {
+        return;
+    };
+    for t in targets
+        .split(',')
+        .map(|v| v.parse::<f64>().expect("TARGETS"))
+    {
+        match r.trace.iter().position(|&(_, f)| f <= t) {
+            Some(i) => println!(
+                "  {name}: reached {t} at evaluation {} ({:.3} s)",
+                i + 1,
+                r.trace[i].0
+            ),
+            None => println!("  {name}: never reached {t}"),
+        }
+    }
+    let multi = r.history.windows(2).filter(|w| w[1].0 - w[0].0 > 1).count();
+    println!(
+        "  {name}: {multi} of {} iterations needed more than one evaluation",
+        r.history.len() - 1
+    );
+}
+
+/// OVERHEAD=1: time per L-BFGS iteration spent outside the objective (two-loop recursion,
+/// line-search bookkeeping) for `n` parameters, on a quadratic that costs O(n) to evaluate.
+fn optimiser_overhead(n: usize) {
+    let h: Vec<f64> = (0..n)
+        .map(|i| 1.0 + 1e4 * (i as f64 / n as f64).powi(4))
+        .collect();
+    let f = |x: &[f64], g: &mut [f64]| {
+        let mut v = 0.0;
+        for i in 0..n {
+            g[i] = h[i] * x[i];
+            v += 0.5 * h[i] * x[i] * x[i];
+        }
+        Some(v)
+    };
+    let x0 = vec![1.0; n];
+    for memory in [10, 100, 200, 400] {
+        let o = LbfgsOptions {
+            memory,
+            max_iter: 1000,
+            max_evals: 100000,
+            grad_tol: 0.0,
+            value_tol: 0.0,
+            ..Default::default()
+        };
+        let t = Instant::now();
+        let r = gpdm::optim::lbfgs(f, &x0, &o);
+        println!(
+            "optimiser overhead, n = {n}, memory {memory}: {:.1} µs per iteration ({} iterations)",
+            t.elapsed().as_secs_f64() * 1e6 / r.iterations.max(1) as f64,
+            r.iterations
+        );
+    }
+}
+
 fn main() {
     let args: Vec<String> = std::env::args().collect();
     let first = args.get(1).cloned().unwrap_or_else(|| "2000".into());
@@ -102,6 +163,9 @@ fn main() {
         t.elapsed().as_secs_f64() * 1e3 / reps as f64,
         m0.y.nrows()
     );
+    if std::env::var("OVERHEAD").is_ok() {
+        optimiser_overhead(th.len());
+    }
     let alternate = Schedule::Alternate {
         rounds: 10,
         iters: 200,
@@ -143,6 +207,7 @@ fn main() {
         let r = train(&mut m, &opts).unwrap();
         let secs = t.elapsed().as_secs_f64();
         let iters = r.history.len() - 1;
+        report_targets(name, &r);
         println!(
             "{name}: {:.6} -> {:.6} in {iters} iterations, {} evals, {:.2} s; exits {:?}; alpha {:?} beta {:?}; jitter {:e}",
             r.initial_value, r.final_value, r.evaluations, secs, r.exits, m.alpha, m.beta, r.max_jitter

@@ -6,8 +6,15 @@
 //! Last, the whole objective+gradient (synthetic N = 446, D = 15000) on a rayon pool of 1
 //! and of 2 threads, interleaved (the pose and dynamics terms are `rayon::join`ed).
 //!
-//! `target/release/examples/profile_objective [objective-only]` (built by `cargo test --release
-//! -p gpdm`; `objective-only` runs just the last part, longer, e.g. under `perf record`).
+//! Then (h22) the reduced-flop pieces of the pose term against the dense ones, and the whole
+//! objective+gradient `eval` against `eval_reference` (the dense pre-h22 algebra), interleaved,
+//! on 1- and 2-thread pools.
+//!
+//! `target/release/examples/profile_objective [objective-only | old-new [PROBLEM_DIR...]]`
+//! (built by `cargo test --release -p gpdm`; `objective-only` runs just the 1-vs-2-thread
+//! part, longer, e.g. under `perf record`; `old-new` just the old-vs-new comparison on the
+//! synthetic problem, or with directories only on those exported problems, e.g. /tmp/h16/leg_l,
+//! see `fit_compare`).
 #[path = "common/synthetic.rs"]
 mod synthetic;
 
@@ -243,13 +250,271 @@ fn compare(n: usize, reps: usize) {
     }
 }
 
+/// Loads a problem exported as y.f64 (row-major N × D) + meta.json (`fit_compare`'s format).
+fn load_problem(dir: &str) -> Vec<nalgebra::DMatrix<f64>> {
+    let dir = std::path::Path::new(dir);
+    let meta = std::fs::read_to_string(dir.join("meta.json")).expect("meta.json");
+    // Tiny ad-hoc parse (no serde_json in this example): "d_obs": D, "seq_lens": [a, b, ...].
+    let field = |k: &str| -> &str {
+        let i = meta.find(&format!("\"{k}\"")).expect("meta field") + k.len() + 2;
+        meta[i..].trim_start_matches([' ', ':'])
+    };
+    let d: usize = field("d_obs")
+        .split(|c: char| !c.is_ascii_digit())
+        .next()
+        .unwrap()
+        .parse()
+        .unwrap();
+    let list = field("seq_lens");
+    let lens: Vec<usize> = list[1..list.find(']').unwrap()]
+        .split(',')
+        .map(|v| v.trim().parse().unwrap())
+        .collect();
+    let v: Vec<f64> = std::fs::read(dir.join("y.f64"))
+        .expect("y.f64")
+        .chunks_exact(8)
+        .map(|c| f64::from_le_bytes(c.try_into().unwrap()))
+        .collect();
+    assert_eq!(v.len(), lens.iter().sum::<usize>() * d, "y.f64 size");
+    let mut start = 0;
+    lens.iter()
+        .map(|&l| {
+            let m = nalgebra::DMatrix::from_row_slice(l, d, &v[start * d..(start + l) * d]);
+            start += l;
+            m
+        })
+        .collect()
+}
+
+/// `eval` (h22) vs `eval_reference` (dense, pre-h22), objective+gradient at the PCA start,
+/// interleaved on 1- and 2-thread pools; medians.
+fn old_new(name: &str, seqs: &[nalgebra::DMatrix<f64>], reps: usize) {
+    let config = GpdmConfig {
+        dyn_noise_floor: Some(1e-3),
+        ..GpdmConfig::default()
+    };
+    let m = Gpdm::new(seqs, config).unwrap();
+    let obj = m.objective().unwrap();
+    let th = m.theta();
+    let mut g = vec![0.0; th.len()];
+    let pools: Vec<_> = [1, 2]
+        .map(|t| {
+            rayon::ThreadPoolBuilder::new()
+                .num_threads(t)
+                .build()
+                .unwrap()
+        })
+        .into();
+    let mut times = vec![Vec::new(); 4];
+    for _ in 0..reps {
+        for (p, pool) in pools.iter().enumerate() {
+            let t = Instant::now();
+            pool.install(|| obj.eval_reference(&th, Some(&mut g)).unwrap());
+            times[2 * p].push(t.elapsed().as_secs_f64());
+            let t = Instant::now();
+            pool.install(|| obj.eval(&th, Some(&mut g)).unwrap());
+            times[2 * p + 1].push(t.elapsed().as_secs_f64());
+        }
+    }
+
+    let t: Vec<f64> = times.into_iter().map(median).collect();
+    let e = obj.eval(&th, None).unwrap();
+    println!(
+        "{name}: N = {} D = {} rank(YYᵀ) = {} jitter K_Y {:e} K_X {:e} ({reps} interleaved, medians)\n  \
+         1 thread: old {:.3} ms new {:.3} ms (old/new {:.2})   \
+         2 threads: old {:.3} ms new {:.3} ms (old/new {:.2})",
+        m.x.nrows(),
+        m.y.ncols(),
+        obj.s_rank(),
+        e.jitter_y,
+        e.jitter_x,
+        t[0] * 1e3,
+        t[1] * 1e3,
+        t[0] / t[1],
+        t[2] * 1e3,
+        t[3] * 1e3,
+        t[2] / t[3]
+    );
+}
+
+/// Prototype for `RbfLinear::gram` (kernel.rs, not changed here): same lower triangles, into
+/// reused buffers, `exp_fast` in a store loop that can vectorise. Measures the lever only.
+fn gram_proto(
+    kern: &gpdm::kernel::RbfLinear,
+    x: faer::MatRef<'_, f64>,
+    k: &mut Mat<f64>,
+    rbf: &mut Mat<f64>,
+) {
+    let (n, d) = (x.nrows(), x.ncols());
+    let cols: Vec<&[f64]> = (0..d)
+        .map(|c| x.col(c).try_as_col_major().unwrap().as_slice())
+        .collect();
+    let half_gamma = -0.5 * kern.gamma;
+    let mut arg = vec![0.0; n];
+    let mut dot = vec![0.0; n];
+    for j in 0..n {
+        let (a, t) = (&mut arg[j..], &mut dot[j..]);
+        a.fill(0.0);
+        t.fill(0.0);
+        for col in &cols {
+            let xj = col[j];
+            for ((ai, ti), &xi) in a.iter_mut().zip(t.iter_mut()).zip(&col[j..]) {
+                let diff = xi - xj;
+                *ai += diff * diff;
+                *ti += xi * xj;
+            }
+        }
+        let rcol = &mut rbf
+            .col_mut(j)
+            .try_as_col_major_mut()
+            .unwrap()
+            .as_slice_mut()[j..];
+        for (r, &s) in rcol.iter_mut().zip(a.iter()) {
+            *r = kern.var * gpdm::vexp::exp_fast(half_gamma * s);
+        }
+        let kcol = &mut k.col_mut(j).try_as_col_major_mut().unwrap().as_slice_mut()[j..];
+        for ((kv, &r), &t) in kcol.iter_mut().zip(rcol.iter()).zip(t.iter()) {
+            *kv = r + kern.lin * t;
+        }
+        kcol[0] += 1.0 / kern.prec;
+    }
+}
+
+/// The pose term's dense steps vs the reduced ones, one thread, interleaved, medians.
+fn pieces(n: usize, d_obs: usize, reps: usize) {
+    let x = Mat::from_fn(n, 3, |i, j| ((i * 3 + j) as f64 * 0.37).sin() * 2.0);
+    let kern = gpdm::kernel::RbfLinear::pose([1.0, 1.0, 10.0]);
+    let gram = kern.gram(x.as_ref());
+    let k = gram.k.clone();
+    // Pseudo-random Y with D > N: S = Y Yᵀ of full rank, the worst case.
+    let y = Mat::from_fn(n, d_obs, |i, j| {
+        (((i * d_obs + j) as f64 * 12.9898).sin() * 43758.5453).fract()
+    });
+    let s = gpdm::linalg::mul_abt(y.as_ref(), y.as_ref());
+    let t = Instant::now();
+    let pc = gpdm::linalg::PivotedCholesky::factor(s.as_ref());
+    let t_pc = t.elapsed().as_secs_f64();
+    let ch = Cholesky::factor(k.as_ref(), "K").unwrap();
+    let mut c = s.clone();
+    ch.half_solve_in_place(c.as_mut());
+    ch.half_solve_in_place(c.as_mut().transpose_mut());
+    let z = ch.half_solve_trapezoidal(pc.r.as_ref());
+    let mut sink = 0.0;
+    let mut proto = (Mat::<f64>::zeros(n, n), Mat::<f64>::zeros(n, n));
+    let mut steps: Vec<(&str, Box<dyn FnMut() -> f64 + '_>)> = vec![
+        (
+            "old C=L⁻¹SL⁻ᵀ",
+            Box::new(|| {
+                let mut c = s.clone();
+                ch.half_solve_in_place(c.as_mut());
+                ch.half_solve_in_place(c.as_mut().transpose_mut());
+                c[(0, 0)]
+            }),
+        ),
+        (
+            "new Z=L⁻¹R",
+            Box::new(|| ch.half_solve_trapezoidal(pc.r.as_ref())[(0, 0)]),
+        ),
+        (
+            "new Z, block 64",
+            Box::new(|| ch.half_solve_trapezoidal_blocked(pc.r.as_ref(), 64)[(0, 0)]),
+        ),
+        (
+            "new Z, block 96",
+            Box::new(|| ch.half_solve_trapezoidal_blocked(pc.r.as_ref(), 96)[(0, 0)]),
+        ),
+        (
+            "new Z, block 128",
+            Box::new(|| ch.half_solve_trapezoidal_blocked(pc.r.as_ref(), 128)[(0, 0)]),
+        ),
+        (
+            "new low(ZZᵀ)",
+            Box::new(|| gpdm::linalg::lower_zzt(z.as_ref())[(n - 1, 0)]),
+        ),
+        ("old sandwich", Box::new(|| ch.sandwich(c.as_ref())[(0, 0)])),
+        (
+            "new sandwich_lower",
+            Box::new(|| ch.sandwich_lower(c.clone())[(0, 0)]),
+        ),
+        // Non-GEMM per-term costs for scale: the Gram matrix (N²/2 scalar `exp`) and the
+        // kernel chain rule, and N²/2 calls of libm `exp` vs the vectorisable `exp_fast`.
+        ("gram", Box::new(|| kern.gram(x.as_ref()).k[(0, 0)])),
+        (
+            "gram proto",
+            Box::new(|| {
+                gram_proto(&kern, x.as_ref(), &mut proto.0, &mut proto.1);
+                proto.0[(0, 0)]
+            }),
+        ),
+        (
+            "gradients",
+            Box::new(|| kern.gradients(&gram, x.as_ref(), c.as_ref()).0[0]),
+        ),
+        (
+            "N²/2 libm exp",
+            Box::new(|| {
+                (0..n * (n + 1) / 2)
+                    .map(|i| (-(i as f64) * 1e-5).exp())
+                    .sum::<f64>()
+            }),
+        ),
+        (
+            "N²/2 exp_fast",
+            Box::new(|| {
+                (0..n * (n + 1) / 2)
+                    .map(|i| gpdm::vexp::exp_fast(-(i as f64) * 1e-5))
+                    .sum::<f64>()
+            }),
+        ),
+    ];
+    let mut times = vec![Vec::new(); steps.len()];
+    for _ in 0..reps {
+        for (i, (_, f)) in steps.iter_mut().enumerate() {
+            let t = Instant::now();
+            sink += f();
+            times[i].push(t.elapsed().as_secs_f64());
+        }
+    }
+    println!(
+        "pose-term pieces, N = {n}, rank(S) = {} ({reps} interleaved, medians, one thread; \
+         pivoted Cholesky of S, once per model: {:.2} ms):",
+        pc.r.ncols(),
+        t_pc * 1e3
+    );
+    for ((name, _), t) in steps.iter().zip(times) {
+        println!("  {name:20} {:.3} ms", median(t) * 1e3);
+    }
+    assert!(sink.is_finite());
+    drop(steps);
+    gram_proto(&kern, x.as_ref(), &mut proto.0, &mut proto.1);
+    let gk = kern.gram(x.as_ref()).k;
+    let diff = (0..n)
+        .flat_map(|j| (j..n).map(move |i| (i, j)))
+        .map(|(i, j)| (proto.0[(i, j)] - gk[(i, j)]).abs())
+        .fold(0.0, f64::max);
+    assert!(diff < 1e-12, "gram prototype differs by {diff:e}");
+}
+
 fn main() {
     // SAFETY: plain FFI call; pins OpenBLAS to the calling thread's single core.
     unsafe { openblas_set_num_threads(1) };
     faer::set_global_parallelism(faer::Par::Seq);
-    if std::env::args().nth(1).as_deref() == Some("objective-only") {
+    let args: Vec<String> = std::env::args().skip(1).collect();
+    if args.first().map(String::as_str) == Some("objective-only") {
         // For `perf record`: only the interleaved objective timing.
         objective_threads(201);
+        return;
+    }
+    if args.first().map(String::as_str) == Some("old-new") {
+        if args.len() == 1 {
+            for n in [192, 446] {
+                pieces(n, n + 7, if n < 300 { 101 } else { 41 });
+            }
+            old_new("synthetic", &synthetic::synthetic(15000, 1e-3), 41);
+        }
+        for dir in &args[1..] {
+            old_new(dir, &load_problem(dir), 101);
+        }
         return;
     }
     let n = 446;
@@ -271,6 +536,11 @@ fn main() {
         compare(n, if n < 300 { 101 } else { 41 });
     }
     objective_threads(41);
+    println!();
+    for n in [192, 446] {
+        pieces(n, n + 7, if n < 300 { 101 } else { 41 });
+    }
+    old_new("synthetic", &synthetic::synthetic(15000, 1e-3), 41);
 }
 
 fn objective_threads(reps: usize) {

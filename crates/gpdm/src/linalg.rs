@@ -126,6 +126,233 @@ impl Cholesky {
     }
 }
 
+/// Column-block width of [`Cholesky::half_solve_trapezoidal`] and the leaf size of
+/// `lower_back_solve`'s recursion (measured at N = 192 and 446, `examples/profile_objective`:
+/// 32 fastest by 3-5 % over 64, 96, 128).
+pub const BLOCK: usize = 32;
+
+impl Cholesky {
+    /// `Z = L⁻¹ R` for a lower-trapezoidal `R` (n × r, `R_ij = 0` for `i < j`, r ≤ n), e.g. the
+    /// factor of [`PivotedCholesky`]. `Z` is lower-trapezoidal too; each column block
+    /// `[j0, j1)` is solved against the trailing block `L[j0.., j0..]` only (rows above `j0`
+    /// are zero in `R` and stay zero in `Z`): ~n³/6 multiply-adds for r = n instead of n³/2.
+    pub fn half_solve_trapezoidal(&self, r: MatRef<'_, f64>) -> Mat<f64> {
+        self.half_solve_trapezoidal_blocked(r, BLOCK)
+    }
+
+    /// [`Cholesky::half_solve_trapezoidal`] with column blocks of width `bs` (benchmarks).
+    #[doc(hidden)]
+    pub fn half_solve_trapezoidal_blocked(&self, r: MatRef<'_, f64>, bs: usize) -> Mat<f64> {
+        let n = self.l.nrows();
+        assert_eq!(r.nrows(), n, "R must have as many rows as L");
+        let mut z = r.to_owned();
+        let mut j0 = 0;
+        while j0 < r.ncols() {
+            let j1 = (j0 + bs.max(1)).min(r.ncols());
+            solve_lower_triangular_in_place(
+                self.l.as_ref().submatrix(j0, j0, n - j0, n - j0),
+                z.as_mut().submatrix_mut(j0, j0, n - j0, j1 - j0),
+                Par::Seq,
+            );
+            j0 = j1;
+        }
+        z
+    }
+
+    /// Lower triangle of `L⁻ᵀ Q L⁻¹` for a symmetric `Q` of which only the lower triangle is
+    /// read (the buffer is reused; its strict upper triangle is overwritten). The strict
+    /// upper triangle of the result is unspecified: [`crate::kernel::RbfLinear::gradients`]
+    /// reads the lower one. `F = Q L⁻¹` by one full solve (n³/2, its right-hand sides in two
+    /// `rayon::join`ed halves), then the lower triangle of
+    /// `L⁻ᵀ F` by `lower_back_solve` (n³/6 instead of n³/2). Same result as
+    /// [`Cholesky::sandwich`] up to rounding.
+    pub fn sandwich_lower(&self, mut q: Mat<f64>) -> Mat<f64> {
+        let n = self.l.nrows();
+        for j in 1..n {
+            for i in 0..j {
+                q[(i, j)] = q[(j, i)];
+            }
+        }
+        // Fᵀ = L⁻ᵀ Q (Q symmetric), so F = Q L⁻¹, stored in q.
+        // Two independent halves of right-hand sides: an idle rayon thread (the other term of
+        // the objective finished first) takes one (h22: 5-9 % per evaluation at N = 446 on
+        // 2 threads, neutral at N = 192 and on 1 thread).
+        // Only on a rayon worker: from outside a pool, `join` would inject into the global one.
+        if n >= 2 * BLOCK && rayon::current_thread_index().is_some() {
+            let (a, b) = q.as_mut().transpose_mut().split_at_col_mut(n / 2);
+            rayon::join(
+                || self.half_solve_t_in_place(a),
+                || self.half_solve_t_in_place(b),
+            );
+        } else {
+            self.half_solve_t_in_place(q.as_mut().transpose_mut());
+        }
+        lower_back_solve(self.l.as_ref(), q.as_mut());
+        q
+    }
+}
+
+/// Lower triangle of `L⁻ᵀ F` in place (only the lower triangle of `F` is read), recursive:
+/// with rows/cols split at h, `G21 = L22⁻ᵀ F21`, `G22 = lower(L22⁻ᵀ F22)`,
+/// `G11 = lower(L11⁻ᵀ (F11 − L21ᵀ G21))` (back substitution for row i reads rows ≥ i only,
+/// so the lower triangles suffice). n³/6 multiply-adds in large GEMMs.
+fn lower_back_solve(l: MatRef<'_, f64>, f: MatMut<'_, f64>) {
+    use faer::linalg::matmul::triangular::{matmul as tri_matmul, BlockStructure as B};
+    let n = l.nrows();
+    if n <= BLOCK {
+        solve_upper_triangular_in_place(l.transpose(), f, Par::Seq);
+        return;
+    }
+    let h = n / 2;
+    let (l11, l21, l22) = (
+        l.submatrix(0, 0, h, h),
+        l.submatrix(h, 0, n - h, h),
+        l.submatrix(h, h, n - h, n - h),
+    );
+    let (mut f11, _, mut f21, f22) = f.split_at_mut(h, h);
+    solve_upper_triangular_in_place(l22.transpose(), f21.rb_mut(), Par::Seq);
+    lower_back_solve(l22, f22);
+    tri_matmul(
+        f11.rb_mut(),
+        B::TriangularLower,
+        Accum::Add,
+        l21.transpose(),
+        B::Rectangular,
+        f21.as_ref(),
+        B::Rectangular,
+        -1.0,
+        Par::Seq,
+    );
+    lower_back_solve(l11, f11);
+}
+
+/// Pivoted Cholesky factor `Pᵀ S P = R Rᵀ` of a symmetric positive semi-definite `S`, with
+/// `R` lower-trapezoidal n × r (r = numerical rank) and `P` the permutation `perm`
+/// (`(Pᵀ S P)_ij = S_{perm[i], perm[j]}`).
+#[derive(Clone, Debug)]
+pub struct PivotedCholesky {
+    /// Pivot order: row i of `R` belongs to row `perm[i]` of `S`.
+    pub perm: Vec<usize>,
+    /// Lower-trapezoidal factor, n × r.
+    pub r: Mat<f64>,
+}
+
+/// Relative stopping tolerance of [`PivotedCholesky::factor`]: stop when the largest remaining
+/// Schur-complement diagonal is ≤ `PIVOT_RTOL · max_i S_ii`. What is dropped is a PSD
+/// remainder `S_rest` with `tr(S_rest) ≤ n · PIVOT_RTOL · max S_ii` (rounding level for
+/// n ≲ 1000), i.e. `tr(K⁻¹ S)` moves by at most `tr(S_rest)/λ_min(K)`.
+pub const PIVOT_RTOL: f64 = 1e-14;
+
+impl PivotedCholesky {
+    /// Unblocked right-looking pivoted Cholesky (LAPACK `dpstf2` order of operations,
+    /// ~n² r / 2 multiply-adds on the lower triangle; run once per data set). Pivots on the
+    /// largest remaining diagonal and stops at [`PIVOT_RTOL`]. An all-zero `S` gives r = 0.
+    pub fn factor(s: MatRef<'_, f64>) -> Self {
+        let n = s.nrows();
+        assert_eq!(s.ncols(), n, "S must be square");
+        let mut a = s.to_owned();
+        let mut perm: Vec<usize> = (0..n).collect();
+        let max_diag = (0..n).map(|i| s[(i, i)]).fold(0.0, f64::max);
+        let tol = PIVOT_RTOL * max_diag;
+        let mut rank = 0;
+        for k in 0..n {
+            // Pivot: largest remaining diagonal (the trailing Schur complement lives in
+            // a[k.., k..], lower triangle; columns < k hold R).
+            let (p, dmax) = (k..n)
+                .map(|i| (i, a[(i, i)]))
+                .fold((k, f64::NEG_INFINITY), |b, c| if c.1 > b.1 { c } else { b });
+            if !(dmax > tol) {
+                break;
+            }
+            if p != k {
+                perm.swap(k, p);
+                // Symmetric swap of rows/cols k and p in the lower triangle, plus the R rows.
+                for j in 0..k {
+                    let t = a[(k, j)];
+                    a[(k, j)] = a[(p, j)];
+                    a[(p, j)] = t;
+                }
+                let t = a[(k, k)];
+                a[(k, k)] = a[(p, p)];
+                a[(p, p)] = t;
+                for i in k + 1..p {
+                    let t = a[(i, k)];
+                    a[(i, k)] = a[(p, i)];
+                    a[(p, i)] = t;
+                }
+                for i in p + 1..n {
+                    let t = a[(i, k)];
+                    a[(i, k)] = a[(i, p)];
+                    a[(i, p)] = t;
+                }
+            }
+            let piv = dmax.sqrt();
+            a[(k, k)] = piv;
+            for i in k + 1..n {
+                a[(i, k)] /= piv;
+            }
+            // Trailing update, lower triangle: a[i, j] -= a[i, k] a[j, k], k < j ≤ i.
+            for j in k + 1..n {
+                let ajk = a[(j, k)];
+                for i in j..n {
+                    let v = a[(i, k)];
+                    a[(i, j)] -= v * ajk;
+                }
+            }
+            rank = k + 1;
+        }
+        let r = Mat::from_fn(n, rank, |i, j| if i >= j { a[(i, j)] } else { 0.0 });
+        PivotedCholesky { perm, r }
+    }
+}
+
+/// Lower triangle of `Z Zᵀ` for a lower-trapezoidal `Z` (n × r, r ≤ n); the strict upper
+/// triangle of the result is zero. Top r rows: triangular × triangular (r³/6); the rows below:
+/// a rectangular block times a triangle and a lower-triangular SYRK.
+pub fn lower_zzt(z: MatRef<'_, f64>) -> Mat<f64> {
+    use faer::linalg::matmul::triangular::{matmul as tri_matmul, BlockStructure as B};
+    let (n, r) = (z.nrows(), z.ncols());
+    let mut out = Mat::zeros(n, n);
+    let zt = z.submatrix(0, 0, r, r);
+    let zb = z.submatrix(r, 0, n - r, r);
+    tri_matmul(
+        out.as_mut().submatrix_mut(0, 0, r, r),
+        B::TriangularLower,
+        Accum::Replace,
+        zt,
+        B::TriangularLower,
+        zt.transpose(),
+        B::TriangularUpper,
+        1.0,
+        Par::Seq,
+    );
+    if n > r {
+        tri_matmul(
+            out.as_mut().submatrix_mut(r, 0, n - r, r),
+            B::Rectangular,
+            Accum::Replace,
+            zb,
+            B::Rectangular,
+            zt.transpose(),
+            B::TriangularUpper,
+            1.0,
+            Par::Seq,
+        );
+        tri_matmul(
+            out.as_mut().submatrix_mut(r, r, n - r, n - r),
+            B::TriangularLower,
+            Accum::Replace,
+            zb,
+            B::Rectangular,
+            zb.transpose(),
+            B::Rectangular,
+            1.0,
+            Par::Seq,
+        );
+    }
+    out
+}
+
 /// `A Bᵀ`, sequential.
 pub fn mul_abt(a: MatRef<'_, f64>, b: MatRef<'_, f64>) -> Mat<f64> {
     let mut out = Mat::zeros(a.nrows(), b.nrows());

@@ -121,8 +121,24 @@ fn one() -> usize {
     1
 }
 
+/// aᵀb with four independent partial sums (a single running sum is one dependent add chain
+/// the compiler may not reorder: 4x slower, and the two-loop recursion is mostly dots).
 fn dot(a: &[f64], b: &[f64]) -> f64 {
-    a.iter().zip(b).map(|(x, y)| x * y).sum()
+    let n = a.len().min(b.len());
+    let (a4, b4) = (a[..n].chunks_exact(4), b[..n].chunks_exact(4));
+    let tail: f64 = a4
+        .remainder()
+        .iter()
+        .zip(b4.remainder())
+        .map(|(x, y)| x * y)
+        .sum();
+    let mut acc = [0.0; 4];
+    for (x, y) in a4.zip(b4) {
+        for ((s, x), y) in acc.iter_mut().zip(x).zip(y) {
+            *s += x * y;
+        }
+    }
+    (acc[0] + acc[1]) + (acc[2] + acc[3]) + tail
 }
 
 fn inf_norm(a: &[f64]) -> f64 {
@@ -171,8 +187,7 @@ where
             history: vec![],
         };
     };
-    let mut s_hist: Vec<Vec<f64>> = vec![];
-    let mut y_hist: Vec<Vec<f64>> = vec![];
+    let mut pairs: std::collections::VecDeque<Pair> = Default::default();
     let mut history = vec![(evals, fx)];
     let mut exit = Exit::MaxIterations;
     let mut iterations = 0;
@@ -185,23 +200,22 @@ where
         }
         // Two-loop recursion: p = −H ∇f.
         let mut q = g.clone();
-        let k = s_hist.len();
+        let k = pairs.len();
         let mut alphas = vec![0.0; k];
-        for i in (0..k).rev() {
-            let rho = 1.0 / dot(&y_hist[i], &s_hist[i]);
-            alphas[i] = rho * dot(&s_hist[i], &q);
-            for j in 0..n {
-                q[j] -= alphas[i] * y_hist[i][j];
+        for (i, pr) in pairs.iter().enumerate().rev() {
+            alphas[i] = dot(&pr.s, &q) / pr.sy;
+            for (qj, yj) in q.iter_mut().zip(&pr.y) {
+                *qj -= alphas[i] * yj;
             }
         }
-        let gamma = if k > 0 {
-            dot(&s_hist[k - 1], &y_hist[k - 1]) / dot(&y_hist[k - 1], &y_hist[k - 1])
+        let gamma = if let Some(last) = pairs.back() {
+            last.sy / last.yy
         } else {
             1.0 / inf_norm(&g).max(1.0)
         };
         let mut scale = vec![gamma; n];
         if k > 0 && blocks.len() > 1 {
-            let (s, y) = (&s_hist[k - 1], &y_hist[k - 1]);
+            let (s, y) = (&pairs[k - 1].s, &pairs[k - 1].y);
             for b in blocks {
                 let (sy, yy) = (
                     dot(&s[b.clone()], &y[b.clone()]),
@@ -215,19 +229,17 @@ where
         for (v, c) in q.iter_mut().zip(&scale) {
             *v *= c;
         }
-        for i in 0..k {
-            let rho = 1.0 / dot(&y_hist[i], &s_hist[i]);
-            let beta = rho * dot(&y_hist[i], &q);
-            for j in 0..n {
-                q[j] += s_hist[i][j] * (alphas[i] - beta);
+        for (i, pr) in pairs.iter().enumerate() {
+            let beta = dot(&pr.y, &q) / pr.sy;
+            for (qj, sj) in q.iter_mut().zip(&pr.s) {
+                *qj += sj * (alphas[i] - beta);
             }
         }
         let mut p: Vec<f64> = q.iter().map(|v| -v).collect();
         let mut dg0 = dot(&p, &g);
         if !(dg0 < 0.0) {
             // Not a descent direction: restart with steepest descent.
-            s_hist.clear();
-            y_hist.clear();
+            pairs.clear();
             let sc = 1.0 / inf_norm(&g).max(1.0);
             p = g.iter().map(|v| -v * sc).collect();
             dg0 = dot(&p, &g);
@@ -247,14 +259,14 @@ where
             Some((xn, fnew, gn)) => {
                 let s: Vec<f64> = xn.iter().zip(&x).map(|(a, b)| a - b).collect();
                 let yv: Vec<f64> = gn.iter().zip(&g).map(|(a, b)| a - b).collect();
-                let sy = dot(&s, &yv);
-                if sy > 1e-12 * dot(&yv, &yv).sqrt() * dot(&s, &s).sqrt() {
-                    if s_hist.len() == opts.memory {
-                        s_hist.remove(0);
-                        y_hist.remove(0);
+                let (sy, yy) = (dot(&s, &yv), dot(&yv, &yv));
+                if sy > 1e-12 * yy.sqrt() * dot(&s, &s).sqrt() {
+                    if opts.memory > 0 {
+                        while pairs.len() >= opts.memory {
+                            pairs.pop_front();
+                        }
+                        pairs.push_back(Pair { s, y: yv, sy, yy });
                     }
-                    s_hist.push(s);
-                    y_hist.push(yv);
                 }
                 let w = opts.value_window.max(1);
                 let decrease = history
@@ -272,10 +284,9 @@ where
                 }
             }
             None => {
-                if !s_hist.is_empty() {
+                if !pairs.is_empty() {
                     // Retry once from steepest descent before giving up.
-                    s_hist.clear();
-                    y_hist.clear();
+                    pairs.clear();
                     if evals < opts.max_evals {
                         continue;
                     }
@@ -305,6 +316,15 @@ where
         exit,
         history,
     }
+}
+
+/// One L-BFGS correction pair s = x_{k+1} − x_k, y = ∇f_{k+1} − ∇f_k, with sᵀy and yᵀy
+/// (computed once, not in every two-loop recursion).
+struct Pair {
+    s: Vec<f64>,
+    y: Vec<f64>,
+    sy: f64,
+    yy: f64,
 }
 
 struct LineSearch {
