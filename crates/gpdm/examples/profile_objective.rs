@@ -10,6 +10,9 @@
 //! objective+gradient `eval` against `eval_reference` (the dense pre-h22 algebra), interleaved,
 //! on 1- and 2-thread pools.
 //!
+//! h24: the pieces also time `RbfLinear::gram`/`gradients` against copies of their pre-h24
+//! versions (`gram_h23`, `gradients_h23`: row-major, libm `exp`, scalar pair loops).
+//!
 //! `target/release/examples/profile_objective [objective-only | old-new [PROBLEM_DIR...]]`
 //! (built by `cargo test --release -p gpdm`; `objective-only` runs just the 1-vs-2-thread
 //! part, longer, e.g. under `perf record`; `old-new` just the old-vs-new comparison on the
@@ -18,7 +21,8 @@
 #[path = "common/synthetic.rs"]
 mod synthetic;
 
-use faer::Mat;
+use faer::{Mat, MatRef};
+use gpdm::kernel::{Gram, RbfLinear};
 use gpdm::linalg::Cholesky;
 use gpdm::{Gpdm, GpdmConfig};
 use std::os::raw::{c_char, c_int};
@@ -337,47 +341,127 @@ fn old_new(name: &str, seqs: &[nalgebra::DMatrix<f64>], reps: usize) {
     );
 }
 
-/// Prototype for `RbfLinear::gram` (kernel.rs, not changed here): same lower triangles, into
-/// reused buffers, `exp_fast` in a store loop that can vectorise. Measures the lever only.
-fn gram_proto(
-    kern: &gpdm::kernel::RbfLinear,
-    x: faer::MatRef<'_, f64>,
-    k: &mut Mat<f64>,
-    rbf: &mut Mat<f64>,
-) {
-    let (n, d) = (x.nrows(), x.ncols());
-    let cols: Vec<&[f64]> = (0..d)
-        .map(|c| x.col(c).try_as_col_major().unwrap().as_slice())
+/// The pre-h24 `RbfLinear::gram` (row-major coordinates, libm `exp`, one element at a time),
+/// kept here as the "old" side of the piece timings.
+fn gram_h23(kern: &RbfLinear, x: MatRef<'_, f64>) -> Gram {
+    let n = x.nrows();
+    let d = x.ncols();
+    if d == 0 {
+        // No coordinates: every distance and dot product is 0.
+        return gram_h23(kern, Mat::<f64>::zeros(n, 1).as_ref());
+    }
+    let rows: Vec<f64> = (0..n)
+        .flat_map(|i| (0..d).map(move |c| x[(i, c)]))
         .collect();
+    let mut rbf = Mat::<f64>::zeros(n, n);
+    let mut k = Mat::<f64>::zeros(n, n);
     let half_gamma = -0.5 * kern.gamma;
-    let mut arg = vec![0.0; n];
-    let mut dot = vec![0.0; n];
+    let noise = 1.0 / kern.prec;
     for j in 0..n {
-        let (a, t) = (&mut arg[j..], &mut dot[j..]);
-        a.fill(0.0);
-        t.fill(0.0);
-        for col in &cols {
-            let xj = col[j];
-            for ((ai, ti), &xi) in a.iter_mut().zip(t.iter_mut()).zip(&col[j..]) {
-                let diff = xi - xj;
-                *ai += diff * diff;
-                *ti += xi * xj;
-            }
-        }
+        let xj = &rows[j * d..(j + 1) * d];
         let rcol = &mut rbf
             .col_mut(j)
             .try_as_col_major_mut()
-            .unwrap()
+            .expect("contiguous")
             .as_slice_mut()[j..];
-        for (r, &s) in rcol.iter_mut().zip(a.iter()) {
-            *r = kern.var * gpdm::vexp::exp_fast(half_gamma * s);
+        let kcol = &mut k
+            .col_mut(j)
+            .try_as_col_major_mut()
+            .expect("contiguous")
+            .as_slice_mut()[j..];
+        // One pass: squared distance, RBF value and (optionally) the linear term.
+        for ((r, kv), xi) in rcol
+            .iter_mut()
+            .zip(kcol.iter_mut())
+            .zip(rows[j * d..].chunks_exact(d))
+        {
+            let (mut s, mut dot) = (0.0, 0.0);
+            for (a, b) in xi.iter().zip(xj) {
+                s += (a - b) * (a - b);
+                dot += a * b;
+            }
+            let arg = half_gamma * s;
+            // exp underflows below −745; returning 0 early avoids subnormal arithmetic.
+            *r = if arg > -700.0 {
+                kern.var * arg.exp()
+            } else {
+                0.0
+            };
+            *kv = *r + kern.lin * dot;
         }
-        let kcol = &mut k.col_mut(j).try_as_col_major_mut().unwrap().as_slice_mut()[j..];
-        for ((kv, &r), &t) in kcol.iter_mut().zip(rcol.iter()).zip(t.iter()) {
-            *kv = r + kern.lin * t;
-        }
-        kcol[0] += 1.0 / kern.prec;
+        kcol[0] += noise;
     }
+    Gram { k, rbf }
+}
+
+/// The pre-h24 `RbfLinear::gradients` (row-major, scalar pair loop).
+fn gradients_h23(
+    k: &RbfLinear,
+    gram: &Gram,
+    x: MatRef<'_, f64>,
+    g: MatRef<'_, f64>,
+) -> ([f64; 4], Mat<f64>) {
+    let n = g.nrows();
+    let d = x.ncols();
+    if d == 0 {
+        // No coordinates: same kernel as one all-zero coordinate; no X gradient.
+        let (p, _) = gradients_h23(k, gram, Mat::<f64>::zeros(n, 1).as_ref(), g);
+        return (p, Mat::zeros(n, 0));
+    }
+    let rows: Vec<f64> = (0..n)
+        .flat_map(|i| (0..d).map(move |c| x[(i, c)]))
+        .collect();
+    let mut dx = vec![0.0; n * d];
+    let (mut gv, mut gg, mut gl, mut tr) = (0.0, 0.0, 0.0, 0.0);
+    let two_gamma = 2.0 * k.gamma;
+    for j in 0..n {
+        let gcol = &g.col(j).try_as_col_major().expect("contiguous").as_slice()[j..];
+        let rcol = &gram
+            .rbf
+            .col(j)
+            .try_as_col_major()
+            .expect("contiguous")
+            .as_slice()[j..];
+        let gjj = gcol[0];
+        tr += gjj;
+        gv += gjj * rcol[0];
+        let xj = &rows[j * d..(j + 1) * d];
+        let (lo, hi) = dx.split_at_mut((j + 1) * d);
+        let dxj = &mut lo[j * d..];
+        for (((gij, r), xi), dxi) in gcol[1..]
+            .iter()
+            .zip(&rcol[1..])
+            .zip(rows[(j + 1) * d..].chunks_exact(d))
+            .zip(hi.chunks_exact_mut(d))
+        {
+            let (mut s, mut dot) = (0.0, 0.0);
+            for (a, b) in xi.iter().zip(xj) {
+                s += (a - b) * (a - b);
+                dot += a * b;
+            }
+            // Off-diagonal pairs count twice (G and K symmetric).
+            gv += 2.0 * gij * r;
+            gg -= gij * r * s;
+            gl += 2.0 * gij * dot;
+            let p = two_gamma * gij * r;
+            let l = 2.0 * k.lin * gij;
+            for c in 0..d {
+                let (a, b) = (xi[c], xj[c]);
+                dxi[c] += -p * (a - b) + l * b;
+                dxj[c] += -p * (b - a) + l * a;
+            }
+        }
+        // Diagonal: K_jj = var + lin ‖x_j‖² + 1/prec.
+        let mut dot = 0.0;
+        for c in 0..d {
+            let a = rows[j * d + c];
+            dot += a * a;
+            dx[j * d + c] += 2.0 * k.lin * gjj * a;
+        }
+        gl += gjj * dot;
+    }
+    let dxm = Mat::from_fn(n, d, |i, c| dx[i * d + c]);
+    ([gv / k.var, gg, gl, -tr / (k.prec * k.prec)], dxm)
 }
 
 /// The pose term's dense steps vs the reduced ones, one thread, interleaved, medians.
@@ -400,7 +484,6 @@ fn pieces(n: usize, d_obs: usize, reps: usize) {
     ch.half_solve_in_place(c.as_mut().transpose_mut());
     let z = ch.half_solve_trapezoidal(pc.r.as_ref());
     let mut sink = 0.0;
-    let mut proto = (Mat::<f64>::zeros(n, n), Mat::<f64>::zeros(n, n));
     let mut steps: Vec<(&str, Box<dyn FnMut() -> f64 + '_>)> = vec![
         (
             "old C=L⁻¹SL⁻ᵀ",
@@ -440,15 +523,23 @@ fn pieces(n: usize, d_obs: usize, reps: usize) {
         // kernel chain rule, and N²/2 calls of libm `exp` vs the vectorisable `exp_fast`.
         ("gram", Box::new(|| kern.gram(x.as_ref()).k[(0, 0)])),
         (
-            "gram proto",
-            Box::new(|| {
-                gram_proto(&kern, x.as_ref(), &mut proto.0, &mut proto.1);
-                proto.0[(0, 0)]
-            }),
+            "gram pre-h24",
+            Box::new(|| gram_h23(&kern, x.as_ref()).k[(0, 0)]),
         ),
         (
             "gradients",
             Box::new(|| kern.gradients(&gram, x.as_ref(), c.as_ref()).0[0]),
+        ),
+        (
+            "gradients pre-h24",
+            Box::new(|| gradients_h23(&kern, &gram, x.as_ref(), c.as_ref()).0[0]),
+        ),
+        (
+            "2 Mat::zeros N×N",
+            Box::new(|| {
+                let (a, b) = (Mat::<f64>::zeros(n, n), Mat::<f64>::zeros(n, n));
+                a[(n - 1, 0)] + b[(0, n - 1)]
+            }),
         ),
         (
             "N²/2 libm exp",
@@ -486,13 +577,15 @@ fn pieces(n: usize, d_obs: usize, reps: usize) {
     }
     assert!(sink.is_finite());
     drop(steps);
-    gram_proto(&kern, x.as_ref(), &mut proto.0, &mut proto.1);
-    let gk = kern.gram(x.as_ref()).k;
+    let (old, new) = (gram_h23(&kern, x.as_ref()).k, kern.gram(x.as_ref()).k);
     let diff = (0..n)
         .flat_map(|j| (j..n).map(move |i| (i, j)))
-        .map(|(i, j)| (proto.0[(i, j)] - gk[(i, j)]).abs())
+        .map(|(i, j)| (old[(i, j)] - new[(i, j)]).abs())
         .fold(0.0, f64::max);
-    assert!(diff < 1e-12, "gram prototype differs by {diff:e}");
+    assert!(
+        diff < 1e-12,
+        "gram differs from the pre-h24 one by {diff:e}"
+    );
 }
 
 fn main() {

@@ -12,6 +12,7 @@ use faer::linalg::triangular_solve::{
 };
 use faer::reborrow::ReborrowMut;
 use faer::{Accum, Mat, MatMut, MatRef, Par};
+use std::sync::Mutex;
 
 /// Number of jitter retries after the plain factorisation fails.
 const JITTER_RETRIES: usize = 6;
@@ -84,6 +85,41 @@ impl Cholesky {
         })
     }
 
+    /// [`Cholesky::factor`] without the copy: factors `k` (only its lower triangle is read)
+    /// in place, taking ownership (e.g. [`crate::kernel::Gram::k`]). faer uses the strict
+    /// upper triangle as scratch, so it is zeroed afterwards (the [`Cholesky::l`] contract;
+    /// n²/2 stores). If the plain factorisation fails, the destroyed `k` is rebuilt by
+    /// `original` and [`Cholesky::factor`]'s logged jitter retries run on it.
+    pub fn factor_owned(
+        mut k: Mat<f64>,
+        what: &'static str,
+        original: impl FnOnce() -> Mat<f64>,
+    ) -> Result<Self> {
+        let n = k.nrows();
+        let mut mem = MemBuffer::new(cholesky_in_place_scratch::<f64>(
+            n,
+            Par::Seq,
+            Default::default(),
+        ));
+        let ok = (0..n).all(|j| k.col_as_slice(j)[j..].iter().all(|v| v.is_finite()))
+            && cholesky_in_place(
+                k.as_mut(),
+                Default::default(),
+                Par::Seq,
+                MemStack::new(&mut mem),
+                Default::default(),
+            )
+            .is_ok();
+        if ok {
+            for j in 1..n {
+                k.col_as_slice_mut(j)[..j].fill(0.0);
+            }
+            return Ok(Cholesky { l: k, jitter: 0.0 });
+        }
+        drop(k);
+        Self::factor(original().as_ref(), what)
+    }
+
     /// `ln |K| = 2 Σ ln L_ii`.
     pub fn logdet(&self) -> f64 {
         2.0 * (0..self.l.nrows())
@@ -126,6 +162,61 @@ impl Cholesky {
     }
 }
 
+/// How [`Cholesky::sandwich_lower_split`] runs its first solve.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Split {
+    /// One solve with all right-hand sides, on this thread.
+    None,
+    /// Two halves of right-hand sides under `rayon::join`: an idle worker of the current pool
+    /// may take one (call on a worker). Handing a half to the pool from a thread outside it
+    /// (`in_place_scope`) was measured 18 % slower per evaluation on leg_l (h24): that thread
+    /// cannot run pool jobs, so it waits until a busy worker gets to the half.
+    Join,
+}
+
+/// Recycled matrix buffers: the objective allocates the same few N × N matrices at every
+/// evaluation, and at N = 446 freeing and re-allocating them cost ~1600 page faults per
+/// evaluation (18 % of the CPU time in the kernel; h24). [`zeros_recycled`] reuses a buffer
+/// of the same shape handed back by [`recycle`]; at most [`POOL_BYTES`] are kept.
+static POOL: Mutex<Vec<Mat<f64>>> = Mutex::new(Vec::new());
+
+/// Bytes of matrix buffers the pool keeps at most.
+pub const POOL_BYTES: usize = 64 << 20;
+
+fn pool() -> std::sync::MutexGuard<'static, Vec<Mat<f64>>> {
+    POOL.lock().unwrap_or_else(|e| e.into_inner())
+}
+
+/// An `nrows × ncols` zero matrix, in a recycled buffer of the same shape when there is one.
+pub fn zeros_recycled(nrows: usize, ncols: usize) -> Mat<f64> {
+    let found = {
+        let mut p = pool();
+        p.iter()
+            .position(|m| m.nrows() == nrows && m.ncols() == ncols)
+            .map(|i| p.swap_remove(i))
+    };
+    match found {
+        Some(mut m) => {
+            m.as_mut().fill(0.0);
+            m
+        }
+        None => Mat::zeros(nrows, ncols),
+    }
+}
+
+/// Hands a matrix's buffer back for [`zeros_recycled`] (dropped when the pool is full or the
+/// matrix is small).
+pub fn recycle(m: Mat<f64>) {
+    let bytes = |m: &Mat<f64>| m.nrows() * m.ncols() * 8;
+    if bytes(&m) < 64 << 10 {
+        return;
+    }
+    let mut p = pool();
+    if p.iter().map(bytes).sum::<usize>() + bytes(&m) <= POOL_BYTES {
+        p.push(m);
+    }
+}
+
 /// Column-block width of [`Cholesky::half_solve_trapezoidal`] and the leaf size of
 /// `lower_back_solve`'s recursion (measured at N = 192 and 446, `examples/profile_objective`:
 /// 32 fastest by 3-5 % over 64, 96, 128).
@@ -145,7 +236,8 @@ impl Cholesky {
     pub fn half_solve_trapezoidal_blocked(&self, r: MatRef<'_, f64>, bs: usize) -> Mat<f64> {
         let n = self.l.nrows();
         assert_eq!(r.nrows(), n, "R must have as many rows as L");
-        let mut z = r.to_owned();
+        let mut z = zeros_recycled(n, r.ncols());
+        z.copy_from(r);
         let mut j0 = 0;
         while j0 < r.ncols() {
             let j1 = (j0 + bs.max(1)).min(r.ncols());
@@ -162,23 +254,29 @@ impl Cholesky {
     /// Lower triangle of `L⁻ᵀ Q L⁻¹` for a symmetric `Q` of which only the lower triangle is
     /// read (the buffer is reused; its strict upper triangle is overwritten). The strict
     /// upper triangle of the result is unspecified: [`crate::kernel::RbfLinear::gradients`]
-    /// reads the lower one. `F = Q L⁻¹` by one full solve (n³/2, its right-hand sides in two
-    /// `rayon::join`ed halves), then the lower triangle of
+    /// reads the lower one. `F = Q L⁻¹` by one full solve (n³/2; on a rayon worker its
+    /// right-hand sides in two `rayon::join`ed halves, [`Split::Join`], so that an idle thread,
+    /// e.g. the one whose objective term finished first, takes one: h22, 5-9 % per evaluation
+    /// at N = 446 on 2 threads, neutral at N = 192), then the lower triangle of
     /// `L⁻ᵀ F` by `lower_back_solve` (n³/6 instead of n³/2). Same result as
-    /// [`Cholesky::sandwich`] up to rounding.
-    pub fn sandwich_lower(&self, mut q: Mat<f64>) -> Mat<f64> {
+    /// [`Cholesky::sandwich`] up to rounding. The strict upper triangle of `Q` is filled from
+    /// the lower one in cache-sized tiles first.
+    pub fn sandwich_lower(&self, q: Mat<f64>) -> Mat<f64> {
+        let split = if rayon::current_thread_index().is_some() {
+            Split::Join
+        } else {
+            Split::None
+        };
+        self.sandwich_lower_split(q, split)
+    }
+
+    /// [`Cholesky::sandwich_lower`] with the first solve's two halves of right-hand sides run
+    /// as chosen by `split` (see [`Split`]). Same result for every choice.
+    pub fn sandwich_lower_split(&self, mut q: Mat<f64>, split: Split) -> Mat<f64> {
         let n = self.l.nrows();
-        for j in 1..n {
-            for i in 0..j {
-                q[(i, j)] = q[(j, i)];
-            }
-        }
+        mirror_lower(q.as_mut());
         // Fᵀ = L⁻ᵀ Q (Q symmetric), so F = Q L⁻¹, stored in q.
-        // Two independent halves of right-hand sides: an idle rayon thread (the other term of
-        // the objective finished first) takes one (h22: 5-9 % per evaluation at N = 446 on
-        // 2 threads, neutral at N = 192 and on 1 thread).
-        // Only on a rayon worker: from outside a pool, `join` would inject into the global one.
-        if n >= 2 * BLOCK && rayon::current_thread_index().is_some() {
+        if split == Split::Join && n >= 2 * BLOCK {
             let (a, b) = q.as_mut().transpose_mut().split_at_col_mut(n / 2);
             rayon::join(
                 || self.half_solve_t_in_place(a),
@@ -189,6 +287,25 @@ impl Cholesky {
         }
         lower_back_solve(self.l.as_ref(), q.as_mut());
         q
+    }
+}
+
+/// Copies the strict lower triangle of a square matrix onto its strict upper triangle, in
+/// 32 × 32 tiles so that the transposed (strided) reads stay in cache.
+fn mirror_lower(mut q: MatMut<'_, f64>) {
+    const TILE: usize = 32;
+    let n = q.nrows();
+    for jb in (0..n).step_by(TILE) {
+        let je = (jb + TILE).min(n);
+        for ib in (0..je).step_by(TILE) {
+            let ie = (ib + TILE).min(n);
+            for j in jb..je {
+                for i in ib..ie.min(j) {
+                    let v = q[(j, i)];
+                    q[(i, j)] = v;
+                }
+            }
+        }
     }
 }
 
@@ -310,9 +427,14 @@ impl PivotedCholesky {
 /// triangle of the result is zero. Top r rows: triangular × triangular (r³/6); the rows below:
 /// a rectangular block times a triangle and a lower-triangular SYRK.
 pub fn lower_zzt(z: MatRef<'_, f64>) -> Mat<f64> {
+    lower_zzt_scaled(z, 1.0)
+}
+
+/// [`lower_zzt`] times `alpha`, applied inside the products (no extra pass over the result).
+pub fn lower_zzt_scaled(z: MatRef<'_, f64>, alpha: f64) -> Mat<f64> {
     use faer::linalg::matmul::triangular::{matmul as tri_matmul, BlockStructure as B};
     let (n, r) = (z.nrows(), z.ncols());
-    let mut out = Mat::zeros(n, n);
+    let mut out = zeros_recycled(n, n);
     let zt = z.submatrix(0, 0, r, r);
     let zb = z.submatrix(r, 0, n - r, r);
     tri_matmul(
@@ -323,7 +445,7 @@ pub fn lower_zzt(z: MatRef<'_, f64>) -> Mat<f64> {
         B::TriangularLower,
         zt.transpose(),
         B::TriangularUpper,
-        1.0,
+        alpha,
         Par::Seq,
     );
     if n > r {
@@ -335,7 +457,7 @@ pub fn lower_zzt(z: MatRef<'_, f64>) -> Mat<f64> {
             B::Rectangular,
             zt.transpose(),
             B::TriangularUpper,
-            1.0,
+            alpha,
             Par::Seq,
         );
         tri_matmul(
@@ -346,10 +468,30 @@ pub fn lower_zzt(z: MatRef<'_, f64>) -> Mat<f64> {
             B::Rectangular,
             zb.transpose(),
             B::Rectangular,
-            1.0,
+            alpha,
             Par::Seq,
         );
     }
+    out
+}
+
+/// Lower triangle of `alpha · W Wᵀ` for a general (tall) `W`; the strict upper triangle is
+/// zero. Half the multiply-adds of [`mul_abt`].
+pub fn lower_wwt_scaled(w: MatRef<'_, f64>, alpha: f64) -> Mat<f64> {
+    use faer::linalg::matmul::triangular::{matmul as tri_matmul, BlockStructure as B};
+    let n = w.nrows();
+    let mut out = zeros_recycled(n, n);
+    tri_matmul(
+        out.as_mut(),
+        B::TriangularLower,
+        Accum::Replace,
+        w,
+        B::Rectangular,
+        w.transpose(),
+        B::Rectangular,
+        alpha,
+        Par::Seq,
+    );
     out
 }
 
