@@ -204,12 +204,21 @@ fn main() {
                 ..Default::default()
             },
         };
-        let r = train(&mut m, &opts).unwrap();
+        // IN_POOL=1: train from inside a rayon worker (as gpdm-train's per-part par_iter does).
+        let r = if std::env::var("IN_POOL").is_ok_and(|v| v == "1") {
+            rayon::ThreadPoolBuilder::new()
+                .build()
+                .expect("pool")
+                .install(|| train(&mut m, &opts))
+                .unwrap()
+        } else {
+            train(&mut m, &opts).unwrap()
+        };
         let secs = t.elapsed().as_secs_f64();
         let iters = r.history.len() - 1;
         report_targets(name, &r);
         println!(
-            "{name}: {:.6} -> {:.6} in {iters} iterations, {} evals, {:.2} s; exits {:?}; alpha {:?} beta {:?}; jitter {:e}",
+            "{name}: {:.6} -> {:.6} in {iters} iterations, {} evals, {:.3} s; exits {:?}; alpha {:?} beta {:?}; jitter {:e}",
             r.initial_value, r.final_value, r.evaluations, secs, r.exits, m.alpha, m.beta, r.max_jitter
         );
         let mut gf = vec![0.0; th.len()];

@@ -8,7 +8,7 @@
 //! `δ(x, x')` is the Kronecker delta on training indices (the noise term), so it appears on
 //! the diagonal of a Gram matrix and never in a cross-covariance with a test point.
 
-use crate::linalg::zeros_recycled;
+use crate::linalg::{unspecified_recycled, zero_strict_upper};
 use crate::vexp::exp_fast;
 use faer::{Mat, MatRef};
 use serde::{Deserialize, Serialize};
@@ -61,11 +61,21 @@ impl RbfLinear {
     /// `var · exp(−γ/2 s)` with the vectorisable [`exp_fast`] (2 ulp of libm), then the linear
     /// term (skipped when `lin = 0`, the pose kernel).
     pub fn gram(&self, x: MatRef<'_, f64>) -> Gram {
+        let mut g = self.gram_lower(x);
+        zero_strict_upper(&mut g.k);
+        zero_strict_upper(&mut g.rbf);
+        g
+    }
+
+    /// [`RbfLinear::gram`] with the strict upper triangles unspecified (not written; the
+    /// buffers are recycled without a zero fill): for the objective, whose Cholesky and
+    /// [`RbfLinear::gradients`] read only the lower triangles.
+    pub(crate) fn gram_lower(&self, x: MatRef<'_, f64>) -> Gram {
         let n = x.nrows();
         let d = x.ncols();
         if d == 0 {
             // No coordinates: every distance and dot product is 0.
-            return self.gram(Mat::<f64>::zeros(n, 1).as_ref());
+            return self.gram_lower(Mat::<f64>::zeros(n, 1).as_ref());
         }
         let copy;
         let x = if x.row_stride() == 1 {
@@ -75,8 +85,8 @@ impl RbfLinear {
             copy.as_ref()
         };
         let cols: Vec<&[f64]> = (0..d).map(|c| col_slice(x, c)).collect();
-        let mut rbf = zeros_recycled(n, n);
-        let mut k = zeros_recycled(n, n);
+        let mut rbf = unspecified_recycled(n, n);
+        let mut k = unspecified_recycled(n, n);
         #[cfg(target_arch = "x86_64")]
         if std::arch::is_x86_feature_detected!("avx2") {
             // SAFETY: the CPU supports AVX2 (checked just above).
@@ -104,13 +114,16 @@ impl RbfLinear {
         for j in 0..n {
             let rcol = &mut rbf.col_as_slice_mut(j)[j..n];
             let kcol = &mut k.col_as_slice_mut(j)[j..n];
-            // Squared distances, accumulated over the coordinates in order.
-            for col in cols {
+            // Squared distances, accumulated over the coordinates in order (the first one
+            // stores: the buffers are not zeroed).
+            set_sq_dist(rcol, &cols[0][j..], cols[0][j]);
+            for col in &cols[1..] {
                 add_sq_dist(rcol, &col[j..], col[j]);
             }
             rbf_of_sq_dist(rcol, self.var, half_gamma);
             if self.lin != 0.0 {
-                for col in cols {
+                set_scaled(kcol, &cols[0][j..], cols[0][j]);
+                for col in &cols[1..] {
                     add_scaled(kcol, &col[j..], col[j]);
                 }
                 lin_plus(kcol, rcol, self.lin);
@@ -272,6 +285,23 @@ impl RbfLinear {
             }
         }
         [gv, gg, gl, tr]
+    }
+}
+
+/// `r_i ← (x_i − x_j)²`.
+#[inline(always)]
+fn set_sq_dist(r: &mut [f64], xs: &[f64], xj: f64) {
+    for (r, &xi) in r.iter_mut().zip(xs) {
+        let t = xi - xj;
+        *r = t * t;
+    }
+}
+
+/// `k_i ← x_i x_j`.
+#[inline(always)]
+fn set_scaled(k: &mut [f64], xs: &[f64], xj: f64) {
+    for (k, &xi) in k.iter_mut().zip(xs) {
+        *k = xi * xj;
     }
 }
 
