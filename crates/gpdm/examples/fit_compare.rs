@@ -14,11 +14,13 @@
 
 use gpdm::optim::{train, LbfgsOptions, Scaling, Schedule, TrainOptions};
 use gpdm::{Gpdm, GpdmConfig};
-use nalgebra::DMatrix;
 use std::time::Instant;
 
+#[path = "common/problem.rs"]
+mod problem;
 #[path = "common/synthetic.rs"]
 mod synthetic;
+use problem::load_problem;
 
 /// Convergence tolerances shared with scipy (written to meta.json).
 const VALUE_TOL: f64 = 1e-10;
@@ -29,33 +31,6 @@ const DYN_NOISE_FLOOR: f64 = 1e-3;
 fn write_f64(path: &std::path::Path, v: &[f64]) {
     let bytes: Vec<u8> = v.iter().flat_map(|x| x.to_le_bytes()).collect();
     std::fs::write(path, bytes).unwrap();
-}
-
-/// Loads a problem exported as y.f64 + meta.json, split into its sequences.
-fn load_problem(dir: &std::path::Path) -> Vec<DMatrix<f64>> {
-    let meta: serde_json::Value =
-        serde_json::from_slice(&std::fs::read(dir.join("meta.json")).unwrap()).unwrap();
-    let d = meta["d_obs"].as_u64().unwrap() as usize;
-    let lens: Vec<usize> = meta["seq_lens"]
-        .as_array()
-        .unwrap()
-        .iter()
-        .map(|v| v.as_u64().unwrap() as usize)
-        .collect();
-    let bytes = std::fs::read(dir.join("y.f64")).unwrap();
-    let v: Vec<f64> = bytes
-        .chunks_exact(8)
-        .map(|c| f64::from_le_bytes(c.try_into().unwrap()))
-        .collect();
-    assert_eq!(v.len(), lens.iter().sum::<usize>() * d, "y.f64 size");
-    let mut start = 0;
-    lens.iter()
-        .map(|&l| {
-            let m = DMatrix::from_row_slice(l, d, &v[start * d..(start + l) * d]);
-            start += l;
-            m
-        })
-        .collect()
 }
 
 /// TARGETS=f1,f2,...: prints the evaluation at which the objective first reached each value

@@ -18,6 +18,8 @@
 //! part, longer, e.g. under `perf record`; `old-new` just the old-vs-new comparison on the
 //! synthetic problem, or with directories only on those exported problems, e.g. /tmp/h16/leg_l,
 //! see `fit_compare`).
+#[path = "common/problem.rs"]
+mod problem;
 #[path = "common/synthetic.rs"]
 mod synthetic;
 
@@ -252,42 +254,6 @@ fn compare(n: usize, reps: usize) {
             if sink.is_finite() { "ok" } else { "nan" }
         );
     }
-}
-
-/// Loads a problem exported as y.f64 (row-major N × D) + meta.json (`fit_compare`'s format).
-fn load_problem(dir: &str) -> Vec<nalgebra::DMatrix<f64>> {
-    let dir = std::path::Path::new(dir);
-    let meta = std::fs::read_to_string(dir.join("meta.json")).expect("meta.json");
-    // Tiny ad-hoc parse (no serde_json in this example): "d_obs": D, "seq_lens": [a, b, ...].
-    let field = |k: &str| -> &str {
-        let i = meta.find(&format!("\"{k}\"")).expect("meta field") + k.len() + 2;
-        meta[i..].trim_start_matches([' ', ':'])
-    };
-    let d: usize = field("d_obs")
-        .split(|c: char| !c.is_ascii_digit())
-        .next()
-        .unwrap()
-        .parse()
-        .unwrap();
-    let list = field("seq_lens");
-    let lens: Vec<usize> = list[1..list.find(']').unwrap()]
-        .split(',')
-        .map(|v| v.trim().parse().unwrap())
-        .collect();
-    let v: Vec<f64> = std::fs::read(dir.join("y.f64"))
-        .expect("y.f64")
-        .chunks_exact(8)
-        .map(|c| f64::from_le_bytes(c.try_into().unwrap()))
-        .collect();
-    assert_eq!(v.len(), lens.iter().sum::<usize>() * d, "y.f64 size");
-    let mut start = 0;
-    lens.iter()
-        .map(|&l| {
-            let m = nalgebra::DMatrix::from_row_slice(l, d, &v[start * d..(start + l) * d]);
-            start += l;
-            m
-        })
-        .collect()
 }
 
 /// `eval` (h22) vs `eval_reference` (dense, pre-h22), objective+gradient at the PCA start,
@@ -606,7 +572,7 @@ fn main() {
             old_new("synthetic", &synthetic::synthetic(15000, 1e-3), 41);
         }
         for dir in &args[1..] {
-            old_new(dir, &load_problem(dir), 101);
+            old_new(dir, &problem::load_problem(std::path::Path::new(dir)), 101);
         }
         return;
     }
