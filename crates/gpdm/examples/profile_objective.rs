@@ -267,14 +267,7 @@ fn old_new(name: &str, seqs: &[nalgebra::DMatrix<f64>], reps: usize) {
     let obj = m.objective().unwrap();
     let th = m.theta();
     let mut g = vec![0.0; th.len()];
-    let pools: Vec<_> = [1, 2]
-        .map(|t| {
-            rayon::ThreadPoolBuilder::new()
-                .num_threads(t)
-                .build()
-                .unwrap()
-        })
-        .into();
+    let pools = one_and_two_thread_pools();
     let mut times = vec![Vec::new(); 4];
     for _ in 0..reps {
         for (p, pool) in pools.iter().enumerate() {
@@ -607,14 +600,7 @@ fn objective_threads(reps: usize) {
     let obj = m.objective().unwrap();
     let th = m.theta();
     let mut g = vec![0.0; th.len()];
-    let pools: Vec<_> = [1, 2]
-        .map(|t| {
-            rayon::ThreadPoolBuilder::new()
-                .num_threads(t)
-                .build()
-                .unwrap()
-        })
-        .into();
+    let pools = one_and_two_thread_pools();
     let mut times = [Vec::new(), Vec::new()];
     for _ in 0..reps {
         for (p, pool) in pools.iter().enumerate() {
@@ -629,4 +615,14 @@ fn objective_threads(reps: usize) {
         t1 * 1e3,
         t2 * 1e3
     );
+}
+
+/// Rayon pools of 1 and 2 threads (for interleaved thread-count comparisons).
+fn one_and_two_thread_pools() -> [rayon::ThreadPool; 2] {
+    [1, 2].map(|t| {
+        rayon::ThreadPoolBuilder::new()
+            .num_threads(t)
+            .build()
+            .expect("thread pool")
+    })
 }

@@ -403,12 +403,7 @@ impl Objective {
         let tr_y: f64 = z.col_iter().map(|c| c.squared_norm_l2()).sum();
         let dd = self.d_obs as f64;
         let value = 0.5 * dd * cy.logdet() + 0.5 * tr_y;
-        let mut term = Term {
-            value,
-            jitter: cy.jitter,
-            dx: None,
-            dparams: [0.0; 4],
-        };
+        let mut term = Term::new(value, cy.jitter);
         if want {
             let mut q = lower_zzt_scaled_only(z.as_ref(), -0.5);
             for j in 0..n {
@@ -446,12 +441,7 @@ impl Objective {
         let tr_y: f64 = (0..n).map(|i| c[(i, i)]).sum();
         let dd = self.d_obs as f64;
         let value = 0.5 * dd * cy.logdet() + 0.5 * tr_y;
-        let mut term = Term {
-            value,
-            jitter: cy.jitter,
-            dx: None,
-            dparams: [0.0; 4],
-        };
+        let mut term = Term::new(value, cy.jitter);
         if want {
             let mut q = -c;
             for i in 0..n {
@@ -508,12 +498,7 @@ impl Objective {
             .sum::<f64>()
             / (2.0 * sigma0);
         let value = 0.5 * d as f64 * cx.logdet() + 0.5 * quad_x + first;
-        let mut term = Term {
-            value,
-            jitter: cx.jitter,
-            dx: None,
-            dparams: [0.0; 4],
-        };
+        let mut term = Term::new(value, cx.jitter);
         if want {
             let g = if dense {
                 let mut q = mul_abt(w.as_ref(), w.as_ref());
@@ -592,6 +577,18 @@ struct Term {
     dx: Option<Mat<f64>>,
     /// Raw `∂/∂(var, γ, lin, prec)` of the kernel.
     dparams: [f64; 4],
+}
+
+impl Term {
+    /// A term's value and jitter, its gradient pieces not (yet) computed.
+    fn new(value: f64, jitter: f64) -> Self {
+        Term {
+            value,
+            jitter,
+            dx: None,
+            dparams: [0.0; 4],
+        }
+    }
 }
 
 /// A (trained or initialised) GPDM: data, latent points and hyperparameters. Serialisable.
