@@ -16,6 +16,7 @@ pub mod footskate;
 pub mod gait;
 pub mod grounding;
 pub mod group;
+pub mod latent_smoothing;
 pub mod metrics;
 pub mod part_data;
 pub mod plots;

@@ -21,6 +21,7 @@ use crate::foot_lock;
 use crate::footskate;
 use crate::grounding::{self, FloorContact};
 use crate::group::{blend_name, blend_sequences, Group};
+use crate::latent_smoothing;
 use crate::metrics::{self, Stats};
 use crate::reconstruct::{Assembly, Decoder};
 use crate::sample::{
@@ -62,6 +63,10 @@ pub struct SynthConfig {
     /// ([`crate::foot_lock`]); on by default.
     #[serde(default = "yes")]
     pub foot_lock: bool,
+    /// Gaussian σ in frames of the temporal smoothing of every sampled latent trajectory
+    /// before decoding ([`crate::latent_smoothing`]); 0 (the default) leaves them as sampled.
+    #[serde(default)]
+    pub latent_smoothing: f64,
 }
 
 fn footskate_smoothness() -> f64 {
@@ -294,6 +299,12 @@ pub fn run(
             "the group does not match the model (train the model from this group)",
         ));
     }
+    if !(cfg.latent_smoothing >= 0.0 && cfg.latent_smoothing.is_finite()) {
+        return Err(Error::invalid(format!(
+            "latent smoothing σ = {} frames: must be a finite number >= 0",
+            cfg.latent_smoothing
+        )));
+    }
     let mut notes = Vec::new();
     let dec = Decoder::new(model, &mut notes)?;
     let clock = std::time::Instant::now();
@@ -341,6 +352,13 @@ pub fn run(
                 start: model.sequences[a].start_pose,
                 contacts: truth.contacts,
             });
+        }
+    }
+    for job in &mut jobs {
+        for parts in &mut job.vars {
+            for x in parts.iter_mut() {
+                latent_smoothing::smooth_trajectory(x, cfg.latent_smoothing);
+            }
         }
     }
     let seconds_sampling = clock.elapsed().as_secs_f64();

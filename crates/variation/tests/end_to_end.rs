@@ -75,6 +75,7 @@ fn tiny_set_end_to_end() {
         footskate: true,
         footskate_smoothness: variation::footskate::SMOOTHNESS,
         foot_lock: true,
+        latent_smoothing: 0.0,
     };
     let out1 = dir.path().join("o1");
     let out2 = dir.path().join("o2");

@@ -71,6 +71,10 @@ struct Args {
     /// sole up to the hip)
     #[arg(long)]
     no_foot_lock: bool,
+    /// Smooth every sampled latent trajectory in time with a Gaussian of SIGMA frames before
+    /// decoding (first point kept; 0 = off: the trajectories as sampled)
+    #[arg(long, value_name = "SIGMA", default_value_t = 0.0)]
+    latent_smoothing: f64,
     /// Output folder: <out>/<sequence>/var<k>/NNNNNN.ply
     #[arg(short, long)]
     out: PathBuf,
@@ -124,6 +128,7 @@ fn main() -> ExitCode {
             footskate: !args.no_footskate,
             footskate_smoothness: args.footskate_smoothness,
             foot_lock: !args.no_foot_lock,
+            latent_smoothing: args.latent_smoothing,
         };
         let report = run(&model, &group, &cfg, &args.out)?;
         for n in &report.notes {
