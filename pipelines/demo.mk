@@ -3,12 +3,14 @@
 #   (out/demo/render/<subject>/<motion>/{contact.png,anim.gif}), then run the transfer and variation
 #   pipelines on it; each ends with the HTML report out/index.html (transfer last, so its 3D view
 #   shows source / transfer / truth; the page lists the variation results too).
-# `make demo-data` / `make demo-render` stop earlier.
+# `make demo-data` / `make demo-render` stop earlier. `make holdout-data` builds the second
+# benchmark set (out/holdout/set: other bodies, styles, rates and test clips; nothing is tuned on it).
 DEMO := $(OUT)/demo
 DEMO_SET := $(DEMO)/set
 SEED ?= 0
 
-.PHONY: demo demo-data demo-render
+.PHONY: demo demo-data demo-render holdout-data
+HOLDOUT_SET := $(OUT)/holdout/set
 
 demo: demo-render
 	@$(MAKE) --no-print-directory variation SET=$(DEMO_SET) OUT=$(OUT)
@@ -23,3 +25,8 @@ $(DEMO_SET)/set.json: | build assets
 # One contact sheet + GIF per motion of each subject (renders in parallel with make -j).
 demo-render: demo-data
 	@$(MAKE) --no-print-directory -f pipelines/render-set.mk SET=$(DEMO_SET) RENDER=$(DEMO)/render BIN=$(BIN)
+
+holdout-data: $(HOLDOUT_SET)/set.json
+
+$(HOLDOUT_SET)/set.json: | build assets
+	$(BIN)/synth -q --preset holdout --seed $(SEED) $(HOLDOUT_SET)

@@ -1,6 +1,9 @@
-//! The two presets: `tiny` (decimated topologies: A `notoes_collapse10pc`, 1,229 vertices; B
+//! The presets: `tiny` (decimated topologies: A `notoes_collapse10pc`, 1,229 vertices; B
 //! `notoes_collapse5pc` subdivided once, 2,454 vertices; ~1.2 s clips; builds in seconds, for
-//! tests) and `default` (full body and `notoes` topologies, 25 and 50 fps: the demo set).
+//! tests), `default` (full body and `notoes` topologies, 25 and 50 fps: the demo set) and
+//! `holdout` (two other bodies, styles, topologies and frame rates, the demo's training
+//! motions and test motions from clips the demo never uses: the second benchmark, on which
+//! nothing is tuned).
 
 use crate::noise::NoiseLevel;
 use crate::style::{Style, TimeWarp};
@@ -100,6 +103,71 @@ pub fn subject_b(topology: Topology, fps: f64) -> SubjectDef {
     }
 }
 
+/// Holdout subject C: 1.8 m slim young African man, stiff arms held close, long strides,
+/// quick cadence; `notoes_collapse10pc` subdivided once (about 4,900 vertices), 50 fps.
+pub fn subject_c() -> SubjectDef {
+    SubjectDef {
+        name: "C".into(),
+        description: "1.8 m slim young man (MakeHuman african-male-young + 0.5 minmuscle-minweight)".into(),
+        targets: vec![
+            ("macrodetails/african-male-young".into(), 1.0),
+            ("macrodetails/universal-male-young-minmuscle-minweight".into(), 0.5),
+        ],
+        topology: Topology::ObjSubdivided("notoes_collapse10pc.obj".into()),
+        fps: 50.0,
+        style: Style {
+            arm_gain: 0.7,
+            arm_max: 1.6,
+            arm_abduction: 2f64.to_radians(),
+            elbow_gain: 0.8,
+            knee_k: 0.15,
+            hip_abduction: 1f64.to_radians(),
+            lean_per_speed: 0.04,
+            warp: TimeWarp { rate: 1.1, amp: 0.03, period: 1.2, phase: 1.3 },
+        },
+    }
+}
+
+/// Holdout subject D: 1.35 m muscular young Asian woman, wide arm swing held out, bent knees,
+/// slow cadence; `notoes_collapse5pc` subdivided once (2,454 vertices), 25 fps.
+pub fn subject_d() -> SubjectDef {
+    SubjectDef {
+        name: "D".into(),
+        description: "1.35 m muscular young woman (MakeHuman asian-female-young + 0.7 maxmuscle-averageweight + 0.4 minheight)".into(),
+        targets: vec![
+            ("macrodetails/asian-female-young".into(), 1.0),
+            ("macrodetails/universal-female-young-maxmuscle-averageweight".into(), 0.7),
+            ("macrodetails/height/female-young-maxmuscle-averageweight-minheight".into(), 0.4),
+        ],
+        topology: Topology::ObjSubdivided("notoes_collapse5pc.obj".into()),
+        fps: 25.0,
+        style: Style {
+            arm_gain: 1.35,
+            arm_max: 1.4,
+            arm_abduction: 14f64.to_radians(),
+            elbow_gain: 1.3,
+            knee_k: 0.25,
+            hip_abduction: 5f64.to_radians(),
+            lean_per_speed: 0.08,
+            warp: TimeWarp { rate: 0.9, amp: 0.03, period: 1.7, phase: 2.1 },
+        },
+    }
+}
+
+/// Test motions of the holdout set: clips the demo set never uses.
+fn holdout_tests() -> (Vec<MotionDef>, Vec<MotionDef>) {
+    let test = vec![
+        dm("spin", "spin", 1),
+        dm("cartwheel", "cartwheel", 1),
+        dm("getup", "getup_faceup", 1),
+        MotionDef {
+            name: "cmu_walkturn".into(),
+            source: MotionSource::Cmu { t0: 5.0, t1: 8.0 },
+        },
+    ];
+    (test, vec![dm("backflip", "backflip", 1)])
+}
+
 fn motions() -> (Vec<MotionDef>, Vec<MotionDef>) {
     let train = vec![
         dm("walk", "walk", 2),
@@ -127,7 +195,10 @@ pub fn default_noise() -> NoiseLevel {
     }
 }
 
-/// A preset by name (`tiny` or `default`).
+/// The preset names [`preset`] knows.
+pub const PRESETS: [&str; 3] = ["default", "tiny", "holdout"];
+
+/// A preset by name (one of [`PRESETS`]).
 pub fn preset(name: &str, seed: u64, noise: bool) -> Option<Config> {
     let (train, test) = motions();
     let noise = noise.then(default_noise);
@@ -159,6 +230,21 @@ pub fn preset(name: &str, seed: u64, noise: bool) -> Option<Config> {
             max_duration: 3.0,
             keyposes: 5,
         }),
+        "holdout" => {
+            let (test, target_test) = holdout_tests();
+            Some(Config {
+                preset: name.into(),
+                seed,
+                noise,
+                source: subject_c(),
+                target: subject_d(),
+                train,
+                test,
+                target_test,
+                max_duration: 3.0,
+                keyposes: 5,
+            })
+        }
         _ => None,
     }
 }

@@ -15,8 +15,9 @@ use mesh_core::cli::{progress_bar, run_stage, CommonArgs};
 struct Args {
     #[command(flatten)]
     common: CommonArgs,
-    /// Preset: `default` (demo set: full body 25 fps + notoes body 50 fps) or `tiny` (coarse, for tests)
-    #[arg(long, default_value = "default", value_parser = ["default", "tiny"])]
+    /// Preset: `default` (demo set: full body 25 fps + notoes body 50 fps), `tiny` (coarse, for
+    /// tests) or `holdout` (other bodies, styles, rates and test clips: the second benchmark)
+    #[arg(long, default_value = "default", value_parser = synth::preset::PRESETS)]
     preset: String,
     /// No capture-like noise on the input sequences (truth is always clean)
     #[arg(long)]
