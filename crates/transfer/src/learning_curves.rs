@@ -1,28 +1,46 @@
-//! Learning curves of the pose regression (paper §7, figures 7-9): RMS
-//! per-vertex error on the training subset and on a held-out 30 % of the dense
-//! pairs, against the training-set size.
+//! Learning curves of the pose regression (CVPR §7, figures 7-9): RMS
+//! per-vertex error on the training subset and on a held-out 30 % of the
+//! frame pairs, against the training-set size.
 //!
-//! - Figure 7: kernels (NN, SE, linear) and the affine key-pose baseline;
-//! - figure 8: dense pairs versus key-poses first (all key-pose pairs, then
-//!   random dense pairs);
-//! - figure 9: per-part GPs versus one whole-body GP.
+//! - Figure 7: kernels (NN, SE, linear) and the affine key-pose baseline,
+//!   training subsets drawn at random;
+//! - figure 8: the same four methods, training subsets initialised with all
+//!   key-pose pairs, then random pairs;
+//! - figure 9: per-part GPs versus one whole-body GP (NN kernel) at equal
+//!   total dimensions (the paper: "for equivalent total number of input and
+//!   output dimensions"; e.g. 5 parts x 20 components against 100 whole-body
+//!   components).
 //!
-//! The split is seeded: the dense pairs of all training motions are shuffled
-//! with ChaCha8 from `--seed`, key-pose pairs always stay on the training side,
-//! and 30 % of the others are held out. Training subsets of increasing size are
-//! prefixes of the shuffled training side, so they are nested.
+//! **Pairs.** The paper's curves use fully annotated frame correspondences
+//! ([`Correspondence::True`]: `train[k].correspondences` of `set.json`, one
+//! per source frame); [`Correspondence::Dtw`] uses the DTW-densified pairs of
+//! `dtw-densify` instead (what the transfer is trained on).
 //!
-//! Error: target coefficients are compared after mapping back to vertices.
-//! PCA axes are orthonormal, so `|decode(a) - decode(b)|² = |a - b|²` and the
-//! per-vertex RMS is `sqrt(Σ_parts |Δc_k|² / (rows · Σ_parts n_k))` with `n_k`
+//! **Split.** The pairs of all training motions are shuffled with ChaCha8
+//! from `--seed`; key-pose pairs always stay on the training side and 30 % of
+//! the others are held out. Training subsets of increasing size are prefixes
+//! of one shuffled order of the training side (figure 8: key-poses first), so
+//! they are nested.
+//!
+//! **Error.** Against the target's *true* aligned part meshes, so a perfect
+//! regressor scores the PCA truncation error, not 0 (as the paper's curves).
+//! With `x` a true part row, `c = W (x - μ)` its coefficients (orthonormal
+//! rows `W`) and `ĉ` the prediction, `x - (μ + Wᵀ ĉ) = Wᵀ (c - ĉ) + r` with the
+//! truncation residual `r = x - μ - Wᵀ c` orthogonal to the rows of `W`, hence
+//! `|x - decode(ĉ)|² = |c - ĉ|² + |r|²` exactly: the per-vertex RMS is
+//! `sqrt(Σ_rows Σ_parts (|Δc_k|² + |r_k|²) / (rows · Σ_parts n_k))` with `n_k`
 //! the part's vertex count (vertices on overlap bands count once per part).
-//! PCA truncation error is not included (it is the same for every method).
-//! The displacement GP is not part of these curves. The key-pose affine
-//! baseline is fitted on the key-poses only at every size (a flat curve).
+//! The `pca-truncation` curve is that error for `ĉ = c`. The displacement GP
+//! is not part of these curves.
+//!
+//! **Affine baseline.** Fitted on the training subset's pairs, every pair a
+//! key-pose (Baran et al.'s affine span grows with the subset, as in the
+//! paper, where it "performs particularly poorly" on large dense sets).
 
 use std::path::Path;
 
 use gp::gpr::GprOptions;
+use mesh_core::capture_set::SetSpec;
 use mesh_core::{Error, Result};
 use nalgebra::DMatrix;
 use rand::seq::SliceRandom;
@@ -30,14 +48,34 @@ use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
 use serde::{Deserialize, Serialize};
 
-use crate::gpr_model::{train, GprModel, Method, PairData, TrainingSet};
+use crate::align::AlignedMotion;
+use crate::gpr_model::{train, GprModel, MeanFunction, Method, PairData, TrainingSet};
+use crate::part_pca::PcaModel;
+
+/// Which frame pairs the curves learn from and are tested on.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+pub enum Correspondence {
+    /// The set's ground-truth correspondences (`set.json`, `train[k].correspondences`).
+    True,
+    /// The DTW-densified pairs (`dtw-densify`).
+    Dtw,
+}
+
+impl Correspondence {
+    pub fn name(&self) -> &'static str {
+        match self {
+            Correspondence::True => "true",
+            Correspondence::Dtw => "dtw",
+        }
+    }
+}
 
 /// Which training rows a curve uses.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
 pub enum Rows {
-    /// Random dense pairs.
+    /// Random pairs.
     Dense,
-    /// All key-pose pairs first, then random dense pairs.
+    /// All key-pose pairs first, then random pairs.
     KeyposesFirst,
 }
 
@@ -61,55 +99,189 @@ impl Curve {
     }
 }
 
-/// The curves of figures 7, 8 and 9 (the first is shared).
-pub const CURVES: [Curve; 6] = [
+const fn curve(method: Method, rows: Rows, parts: bool) -> Curve {
     Curve {
-        method: Method::GprNn,
-        rows: Rows::Dense,
-        parts: true,
-    },
-    Curve {
-        method: Method::GprSe,
-        rows: Rows::Dense,
-        parts: true,
-    },
-    Curve {
-        method: Method::GprLinear,
-        rows: Rows::Dense,
-        parts: true,
-    },
-    Curve {
-        method: Method::KeyposeAffine,
-        rows: Rows::Dense,
-        parts: true,
-    },
-    Curve {
-        method: Method::GprNn,
-        rows: Rows::KeyposesFirst,
-        parts: true,
-    },
-    Curve {
-        method: Method::WholeBody,
-        rows: Rows::Dense,
-        parts: false,
-    },
+        method,
+        rows,
+        parts,
+    }
+}
+
+/// The curves of figures 7, 8 and 9 (figure 9 shares figure 7's gpr-nn curve).
+pub const CURVES: [Curve; 9] = [
+    curve(Method::GprNn, Rows::Dense, true),
+    curve(Method::GprSe, Rows::Dense, true),
+    curve(Method::GprLinear, Rows::Dense, true),
+    curve(Method::KeyposeAffine, Rows::Dense, true),
+    curve(Method::GprNn, Rows::KeyposesFirst, true),
+    curve(Method::GprSe, Rows::KeyposesFirst, true),
+    curve(Method::GprLinear, Rows::KeyposesFirst, true),
+    curve(Method::KeyposeAffine, Rows::KeyposesFirst, true),
+    curve(Method::WholeBody, Rows::Dense, false),
 ];
+
+/// Curve label of the PCA truncation floor (a perfect regressor).
+pub fn truncation_label(parts: bool) -> String {
+    format!(
+        "pca-truncation {}",
+        if parts { "parts" } else { "whole-body" }
+    )
+}
 
 /// One point of one curve.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct CurvePoint {
     pub direction: String,
+    /// [`Correspondence::name`].
+    pub pairs: String,
     pub curve: String,
     pub n_train: usize,
+    /// Total number of target PCA components (sum over parts).
+    pub components: usize,
     pub train_rms_m: f64,
     pub test_rms_m: f64,
+}
+
+/// One training pair in coefficients, with the PCA truncation residuals of
+/// both motions' frames.
+#[derive(Clone, Debug)]
+pub struct EncodedPair {
+    pub data: PairData,
+    /// `source_residual[part][frame]`: `|r|²` (m², summed over the part's vertices).
+    pub source_residual: Vec<Vec<f64>>,
+    pub target_residual: Vec<Vec<f64>>,
+}
+
+impl EncodedPair {
+    /// Swaps source and target (the reverse direction).
+    pub fn reversed(self) -> EncodedPair {
+        EncodedPair {
+            data: self.data.reversed(),
+            source_residual: self.target_residual,
+            target_residual: self.source_residual,
+        }
+    }
+}
+
+/// Squared truncation residual `|x - decode(encode(x))|²` of every part of
+/// every frame of `motion`: `result[part][frame]`.
+pub fn truncation_residuals(pca: &PcaModel, motion: &AlignedMotion) -> Result<Vec<Vec<f64>>> {
+    let rows = pca.part_rows(motion);
+    let coeffs = pca.encode_rows(&rows)?;
+    pca.parts
+        .iter()
+        .zip(rows.iter().zip(&coeffs))
+        .map(|(p, (x, c))| {
+            let rec = p
+                .pca
+                .decode(c)
+                .map_err(|e| Error::invalid(format!("part '{}': {e}", p.name)))?;
+            Ok((rec - x).row_iter().map(|r| r.norm_squared()).collect())
+        })
+        .collect()
+}
+
+/// Encodes one training pair (set order: `source` of the set's source
+/// subject) with the two subjects' PCA models.
+pub fn encode_pair(
+    source: &AlignedMotion,
+    target: &AlignedMotion,
+    pairs: &[[usize; 2]],
+    keyposes: &[[usize; 2]],
+    source_pca: &PcaModel,
+    target_pca: &PcaModel,
+) -> Result<EncodedPair> {
+    let (fs, ft) = (source.n_frames(), target.n_frames());
+    if let Some([i, j]) = pairs
+        .iter()
+        .chain(keyposes)
+        .find(|[i, j]| *i >= fs || *j >= ft)
+    {
+        return Err(Error::invalid(format!(
+            "frame pair ({i}, {j}) outside the motions ({fs} and {ft} frames)"
+        )));
+    }
+    Ok(EncodedPair {
+        data: PairData {
+            source_coeffs: source_pca.encode(source)?,
+            target_coeffs: target_pca.encode(target)?,
+            source_disp: source.displacements.clone(),
+            target_disp: target.displacements.clone(),
+            pairs: pairs.to_vec(),
+            keyposes: keyposes.to_vec(),
+        },
+        source_residual: truncation_residuals(source_pca, source)?,
+        target_residual: truncation_residuals(target_pca, target)?,
+    })
+}
+
+/// The key-poses and the true dense correspondences of the training pair
+/// whose source motion is `motion` in `set` (`set_path` for messages).
+pub fn true_correspondences(
+    set: &SetSpec,
+    set_path: &Path,
+    motion: &str,
+) -> Result<(Vec<[usize; 2]>, Vec<[usize; 2]>)> {
+    let pair = set
+        .train
+        .iter()
+        .find(|p| p.source == motion)
+        .ok_or_else(|| {
+            Error::file(
+                set_path,
+                format!("no training pair with source motion '{motion}'"),
+            )
+        })?;
+    let value = pair.extra.get("correspondences").ok_or_else(|| {
+        Error::file(
+            set_path,
+            format!("training pair '{motion}' has no 'correspondences' (true frame pairs)"),
+        )
+    })?;
+    let corr: Vec<[usize; 2]> = serde_json::from_value(value.clone()).map_err(|e| {
+        Error::file(
+            set_path,
+            format!("training pair '{motion}': bad correspondences: {e}"),
+        )
+    })?;
+    if corr.is_empty() {
+        return Err(Error::file(
+            set_path,
+            format!("training pair '{motion}': no correspondences"),
+        ));
+    }
+    Ok((pair.keyposes.clone(), corr))
+}
+
+/// Fits a whole-body PCA with `components` components on `motions` (all of
+/// one subject, aligned alike), as `pca-fit --whole-body --components N`.
+pub fn fit_whole_body(motions: &[&AlignedMotion], components: usize) -> Result<PcaModel> {
+    let first = motions
+        .first()
+        .and_then(|m| m.frames.first())
+        .ok_or_else(|| Error::invalid("no aligned frames to fit a whole-body PCA on"))?;
+    let seg = crate::part_pca::whole_body(first.len());
+    let (model, _) = crate::part_pca::fit(
+        first,
+        &seg,
+        motions,
+        gp::pca::Components::Count(components),
+        crate::part_pca::PartAlignment::Body,
+    )?;
+    Ok(model)
+}
+
+/// Total number of components of a PCA model (sum over parts).
+pub fn total_components(pca: &PcaModel) -> usize {
+    pca.parts.iter().map(|p| p.pca.n_components()).sum()
 }
 
 /// The training data of one direction, for per-part and whole-body PCA.
 pub struct DirectionData {
     pub label: String,
-    pub parts: Vec<PairData>,
-    pub whole: Vec<PairData>,
+    pub correspondence: Correspondence,
+    pub parts: Vec<EncodedPair>,
+    pub whole: Vec<EncodedPair>,
     /// Target vertex count of each part, and of the whole body.
     pub part_vertices: Vec<usize>,
     pub whole_vertices: usize,
@@ -149,6 +321,11 @@ pub fn split(n: usize, keys: &[usize], seed: u64) -> (Vec<usize>, Vec<usize>) {
     (train, test)
 }
 
+/// Size of the training side of [`split`] for `n` rows with `keys` key rows.
+pub fn train_side_len(n: usize, keys: usize) -> usize {
+    n - (n.saturating_sub(keys) as f64 * 0.3).round() as usize
+}
+
 /// About `count` sizes from `min` to `max`, geometrically spaced, distinct.
 pub fn sizes(min: usize, max: usize, count: usize) -> Vec<usize> {
     let (min, max) = (min.max(2).min(max), max.max(2));
@@ -162,44 +339,87 @@ pub fn sizes(min: usize, max: usize, count: usize) -> Vec<usize> {
     out
 }
 
-/// Per-vertex RMS error between predicted and true target coefficients.
-pub fn coefficient_rms(pred: &[DMatrix<f64>], truth: &[DMatrix<f64>], vertices: &[usize]) -> f64 {
+/// Per training row (in [`crate::gpr_model::training_set`] order, dense
+/// pairs) the target's squared truncation residual of every part:
+/// `result[part][row]`.
+pub fn row_residuals(pairs: &[EncodedPair]) -> Vec<Vec<f64>> {
+    let n_parts = pairs.first().map_or(0, |p| p.target_residual.len());
+    (0..n_parts)
+        .map(|k| {
+            pairs
+                .iter()
+                .flat_map(|p| p.data.pairs.iter().map(move |&[_, j]| p.target_residual[k][j]))
+                .collect()
+        })
+        .collect()
+}
+
+/// Per-vertex RMS error against the true parts: predicted coefficients
+/// `pred`, true coefficients `truth` (per part, one row per pair), squared
+/// truncation residuals `residual[part][row]` of the same rows, and each
+/// part's vertex count (see the module documentation).
+pub fn vertex_rms(
+    pred: &[DMatrix<f64>],
+    truth: &[DMatrix<f64>],
+    residual: &[Vec<f64>],
+    vertices: &[usize],
+) -> f64 {
     let rows = truth.first().map_or(0, |t| t.nrows()).max(1) as f64;
     let sq: f64 = pred
         .iter()
         .zip(truth)
         .map(|(p, t)| (p - t).norm_squared())
-        .sum();
+        .sum::<f64>()
+        + residual.iter().flatten().sum::<f64>();
     (sq / (rows * vertices.iter().sum::<usize>().max(1) as f64)).sqrt()
 }
 
-fn part_error(model: &GprModel, data: &TrainingSet, vertices: &[usize]) -> Result<f64> {
+fn pick(residual: &[Vec<f64>], rows: &[usize]) -> Vec<Vec<f64>> {
+    residual
+        .iter()
+        .map(|r| rows.iter().map(|&i| r[i]).collect())
+        .collect()
+}
+
+fn model_error(
+    model: &GprModel,
+    data: &TrainingSet,
+    residual: &[Vec<f64>],
+    vertices: &[usize],
+) -> Result<f64> {
     let pred = model
         .parts
         .iter()
         .zip(&data.x_parts)
         .map(|(r, x)| r.predict(x))
         .collect::<Result<Vec<_>>>()?;
-    Ok(coefficient_rms(&pred, &data.y_parts, vertices))
+    Ok(vertex_rms(&pred, &data.y_parts, residual, vertices))
 }
 
-/// All points of all [`CURVES`] for one direction. `train_sizes` larger than
-/// the training side are skipped.
+/// All points of all [`CURVES`] (and the PCA truncation floors) for one
+/// direction. `train_sizes` larger than the training side are skipped.
+/// `nn_bias` and `mean`: as `gpr-train` ([`crate::gpr_model::train`]).
+#[allow(clippy::too_many_arguments)]
 pub fn run_direction(
     dir: &DirectionData,
     train_sizes: &[usize],
     nn_bias: bool,
+    mean: MeanFunction,
     opts: &GprOptions,
     seed: u64,
 ) -> Result<Vec<CurvePoint>> {
-    let parts_set = crate::gpr_model::training_set(&dir.parts, dir.frame_ratio, false)?;
-    let whole_set = crate::gpr_model::training_set(&dir.whole, dir.frame_ratio, false)?;
+    let plain = |v: &[EncodedPair]| v.iter().map(|p| p.data.clone()).collect::<Vec<_>>();
+    let (parts_data, whole_data) = (plain(&dir.parts), plain(&dir.whole));
+    let parts_set = crate::gpr_model::training_set(&parts_data, dir.frame_ratio, false)?;
+    let whole_set = crate::gpr_model::training_set(&whole_data, dir.frame_ratio, false)?;
     if parts_set.len() != whole_set.len() {
         return Err(Error::invalid(
             "per-part and whole-body training sets differ in length",
         ));
     }
-    let keys = key_rows(&dir.parts);
+    let (parts_res, whole_res) = (row_residuals(&dir.parts), row_residuals(&dir.whole));
+    let comps = |s: &TrainingSet| s.y_parts.iter().map(|y| y.ncols()).sum::<usize>();
+    let keys = key_rows(&parts_data);
     let (train_side, held_out) = split(parts_set.len(), &keys, seed);
     let keys_first: Vec<usize> = {
         let mut k = keys.clone();
@@ -212,69 +432,89 @@ pub fn run_direction(
         d.shuffle(&mut rng);
         d
     };
+    let point = |curve: String, n: usize, components: usize, train: f64, test: f64| CurvePoint {
+        direction: dir.label.clone(),
+        pairs: dir.correspondence.name().to_string(),
+        curve,
+        n_train: n,
+        components,
+        train_rms_m: train,
+        test_rms_m: test,
+    };
     let mut points = Vec::new();
     for curve in CURVES {
-        let (set, names, vertices): (&TrainingSet, Vec<String>, Vec<usize>) = if curve.parts {
-            (
-                &parts_set,
-                dir.part_names.clone(),
-                dir.part_vertices.clone(),
-            )
-        } else {
-            (
-                &whole_set,
-                vec!["body".to_string()],
-                vec![dir.whole_vertices],
-            )
-        };
+        let (set, residual, names, vertices): (&TrainingSet, &[Vec<f64>], Vec<String>, Vec<usize>) =
+            if curve.parts {
+                (
+                    &parts_set,
+                    &parts_res,
+                    dir.part_names.clone(),
+                    dir.part_vertices.clone(),
+                )
+            } else {
+                (
+                    &whole_set,
+                    &whole_res,
+                    vec!["body".to_string()],
+                    vec![dir.whole_vertices],
+                )
+            };
         let test = set.subset(&held_out);
+        let test_res = pick(residual, &held_out);
         for &n in train_sizes {
             if n > train_side.len() || (curve.rows == Rows::KeyposesFirst && n < keys.len()) {
                 continue;
             }
-            let rows: Vec<usize> = match curve.rows {
-                Rows::Dense => dense_order[..n].to_vec(),
-                Rows::KeyposesFirst => keys_first[..n].to_vec(),
+            let rows: &[usize] = match curve.rows {
+                Rows::Dense => &dense_order[..n],
+                Rows::KeyposesFirst => &keys_first[..n],
             };
-            let train_rows = set.subset(&rows);
-            let model = if curve.method == Method::KeyposeAffine {
-                // Baran et al. use the key-poses only, whatever the size.
-                let key_set = set.subset(&keys);
-                fit_on(
-                    curve.method,
-                    nn_bias,
-                    &names,
-                    &key_set,
-                    dir.frame_ratio,
-                    opts,
-                )?
-            } else {
-                fit_on(
-                    curve.method,
-                    nn_bias,
-                    &names,
-                    &train_rows,
-                    dir.frame_ratio,
-                    opts,
-                )?
-            };
-            points.push(CurvePoint {
-                direction: dir.label.clone(),
-                curve: curve.label(),
-                n_train: n,
-                train_rms_m: part_error(&model, &train_rows, &vertices)?,
-                test_rms_m: part_error(&model, &test, &vertices)?,
-            });
+            let train_rows = set.subset(rows);
+            let model = fit_on(
+                curve.method,
+                nn_bias,
+                mean,
+                &names,
+                &train_rows,
+                dir.frame_ratio,
+                opts,
+            )?;
+            points.push(point(
+                curve.label(),
+                n,
+                comps(set),
+                model_error(&model, &train_rows, &pick(residual, rows), &vertices)?,
+                model_error(&model, &test, &test_res, &vertices)?,
+            ));
+        }
+    }
+    // The floor: a perfect regressor on the same rows.
+    for (parts, set, residual, vertices) in [
+        (true, &parts_set, &parts_res, dir.part_vertices.clone()),
+        (false, &whole_set, &whole_res, vec![dir.whole_vertices]),
+    ] {
+        let test = set.subset(&held_out);
+        let test_err = vertex_rms(&test.y_parts, &test.y_parts, &pick(residual, &held_out), &vertices);
+        for &n in train_sizes.iter().filter(|&&n| n <= train_side.len()) {
+            let tr = set.subset(&dense_order[..n]);
+            let train_err = vertex_rms(
+                &tr.y_parts,
+                &tr.y_parts,
+                &pick(residual, &dense_order[..n]),
+                &vertices,
+            );
+            points.push(point(truncation_label(parts), n, comps(set), train_err, test_err));
         }
     }
     Ok(points)
 }
 
 /// Trains the pose regressors of `method` on the rows of `set` (every row a
-/// "key-pose", so that the affine baseline uses them all).
+/// "key-pose", so that the affine baseline spans them all).
 fn fit_on(
     method: Method,
     nn_bias: bool,
+    mean: MeanFunction,
     names: &[String],
     set: &TrainingSet,
     ratio: f64,
@@ -291,46 +531,49 @@ fn fit_on(
         pairs: (0..n).map(|r| [r, r]).collect(),
         keyposes: (0..n).map(|r| [r, r]).collect(),
     };
-    train(method, nn_bias, names, &[one], ratio.max(1e-9), false, opts)
+    train(method, nn_bias, mean, names, &[one], ratio.max(1e-9), false, opts)
 }
 
 /// Writes the points as CSV.
 pub fn write_csv(path: &Path, points: &[CurvePoint]) -> Result<()> {
-    let mut text = String::from("direction,curve,n_train,train_rms_m,test_rms_m\n");
+    let mut text =
+        String::from("direction,pairs,curve,n_train,components,train_rms_m,test_rms_m\n");
     for p in points {
         text.push_str(&format!(
-            "{},{},{},{:.6},{:.6}\n",
-            p.direction, p.curve, p.n_train, p.train_rms_m, p.test_rms_m
+            "{},{},{},{},{},{:.6},{:.6}\n",
+            p.direction, p.pairs, p.curve, p.n_train, p.components, p.train_rms_m, p.test_rms_m
         ));
     }
     mesh_core::atomic::write_bytes_atomic(path, text.as_bytes())
 }
 
-/// The figures: `(file stem, title, curve labels)`.
+/// The figures: `(file stem, title, curve labels)`; the PCA truncation floor
+/// of the figure's representation(s) is drawn too.
 pub fn figures() -> Vec<(&'static str, &'static str, Vec<String>)> {
     let l = |i: usize| CURVES[i].label();
     vec![
         (
             "fig7-kernels",
             "Kernels and key-pose affine baseline",
-            vec![l(0), l(1), l(2), l(3)],
+            vec![l(0), l(1), l(2), l(3), truncation_label(true)],
         ),
         (
             "fig8-dense-vs-keyposes",
-            "Dense pairs vs key-poses first",
-            vec![l(0), l(4)],
+            "Training subsets initialised with the key-poses",
+            vec![l(4), l(5), l(6), l(7), truncation_label(true)],
         ),
         (
             "fig9-parts-vs-whole",
-            "Parts vs whole body",
-            vec![l(0), l(5)],
+            "Parts vs whole body (NN kernel)",
+            vec![l(0), l(8), truncation_label(true), truncation_label(false)],
         ),
     ]
 }
 
 static FONT: &[u8] = include_bytes!("../assets/DejaVuSans.ttf");
 
-fn register_font() {
+/// Registers the embedded DejaVu Sans as plotters' "sans-serif" (once).
+pub fn register_font() {
     static ONCE: std::sync::Once = std::sync::Once::new();
     ONCE.call_once(|| {
         // The font is compiled in: registration cannot fail on a valid TTF.
@@ -346,15 +589,18 @@ const COLOURS: [plotters::style::RGBColor; 4] = [
     plotters::style::RGBColor(214, 39, 40),
 ];
 
+/// One series: legend name, `(n, train, test)` points, whether it is a floor.
+type Series = (String, Vec<(f64, f64, f64)>, bool);
+
 fn draw<DB: plotters::prelude::DrawingBackend>(
     root: plotters::prelude::DrawingArea<DB, plotters::coord::Shift>,
     title: &str,
-    series: &[(String, Vec<(f64, f64, f64)>)],
+    series: &[Series],
 ) -> std::result::Result<(), String> {
     use plotters::prelude::*;
     let e = |x: &dyn std::fmt::Debug| format!("{x:?}");
     root.fill(&WHITE).map_err(|x| e(&x))?;
-    let all = series.iter().flat_map(|(_, p)| p.iter());
+    let all = series.iter().flat_map(|(_, p, _)| p.iter());
     let (mut x0, mut x1, mut y1) = (f64::INFINITY, 0.0f64, 0.0f64);
     for &(x, a, b) in all {
         x0 = x0.min(x);
@@ -366,7 +612,7 @@ fn draw<DB: plotters::prelude::DrawingBackend>(
     }
     let y1 = if y1 > 0.0 { y1 * 1.1 * 1000.0 } else { 1.0 };
     let mut chart = ChartBuilder::on(&root)
-        .caption(title, ("sans-serif", 20))
+        .caption(title, ("sans-serif", 18))
         .margin(12)
         .x_label_area_size(40)
         .y_label_area_size(56)
@@ -379,8 +625,36 @@ fn draw<DB: plotters::prelude::DrawingBackend>(
         .label_style(("sans-serif", 13))
         .draw()
         .map_err(|x| e(&x))?;
-    for (i, (name, pts)) in series.iter().enumerate() {
-        let c = COLOURS[i % COLOURS.len()];
+    let mut colour_index = 0;
+    for (name, pts, floor) in series {
+        if *floor {
+            let c = if name.contains("whole") {
+                RGBColor(120, 120, 120)
+            } else {
+                BLACK
+            };
+            // Dashed: the held-out floor (the training floor is nearly the same).
+            let (a, b) = (x0, x1.max(x0 + 1.0));
+            let y = pts.first().map_or(0.0, |p| p.2) * 1000.0;
+            let k = 40;
+            let dashes = (0..k).step_by(2).map(move |i| {
+                let (s, t) = (i as f64 / k as f64, (i + 1) as f64 / k as f64);
+                PathElement::new(
+                    vec![(a + (b - a) * s, y), (a + (b - a) * t, y)],
+                    c.stroke_width(1),
+                )
+            });
+            chart
+                .draw_series(dashes)
+                .map_err(|x| e(&x))?
+                .label(name.clone())
+                .legend(move |(x, y)| {
+                    PathElement::new(vec![(x, y), (x + 6, y)], c.stroke_width(1))
+                });
+            continue;
+        }
+        let c = COLOURS[colour_index % COLOURS.len()];
+        colour_index += 1;
         chart
             .draw_series(LineSeries::new(
                 pts.iter().map(|p| (p.0, p.2 * 1000.0)),
@@ -418,7 +692,25 @@ fn draw<DB: plotters::prelude::DrawingBackend>(
     Ok(())
 }
 
-/// Writes `<dir>/<direction>-<figure>.png` and `.svg` for every figure and direction.
+/// Encodes an RGB buffer as PNG bytes.
+pub fn png_bytes(path: &Path, pixels: &[u8], w: u32, h: u32) -> Result<Vec<u8>> {
+    let mut bytes = Vec::new();
+    {
+        let mut enc = png::Encoder::new(&mut bytes, w, h);
+        enc.set_color(png::ColorType::Rgb);
+        enc.set_depth(png::BitDepth::Eight);
+        let mut writer = enc
+            .write_header()
+            .map_err(|e| Error::file(path, e.to_string()))?;
+        writer
+            .write_image_data(pixels)
+            .map_err(|e| Error::file(path, e.to_string()))?;
+    }
+    Ok(bytes)
+}
+
+/// Writes `<dir>/<direction>-<figure>.png` and `.svg` for every figure and
+/// direction; `pairs` (e.g. "true pairs") goes into the titles.
 pub fn plot_all(dir: &Path, points: &[CurvePoint]) -> Result<Vec<std::path::PathBuf>> {
     use plotters::prelude::*;
     register_font();
@@ -426,19 +718,33 @@ pub fn plot_all(dir: &Path, points: &[CurvePoint]) -> Result<Vec<std::path::Path
     directions.dedup();
     let mut written = Vec::new();
     for d in directions {
+        let pairs = points
+            .iter()
+            .find(|p| p.direction == d)
+            .map_or("", |p| p.pairs.as_str());
         for (stem, title, labels) in figures() {
-            let series: Vec<(String, Vec<(f64, f64, f64)>)> = labels
+            let series: Vec<Series> = labels
                 .iter()
                 .map(|l| {
-                    let pts = points
+                    let sel: Vec<&CurvePoint> = points
                         .iter()
                         .filter(|p| p.direction == d && &p.curve == l)
+                        .collect();
+                    let dims = sel.first().map_or(0, |p| p.components);
+                    let pts = sel
+                        .iter()
                         .map(|p| (p.n_train as f64, p.train_rms_m, p.test_rms_m))
                         .collect();
-                    (l.clone(), pts)
+                    let floor = l.starts_with("pca-truncation");
+                    let name = if stem.starts_with("fig9") || floor {
+                        format!("{l} ({dims} dims)")
+                    } else {
+                        l.clone()
+                    };
+                    (name, pts, floor)
                 })
                 .collect();
-            let title = format!("{d}: {title}");
+            let title = format!("{d}, {pairs} pairs: {title}");
             let name = format!("{}-{stem}", d.replace("->", "-to-"));
             let (w, h) = (800u32, 560u32);
             let png_path = dir.join(format!("{name}.png"));
@@ -449,18 +755,7 @@ pub fn plot_all(dir: &Path, points: &[CurvePoint]) -> Result<Vec<std::path::Path
                 &series,
             )
             .map_err(|m| Error::file(&png_path, format!("cannot draw the plot: {m}")))?;
-            let mut bytes = Vec::new();
-            {
-                let mut enc = png::Encoder::new(&mut bytes, w, h);
-                enc.set_color(png::ColorType::Rgb);
-                enc.set_depth(png::BitDepth::Eight);
-                let mut writer = enc
-                    .write_header()
-                    .map_err(|e| Error::file(&png_path, e.to_string()))?;
-                writer
-                    .write_image_data(&pixels)
-                    .map_err(|e| Error::file(&png_path, e.to_string()))?;
-            }
+            let bytes = png_bytes(&png_path, &pixels, w, h)?;
             mesh_core::atomic::write_bytes_atomic(&png_path, &bytes)?;
             written.push(png_path);
             let svg_path = dir.join(format!("{name}.svg"));

@@ -5,9 +5,15 @@ use anyhow::{bail, Context};
 use clap::Parser;
 use gp::gpr::{GprOptions, PAPER_NOISE_VAR};
 use mesh_core::artifact::Artifact;
+use mesh_core::capture_set::SetSpec;
 use mesh_core::cli::{run_stage, CommonArgs};
-use transfer::gpr_model::{PairData, PairFiles};
-use transfer::learning_curves::{plot_all, run_direction, sizes, write_csv, DirectionData};
+use transfer::align::AlignedMotion;
+use transfer::densify::Correspondences;
+use transfer::gpr_model::MeanFunction;
+use transfer::learning_curves::{
+    encode_pair, fit_whole_body, plot_all, run_direction, sizes, total_components,
+    train_side_len, true_correspondences, write_csv, Correspondence, DirectionData,
+};
 use transfer::part_pca::PcaModel;
 
 /// Learning curves of the pose regression, both directions (paper figures 7-9): CSV, PNG and SVG plots
@@ -15,7 +21,7 @@ use transfer::part_pca::PcaModel;
 #[command(
     name = "learning-curves",
     version,
-    after_help = "e.g.: learning-curves --source-pca work/A/pca.model --target-pca work/B/pca.model --source-whole work/A/pca-whole.model \\\n        --target-whole work/B/pca-whole.model --source-fps 25 --target-fps 50 \\\n        --pair work/A/walk.aligned work/B/walk.aligned work/pairs/walk.corr --out out/learning-curves"
+    after_help = "e.g.: learning-curves --source-pca work/A/pca.model --target-pca work/B/pca.model --source-fps 25 --target-fps 50 \\\n        --set set/set.json --true-pair walk work/A/walk.aligned work/B/walk.aligned --out out/learning-curves\n      learning-curves --source-pca work/A/pca.model --target-pca work/B/pca.model --source-whole work/A/pca-whole.model \\\n        --target-whole work/B/pca-whole.model --source-fps 25 --target-fps 50 \\\n        --pair work/A/walk.aligned work/B/walk.aligned work/pairs/walk.corr --out out/learning-curves-dtw"
 )]
 struct Args {
     #[command(flatten)]
@@ -26,12 +32,15 @@ struct Args {
     /// Per-part PCA model of the set's target subject
     #[arg(long)]
     target_pca: PathBuf,
-    /// Whole-body PCA model of the source subject (pca-fit --whole-body)
-    #[arg(long)]
-    source_whole: PathBuf,
+    /// Whole-body PCA model of the source subject (pca-fit --whole-body) [default: fitted here with --whole-components]
+    #[arg(long, requires = "target_whole", conflicts_with = "whole_components")]
+    source_whole: Option<PathBuf>,
     /// Whole-body PCA model of the target subject
+    #[arg(long, requires = "source_whole")]
+    target_whole: Option<PathBuf>,
+    /// Components of the whole-body PCA fitted on the training motions [default: as many as the subject's parts together]
     #[arg(long)]
-    target_whole: PathBuf,
+    whole_components: Option<usize>,
     #[arg(long)]
     source_fps: f64,
     #[arg(long)]
@@ -42,9 +51,16 @@ struct Args {
     /// Target subject name
     #[arg(long, default_value = "B")]
     target_name: String,
-    /// A training pair as in the set: aligned source motion, aligned target motion, correspondences (repeat)
-    #[arg(long, num_args = 3, value_names = ["SET_SOURCE", "SET_TARGET", "CORR"], required = true, action = clap::ArgAction::Append)]
+    /// A training pair with DTW pairs: aligned source motion, aligned target motion, correspondences (repeat)
+    #[arg(long, num_args = 3, value_names = ["SET_SOURCE", "SET_TARGET", "CORR"], action = clap::ArgAction::Append,
+          required_unless_present = "true_pair", conflicts_with = "true_pair")]
     pair: Vec<PathBuf>,
+    /// The capture set's set.json (key-poses and true correspondences of --true-pair)
+    #[arg(long)]
+    set: Option<PathBuf>,
+    /// A training pair with the set's true correspondences: source motion name, aligned source motion, aligned target motion (repeat)
+    #[arg(long, num_args = 3, value_names = ["MOTION", "SET_SOURCE", "SET_TARGET"], action = clap::ArgAction::Append, requires = "set")]
+    true_pair: Vec<String>,
     /// Largest training subset (pairs)
     #[arg(long, default_value_t = 300)]
     max_train: usize,
@@ -54,6 +70,9 @@ struct Args {
     /// Neural-network kernel with the bias input (R&W eq. 4.29); eq. 10 as printed has none, which limits the GP to odd functions
     #[arg(long)]
     nn_bias: bool,
+    /// Mean function of the GPs: affine (the GP on its residuals) or zero (the paper's curves)
+    #[arg(long, value_enum, default_value_t = MeanFunction::default())]
+    mean: MeanFunction,
     /// Observation-noise variance σn²
     #[arg(long, default_value_t = PAPER_NOISE_VAR)]
     noise_var: f64,
@@ -65,79 +84,134 @@ struct Args {
     out: PathBuf,
 }
 
+/// One training pair as loaded: motions, frame pairs, key-poses.
+struct Loaded {
+    source: AlignedMotion,
+    target: AlignedMotion,
+    pairs: Vec<[usize; 2]>,
+    keyposes: Vec<[usize; 2]>,
+    what: String,
+}
+
+fn load_pairs(args: &Args) -> anyhow::Result<(Correspondence, Vec<Loaded>)> {
+    let load = |p: &str| AlignedMotion::load(p);
+    if let Some(set_path) = &args.set {
+        if !args.true_pair.is_empty() {
+            let set = SetSpec::load(set_path)?;
+            let mut out = Vec::new();
+            for t in args.true_pair.chunks(3) {
+                let (keyposes, pairs) = true_correspondences(&set, set_path, &t[0])?;
+                out.push(Loaded {
+                    source: load(&t[1])?,
+                    target: load(&t[2])?,
+                    pairs,
+                    keyposes,
+                    what: format!("{} (true pairs of {})", t[1], t[0]),
+                });
+            }
+            return Ok((Correspondence::True, out));
+        }
+    }
+    let mut out = Vec::new();
+    for f in args.pair.chunks(3) {
+        let corr = Correspondences::load(&f[2])?;
+        out.push(Loaded {
+            source: AlignedMotion::load(&f[0])?,
+            target: AlignedMotion::load(&f[1])?,
+            pairs: corr.pairs,
+            keyposes: corr.keyposes,
+            what: f[2].display().to_string(),
+        });
+    }
+    Ok((Correspondence::Dtw, out))
+}
+
 fn main() -> ExitCode {
     let args = Args::parse();
     run_stage("learning-curves", || {
         args.common.init()?;
-        let load = |p: &PathBuf| PcaModel::load(p);
-        let (sp, tp, sw, tw) = (
-            load(&args.source_pca)?,
-            load(&args.target_pca)?,
-            load(&args.source_whole)?,
-            load(&args.target_whole)?,
-        );
+        let (sp, tp) = (PcaModel::load(&args.source_pca)?, PcaModel::load(&args.target_pca)?);
         let names: Vec<String> = sp.parts.iter().map(|p| p.name.clone()).collect();
         if tp.parts.iter().map(|p| &p.name).ne(names.iter()) {
-            bail!(
-                "{}: the part names differ from the source's {:?}",
-                args.target_pca.display(),
-                names
-            );
+            bail!("{}: the part names differ from the source's {:?}", args.target_pca.display(), names);
         }
+        let (correspondence, loaded) = load_pairs(&args)?;
+        let (sw, tw) = match (&args.source_whole, &args.target_whole) {
+            (Some(s), Some(t)) => (PcaModel::load(s)?, PcaModel::load(t)?),
+            _ => {
+                let fit = |pick: &dyn Fn(&Loaded) -> &AlignedMotion, parts: &PcaModel| {
+                    let motions: Vec<&AlignedMotion> = loaded.iter().map(pick).collect();
+                    fit_whole_body(&motions, args.whole_components.unwrap_or(total_components(parts)))
+                };
+                (fit(&|l| &l.source, &sp)?, fit(&|l| &l.target, &tp)?)
+            }
+        };
         let (mut parts, mut whole) = (Vec::new(), Vec::new());
-        for files in args.pair.chunks(3) {
-            let pair = PairFiles::load(files)?;
-            parts.push(pair.encode(&sp, &tp)?);
-            whole.push(pair.encode(&sw, &tw)?);
+        for l in &loaded {
+            let enc = |s: &PcaModel, t: &PcaModel| {
+                encode_pair(&l.source, &l.target, &l.pairs, &l.keyposes, s, t).with_context(|| l.what.clone())
+            };
+            parts.push(enc(&sp, &tp)?);
+            whole.push(enc(&sw, &tw)?);
+        }
+        drop(loaded);
+        mesh_core::info!(
+            "components: source {} in parts, {} whole body; target {} in parts, {} whole body; {} pairs",
+            total_components(&sp),
+            total_components(&sw),
+            total_components(&tp),
+            total_components(&tw),
+            correspondence.name()
+        );
+        if total_components(&tp) != total_components(&tw) || total_components(&sp) != total_components(&sw) {
+            mesh_core::warn!(
+                "figure 9 compares unequal dimensions: parts {} / {}, whole body {} / {} (source / target)",
+                total_components(&sp),
+                total_components(&tp),
+                total_components(&sw),
+                total_components(&tw)
+            );
         }
         let opts = GprOptions {
             noise_var: args.noise_var,
-            cg: gp::optim::CgOptions {
-                max_iter: args.max_iter,
-                ..Default::default()
-            },
+            cg: gp::optim::CgOptions { max_iter: args.max_iter, ..Default::default() },
             ..Default::default()
         };
-        let n_keys = parts.iter().map(|p| p.keyposes.len()).sum::<usize>();
-        let n_rows = parts.iter().map(|p| p.pairs.len()).sum::<usize>();
-        let train_max = args
-            .max_train
-            .min(n_rows - (n_rows.saturating_sub(n_keys) as f64 * 0.3).round() as usize);
+        let n_keys = parts.iter().map(|p| p.data.keyposes.len()).sum::<usize>();
+        let n_rows = parts.iter().map(|p| p.data.pairs.len()).sum::<usize>();
+        let train_max = args.max_train.min(train_side_len(n_rows, n_keys));
         let train_sizes = sizes(n_keys.max(10), train_max, args.steps);
-        let forward = DirectionData {
-            label: format!("{}->{}", args.source_name, args.target_name),
-            part_vertices: tp.parts.iter().map(|p| p.vertices.len()).collect(),
-            whole_vertices: tw.n_vertices,
+        let direction = |label: String, ratio: f64, vertices: &PcaModel, whole_vertices: usize, parts, whole| DirectionData {
+            label,
+            correspondence,
+            part_vertices: vertices.parts.iter().map(|p| p.vertices.len()).collect(),
+            whole_vertices,
             part_names: names.clone(),
-            frame_ratio: args.target_fps / args.source_fps,
-            parts: parts.clone(),
-            whole: whole.clone(),
+            frame_ratio: ratio,
+            parts,
+            whole,
         };
-        let reverse = DirectionData {
-            label: format!("{}->{}", args.target_name, args.source_name),
-            part_vertices: sp.parts.iter().map(|p| p.vertices.len()).collect(),
-            whole_vertices: sw.n_vertices,
-            part_names: names,
-            frame_ratio: args.source_fps / args.target_fps,
-            parts: parts.into_iter().map(PairData::reversed).collect(),
-            whole: whole.into_iter().map(PairData::reversed).collect(),
-        };
+        let forward = direction(
+            format!("{}->{}", args.source_name, args.target_name),
+            args.target_fps / args.source_fps,
+            &tp,
+            tw.n_vertices,
+            parts.clone(),
+            whole.clone(),
+        );
+        let reverse = direction(
+            format!("{}->{}", args.target_name, args.source_name),
+            args.source_fps / args.target_fps,
+            &sp,
+            sw.n_vertices,
+            parts.into_iter().map(|p| p.reversed()).collect(),
+            whole.into_iter().map(|p| p.reversed()).collect(),
+        );
         let mut points = Vec::new();
         for d in [&forward, &reverse] {
             let t = std::time::Instant::now();
-            points.extend(run_direction(
-                d,
-                &train_sizes,
-                args.nn_bias,
-                &opts,
-                args.common.seed,
-            )?);
-            mesh_core::info!(
-                "{}: sizes {:?} in {:.1} s",
-                d.label,
-                train_sizes,
-                t.elapsed().as_secs_f64()
-            );
+            points.extend(run_direction(d, &train_sizes, args.nn_bias, args.mean, &opts, args.common.seed)?);
+            mesh_core::info!("{}: sizes {:?} in {:.1} s", d.label, train_sizes, t.elapsed().as_secs_f64());
         }
         std::fs::create_dir_all(&args.out).with_context(|| args.out.display().to_string())?;
         let plots = plot_all(&args.out, &points)?;
