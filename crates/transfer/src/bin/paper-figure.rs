@@ -1,0 +1,178 @@
+use std::path::PathBuf;
+use std::process::ExitCode;
+
+use anyhow::{bail, Context};
+use clap::{Args as ClapArgs, Parser, Subcommand};
+use mesh_core::artifact::Artifact;
+use mesh_core::capture_set::SetSpec;
+use mesh_core::cli::{run_stage, CommonArgs};
+use mesh_core::segmentation::Segmentation;
+use mesh_core::sequence::MeshSequence;
+use transfer::align::AlignedMotion;
+use transfer::densify::PAPER_SIGMA2;
+use transfer::figures::{correction_example, cost_and_path, CostFigure};
+use transfer::gpr_model::GprModel;
+use transfer::learning_curves::true_correspondences;
+use transfer::part_pca::PcaModel;
+
+/// The paper's figures 3 (BLR cost matrix with the DTW path) and 5 (a body part correction example)
+#[derive(Parser, Debug)]
+#[command(
+    name = "paper-figure",
+    version,
+    after_help = "e.g.: paper-figure cost-matrix --set set/set.json --pair walk --source-pca work/A/pca.model --target-pca work/B/pca.model \\\n        work/A/walk.aligned work/B/walk.aligned --out figures/fig3-walk.png\n      paper-figure correction --model work/models/A-to-B/gpr-nn.model --source-pca work/A/pca.model --target-pca work/B/pca.model \\\n        --segmentation work/B/parts.seg --target-training work/B/walk.aligned --truth set/truth/B/punch work/A/punch.aligned --out figures/fig5-punch.png"
+)]
+struct Args {
+    #[command(subcommand)]
+    figure: Figure,
+}
+
+#[derive(Subcommand, Debug)]
+enum Figure {
+    /// CVPR figure 3: -log P_ij of one training pair (eqs. 1-6), the DTW path (eq. 7), key-poses and true pairs
+    CostMatrix(CostArgs),
+    /// CVPR figure 5: a predicted part before / after the §6.1 correction, and its nearest training meshes
+    Correction(CorrectionArgs),
+}
+
+#[derive(ClapArgs, Debug)]
+struct CostArgs {
+    #[command(flatten)]
+    common: CommonArgs,
+    /// The capture set's set.json (key-poses and, if present, true correspondences)
+    #[arg(long)]
+    set: PathBuf,
+    /// Training pair, by the source motion's name
+    #[arg(long)]
+    pair: String,
+    /// Source subject's PCA model
+    #[arg(long)]
+    source_pca: PathBuf,
+    /// Target subject's PCA model
+    #[arg(long)]
+    target_pca: PathBuf,
+    /// Observation noise variance σ² of the key-pose regression (eq. 1)
+    #[arg(long, default_value_t = PAPER_SIGMA2)]
+    sigma2: f64,
+    /// Aligned source motion
+    source: PathBuf,
+    /// Aligned target motion
+    target: PathBuf,
+    /// Output PNG (an SVG is written next to it unless --no-svg)
+    #[arg(short, long)]
+    out: PathBuf,
+    #[arg(long)]
+    no_svg: bool,
+}
+
+#[derive(ClapArgs, Debug)]
+struct CorrectionArgs {
+    #[command(flatten)]
+    common: CommonArgs,
+    /// Transfer model (gpr-train)
+    #[arg(long)]
+    model: PathBuf,
+    /// Source subject's PCA model
+    #[arg(long)]
+    source_pca: PathBuf,
+    /// Target subject's PCA model
+    #[arg(long)]
+    target_pca: PathBuf,
+    /// Target subject's segmentation (segment)
+    #[arg(long)]
+    segmentation: PathBuf,
+    /// Target's aligned training motions: the correction's training part meshes (repeat)
+    #[arg(long = "target-training", required = true)]
+    target_training: Vec<PathBuf>,
+    /// Nearest training part meshes blended by the correction (the paper's M)
+    #[arg(short = 'm', long, default_value_t = surface::correct::DEFAULT_NEIGHBOURS)]
+    neighbours: usize,
+    /// Part to show [default: the part and frame farthest from every training mesh]
+    #[arg(long)]
+    part: Option<String>,
+    /// Source frame to show [default: see --part]
+    #[arg(long)]
+    frame: Option<usize>,
+    /// The target's true sequence of the motion (folder of frames): drawn last, and scored in --report
+    #[arg(long)]
+    truth: Option<PathBuf>,
+    /// Panel size in pixels
+    #[arg(long, default_value_t = 360)]
+    size: u32,
+    /// View: front, side, three-quarter or AZIMUTH,ELEVATION
+    #[arg(long, default_value = "three-quarter")]
+    camera: String,
+    /// Aligned source motion (align)
+    motion: PathBuf,
+    /// Output PNG
+    #[arg(short, long)]
+    out: PathBuf,
+    /// Write the example's numbers (nearest distances, errors to the truth) as JSON
+    #[arg(long)]
+    report: Option<PathBuf>,
+}
+
+fn cost_matrix(a: &CostArgs) -> anyhow::Result<()> {
+    let set = SetSpec::load(&a.set)?;
+    let Some(pair) = set.train.iter().find(|p| p.source == a.pair) else {
+        bail!("{}: no training pair with source motion '{}'", a.set.display(), a.pair);
+    };
+    let truth = true_correspondences(&set, &a.set, &a.pair).ok().map(|t| t.1);
+    let (sp, tp) = (PcaModel::load(&a.source_pca)?, PcaModel::load(&a.target_pca)?);
+    let (src, tgt) = (AlignedMotion::load(&a.source)?, AlignedMotion::load(&a.target)?);
+    let xs = sp.encode(&src).with_context(|| a.source.display().to_string())?;
+    let ys = tp.encode(&tgt).with_context(|| a.target.display().to_string())?;
+    let (cost, path) = cost_and_path(&xs, &ys, &pair.keyposes, a.sigma2).with_context(|| a.set.display().to_string())?;
+    let fig = CostFigure {
+        title: format!("{} / {}: -log P_ij (eqs. 1-6), DTW path (eq. 7)", pair.source, pair.target),
+        cost,
+        path,
+        keyposes: pair.keyposes.clone(),
+        truth,
+    };
+    let svg = a.out.with_extension("svg");
+    fig.write(&a.out, (!a.no_svg).then_some(svg.as_path()))?;
+    Ok(())
+}
+
+fn correction(a: &CorrectionArgs) -> anyhow::Result<()> {
+    let Some(view) = render::camera::View::parse(&a.camera) else {
+        bail!("--camera {}: expected front, side, three-quarter or AZIMUTH,ELEVATION", a.camera);
+    };
+    let model = GprModel::load(&a.model)?;
+    let (sp, tp) = (PcaModel::load(&a.source_pca)?, PcaModel::load(&a.target_pca)?);
+    let seg = Segmentation::load(&a.segmentation)?;
+    let training: Vec<AlignedMotion> = a.target_training.iter().map(AlignedMotion::load).collect::<Result<_, _>>()?;
+    let refs: Vec<&AlignedMotion> = training.iter().collect();
+    let source = AlignedMotion::load(&a.motion)?;
+    let truth = a.truth.as_ref().map(MeshSequence::load_dir).transpose()?;
+    let (fig, report) = correction_example(
+        &model,
+        &sp,
+        &tp,
+        &seg,
+        &refs,
+        &source,
+        a.part.as_deref(),
+        a.frame,
+        a.neighbours,
+        truth.as_ref().map(|t| t.frames.as_slice()),
+    )
+    .with_context(|| a.motion.display().to_string())?;
+    mesh_core::info!("{}", serde_json::to_string(&report)?);
+    fig.render(a.size, &view).write_png(&a.out)?;
+    if let Some(r) = &a.report {
+        mesh_core::atomic::write_bytes_atomic(r, serde_json::to_string_pretty(&report)?.as_bytes())?;
+    }
+    Ok(())
+}
+
+fn main() -> ExitCode {
+    let args = Args::parse();
+    run_stage("paper-figure", || {
+        match &args.figure {
+            Figure::CostMatrix(a) => a.common.init().and_then(|_| cost_matrix(a)),
+            Figure::Correction(a) => a.common.init().and_then(|_| correction(a)),
+        }
+    })
+}
