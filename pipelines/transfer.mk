@@ -8,8 +8,14 @@
 
 SET ?= $(OUT)/demo/set
 TRANSFER_METHODS ?= gpr-nn gpr-se gpr-linear keypose-affine whole-body
-# pca-fit --part-alignment: body (parts cut from whole-body-aligned frames) or part (see h14 results)
+# align --frame: root (poses fitted on the torso core, the default) or body (the paper's whole mesh)
+ALIGN_FRAME ?= root
+# pca-fit --part-alignment: body (parts cut from the aligned frames) or part (each part Procrustes-aligned)
 PART_ALIGNMENT ?= body
+# gpr-predict --placement of every method's output (gpr-nn is also placed the other two ways)
+PLACEMENT ?= scaled-source
+# gpr-train --mean: affine (least-squares affine map, GP on the residuals) or zero (the paper)
+GPR_MEAN ?= affine
 TRANSFER_WORK := $(OUT)/work
 TRANSFER_RULES := $(TRANSFER_WORK)/transfer-rules.mk
 TRANSFER_BINS := align segment pca-fit dtw-densify gpr-train gpr-predict evaluate learning-curves render
@@ -50,8 +56,8 @@ def rule(target, deps, *cmds):
 for x in (S, T):
     for m in motions(x):
         d = os.path.join(set_dir, x, m)
-        rule("%s/%s/%s.aligned" % (W, x, m), [B + "/align", tpl[x]] + [os.path.join(d, f) for f in frames(d)],
-             "@mkdir -p $$(@D)", "%s/align -q --template %s %s --out $$@" % (B, tpl[x], d))
+        rule("%s/%s/%s.aligned" % (W, x, m), [B + "/align", tpl[x], "%s/%s/parts.seg" % (W, x)] + [os.path.join(d, f) for f in frames(d)],
+             "@mkdir -p $$(@D)", "%s/align -q --frame $$(ALIGN_FRAME) --segmentation %s/%s/parts.seg --template %s %s --out $$@" % (B, W, x, tpl[x], d))
     rule("%s/%s/parts.seg" % (W, x), [B + "/segment", os.path.join(set_dir, x, "subject.json"), tpl[x]],
          "@mkdir -p $$(@D)", "%s/segment -q %s --template %s --out $$@" % (B, os.path.join(set_dir, x, "subject.json"), tpl[x]))
     aligned = ["%s/%s/%s.aligned" % (W, x, m) for m in train[x]]
@@ -83,16 +89,17 @@ for (src, tgt, rev, tests) in directions:
         model = "%s/models/%s/%s.model" % (W, dn, name)
         rule(model, [B + "/gpr-train", "%s/%s/%s.model" % (W, src, pca), "%s/%s/%s.model" % (W, tgt, pca)] + corrs,
              "@mkdir -p $$(@D)",
-             "%s/gpr-train -q --method %s %s %s --source-pca %s/%s/%s.model --target-pca %s/%s/%s.model --source-fps %g --target-fps %g %s --out $$@"
+             "%s/gpr-train -q --mean $$(GPR_MEAN) --method %s %s %s --source-pca %s/%s/%s.model --target-pca %s/%s/%s.model --source-fps %g --target-fps %g %s --out $$@"
              % (B, method, "--keyposes-only" if keys else "", "--reverse" if rev else "", W, src, pca, W, tgt, pca, fps[src], fps[tgt], " ".join(pair_args)))
         stamps.append(model)
         for m in tests:
             if not os.path.isdir(os.path.join(set_dir, src, m)):
                 continue
             truth = os.path.join(set_dir, "truth", tgt, m)
-            places = ["regressed"] + (["scaled-source", "blended"] if name == "gpr-nn" else [])
+            default_pl = sys.argv[4]
+            places = [default_pl] + ([p for p in ("scaled-source", "regressed", "blended") if p != default_pl] if name == "gpr-nn" else [])
             for pl in places:
-                seq = "%s/transfer/%s/%s/%s" % (out, dn, m, name) if pl == "regressed" else "%s/placement/%s/%s/%s" % (W, dn, m, pl)
+                seq = "%s/transfer/%s/%s/%s" % (out, dn, m, name) if pl == default_pl else "%s/placement/%s/%s/%s" % (W, dn, m, pl)
                 timing = "%s/predict/%s/%s/%s-%s.json" % (W, dn, m, name, pl)
                 rule(timing, [B + "/gpr-predict", model, "%s/%s/%s.aligned" % (W, src, m)],
                      "@mkdir -p $$(@D)",
@@ -110,19 +117,19 @@ for (src, tgt, rev, tests) in directions:
                 # Paper section 6 after the regression: correction (M = 3), then stitching.
                 for (surf, meth) in (("correct", "gpr-nn+correct"), ("correct-stitch", "gpr-nn+correct+stitch")):
                     seq = "%s/transfer/%s/%s/%s" % (out, dn, m, meth)
-                    timing = "%s/predict/%s/%s/%s-regressed.json" % (W, dn, m, meth)
+                    timing = "%s/predict/%s/%s/%s-%s.json" % (W, dn, m, meth, default_pl)
                     training = ["%s/%s/%s.aligned" % (W, tgt, t) for t in train[tgt]]
                     rule(timing, [B + "/gpr-predict", model, "%s/%s/%s.aligned" % (W, src, m), "%s/%s/parts.seg" % (W, tgt)] + training,
                          "@mkdir -p $$(@D)",
-                         "%s/gpr-predict -q --model %s --source-pca %s/%s/pca.model --target-pca %s/%s/pca.model --target-template %s --surface %s --segmentation %s/%s/parts.seg %s -m 3 %s/%s/%s.aligned --out %s --timing $$@"
-                         % (B, model, W, src, W, tgt, tpl[tgt], surf, W, tgt, " ".join("--target-training " + t for t in training), W, src, m, seq))
+                         "%s/gpr-predict -q --model %s --source-pca %s/%s/pca.model --target-pca %s/%s/pca.model --target-template %s --placement %s --surface %s --segmentation %s/%s/parts.seg %s -m 3 %s/%s/%s.aligned --out %s --timing $$@"
+                         % (B, model, W, src, W, tgt, tpl[tgt], default_pl, surf, W, tgt, " ".join("--target-training " + t for t in training), W, src, m, seq))
                     stamps.append(timing)
                     if os.path.isdir(truth):
-                        rec = "%s/eval/%s/%s/%s-regressed.json" % (W, dn, m, meth)
+                        rec = "%s/eval/%s/%s/%s-%s.json" % (W, dn, m, meth, default_pl)
                         rule(rec, [B + "/evaluate", timing],
                              "@mkdir -p $$(@D)",
-                             "%s/evaluate -q %s %s --direction '%s' --motion %s --method %s --placement regressed --training dense --out $$@"
-                             % (B, seq, truth, label, m, meth))
+                             "%s/evaluate -q %s %s --direction '%s' --motion %s --method %s --placement %s --training dense --out $$@"
+                             % (B, seq, truth, label, m, meth, default_pl))
                         results.append(rec)
                     sheet = "%s/render/%s/%s/%s/contact.png" % (out, dn, m, meth)
                     seqs = [os.path.join(set_dir, src, m), seq] + ([truth] if os.path.isdir(truth) else [])
@@ -136,7 +143,7 @@ for (src, tgt, rev, tests) in directions:
                 if os.path.isdir(truth):
                     seqs.append(truth)
                     labels += ",truth"
-                rule(sheet, [B + "/render", "%s/predict/%s/%s/gpr-nn-regressed.json" % (W, dn, m)],
+                rule(sheet, [B + "/render", "%s/predict/%s/%s/gpr-nn-%s.json" % (W, dn, m, default_pl)],
                      "%s/render -q --separate-rows --no-frames --no-gif --labels %s --out $$(@D) %s" % (B, labels, " ".join(seqs)))
                 stamps.append(sheet)
 lc = "%s/learning-curves/learning_curves.csv" % out
@@ -159,7 +166,7 @@ export TRANSFER_RULES_PY
 
 $(TRANSFER_RULES): $(SET)/set.json $(wildcard $(SET)/* $(SET)/truth/*) pipelines/transfer.mk
 	@mkdir -p $(@D)
-	@python3 -c "$$TRANSFER_RULES_PY" $(SET) $(OUT) "$(TRANSFER_METHODS)" > $@.tmp && mv $@.tmp $@
+	@python3 -c "$$TRANSFER_RULES_PY" $(SET) $(OUT) "$(TRANSFER_METHODS)" $(PLACEMENT) > $@.tmp && mv $@.tmp $@
 
 
 # The generated rules (and the merge below) exist only under `make transfer`, which calls

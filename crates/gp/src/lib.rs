@@ -17,9 +17,11 @@
 //! - [`kernel`]: covariance functions, including the neural-network kernel (eq. 10);
 //! - [`gpr`]: multi-output GP regression and its marginal likelihood (eqs. 8-13);
 //! - [`optim`]: non-linear conjugate gradients (Polak-Ribière+) with a strong-Wolfe line search;
-//! - [`affine_keypose`]: the Semantic Deformation Transfer baseline (Baran et al. 2009).
+//! - [`affine_keypose`]: the Semantic Deformation Transfer baseline (Baran et al. 2009);
+//! - [`affine_mean`]: an explicit affine mean function, the GP then fitted on the residuals.
 
 pub mod affine_keypose;
+pub mod affine_mean;
 pub mod blr;
 pub mod dtw;
 pub mod gpr;

@@ -11,7 +11,7 @@
 use criterion::{criterion_group, criterion_main, Criterion, Throughput};
 use gp::gpr::GprOptions;
 use nalgebra::DMatrix;
-use transfer::gpr_model::{train, Method, PairData};
+use transfer::gpr_model::{train, MeanFunction, Method, PairData};
 use transfer::predict::{displacement_matrix, predict};
 
 const PARTS: usize = 5;
@@ -68,6 +68,7 @@ fn bench(c: &mut Criterion) {
                     train(
                         Method::GprNn,
                         false,
+                        MeanFunction::default(),
                         &names,
                         std::slice::from_ref(&data),
                         1.0,
@@ -83,6 +84,7 @@ fn bench(c: &mut Criterion) {
     let model = train(
         Method::GprNn,
         false,
+        MeanFunction::default(),
         &names,
         &[pair_data(1100)],
         1.0,

@@ -6,19 +6,118 @@
 //! `P_i = (R_i, t_i)` minimising `Σ |R_i T + t_i - V_i|²` over the template
 //! `T`. The aligned frame is `P_i⁻¹ V_i` (the body brought back to the
 //! template's position and heading). The displacement of frame `i` is the
-//! motion from the previous pose expressed in the previous frame's body
-//! coordinates, `D_i = P_{i-1}⁻¹ P_i`, so it does not depend on heading; it is
-//! stored as the 6-vector `(t_x, t_y, t_z, h_1, h_2, h_3)` with `h = log R`.
-//! `D_0` is the identity: every motion starts where its first frame stands,
-//! and `P_0` records where that is.
+//! motion of the body's *root* from the previous frame, expressed in the
+//! previous frame's body coordinates: with the root pose `Q_i = P_i ∘ T(c)`
+//! (`c` the template's root point, [`root_point`]), `D_i = Q_{i-1}⁻¹ Q_i`. It
+//! does not depend on heading nor on where the template stands (a turn on the
+//! spot is a pure rotation); it is stored as the 6-vector
+//! `(t_x, t_y, t_z, h_1, h_2, h_3)` with `h = log R`. `D_0` is the identity:
+//! every motion starts where its first frame stands, and `P_0` records where
+//! that is.
+//!
+//! Which vertices the Procrustes fit uses is the *alignment frame*
+//! ([`AlignFrame`]): the paper's reading fits the whole body; `root` fits only
+//! the root part's core (the torso without the overlap bands it shares with
+//! the limbs), so a raised leg or a punch does not tilt the frame every part is
+//! expressed in. In the paper's 5-part tree (a torso and four limbs) the root
+//! frame is also the hierarchical one: each limb in its parent's frame.
 
 use mesh_core::artifact::Artifact;
 use mesh_core::rigid::{procrustes, relative_in_body_frame, RigidMotion};
+use mesh_core::segmentation::Segmentation;
 use mesh_core::sequence::MeshSequence;
 use mesh_core::{Error, Result, TriMesh};
 use nalgebra::{Vector3, Vector6};
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
+
+/// Which vertices define a frame's rigid pose (see the module documentation).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize, clap::ValueEnum)]
+#[serde(rename_all = "kebab-case")]
+pub enum AlignFrame {
+    /// The root part's core: the root without the bands it shares with its children.
+    #[default]
+    Root,
+    /// Every vertex (the paper's Procrustes analysis of the whole mesh).
+    Body,
+}
+
+/// The template vertices `frame` aligns on (sorted; empty means every vertex).
+/// `Root` needs the subject's segmentation.
+pub fn anchor_vertices(frame: AlignFrame, parts: Option<&Segmentation>) -> Result<Vec<u32>> {
+    match frame {
+        AlignFrame::Body => Ok(Vec::new()),
+        AlignFrame::Root => {
+            let parts = parts.ok_or_else(|| {
+                Error::invalid("the root alignment frame needs the subject's segmentation")
+            })?;
+            let root = parts
+                .parts
+                .iter()
+                .find(|p| p.parent.is_none())
+                .ok_or_else(|| Error::invalid("the segmentation has no root part"))?;
+            let mut in_child = vec![false; parts.n_vertices];
+            for p in parts.parts.iter().filter(|p| p.parent.is_some()) {
+                for &v in &p.vertices {
+                    if let Some(c) = in_child.get_mut(v as usize) {
+                        *c = true;
+                    }
+                }
+            }
+            let core: Vec<u32> = root
+                .vertices
+                .iter()
+                .copied()
+                .filter(|&v| !in_child.get(v as usize).copied().unwrap_or(true))
+                .collect();
+            if core.len() < 3 {
+                return Err(Error::invalid(format!(
+                    "root part '{}' keeps {} vertices outside its children's bands (need 3 to align on)",
+                    root.name,
+                    core.len()
+                )));
+            }
+            Ok(core)
+        }
+    }
+}
+
+/// The root point of a template: the centroid of its `anchor` vertices (of every
+/// vertex when `anchor` is empty). Displacements are motions of this point.
+pub fn root_point(template: &[Vector3<f64>], anchor: &[u32]) -> Vector3<f64> {
+    let (sum, n) = if anchor.is_empty() {
+        (template.iter().sum::<Vector3<f64>>(), template.len())
+    } else {
+        (
+            anchor.iter().filter_map(|&v| template.get(v as usize)).sum(),
+            anchor.len(),
+        )
+    };
+    if n == 0 {
+        Vector3::zeros()
+    } else {
+        sum / n as f64
+    }
+}
+
+/// Root poses `Q_i = P_i ∘ T(c)` of template poses `P_i`: where the root point `c`
+/// is and how the body is turned.
+pub fn root_poses(poses: &[RigidMotion], root: &Vector3<f64>) -> Vec<RigidMotion> {
+    let to_root = RigidMotion::new(nalgebra::Rotation3::identity(), *root);
+    poses.iter().map(|p| p.compose(&to_root)).collect()
+}
+
+/// The rigid motion taking `src` onto `dst` fitted on the `anchor` vertices
+/// only (every vertex when `anchor` is empty): Procrustes, as [`procrustes`].
+pub fn fit_on(src: &[Vector3<f64>], dst: &[Vector3<f64>], anchor: &[u32]) -> RigidMotion {
+    if anchor.is_empty() {
+        return procrustes(src, dst, None);
+    }
+    let pick = |x: &[Vector3<f64>]| -> Vec<Vector3<f64>> {
+        anchor.iter().map(|&v| x[v as usize]).collect()
+    };
+    procrustes(&pick(src), &pick(dst), None)
+}
 
 /// A motion after alignment: the aligned frames, each frame's world pose and
 /// its displacement from the previous frame.
@@ -32,11 +131,13 @@ pub struct AlignedMotion {
     pub poses: Vec<RigidMotion>,
     /// Displacements `D_i = P_{i-1}⁻¹ P_i` as 6-vectors (`D_0 = 0`).
     pub displacements: Vec<[f64; 6]>,
+    /// Template vertices the poses were fitted on ([`anchor_vertices`]; empty: all).
+    pub anchor: Vec<u32>,
 }
 
 impl Artifact for AlignedMotion {
     const KIND: &'static str = "aligned-motion";
-    const VERSION: u32 = 1;
+    const VERSION: u32 = 2;
 }
 
 impl AlignedMotion {
@@ -50,8 +151,24 @@ impl AlignedMotion {
     }
 }
 
-/// Aligns every frame of `motion` to `template` (same topology required).
+/// Aligns every frame of `motion` to `template` on the whole body (same topology required).
 pub fn align_motion(template: &TriMesh, motion: &MeshSequence) -> Result<AlignedMotion> {
+    align_motion_on(template, motion, &[])
+}
+
+/// Aligns every frame of `motion` to `template`, fitting each pose on the
+/// `anchor` vertices ([`anchor_vertices`]; empty: every vertex).
+pub fn align_motion_on(
+    template: &TriMesh,
+    motion: &MeshSequence,
+    anchor: &[u32],
+) -> Result<AlignedMotion> {
+    if let Some(&v) = anchor.iter().find(|&&v| v as usize >= template.n_vertices()) {
+        return Err(Error::invalid(format!(
+            "alignment vertex {v} is beyond the template's {} vertices",
+            template.n_vertices()
+        )));
+    }
     if motion.n_vertices() != template.n_vertices() || motion.faces != template.faces {
         return Err(Error::invalid(format!(
             "motion has {} vertices and {} faces but the template has {} and {}: not the same topology",
@@ -67,7 +184,7 @@ pub fn align_motion(template: &TriMesh, motion: &MeshSequence) -> Result<Aligned
     let poses: Vec<RigidMotion> = motion
         .frames
         .par_iter()
-        .map(|frame| procrustes(&template.vertices, frame, None))
+        .map(|frame| fit_on(&template.vertices, frame, anchor))
         .collect();
     let frames: Vec<Vec<Vector3<f64>>> = motion
         .frames
@@ -75,12 +192,19 @@ pub fn align_motion(template: &TriMesh, motion: &MeshSequence) -> Result<Aligned
         .zip(&poses)
         .map(|(frame, pose)| pose.inverse().apply_all(frame))
         .collect();
+    let roots = root_poses(&poses, &root_point(&template.vertices, anchor));
     let mut displacements = vec![[0.0; 6]];
-    for w in poses.windows(2) {
+    for w in roots.windows(2) {
         let d: Vector6<f64> = relative_in_body_frame(&w[0], &w[1]).to_6vec();
         displacements.push(d.into());
     }
-    Ok(AlignedMotion { faces: motion.faces.clone(), frames, poses, displacements })
+    Ok(AlignedMotion {
+        faces: motion.faces.clone(),
+        frames,
+        poses,
+        displacements,
+        anchor: anchor.to_vec(),
+    })
 }
 
 #[cfg(test)]
@@ -117,7 +241,12 @@ mod tests {
             .iter()
             .map(|d| RigidMotion::from_6vec(&Vector6::from_column_slice(d)))
             .collect();
-        let integrated = integrate(&aligned.poses[0], &steps);
+        // Displacements move the root point: integrate root poses, then shift back.
+        let root = root_point(&template.vertices, &[]);
+        let q0 = root_poses(&aligned.poses[..1], &root)[0];
+        let back = RigidMotion::new(nalgebra::Rotation3::identity(), -root);
+        let integrated: Vec<RigidMotion> =
+            integrate(&q0, &steps).iter().map(|q| q.compose(&back)).collect();
         for (a, b) in integrated.iter().zip(&truth) {
             assert!((a.translation - b.translation).norm() < 1e-9);
             assert!((a.rotation.matrix() - b.rotation.matrix()).norm() < 1e-9);

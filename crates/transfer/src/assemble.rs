@@ -44,6 +44,15 @@ pub struct AssemblyPlan {
     pub coverage: Vec<u32>,
     /// The template (from the parts' references), for the final alignment.
     pub template: Vec<Vector3<f64>>,
+    /// The vertices the final alignment fits on (the PCA model's anchor; empty: all).
+    pub anchor: Vec<u32>,
+}
+
+impl AssemblyPlan {
+    /// `mesh` brought back to the template frame on the anchor vertices, as `align` does.
+    pub fn to_template_frame(&self, mesh: &[Vector3<f64>]) -> Vec<Vector3<f64>> {
+        crate::align::fit_on(mesh, &self.template, &self.anchor).apply_all(mesh)
+    }
 }
 
 /// Plans the assembly of `pca`'s parts; every template vertex must be in a
@@ -131,6 +140,7 @@ pub fn plan(pca: &PcaModel) -> Result<AssemblyPlan> {
         steps,
         coverage,
         template,
+        anchor: pca.anchor.clone(),
     })
 }
 
@@ -171,7 +181,7 @@ pub fn assemble_frame(
         .zip(&plan.coverage)
         .map(|(s, &c)| s / c as f64)
         .collect();
-    procrustes(&mean, &plan.template, None).apply_all(&mean)
+    plan.to_template_frame(&mean)
 }
 
 /// Assembles every frame: `decoded[part][frame]` as from `PcaModel::decode`.
@@ -232,6 +242,7 @@ mod tests {
                 part("limb", &limb),
             ],
             alignment: PartAlignment::Part,
+            anchor: Vec::new(),
         };
         let plan = plan(&pca).unwrap();
         assert_eq!(
@@ -303,6 +314,7 @@ mod tests {
             n_vertices: 6,
             parts: vec![p("a", vec![0, 1, 2]), p("b", vec![3, 4, 5])],
             alignment: PartAlignment::Part,
+            anchor: Vec::new(),
         };
         assert!(plan(&pca)
             .unwrap_err()

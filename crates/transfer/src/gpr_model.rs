@@ -26,6 +26,7 @@
 //! - Frame rates: see [`target_step`].
 
 use gp::affine_keypose::AffineKeypose;
+use gp::affine_mean::{AffineMean, DEFAULT_RIDGE};
 use gp::gpr::{Gpr, GprOptions, TrainReport};
 use gp::kernel::Kernel;
 use mesh_core::artifact::Artifact;
@@ -96,13 +97,27 @@ impl Method {
     }
 }
 
+/// The mean function of the GPs (CVPR eq. 11 assumes a zero mean).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize, clap::ValueEnum)]
+#[serde(rename_all = "kebab-case")]
+pub enum MeanFunction {
+    /// An affine map fitted by least squares, the GP on the residuals (`gp::affine_mean`):
+    /// far from the training inputs the prediction degrades to the linear mapping.
+    #[default]
+    Affine,
+    /// Zero mean (the paper): far from the data the prediction falls back to the PCA mean.
+    Zero,
+}
+
 /// The mapping of one part's coefficients (or of the displacement).
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub enum Regressor {
-    /// A GP trained on outputs divided by `y_scale`.
+    /// `mean(x) + y_scale · gp(x)`: a GP trained on the residuals of the (optional) affine
+    /// mean, divided by `y_scale`.
     Gp {
         gpr: Gpr,
         y_scale: f64,
+        mean: Option<AffineMean>,
     },
     Affine(AffineKeypose),
 }
@@ -111,10 +126,34 @@ impl Regressor {
     /// Mapped outputs for the rows of `xs`.
     pub fn predict(&self, xs: &DMatrix<f64>) -> Result<DMatrix<f64>> {
         let out = match self {
-            Regressor::Gp { gpr, y_scale } => gpr.predict_mean(xs).map(|m| m * *y_scale),
+            Regressor::Gp { gpr, y_scale, mean } => gpr.predict_mean(xs).and_then(|g| {
+                let g = g * *y_scale;
+                match mean {
+                    Some(m) => m.predict(xs).map(|m| m + g),
+                    None => Ok(g),
+                }
+            }),
             Regressor::Affine(a) => a.predict(xs),
         };
         out.map_err(|e| Error::invalid(e.to_string()))
+    }
+}
+
+/// The mean of `mean_fn` fitted on `(x, y)` and the residuals the GP is trained on.
+fn fit_mean(
+    mean_fn: MeanFunction,
+    x: &DMatrix<f64>,
+    y: &DMatrix<f64>,
+    notes: &mut Vec<String>,
+) -> Result<(Option<AffineMean>, DMatrix<f64>)> {
+    match mean_fn {
+        MeanFunction::Zero => Ok((None, y.clone())),
+        MeanFunction::Affine => {
+            let m = AffineMean::fit(x, y, DEFAULT_RIDGE, notes)
+                .map_err(|e| Error::invalid(e.to_string()))?;
+            let r = y - m.predict(x).map_err(|e| Error::invalid(e.to_string()))?;
+            Ok((Some(m), r))
+        }
     }
 }
 
@@ -178,12 +217,14 @@ pub struct GprModel {
     pub keyposes_only: bool,
     /// NN kernel with the bias input (see [`Method::kernel`]).
     pub nn_bias: bool,
+    /// Mean function of the GPs.
+    pub mean: MeanFunction,
     pub reports: Vec<RegressorReport>,
 }
 
 impl Artifact for GprModel {
     const KIND: &'static str = "gpr-model";
-    const VERSION: u32 = 1;
+    const VERSION: u32 = 2;
 }
 
 /// The coefficients and displacements of one training pair of motions, with
@@ -386,6 +427,7 @@ fn rms(m: &DMatrix<f64>) -> f64 {
 fn train_parts(
     method: Method,
     nn_bias: bool,
+    mean_fn: MeanFunction,
     names: &[String],
     data: &TrainingSet,
     keys: &TrainingSet,
@@ -393,19 +435,26 @@ fn train_parts(
 ) -> Result<(Vec<Regressor>, Vec<RegressorReport>)> {
     match method.kernel(nn_bias) {
         Some(kernel) => {
-            let problems: Vec<(DMatrix<f64>, DMatrix<f64>)> = data
-                .x_parts
-                .iter()
-                .cloned()
-                .zip(data.y_parts.iter().cloned())
-                .collect();
+            let mut means = Vec::new();
+            let mut problems: Vec<(DMatrix<f64>, DMatrix<f64>)> = Vec::new();
+            let mut mean_notes = Vec::new();
+            for (k, name) in names.iter().enumerate() {
+                let mut notes = Vec::new();
+                let (m, r) = fit_mean(mean_fn, &data.x_parts[k], &data.y_parts[k], &mut notes)
+                    .map_err(|e| Error::invalid(format!("part '{name}': {e}")))?;
+                means.push(m);
+                mean_notes.push(notes);
+                problems.push((data.x_parts[k].clone(), r));
+            }
             let trained = gp::gpr::train_many(kernel, &problems, opts);
             let mut regs = Vec::new();
             let mut reports = Vec::new();
-            for (name, t) in names.iter().zip(trained) {
+            for (((name, t), mean), notes) in names.iter().zip(trained).zip(means).zip(mean_notes) {
                 let (gpr, r) = t.map_err(|e| Error::invalid(format!("part '{name}': {e}")))?;
-                reports.push(RegressorReport::from_train(name, &gpr, &r));
-                regs.push(Regressor::Gp { gpr, y_scale: 1.0 });
+                let mut report = RegressorReport::from_train(name, &gpr, &r);
+                report.notes.extend(notes);
+                reports.push(report);
+                regs.push(Regressor::Gp { gpr, y_scale: 1.0, mean });
             }
             Ok((regs, reports))
         }
@@ -431,14 +480,18 @@ fn train_parts(
     }
 }
 
-/// Trains the displacement GP (`gpr-nn`, outputs scaled to unit RMS).
+/// Trains the displacement GP (`gpr-nn` on the residuals of `mean_fn`, scaled to unit RMS).
 pub fn train_displacement(
     data: &TrainingSet,
     nn_bias: bool,
+    mean_fn: MeanFunction,
     opts: &GprOptions,
 ) -> Result<(Regressor, RegressorReport)> {
-    let y_scale = rms(&data.y_disp).max(1e-9);
-    let y = &data.y_disp / y_scale;
+    let mut notes = Vec::new();
+    let (mean, resid) = fit_mean(mean_fn, &data.x_disp, &data.y_disp, &mut notes)
+        .map_err(|e| Error::invalid(format!("displacement: {e}")))?;
+    let y_scale = rms(&resid).max(1e-9);
+    let y = &resid / y_scale;
     let (gpr, r) = Gpr::train(
         Kernel::NeuralNetwork {
             l: 1.0,
@@ -450,16 +503,19 @@ pub fn train_displacement(
         opts,
     )
     .map_err(|e| Error::invalid(format!("displacement: {e}")))?;
-    let report = RegressorReport::from_train("displacement", &gpr, &r);
-    Ok((Regressor::Gp { gpr, y_scale }, report))
+    let mut report = RegressorReport::from_train("displacement", &gpr, &r);
+    report.notes.extend(notes);
+    Ok((Regressor::Gp { gpr, y_scale, mean }, report))
 }
 
 /// Trains a transfer model: the pose mapping of `method` per part and the
 /// displacement GP. `part_names` are the parts of both PCA models (equal).
 /// `nn_bias`: see [`Method::kernel`].
+#[allow(clippy::too_many_arguments)]
 pub fn train(
     method: Method,
     nn_bias: bool,
+    mean_fn: MeanFunction,
     part_names: &[String],
     pairs: &[PairData],
     frame_ratio: f64,
@@ -485,8 +541,8 @@ pub fn train(
         data.clone()
     };
     let (parts, disp) = rayon::join(
-        || train_parts(method, nn_bias, part_names, &data, &keys, opts),
-        || train_displacement(&data, nn_bias, opts),
+        || train_parts(method, nn_bias, mean_fn, part_names, &data, &keys, opts),
+        || train_displacement(&data, nn_bias, mean_fn, opts),
     );
     let (parts, mut reports) = parts?;
     let (displacement, disp_report) = disp?;
@@ -504,6 +560,7 @@ pub fn train(
         frame_ratio,
         keyposes_only,
         nn_bias,
+        mean: mean_fn,
         reports,
     })
 }
@@ -566,6 +623,7 @@ mod tests {
         let m = train(
             Method::GprLinear,
             false,
+            MeanFunction::Zero,
             &names,
             &[lin.clone()],
             1.0,
@@ -591,6 +649,7 @@ mod tests {
         let odd = train(
             Method::GprNn,
             false,
+            MeanFunction::Zero,
             &names,
             &[nl.clone()],
             1.0,
@@ -604,7 +663,7 @@ mod tests {
             (y_odd + y_neg).abs() < 1e-12,
             "no-bias NN GP is odd: {y_odd} {y_neg}"
         );
-        let m = train(Method::GprNn, true, &names, &[nl], 1.0, false, &opts).unwrap();
+        let m = train(Method::GprNn, true, MeanFunction::Zero, &names, &[nl], 1.0, false, &opts).unwrap();
         let y = m.parts[0].predict(&x).unwrap();
         assert!((y[0] - want0).abs() < 0.02, "{} vs {want0}", y[0]);
         assert!((y_odd - want0).abs() > 0.05, "{y_odd} vs {want0}");
@@ -613,6 +672,7 @@ mod tests {
         let m = train(
             Method::KeyposeAffine,
             false,
+            MeanFunction::Zero,
             &names,
             &[lin.clone()],
             1.0,

@@ -58,11 +58,14 @@ pub struct PcaModel {
     pub parts: Vec<PartPca>,
     /// How the parts were aligned before PCA; decoded parts are in that frame.
     pub alignment: PartAlignment,
+    /// Template vertices the training frames were aligned on (`align`'s anchor; empty: all):
+    /// assembled meshes are brought back to the template on the same vertices.
+    pub anchor: Vec<u32>,
 }
 
 impl Artifact for PcaModel {
     const KIND: &'static str = "pca-model";
-    const VERSION: u32 = 2;
+    const VERSION: u32 = 3;
 }
 
 /// Explained variance and reconstruction error of one part on its training data.
@@ -155,6 +158,12 @@ pub fn fit(
             template.len()
         )));
     }
+    let anchor = motions.first().map(|m| m.anchor.clone()).unwrap_or_default();
+    if motions.iter().any(|m| m.anchor != anchor) {
+        return Err(Error::invalid(
+            "the aligned motions were aligned on different vertices (align --frame): align them alike",
+        ));
+    }
     let fitted: Vec<(PartPca, PartReport)> = parts
         .parts
         .par_iter()
@@ -195,12 +204,27 @@ pub fn fit(
             n_vertices: parts.n_vertices,
             parts: parts_pca,
             alignment,
+            anchor,
         },
         reports,
     ))
 }
 
 impl PcaModel {
+    /// The template's vertex positions, from the parts' references (every template vertex
+    /// is in some part; one not in any stays at the origin).
+    pub fn template_vertices(&self) -> Vec<Vector3<f64>> {
+        let mut template = vec![Vector3::zeros(); self.n_vertices];
+        for p in &self.parts {
+            for (&v, r) in p.vertices.iter().zip(&p.reference) {
+                if let Some(t) = template.get_mut(v as usize) {
+                    *t = *r;
+                }
+            }
+        }
+        template
+    }
+
     /// The part vertices of every frame of `motion` in the frame PCA works in
     /// (`F x 3n_k` per part), as the model's [`PartAlignment`] prescribes.
     pub fn part_rows(&self, motion: &AlignedMotion) -> Vec<DMatrix<f64>> {

@@ -1,12 +1,21 @@
 //! Placing the transferred poses in the world: per-frame rigid displacements
-//! integrated from the source's first world pose (paper §4, "Rigid
-//! Transformation": `P_i = P_{i-1} ∘ (dT_i, dR_i)`).
+//! integrated from a start pose (paper §4, "Rigid Transformation":
+//! `P_i = P_{i-1} ∘ (dT_i, dR_i)`).
+//!
+//! Everything is integrated as *root poses* `Q_i = P_i ∘ T(c)`: the pose of the
+//! subject's root point `c` (the centroid of the template's alignment anchor,
+//! `align --frame`), so that a displacement's translation is the root's own
+//! motion and does not depend on where the template happens to stand (a turn
+//! about the body is not a swing about the template's origin). The start is the
+//! source's first root pose with its position scaled about the world origin by
+//! the height ratio `s = h_t / h_s` (heights: the templates' extents along +y;
+//! the floor is `y = 0`): the target performs the motion in the same capture
+//! volume, at its own size. `P_i = Q_i ∘ T(-c_t)` places the target's frames.
 //!
 //! Three choices of per-frame displacement, all reported by `evaluate`:
+//! - `scaled-source` (the default): the source's own root displacement with its
+//!   translation scaled by `s`; rotation unchanged;
 //! - `regressed` (the paper): the displacement GP's prediction;
-//! - `scaled-source`: the source's own displacement with its translation scaled
-//!   by the target/source height ratio `s = h_t / h_s` (heights are the
-//!   templates' bounding-box extents along +y); rotation unchanged;
 //! - `blended`: per frame `D = (1 - w) D_regressed + w D_scaled`, on the
 //!   6-vectors, with `w = σ²_*(x) / k(x, x)` the displacement GP's latent
 //!   predictive variance (eq. 12) relative to its prior variance: `w ≈ 0`
@@ -25,10 +34,10 @@ use crate::part_pca::PcaModel;
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize, ValueEnum)]
 #[serde(rename_all = "kebab-case")]
 pub enum Placement {
-    /// The displacement GP's prediction (the paper)
-    Regressed,
     /// The source displacement, translation scaled by the height ratio
     ScaledSource,
+    /// The displacement GP's prediction (the paper)
+    Regressed,
     /// Regressed, falling back to scaled-source where the GP's variance is high
     Blended,
 }
@@ -58,6 +67,26 @@ pub fn template_height(pca: &PcaModel) -> f64 {
     } else {
         0.0
     }
+}
+
+/// The template's root point (see [`crate::align::root_point`]).
+pub fn root_point(pca: &PcaModel) -> Vector3<f64> {
+    crate::align::root_point(&pca.template_vertices(), &pca.anchor)
+}
+
+/// World poses `P_i = Q_i ∘ T(-c)` of root poses `Q_i`.
+pub fn world_poses(root_poses: &[RigidMotion], root: &Vector3<f64>) -> Vec<RigidMotion> {
+    let back = RigidMotion::new(nalgebra::Rotation3::identity(), -root);
+    root_poses.iter().map(|q| q.compose(&back)).collect()
+}
+
+/// The target's first root pose: the source's first root pose `source_root_start` with
+/// its position scaled by `ratio` about the world origin, same orientation.
+pub fn scaled_start(source_root_start: &RigidMotion, ratio: f64) -> RigidMotion {
+    RigidMotion::new(
+        source_root_start.rotation,
+        source_root_start.translation * ratio,
+    )
 }
 
 /// The source displacements with translation scaled by `ratio`.

@@ -53,9 +53,9 @@ pub fn predict(
         })
         .collect::<Result<Vec<_>>>()?;
     let (displacement, variance_ratio) = match (&model.displacement, with_variance) {
-        (Regressor::Gp { gpr, y_scale }, true) => {
+        (Regressor::Gp { gpr, y_scale, mean }, true) => {
             let mut notes = Vec::new();
-            let (mean, var) = gpr
+            let (mean_gp, var) = gpr
                 .predict_with_variance(source_disp, &mut notes)
                 .map_err(|e| Error::invalid(format!("displacement: {e}")))?;
             for n in notes {
@@ -73,7 +73,11 @@ pub fn predict(
                     }
                 })
                 .collect();
-            (mean * *y_scale, Some(ratio))
+            let mut disp = mean_gp * *y_scale;
+            if let Some(m) = mean {
+                disp += m.predict(source_disp).map_err(|e| Error::invalid(format!("displacement: {e}")))?;
+            }
+            (disp, Some(ratio))
         }
         (reg, _) => (reg.predict(source_disp)?, None),
     };
@@ -117,7 +121,11 @@ pub fn transfer_motion(
     placement: crate::placement::Placement,
     reconstructor: Option<&mut crate::reconstruct::Reconstructor>,
 ) -> Result<Transferred> {
-    use crate::placement::{blend, place, poses, scaled_source, template_height, Placement};
+    use crate::align::root_poses;
+    use crate::placement::{
+        blend, place, poses, root_point, scaled_source, scaled_start, template_height,
+        world_poses, Placement,
+    };
     use std::time::Instant;
     let t0 = Instant::now();
     let xs = source_pca.encode(motion)?;
@@ -135,6 +143,7 @@ pub fn transfer_motion(
             crate::assemble::assemble(&plan, target_pca, &decoded)
         }
     };
+    let (source_root, target_root) = (root_point(source_pca), root_point(target_pca));
     let regressed: Vec<[f64; 6]> = pred
         .displacement
         .row_iter()
@@ -146,19 +155,21 @@ pub fn transfer_motion(
     } else {
         1.0
     };
+    let scaled = scaled_source(&motion.displacements, ratio);
     let steps = match placement {
         Placement::Regressed => regressed,
-        Placement::ScaledSource => scaled_source(&motion.displacements, ratio),
+        Placement::ScaledSource => scaled,
         Placement::Blended => {
             let w = pred
                 .variance_ratio
                 .clone()
                 .unwrap_or_else(|| vec![0.0; regressed.len()]);
-            blend(&regressed, &scaled_source(&motion.displacements, ratio), &w)
+            blend(&regressed, &scaled, &w)
         }
     };
-    let start = motion.poses.first().copied().unwrap_or_default();
-    let world_poses = poses(&start, &steps);
+    let source_start = root_poses(&motion.poses[..motion.poses.len().min(1)], &source_root);
+    let start = scaled_start(&source_start.first().copied().unwrap_or_default(), ratio);
+    let world_poses = world_poses(&poses(&start, &steps), &target_root);
     let frames = place(&world_poses, &frames);
     let decode_s = t2.elapsed().as_secs_f64();
     Ok(Transferred {

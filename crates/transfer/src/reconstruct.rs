@@ -11,7 +11,6 @@
 //! frames cut into parts exactly as PCA sees them ([`PcaModel::part_rows`]),
 //! so prediction and training meshes share one frame.
 
-use mesh_core::rigid::procrustes;
 use mesh_core::segmentation::Segmentation;
 use mesh_core::{Error, Result};
 use nalgebra::{DMatrix, Vector3};
@@ -162,7 +161,7 @@ impl Reconstructor {
                     .stitch(&frame)
                     .map_err(|e| Error::invalid(format!("frame {f}: {e}")))?
                     .vertices;
-                Ok(procrustes(&v, &self.plan.template, None).apply_all(&v))
+                Ok(self.plan.to_template_frame(&v))
             })
             .collect()
     }
@@ -236,6 +235,7 @@ mod tests {
             faces: mesh.faces.clone(),
             poses: vec![RigidMotion::identity(); frames.len()],
             displacements: vec![[0.0; 6]; frames.len()],
+            anchor: Vec::new(),
             frames,
         };
         (mesh, seg, motion)

@@ -59,20 +59,6 @@ impl Work {
             if s == "A" {
                 motions.push(common::TEST.0);
             }
-            for m in &motions {
-                let out = self.path(&format!("{s}/{m}.aligned"));
-                run(
-                    "align",
-                    &[
-                        "-q",
-                        "--template",
-                        p(&tpl),
-                        p(&self.set.join(s).join(m)),
-                        "--out",
-                        p(&out),
-                    ],
-                );
-            }
             let seg = self.path(&format!("{s}/parts.seg"));
             run(
                 "segment",
@@ -85,6 +71,22 @@ impl Work {
                     p(&seg),
                 ],
             );
+            for m in &motions {
+                let out = self.path(&format!("{s}/{m}.aligned"));
+                run(
+                    "align",
+                    &[
+                        "-q",
+                        "--segmentation",
+                        p(&seg),
+                        "--template",
+                        p(&tpl),
+                        p(&self.set.join(s).join(m)),
+                        "--out",
+                        p(&out),
+                    ],
+                );
+            }
             let aligned: Vec<String> = train
                 .iter()
                 .map(|m| p(&self.path(&format!("{s}/{m}.aligned"))).to_string())

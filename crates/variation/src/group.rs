@@ -329,6 +329,7 @@ pub fn blend_sequences(
             frames,
             poses,
             displacements: disp,
+            anchor: a.motion.anchor.clone(),
         },
         contacts,
         map: (0..n).collect(),

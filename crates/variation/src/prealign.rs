@@ -179,6 +179,7 @@ pub fn apply(motion: &AlignedMotion, map: &[usize]) -> AlignedMotion {
         frames,
         poses,
         displacements,
+        anchor: motion.anchor.clone(),
     }
 }
 

@@ -166,6 +166,7 @@ fn blends_at_zero_and_one_reproduce_the_endpoints() {
                 frames,
                 poses,
                 displacements: disp,
+                anchor: Vec::new(),
             },
             contacts: None,
             map: (0..n).collect(),

@@ -1,19 +1,21 @@
 use std::path::PathBuf;
 use std::process::ExitCode;
 
-use anyhow::Context;
+use anyhow::{bail, Context};
 use clap::Parser;
 use mesh_core::artifact::Artifact;
 use mesh_core::cli::{run_stage, CommonArgs};
 use mesh_core::io::read_mesh;
+use mesh_core::segmentation::Segmentation;
 use mesh_core::sequence::MeshSequence;
+use transfer::align::{align_motion_on, anchor_vertices, AlignFrame};
 
 /// Rigidly align every frame of a motion to the subject's template and record per-frame displacements
 #[derive(Parser, Debug)]
 #[command(
     name = "align",
     version,
-    after_help = "e.g.: align --template set/A/walk/000000.ply set/A/walk --out work/A/walk.aligned"
+    after_help = "e.g.: align --template set/A/walk/000000.ply --segmentation work/A/parts.seg set/A/walk --out work/A/walk.aligned\n      align --frame body --template set/A/walk/000000.ply set/A/walk --out work/A/walk.aligned"
 )]
 struct Args {
     #[command(flatten)]
@@ -21,6 +23,13 @@ struct Args {
     /// Template mesh of the subject (PLY or OBJ); every frame must share its topology
     #[arg(long)]
     template: PathBuf,
+    /// Vertices each frame's rigid pose is fitted on: `root` = the root part without the
+    /// bands it shares with the limbs (needs --segmentation); `body` = every vertex (the paper)
+    #[arg(long, value_enum, default_value_t = AlignFrame::Root)]
+    frame: AlignFrame,
+    /// Segmentation artifact of the subject (from `segment`), for --frame root
+    #[arg(long)]
+    segmentation: Option<PathBuf>,
     /// Motion folder of frames 000000.ply, 000001.ply, ...
     motion: PathBuf,
     /// Output artifact (kind aligned-motion)
@@ -32,14 +41,34 @@ fn main() -> ExitCode {
     let args = Args::parse();
     run_stage("align", || {
         args.common.init()?;
+        if args.frame == AlignFrame::Root && args.segmentation.is_none() {
+            bail!("--frame root needs --segmentation (the subject's parts from `segment`), or use --frame body");
+        }
         let template = read_mesh(&args.template)?;
+        let seg = args.segmentation.as_ref().map(Segmentation::load).transpose()?;
+        if let (Some(s), Some(path)) = (&seg, &args.segmentation) {
+            if s.n_vertices != template.n_vertices() {
+                bail!(
+                    "{}: made for {} vertices but the template {} has {}",
+                    path.display(),
+                    s.n_vertices,
+                    args.template.display(),
+                    template.n_vertices()
+                );
+            }
+        }
+        let anchor = anchor_vertices(args.frame, seg.as_ref())?;
         let motion = MeshSequence::load_dir(&args.motion)?;
-        let aligned = transfer::align::align_motion(&template, &motion)
+        let aligned = align_motion_on(&template, &motion, &anchor)
             .with_context(|| args.motion.display().to_string())?;
-        let header = args
+        let mut header = args
             .common
             .header("align", env!("CARGO_PKG_VERSION"))
+            .with_params(&serde_json::json!({ "frame": args.frame }))?
             .with_input(&args.template)?;
+        if let Some(path) = &args.segmentation {
+            header = header.with_input(path)?;
+        }
         aligned.save(&args.out, &header)?;
         Ok(())
     })

@@ -38,7 +38,7 @@ struct Args {
     #[arg(long)]
     target_template: PathBuf,
     /// How the poses are placed in the world
-    #[arg(long, value_enum, default_value_t = Placement::Regressed)]
+    #[arg(long, value_enum, default_value_t = Placement::ScaledSource)]
     placement: Placement,
     /// Surface reconstruction after PCA decoding (paper §6): `assemble` averages overlaps,
     /// `correct` applies §6.1 first, `correct-stitch` also stitches along optimal loops (§6.2)

@@ -6,7 +6,7 @@ use clap::Parser;
 use gp::gpr::{GprOptions, PAPER_NOISE_VAR};
 use mesh_core::artifact::Artifact;
 use mesh_core::cli::{run_stage, CommonArgs};
-use transfer::gpr_model::{train, GprModel, Method, PairFiles};
+use transfer::gpr_model::{train, GprModel, MeanFunction, Method, PairFiles};
 use transfer::part_pca::PcaModel;
 
 /// Train the source-to-target GP regression per body part and for the rigid displacement (eqs. 8-13)
@@ -46,9 +46,16 @@ struct Args {
     /// Neural-network kernel with the bias input (R&W eq. 4.29); eq. 10 as printed has none, which limits the GP to odd functions
     #[arg(long)]
     nn_bias: bool,
-    /// Observation-noise variance σn² (the paper's 0.1)
+    /// Mean function of the GPs: `affine` = least-squares affine map, GP on the residuals;
+    /// `zero` = the paper's zero-mean GP (eq. 11)
+    #[arg(long, value_enum, default_value_t = MeanFunction::Affine)]
+    mean: MeanFunction,
+    /// Observation-noise variance σn² (the paper's 0.1; the starting value with --learn-noise)
     #[arg(long, default_value_t = PAPER_NOISE_VAR)]
     noise_var: f64,
+    /// Also learn σn² by maximising the marginal likelihood (the paper fixes it)
+    #[arg(long)]
+    learn_noise: bool,
     /// Maximum conjugate-gradient iterations per GP
     #[arg(long, default_value_t = 100)]
     max_iter: usize,
@@ -101,6 +108,7 @@ fn main() -> ExitCode {
         }
         let opts = GprOptions {
             noise_var: args.noise_var,
+            learn_noise: args.learn_noise,
             cg: gp::optim::CgOptions {
                 max_iter: args.max_iter,
                 ..Default::default()
@@ -112,6 +120,7 @@ fn main() -> ExitCode {
         let model: GprModel = train(
             method,
             args.nn_bias,
+            args.mean,
             &names,
             &pairs,
             ratio,
@@ -134,7 +143,7 @@ fn main() -> ExitCode {
             .common
             .header("gpr-train", env!("CARGO_PKG_VERSION"))
             .with_params(&serde_json::json!({
-                "method": method.name(), "nn_bias": args.nn_bias, "keyposes_only": args.keyposes_only, "noise_var": args.noise_var,
+                "method": method.name(), "nn_bias": args.nn_bias, "keyposes_only": args.keyposes_only, "noise_var": args.noise_var, "learn_noise": args.learn_noise, "mean": args.mean,
                 "reverse": args.reverse, "source_fps": args.source_fps, "target_fps": args.target_fps,
             }))?
             .with_input(&args.source_pca)?

@@ -8,7 +8,7 @@ use mesh_core::cli::{run_stage, CommonArgs};
 use mesh_core::io::read_mesh;
 use mesh_core::segmentation::Segmentation;
 use mesh_core::sequence::MeshSequence;
-use transfer::align::{align_motion, AlignedMotion};
+use transfer::align::{align_motion_on, AlignedMotion};
 use transfer::part_pca::{fit, PartAlignment};
 use transfer::reconstruct::{Reconstructor, Surface};
 use transfer::representation::{rebuilt_error, truncation_rms, RepresentationRow};
@@ -58,7 +58,8 @@ fn main() -> ExitCode {
             .map(AlignedMotion::load)
             .collect::<Result<Vec<_>, _>>()?;
         let refs: Vec<&AlignedMotion> = motions.iter().collect();
-        let truth = align_motion(&template, &MeshSequence::load_dir(&args.truth)?)?;
+        let anchor = refs.first().map(|m| m.anchor.clone()).unwrap_or_default();
+        let truth = align_motion_on(&template, &MeshSequence::load_dir(&args.truth)?, &anchor)?;
         let mut rows = Vec::new();
         let mut truncation = serde_json::Map::new();
         for alignment in [PartAlignment::Body, PartAlignment::Part] {
