@@ -165,7 +165,7 @@ impl CostFigure {
             chart
                 .draw_series(LineSeries::new(
                     truth.iter().map(centre),
-                    rgb(TRUTH_COLOUR).stroke_width(2),
+                    rgb(TRUTH_COLOUR).stroke_width(3),
                 ))
                 .map_err(|x| e(&x))?
                 .label("true correspondences")
@@ -176,7 +176,7 @@ impl CostFigure {
         chart
             .draw_series(LineSeries::new(
                 self.path.iter().map(centre),
-                rgb(PATH_COLOUR).stroke_width(2),
+                rgb(PATH_COLOUR).stroke_width(3),
             ))
             .map_err(|x| e(&x))?
             .label("DTW path (eq. 7)")
@@ -200,13 +200,16 @@ impl CostFigure {
             .position(SeriesLabelPosition::LowerRight)
             .draw()
             .map_err(|x| e(&x))?;
-        let (a, b) = (chart.backend_coord(&(0.0, 0.0)), chart.backend_coord(&(1.0, 1.0)));
+        let (a, b) = (
+            chart.backend_coord(&(0.0, 0.0)),
+            chart.backend_coord(&(fs as f64, ft as f64)),
+        );
         root.present().map_err(|x| e(&x))?;
         Ok(CostLayout {
             x0: a.0 as f64,
             y0: a.1 as f64,
-            cell_w: (b.0 - a.0) as f64,
-            cell_h: (a.1 - b.1) as f64,
+            cell_w: (b.0 - a.0) as f64 / fs as f64,
+            cell_h: (a.1 - b.1) as f64 / ft as f64,
         })
     }
 

@@ -1,0 +1,240 @@
+//! The paper's evaluation figures: learning-curve errors against the true
+//! parts (PCA truncation included), the cost-matrix figure's pixels, the
+//! correction figure's panels.
+
+use gp::gpr::GprOptions;
+use mesh_core::sequence::MeshSequence;
+use mesh_core::shapes::cylinder;
+use nalgebra::{DMatrix, Vector3};
+use transfer::align::{align_motion, AlignedMotion};
+use transfer::figures::{CorrectionFigure, CostFigure, PATH_COLOUR, TRUTH_COLOUR};
+use transfer::gpr_model::MeanFunction;
+use transfer::learning_curves::{
+    encode_pair, run_direction, sizes, train_side_len, truncation_label, vertex_rms,
+    Correspondence, DirectionData,
+};
+use transfer::part_pca::{fit, whole_body, PartAlignment, PcaModel};
+
+/// A bending, swelling cylinder driven by four hidden factors: a 3-component
+/// PCA cannot represent it exactly (non-zero truncation error).
+fn motion(frames: usize, phase: f64) -> (AlignedMotion, mesh_core::TriMesh) {
+    let t = cylinder(6, 10, 0.1, 1.0);
+    let seq: Vec<Vec<Vector3<f64>>> = (0..frames)
+        .map(|i| {
+            let s = i as f64 * 0.21 + phase;
+            let (a, b, c, d) = (s.sin(), (0.7 * s).cos(), (1.9 * s).sin(), (3.1 * s).cos());
+            t.vertices
+                .iter()
+                .map(|v| {
+                    Vector3::new(
+                        v.x * (1.0 + 0.2 * a) + 0.05 * d * v.y,
+                        v.y + 0.03 * c * v.x,
+                        v.z * (1.0 + 0.1 * c) + 0.15 * b * v.y * v.y,
+                    )
+                })
+                .collect()
+        })
+        .collect();
+    let m = align_motion(&t, &MeshSequence::new(t.faces.clone(), seq)).unwrap();
+    (m, t)
+}
+
+fn pca(m: &AlignedMotion, t: &mesh_core::TriMesh, comps: usize) -> PcaModel {
+    fit(
+        &t.vertices,
+        &whole_body(t.n_vertices()),
+        &[m],
+        gp::pca::Components::Count(comps),
+        PartAlignment::Body,
+    )
+    .unwrap()
+    .0
+}
+
+/// `vertex_rms` is the per-vertex RMS between decoded coefficients and the
+/// true part meshes, for exact and perturbed predictions alike.
+#[test]
+fn vertex_rms_measures_against_the_true_parts() {
+    let (m, t) = motion(40, 0.0);
+    let model = pca(&m, &t, 3);
+    let pair: Vec<[usize; 2]> = (0..40).map(|i| [i, i]).collect();
+    let enc = encode_pair(&m, &m, &pair, &[[0, 0]], &model, &model).unwrap();
+    let truth = &enc.data.target_coeffs;
+    let rows = model.part_rows(&m);
+    let n = t.n_vertices();
+    let brute = |c: &DMatrix<f64>| {
+        let dec = model.parts[0].pca.decode(c).unwrap();
+        ((dec - &rows[0]).norm_squared() / (40 * n) as f64).sqrt()
+    };
+    let exact = vertex_rms(truth, truth, &enc.target_residual, &[n]);
+    assert!(exact > 1e-4, "the truncation error must not vanish: {exact}");
+    assert!((exact - brute(&truth[0])).abs() < 1e-9 * exact.max(1.0), "{exact} vs {}", brute(&truth[0]));
+    let off = truth[0].map(|x| x * 0.9 + 0.01);
+    let got = vertex_rms(&[off.clone()], truth, &enc.target_residual, &[n]);
+    assert!((got - brute(&off)).abs() < 1e-9, "{got} vs {}", brute(&off));
+    assert!(got > exact);
+}
+
+/// Identical subjects with the true (identity) correspondences: a regressor
+/// that learns the identity scores the PCA truncation error, not 0, and the
+/// `pca-truncation` floor equals the brute-force truncation error of the
+/// held-out frames.
+#[test]
+fn perfect_mapping_scores_the_truncation_error() {
+    let (m, t) = motion(60, 0.3);
+    let model = pca(&m, &t, 3);
+    let pair: Vec<[usize; 2]> = (0..60).map(|i| [i, i]).collect();
+    let keys = vec![[5, 5], [20, 20], [35, 35], [50, 50]];
+    let enc = encode_pair(&m, &m, &pair, &keys, &model, &model).unwrap();
+    let n = t.n_vertices();
+    let dir = DirectionData {
+        label: "A->A".into(),
+        correspondence: Correspondence::True,
+        parts: vec![enc.clone()],
+        whole: vec![enc],
+        part_vertices: vec![n],
+        whole_vertices: n,
+        part_names: vec!["body".into()],
+        frame_ratio: 1.0,
+    };
+    let opts = GprOptions {
+        noise_var: 1e-8,
+        ..Default::default()
+    };
+    let max = train_side_len(60, keys.len());
+    let points = run_direction(&dir, &sizes(20, max, 2), false, MeanFunction::Zero, &opts, 7).unwrap();
+    let floor: Vec<_> = points.iter().filter(|p| p.curve == truncation_label(true)).collect();
+    assert!(!floor.is_empty());
+    let trunc = floor[0].test_rms_m;
+    assert!(trunc > 1e-4, "{trunc}");
+    // Every frame's own truncation error, by decoding: the held-out floor lies within it.
+    let rows = model.part_rows(&m);
+    let coeffs = model.encode_rows(&rows).unwrap();
+    let dec = model.parts[0].pca.decode(&coeffs[0]).unwrap();
+    let per_frame: Vec<f64> = (0..60)
+        .map(|f| ((dec.row(f) - rows[0].row(f)).norm_squared() / n as f64).sqrt())
+        .collect();
+    let (lo, hi) = per_frame.iter().fold((f64::MAX, 0.0f64), |a, &e| (a.0.min(e), a.1.max(e)));
+    assert!(trunc >= lo && trunc <= hi, "{trunc} outside [{lo}, {hi}]");
+    let linear = points
+        .iter()
+        .filter(|p| p.curve == "gpr-linear dense parts")
+        .last()
+        .unwrap();
+    assert!(
+        (linear.test_rms_m - trunc).abs() < 0.02 * trunc,
+        "identity learnt by the linear GP: {} vs truncation {trunc}",
+        linear.test_rms_m
+    );
+    assert!(linear.train_rms_m >= floor.last().unwrap().train_rms_m * 0.999);
+    for p in &points {
+        assert!(p.test_rms_m >= trunc * 0.999, "{p:?} below the truncation floor {trunc}");
+        assert_eq!(p.pairs, "true");
+        assert_eq!(p.components, 3);
+    }
+    // Figure 8 is drawn for every method.
+    for method in ["gpr-nn", "gpr-se", "gpr-linear", "keypose-affine"] {
+        let label = format!("{method} keyposes-first parts");
+        assert!(points.iter().any(|p| p.curve == label), "{label}");
+    }
+}
+
+fn near(a: [u8; 3], b: [u8; 3], tol: i32) -> bool {
+    a.iter().zip(&b).all(|(x, y)| (*x as i32 - *y as i32).abs() <= tol)
+}
+
+/// The cost-matrix PNG has the announced size, the path's cells are drawn in
+/// the path colour, cells far from it are not, and the true correspondences
+/// show where they leave the path.
+#[test]
+fn cost_matrix_figure_draws_the_path_where_it_is() {
+    let (fs, ft) = (30usize, 50usize);
+    let path: Vec<[usize; 2]> = (0..fs).map(|i| [i, (i * (ft - 1) + (fs - 1) / 2) / (fs - 1)]).collect();
+    let target_of = |i: usize| path.iter().filter(|q| q[0] == i).map(|q| q[1]).max().unwrap();
+    let cost = DMatrix::from_fn(fs, ft, |i, j| ((j as f64 - target_of(i) as f64).abs() + 1.0).powi(3));
+    // Truth: the path shifted by 8 target frames on the second half.
+    let truth: Vec<[usize; 2]> = (0..fs)
+        .map(|i| [i, if i >= 15 { (target_of(i) + 8).min(ft - 1) } else { target_of(i) }])
+        .collect();
+    let fig = CostFigure {
+        title: "test".into(),
+        cost,
+        path: path.clone(),
+        keyposes: vec![],
+        truth: Some(truth.clone()),
+    };
+    let dir = tempfile::tempdir().unwrap();
+    let (png_path, svg_path) = (dir.path().join("fig3.png"), dir.path().join("fig3.svg"));
+    let layout = fig.write(&png_path, Some(&svg_path)).unwrap();
+    assert!(std::fs::metadata(&svg_path).unwrap().len() > 1000);
+    let decoder = png::Decoder::new(std::io::BufReader::new(std::fs::File::open(&png_path).unwrap()));
+    let mut reader = decoder.read_info().unwrap();
+    let mut buf = vec![0u8; reader.output_buffer_size().unwrap()];
+    let info = reader.next_frame(&mut buf).unwrap();
+    assert_eq!((info.width, info.height), fig.size());
+    assert_eq!(info.color_type, png::ColorType::Rgb);
+    let px = |(x, y): (u32, u32)| {
+        let o = ((y * info.width + x) * 3) as usize;
+        [buf[o], buf[o + 1], buf[o + 2]]
+    };
+    assert!(layout.cell_w >= 2.0 && layout.cell_h >= 2.0, "{layout:?}");
+    // Some pixel within one of the cell centre has the colour (lines are 3 px wide).
+    let around = |(x, y): (u32, u32), colour: [u8; 3], tol: i32| {
+        (x - 1..=x + 1).any(|x| (y - 1..=y + 1).any(|y| near(px((x, y)), colour, tol)))
+    };
+    for p in &path {
+        let c = layout.centre(p[0], p[1]);
+        if !around(c, PATH_COLOUR, 30) {
+            let mut m = String::new();
+            for y in c.1 - 8..=c.1 + 8 {
+                for x in c.0 - 8..=c.0 + 8 {
+                    m.push(if near(px((x, y)), PATH_COLOUR, 30) { '#' } else { '.' });
+                }
+                m.push('\n');
+            }
+            panic!("path cell {p:?} at {c:?} is {:?}\n{m}", px(c));
+        }
+    }
+    let mut far = 0;
+    for i in 0..fs {
+        for j in 0..ft {
+            let d = path.iter().chain(&truth).map(|q| (q[0].abs_diff(i)).max(q[1].abs_diff(j))).min().unwrap();
+            // Above the path only: the legend sits in the lower right corner.
+            if d >= 3 && j > target_of(i) + 3 {
+                let c = px(layout.centre(i, j));
+                assert!(!near(c, PATH_COLOUR, 30) && !near(c, TRUTH_COLOUR, 30), "cell ({i}, {j}) is {c:?}");
+                far += 1;
+            }
+        }
+    }
+    assert!(far > fs * ft / 4, "{far}");
+    for t in truth.iter().filter(|t| t[0] >= 17 && t[0] + 2 < fs && t[1] + 1 < ft) {
+        let c = layout.centre(t[0], t[1]);
+        assert!(around(c, TRUTH_COLOUR, 40), "truth cell {t:?} at {c:?} is {:?}", px(c));
+    }
+}
+
+/// The correction figure has one panel per mesh (before, after, nearest,
+/// truth), each with the mesh drawn at its centre.
+#[test]
+fn correction_figure_has_one_panel_per_mesh() {
+    let t = cylinder(6, 10, 0.1, 1.0);
+    let bent: Vec<Vector3<f64>> = t.vertices.iter().map(|v| v + Vector3::new(0.1 * v.y * v.y, 0.0, 0.0)).collect();
+    let fig = CorrectionFigure {
+        title: "leg_l, frame 3".into(),
+        faces: t.faces.clone(),
+        before: bent.clone(),
+        after: t.vertices.clone(),
+        nearest: vec![(t.vertices.clone(), 0.02), (bent.clone(), 0.03)],
+        truth: Some(t.vertices.clone()),
+    };
+    let cell = 120;
+    let img = fig.render(cell, &render::camera::View::FRONT);
+    assert_eq!(img.width, 5 * cell);
+    assert!(img.height > cell);
+    for k in 0..5 {
+        let (cx, cy) = (k * cell + cell / 2, 28 + cell / 2);
+        let c = img.get(cx, cy);
+        assert_ne!(c, render::colour::WHITE, "panel {k} is empty at its centre");
+    }
+}
