@@ -16,6 +16,9 @@ PART_ALIGNMENT ?= body
 PLACEMENT ?= scaled-source
 # gpr-train --mean: affine (least-squares affine map, GP on the residuals) or zero (the paper)
 GPR_MEAN ?= affine
+# Further gpr-train flags for every model (e.g. --learn-noise, --nn-bias), and pca-fit components
+GPR_TRAIN_FLAGS ?=
+PCA_COMPONENTS ?= 20
 TRANSFER_WORK := $(OUT)/work
 TRANSFER_RULES := $(TRANSFER_WORK)/transfer-rules.mk
 TRANSFER_BINS := align segment pca-fit dtw-densify gpr-train gpr-predict evaluate learning-curves render
@@ -49,6 +52,8 @@ def template(x):
     d = os.path.join(set_dir, x, train[x][0])
     return os.path.join(d, frames(d)[0])
 tpl = {x: template(x) for x in (S, T)}
+# evaluate's foot-sliding inputs: the subject's truth contacts, its parts and its template.
+feet = {x: "--contacts %s --segmentation %s/%s/parts.seg --template %s" % (os.path.join(set_dir, x, "subject.json"), W, x, tpl[x]) for x in (S, T)}
 B = "$$(BIN)"
 rules, results, stamps = [], [], []
 def rule(target, deps, *cmds):
@@ -62,7 +67,7 @@ for x in (S, T):
          "@mkdir -p $$(@D)", "%s/segment -q %s --template %s --out $$@" % (B, os.path.join(set_dir, x, "subject.json"), tpl[x]))
     aligned = ["%s/%s/%s.aligned" % (W, x, m) for m in train[x]]
     rule("%s/%s/pca.model" % (W, x), [B + "/pca-fit", "%s/%s/parts.seg" % (W, x)] + aligned,
-         "%s/pca-fit -q --part-alignment $$(PART_ALIGNMENT) --template %s --parts %s/%s/parts.seg %s --out $$@ --report %s/%s/pca.json" % (B, tpl[x], W, x, " ".join(aligned), W, x))
+         "%s/pca-fit -q --components $$(PCA_COMPONENTS) --part-alignment $$(PART_ALIGNMENT) --template %s --parts %s/%s/parts.seg %s --out $$@ --report %s/%s/pca.json" % (B, tpl[x], W, x, " ".join(aligned), W, x))
     rule("%s/%s/pca-whole.model" % (W, x), [B + "/pca-fit"] + aligned,
          "%s/pca-fit -q --whole-body --template %s %s --out $$@ --report %s/%s/pca-whole.json" % (B, tpl[x], " ".join(aligned), W, x))
 pair_args = []
@@ -89,7 +94,7 @@ for (src, tgt, rev, tests) in directions:
         model = "%s/models/%s/%s.model" % (W, dn, name)
         rule(model, [B + "/gpr-train", "%s/%s/%s.model" % (W, src, pca), "%s/%s/%s.model" % (W, tgt, pca)] + corrs,
              "@mkdir -p $$(@D)",
-             "%s/gpr-train -q --mean $$(GPR_MEAN) --method %s %s %s --source-pca %s/%s/%s.model --target-pca %s/%s/%s.model --source-fps %g --target-fps %g %s --out $$@"
+             "%s/gpr-train -q --mean $$(GPR_MEAN) $$(GPR_TRAIN_FLAGS) --method %s %s %s --source-pca %s/%s/%s.model --target-pca %s/%s/%s.model --source-fps %g --target-fps %g %s --out $$@"
              % (B, method, "--keyposes-only" if keys else "", "--reverse" if rev else "", W, src, pca, W, tgt, pca, fps[src], fps[tgt], " ".join(pair_args)))
         stamps.append(model)
         for m in tests:
@@ -110,8 +115,8 @@ for (src, tgt, rev, tests) in directions:
                     rec = "%s/eval/%s/%s/%s-%s.json" % (W, dn, m, name, pl)
                     rule(rec, [B + "/evaluate", timing],
                          "@mkdir -p $$(@D)",
-                         "%s/evaluate -q %s %s --direction '%s' --motion %s --method %s --placement %s --training %s --out $$@"
-                         % (B, seq, truth, label, m, method, pl, "keyposes" if keys else "dense"))
+                         "%s/evaluate -q %s %s %s --direction '%s' --motion %s --method %s --placement %s --training %s --out $$@"
+                         % (B, seq, truth, feet[tgt], label, m, method, pl, "keyposes" if keys else "dense"))
                     results.append(rec)
             if name == "gpr-nn":
                 # Paper section 6 after the regression: correction (M = 3), then stitching.
@@ -128,8 +133,8 @@ for (src, tgt, rev, tests) in directions:
                         rec = "%s/eval/%s/%s/%s-%s.json" % (W, dn, m, meth, default_pl)
                         rule(rec, [B + "/evaluate", timing],
                              "@mkdir -p $$(@D)",
-                             "%s/evaluate -q %s %s --direction '%s' --motion %s --method %s --placement %s --training dense --out $$@"
-                             % (B, seq, truth, label, m, meth, default_pl))
+                             "%s/evaluate -q %s %s %s --direction '%s' --motion %s --method %s --placement %s --training dense --out $$@"
+                             % (B, seq, truth, feet[tgt], label, m, meth, default_pl))
                         results.append(rec)
                     sheet = "%s/render/%s/%s/%s/contact.png" % (out, dn, m, meth)
                     seqs = [os.path.join(set_dir, src, m), seq] + ([truth] if os.path.isdir(truth) else [])

@@ -485,6 +485,11 @@ impl Gpr {
         self.x.ncols()
     }
 
+    /// The training inputs (`F x D`, one pair per row).
+    pub fn inputs(&self) -> &DMatrix<f64> {
+        &self.x
+    }
+
     /// Output dimension `m`.
     pub fn output_dim(&self) -> usize {
         self.alpha.ncols()

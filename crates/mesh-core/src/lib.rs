@@ -19,6 +19,8 @@ pub mod atomic;
 pub mod rigid;
 pub mod cli;
 pub mod shapes;
+pub mod contacts;
+pub mod feet;
 
 pub use error::{Error, Result};
 pub use mesh::TriMesh;

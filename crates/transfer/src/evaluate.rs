@@ -6,6 +6,12 @@
 //! - `rms_placed_m`: as placed in the world, no alignment.
 //!
 //! Both are `sqrt(mean over frames and vertices of |p - t|²)`, in metres.
+//!
+//! - `foot_sliding_m`: where the truth's feet are planted (its contact
+//!   annotations, `truth_contacts` in `subject.json`), the mean horizontal
+//!   motion per frame of the prediction's sole centroids
+//!   (`mesh_core::feet::contact_sliding`); `truth_foot_sliding_m` is the same
+//!   measure on the truth itself, for scale.
 
 use mesh_core::rigid::procrustes;
 use mesh_core::sequence::MeshSequence;
@@ -26,6 +32,12 @@ pub struct EvalRecord {
     pub rms_pose_m: f64,
     pub rms_placed_m: f64,
     pub frames: usize,
+    /// Sliding of the prediction's planted feet (m per frame), where contacts are known.
+    pub foot_sliding_m: Option<f64>,
+    /// The same measure on the truth.
+    pub truth_foot_sliding_m: Option<f64>,
+    /// `rms_pose_m` of each frame.
+    pub frame_pose_m: Vec<f64>,
 }
 
 /// Sum of squared distances between matching points.
@@ -36,6 +48,14 @@ fn sum_sq(a: &[Vector3<f64>], b: &[Vector3<f64>]) -> f64 {
 /// `(rms_pose_m, rms_placed_m)` of `pred` against `truth` (same frame count,
 /// same vertex count).
 pub fn rms_errors(pred: &MeshSequence, truth: &MeshSequence) -> Result<(f64, f64)> {
+    rms_errors_per_frame(pred, truth).map(|(pose, placed, _)| (pose, placed))
+}
+
+/// [`rms_errors`] and the pose error of every frame.
+pub fn rms_errors_per_frame(
+    pred: &MeshSequence,
+    truth: &MeshSequence,
+) -> Result<(f64, f64, Vec<f64>)> {
     if pred.n_frames() != truth.n_frames() {
         return Err(Error::invalid(format!(
             "the prediction has {} frames but the truth {}",
@@ -53,7 +73,7 @@ pub fn rms_errors(pred: &MeshSequence, truth: &MeshSequence) -> Result<(f64, f64
             truth.n_vertices()
         )));
     }
-    let (pose, placed) = pred
+    let per_frame: Vec<(f64, f64)> = pred
         .frames
         .par_iter()
         .zip(&truth.frames)
@@ -61,11 +81,43 @@ pub fn rms_errors(pred: &MeshSequence, truth: &MeshSequence) -> Result<(f64, f64
             let m = procrustes(p, t, None);
             (sum_sq(&m.apply_all(p), t), sum_sq(p, t))
         })
-        .collect::<Vec<_>>()
-        .into_iter()
+        .collect();
+    let (pose, placed) = per_frame
+        .iter()
         .fold((0.0, 0.0), |(a, b), (c, d)| (a + c, b + d));
+    let nv = pred.n_vertices().max(1) as f64;
+    let frames = per_frame.iter().map(|(p, _)| (p / nv).sqrt()).collect();
     let n = (pred.n_frames() * pred.n_vertices()) as f64;
-    Ok(((pose / n).sqrt(), (placed / n).sqrt()))
+    Ok(((pose / n).sqrt(), (placed / n).sqrt(), frames))
+}
+
+/// `(prediction, truth)` foot sliding on the truth's `contacts` (per frame `[left, right]`)
+/// with the target's `soles` ([`mesh_core::feet::soles`]); `None` where no foot is planted in
+/// two consecutive frames.
+pub fn foot_sliding(
+    pred: &MeshSequence,
+    truth: &MeshSequence,
+    soles: &[Vec<u32>],
+    contacts: &[[bool; 2]],
+    up: &Vector3<f64>,
+) -> Result<(Option<f64>, Option<f64>)> {
+    let n = pred.n_vertices();
+    if let Some(v) = soles.iter().flatten().find(|&&v| v as usize >= n) {
+        return Err(Error::invalid(format!(
+            "sole vertex {v} is beyond the prediction's {n} vertices"
+        )));
+    }
+    if contacts.len() != truth.n_frames() {
+        return Err(Error::invalid(format!(
+            "{} contact frames for {} truth frames",
+            contacts.len(),
+            truth.n_frames()
+        )));
+    }
+    Ok((
+        mesh_core::feet::contact_sliding(&pred.frames, soles, contacts, up),
+        mesh_core::feet::contact_sliding(&truth.frames, soles, contacts, up),
+    ))
 }
 
 #[cfg(test)]
@@ -110,6 +162,30 @@ mod tests {
             (placed - ((5.0 + 0.27) / 6.0f64).sqrt()).abs() < 1e-12,
             "{placed}"
         );
+    }
+
+    /// A foot planted in the truth and dragged 2 cm per frame in the prediction slides
+    /// 0.02 m/frame; the truth itself 0; vertical motion does not count.
+    #[test]
+    fn foot_sliding_on_the_truths_contacts() {
+        let still = vec![[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]];
+        let truth = seq(vec![still.clone(); 4]);
+        let pred = seq(
+            (0..4)
+                .map(|i| {
+                    let d = 0.02 * i as f64;
+                    vec![[d, 0.01 * i as f64, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]]
+                })
+                .collect(),
+        );
+        let soles = vec![vec![0u32], vec![]];
+        let contacts = vec![[true, false]; 4];
+        let (p, t) = foot_sliding(&pred, &truth, &soles, &contacts, &Vector3::y()).unwrap();
+        assert!((p.unwrap() - 0.02).abs() < 1e-12, "{p:?}");
+        assert_eq!(t, Some(0.0));
+        let none = vec![[false, false]; 4];
+        assert_eq!(foot_sliding(&pred, &truth, &soles, &none, &Vector3::y()).unwrap(), (None, None));
+        assert!(foot_sliding(&pred, &truth, &[vec![7]], &contacts, &Vector3::y()).is_err());
     }
 
     #[test]

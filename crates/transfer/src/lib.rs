@@ -10,6 +10,7 @@ pub mod part_pca;
 pub mod densify;
 pub mod gpr_model;
 pub mod predict;
+pub mod confidence;
 pub mod assemble;
 pub mod reconstruct;
 pub mod representation;

@@ -4,8 +4,11 @@ use std::process::ExitCode;
 use anyhow::Context;
 use clap::Parser;
 use mesh_core::cli::{run_stage, CommonArgs};
+use mesh_core::artifact::Artifact;
+use mesh_core::capture_set::SubjectSpec;
+use mesh_core::segmentation::Segmentation;
 use mesh_core::sequence::MeshSequence;
-use transfer::evaluate::{rms_errors, EvalRecord};
+use transfer::evaluate::{foot_sliding, rms_errors_per_frame, EvalRecord};
 
 /// Per-vertex RMS error of a transferred sequence against its ground truth (pose-aligned and as placed)
 #[derive(Parser, Debug)]
@@ -36,6 +39,16 @@ struct Args {
     /// Training-pair label for the record: dense or keyposes
     #[arg(long, default_value = "dense")]
     training: String,
+    /// The target's subject.json: foot sliding is measured on its `truth_contacts` of --motion
+    /// (needs --segmentation and --template)
+    #[arg(long, requires_all = ["segmentation", "template"])]
+    contacts: Option<PathBuf>,
+    /// The target's segmentation (its leg parts give the soles)
+    #[arg(long)]
+    segmentation: Option<PathBuf>,
+    /// The target's template mesh (rest pose: the soles are its lowest leg vertices)
+    #[arg(long)]
+    template: Option<PathBuf>,
     /// Output JSON record (stdout when omitted)
     #[arg(short, long)]
     out: Option<PathBuf>,
@@ -47,8 +60,41 @@ fn main() -> ExitCode {
         args.common.init()?;
         let pred = MeshSequence::load_dir(&args.prediction)?;
         let truth = MeshSequence::load_dir(&args.truth)?;
-        let (rms_pose_m, rms_placed_m) =
-            rms_errors(&pred, &truth).with_context(|| args.prediction.display().to_string())?;
+        let (rms_pose_m, rms_placed_m, frame_pose_m) = rms_errors_per_frame(&pred, &truth)
+            .with_context(|| args.prediction.display().to_string())?;
+        let (mut foot_sliding_m, mut truth_foot_sliding_m) = (None, None);
+        if let (Some(spec_path), Some(seg_path), Some(tpl_path)) =
+            (&args.contacts, &args.segmentation, &args.template)
+        {
+            let spec = SubjectSpec::load(spec_path)?;
+            let up = spec.up_vector().with_context(|| {
+                format!("{}: up axis '{}' is not one of ±x, ±y, ±z", spec_path.display(), spec.up)
+            })?;
+            let seg = Segmentation::load(seg_path)?;
+            let template = mesh_core::io::read_mesh(tpl_path)?;
+            if template.n_vertices() != seg.n_vertices {
+                anyhow::bail!(
+                    "{}: {} vertices but the segmentation was made for {}",
+                    tpl_path.display(),
+                    template.n_vertices(),
+                    seg.n_vertices
+                );
+            }
+            let legs: Vec<(&str, &[u32])> =
+                seg.parts.iter().map(|p| (p.name.as_str(), p.vertices.as_slice())).collect();
+            let soles = mesh_core::feet::soles(&legs, &template.vertices, &up, 0.015);
+            if let Some(c) = mesh_core::contacts::from_subject_field(
+                &spec,
+                "truth_contacts",
+                &args.motion,
+                truth.n_frames(),
+            )
+            .with_context(|| spec_path.display().to_string())?
+            {
+                (foot_sliding_m, truth_foot_sliding_m) = foot_sliding(&pred, &truth, &soles, &c, &up)
+                    .with_context(|| args.prediction.display().to_string())?;
+            }
+        }
         let record = EvalRecord {
             direction: args.direction.clone(),
             motion: args.motion.clone(),
@@ -58,6 +104,9 @@ fn main() -> ExitCode {
             rms_pose_m,
             rms_placed_m,
             frames: pred.n_frames(),
+            foot_sliding_m,
+            truth_foot_sliding_m,
+            frame_pose_m,
         };
         let text = serde_json::to_string_pretty(&record)?;
         match &args.out {

@@ -64,6 +64,10 @@ struct Args {
     /// Also write timings (frames per second of the prediction) as JSON
     #[arg(long)]
     timing: Option<PathBuf>,
+    /// Also write per-frame confidence as JSON: per part, the GP's predictive variance over
+    /// its prior variance and the distance to the nearest training input (docs/FORMATS.md)
+    #[arg(long)]
+    confidence: Option<PathBuf>,
 }
 
 fn main() -> ExitCode {
@@ -142,6 +146,13 @@ fn main() -> ExitCode {
             mesh_core::info!(
                 "blended placement: scaled-source weight mean {mean:.3}, max {max:.3}"
             );
+        }
+        if let Some(path) = &args.confidence {
+            let xs = src_pca.encode(&motion)?;
+            let xd = transfer::predict::displacement_matrix(&motion.displacements);
+            let c = transfer::confidence::confidence(&model, &xs, &xd)
+                .with_context(|| args.motion.display().to_string())?;
+            mesh_core::atomic::write_bytes_atomic(path, serde_json::to_string(&c)?.as_bytes())?;
         }
         let t1 = Instant::now();
         MeshSequence::new(faces, result.frames).write_dir(&args.out)?;
