@@ -21,7 +21,7 @@ GPR_TRAIN_FLAGS ?=
 PCA_COMPONENTS ?= 20
 TRANSFER_WORK := $(OUT)/work
 TRANSFER_RULES := $(TRANSFER_WORK)/transfer-rules.mk
-TRANSFER_BINS := align segment pca-fit dtw-densify gpr-train gpr-predict evaluate learning-curves render
+TRANSFER_BINS := align segment pca-fit dtw-densify gpr-train gpr-predict evaluate learning-curves paper-figure render
 
 .PHONY: transfer transfer-results transfer-report
 transfer:
@@ -124,10 +124,13 @@ for (src, tgt, rev, tests) in directions:
                     seq = "%s/transfer/%s/%s/%s" % (out, dn, m, meth)
                     timing = "%s/predict/%s/%s/%s-%s.json" % (W, dn, m, meth, default_pl)
                     training = ["%s/%s/%s.aligned" % (W, tgt, t) for t in train[tgt]]
+                    # Per-frame confidence (docs/FORMATS.md) beside the full pipeline's output.
+                    conf_dir = "%s/confidence/%s" % (W, dn)
+                    conf_arg = " --confidence %s/%s.json" % (conf_dir, m) if surf == "correct-stitch" else ""
                     rule(timing, [B + "/gpr-predict", model, "%s/%s/%s.aligned" % (W, src, m), "%s/%s/parts.seg" % (W, tgt)] + training,
-                         "@mkdir -p $$(@D)",
-                         "%s/gpr-predict -q --model %s --source-pca %s/%s/pca.model --target-pca %s/%s/pca.model --target-template %s --placement %s --surface %s --segmentation %s/%s/parts.seg %s -m 3 %s/%s/%s.aligned --out %s --timing $$@"
-                         % (B, model, W, src, W, tgt, tpl[tgt], default_pl, surf, W, tgt, " ".join("--target-training " + t for t in training), W, src, m, seq))
+                         "@mkdir -p $$(@D) %s" % conf_dir,
+                         "%s/gpr-predict -q --model %s --source-pca %s/%s/pca.model --target-pca %s/%s/pca.model --target-template %s --placement %s --surface %s --segmentation %s/%s/parts.seg %s -m 3 %s/%s/%s.aligned --out %s --timing $$@%s"
+                         % (B, model, W, src, W, tgt, tpl[tgt], default_pl, surf, W, tgt, " ".join("--target-training " + t for t in training), W, src, m, seq, conf_arg))
                     stamps.append(timing)
                     if os.path.isdir(truth):
                         rec = "%s/eval/%s/%s/%s-%s.json" % (W, dn, m, meth, default_pl)
@@ -151,12 +154,48 @@ for (src, tgt, rev, tests) in directions:
                 rule(sheet, [B + "/render", "%s/predict/%s/%s/gpr-nn-%s.json" % (W, dn, m, default_pl)],
                      "%s/render -q --separate-rows --no-frames --no-gif --labels %s --out $$(@D) %s" % (B, labels, " ".join(seqs)))
                 stamps.append(sheet)
+# Learning curves (CVPR figs. 7-9) on the set's true correspondences, errors against the true
+# parts (PCA truncation included), the paper's zero-mean GPs; the whole body at the parts' total
+# dimensions (fitted by learning-curves itself).
+true_pairs = " ".join("--true-pair %s %s/%s/%s.aligned %s/%s/%s.aligned" % (p["source"], W, S, p["source"], W, T, p["target"]) for p in spec["train"])
+aligned_pairs = [a for p in spec["train"] for a in ("%s/%s/%s.aligned" % (W, S, p["source"]), "%s/%s/%s.aligned" % (W, T, p["target"]))]
 lc = "%s/learning-curves/learning_curves.csv" % out
-rule(lc, [B + "/learning-curves", "%s/%s/pca.model" % (W, S), "%s/%s/pca.model" % (W, T), "%s/%s/pca-whole.model" % (W, S), "%s/%s/pca-whole.model" % (W, T)] + corrs,
+rule(lc, [B + "/learning-curves", os.path.join(set_dir, "set.json"), "%s/%s/pca.model" % (W, S), "%s/%s/pca.model" % (W, T)] + aligned_pairs,
      "@mkdir -p $$(@D)",
-     "%s/learning-curves -q --seed 0 --source-pca %s/%s/pca.model --target-pca %s/%s/pca.model --source-whole %s/%s/pca-whole.model --target-whole %s/%s/pca-whole.model --source-fps %g --target-fps %g --source-name %s --target-name %s %s --out $$(@D)"
-     % (B, W, S, W, T, W, S, W, T, fps[S], fps[T], S, T, " ".join(pair_args)))
+     "%s/learning-curves -q --seed 0 --mean zero --set %s --source-pca %s/%s/pca.model --target-pca %s/%s/pca.model --source-fps %g --target-fps %g --source-name %s --target-name %s %s --out $$(@D)"
+     % (B, os.path.join(set_dir, "set.json"), W, S, W, T, fps[S], fps[T], S, T, true_pairs))
 stamps.append(lc)
+# CVPR fig. 3: the association cost of the first training pair, its DTW path, key-poses and truth.
+p0 = spec["train"][0]
+fig3 = "%s/figures/fig3-%s.png" % (out, p0["source"])
+rule(fig3, [B + "/paper-figure", "%s/%s/pca.model" % (W, S), "%s/%s/pca.model" % (W, T), "%s/%s/%s.aligned" % (W, S, p0["source"]), "%s/%s/%s.aligned" % (W, T, p0["target"])],
+     "@mkdir -p $$(@D)",
+     "%s/paper-figure cost-matrix -q --set %s --pair %s --source-pca %s/%s/pca.model --target-pca %s/%s/pca.model %s/%s/%s.aligned %s/%s/%s.aligned --out $$@"
+     % (B, os.path.join(set_dir, "set.json"), p0["source"], W, S, W, T, W, S, p0["source"], W, T, p0["target"]))
+stamps.append(fig3)
+# CVPR fig. 5 (a correction example) and fig. 10 (every method's raw output on one motion): the
+# first forward test motion.
+if directions[0][3]:
+    m0 = directions[0][3][0]
+    dn0 = "%s-to-%s" % (S, T)
+    model0 = "%s/models/%s/gpr-nn.model" % (W, dn0)
+    training = ["%s/%s/%s.aligned" % (W, T, t) for t in train[T]]
+    truth0 = os.path.join(set_dir, "truth", T, m0)
+    fig5 = "%s/figures/fig5-%s.png" % (out, m0)
+    rule(fig5, [B + "/paper-figure", model0, "%s/%s/parts.seg" % (W, T), "%s/%s/%s.aligned" % (W, S, m0)] + training,
+         "@mkdir -p $$(@D)",
+         "%s/paper-figure correction -q --model %s --source-pca %s/%s/pca.model --target-pca %s/%s/pca.model --segmentation %s/%s/parts.seg %s %s --size 300 %s/%s/%s.aligned --out $$@ --report %s/figures/fig5-%s.json"
+         % (B, model0, W, S, W, T, W, T, " ".join("--target-training " + t for t in training), ("--truth " + truth0) if os.path.isdir(truth0) else "", W, S, m0, out, m0))
+    stamps.append(fig5)
+    names = ["gpr-nn", "gpr-se", "gpr-linear", "keypose-affine", "whole-body", "gpr-nn-keyposes"]
+    names = [n for n in names if n in methods or n == "gpr-nn-keyposes"]
+    fig10 = "%s/figures/fig10-%s-%s/contact.png" % (out, dn0, m0)
+    seqs = [os.path.join(set_dir, S, m0)] + ["%s/transfer/%s/%s/%s" % (out, dn0, m0, n) for n in names] + ([truth0] if os.path.isdir(truth0) else [])
+    rule(fig10, [B + "/render"] + ["%s/predict/%s/%s/%s-%s.json" % (W, dn0, m0, n, default_pl) for n in names],
+         "%s/render -q --separate-rows --no-frames --no-gif --follow --labels source,%s%s --out $$(@D) %s"
+         % (B, ",".join(names), ",truth" if os.path.isdir(truth0) else "", " ".join(seqs)))
+    stamps.append(fig10)
+
 # The report's 3D view: the first forward test motion, after correction and stitching.
 if directions[0][3]:
     m0 = directions[0][3][0]
