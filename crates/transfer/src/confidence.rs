@@ -15,7 +15,7 @@
 use std::collections::BTreeMap;
 
 use mesh_core::{Error, Result};
-use nalgebra::DMatrix;
+use nalgebra::{DMatrix, DVector};
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 
@@ -43,13 +43,17 @@ fn of_regressor(reg: &Regressor, xs: &DMatrix<f64>) -> Result<(Option<Vec<f64>>,
     for n in notes {
         mesh_core::warn!("confidence: {n}");
     }
-    let prior = gpr.kernel.diag(xs);
-    let ratio = var
-        .iter()
+    let ratio = ratio_to_prior(&var, &gpr.kernel.diag(xs));
+    Ok((Some(ratio), Some(nearest_distances(gpr.inputs(), xs))))
+}
+
+/// Latent predictive variances over the prior variances `k(x, x)`, clamped to [0, 1]
+/// (1 where the prior variance is 0).
+pub fn ratio_to_prior(var: &DVector<f64>, prior: &DVector<f64>) -> Vec<f64> {
+    var.iter()
         .zip(prior.iter())
         .map(|(v, p)| if *p > 0.0 { (v / p).clamp(0.0, 1.0) } else { 1.0 })
-        .collect();
-    Ok((Some(ratio), Some(nearest_distances(gpr.inputs(), xs))))
+        .collect()
 }
 
 /// Distance from each row of `xs` to the nearest row of `train`, divided by the RMS distance

@@ -61,18 +61,7 @@ pub fn predict(
             for n in notes {
                 mesh_core::warn!("displacement GP: {n}");
             }
-            let prior = gpr.kernel.diag(source_disp);
-            let ratio = var
-                .iter()
-                .zip(prior.iter())
-                .map(|(v, p)| {
-                    if *p > 0.0 {
-                        (v / p).clamp(0.0, 1.0)
-                    } else {
-                        1.0
-                    }
-                })
-                .collect();
+            let ratio = crate::confidence::ratio_to_prior(&var, &gpr.kernel.diag(source_disp));
             let mut disp = mean_gp * *y_scale;
             if let Some(m) = mean {
                 disp += m.predict(source_disp).map_err(|e| Error::invalid(format!("displacement: {e}")))?;
