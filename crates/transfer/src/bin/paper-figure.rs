@@ -10,17 +10,20 @@ use mesh_core::segmentation::Segmentation;
 use mesh_core::sequence::MeshSequence;
 use transfer::align::AlignedMotion;
 use transfer::densify::PAPER_SIGMA2;
-use transfer::figures::{correction_example, cost_and_path, CostFigure};
+use transfer::figures::{
+    correction_example, cost_and_path, load_confidence, load_eval, ConfidenceFigure, CostFigure,
+    DEFAULT_EXTRAPOLATION_THRESHOLD,
+};
 use transfer::gpr_model::GprModel;
 use transfer::learning_curves::true_correspondences;
 use transfer::part_pca::PcaModel;
 
-/// The paper's figures 3 (BLR cost matrix with the DTW path) and 5 (a body part correction example)
+/// The paper's figures 3 (BLR cost matrix with the DTW path) and 5 (a body part correction example), and the per-frame confidence of a transfer
 #[derive(Parser, Debug)]
 #[command(
     name = "paper-figure",
     version,
-    after_help = "e.g.: paper-figure cost-matrix --set set/set.json --pair walk --source-pca work/A/pca.model --target-pca work/B/pca.model \\\n        work/A/walk.aligned work/B/walk.aligned --out figures/fig3-walk.png\n      paper-figure correction --model work/models/A-to-B/gpr-nn.model --source-pca work/A/pca.model --target-pca work/B/pca.model \\\n        --segmentation work/B/parts.seg --target-training work/B/walk.aligned --truth set/truth/B/punch work/A/punch.aligned --out figures/fig5-punch.png"
+    after_help = "e.g.: paper-figure cost-matrix --set set/set.json --pair walk --source-pca work/A/pca.model --target-pca work/B/pca.model \\\n        work/A/walk.aligned work/B/walk.aligned --out figures/fig3-walk.png\n      paper-figure correction --model work/models/A-to-B/gpr-nn.model --source-pca work/A/pca.model --target-pca work/B/pca.model \\\n        --segmentation work/B/parts.seg --target-training work/B/walk.aligned --truth set/truth/B/punch work/A/punch.aligned --out figures/fig5-punch.png\n      paper-figure confidence --confidence work/confidence/A-to-B/punch.json --eval work/eval/A-to-B/punch/gpr-nn.json --out figures/confidence-punch.png"
 )]
 struct Args {
     #[command(subcommand)]
@@ -33,6 +36,8 @@ enum Figure {
     CostMatrix(CostArgs),
     /// CVPR figure 5: a predicted part before / after the §6.1 correction, and its nearest training meshes
     Correction(CorrectionArgs),
+    /// Per frame: nearest distance and variance ratio of every part (gpr-predict --confidence), the pose error (evaluate)
+    Confidence(ConfidenceArgs),
 }
 
 #[derive(ClapArgs, Debug)]
@@ -112,6 +117,48 @@ struct CorrectionArgs {
     report: Option<PathBuf>,
 }
 
+#[derive(ClapArgs, Debug)]
+struct ConfidenceArgs {
+    #[command(flatten)]
+    common: CommonArgs,
+    /// Confidence JSON of one transferred motion (gpr-predict --confidence)
+    #[arg(long)]
+    confidence: PathBuf,
+    /// Evaluate record of the same motion (evaluate --out): adds the per-frame pose error panel
+    #[arg(long)]
+    eval: Option<PathBuf>,
+    /// Shade the frames where some body part's nearest distance is at least this
+    #[arg(long, default_value_t = DEFAULT_EXTRAPOLATION_THRESHOLD)]
+    threshold: f64,
+    /// Title [default: direction, motion and method of --eval]
+    #[arg(long)]
+    title: Option<String>,
+    /// Output PNG (an SVG is written next to it unless --no-svg)
+    #[arg(short, long)]
+    out: PathBuf,
+    #[arg(long)]
+    no_svg: bool,
+}
+
+fn confidence(a: &ConfidenceArgs) -> anyhow::Result<()> {
+    if !(a.threshold.is_finite() && a.threshold >= 0.0) {
+        bail!("--threshold {}: expected a non-negative number", a.threshold);
+    }
+    let conf = load_confidence(&a.confidence)?;
+    let eval = a.eval.as_ref().map(|p| load_eval(p, conf.frames, &a.confidence)).transpose()?;
+    let fig = ConfidenceFigure::new(&conf, eval.as_ref(), a.title.clone(), a.threshold);
+    mesh_core::info!("{}", fig.caption);
+    if eval.is_some() {
+        match fig.correlation {
+            Some(r) => mesh_core::info!("pearson r = {r:.4} over {} frames", fig.frames),
+            None => mesh_core::info!("pearson r undefined over {} frames (a constant series)", fig.frames),
+        }
+    }
+    let svg = a.out.with_extension("svg");
+    fig.write(&a.out, (!a.no_svg).then_some(svg.as_path()))?;
+    Ok(())
+}
+
 fn cost_matrix(a: &CostArgs) -> anyhow::Result<()> {
     let set = SetSpec::load(&a.set)?;
     let Some(pair) = set.train.iter().find(|p| p.source == a.pair) else {
@@ -173,6 +220,7 @@ fn main() -> ExitCode {
         match &args.figure {
             Figure::CostMatrix(a) => a.common.init().and_then(|_| cost_matrix(a)),
             Figure::Correction(a) => a.common.init().and_then(|_| correction(a)),
+            Figure::Confidence(a) => a.common.init().and_then(|_| confidence(a)),
         }
     })
 }
