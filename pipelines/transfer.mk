@@ -139,6 +139,15 @@ for (src, tgt, rev, tests) in directions:
                              "%s/evaluate -q %s %s %s --direction '%s' --motion %s --method %s --placement %s --training dense --out $$@"
                              % (B, seq, truth, feet[tgt], label, m, meth, default_pl))
                         results.append(rec)
+                    if surf == "correct-stitch":
+                        # Per-frame confidence beside the error (where truth exists), for the report.
+                        plot = "%s/figures/confidence-%s-%s.png" % (out, dn, m)
+                        has_truth = os.path.isdir(truth)
+                        rule(plot, [B + "/paper-figure", timing] + ([rec] if has_truth else []),
+                             "@mkdir -p $$(@D)",
+                             "%s/paper-figure confidence -q --confidence %s/%s.json %s --title '%s %s: confidence and error per frame' --out $$@"
+                             % (B, conf_dir, m, ("--eval " + rec) if has_truth else "", label, m))
+                        stamps.append(plot)
                     sheet = "%s/render/%s/%s/%s/contact.png" % (out, dn, m, meth)
                     seqs = [os.path.join(set_dir, src, m), seq] + ([truth] if os.path.isdir(truth) else [])
                     rule(sheet, [B + "/render", timing],
