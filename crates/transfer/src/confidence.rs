@@ -27,12 +27,15 @@ pub struct Confidence {
     /// Part names, then `displacement`.
     pub parts: Vec<String>,
     pub frames: usize,
-    pub variance_ratio: BTreeMap<String, Option<Vec<f64>>>,
-    pub nearest_distance: BTreeMap<String, Option<Vec<f64>>>,
+    pub variance_ratio: BTreeMap<String, Series>,
+    pub nearest_distance: BTreeMap<String, Series>,
 }
 
+/// One figure per frame, or `None` where a regressor has no GP.
+type Series = Option<Vec<f64>>;
+
 /// `(variance ratio, normalised nearest distance)` per row of `xs` for one regressor.
-fn of_regressor(reg: &Regressor, xs: &DMatrix<f64>) -> Result<(Option<Vec<f64>>, Option<Vec<f64>>)> {
+fn of_regressor(reg: &Regressor, xs: &DMatrix<f64>) -> Result<(Series, Series)> {
     let Regressor::Gp { gpr, .. } = reg else {
         return Ok((None, None));
     };

@@ -4,35 +4,11 @@
 mod common;
 
 use std::path::{Path, PathBuf};
-use std::process::Command;
 
 use mesh_core::sequence::MeshSequence;
 use transfer::evaluate::{rms_errors, EvalRecord};
 
-fn bin(name: &str) -> &'static str {
-    match name {
-        "align" => env!("CARGO_BIN_EXE_align"),
-        "segment" => env!("CARGO_BIN_EXE_segment"),
-        "pca-fit" => env!("CARGO_BIN_EXE_pca-fit"),
-        "dtw-densify" => env!("CARGO_BIN_EXE_dtw-densify"),
-        "gpr-train" => env!("CARGO_BIN_EXE_gpr-train"),
-        "gpr-predict" => env!("CARGO_BIN_EXE_gpr-predict"),
-        "evaluate" => env!("CARGO_BIN_EXE_evaluate"),
-        "learning-curves" => env!("CARGO_BIN_EXE_learning-curves"),
-        _ => unreachable!(),
-    }
-}
-
-fn run(name: &str, args: &[&str]) -> String {
-    let out = Command::new(bin(name))
-        .args(args)
-        .env("OPENBLAS_NUM_THREADS", "1")
-        .output()
-        .unwrap();
-    let err = String::from_utf8_lossy(&out.stderr);
-    assert!(out.status.success(), "{name} {args:?} failed: {err}");
-    String::from_utf8_lossy(&out.stdout).into_owned()
-}
+use common::run;
 
 fn p(path: &Path) -> &str {
     path.to_str().unwrap()

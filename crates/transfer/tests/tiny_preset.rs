@@ -5,36 +5,14 @@
 //! is no worse than the raw regression, and the default placement beats the paper's
 //! regressed displacement.
 
+mod common;
+
+use common::run;
+
 use std::path::{Path, PathBuf};
-use std::process::Command;
 
 use mesh_core::sequence::MeshSequence;
 use transfer::evaluate::rms_errors;
-
-fn bin(name: &str) -> &'static str {
-    match name {
-        "align" => env!("CARGO_BIN_EXE_align"),
-        "segment" => env!("CARGO_BIN_EXE_segment"),
-        "pca-fit" => env!("CARGO_BIN_EXE_pca-fit"),
-        "dtw-densify" => env!("CARGO_BIN_EXE_dtw-densify"),
-        "gpr-train" => env!("CARGO_BIN_EXE_gpr-train"),
-        "gpr-predict" => env!("CARGO_BIN_EXE_gpr-predict"),
-        _ => unreachable!(),
-    }
-}
-
-fn run(name: &str, args: &[String]) {
-    let out = Command::new(bin(name))
-        .args(args)
-        .env("OPENBLAS_NUM_THREADS", "1")
-        .output()
-        .unwrap();
-    assert!(
-        out.status.success(),
-        "{name} {args:?} failed: {}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-}
 
 fn s(p: &Path) -> String {
     p.to_str().unwrap().to_string()

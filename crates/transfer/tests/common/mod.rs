@@ -14,6 +14,7 @@
 #![allow(dead_code)]
 
 use std::path::Path;
+use std::process::Command;
 
 use mesh_core::rigid::{so3_exp, RigidMotion};
 use mesh_core::sequence::MeshSequence;
@@ -228,3 +229,31 @@ pub fn write_set(dir: &Path) {
     let set = serde_json::json!({"source": "A", "target": "B", "train": train, "test": [name]});
     std::fs::write(dir.join("set.json"), set.to_string()).unwrap();
 }
+
+/// The stage binary `name` of this crate.
+pub fn bin(name: &str) -> &'static str {
+    match name {
+        "align" => env!("CARGO_BIN_EXE_align"),
+        "segment" => env!("CARGO_BIN_EXE_segment"),
+        "pca-fit" => env!("CARGO_BIN_EXE_pca-fit"),
+        "dtw-densify" => env!("CARGO_BIN_EXE_dtw-densify"),
+        "gpr-train" => env!("CARGO_BIN_EXE_gpr-train"),
+        "gpr-predict" => env!("CARGO_BIN_EXE_gpr-predict"),
+        "evaluate" => env!("CARGO_BIN_EXE_evaluate"),
+        "learning-curves" => env!("CARGO_BIN_EXE_learning-curves"),
+        _ => unreachable!(),
+    }
+}
+
+/// Runs stage `name` with `args` (one BLAS thread); panics with its stderr on failure.
+pub fn run<S: AsRef<std::ffi::OsStr> + std::fmt::Debug>(name: &str, args: &[S]) -> String {
+    let out = Command::new(bin(name))
+        .args(args)
+        .env("OPENBLAS_NUM_THREADS", "1")
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(out.status.success(), "{name} {args:?} failed: {err}");
+    String::from_utf8_lossy(&out.stdout).into_owned()
+}
+
