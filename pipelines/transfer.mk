@@ -52,6 +52,9 @@ def template(x):
     d = os.path.join(set_dir, x, train[x][0])
     return os.path.join(d, frames(d)[0])
 tpl = {x: template(x) for x in (S, T)}
+# The whole-body comparison at the parts' total dimension (CVPR fig. 9: "equivalent total number of
+# input and output dimensions").
+whole_components = {x: int(sys.argv[5]) * len(subj[x]["parts"]) for x in (S, T)}
 # evaluate's foot-sliding inputs: the subject's truth contacts, its parts and its template.
 feet = {x: "--contacts %s --segmentation %s/%s/parts.seg --template %s" % (os.path.join(set_dir, x, "subject.json"), W, x, tpl[x]) for x in (S, T)}
 B = "$$(BIN)"
@@ -69,7 +72,7 @@ for x in (S, T):
     rule("%s/%s/pca.model" % (W, x), [B + "/pca-fit", "%s/%s/parts.seg" % (W, x)] + aligned,
          "%s/pca-fit -q --components $$(PCA_COMPONENTS) --part-alignment $$(PART_ALIGNMENT) --template %s --parts %s/%s/parts.seg %s --out $$@ --report %s/%s/pca.json" % (B, tpl[x], W, x, " ".join(aligned), W, x))
     rule("%s/%s/pca-whole.model" % (W, x), [B + "/pca-fit"] + aligned,
-         "%s/pca-fit -q --whole-body --template %s %s --out $$@ --report %s/%s/pca-whole.json" % (B, tpl[x], " ".join(aligned), W, x))
+         "%s/pca-fit -q --whole-body --components %d --template %s %s --out $$@ --report %s/%s/pca-whole.json" % (B, whole_components[x], tpl[x], " ".join(aligned), W, x))
 pair_args = []
 corrs = []
 for p in spec["train"]:
@@ -219,7 +222,7 @@ export TRANSFER_RULES_PY
 
 $(TRANSFER_RULES): $(SET)/set.json $(wildcard $(SET)/* $(SET)/truth/*) pipelines/transfer.mk
 	@mkdir -p $(@D)
-	@python3 -c "$$TRANSFER_RULES_PY" $(SET) $(OUT) "$(TRANSFER_METHODS)" $(PLACEMENT) > $@.tmp && mv $@.tmp $@
+	@python3 -c "$$TRANSFER_RULES_PY" $(SET) $(OUT) "$(TRANSFER_METHODS)" $(PLACEMENT) $(PCA_COMPONENTS) > $@.tmp && mv $@.tmp $@
 
 
 # The generated rules (and the merge below) exist only under `make transfer`, which calls
