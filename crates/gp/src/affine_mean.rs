@@ -11,9 +11,10 @@
 //! ```text
 //! W = argmin ‖[X 1] W - Y‖² + λ ‖W‖²,   (Xᵀ_1 X_1 + λ I) W = Xᵀ_1 Y,   X_1 = [X 1]
 //! ```
-//! solved by Cholesky (no inverse formed); `λ = ridge · tr(Xᵀ_1 X_1) / (m + 1)`, a small
-//! relative regulariser that only matters when `X` is rank deficient (fewer pairs than
-//! input dimensions, e.g. key-poses only).
+//! solved by Cholesky (no inverse formed); `λ = ridge · tr(Xᵀ_1 X_1) / (m + 1)`, a relative
+//! regulariser. At [`DEFAULT_RIDGE`] it only matters when `X` is rank deficient (fewer pairs
+//! than input dimensions, e.g. key-poses only); larger values shrink the map along the input
+//! directions the training inputs barely span.
 
 use crate::linalg::Cholesky;
 use crate::{check_finite, invalid, Result};

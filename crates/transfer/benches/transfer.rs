@@ -11,7 +11,7 @@
 use criterion::{criterion_group, criterion_main, Criterion, Throughput};
 use gp::gpr::GprOptions;
 use nalgebra::DMatrix;
-use transfer::gpr_model::{train, MeanFunction, Method, PairData};
+use transfer::gpr_model::{train, MeanFunction, Method, PairData, MEAN_RIDGE};
 use transfer::predict::{displacement_matrix, predict};
 
 const PARTS: usize = 5;
@@ -69,6 +69,7 @@ fn bench(c: &mut Criterion) {
                         Method::GprNn,
                         false,
                         MeanFunction::default(),
+                        MEAN_RIDGE,
                         &names,
                         std::slice::from_ref(&data),
                         1.0,
@@ -85,6 +86,7 @@ fn bench(c: &mut Criterion) {
         Method::GprNn,
         false,
         MeanFunction::default(),
+        MEAN_RIDGE,
         &names,
         &[pair_data(1100)],
         1.0,

@@ -49,7 +49,7 @@ use rand_chacha::ChaCha8Rng;
 use serde::{Deserialize, Serialize};
 
 use crate::align::AlignedMotion;
-use crate::gpr_model::{train, GprModel, MeanFunction, Method, PairData, TrainingSet};
+use crate::gpr_model::{train, GprModel, MeanFunction, Method, PairData, TrainingSet, MEAN_RIDGE};
 use crate::part_pca::PcaModel;
 
 /// Which frame pairs the curves learn from and are tested on.
@@ -531,7 +531,7 @@ fn fit_on(
         pairs: (0..n).map(|r| [r, r]).collect(),
         keyposes: (0..n).map(|r| [r, r]).collect(),
     };
-    train(method, nn_bias, mean, names, &[one], ratio.max(1e-9), false, opts)
+    train(method, nn_bias, mean, MEAN_RIDGE, names, &[one], ratio.max(1e-9), false, opts)
 }
 
 /// Writes the points as CSV.

@@ -6,7 +6,7 @@ use clap::Parser;
 use gp::gpr::{GprOptions, PAPER_NOISE_VAR};
 use mesh_core::artifact::Artifact;
 use mesh_core::cli::{run_stage, CommonArgs};
-use transfer::gpr_model::{train, GprModel, MeanFunction, Method, PairFiles};
+use transfer::gpr_model::{train, GprModel, MeanFunction, Method, PairFiles, MEAN_RIDGE};
 use transfer::part_pca::PcaModel;
 
 /// Train the source-to-target GP regression per body part and for the rigid displacement (eqs. 8-13)
@@ -50,6 +50,10 @@ struct Args {
     /// `zero` = the paper's zero-mean GP (eq. 11)
     #[arg(long, value_enum, default_value_t = MeanFunction::Affine)]
     mean: MeanFunction,
+    /// Relative ridge of the affine mean (shrinks the map along input directions the training
+    /// poses barely span; 1e-6 is the plain least-squares fit)
+    #[arg(long, default_value_t = MEAN_RIDGE)]
+    mean_ridge: f64,
     /// Observation-noise variance σn² (the paper's 0.1; the starting value with --learn-noise)
     #[arg(long, default_value_t = PAPER_NOISE_VAR)]
     noise_var: f64,
@@ -121,6 +125,7 @@ fn main() -> ExitCode {
             method,
             args.nn_bias,
             args.mean,
+            args.mean_ridge,
             &names,
             &pairs,
             ratio,
@@ -143,7 +148,7 @@ fn main() -> ExitCode {
             .common
             .header("gpr-train", env!("CARGO_PKG_VERSION"))
             .with_params(&serde_json::json!({
-                "method": method.name(), "nn_bias": args.nn_bias, "keyposes_only": args.keyposes_only, "noise_var": args.noise_var, "learn_noise": args.learn_noise, "mean": args.mean,
+                "method": method.name(), "nn_bias": args.nn_bias, "keyposes_only": args.keyposes_only, "noise_var": args.noise_var, "learn_noise": args.learn_noise, "mean": args.mean, "mean_ridge": args.mean_ridge,
                 "reverse": args.reverse, "source_fps": args.source_fps, "target_fps": args.target_fps,
             }))?
             .with_input(&args.source_pca)?
