@@ -12,6 +12,7 @@
 pub mod contacts;
 pub mod evaluate;
 pub mod foot_lock;
+pub mod frame_stride;
 pub mod footskate;
 pub mod gait;
 pub mod grounding;
