@@ -15,7 +15,12 @@ use nalgebra::DMatrix;
 
 /// The stride that brings `fps` to about `fit_rate` frames per second (at least 1), further
 /// raised, when `max_frames` is given, until `frames` capture frames keep at most `max_frames`.
-pub fn stride_for(fps: f64, fit_rate: Option<f64>, frames: usize, max_frames: Option<usize>) -> usize {
+pub fn stride_for(
+    fps: f64,
+    fit_rate: Option<f64>,
+    frames: usize,
+    max_frames: Option<usize>,
+) -> usize {
     let mut s = match fit_rate {
         Some(r) if r > 0.0 && fps > r => (fps / r).round().max(1.0) as usize,
         _ => 1,
@@ -109,7 +114,11 @@ pub fn upsample(x: &DMatrix<f64>, s: usize, frames: usize) -> DMatrix<f64> {
         let (p0, p1, p2, p3) = (row(i - 1)[c], row(i)[c], row(i + 1)[c], row(i + 2)[c]);
         // Tangents (p_{i+1} − p_{i−1})/2; at the ends the clamped rows make them one-sided.
         let m1 = if i == 0 { p2 - p1 } else { 0.5 * (p2 - p0) };
-        let m2 = if i + 2 >= n as isize { p2 - p1 } else { 0.5 * (p3 - p1) };
+        let m2 = if i + 2 >= n as isize {
+            p2 - p1
+        } else {
+            0.5 * (p3 - p1)
+        };
         let (u2, u3) = (u * u, u * u * u);
         (2.0 * u3 - 3.0 * u2 + 1.0) * p1
             + (u3 - 2.0 * u2 + u) * m1
@@ -171,8 +180,13 @@ mod tests {
             }
         }
         // A ramp: the mean of frames 1..=2 and 3..=4.
-        let ramp: Vec<[f64; 6]> = (0..5).map(|t| [t as f64, 0.0, 0.0, 0.0, 0.0, 0.0]).collect();
+        let ramp: Vec<[f64; 6]> = (0..5)
+            .map(|t| [t as f64, 0.0, 0.0, 0.0, 0.0, 0.0])
+            .collect();
         let st = strided_displacements(&ramp, 2);
-        assert_eq!(st.iter().map(|d| d[0]).collect::<Vec<_>>(), vec![1.5, 1.5, 3.5]);
+        assert_eq!(
+            st.iter().map(|d| d[0]).collect::<Vec<_>>(),
+            vec![1.5, 1.5, 3.5]
+        );
     }
 }

@@ -12,8 +12,8 @@
 pub mod contacts;
 pub mod evaluate;
 pub mod foot_lock;
-pub mod frame_stride;
 pub mod footskate;
+pub mod frame_stride;
 pub mod gait;
 pub mod grounding;
 pub mod group;

@@ -93,7 +93,15 @@ pub fn sequence_variations(
     if s >= dec.model.sequences.len() {
         return Err(Error::invalid(format!("no training sequence {s}")));
     }
-    sequence_variations_len(dec, s, dec.model.n_frames(), sampler, variance_scale, opts, 1)
+    sequence_variations_len(
+        dec,
+        s,
+        dec.model.n_frames(),
+        sampler,
+        variance_scale,
+        opts,
+        1,
+    )
 }
 
 /// `opts.n_samples` variations of `len` capture frames of training sequence `s` (started at its
@@ -190,7 +198,10 @@ pub fn sequence_variations_len(
     let mut stats = Vec::new();
     for (r, &(k, _)) in runs.into_iter().zip(&tasks) {
         let (t, st) = r?;
-        by_part[k].extend(t.iter().map(|x| frame_stride::upsample(x, model.stride, frames)));
+        by_part[k].extend(
+            t.iter()
+                .map(|x| frame_stride::upsample(x, model.stride, frames)),
+        );
         stats.push(st);
     }
     let n = by_part

@@ -25,8 +25,8 @@ use crate::latent_smoothing;
 use crate::metrics::{self, Stats};
 use crate::reconstruct::{Assembly, Decoder};
 use crate::sample::{
-    blend_entries, blend_variations, default_hmc, mix, sequence_variations_len, ChainStats, Sampler,
-    Variations,
+    blend_entries, blend_variations, default_hmc, mix, sequence_variations_len, ChainStats,
+    Sampler, Variations,
 };
 use crate::train::VariationModel;
 
@@ -359,7 +359,9 @@ pub fn run(
         Some(Query::Motion(name)) => (vec![index(name)?], Vec::new()),
         Some(Query::Blend { a, b, w }) => {
             let (ia, ib) = (index(a)?, index(b)?);
-            if ia == ib || model.sequences[ia].blend.is_some() || model.sequences[ib].blend.is_some()
+            if ia == ib
+                || model.sequences[ia].blend.is_some()
+                || model.sequences[ib].blend.is_some()
             {
                 return Err(Error::invalid(format!(
                     "blend '{a}:{b}': two different captured motions are needed"
@@ -368,7 +370,10 @@ pub fn run(
             if !(0.0..=1.0).contains(w) {
                 return Err(Error::invalid(format!("blend weight {w} outside [0, 1]")));
             }
-            let used = blend_entries(model, ia, ib).into_iter().map(|e| e.1).collect();
+            let used = blend_entries(model, ia, ib)
+                .into_iter()
+                .map(|e| e.1)
+                .collect();
             (used, vec![(ia, ib, *w)])
         }
     };
@@ -407,7 +412,10 @@ pub fn run(
             )?;
             let label = match cfg.query {
                 None => blend_name(w),
-                Some(_) => format!("{}-{}-{w}", model.sequences[a].name, model.sequences[b].name),
+                Some(_) => format!(
+                    "{}-{}-{w}",
+                    model.sequences[a].name, model.sequences[b].name
+                ),
             };
             jobs.push(Job {
                 label,

@@ -213,9 +213,7 @@ pub struct PartTrainReport {
 
 /// The stride [`train`] uses for `group` under `cfg` ([`frame_stride::stride_for`]).
 pub fn fit_stride(group: &Group, cfg: &TrainConfig) -> usize {
-    let per_seq = cfg
-        .max_fit_frames
-        .map(|m| m / group.sequences.len().max(1));
+    let per_seq = cfg.max_fit_frames.map(|m| m / group.sequences.len().max(1));
     frame_stride::stride_for(group.fps, cfg.fit_rate, group.n_frames(), per_seq)
 }
 
@@ -231,7 +229,9 @@ pub fn training_data(group: &Group, stride: usize) -> (Vec<Vec<DMatrix<f64>>>, D
             group
                 .sequences
                 .iter()
-                .map(|s| frame_stride::strided_rows(&part_data::part_rows(&s.motion, p, &r), stride))
+                .map(|s| {
+                    frame_stride::strided_rows(&part_data::part_rows(&s.motion, p, &r), stride)
+                })
                 .collect()
         })
         .collect();
