@@ -315,6 +315,18 @@ pub fn run(
     cfg: &SynthConfig,
     out: &Path,
 ) -> Result<SynthReport> {
+    run_with_progress(model, group, cfg, out, &|_, _| {})
+}
+
+/// [`run`], calling `progress(done, total)` after the sampling (done = 0) and after each
+/// synthesised sequence is written.
+pub fn run_with_progress(
+    model: &VariationModel,
+    group: &Group,
+    cfg: &SynthConfig,
+    out: &Path,
+    progress: &dyn Fn(usize, usize),
+) -> Result<SynthReport> {
     if group.sequences.len() != model.sequences.len() || group.n_frames() != model.n_frames() {
         return Err(Error::invalid(
             "the group does not match the model (train the model from this group)",
@@ -435,6 +447,7 @@ pub fn run(
         }
     }
     let seconds_sampling = clock.elapsed().as_secs_f64();
+    progress(0, jobs.len());
     let clock = std::time::Instant::now();
     let mut sequences = Vec::new();
     // Ground on the lowest point of the whole body: sampled feet often point their toes through
@@ -537,6 +550,7 @@ pub fn run(
                 .write_dir(out.join(&job.label).join(format!("var{k}")))?;
         }
         sequences.push(measure(job, &decoded, model));
+        progress(j + 1, jobs.len());
     }
     let rates: Vec<f64> = chains.iter().map(|c| c.accept_rate).collect();
     Ok(SynthReport {

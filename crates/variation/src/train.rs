@@ -113,10 +113,10 @@ pub const DYN_NOISE_FLOOR: f64 = 1e-3;
 #[serde(rename_all = "lowercase")]
 pub enum Fit {
     /// Every captured frame (the paper's fit; cost N³ per objective evaluation).
-    #[default]
     Exact,
     /// Every s-th frame ([`crate::frame_stride`]): dynamics at about [`FIT_RATE`] fps and at most
-    /// [`MAX_FIT_FRAMES`] training frames per part.
+    /// [`MAX_FIT_FRAMES`] training frames per part (the default: docs/DEVIATIONS.md).
+    #[default]
     Strided,
 }
 
@@ -124,7 +124,7 @@ pub enum Fit {
 pub const FIT_RATE: f64 = 25.0;
 
 /// Default bound on one part's training frames in the strided fit.
-pub const MAX_FIT_FRAMES: usize = 200;
+pub const MAX_FIT_FRAMES: usize = 240;
 
 /// Training settings.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
@@ -164,8 +164,8 @@ impl Default for TrainConfig {
                 ..Default::default()
             },
             options,
-            fit_rate: None,
-            max_fit_frames: None,
+            fit_rate: Some(FIT_RATE),
+            max_fit_frames: Some(MAX_FIT_FRAMES),
         }
     }
 }
@@ -260,6 +260,16 @@ pub fn training_data(group: &Group, stride: usize) -> (Vec<Vec<DMatrix<f64>>>, D
 
 /// Trains the model of `group`.
 pub fn train(group: &Group, cfg: &TrainConfig) -> Result<(VariationModel, Vec<PartTrainReport>)> {
+    train_with_progress(group, cfg, &|_| {})
+}
+
+/// [`train`], calling `part_done` with each part's name as its fit finishes (parts are
+/// trained in parallel, so in any order).
+pub fn train_with_progress(
+    group: &Group,
+    cfg: &TrainConfig,
+    part_done: &(dyn Fn(&str) + Sync),
+) -> Result<(VariationModel, Vec<PartTrainReport>)> {
     if group.sequences.is_empty() || group.parts.is_empty() {
         return Err(Error::invalid(format!(
             "group '{}' has no sequences or no parts",
@@ -294,6 +304,7 @@ pub fn train(group: &Group, cfg: &TrainConfig) -> Result<(VariationModel, Vec<Pa
                 report,
             };
             let reference = part_data::reference(&group.template, p);
+            part_done(&p.name);
             Ok((
                 PartModel {
                     part: p.clone(),

@@ -6,7 +6,7 @@ use gpdm::optim::{Exit, Schedule};
 use mesh_core::artifact::Artifact;
 use mesh_core::cli::{run_stage, CommonArgs};
 use variation::group::Group;
-use variation::train::{train, TrainConfig};
+use variation::train::{train_with_progress, TrainConfig};
 
 /// Learn one GPDM per body part (shared latent space per part) from a prealigned movement group
 #[derive(Parser, Debug)]
@@ -76,7 +76,13 @@ fn main() -> ExitCode {
         }
         cfg.options.lbfgs.max_iter = args.max_iter;
         cfg.fit(args.fit, args.fit_rate, args.max_fit_frames)?;
-        let (model, reports) = train(&group, &cfg)?;
+        let bar = mesh_core::cli::progress_bar(
+            group.parts.len() as u64,
+            "gpdm-train: parts",
+            &args.common,
+        );
+        let (model, reports) = train_with_progress(&group, &cfg, &|_| bar.inc(1))?;
+        bar.finish_and_clear();
         if model.stride > 1 {
             mesh_core::info!(
                 "dynamics learned every {} frames ({:.1} fps of {:.1})",

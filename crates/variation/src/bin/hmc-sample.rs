@@ -7,7 +7,7 @@ use mesh_core::cli::{run_stage, CommonArgs};
 use variation::group::Group;
 use variation::reconstruct::Assembly;
 use variation::sample::Sampler;
-use variation::synthesize::{run, Query, SynthConfig};
+use variation::synthesize::{run_with_progress, Query, SynthConfig};
 use variation::train::VariationModel;
 
 /// Sample variations of every training motion and of blends by HMC in the GPDM latent spaces and write them as meshes
@@ -162,7 +162,17 @@ fn main() -> ExitCode {
             },
             frames: args.frames,
         };
-        let report = run(&model, &group, &cfg, &args.out)?;
+        // Sampling first (a spinner), then one step per synthesised sequence.
+        let bar = mesh_core::cli::progress_bar(0, "hmc-sample: sampling", &args.common);
+        bar.enable_steady_tick(std::time::Duration::from_millis(200));
+        let report = run_with_progress(&model, &group, &cfg, &args.out, &|done, total| {
+            if done == 0 {
+                bar.set_length(total as u64);
+                bar.set_message("hmc-sample: sequences");
+            }
+            bar.set_position(done as u64);
+        })?;
+        bar.finish_and_clear();
         for n in &report.notes {
             mesh_core::warn!("{n}");
         }
