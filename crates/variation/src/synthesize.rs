@@ -465,6 +465,9 @@ pub fn run_with_progress(
     if cfg.footskate && feet.is_none() {
         notes.push("foot-skating clean-up skipped: no left and right soles found".into());
     }
+    let fused = (cfg.assembly == Assembly::Average && !cfg.sample_poses)
+        .then(|| dec.fused())
+        .transpose()?;
     for (j, job) in jobs.iter().enumerate() {
         if cfg.footskate && job.contacts.is_none() {
             notes.push(format!(
@@ -482,12 +485,27 @@ pub fn run_with_progress(
             .map(|(k, latents)| {
                 let mut rng =
                     ChaCha8Rng::seed_from_u64(mix(cfg.seed, 0xDEC0DE + j as u64, k as u64));
-                let mut m = dec.decode(
-                    latents,
-                    &job.start,
-                    cfg.assembly,
-                    cfg.sample_poses.then_some(&mut rng),
-                )?;
+                let mut m = match &fused {
+                    // Mean poses merged by averaging: the fused decoder (same result, one pass).
+                    Some(f) => {
+                        let nv = model.template.len();
+                        let t_len = latents.first().map_or(0, |x| x.nrows());
+                        let mut flat = vec![Vector3::zeros(); t_len * nv];
+                        f.decode_average_into(
+                            latents,
+                            &job.start,
+                            &mut crate::reconstruct::FusedScratch::default(),
+                            &mut flat,
+                        )?;
+                        flat.chunks_exact(nv.max(1)).map(|c| c.to_vec()).collect()
+                    }
+                    None => dec.decode(
+                        latents,
+                        &job.start,
+                        cfg.assembly,
+                        cfg.sample_poses.then_some(&mut rng),
+                    )?,
+                };
                 // Rigid shifts of the variation leave the (pose-normalised) DTW unchanged.
                 let matches = grounding::correspondence(&m, &job.source, &model.template);
                 let ungrounded = floor_contact(&m, &job.source, &matches, model);
