@@ -48,6 +48,32 @@ fn tiny_set_end_to_end() {
     );
     assert_eq!(group.sequences.len(), 3);
     let t = group.n_frames();
+
+    // Without annotations, prealign detects contacts from the meshes; they agree with synth's
+    // (written from the skeleton's feet) on the time-aligned sequences.
+    {
+        let json = set.subject_json("A");
+        let text = std::fs::read_to_string(&json).unwrap();
+        let mut v: serde_json::Value = serde_json::from_str(&text).unwrap();
+        v.as_object_mut().unwrap().remove("contacts");
+        std::fs::write(&json, serde_json::to_string(&v).unwrap()).unwrap();
+        let (detected, notes) = build(&CaptureSet::open(&set_dir).unwrap(), &spec).unwrap();
+        std::fs::write(&json, text).unwrap();
+        assert!(
+            notes.iter().any(|n| n.contains("contacts detected")),
+            "{notes:?}"
+        );
+        for (a, b) in group.sequences.iter().zip(&detected.sequences).take(2) {
+            let (truth, found) = (a.contacts.as_ref().unwrap(), b.contacts.as_ref().unwrap());
+            let (p, r) = variation::contact_detector::precision_recall(found, truth);
+            eprintln!("{}: detected contacts precision {p:?} recall {r:?}", a.name);
+            assert!(
+                p.unwrap() > 0.8 && r.unwrap() > 0.5,
+                "{}: precision {p:?} recall {r:?}",
+                a.name
+            );
+        }
+    }
     assert!(group.sequences.iter().all(|s| s.motion.n_frames() == t));
 
     let mut tc = TrainConfig::default();
