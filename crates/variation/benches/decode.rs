@@ -46,7 +46,7 @@ fn model(level: usize) -> VariationModel {
         start_pose: RigidMotion::identity(),
         contacts: None,
     };
-    VariationModel {
+    let mut m = VariationModel {
         group: "bench".into(),
         subject: "sphere".into(),
         fps: 25.0,
@@ -64,7 +64,11 @@ fn model(level: usize) -> VariationModel {
         },
         sequences: vec![info("a"), info("b")],
         pair: Some((0, 1)),
-    }
+        stride: 1,
+        frames: 0,
+    };
+    m.frames = m.parts[0].gpdm.seq_lens[0];
+    m
 }
 
 fn decode(c: &mut Criterion) {

@@ -20,7 +20,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         .iter()
         .position(|p| &p.name == part)
         .ok_or_else(|| format!("no part '{part}' in group '{}'", group.name))?;
-    let (data, _) = training_data(&group);
+    let (data, _) = training_data(&group, 1);
     let seqs = &data[k];
     let d = seqs[0].ncols();
     let mut bytes = Vec::new();

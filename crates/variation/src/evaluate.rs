@@ -1,7 +1,8 @@
 //! `variation-eval`: the model-level figures of issue 6.
 //!
 //! - **Fig. 4**: reconstruction error of the training poses, GPDM (eq. 12 at the learned
-//!   latent points) against PCA with the same dimension d, as the mean per-vertex distance in
+//!   latent points, interpolated to every captured frame when trained at a stride) against
+//!   PCA with the same dimension d on the training rows, as the mean per-vertex distance in
 //!   each part's template frame (torso displacement columns excluded).
 //! - **Fig. 7b**: for w ∈ {0.25, 0.75}, the non-linear mesh blend `Y_w` of the pair is the
 //!   truth; the latent interpolation *guided* by the learned intermediate trajectory
@@ -94,6 +95,13 @@ fn weighted(model: &VariationModel, per_part: &[f64]) -> f64 {
         / n.max(1) as f64
 }
 
+/// Part `k`'s captured rows of training sequence `s` (every frame, template part frame).
+fn capture_rows(model: &VariationModel, group: &Group, k: usize, s: usize) -> DMatrix<f64> {
+    let part = &model.parts[k].part;
+    let r = part_data::reference(&model.template, part);
+    part_data::part_rows(&group.sequences[s].motion, part, &r)
+}
+
 /// Runs the evaluation; plots go to `plots` (if given).
 pub fn evaluate(
     model: &VariationModel,
@@ -101,6 +109,11 @@ pub fn evaluate(
     plots: Option<&Path>,
     seed: u64,
 ) -> Result<EvalReport> {
+    if group.sequences.len() != model.sequences.len() || group.n_frames() != model.n_frames() {
+        return Err(Error::invalid(
+            "the group does not match the model (train the model from this group)",
+        ));
+    }
     let mut notes = Vec::new();
     let dec = Decoder::new(model, &mut notes)?;
     let d = model.parts[0].gpdm.config.latent_dim;
@@ -108,14 +121,23 @@ pub fn evaluate(
     let mut reconstruction = Vec::new();
     for (k, pm) in model.parts.iter().enumerate() {
         let g = &pm.gpdm;
+        let nv = vertex_count(model, k);
+        // GPDM: eq. 12 at the learned latent points, brought to the capture's rate, against
+        // every captured frame.
+        let mut sum = 0.0;
+        for s in 0..model.sequences.len() {
+            let rec = dec.predictors[k]
+                .pose_mean(&model.latents(s)[k])
+                .map_err(|e| Error::invalid(e.to_string()))?;
+            let truth = capture_rows(model, group, k, s);
+            sum += mean_row_distance(&rec, &truth, nv) * truth.nrows() as f64;
+        }
+        let frames = (model.sequences.len() * model.n_frames()).max(1) as f64;
+        // PCA with the same dimension on the training rows.
         let mut y = g.y.clone();
         for mut row in y.row_iter_mut() {
             row += g.y_mean.transpose();
         }
-        let rec = dec.predictors[k]
-            .pose_mean(&g.x)
-            .map_err(|e| Error::invalid(e.to_string()))?;
-        let nv = vertex_count(model, k);
         let pca = Pca::fit(&y, Components::Count(d)).map_err(|e| Error::invalid(e.to_string()))?;
         let pr = pca
             .decode(&pca.encode(&y).map_err(|e| Error::invalid(e.to_string()))?)
@@ -123,7 +145,7 @@ pub fn evaluate(
         reconstruction.push(ReconstructionError {
             part: pm.part.name.clone(),
             vertices: nv,
-            gpdm_m: mean_row_distance(&rec, &y, nv),
+            gpdm_m: sum / frames,
             pca_m: mean_row_distance(&pr, &y, nv),
         });
     }
@@ -210,21 +232,19 @@ pub fn evaluate(
     // Mean prediction.
     let mut mean_prediction = Vec::new();
     for (s, info) in model.sequences.iter().enumerate() {
-        let lat = model.latents(s);
+        let lat = model.model_latents(s);
         let mut per = Vec::new();
-        for (k, pm) in model.parts.iter().enumerate() {
+        for k in 0..model.parts.len() {
             let x1: Vec<f64> = lat[k].row(0).iter().copied().collect();
+            let steps = crate::frame_stride::covering_count(model.n_frames(), model.stride);
             let xm = dec.predictors[k]
-                .mean_trajectory(&x1, lat[k].nrows())
+                .mean_trajectory(&x1, steps)
                 .map_err(|e| Error::invalid(e.to_string()))?;
+            let xm = crate::frame_stride::upsample(&xm, model.stride, model.n_frames());
             let rec = dec.predictors[k]
                 .pose_mean(&xm)
                 .map_err(|e| Error::invalid(e.to_string()))?;
-            let start: usize = pm.gpdm.seq_lens[..s].iter().sum();
-            let mut y = pm.gpdm.y.rows(start, lat[k].nrows()).into_owned();
-            for mut row in y.row_iter_mut() {
-                row += pm.gpdm.y_mean.transpose();
-            }
+            let y = capture_rows(model, group, k, s);
             per.push(mean_row_distance(&rec, &y, vertex_count(model, k)));
         }
         mean_prediction.push(MeanPrediction {

@@ -139,14 +139,63 @@ pub fn build(set: &CaptureSet, spec: &GroupSpec) -> Result<(Group, Vec<String>)>
             )));
         }
     }
+    let mut notes: Vec<String> = skipped
+        .iter()
+        .map(|m| format!("motion '{m}' is not in the set: skipped"))
+        .collect();
+    let seg = if spec.whole_body {
+        transfer::part_pca::whole_body(template.n_vertices())
+    } else {
+        match mesh_core::segmentation::segment(template, &subject_spec) {
+            Ok(s) => s,
+            Err(e) if spec.fallback_whole_body => {
+                notes.push(format!(
+                    "{}: {e}: body parts unusable, modelling the whole body as one part",
+                    set.subject_json(&spec.subject).display()
+                ));
+                transfer::part_pca::whole_body(template.n_vertices())
+            }
+            Err(e) => return Err(Error::file(set.subject_json(&spec.subject), e.to_string())),
+        }
+    };
+    let parts = seg
+        .parts
+        .iter()
+        .map(|p| PartDef {
+            name: p.name.clone(),
+            parent: p
+                .parent
+                .as_ref()
+                .and_then(|q| seg.parts.iter().position(|x| &x.name == q)),
+            vertices: p.vertices.clone(),
+        })
+        .collect::<Vec<PartDef>>();
+    let up = subject_spec.up_vector().unwrap_or(Vector3::y());
+    // Soles of the two leg parts, left first, for motions without contact annotations.
+    let soles = crate::metrics::soles(&parts, &template.vertices, &up, 0.015);
+    let has_legs = parts.iter().filter(|p| p.name.starts_with("leg")).count() == 2;
     let mut loaded = Vec::new();
     for m in &present {
         let dir = set.motion_dir(&spec.subject, m);
         let seq = MeshSequence::load_dir(&dir)?;
         let aligned = align_motion(template, &seq)
             .map_err(|e| Error::invalid(format!("{}: {e}", dir.display())))?;
-        let c = contacts::from_subject(&subject_spec, m, aligned.n_frames())
+        let mut c = contacts::from_subject(&subject_spec, m, aligned.n_frames())
             .map_err(|e| Error::file(set.subject_json(&spec.subject), e.to_string()))?;
+        if c.is_none() && has_legs {
+            c = crate::contact_detector::detect(
+                &seq.frames,
+                &soles,
+                &up,
+                subject_spec.fps,
+                &crate::contact_detector::Rule::default(),
+            );
+            if c.is_some() {
+                notes.push(format!(
+                    "motion '{m}' has no contact annotations: contacts detected from its meshes"
+                ));
+            }
+        }
         loaded.push((m.clone(), aligned, c));
     }
     let r = present
@@ -229,43 +278,12 @@ pub fn build(set: &CaptureSet, spec: &GroupSpec) -> Result<(Group, Vec<String>)>
             map,
         });
     }
-    let mut notes: Vec<String> = skipped
-        .iter()
-        .map(|m| format!("motion '{m}' is not in the set: skipped"))
-        .collect();
-    let seg = if spec.whole_body {
-        transfer::part_pca::whole_body(template.n_vertices())
-    } else {
-        match mesh_core::segmentation::segment(template, &subject_spec) {
-            Ok(s) => s,
-            Err(e) if spec.fallback_whole_body => {
-                notes.push(format!(
-                    "{}: {e}: body parts unusable, modelling the whole body as one part",
-                    set.subject_json(&spec.subject).display()
-                ));
-                transfer::part_pca::whole_body(template.n_vertices())
-            }
-            Err(e) => return Err(Error::file(set.subject_json(&spec.subject), e.to_string())),
-        }
-    };
-    let parts = seg
-        .parts
-        .iter()
-        .map(|p| PartDef {
-            name: p.name.clone(),
-            parent: p
-                .parent
-                .as_ref()
-                .and_then(|q| seg.parts.iter().position(|x| &x.name == q)),
-            vertices: p.vertices.clone(),
-        })
-        .collect();
     let pair = (sequences.len() >= 2).then_some((0, 1));
     let mut group = Group {
         name: spec.name.clone(),
         subject: spec.subject.clone(),
         fps: subject_spec.fps,
-        up: subject_spec.up_vector().unwrap_or(Vector3::y()),
+        up,
         template: template.vertices.clone(),
         faces: template.faces.clone(),
         parts,

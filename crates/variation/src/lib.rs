@@ -9,10 +9,12 @@
 //! post-process) -> [`footskate`] (planted feet kept in place by a root shift, a post-process) ->
 //! [`foot_lock`] (the rest of each planted sole's slide absorbed by its leg) -> [`metrics`] and [`plots`].
 
+pub mod contact_detector;
 pub mod contacts;
 pub mod evaluate;
 pub mod foot_lock;
 pub mod footskate;
+pub mod frame_stride;
 pub mod gait;
 pub mod grounding;
 pub mod group;

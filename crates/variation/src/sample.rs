@@ -19,7 +19,9 @@ use rand_chacha::ChaCha8Rng;
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 
+use crate::frame_stride;
 use crate::reconstruct::Decoder;
+use crate::train::VariationModel;
 
 /// Statistics of one chain.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
@@ -79,7 +81,8 @@ pub fn mix(seed: u64, a: u64, b: u64) -> u64 {
     z ^ (z >> 31)
 }
 
-/// `opts.n_samples` variations of training sequence `s` (chains seeded from `opts.seed`).
+/// `opts.n_samples` variations of training sequence `s` at its capture length (chains seeded
+/// from `opts.seed`).
 pub fn sequence_variations(
     dec: &Decoder,
     s: usize,
@@ -87,18 +90,25 @@ pub fn sequence_variations(
     variance_scale: f64,
     opts: &HmcOptions,
 ) -> Result<(Variations, Vec<ChainStats>)> {
-    let len = dec
-        .model
-        .parts
-        .first()
-        .and_then(|p| p.gpdm.seq_lens.get(s).copied())
-        .ok_or_else(|| Error::invalid(format!("no training sequence {s}")))?;
-    sequence_variations_len(dec, s, len, sampler, variance_scale, opts, 1)
+    if s >= dec.model.sequences.len() {
+        return Err(Error::invalid(format!("no training sequence {s}")));
+    }
+    sequence_variations_len(
+        dec,
+        s,
+        dec.model.n_frames(),
+        sampler,
+        variance_scale,
+        opts,
+        1,
+    )
 }
 
-/// `opts.n_samples` variations of `len` frames of training sequence `s` (started at its first
-/// latent point; `len` may exceed the sequence's length), every part
+/// `opts.n_samples` variations of `len` capture frames of training sequence `s` (started at its
+/// first latent point; `len` may exceed the sequence's length), every part
 /// sampled by `chains` independent chains (each `ceil(n / chains)` samples, its own burn-in).
+/// The chains run at the model's training steps (`frame_stride::covering_count(len, stride)`
+/// points) and the draws are brought to the capture's rate ([`crate::frame_stride::upsample`]).
 /// All (part, chain) pairs run as parallel tasks; chain `c` of part `k` is seeded with
 /// `mix(opts.seed, s + 1, k + 1 + c·2³²)` (chain 0: the single-chain seed) and the samples are
 /// concatenated by chain, so the result is the same for any number of threads. With
@@ -130,14 +140,16 @@ pub fn sequence_variations_len(
     let tasks: Vec<(usize, usize)> = (0..model.parts.len())
         .flat_map(|k| (0..chains).map(move |c| (k, c)))
         .collect();
+    let frames = len;
+    let len = frame_stride::covering_count(frames, model.stride);
     let runs: Vec<Result<(Vec<DMatrix<f64>>, ChainStats)>> = tasks
         .par_iter()
         .map(|&(k, c)| {
             let (pr, pm) = (&dec.predictors[k], &model.parts[k]);
             let x = pm.gpdm.sequence_latent(s).expect("index checked");
-            if len < 2 {
+            if frames < 2 {
                 return Err(Error::invalid(format!(
-                    "{}: {len} frames requested, at least 2 are needed",
+                    "{}: {frames} frames requested, at least 2 are needed",
                     info.name
                 )));
             }
@@ -186,7 +198,10 @@ pub fn sequence_variations_len(
     let mut stats = Vec::new();
     for (r, &(k, _)) in runs.into_iter().zip(&tasks) {
         let (t, st) = r?;
-        by_part[k].extend(t);
+        by_part[k].extend(
+            t.iter()
+                .map(|x| frame_stride::upsample(x, model.stride, frames)),
+        );
         stats.push(st);
     }
     let n = by_part
@@ -203,25 +218,41 @@ pub fn sequence_variations_len(
     ))
 }
 
-/// `n` variations of the blend at `w` from the sampled variants `pools[s]` of the training
-/// sequences (index `s` as in the model); needs the model's blend pair.
+/// The learned trajectories that guide a blend of training sequences `a` (w = 0) and `b`
+/// (w = 1), as `(w, sequence index)` sorted by `w`: the endpoints, plus the pre-blended
+/// sequences of §7 when `(a, b)` is the model's blend pair (in either order). A pair without
+/// pre-blends blends the endpoints' variants directly (the paper's unguided interpolation).
+pub fn blend_entries(model: &VariationModel, a: usize, b: usize) -> Vec<(f64, usize)> {
+    let mut entries = vec![(0.0, a), (1.0, b)];
+    let flip = match model.pair {
+        Some(p) if p == (a, b) => Some(false),
+        Some(p) if p == (b, a) => Some(true),
+        _ => None,
+    };
+    if let Some(flip) = flip {
+        for (i, s) in model.sequences.iter().enumerate() {
+            if let Some(v) = s.blend {
+                entries.push((if flip { 1.0 - v } else { v }, i));
+            }
+        }
+    }
+    entries.sort_by(|x, y| x.0.total_cmp(&y.0));
+    entries
+}
+
+/// `n` variations of the blend at `w` of training sequences `a` and `b` from the sampled
+/// variants `pools[s]` of the training sequences (index `s` as in the model; only those of
+/// [`blend_entries`] are read).
 pub fn blend_variations(
     dec: &Decoder,
     pools: &[Variations],
+    (a, b): (usize, usize),
     w: f64,
     n: usize,
     seed: u64,
 ) -> Result<Variations> {
     let model = dec.model;
-    let (a, b) = model
-        .pair
-        .ok_or_else(|| Error::invalid("the model has no blend pair (train with two motions)"))?;
-    let mut entries_idx = vec![(0.0, a), (1.0, b)];
-    for (i, s) in model.sequences.iter().enumerate() {
-        if let Some(v) = s.blend {
-            entries_idx.push((v, i));
-        }
-    }
+    let entries_idx = blend_entries(model, a, b);
     let sets = (0..model.parts.len())
         .map(|k| {
             let entries = entries_idx

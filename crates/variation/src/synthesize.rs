@@ -25,7 +25,8 @@ use crate::latent_smoothing;
 use crate::metrics::{self, Stats};
 use crate::reconstruct::{Assembly, Decoder};
 use crate::sample::{
-    blend_variations, default_hmc, mix, sequence_variations, ChainStats, Sampler, Variations,
+    blend_entries, blend_variations, default_hmc, mix, sequence_variations_len, ChainStats,
+    Sampler, Variations,
 };
 use crate::train::VariationModel;
 
@@ -67,6 +68,26 @@ pub struct SynthConfig {
     /// before decoding ([`crate::latent_smoothing`]); 0 (the default) leaves them as sampled.
     #[serde(default)]
     pub latent_smoothing: f64,
+    /// What to synthesise: None (every training sequence and the blends `blends` of the
+    /// model's pair, the pipeline's default) or one [`Query`].
+    #[serde(default)]
+    pub query: Option<Query>,
+    /// Frames per variation (None: the capture's length). Longer than the capture follows the
+    /// learned dynamics past its end; shorter cuts.
+    #[serde(default)]
+    pub frames: Option<usize>,
+}
+
+/// One request against a trained model.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Query {
+    /// Variations of one training sequence, by name (a motion or a pre-blend `blend-<w>`).
+    Motion(String),
+    /// Variations of the blend at weight `w` ∈ [0, 1] of motions `a` (w = 0) and `b` (w = 1):
+    /// guided by the learned pre-blends when (a, b) is the model's blend pair, else the
+    /// endpoints' variants interpolated ([`crate::sample::blend_entries`]).
+    Blend { a: String, b: String, w: f64 },
 }
 
 fn footskate_smoothness() -> f64 {
@@ -294,6 +315,18 @@ pub fn run(
     cfg: &SynthConfig,
     out: &Path,
 ) -> Result<SynthReport> {
+    run_with_progress(model, group, cfg, out, &|_, _| {})
+}
+
+/// [`run`], calling `progress(done, total)` after the sampling (done = 0) and after each
+/// synthesised sequence is written.
+pub fn run_with_progress(
+    model: &VariationModel,
+    group: &Group,
+    cfg: &SynthConfig,
+    out: &Path,
+    progress: &dyn Fn(usize, usize),
+) -> Result<SynthReport> {
     if group.sequences.len() != model.sequences.len() || group.n_frames() != model.n_frames() {
         return Err(Error::invalid(
             "the group does not match the model (train the model from this group)",
@@ -312,31 +345,76 @@ pub fn run(
     hmc.burn_in = cfg.burn_in;
     hmc.thin = cfg.thin.max(1);
     hmc.target_accept = cfg.target_accept;
-    let mut pools: Vec<Variations> = Vec::new();
+    let frames = cfg.frames.unwrap_or(model.n_frames());
+    let index = |name: &str| {
+        model.index(name).ok_or_else(|| {
+            let names: Vec<&str> = model.sequences.iter().map(|s| s.name.as_str()).collect();
+            Error::invalid(format!(
+                "no sequence '{name}' in the model (it has {})",
+                names.join(", ")
+            ))
+        })
+    };
+    // The training sequences to sample, and the blends to make: (a, b, w).
+    let (wanted, blends): (Vec<usize>, Vec<(usize, usize, f64)>) = match &cfg.query {
+        None => {
+            let blends = if cfg.blends.is_empty() {
+                Vec::new()
+            } else {
+                let (a, b) = model.pair.ok_or_else(|| {
+                    Error::invalid("blends requested but the group has a single motion")
+                })?;
+                cfg.blends.iter().map(|&w| (a, b, w)).collect()
+            };
+            ((0..model.sequences.len()).collect(), blends)
+        }
+        Some(Query::Motion(name)) => (vec![index(name)?], Vec::new()),
+        Some(Query::Blend { a, b, w }) => {
+            let (ia, ib) = (index(a)?, index(b)?);
+            if ia == ib
+                || model.sequences[ia].blend.is_some()
+                || model.sequences[ib].blend.is_some()
+            {
+                return Err(Error::invalid(format!(
+                    "blend '{a}:{b}': two different captured motions are needed"
+                )));
+            }
+            if !(0.0..=1.0).contains(w) {
+                return Err(Error::invalid(format!("blend weight {w} outside [0, 1]")));
+            }
+            let used = blend_entries(model, ia, ib)
+                .into_iter()
+                .map(|e| e.1)
+                .collect();
+            (used, vec![(ia, ib, *w)])
+        }
+    };
+    let mut pools: Vec<Variations> = vec![Vec::new(); model.sequences.len()];
     let mut chains = Vec::new();
-    for s in 0..model.sequences.len() {
-        let (v, st) = sequence_variations(&dec, s, cfg.sampler, cfg.variance_scale, &hmc)?;
-        pools.push(v);
+    for &s in &wanted {
+        let (v, st) =
+            sequence_variations_len(&dec, s, frames, cfg.sampler, cfg.variance_scale, &hmc, 1)?;
+        pools[s] = v;
         chains.extend(st);
     }
     let mut jobs: Vec<Job> = Vec::new();
-    for (s, info) in model.sequences.iter().enumerate() {
-        jobs.push(Job {
-            label: info.name.clone(),
-            blend: info.blend,
-            vars: pools[s].clone(),
-            source: group.sequences[s].motion.world_frames(),
-            start: info.start_pose,
-            contacts: group.sequences[s].contacts.clone(),
-        });
+    if cfg.query.is_none() || matches!(cfg.query, Some(Query::Motion(_))) {
+        for &s in &wanted {
+            let info = &model.sequences[s];
+            jobs.push(Job {
+                label: info.name.clone(),
+                blend: info.blend,
+                vars: pools[s].clone(),
+                source: group.sequences[s].motion.world_frames(),
+                start: info.start_pose,
+                contacts: group.sequences[s].contacts.clone(),
+            });
+        }
     }
-    if !cfg.blends.is_empty() {
-        let (a, b) = model
-            .pair
-            .ok_or_else(|| Error::invalid("blends requested but the group has a single motion"))?;
+    if !blends.is_empty() {
         let blender = surface::blend::Blender::new(group.template.clone(), group.faces.clone())?;
-        for &w in &cfg.blends {
-            let vars = blend_variations(&dec, &pools, w, cfg.n, cfg.seed)?;
+        for &(a, b, w) in &blends {
+            let vars = blend_variations(&dec, &pools, (a, b), w, cfg.n, cfg.seed)?;
             let truth = blend_sequences(
                 &blender,
                 &group.sequences[a],
@@ -344,8 +422,15 @@ pub fn run(
                 w,
                 &group.up,
             )?;
+            let label = match cfg.query {
+                None => blend_name(w),
+                Some(_) => format!(
+                    "{}-{}-{w}",
+                    model.sequences[a].name, model.sequences[b].name
+                ),
+            };
             jobs.push(Job {
-                label: blend_name(w),
+                label,
                 blend: Some(w),
                 vars,
                 source: truth.motion.world_frames(),
@@ -362,6 +447,7 @@ pub fn run(
         }
     }
     let seconds_sampling = clock.elapsed().as_secs_f64();
+    progress(0, jobs.len());
     let clock = std::time::Instant::now();
     let mut sequences = Vec::new();
     // Ground on the lowest point of the whole body: sampled feet often point their toes through
@@ -379,6 +465,9 @@ pub fn run(
     if cfg.footskate && feet.is_none() {
         notes.push("foot-skating clean-up skipped: no left and right soles found".into());
     }
+    let fused = (cfg.assembly == Assembly::Average && !cfg.sample_poses)
+        .then(|| dec.fused())
+        .transpose()?;
     for (j, job) in jobs.iter().enumerate() {
         if cfg.footskate && job.contacts.is_none() {
             notes.push(format!(
@@ -396,12 +485,27 @@ pub fn run(
             .map(|(k, latents)| {
                 let mut rng =
                     ChaCha8Rng::seed_from_u64(mix(cfg.seed, 0xDEC0DE + j as u64, k as u64));
-                let mut m = dec.decode(
-                    latents,
-                    &job.start,
-                    cfg.assembly,
-                    cfg.sample_poses.then_some(&mut rng),
-                )?;
+                let mut m = match &fused {
+                    // Mean poses merged by averaging: the fused decoder (same result, one pass).
+                    Some(f) => {
+                        let nv = model.template.len();
+                        let t_len = latents.first().map_or(0, |x| x.nrows());
+                        let mut flat = vec![Vector3::zeros(); t_len * nv];
+                        f.decode_average_into(
+                            latents,
+                            &job.start,
+                            &mut crate::reconstruct::FusedScratch::default(),
+                            &mut flat,
+                        )?;
+                        flat.chunks_exact(nv.max(1)).map(|c| c.to_vec()).collect()
+                    }
+                    None => dec.decode(
+                        latents,
+                        &job.start,
+                        cfg.assembly,
+                        cfg.sample_poses.then_some(&mut rng),
+                    )?,
+                };
                 // Rigid shifts of the variation leave the (pose-normalised) DTW unchanged.
                 let matches = grounding::correspondence(&m, &job.source, &model.template);
                 let ungrounded = floor_contact(&m, &job.source, &matches, model);
@@ -464,6 +568,7 @@ pub fn run(
                 .write_dir(out.join(&job.label).join(format!("var{k}")))?;
         }
         sequences.push(measure(job, &decoded, model));
+        progress(j + 1, jobs.len());
     }
     let rates: Vec<f64> = chains.iter().map(|c| c.accept_rate).collect();
     Ok(SynthReport {

@@ -20,6 +20,7 @@ use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 
 use crate::contacts::Contacts;
+use crate::frame_stride;
 use crate::group::{Group, PartDef};
 use crate::part_data::{self, DisplacementScale};
 
@@ -56,11 +57,16 @@ pub struct VariationModel {
     pub scale: DisplacementScale,
     pub sequences: Vec<SequenceInfo>,
     pub pair: Option<(usize, usize)>,
+    /// Capture frames per training step of the GPDMs ([`crate::frame_stride`]; 1: every frame).
+    pub stride: usize,
+    /// Capture frames per training sequence (the GPDMs hold
+    /// `frame_stride::kept_count(frames, stride)` of them).
+    pub frames: usize,
 }
 
 impl Artifact for VariationModel {
     const KIND: &'static str = "variation-model";
-    const VERSION: u32 = 1;
+    const VERSION: u32 = 2;
 }
 
 impl VariationModel {
@@ -68,16 +74,31 @@ impl VariationModel {
     pub fn index(&self, name: &str) -> Option<usize> {
         self.sequences.iter().position(|s| s.name == name)
     }
-    /// Training sequence `s`'s learned latent trajectory for every part.
+    /// Training sequence `s`'s learned latent trajectory for every part, at the capture's rate
+    /// (interpolated between the training steps when the stride is above 1).
     pub fn latents(&self, s: usize) -> Vec<DMatrix<f64>> {
+        self.model_latents(s)
+            .iter()
+            .map(|x| frame_stride::upsample(x, self.stride, self.frames))
+            .collect()
+    }
+    /// Training sequence `s`'s learned latent trajectory for every part, one row per training
+    /// step (every `stride` capture frames).
+    pub fn model_latents(&self, s: usize) -> Vec<DMatrix<f64>> {
         self.parts
             .iter()
             .map(|p| p.gpdm.sequence_latent(s).expect("sequence index in range"))
             .collect()
     }
-    /// Frames per training sequence.
+    /// Capture frames per training sequence.
     pub fn n_frames(&self) -> usize {
-        self.parts.first().map_or(0, |p| p.gpdm.seq_lens[0])
+        self.frames
+    }
+    /// Latent trajectories sampled at the training steps, brought to `frames` capture frames.
+    pub fn to_capture_rate(&self, x: &[DMatrix<f64>], frames: usize) -> Vec<DMatrix<f64>> {
+        x.iter()
+            .map(|x| frame_stride::upsample(x, self.stride, frames))
+            .collect()
     }
 }
 
@@ -87,11 +108,37 @@ impl VariationModel {
 /// the source (h13-results.md).
 pub const DYN_NOISE_FLOOR: f64 = 1e-3;
 
+/// Which frames train the GPDMs.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize, clap::ValueEnum)]
+#[serde(rename_all = "lowercase")]
+pub enum Fit {
+    /// Every captured frame (the paper's fit; cost N³ per objective evaluation).
+    Exact,
+    /// Every s-th frame ([`crate::frame_stride`]): dynamics at about [`FIT_RATE`] fps and at most
+    /// [`MAX_FIT_FRAMES`] training frames per part (the default: docs/DEVIATIONS.md).
+    #[default]
+    Strided,
+}
+
+/// Default frame rate of the strided fit (the 3DV paper's captures are 25 fps).
+pub const FIT_RATE: f64 = 25.0;
+
+/// Default bound on one part's training frames in the strided fit.
+pub const MAX_FIT_FRAMES: usize = 240;
+
 /// Training settings.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct TrainConfig {
     pub gpdm: GpdmConfig,
     pub options: TrainOptions,
+    /// Frame rate the dynamics are learned at ([`crate::frame_stride`]): the stride is
+    /// `round(fps / fit_rate)` (None: every frame, the paper's exact fit).
+    #[serde(default)]
+    pub fit_rate: Option<f64>,
+    /// Upper bound on the training frames of one part (all sequences): the stride is raised
+    /// until they fit (None: no bound).
+    #[serde(default)]
+    pub max_fit_frames: Option<usize>,
 }
 
 /// L-BFGS memory of gpdm-train: on the N = 446, D = 15000 comparison problem 100 correction
@@ -117,7 +164,38 @@ impl Default for TrainConfig {
                 ..Default::default()
             },
             options,
+            fit_rate: Some(FIT_RATE),
+            max_fit_frames: Some(MAX_FIT_FRAMES),
         }
+    }
+}
+
+impl TrainConfig {
+    /// Selects the training frames: `Fit::Exact` clears the stride settings, `Fit::Strided`
+    /// sets the rate and the frame bound (both must be positive; the bound at least 2 per
+    /// sequence is checked by [`train`]).
+    pub fn fit(&mut self, fit: Fit, fit_rate: f64, max_fit_frames: usize) -> Result<()> {
+        match fit {
+            Fit::Exact => {
+                self.fit_rate = None;
+                self.max_fit_frames = None;
+            }
+            Fit::Strided => {
+                if !(fit_rate > 0.0 && fit_rate.is_finite()) {
+                    return Err(Error::invalid(format!(
+                        "fit rate {fit_rate} fps must be a positive number"
+                    )));
+                }
+                if max_fit_frames < 2 {
+                    return Err(Error::invalid(format!(
+                        "max fit frames {max_fit_frames}: at least 2 are needed"
+                    )));
+                }
+                self.fit_rate = Some(fit_rate);
+                self.max_fit_frames = Some(max_fit_frames);
+            }
+        }
+        Ok(())
     }
 }
 
@@ -133,9 +211,16 @@ pub struct PartTrainReport {
     pub report: TrainReport,
 }
 
-/// Per-part training matrices: `data[k][s]` is part `k`'s `T × D_k` rows of sequence `s`
-/// (torso rows with the scaled displacement and gravity values), and the displacement scale.
-pub fn training_data(group: &Group) -> (Vec<Vec<DMatrix<f64>>>, DisplacementScale) {
+/// The stride [`train`] uses for `group` under `cfg` ([`frame_stride::stride_for`]).
+pub fn fit_stride(group: &Group, cfg: &TrainConfig) -> usize {
+    let per_seq = cfg.max_fit_frames.map(|m| m / group.sequences.len().max(1));
+    frame_stride::stride_for(group.fps, cfg.fit_rate, group.n_frames(), per_seq)
+}
+
+/// Per-part training matrices: `data[k][s]` is part `k`'s rows of sequence `s` at frames
+/// `0, stride, 2·stride, …` (torso rows with the scaled per-capture-frame displacement and
+/// gravity values), and the displacement scale.
+pub fn training_data(group: &Group, stride: usize) -> (Vec<Vec<DMatrix<f64>>>, DisplacementScale) {
     let mut data: Vec<Vec<DMatrix<f64>>> = group
         .parts
         .par_iter()
@@ -144,31 +229,62 @@ pub fn training_data(group: &Group) -> (Vec<Vec<DMatrix<f64>>>, DisplacementScal
             group
                 .sequences
                 .iter()
-                .map(|s| part_data::part_rows(&s.motion, p, &r))
+                .map(|s| {
+                    frame_stride::strided_rows(&part_data::part_rows(&s.motion, p, &r), stride)
+                })
                 .collect()
         })
         .collect();
     let disp: Vec<Vec<[f64; 6]>> = group
         .sequences
         .iter()
-        .map(|s| part_data::model_displacements(&s.motion))
+        .map(|s| {
+            if stride == 1 {
+                part_data::model_displacements(&s.motion)
+            } else {
+                frame_stride::strided_displacements(&s.motion.displacements, stride)
+            }
+        })
         .collect();
     let scale = part_data::displacement_scale(&data[0], &disp);
     for ((m, d), s) in data[0].iter_mut().zip(&disp).zip(&group.sequences) {
-        *m = part_data::with_displacement(m, d, &part_data::gravity(&s.motion, &group.up), scale);
+        let grav = part_data::gravity(&s.motion, &group.up);
+        let grav: Vec<[f64; 4]> = frame_stride::kept_frames(grav.len(), stride)
+            .into_iter()
+            .map(|f| grav[f])
+            .collect();
+        *m = part_data::with_displacement(m, d, &grav, scale);
     }
     (data, scale)
 }
 
 /// Trains the model of `group`.
 pub fn train(group: &Group, cfg: &TrainConfig) -> Result<(VariationModel, Vec<PartTrainReport>)> {
+    train_with_progress(group, cfg, &|_| {})
+}
+
+/// [`train`], calling `part_done` with each part's name as its fit finishes (parts are
+/// trained in parallel, so in any order).
+pub fn train_with_progress(
+    group: &Group,
+    cfg: &TrainConfig,
+    part_done: &(dyn Fn(&str) + Sync),
+) -> Result<(VariationModel, Vec<PartTrainReport>)> {
     if group.sequences.is_empty() || group.parts.is_empty() {
         return Err(Error::invalid(format!(
             "group '{}' has no sequences or no parts",
             group.name
         )));
     }
-    let (data, scale) = training_data(group);
+    let stride = fit_stride(group, cfg);
+    if frame_stride::kept_count(group.n_frames(), stride) < 2 {
+        return Err(Error::invalid(format!(
+            "group '{}': {} frames per sequence at stride {stride} leave fewer than 2 training steps",
+            group.name,
+            group.n_frames()
+        )));
+    }
+    let (data, scale) = training_data(group, stride);
     let results: Vec<Result<(PartModel, PartTrainReport)>> = group
         .parts
         .par_iter()
@@ -188,6 +304,7 @@ pub fn train(group: &Group, cfg: &TrainConfig) -> Result<(VariationModel, Vec<Pa
                 report,
             };
             let reference = part_data::reference(&group.template, p);
+            part_done(&p.name);
             Ok((
                 PartModel {
                     part: p.clone(),
@@ -226,6 +343,8 @@ pub fn train(group: &Group, cfg: &TrainConfig) -> Result<(VariationModel, Vec<Pa
         scale,
         sequences,
         pair: group.pair,
+        stride,
+        frames: group.n_frames(),
     };
     Ok((model, reports))
 }

@@ -8,8 +8,8 @@ use mesh_core::sequence::MeshSequence;
 use variation::group::{build, GroupSpec};
 use variation::prealign::PrealignOptions;
 use variation::reconstruct::Assembly;
-use variation::sample::Sampler;
-use variation::synthesize::{run, SynthConfig};
+use variation::sample::{blend_entries, Sampler};
+use variation::synthesize::{run, Query, SynthConfig};
 use variation::train::{train, TrainConfig};
 
 #[test]
@@ -48,6 +48,32 @@ fn tiny_set_end_to_end() {
     );
     assert_eq!(group.sequences.len(), 3);
     let t = group.n_frames();
+
+    // Without annotations, prealign detects contacts from the meshes; they agree with synth's
+    // (written from the skeleton's feet) on the time-aligned sequences.
+    {
+        let json = set.subject_json("A");
+        let text = std::fs::read_to_string(&json).unwrap();
+        let mut v: serde_json::Value = serde_json::from_str(&text).unwrap();
+        v.as_object_mut().unwrap().remove("contacts");
+        std::fs::write(&json, serde_json::to_string(&v).unwrap()).unwrap();
+        let (detected, notes) = build(&CaptureSet::open(&set_dir).unwrap(), &spec).unwrap();
+        std::fs::write(&json, text).unwrap();
+        assert!(
+            notes.iter().any(|n| n.contains("contacts detected")),
+            "{notes:?}"
+        );
+        for (a, b) in group.sequences.iter().zip(&detected.sequences).take(2) {
+            let (truth, found) = (a.contacts.as_ref().unwrap(), b.contacts.as_ref().unwrap());
+            let (p, r) = variation::contact_detector::precision_recall(found, truth);
+            eprintln!("{}: detected contacts precision {p:?} recall {r:?}", a.name);
+            assert!(
+                p.unwrap() > 0.8 && r.unwrap() > 0.5,
+                "{}: precision {p:?} recall {r:?}",
+                a.name
+            );
+        }
+    }
     assert!(group.sequences.iter().all(|s| s.motion.n_frames() == t));
 
     let mut tc = TrainConfig::default();
@@ -76,6 +102,8 @@ fn tiny_set_end_to_end() {
         footskate_smoothness: variation::footskate::SMOOTHNESS,
         foot_lock: true,
         latent_smoothing: 0.0,
+        query: None,
+        frames: None,
     };
     let out1 = dir.path().join("o1");
     let out2 = dir.path().join("o2");
@@ -153,4 +181,109 @@ fn tiny_set_end_to_end() {
     }
     assert_eq!(r1.accept_rate, r2.accept_rate);
     assert_ne!(r1.accept_rate.mean, r3.accept_rate.mean + 1.0);
+
+    // Queries: one motion at another length, reproducible from (model, query, seed); a blend
+    // of the pair given in the other order is guided by the pre-blend at 1 − w.
+    let (walk, run_i, pre) = (
+        group.index("walk").unwrap(),
+        group.index("run").unwrap(),
+        group.index("blend-0.5").unwrap(),
+    );
+    assert_eq!(
+        blend_entries(&model, run_i, walk),
+        vec![(0.0, run_i), (0.5, pre), (1.0, walk)]
+    );
+    let query = |q: Query, frames: Option<usize>, out: &std::path::Path| {
+        let c = SynthConfig {
+            query: Some(q),
+            frames,
+            sampler: Sampler::Ancestral,
+            ..sc.clone()
+        };
+        run(&model, &group, &c, out).unwrap()
+    };
+    for frames in [t + 9, 5] {
+        let (o4, o5) = (
+            dir.path().join(format!("q{frames}a")),
+            dir.path().join(format!("q{frames}b")),
+        );
+        let r = query(Query::Motion("walk".into()), Some(frames), &o4);
+        query(Query::Motion("walk".into()), Some(frames), &o5);
+        assert_eq!(r.sequences.len(), 1);
+        assert_eq!(
+            std::fs::read_dir(&o4).unwrap().count(),
+            1,
+            "only the queried motion"
+        );
+        for k in 0..2 {
+            let a = MeshSequence::load_dir(o4.join("walk").join(format!("var{k}"))).unwrap();
+            let b = MeshSequence::load_dir(o5.join("walk").join(format!("var{k}"))).unwrap();
+            assert_eq!(a.n_frames(), frames);
+            assert_eq!(a.frames, b.frames, "same query and seed, different meshes");
+        }
+    }
+    let o6 = dir.path().join("qb");
+    let r = query(
+        Query::Blend {
+            a: "run".into(),
+            b: "walk".into(),
+            w: 0.3,
+        },
+        None,
+        &o6,
+    );
+    assert_eq!(r.sequences[0].label, "run-walk-0.3");
+    assert_eq!(
+        MeshSequence::load_dir(o6.join("run-walk-0.3/var1"))
+            .unwrap()
+            .n_frames(),
+        t
+    );
+    let bad = SynthConfig {
+        query: Some(Query::Motion("swim".into())),
+        ..sc.clone()
+    };
+    let err = run(&model, &group, &bad, &dir.path().join("qx"))
+        .unwrap_err()
+        .to_string();
+    assert!(err.contains("swim") && err.contains("walk"), "{err}");
+
+    // Strided fit: every second frame trains the dynamics, the variations keep the capture's
+    // frame count, and the learned trajectories reconstruct the captured frames.
+    let strided = TrainConfig {
+        fit_rate: Some(group.fps / 2.0),
+        max_fit_frames: None,
+        ..tc.clone()
+    };
+    let (m2, rep2) = train(&group, &strided).unwrap();
+    assert_eq!(m2.stride, 2);
+    assert_eq!(
+        rep2[0].frames,
+        3 * variation::frame_stride::kept_count(t, 2)
+    );
+    assert_eq!(m2.latents(0)[0].nrows(), t);
+    let o7 = dir.path().join("s2");
+    let r = run(
+        &m2,
+        &group,
+        &SynthConfig {
+            sampler: Sampler::Ancestral,
+            ..sc.clone()
+        },
+        &o7,
+    )
+    .unwrap();
+    assert_eq!(r.sequences.len(), 4);
+    assert_eq!(
+        MeshSequence::load_dir(o7.join("run/var0"))
+            .unwrap()
+            .n_frames(),
+        t
+    );
+    let ev = variation::evaluate::evaluate(&m2, &group, None, 0).unwrap();
+    assert!(
+        ev.reconstruction_gpdm_m < 0.05,
+        "strided reconstruction {} m",
+        ev.reconstruction_gpdm_m
+    );
 }

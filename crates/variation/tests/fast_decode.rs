@@ -71,7 +71,7 @@ fn model() -> VariationModel {
         ),
         contacts: None,
     };
-    VariationModel {
+    let mut m = VariationModel {
         group: "test".into(),
         subject: "sphere".into(),
         fps: 25.0,
@@ -88,7 +88,11 @@ fn model() -> VariationModel {
         },
         sequences: vec![info("a"), info("b")],
         pair: Some((0, 1)),
-    }
+        stride: 1,
+        frames: 0,
+    };
+    m.frames = m.parts[0].gpdm.seq_lens[0];
+    m
 }
 
 fn max_dev(fast: &[Vector3<f64>], old: &[Vec<Vector3<f64>>]) -> f64 {

@@ -6,7 +6,7 @@ use gpdm::optim::{Exit, Schedule};
 use mesh_core::artifact::Artifact;
 use mesh_core::cli::{run_stage, CommonArgs};
 use variation::group::Group;
-use variation::train::{train, TrainConfig};
+use variation::train::{train_with_progress, TrainConfig};
 
 /// Learn one GPDM per body part (shared latent space per part) from a prealigned movement group
 #[derive(Parser, Debug)]
@@ -39,6 +39,18 @@ struct Args {
     /// L-BFGS iteration limit of the joint fit (it normally stops by convergence first)
     #[arg(long, default_value_t = 10000)]
     max_iter: usize,
+    /// Training frames: exact (every frame, the paper's fit; cost grows as N³) or strided (every
+    /// s-th frame, s from --fit-rate and --max-fit-frames; sampling interpolates back to the
+    /// capture's rate)
+    #[arg(long, value_enum, default_value_t = variation::train::Fit::default())]
+    fit: variation::train::Fit,
+    /// With --fit strided: frame rate the dynamics are learned at (stride round(fps / rate))
+    #[arg(long, value_name = "FPS", default_value_t = variation::train::FIT_RATE)]
+    fit_rate: f64,
+    /// With --fit strided: the stride is raised until one part's training frames (all
+    /// sequences) are at most this many, so the cost stays bounded whatever the capture length
+    #[arg(long, value_name = "N", default_value_t = variation::train::MAX_FIT_FRAMES)]
+    max_fit_frames: usize,
     /// Output artifact (kind variation-model)
     #[arg(short, long)]
     out: PathBuf,
@@ -63,7 +75,22 @@ fn main() -> ExitCode {
             };
         }
         cfg.options.lbfgs.max_iter = args.max_iter;
-        let (model, reports) = train(&group, &cfg)?;
+        cfg.fit(args.fit, args.fit_rate, args.max_fit_frames)?;
+        let bar = mesh_core::cli::progress_bar(
+            group.parts.len() as u64,
+            "gpdm-train: parts",
+            &args.common,
+        );
+        let (model, reports) = train_with_progress(&group, &cfg, &|_| bar.inc(1))?;
+        bar.finish_and_clear();
+        if model.stride > 1 {
+            mesh_core::info!(
+                "dynamics learned every {} frames ({:.1} fps of {:.1})",
+                model.stride,
+                model.fps / model.stride as f64,
+                model.fps
+            );
+        }
         for r in &reports {
             mesh_core::info!(
                 "{}: {} frames x {} dims, objective {:.4e} -> {:.4e} in {:.1} s",
@@ -110,7 +137,8 @@ fn main() -> ExitCode {
                     })
                 })
                 .collect();
-            let json = serde_json::json!({ "group": group.name, "config": cfg, "scale": model.scale, "parts": light });
+            let json = serde_json::json!({ "group": group.name, "config": cfg, "scale": model.scale,
+                "stride": model.stride, "parts": light });
             mesh_core::atomic::write_bytes_atomic(
                 p,
                 (serde_json::to_string_pretty(&json)? + "\n").as_bytes(),

@@ -7,7 +7,7 @@ use mesh_core::cli::{run_stage, CommonArgs};
 use variation::group::Group;
 use variation::reconstruct::Assembly;
 use variation::sample::Sampler;
-use variation::synthesize::{run, SynthConfig};
+use variation::synthesize::{run_with_progress, Query, SynthConfig};
 use variation::train::VariationModel;
 
 /// Sample variations of every training motion and of blends by HMC in the GPDM latent spaces and write them as meshes
@@ -15,7 +15,7 @@ use variation::train::VariationModel;
 #[command(
     name = "hmc-sample",
     version,
-    after_help = "e.g.: hmc-sample --seed 0 -n 5 --blends 0.25,0.75 --group work/locomotion.group work/locomotion.model --out out/variation/locomotion --report work/locomotion-samples.json"
+    after_help = "e.g.: hmc-sample --seed 0 -n 5 --blends 0.25,0.75 --group work/locomotion.group work/locomotion.model --out out/variation/locomotion --report work/locomotion-samples.json\n      hmc-sample --group work/locomotion.group work/locomotion.model --motion walk -n 20 --frames 300 --seed 7 --out out/walk20\n      hmc-sample --group work/locomotion.group work/locomotion.model --blend walk:run --weight 0.3 -n 10 --sampler ancestral --out out/blend03"
 )]
 struct Args {
     #[command(flatten)]
@@ -28,6 +28,21 @@ struct Args {
     /// Variations per sequence
     #[arg(short, long, default_value_t = 5)]
     n: usize,
+    /// Only variations of this training sequence (a motion of the group, or a pre-blend
+    /// `blend-<w>`), instead of every sequence and the --blends
+    #[arg(long, value_name = "NAME", conflicts_with = "blend")]
+    motion: Option<String>,
+    /// Only variations of the blend of two motions of the group, `A:B` at --weight (guided by
+    /// the learned pre-blends for the group's blend pair, the motions' own variants otherwise)
+    #[arg(long, value_name = "A:B", requires = "weight", value_parser = parse_pair)]
+    blend: Option<(String, String)>,
+    /// Weight w* in [0, 1] of the --blend (0: A, 1: B)
+    #[arg(long, value_name = "W", requires = "blend")]
+    weight: Option<f64>,
+    /// Frames per variation [default: the capture's length]; longer follows the dynamics on
+    /// past the capture's end, shorter cuts
+    #[arg(long, value_name = "N")]
+    frames: Option<usize>,
     /// Blend weights w* in [0, 1] to synthesise, comma-separated (empty: none)
     #[arg(long, default_value = "0.25,0.75", value_parser = parse_weights)]
     blends: Weights,
@@ -83,6 +98,13 @@ struct Args {
     report: Option<PathBuf>,
 }
 
+fn parse_pair(s: &str) -> Result<(String, String), String> {
+    match s.split_once(':') {
+        Some((a, b)) if !a.is_empty() && !b.is_empty() => Ok((a.into(), b.into())),
+        _ => Err(format!("'{s}' is not two motion names A:B")),
+    }
+}
+
 fn parse_sampler(s: &str) -> Result<Sampler, String> {
     Sampler::from_name(s).ok_or_else(|| format!("unknown sampler '{s}' (hmc, ancestral)"))
 }
@@ -129,8 +151,28 @@ fn main() -> ExitCode {
             footskate_smoothness: args.footskate_smoothness,
             foot_lock: !args.no_foot_lock,
             latent_smoothing: args.latent_smoothing,
+            query: match (&args.motion, &args.blend, args.weight) {
+                (Some(m), _, _) => Some(Query::Motion(m.clone())),
+                (None, Some((a, b)), Some(w)) => Some(Query::Blend {
+                    a: a.clone(),
+                    b: b.clone(),
+                    w,
+                }),
+                _ => None,
+            },
+            frames: args.frames,
         };
-        let report = run(&model, &group, &cfg, &args.out)?;
+        // Sampling first (a spinner), then one step per synthesised sequence.
+        let bar = mesh_core::cli::progress_bar(0, "hmc-sample: sampling", &args.common);
+        bar.enable_steady_tick(std::time::Duration::from_millis(200));
+        let report = run_with_progress(&model, &group, &cfg, &args.out, &|done, total| {
+            if done == 0 {
+                bar.set_length(total as u64);
+                bar.set_message("hmc-sample: sequences");
+            }
+            bar.set_position(done as u64);
+        })?;
+        bar.finish_and_clear();
         for n in &report.notes {
             mesh_core::warn!("{n}");
         }
