@@ -35,4 +35,6 @@ test: build assets setup-web
 clean-out:
 	rm -rf $(OUT)
 
-include pipelines/*.mk
+# The pipelines, then their task graph (pipelines/plan.mk reads every pipeline's options).
+include $(filter-out pipelines/plan.mk,$(wildcard pipelines/*.mk))
+include pipelines/plan.mk
