@@ -8,7 +8,7 @@ use std::path::{Path, PathBuf};
 
 use anyhow::{bail, Result};
 
-use crate::resources;
+use crate::resources::Table;
 use crate::task::{Graph, Task};
 
 /// The stage kinds in submission order (each after every kind it reads from) with their tasks.
@@ -65,6 +65,8 @@ pub struct Layout {
     pub bin: PathBuf,
     /// `run.sbatch` goes here; arrays, tables and logs under `<out>/slurm/`.
     pub out: PathBuf,
+    /// CPUs and memory per stage.
+    pub resources: Table,
 }
 
 /// Every file to write: `(path, text)`.
@@ -89,7 +91,9 @@ pub fn scripts(graph: &Graph, layout: &Layout) -> Result<Vec<(PathBuf, String)>>
     for (kind, tasks, deps) in arrays(graph)? {
         let table = dir.join(format!("{kind}.tasks"));
         files.push((table.clone(), crate::task_table::write_table(&tasks)?));
-        let r = resources::for_kind(&kind);
+        // The array's request covers its most demanding task.
+        let bins: Vec<&str> = tasks.iter().flat_map(|t| t.bins()).collect();
+        let r = layout.resources.for_bins(&bins);
         let script = dir.join(format!("{kind}.sbatch"));
         files.push((
             script.clone(),

@@ -60,6 +60,10 @@ pub struct SlurmArgs {
     /// Directory the jobs start in (the pipelines' paths are relative to it) [default: the current one]
     #[arg(long, value_name = "DIR")]
     pub workdir: Option<PathBuf>,
+    /// Measured peaks per stage (scripts/slurm-measure's output) for --mem and --cpus-per-task
+    /// [default: the tiny preset's, docs/CLUSTER.md]
+    #[arg(long, value_name = "FILE")]
+    pub resources: Option<PathBuf>,
     /// Output folder: run.sbatch, and slurm/ with the arrays, task tables and logs
     #[arg(short, long)]
     pub out: PathBuf,
@@ -137,7 +141,14 @@ pub fn run(args: &Args) -> Result<()> {
                 Some(w) => absolute(w)?,
                 None => std::env::current_dir().context("cannot read the current directory")?,
             };
-            let layout = crate::slurm::Layout { workdir, bin: absolute(&a.bin)?, out: absolute(&a.out)? };
+            let resources = match &a.resources {
+                Some(p) => {
+                    let text = std::fs::read_to_string(p).with_context(|| p.display().to_string())?;
+                    crate::resources::Table::parse(&text).with_context(|| p.display().to_string())?
+                }
+                None => crate::resources::Table::default(),
+            };
+            let layout = crate::slurm::Layout { workdir, bin: absolute(&a.bin)?, out: absolute(&a.out)?, resources };
             let files = crate::slurm::scripts(&graph, &layout)?;
             for d in crate::slurm::log_dirs(&graph, &layout) {
                 std::fs::create_dir_all(&d).with_context(|| format!("{}: cannot create", d.display()))?;

@@ -32,21 +32,21 @@ pub fn fmt_g(x: f64) -> String {
     if x == 0.0 || !x.is_finite() {
         return format!("{x}");
     }
-    let exp = x.abs().log10().floor() as i32;
-    if !(-5..6).contains(&exp) {
-        let t = format!("{:.5e}", x);
-        let (m, e) = t.split_once('e').unwrap_or((&t, "0"));
-        let m = m.trim_end_matches('0').trim_end_matches('.');
-        let e: i32 = e.parse().unwrap_or(0);
-        return format!("{m}e{}{:02}", if e < 0 { '-' } else { '+' }, e.abs());
+    // The exponent after rounding to 6 significant digits decides the notation.
+    let sci = format!("{x:.5e}");
+    let (mant, exp) = sci.split_once('e').unwrap_or((&sci, "0"));
+    let exp: i32 = exp.parse().unwrap_or(0);
+    let trim = |t: &str| {
+        if t.contains('.') {
+            t.trim_end_matches('0').trim_end_matches('.').to_string()
+        } else {
+            t.to_string()
+        }
+    };
+    if !(-4..6).contains(&exp) {
+        return format!("{}e{}{:02}", trim(mant), if exp < 0 { '-' } else { '+' }, exp.abs());
     }
-    let decimals = (5 - exp).max(0) as usize;
-    let t = format!("{:.*}", decimals, x);
-    if t.contains('.') {
-        t.trim_end_matches('0').trim_end_matches('.').to_string()
-    } else {
-        t
-    }
+    trim(&format!("{:.*}", (5 - exp) as usize, x))
 }
 
 /// Adds the transfer pipeline's tasks and its variables (`TRANSFER_RECORDS`, `TRANSFER_STAMPS`,
@@ -403,7 +403,7 @@ pub fn plan(set: &CaptureSet, out: &str, opt: &TransferOptions, graph: &mut Grap
     let mut args = vec![s("collect"), s("transfer"), s("--out"), results.clone()];
     args.extend(records);
     graph.push(Task {
-        kind: "collect".into(),
+        kind: "collect-results".into(),
         target: results,
         inputs,
         dirs: Vec::new(),

@@ -101,7 +101,7 @@ pub fn plan(set: &CaptureSet, out: &str, opt: &VariationOptions, graph: &mut Gra
     let mut args = vec![s("collect"), s("variation"), s("--work"), work.clone(), s("--out"), table.clone()];
     args.extend(names);
     graph.push(Task {
-        kind: "collect".into(),
+        kind: "collect-variation".into(),
         target: table,
         inputs: records,
         dirs: Vec::new(),
