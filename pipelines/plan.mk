@@ -4,6 +4,7 @@
 # goals include it. It is rewritten when the set's description or folders, the plan binary or the
 # options change (the options are kept in $(PLAN_OPTIONS), rewritten only when they differ).
 #   make slurm SET=<capture set> OUT=<dir>     Slurm job arrays of both pipelines: sbatch <dir>/run.sbatch
+#     SLURM_RESOURCES=<file>: measured peaks per stage (scripts/slurm-measure) for --mem/--cpus-per-task
 # The top-level Makefile includes this file after the pipelines, so that every option is defined.
 
 PLAN_MK := $(OUT)/work/plan.mk
@@ -31,8 +32,9 @@ $(PLAN_MK): $(PLAN_OPTIONS) $(BIN)/plan $(SET)/set.json $(wildcard $(SET)/* $(SE
 include $(PLAN_MK)
 endif
 
+SLURM_RESOURCES ?=
 .PHONY: slurm
 slurm:
 	@test -f $(SET)/set.json || { echo "slurm: $(SET)/set.json: no capture set (run 'make demo-data' or pass SET=<dir>)" >&2; exit 1; }
 	$(CARGO) build --release --workspace --quiet
-	$(BIN)/plan slurm -q $(PLAN_ARGS) --bin $(BIN) --out $(OUT)
+	$(BIN)/plan slurm -q $(PLAN_ARGS) --bin $(BIN) $(if $(SLURM_RESOURCES),--resources $(SLURM_RESOURCES)) --out $(OUT)
