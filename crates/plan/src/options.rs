@@ -5,67 +5,17 @@
 use std::path::PathBuf;
 
 use clap::{Args, ValueEnum};
+pub use transfer::align::AlignFrame;
+pub use transfer::gpr_model::{MeanFunction, Method};
+pub use transfer::part_pca::PartAlignment;
+pub use transfer::placement::Placement;
 
-/// A transfer method of `gpr-train --method`.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord, ValueEnum)]
-pub enum Method {
-    GprNn,
-    GprSe,
-    GprLinear,
-    KeyposeAffine,
-    WholeBody,
-}
-
-impl Method {
-    pub fn name(self) -> &'static str {
-        match self {
-            Method::GprNn => "gpr-nn",
-            Method::GprSe => "gpr-se",
-            Method::GprLinear => "gpr-linear",
-            Method::KeyposeAffine => "keypose-affine",
-            Method::WholeBody => "whole-body",
-        }
-    }
-}
-
-/// `gpr-predict --placement`.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
-pub enum Placement {
-    ScaledSource,
-    Regressed,
-    Blended,
-}
-
-impl Placement {
-    pub const ALL: [Placement; 3] = [Placement::ScaledSource, Placement::Regressed, Placement::Blended];
-    pub fn name(self) -> &'static str {
-        match self {
-            Placement::ScaledSource => "scaled-source",
-            Placement::Regressed => "regressed",
-            Placement::Blended => "blended",
-        }
-    }
-}
-
-/// `align --frame`.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
-pub enum AlignFrame {
-    Root,
-    Body,
-}
-
-/// `pca-fit --part-alignment`.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
-pub enum PartAlignment {
-    Body,
-    Part,
-}
-
-/// `gpr-train --mean`.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
-pub enum GprMean {
-    Affine,
-    Zero,
+/// `gpr-train --method`, parsed by the stage's own names.
+fn parse_method(s: &str) -> Result<Method, String> {
+    Method::from_name(s).ok_or_else(|| {
+        let names: Vec<&str> = Method::ALL.iter().map(|m| m.name()).collect();
+        format!("unknown method '{s}' ({})", names.join(", "))
+    })
 }
 
 /// The name clap shows for a value (its command-line spelling).
@@ -90,7 +40,7 @@ pub struct Paths {
 #[derive(Args, Clone, Debug, PartialEq)]
 pub struct TransferOptions {
     /// Transfer methods (TRANSFER_METHODS); gpr-nn with key-poses only is always added
-    #[arg(long, num_args = 1.., value_enum, default_values = ["gpr-nn", "gpr-se", "gpr-linear", "keypose-affine", "whole-body"])]
+    #[arg(long, num_args = 1.., value_parser = parse_method, default_values = ["gpr-nn", "gpr-se", "gpr-linear", "keypose-affine", "whole-body"])]
     pub methods: Vec<Method>,
     /// align --frame (ALIGN_FRAME)
     #[arg(long, value_enum, default_value = "root")]
@@ -103,7 +53,7 @@ pub struct TransferOptions {
     pub placement: Placement,
     /// gpr-train --mean (GPR_MEAN)
     #[arg(long, value_enum, default_value = "affine")]
-    pub gpr_mean: GprMean,
+    pub gpr_mean: MeanFunction,
     /// Further gpr-train flags for every model, one string (GPR_TRAIN_FLAGS)
     #[arg(long, default_value = "", allow_hyphen_values = true, value_name = "FLAGS")]
     pub gpr_train_flags: String,

@@ -166,7 +166,7 @@ pub fn plan(set: &CaptureSet, out: &str, opt: &TransferOptions, graph: &mut Grap
         (tn, sn, true, rev_tests),
     ];
     let mut variants: Vec<(String, Method, bool)> =
-        opt.methods.iter().map(|&m| (m.name().to_string(), m, false)).collect();
+        opt.methods.iter().map(|m| (m.name().to_string(), *m, false)).collect();
     variants.push(("gpr-nn-keyposes".into(), Method::GprNn, true));
     let default_pl = opt.placement;
     for (src, tgt, rev, tests) in &directions {
@@ -202,7 +202,8 @@ pub fn plan(set: &CaptureSet, out: &str, opt: &TransferOptions, graph: &mut Grap
                 let has_truth = set.has_truth(tgt, m);
                 let mut places = vec![default_pl];
                 if name == "gpr-nn" {
-                    places.extend(Placement::ALL.into_iter().filter(|&p| p != default_pl));
+                    let all = [Placement::ScaledSource, Placement::Regressed, Placement::Blended];
+                    places.extend(all.into_iter().filter(|&p| p != default_pl));
                 }
                 for pl in places {
                     let seq = if pl == default_pl {
@@ -364,10 +365,8 @@ pub fn plan(set: &CaptureSet, out: &str, opt: &TransferOptions, graph: &mut Grap
             format!("{out}/figures/fig5-{m0}.json"),
         ]);
         stamps.push(graph.push(Task::run("paper-figure", fig5, inputs, args).mkdir_target()));
-        let names: Vec<String> = [
-            Method::GprNn, Method::GprSe, Method::GprLinear, Method::KeyposeAffine, Method::WholeBody,
-        ]
-        .into_iter()
+        let names: Vec<String> = Method::ALL
+            .into_iter()
         .filter(|m| opt.methods.contains(m))
         .map(|m| m.name().to_string())
         .chain(std::iter::once(s("gpr-nn-keyposes")))
