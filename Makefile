@@ -2,6 +2,7 @@
 #   make demo   fetch the real assets, build, synthesise the demo capture set, render it
 #   make test   the whole test suite (release mode: the numerics need it)
 #   make build  release build of every stage binary
+#   make slurm SET=<set> OUT=<dir>   both pipelines as Slurm job arrays: sbatch <dir>/run.sbatch
 
 SHELL := bash
 .SHELLFLAGS := -eu -o pipefail -c
@@ -20,7 +21,7 @@ export OPENBLAS_NUM_THREADS := 1
 all: build
 
 help:
-	@sed -n '2,5p' Makefile
+	@sed -n '2,6p' Makefile
 
 setup:
 	@scripts/setup-system
@@ -28,11 +29,15 @@ setup:
 build: setup
 	$(CARGO) build --release --workspace --quiet
 
-# assets: synth's tests use the real bodies; setup-web: glTF validator + headless Chromium tests.
+# assets: synth's tests use the real bodies; setup-web: glTF validator + headless Chromium tests;
+# scripts/slurm-test installs Slurm + munge and runs the tiny preset's pipelines as job arrays.
 test: build assets setup-web
 	$(CARGO) test --release --workspace
+	scripts/slurm-test
 
 clean-out:
 	rm -rf $(OUT)
 
-include pipelines/*.mk
+# The pipelines, then their task graph (pipelines/plan.mk reads every pipeline's options).
+include $(filter-out pipelines/plan.mk,$(wildcard pipelines/*.mk))
+include pipelines/plan.mk

@@ -1,4 +1,4 @@
-# Variation synthesis (variation paper, issue 6):
+# Variation synthesis (3DV paper):
 #   make variation SET=<capture set> OUT=<dir>      (defaults: SET=$(OUT)/demo/set, OUT=out)
 # Per movement group (VARIATION_GROUPS; motions in VARIATION_MOTIONS_<group>, missing ones skipped):
 #   $(OUT)/work/variation/<group>.group       prealigned motions + pre-blended Y_w (prealign)
@@ -10,7 +10,6 @@
 
 SET ?= $(OUT)/demo/set
 comma := ,
-VARIATION_WORK := $(OUT)/work/variation
 VARIATION_OUT := $(OUT)/variation
 VARIATION_SUBJECT ?=
 VARIATION_GROUPS ?= locomotion jump
@@ -41,33 +40,6 @@ variation:
 	@$(MAKE) --no-print-directory variation-results SET=$(SET) OUT=$(OUT)
 	@$(MAKE) --no-print-directory report OUT=$(OUT) REPORT_VIEWS="$(VARIATION_REPORT_VIEWS)" REPORT_TITLE="surfcap variation: $(SET)"
 
+# The rules (prealign, gpdm-train, hmc-sample and its contact sheets, variation-eval per group,
+# then variation.json) are the task graph that pipelines/plan.mk includes under this goal.
 variation-results: $(OUT)/variation.json
-
-define VARIATION_GROUP_RULES
-$(VARIATION_WORK)/$(1).group: $(SET)/set.json $(BIN)/prealign
-	@mkdir -p $$(@D)
-	$(BIN)/prealign -q --set $(SET) $(if $(VARIATION_SUBJECT),--subject $(VARIATION_SUBJECT)) --group $(1) --motions $(VARIATION_MOTIONS_$(1)) $(VARIATION_PREALIGN_FLAGS_$(1)) --blend-weights $(VARIATION_W) --out $$@
-
-$(VARIATION_WORK)/$(1).model: $(VARIATION_WORK)/$(1).group $(BIN)/gpdm-train
-	$(BIN)/gpdm-train -q $(VARIATION_TRAIN_FLAGS) $$< --out $$@ --report $(VARIATION_WORK)/$(1)-train.json
-
-$(VARIATION_WORK)/$(1)-samples.json: $(VARIATION_WORK)/$(1).model $(BIN)/hmc-sample $(BIN)/render
-	rm -rf $(VARIATION_OUT)/$(1) $(VARIATION_OUT)/render/$(1)
-	$(BIN)/hmc-sample -q --seed $(VARIATION_SEED) -n $(VARIATION_N) --variance-scale $(VARIATION_VARIANCE_SCALE) --blends $(VARIATION_BLENDS) $(VARIATION_SAMPLE_FLAGS) --group $(VARIATION_WORK)/$(1).group $$< --out $(VARIATION_OUT)/$(1) --report $$@.tmp
-	for d in $(VARIATION_OUT)/$(1)/*/; do s=$$$$(basename $$$$d); \
-	  $(BIN)/render -q --no-frames --stride 2 --labels $$$$(cd $$$$d && ls -d var* | paste -sd,) --out $(VARIATION_OUT)/render/$(1)/$$$$s $$$$d/var*; done
-	mv $$@.tmp $$@
-
-$(VARIATION_WORK)/$(1)-eval.json: $(VARIATION_WORK)/$(1).model $(BIN)/variation-eval
-	$(BIN)/variation-eval -q --seed $(VARIATION_SEED) --group $(VARIATION_WORK)/$(1).group $$< --plots $(VARIATION_OUT)/plots/$(1) --out $$@
-endef
-$(foreach g,$(VARIATION_GROUPS),$(eval $(call VARIATION_GROUP_RULES,$(g))))
-
-VARIATION_RECORDS := $(foreach g,$(VARIATION_GROUPS),$(VARIATION_WORK)/$(g)-samples.json $(VARIATION_WORK)/$(g)-eval.json)
-
-# One file with every group's training, evaluation and sampling records.
-$(OUT)/variation.json: $(VARIATION_RECORDS)
-	@python3 -c 'import json, sys; w = sys.argv[2]; gs = sys.argv[3:]; \
-	  out = {g: {k: json.load(open("%s/%s-%s.json" % (w, g, k))) for k in ("train", "eval", "samples")} for g in gs}; \
-	  open(sys.argv[1] + ".tmp", "w").write(json.dumps(out, indent=1) + "\n")' $@ $(VARIATION_WORK) $(VARIATION_GROUPS)
-	@mv $@.tmp $@

@@ -1,0 +1,16 @@
+//! The pipelines' task graph (`plan`): from a capture set and the pipelines' options, every
+//! stage invocation of `make transfer` (CVPR) and `make variation` (3DV) with its inputs, the
+//! directories it creates and the file that marks it complete; written as a make fragment
+//! ([`make_fragment`]) or as Slurm job arrays over task tables ([`slurm`], [`task_table`]).
+
+pub mod collect;
+pub mod json_text;
+pub mod make_fragment;
+pub mod options;
+pub mod resources;
+pub mod slurm;
+pub mod stage;
+pub mod task;
+pub mod task_table;
+pub mod transfer;
+pub mod variation;

@@ -1,0 +1,179 @@
+//! The `plan` stage: its arguments and what each subcommand does.
+
+use std::path::{Path, PathBuf};
+
+use anyhow::{Context, Result};
+use clap::{Args as ClapArgs, Parser, Subcommand};
+use mesh_core::capture_set::CaptureSet;
+use mesh_core::cli::CommonArgs;
+
+use crate::options::PipelineOptions;
+use crate::task::Graph;
+
+/// Write the pipelines' task graph (every stage invocation with its inputs and outputs) as a make fragment or Slurm job arrays
+#[derive(Parser, Debug)]
+#[command(
+    name = "plan",
+    version,
+    after_help = "e.g.: plan make --set out/demo/set --pipeline-out out --out out/work/plan.mk\n      \
+                  plan slurm --set out/demo/set --pipeline-out out/slurm --out out/slurm\n      \
+                  plan run-task --table out/slurm/slurm/align.tasks --task 0"
+)]
+pub struct Args {
+    #[command(subcommand)]
+    pub command: Command,
+}
+
+#[derive(Subcommand, Debug)]
+pub enum Command {
+    /// The make fragment both pipelines include (pipelines/plan.mk)
+    Make(MakeArgs),
+    /// Slurm batch scripts: one job array per stage kind, chained by afterok, and run.sbatch
+    Slurm(SlurmArgs),
+    /// Run task N of a task table, or skip it when its target is newer than its inputs
+    RunTask(RunTaskArgs),
+    /// Merge the pipelines' records into one table (results.json, variation.json)
+    #[command(subcommand)]
+    Collect(Collect),
+}
+
+#[derive(ClapArgs, Debug)]
+pub struct MakeArgs {
+    #[command(flatten)]
+    pub common: CommonArgs,
+    #[command(flatten)]
+    pub options: PipelineOptions,
+    /// Output make fragment
+    #[arg(short, long)]
+    pub out: PathBuf,
+}
+
+#[derive(ClapArgs, Debug)]
+pub struct SlurmArgs {
+    #[command(flatten)]
+    pub common: CommonArgs,
+    #[command(flatten)]
+    pub options: PipelineOptions,
+    /// Stage binaries the jobs run
+    #[arg(long, value_name = "DIR", default_value = "target/release")]
+    pub bin: PathBuf,
+    /// Directory the jobs start in (the pipelines' paths are relative to it) [default: the current one]
+    #[arg(long, value_name = "DIR")]
+    pub workdir: Option<PathBuf>,
+    /// Measured peaks per stage (scripts/slurm-measure's output) for --mem and --cpus-per-task
+    /// [default: the tiny preset's, docs/CLUSTER.md]
+    #[arg(long, value_name = "FILE")]
+    pub resources: Option<PathBuf>,
+    /// Output folder: run.sbatch, and slurm/ with the arrays, task tables and logs
+    #[arg(short, long)]
+    pub out: PathBuf,
+}
+
+#[derive(ClapArgs, Debug)]
+pub struct RunTaskArgs {
+    #[command(flatten)]
+    pub common: CommonArgs,
+    /// Stage binaries
+    #[arg(long, value_name = "DIR", default_value = "target/release")]
+    pub bin: PathBuf,
+    /// Task table (one task per line, written by `plan slurm`)
+    #[arg(long)]
+    pub table: PathBuf,
+    /// Task index (0-based line of the table; Slurm's SLURM_ARRAY_TASK_ID)
+    #[arg(long, value_name = "N")]
+    pub task: usize,
+}
+
+#[derive(Subcommand, Debug)]
+pub enum Collect {
+    /// Transfer evaluation records into one list sorted by direction, motion, method
+    Transfer {
+        #[command(flatten)]
+        common: CommonArgs,
+        /// Output table (results.json)
+        #[arg(short, long)]
+        out: PathBuf,
+        /// Evaluation records (evaluate --out)
+        #[arg(required = true)]
+        records: Vec<PathBuf>,
+    },
+    /// Every group's <g>-train.json, <g>-eval.json and <g>-samples.json into one object
+    Variation {
+        #[command(flatten)]
+        common: CommonArgs,
+        /// Folder of the group records (OUT/work/variation)
+        #[arg(long, value_name = "DIR")]
+        work: PathBuf,
+        /// Output table (variation.json)
+        #[arg(short, long)]
+        out: PathBuf,
+        /// Group names
+        #[arg(required = true)]
+        groups: Vec<String>,
+    },
+}
+
+/// Both pipelines' task graph.
+pub fn graph(options: &PipelineOptions) -> Result<Graph> {
+    let set = CaptureSet::open(&options.paths.set)?;
+    let out = options.paths.pipeline_out.to_string_lossy().into_owned();
+    let mut graph = Graph::default();
+    crate::transfer::plan(&set, &out, &options.transfer, &mut graph)?;
+    crate::variation::plan(&set, &out, &options.variation, &mut graph)?;
+    Ok(graph)
+}
+
+fn absolute(p: &Path) -> Result<PathBuf> {
+    std::path::absolute(p).with_context(|| format!("{}: cannot make the path absolute", p.display()))
+}
+
+pub fn run(args: &Args) -> Result<()> {
+    match &args.command {
+        Command::Make(a) => {
+            a.common.init()?;
+            let text = crate::make_fragment::fragment(&graph(&a.options)?);
+            mesh_core::atomic::write_bytes_atomic(&a.out, text.as_bytes())?;
+        }
+        Command::Slurm(a) => {
+            a.common.init()?;
+            let graph = graph(&a.options)?;
+            let workdir = match &a.workdir {
+                Some(w) => absolute(w)?,
+                None => std::env::current_dir().context("cannot read the current directory")?,
+            };
+            let resources = match &a.resources {
+                Some(p) => {
+                    let text = std::fs::read_to_string(p).with_context(|| p.display().to_string())?;
+                    crate::resources::Table::parse(&text).with_context(|| p.display().to_string())?
+                }
+                None => crate::resources::Table::default(),
+            };
+            let layout = crate::slurm::Layout { workdir, bin: absolute(&a.bin)?, out: absolute(&a.out)?, resources };
+            let files = crate::slurm::scripts(&graph, &layout)?;
+            for d in crate::slurm::log_dirs(&graph, &layout) {
+                std::fs::create_dir_all(&d).with_context(|| format!("{}: cannot create", d.display()))?;
+            }
+            for (path, text) in files {
+                mesh_core::atomic::write_bytes_atomic(&path, text.as_bytes())?;
+            }
+        }
+        Command::RunTask(a) => {
+            a.common.init()?;
+            let task = crate::task_table::read_task(&a.table, a.task)?;
+            if crate::task_table::up_to_date(&task, &a.bin) {
+                mesh_core::info!("{}: up to date, skipped", task.target);
+                return Ok(());
+            }
+            crate::task_table::run_task(&task, &a.bin).with_context(|| task.target.clone())?;
+        }
+        Command::Collect(Collect::Transfer { common, out, records }) => {
+            common.init()?;
+            crate::collect::transfer(records, out)?;
+        }
+        Command::Collect(Collect::Variation { common, work, out, groups }) => {
+            common.init()?;
+            crate::collect::variation(work, groups, out)?;
+        }
+    }
+    Ok(())
+}

@@ -1,0 +1,111 @@
+//! The variation pipeline's tasks (3DV): per movement group `prealign` (time-aligned motions and
+//! pre-blends), `gpdm-train` (one GPDM per part), `hmc-sample` (variations, then their contact
+//! sheets), `variation-eval`; and the merge of every group's records into `variation.json`.
+
+use anyhow::Result;
+use mesh_core::capture_set::{CaptureSet, SubjectSpec};
+
+use crate::options::{words, VariationOptions};
+use crate::task::{Graph, Step, Task};
+
+fn s(x: impl Into<String>) -> String {
+    x.into()
+}
+
+/// Adds the variation pipeline's tasks and its `VARIATION_RECORDS` variable to `graph`.
+pub fn plan(set: &CaptureSet, out: &str, opt: &VariationOptions, graph: &mut Graph) -> Result<()> {
+    let work = format!("{out}/work/variation");
+    let vout = format!("{out}/variation");
+    let (groups, prealign_defaults) = if opt.groups.is_empty() {
+        (VariationOptions::default_groups(), opt.prealign_flags.is_empty())
+    } else {
+        (opt.groups.clone(), false)
+    };
+    let subject = opt.variation_subject.clone().unwrap_or_else(|| set.spec.source.clone());
+    let set_root = set.root.to_string_lossy().into_owned();
+    let mut records = Vec::new();
+    let mut names = Vec::new();
+    for (g, motions) in &groups {
+        // prealign reads the set, the subject's description and template, and the frames of
+        // the group's motions that exist (missing ones are skipped).
+        let mut inputs = vec![set.set_json().to_string_lossy().into_owned()];
+        if let Ok(spec) = SubjectSpec::load(set.subject_json(&subject)) {
+            inputs.push(set.subject_json(&subject).to_string_lossy().into_owned());
+            if let Ok(t) = set.template_path(&subject, &spec) {
+                inputs.push(t.to_string_lossy().into_owned());
+            }
+        }
+        for m in motions.split(',').filter(|m| !m.is_empty()) {
+            if let Ok(frames) = set.frames(&subject, m) {
+                inputs.extend(frames.iter().map(|f| f.to_string_lossy().into_owned()));
+            }
+        }
+        let group = format!("{work}/{g}.group");
+        let mut args = vec![s("-q"), s("--set"), set_root.clone()];
+        if let Some(sub) = &opt.variation_subject {
+            args.extend([s("--subject"), sub.clone()]);
+        }
+        args.extend([s("--group"), g.clone(), s("--motions"), motions.clone()]);
+        if prealign_defaults && g == "locomotion" {
+            args.push(s("--gait-cycles"));
+        }
+        args.extend(opt.prealign_words(g));
+        args.extend([s("--blend-weights"), opt.variation_w.clone(), s("--out"), group.clone()]);
+        graph.push(Task::run("prealign", group.clone(), inputs, args).mkdir_target());
+
+        let model = format!("{work}/{g}.model");
+        let mut args = vec![s("-q")];
+        args.extend(words(&opt.variation_train_flags));
+        args.extend([group.clone(), s("--out"), model.clone(), s("--report"), format!("{work}/{g}-train.json")]);
+        graph.push(Task::run("gpdm-train", model.clone(), vec![group.clone()], args));
+
+        // hmc-sample writes its report under a temporary name, the sheets follow, and the
+        // report's rename marks the whole task complete.
+        let samples = format!("{work}/{g}-samples.json");
+        let tmp = format!("{samples}.tmp");
+        let mut args = vec![
+            s("-q"), s("--seed"), opt.variation_seed.to_string(), s("-n"), opt.variation_n.to_string(),
+            s("--variance-scale"), opt.variation_variance_scale.clone(), s("--blends"),
+            opt.variation_blends.clone(),
+        ];
+        args.extend(words(&opt.variation_sample_flags));
+        args.extend([s("--group"), group.clone(), model.clone(), s("--out"), format!("{vout}/{g}"), s("--report"), tmp.clone()]);
+        graph.push(Task {
+            kind: "hmc-sample".into(),
+            target: samples.clone(),
+            inputs: vec![model.clone()],
+            dirs: Vec::new(),
+            steps: vec![
+                Step::Remove { paths: vec![format!("{vout}/{g}"), format!("{vout}/render/{g}")] },
+                Step::Run { bin: "hmc-sample".into(), args },
+                Step::RenderVariations {
+                    dir: format!("{vout}/{g}"),
+                    out_dir: format!("{vout}/render/{g}"),
+                    flags: vec![s("-q"), s("--no-frames"), s("--stride"), s("2")],
+                },
+                Step::Rename { from: tmp, to: samples.clone() },
+            ],
+        });
+
+        let eval = format!("{work}/{g}-eval.json");
+        let args = vec![
+            s("-q"), s("--seed"), opt.variation_seed.to_string(), s("--group"), group.clone(), model.clone(),
+            s("--plots"), format!("{vout}/plots/{g}"), s("--out"), eval.clone(),
+        ];
+        graph.push(Task::run("variation-eval", eval.clone(), vec![model.clone()], args));
+        records.extend([samples, eval]);
+        names.push(g.clone());
+    }
+    graph.variable("VARIATION_RECORDS", records.clone());
+    let table = format!("{out}/variation.json");
+    let mut args = vec![s("collect"), s("variation"), s("--work"), work.clone(), s("--out"), table.clone()];
+    args.extend(names);
+    graph.push(Task {
+        kind: "collect-variation".into(),
+        target: table,
+        inputs: records,
+        dirs: Vec::new(),
+        steps: vec![Step::Run { bin: "plan".into(), args }],
+    });
+    Ok(())
+}

@@ -1,0 +1,40 @@
+# The pipelines' task graph (crates/plan). `plan make` writes every stage invocation of
+# `make transfer` and `make variation` (target, inputs, recipe) into $(PLAN_MK) from the capture
+# set and the options of pipelines/transfer.mk and pipelines/variation.mk; the pipelines' result
+# goals include it. It is rewritten when the set's description or folders, the plan binary or the
+# options change (the options are kept in $(PLAN_OPTIONS), rewritten only when they differ).
+#   make slurm SET=<capture set> OUT=<dir>     Slurm job arrays of both pipelines: sbatch <dir>/run.sbatch
+#     SLURM_RESOURCES=<file>: measured peaks per stage (scripts/slurm-measure) for --mem/--cpus-per-task
+# The top-level Makefile includes this file after the pipelines, so that every option is defined.
+
+PLAN_MK := $(OUT)/work/plan.mk
+PLAN_OPTIONS := $(OUT)/work/plan.options
+PLAN_GOALS := transfer-results transfer-report variation-results
+PLAN_ARGS := --set $(SET) --pipeline-out $(OUT) \
+  --methods $(TRANSFER_METHODS) --align-frame $(ALIGN_FRAME) --part-alignment $(PART_ALIGNMENT) \
+  --placement $(PLACEMENT) --gpr-mean $(GPR_MEAN) --gpr-train-flags '$(GPR_TRAIN_FLAGS)' \
+  --pca-components $(PCA_COMPONENTS) $(if $(VARIATION_SUBJECT),--variation-subject $(VARIATION_SUBJECT)) \
+  $(foreach g,$(VARIATION_GROUPS),--variation-group $(g)=$(VARIATION_MOTIONS_$(g)) \
+    $(if $(VARIATION_PREALIGN_FLAGS_$(g)),'--prealign-flags=$(g)=$(VARIATION_PREALIGN_FLAGS_$(g))')) \
+  --variation-w $(VARIATION_W) --variation-blends $(VARIATION_BLENDS) --variation-n $(VARIATION_N) \
+  --variation-seed $(VARIATION_SEED) --variation-variance-scale $(VARIATION_VARIANCE_SCALE) \
+  --variation-train-flags '$(VARIATION_TRAIN_FLAGS)' --variation-sample-flags '$(VARIATION_SAMPLE_FLAGS)'
+
+ifneq ($(filter $(PLAN_GOALS),$(MAKECMDGOALS)),)
+ifneq ($(file <$(PLAN_OPTIONS)),$(strip $(PLAN_ARGS)))
+$(shell mkdir -p $(dir $(PLAN_OPTIONS)))
+$(file >$(PLAN_OPTIONS),$(strip $(PLAN_ARGS)))
+endif
+
+$(PLAN_MK): $(PLAN_OPTIONS) $(BIN)/plan $(SET)/set.json $(wildcard $(SET)/* $(SET)/*/* $(SET)/truth/*)
+	$(BIN)/plan make -q $(PLAN_ARGS) --out $@
+
+include $(PLAN_MK)
+endif
+
+SLURM_RESOURCES ?=
+.PHONY: slurm
+slurm:
+	@test -f $(SET)/set.json || { echo "slurm: $(SET)/set.json: no capture set (run 'make demo-data' or pass SET=<dir>)" >&2; exit 1; }
+	$(CARGO) build --release --workspace --quiet
+	$(BIN)/plan slurm -q $(PLAN_ARGS) --bin $(BIN) $(if $(SLURM_RESOURCES),--resources $(SLURM_RESOURCES)) --out $(OUT)
