@@ -1,0 +1,393 @@
+//! Sparse GP regression: Titsias' (2009) collapsed variational bound with `M` inducing inputs
+//! `Z`, for training sets too large for the exact GP of CVPR eqs. 8-13 (whose cost is cubic in
+//! the number of pairs `F`).
+//!
+//! With `K = K_uu` (`M x M`), `Φ = K_fu` (`F x M`), `Q_ff = Φ K⁻¹ Φᵀ`, `s = σn²` and `m` output
+//! columns sharing the kernel (as in eq. 8), the bound on the log marginal likelihood is
+//! ```text
+//! F(θ) = Σ_i log N(Y_i | 0, Q_ff + s I) - m/(2s) tr(K_ff - Q_ff)
+//!      = -½ m log|B| - ½ F m log(2π s) - |Y|²/(2s) + ½ |c|² - m/(2s) (tr K_ff - tr(L⁻¹ T L⁻ᵀ))
+//! T = Φᵀ Φ,  K = L Lᵀ,  B = I + L⁻¹ T L⁻ᵀ / s = L_B L_Bᵀ,  c = L_B⁻¹ L⁻¹ Φᵀ Y / s
+//! ```
+//! (matrix determinant lemma and Woodbury, with `P = K + T/s = L B Lᵀ`). Only `M x M` and
+//! `F x M` matrices appear: a value costs one `F x M` kernel block and the product `ΦᵀΦ`
+//! (`F M²`), never an `F x F` matrix.
+//!
+//! Gradient, through `K`, `Φ` and `diag K_ff` (each kernel's `∂/∂log σf` is twice itself):
+//! ```text
+//! β = P⁻¹ Φᵀ Y,   G_P = -½ m P⁻¹ - ββᵀ/(2s²)
+//! G_K = G_P + ½ m K⁻¹ - m/(2s) K⁻¹ T K⁻¹,    G_T = G_P / s + m/(2s) K⁻¹
+//! ∂F/∂θ = <G_K, ∂K> + 2 <G_T, Φᵀ ∂Φ> + <β, ∂Φᵀ Y>/s² - m/(2s) tr ∂K_ff
+//! ∂F/∂s = -<G_P, T>/s² - F m/(2s) + |Y|²/(2s²) - <β, ΦᵀY>/s³ + m/(2s²)(tr K_ff - tr(K⁻¹T))
+//! ```
+//! (`<·,·>` the Frobenius product); the gradient adds one `F M²` product `Φᵀ ∂Φ/∂log l` and
+//! the elements of the `M x M` inverses `K⁻¹`, `P⁻¹` (needed for the trace terms, as in the
+//! exact GP's gradient). The inducing inputs are fixed during optimisation
+//! ([`crate::inducing::greedy_variance`] at the starting hyperparameters); the kernel
+//! hyperparameters (and optionally `σn²`) are optimised, as for the exact GP.
+//!
+//! Prediction (Titsias eq. 6, the optimal `q(u)`): mean `K_*u β / s`, latent variance
+//! `k_** - |L⁻¹ k_u*|² + |L_P⁻¹ k_u*|²` with `L_P = L L_B` (the factor of `P`). At `Z = X` the
+//! bound, mean and variance equal the exact GP's (`Q_ff = K_ff`, `K⁻¹ - P⁻¹ = (K + sI)⁻¹`).
+//!
+//! Cross-check: `scripts/compare/sgpr_gpy.py` against GPy's `SparseGPRegression` with the
+//! same inducing inputs.
+
+use crate::gpr::{
+    check_xy, from_search, initial_kernel, summarise_notes, to_search, warm_start, Gpr,
+    GprOptions, TrainReport,
+};
+use crate::inducing::greedy_variance;
+use crate::kernel::Kernel;
+use crate::linalg::{tr_mul, Cholesky};
+use crate::optim::minimize_lazy;
+use crate::{check_finite, invalid, Result};
+use nalgebra::{DMatrix, DVector};
+use serde::{Deserialize, Serialize};
+
+/// Inducing-input count used by [`Sparsity::Auto`].
+pub const AUTO_INDUCING: usize = 256;
+
+/// Exact or sparse training.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+pub enum Sparsity {
+    /// The exact GP (CVPR eqs. 8-13).
+    #[default]
+    Exact,
+    /// Titsias' bound with at most this many inducing inputs (exact when `F` is not larger).
+    Inducing(usize),
+    /// Exact while it is cheaper than the sparse GP with [`AUTO_INDUCING`] inputs, sparse above
+    /// (see [`Sparsity::inducing_for`]).
+    Auto,
+}
+
+impl Sparsity {
+    /// The inducing-input count to train `pairs` pairs with, `None` for the exact GP. For
+    /// [`Sparsity::Auto`]: sparse when `F > 2 M`, where an exact evaluation (`~F³`: Cholesky and
+    /// the inverse's elements) starts costing more than a sparse one (`~4 F M²`: `ΦᵀΦ`,
+    /// `Φᵀ∂Φ` and the kernel blocks).
+    pub fn inducing_for(&self, pairs: usize) -> Option<usize> {
+        match *self {
+            Sparsity::Exact => None,
+            Sparsity::Inducing(m) => (pairs > m).then_some(m),
+            Sparsity::Auto => (pairs > 2 * AUTO_INDUCING).then_some(AUTO_INDUCING),
+        }
+    }
+}
+
+/// What a sparse [`Gpr`] keeps for prediction: the inducing inputs and two `M x M` lower
+/// factors (`L` of `K_uu` and `L_P` of `K_uu + K_uf K_fu / s`); the model's `alpha` is `β / s`.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct SparsePosterior {
+    pub(crate) inducing: DMatrix<f64>,
+    pub(crate) l_uu: DMatrix<f64>,
+    pub(crate) l_p: DMatrix<f64>,
+}
+
+impl SparsePosterior {
+    /// The inducing inputs `Z` (`M x D`).
+    pub fn inducing(&self) -> &DMatrix<f64> {
+        &self.inducing
+    }
+
+    /// Latent variance `k_** - |L⁻¹ k_u*|² + |L_P⁻¹ k_u*|²` for each row of `ks_t` (`K_u*` as
+    /// `M x N`) with prior variances `prior`.
+    pub(crate) fn variance(&self, ku_star: &DMatrix<f64>, prior: &DVector<f64>) -> DVector<f64> {
+        let a = lower_solve(&self.l_uu, ku_star);
+        let b = lower_solve(&self.l_p, ku_star);
+        DVector::from_iterator(
+            prior.len(),
+            (0..prior.len()).map(|i| {
+                (prior[i] - a.column(i).norm_squared() + b.column(i).norm_squared()).max(0.0)
+            }),
+        )
+    }
+}
+
+fn lower_solve(l: &DMatrix<f64>, b: &DMatrix<f64>) -> DMatrix<f64> {
+    let mut x = b.clone();
+    l.solve_lower_triangular_unchecked_mut(&mut x);
+    x
+}
+
+fn upper_solve(l: &DMatrix<f64>, b: &DMatrix<f64>) -> DMatrix<f64> {
+    let mut x = b.clone();
+    l.tr_solve_lower_triangular_unchecked_mut(&mut x);
+    x
+}
+
+fn check_inducing(z: &DMatrix<f64>, x: &DMatrix<f64>) -> Result<()> {
+    if z.nrows() == 0 || z.ncols() != x.ncols() {
+        return invalid(format!(
+            "sparse GP: {} inducing inputs of dimension {} for inputs of dimension {}",
+            z.nrows(),
+            z.ncols(),
+            x.ncols()
+        ));
+    }
+    check_finite("inducing inputs", z)
+}
+
+/// The bound at one hyperparameter setting, factorised so that the gradient can follow
+/// without recomputing the value's products (as the exact GP's `Factored`).
+struct SparseFactored {
+    kernel: Kernel,
+    noise_var: f64,
+    /// `K_uu` (full, without jitter) and the lower factor of `K_uu + jitter I`.
+    kuu: DMatrix<f64>,
+    l_uu: DMatrix<f64>,
+    jitter: f64,
+    /// `Φ = K_fu` (`F x M`), `T = ΦᵀΦ`, `ΦᵀY`.
+    phi: DMatrix<f64>,
+    t: DMatrix<f64>,
+    phi_y: DMatrix<f64>,
+    l_b: DMatrix<f64>,
+    /// `tr K_ff`, `tr(K⁻¹ T)`, `|Y|²`.
+    trace_kff: f64,
+    trace_qff: f64,
+    yy: f64,
+    /// `β = P⁻¹ Φᵀ Y`.
+    beta: DMatrix<f64>,
+    value: f64,
+}
+
+impl SparseFactored {
+    fn new(
+        kernel: &Kernel,
+        noise_var: f64,
+        z: &DMatrix<f64>,
+        x: &DMatrix<f64>,
+        y: &DMatrix<f64>,
+        notes: &mut Vec<String>,
+    ) -> Result<Self> {
+        let (f, m) = (x.nrows() as f64, y.ncols() as f64);
+        let s = noise_var;
+        if !(s > 0.0 && s.is_finite()) {
+            return invalid(format!("sparse GP: noise variance must be > 0, got {s}"));
+        }
+        let kuu = kernel.gram(z);
+        let chol = Cholesky::new(&kuu, "K_uu", notes)?;
+        let (l_uu, jitter) = (chol.lower(), chol.jitter);
+        let phi = kernel.cross(x, z);
+        let t = tr_mul(&phi, &phi);
+        let phi_y = tr_mul(&phi, y);
+        // L⁻¹ T L⁻ᵀ (T symmetric).
+        let lt = lower_solve(&l_uu, &t);
+        let a = lower_solve(&l_uu, &lt.transpose());
+        let trace_qff = a.trace();
+        let mut bmat = a / s;
+        for i in 0..bmat.nrows() {
+            bmat[(i, i)] += 1.0;
+        }
+        let l_b = Cholesky::new(&bmat, "I + L⁻¹ K_uf K_fu L⁻ᵀ / noise", notes)?.lower();
+        let c = lower_solve(&l_b, &lower_solve(&l_uu, &phi_y)) / s;
+        let beta = upper_solve(&l_uu, &upper_solve(&l_b, &c)) * s;
+        let log_det_b = 2.0 * l_b.diagonal().iter().map(|v| v.ln()).sum::<f64>();
+        let (trace_kff, yy) = (kernel.diag(x).sum(), y.norm_squared());
+        let value = -0.5 * m * log_det_b
+            - 0.5 * f * m * (2.0 * std::f64::consts::PI * s).ln()
+            - 0.5 * yy / s
+            + 0.5 * c.norm_squared()
+            - 0.5 * m / s * (trace_kff - trace_qff);
+        Ok(Self {
+            kernel: *kernel,
+            noise_var,
+            kuu,
+            l_uu,
+            jitter,
+            phi,
+            t,
+            phi_y,
+            l_b,
+            trace_kff,
+            trace_qff,
+            yy,
+            beta,
+            value,
+        })
+    }
+
+    /// Gradient with respect to the kernel's log hyperparameters, then `∂/∂ log σn²` when
+    /// `with_noise` (module documentation).
+    fn gradient(&self, z: &DMatrix<f64>, x: &DMatrix<f64>, y: &DMatrix<f64>, with_noise: bool) -> Vec<f64> {
+        let (f, m, s) = (x.nrows() as f64, y.ncols() as f64, self.noise_var);
+        let mm = self.kuu.nrows();
+        let l_inv = lower_solve(&self.l_uu, &DMatrix::identity(mm, mm));
+        let k_inv = l_inv.tr_mul(&l_inv);
+        // P⁻¹ = L⁻ᵀ L_B⁻ᵀ L_B⁻¹ L⁻¹.
+        let r = upper_solve(&self.l_uu, &upper_solve(&self.l_b, &DMatrix::identity(mm, mm)));
+        let p_inv = &r * r.transpose();
+        let g_p = &p_inv * (-0.5 * m) - &self.beta * self.beta.transpose() * (0.5 / (s * s));
+        let kt = &k_inv * &self.t * &k_inv;
+        let g_k = &g_p + &k_inv * (0.5 * m) - kt * (0.5 * m / s);
+        let g_t = &g_p / s + &k_inv * (0.5 * m / s);
+        let beta_phi_y = self.beta.dot(&self.phi_y);
+        let mut grad = Vec::with_capacity(3);
+        if self.kernel.param_names().len() == 2 {
+            let (_, dphi) = self.kernel.cross_with_dlog_l(x, z);
+            let dphi = dphi.expect("kernel with a length scale");
+            let dkuu = self.kernel.gram_with_grads(z).1.swap_remove(0);
+            let (_, dkff) = self.kernel.diag_with_dlog_l(x);
+            let c = tr_mul(&self.phi, &dphi);
+            let dphi_y = tr_mul(&dphi, y);
+            grad.push(
+                g_k.dot(&dkuu) + 2.0 * g_t.dot(&c) + self.beta.dot(&dphi_y) / (s * s)
+                    - 0.5 * m / s * dkff.sum(),
+            );
+        }
+        grad.push(
+            2.0 * g_k.dot(&self.kuu) + 4.0 * g_t.dot(&self.t) + 2.0 * beta_phi_y / (s * s)
+                - m / s * self.trace_kff,
+        );
+        if with_noise {
+            let d_s = -g_p.dot(&self.t) / (s * s) - 0.5 * f * m / s + 0.5 * self.yy / (s * s)
+                - beta_phi_y / (s * s * s)
+                + 0.5 * m / (s * s) * (self.trace_kff - self.trace_qff);
+            grad.push(s * d_s);
+        }
+        grad
+    }
+
+    fn into_model(self, x: &DMatrix<f64>, z: &DMatrix<f64>) -> Gpr {
+        let l_p = &self.l_uu * &self.l_b;
+        let alpha = &self.beta / self.noise_var;
+        Gpr::from_sparse(
+            self.kernel,
+            self.noise_var,
+            self.jitter,
+            x.clone(),
+            alpha,
+            SparsePosterior {
+                inducing: z.clone(),
+                l_uu: self.l_uu,
+                l_p,
+            },
+        )
+    }
+}
+
+/// Titsias' bound on the log marginal likelihood of `Y` given `X` with inducing inputs `Z`,
+/// summed over the output columns.
+pub fn sparse_bound(
+    kernel: &Kernel,
+    noise_var: f64,
+    z: &DMatrix<f64>,
+    x: &DMatrix<f64>,
+    y: &DMatrix<f64>,
+    notes: &mut Vec<String>,
+) -> Result<f64> {
+    check_xy(x, y)?;
+    check_inducing(z, x)?;
+    Ok(SparseFactored::new(kernel, noise_var, z, x, y, notes)?.value)
+}
+
+/// The bound and its gradient with respect to the kernel's log hyperparameters
+/// ([`Kernel::log_params`] order), followed by `∂/∂ log σn²` when `with_noise`.
+pub fn sparse_bound_grad(
+    kernel: &Kernel,
+    noise_var: f64,
+    with_noise: bool,
+    z: &DMatrix<f64>,
+    x: &DMatrix<f64>,
+    y: &DMatrix<f64>,
+    notes: &mut Vec<String>,
+) -> Result<(f64, Vec<f64>)> {
+    check_xy(x, y)?;
+    check_inducing(z, x)?;
+    let f = SparseFactored::new(kernel, noise_var, z, x, y, notes)?;
+    Ok((f.value, f.gradient(z, x, y, with_noise)))
+}
+
+/// Conditions the sparse GP on `(X, Y)` with fixed hyperparameters and inducing inputs `Z`.
+pub fn fit_sparse(
+    kernel: Kernel,
+    noise_var: f64,
+    z: &DMatrix<f64>,
+    x: &DMatrix<f64>,
+    y: &DMatrix<f64>,
+    notes: &mut Vec<String>,
+) -> Result<Gpr> {
+    check_xy(x, y)?;
+    check_inducing(z, x)?;
+    Ok(SparseFactored::new(&kernel, noise_var, z, x, y, notes)?.into_model(x, z))
+}
+
+/// Trains the sparse GP with at most `m` inducing inputs: starting hyperparameters as the
+/// exact GP's ([`initial_kernel`], then the warm start on a subset), inducing inputs by
+/// [`greedy_variance`] at those hyperparameters, then the bound maximised over the kernel's
+/// hyperparameters (and `σn²` if asked) with the same optimiser and search coordinates.
+pub fn train_sparse(
+    kernel: Kernel,
+    x: &DMatrix<f64>,
+    y: &DMatrix<f64>,
+    m: usize,
+    opts: &GprOptions,
+) -> Result<(Gpr, TrainReport)> {
+    check_xy(x, y)?;
+    if m == 0 {
+        return invalid("sparse GP: at least one inducing input is needed");
+    }
+    if !(opts.noise_var > 0.0 && opts.noise_var.is_finite()) {
+        return invalid(format!("sparse GP: noise variance must be > 0, got {}", opts.noise_var));
+    }
+    let mut notes = Vec::new();
+    let start = if opts.data_init { initial_kernel(&kernel, x, y) } else { kernel };
+    let start = warm_start(start, x, y, opts);
+    let z = x.select_rows(greedy_variance(&start, x, m).iter());
+    let first = SparseFactored::new(&start, opts.noise_var, &z, x, y, &mut notes)?;
+    let initial_lml = first.value;
+    let nk = start.param_names().len();
+    let valley = matches!(start, Kernel::NeuralNetwork { .. });
+    let (fitted, exit, iterations, evaluations, gradient_evaluations) = if opts.optimise {
+        let mut phi0 = to_search(&start.log_params(), valley);
+        if opts.learn_noise {
+            phi0.push(opts.noise_var.ln());
+        }
+        let mut last: Option<(Vec<f64>, Result<SparseFactored>)> = match opts.learn_noise {
+            false => Some((phi0.clone(), Ok(first))),
+            true => None,
+        };
+        let r = minimize_lazy(
+            |phi: &[f64], need_grad: bool| {
+                if last.as_ref().is_none_or(|(p, _)| p.as_slice() != phi) {
+                    let kern = start.with_log_params(&from_search(&phi[..nk], valley));
+                    let noise = if opts.learn_noise { phi[nk].exp() } else { opts.noise_var };
+                    last = Some((phi.to_vec(), SparseFactored::new(&kern, noise, &z, x, y, &mut notes)));
+                }
+                let Some((_, Ok(f))) = &last else {
+                    return (f64::INFINITY, None);
+                };
+                if !need_grad {
+                    return (-f.value, None);
+                }
+                let mut g = f.gradient(&z, x, y, opts.learn_noise);
+                if valley {
+                    g[0] += g[1];
+                }
+                (-f.value, Some(g.into_iter().map(|d| -d).collect()))
+            },
+            &phi0,
+            &opts.cg,
+        );
+        let kern = start.with_log_params(&from_search(&r.x[..nk], valley));
+        let noise = if opts.learn_noise { r.x[nk].exp() } else { opts.noise_var };
+        let fitted = match last {
+            Some((p, Ok(f))) if p == r.x => f,
+            _ => SparseFactored::new(&kern, noise, &z, x, y, &mut notes)?,
+        };
+        (fitted, Some(r.exit), r.iterations, r.evaluations, r.gradient_evaluations)
+    } else {
+        (first, None, 0, 0, 0)
+    };
+    let lml = fitted.value;
+    let report = TrainReport {
+        exit,
+        iterations,
+        evaluations,
+        gradient_evaluations,
+        initial_lml,
+        lml,
+        notes: summarise_notes(notes),
+    };
+    Ok((fitted.into_model(x, &z), report))
+}
