@@ -45,6 +45,14 @@ use crate::{check_finite, invalid, Result};
 use nalgebra::{DMatrix, DVector};
 use serde::{Deserialize, Serialize};
 
+/// Jitter added to `K_uu`, relative to the signal variance `σf²` (so `K_uu + ε σf² I` stays
+/// proportional to `σf²` and `∂/∂log σf` is still twice the matrix). The NN kernel tends to a
+/// rank-`D+1` linear kernel as `l` grows, so with more inducing inputs than that `K_uu`
+/// becomes singular during the optimisation; GPy and GPflow add a fixed `1e-6` for the same
+/// reason. Training uses this value; the lower-level functions take it as an argument (0
+/// gives the bound exactly as written, e.g. to compare with the exact GP at `Z = X`).
+pub const KUU_JITTER: f64 = 1e-6;
+
 /// Inducing-input count used by [`Sparsity::Auto`].
 pub const AUTO_INDUCING: usize = 256;
 
@@ -71,6 +79,32 @@ impl Sparsity {
             Sparsity::Exact => None,
             Sparsity::Inducing(m) => (pairs > m).then_some(m),
             Sparsity::Auto => (pairs > 2 * AUTO_INDUCING).then_some(AUTO_INDUCING),
+        }
+    }
+}
+
+impl std::str::FromStr for Sparsity {
+    type Err = String;
+
+    /// `exact`, `auto`, or an inducing-input count `M >= 1` (the command-line syntax).
+    fn from_str(s: &str) -> std::result::Result<Self, String> {
+        match s {
+            "exact" => Ok(Sparsity::Exact),
+            "auto" => Ok(Sparsity::Auto),
+            _ => match s.parse::<usize>() {
+                Ok(m) if m >= 1 => Ok(Sparsity::Inducing(m)),
+                _ => Err(format!("expected an inducing-input count >= 1, 'auto' or 'exact', got '{s}'")),
+            },
+        }
+    }
+}
+
+impl std::fmt::Display for Sparsity {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            Sparsity::Exact => write!(f, "exact"),
+            Sparsity::Inducing(m) => write!(f, "{m}"),
+            Sparsity::Auto => write!(f, "auto"),
         }
     }
 }
@@ -133,7 +167,7 @@ fn check_inducing(z: &DMatrix<f64>, x: &DMatrix<f64>) -> Result<()> {
 struct SparseFactored {
     kernel: Kernel,
     noise_var: f64,
-    /// `K_uu` (full, without jitter) and the lower factor of `K_uu + jitter I`.
+    /// `K_uu + ε σf² I` ([`KUU_JITTER`]) and the lower factor of it plus any jitter retry.
     kuu: DMatrix<f64>,
     l_uu: DMatrix<f64>,
     jitter: f64,
@@ -158,6 +192,7 @@ impl SparseFactored {
         z: &DMatrix<f64>,
         x: &DMatrix<f64>,
         y: &DMatrix<f64>,
+        kuu_jitter: f64,
         notes: &mut Vec<String>,
     ) -> Result<Self> {
         let (f, m) = (x.nrows() as f64, y.ncols() as f64);
@@ -165,7 +200,11 @@ impl SparseFactored {
         if !(s > 0.0 && s.is_finite()) {
             return invalid(format!("sparse GP: noise variance must be > 0, got {s}"));
         }
-        let kuu = kernel.gram(z);
+        let mut kuu = kernel.gram(z);
+        let sf2 = (2.0 * kernel.log_params().last().copied().unwrap_or(0.0)).exp();
+        for i in 0..kuu.nrows() {
+            kuu[(i, i)] += kuu_jitter * sf2;
+        }
         let chol = Cholesky::new(&kuu, "K_uu", notes)?;
         let (l_uu, jitter) = (chol.lower(), chol.jitter);
         let phi = kernel.cross(x, z);
@@ -267,18 +306,19 @@ impl SparseFactored {
 }
 
 /// Titsias' bound on the log marginal likelihood of `Y` given `X` with inducing inputs `Z`,
-/// summed over the output columns.
+/// summed over the output columns, with `K_uu + kuu_jitter σf² I`.
 pub fn sparse_bound(
     kernel: &Kernel,
     noise_var: f64,
     z: &DMatrix<f64>,
     x: &DMatrix<f64>,
     y: &DMatrix<f64>,
+    kuu_jitter: f64,
     notes: &mut Vec<String>,
 ) -> Result<f64> {
     check_xy(x, y)?;
     check_inducing(z, x)?;
-    Ok(SparseFactored::new(kernel, noise_var, z, x, y, notes)?.value)
+    Ok(SparseFactored::new(kernel, noise_var, z, x, y, kuu_jitter, notes)?.value)
 }
 
 /// The bound and its gradient with respect to the kernel's log hyperparameters
@@ -290,11 +330,12 @@ pub fn sparse_bound_grad(
     z: &DMatrix<f64>,
     x: &DMatrix<f64>,
     y: &DMatrix<f64>,
+    kuu_jitter: f64,
     notes: &mut Vec<String>,
 ) -> Result<(f64, Vec<f64>)> {
     check_xy(x, y)?;
     check_inducing(z, x)?;
-    let f = SparseFactored::new(kernel, noise_var, z, x, y, notes)?;
+    let f = SparseFactored::new(kernel, noise_var, z, x, y, kuu_jitter, notes)?;
     Ok((f.value, f.gradient(z, x, y, with_noise)))
 }
 
@@ -305,11 +346,12 @@ pub fn fit_sparse(
     z: &DMatrix<f64>,
     x: &DMatrix<f64>,
     y: &DMatrix<f64>,
+    kuu_jitter: f64,
     notes: &mut Vec<String>,
 ) -> Result<Gpr> {
     check_xy(x, y)?;
     check_inducing(z, x)?;
-    Ok(SparseFactored::new(&kernel, noise_var, z, x, y, notes)?.into_model(x, z))
+    Ok(SparseFactored::new(&kernel, noise_var, z, x, y, kuu_jitter, notes)?.into_model(x, z))
 }
 
 /// Trains the sparse GP with at most `m` inducing inputs: starting hyperparameters as the
@@ -330,11 +372,25 @@ pub fn train_sparse(
     if !(opts.noise_var > 0.0 && opts.noise_var.is_finite()) {
         return invalid(format!("sparse GP: noise variance must be > 0, got {}", opts.noise_var));
     }
-    let mut notes = Vec::new();
     let start = if opts.data_init { initial_kernel(&kernel, x, y) } else { kernel };
     let start = warm_start(start, x, y, opts);
     let z = x.select_rows(greedy_variance(&start, x, m).iter());
-    let first = SparseFactored::new(&start, opts.noise_var, &z, x, y, &mut notes)?;
+    train_sparse_with_inducing(start, x, y, &z, opts)
+}
+
+/// Maximises the bound with the inducing inputs `z` fixed, starting from `start` as given
+/// (no data-driven start, no warm start), then conditions on the data.
+pub fn train_sparse_with_inducing(
+    start: Kernel,
+    x: &DMatrix<f64>,
+    y: &DMatrix<f64>,
+    z: &DMatrix<f64>,
+    opts: &GprOptions,
+) -> Result<(Gpr, TrainReport)> {
+    check_xy(x, y)?;
+    check_inducing(z, x)?;
+    let mut notes = Vec::new();
+    let first = SparseFactored::new(&start, opts.noise_var, z, x, y, KUU_JITTER, &mut notes)?;
     let initial_lml = first.value;
     let nk = start.param_names().len();
     let valley = matches!(start, Kernel::NeuralNetwork { .. });
@@ -352,7 +408,7 @@ pub fn train_sparse(
                 if last.as_ref().is_none_or(|(p, _)| p.as_slice() != phi) {
                     let kern = start.with_log_params(&from_search(&phi[..nk], valley));
                     let noise = if opts.learn_noise { phi[nk].exp() } else { opts.noise_var };
-                    last = Some((phi.to_vec(), SparseFactored::new(&kern, noise, &z, x, y, &mut notes)));
+                    last = Some((phi.to_vec(), SparseFactored::new(&kern, noise, z, x, y, KUU_JITTER, &mut notes)));
                 }
                 let Some((_, Ok(f))) = &last else {
                     return (f64::INFINITY, None);
@@ -360,7 +416,7 @@ pub fn train_sparse(
                 if !need_grad {
                     return (-f.value, None);
                 }
-                let mut g = f.gradient(&z, x, y, opts.learn_noise);
+                let mut g = f.gradient(z, x, y, opts.learn_noise);
                 if valley {
                     g[0] += g[1];
                 }
@@ -373,7 +429,7 @@ pub fn train_sparse(
         let noise = if opts.learn_noise { r.x[nk].exp() } else { opts.noise_var };
         let fitted = match last {
             Some((p, Ok(f))) if p == r.x => f,
-            _ => SparseFactored::new(&kern, noise, &z, x, y, &mut notes)?,
+            _ => SparseFactored::new(&kern, noise, z, x, y, KUU_JITTER, &mut notes)?,
         };
         (fitted, Some(r.exit), r.iterations, r.evaluations, r.gradient_evaluations)
     } else {
@@ -389,5 +445,5 @@ pub fn train_sparse(
         lml,
         notes: summarise_notes(notes),
     };
-    Ok((fitted.into_model(x, &z), report))
+    Ok((fitted.into_model(x, z), report))
 }

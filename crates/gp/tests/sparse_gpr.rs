@@ -39,11 +39,11 @@ fn inducing_at_every_input_equals_the_exact_gp() {
         }
         let mut notes = Vec::new();
         let exact = log_marginal_likelihood(&k, 0.1, &x, &y, &mut notes).unwrap();
-        let bound = sparse_bound(&k, 0.1, &x, &x, &y, &mut notes).unwrap();
+        let bound = sparse_bound(&k, 0.1, &x, &x, &y, 0.0, &mut notes).unwrap();
         assert!(notes.is_empty(), "{k:?}: {notes:?}");
         assert!((exact - bound).abs() < 1e-8, "{k:?}: exact {exact} bound {bound}");
         let e = Gpr::fit(k, 0.1, &x, &y, &mut notes).unwrap();
-        let s = fit_sparse(k, 0.1, &x, &x, &y, &mut notes).unwrap();
+        let s = fit_sparse(k, 0.1, &x, &x, &y, 0.0, &mut notes).unwrap();
         let (me, ve) = e.predict_with_variance(&xs, &mut notes).unwrap();
         let (ms, vs) = s.predict_with_variance(&xs, &mut notes).unwrap();
         assert!((&me - &ms).amax() < 1e-8, "{k:?}: mean {}", (&me - &ms).amax());
@@ -69,7 +69,7 @@ fn sparse_posterior_and_bound_match_dense_closed_forms() {
         let lu = sigma_inv.clone().lu();
         let mean = &ksu * lu.solve(&(&kuf * &y)).unwrap() / s;
         let kuu_lu = kuu.clone().lu();
-        let m = fit_sparse(k, s, &z, &x, &y, &mut Vec::new()).unwrap();
+        let m = fit_sparse(k, s, &z, &x, &y, 0.0, &mut Vec::new()).unwrap();
         let (got_mean, got_var) = m.predict_with_variance(&xs, &mut Vec::new()).unwrap();
         assert!((&got_mean - &mean).amax() < 1e-9, "{k:?}: {}", (&got_mean - &mean).amax());
         for i in 0..xs.nrows() {
@@ -90,12 +90,13 @@ fn sparse_posterior_and_bound_match_dense_closed_forms() {
         let log_det = c_lu.determinant().ln();
         let trace = k.gram(&x).trace() - qff.trace();
         let want = -0.5 * quad - 0.5 * p * log_det - 0.5 * p * n * (2.0 * std::f64::consts::PI).ln() - 0.5 * p * trace / s;
-        let got = sparse_bound(&k, s, &z, &x, &y, &mut Vec::new()).unwrap();
+        let got = sparse_bound(&k, s, &z, &x, &y, 0.0, &mut Vec::new()).unwrap();
         assert!((got - want).abs() < 1e-8 * want.abs().max(1.0), "{k:?}: {got} vs {want}");
     }
 }
 
-/// Analytic gradient of the bound against central differences, every kernel, noise included.
+/// Analytic gradient of the bound against central differences, every kernel, noise included,
+/// with a `K_uu` jitter large enough to matter.
 #[test]
 fn bound_gradient_matches_finite_differences() {
     let (x, y) = data(40, 6);
@@ -103,12 +104,12 @@ fn bound_gradient_matches_finite_differences() {
     for k in kernels() {
         let z = if matches!(k, Kernel::Linear { .. }) { z.rows(0, 3).into_owned() } else { z.clone() };
         let noise = 0.07;
-        let (_, g) = sparse_bound_grad(&k, noise, true, &z, &x, &y, &mut Vec::new()).unwrap();
+        let (_, g) = sparse_bound_grad(&k, noise, true, &z, &x, &y, 1e-3, &mut Vec::new()).unwrap();
         let mut theta = k.log_params();
         theta.push(noise.ln());
         let f = |t: &[f64]| {
             let nk = t.len() - 1;
-            sparse_bound(&k.with_log_params(&t[..nk]), t[nk].exp(), &z, &x, &y, &mut Vec::new()).unwrap()
+            sparse_bound(&k.with_log_params(&t[..nk]), t[nk].exp(), &z, &x, &y, 1e-3, &mut Vec::new()).unwrap()
         };
         let h = 1e-5;
         for i in 0..theta.len() {
@@ -132,7 +133,7 @@ fn bound_is_below_the_exact_likelihood_and_rises_with_more_inducing_inputs() {
     let mut prev = f64::NEG_INFINITY;
     for m in [2, 5, 10, 20, 40] {
         let z = x.select_rows(order[..m].iter());
-        let b = sparse_bound(&k, 0.1, &z, &x, &y, &mut Vec::new()).unwrap();
+        let b = sparse_bound(&k, 0.1, &z, &x, &y, 0.0, &mut Vec::new()).unwrap();
         assert!(b <= exact + 1e-9, "M = {m}: bound {b} above exact {exact}");
         assert!(b >= prev - 1e-9, "M = {m}: bound {b} fell from {prev}");
         prev = b;
@@ -171,9 +172,9 @@ fn sparse_training_generalises_like_the_exact_gp_and_round_trips() {
 fn bad_inducing_inputs_are_rejected() {
     let (x, y) = data(10, 10);
     let k = Kernel::neural_network(1.0, 1.0);
-    assert!(sparse_bound(&k, 0.1, &DMatrix::zeros(0, 3), &x, &y, &mut Vec::new()).is_err());
-    assert!(sparse_bound(&k, 0.1, &DMatrix::zeros(2, 2), &x, &y, &mut Vec::new()).is_err());
+    assert!(sparse_bound(&k, 0.1, &DMatrix::zeros(0, 3), &x, &y, 0.0, &mut Vec::new()).is_err());
+    assert!(sparse_bound(&k, 0.1, &DMatrix::zeros(2, 2), &x, &y, 0.0, &mut Vec::new()).is_err());
     let nan = DMatrix::from_element(2, 3, f64::NAN);
-    assert!(sparse_bound(&k, 0.1, &nan, &x, &y, &mut Vec::new()).is_err());
-    assert!(sparse_bound(&k, 0.0, &x.rows(0, 2).into_owned(), &x, &y, &mut Vec::new()).is_err());
+    assert!(sparse_bound(&k, 0.1, &nan, &x, &y, 0.0, &mut Vec::new()).is_err());
+    assert!(sparse_bound(&k, 0.0, &x.rows(0, 2).into_owned(), &x, &y, 0.0, &mut Vec::new()).is_err());
 }

@@ -167,7 +167,10 @@ pub struct RegressorReport {
     pub exit: Option<String>,
     pub iterations: usize,
     pub initial_lml: f64,
+    /// Log marginal likelihood, or Titsias' lower bound on it for a sparse GP.
     pub lml: f64,
+    /// Inducing-input count of a sparse GP (`None`: exact GP or no GP).
+    pub inducing: Option<usize>,
     /// Numerical notes (Cholesky jitter retries).
     pub notes: Vec<String>,
 }
@@ -181,6 +184,7 @@ impl RegressorReport {
             iterations: r.iterations,
             initial_lml: r.initial_lml,
             lml: r.lml,
+            inducing: gpr.sparse().map(|s| s.inducing().nrows()),
             notes: r.notes.clone(),
         }
     }
@@ -189,9 +193,13 @@ impl RegressorReport {
     pub fn line(&self) -> String {
         match (&self.kernel, &self.exit) {
             (Some(k), exit) => format!(
-                "{}: kernel {:?}, log marginal likelihood {:.3} -> {:.3}, {} iterations, exit: {}",
+                "{}: kernel {:?}, {} {:.3} -> {:.3}, {} iterations, exit: {}",
                 self.name,
                 k,
+                match self.inducing {
+                    Some(m) => format!("sparse bound ({m} inducing inputs)"),
+                    None => "log marginal likelihood".to_string(),
+                },
                 self.initial_lml,
                 self.lml,
                 self.iterations,
@@ -224,7 +232,7 @@ pub struct GprModel {
 
 impl Artifact for GprModel {
     const KIND: &'static str = "gpr-model";
-    const VERSION: u32 = 2;
+    const VERSION: u32 = 3;
 }
 
 /// The coefficients and displacements of one training pair of motions, with
@@ -472,6 +480,7 @@ fn train_parts(
                     iterations: 0,
                     initial_lml: f64::NAN,
                     lml: f64::NAN,
+                    inducing: None,
                     notes: Vec::new(),
                 });
             }

@@ -1,0 +1,96 @@
+#!/usr/bin/env python3
+"""Compare the `gp` crate's sparse GP (Titsias' bound) with GPy's SparseGPRegression.
+
+Usage: sgpr_gpy.py DIR [--models 0,1,...]
+  e.g.: OPENBLAS_NUM_THREADS=1 cargo run --release -p gp --example sgpr_compare -- --pairs 1100 --inducing 256 --dump /tmp/sgpr1100
+        OPENBLAS_NUM_THREADS=1 python3 scripts/compare/sgpr_gpy.py /tmp/sgpr1100
+
+DIR holds problem_XX_{x,y,z}.csv and rust.json written by the `sgpr_compare` example (z: the
+inducing inputs our greedy variance selection chose). For each problem GPy builds
+SparseGPRegression with the MLP kernel, the same inducing inputs (fixed), the same fixed noise
+variance and the same K_uu jitter (ours is 1e-6 * sigma_f^2, set as GPy's absolute
+`const_jitter` at the compared point), then:
+  1. evaluates its bound at our optimum: must equal ours to 1e-6 relative (the known answer);
+  2. optimises from our starting hyperparameters with GPy's default (L-BFGS-B), timed, and
+     prints its optimum and the time ratio against our single-threaded run on the same Z.
+Kernel mapping as in gpr_gpy.py: w = 1/(2 l^2), b = 0, var = sigma_f^2 * pi / 2.
+Requires: pip install GPy==1.15.0 numpy scipy
+"""
+import json
+import math
+import sys
+import time
+
+import numpy as np
+
+try:
+    import GPy
+except ImportError:
+    sys.exit("sgpr_gpy.py: GPy not installed (pip install GPy==1.15.0 numpy scipy)")
+
+KUU_JITTER = 1e-6  # crates/gp/src/sparse_gpr.rs, relative to sigma_f^2
+
+
+def to_gpy(l, sf):
+    return 1.0 / (2.0 * l * l), sf * sf * math.pi / 2.0
+
+
+def from_gpy(w, var):
+    return math.sqrt(1.0 / (2.0 * w)), math.sqrt(2.0 * var / math.pi)
+
+
+def model_for(x, y, z, noise, l, sf):
+    w, var = to_gpy(l, sf)
+    k = GPy.kern.MLP(input_dim=x.shape[1], variance=var, weight_variance=w, bias_variance=1e-300)
+    with np.errstate(divide="ignore"):
+        k.bias_variance.fix(0.0)  # eq. 10 has no bias
+    m = GPy.models.SparseGPRegression(x, y, kernel=k, Z=z.copy())
+    m.inducing_inputs.fix()
+    m.Gaussian_noise.variance = noise
+    m.Gaussian_noise.variance.fix()
+    m.inference_method.const_jitter = KUU_JITTER * sf * sf
+    m.parameters_changed()
+    return m
+
+
+def main():
+    if len(sys.argv) < 2 or sys.argv[1] in ("-h", "--help"):
+        sys.exit(__doc__)
+    d = sys.argv[1]
+    meta = json.load(open(f"{d}/rust.json"))
+    sel = None
+    if "--models" in sys.argv:
+        sel = {int(v) for v in sys.argv[sys.argv.index("--models") + 1].split(",")}
+    noise = meta["noise_var"]
+    print(f"pairs {meta['pairs']}, inducing {meta['inducing']}, noise variance {noise}")
+    print(f"{'model':>5} {'rust bound':>16} {'gpy@rust':>16} {'rel diff':>9} {'gpy optimum':>16}"
+          f" {'rust l':>9} {'gpy l':>9} {'rust s':>8} {'gpy s':>8} {'ratio':>6}")
+    worst = 0.0
+    rust_total = gpy_total = 0.0
+    for rec in meta["models"]:
+        i = rec["index"]
+        if sel is not None and i not in sel:
+            continue
+        x = np.loadtxt(f"{d}/problem_{i:02d}_x.csv", delimiter=",", ndmin=2)
+        y = np.loadtxt(f"{d}/problem_{i:02d}_y.csv", delimiter=",", ndmin=2)
+        z = np.loadtxt(f"{d}/problem_{i:02d}_z.csv", delimiter=",", ndmin=2)
+        at_rust = -float(model_for(x, y, z, noise, rec["l"], rec["sigma_f"]).objective_function())
+        rel = abs(at_rust - rec["bound"]) / abs(rec["bound"])
+        worst = max(worst, rel)
+        m = model_for(x, y, z, noise, rec["l0"], rec["sigma_f0"])
+        t = time.perf_counter()
+        m.optimize()
+        secs = time.perf_counter() - t
+        gl, _ = from_gpy(float(m.mlp.weight_variance.values[0]), float(m.mlp.variance.values[0]))
+        rust_total += rec["train_s"]
+        gpy_total += secs
+        print(f"{i:>5} {rec['bound']:>16.6f} {at_rust:>16.6f} {rel:>9.1e} {-float(m.objective_function()):>16.6f}"
+              f" {rec['l']:>9.4f} {gl:>9.4f} {rec['train_s']:>8.3f} {secs:>8.3f} {secs / rec['train_s']:>6.1f}")
+    print(f"worst relative bound difference at our optimum: {worst:.2e}")
+    print(f"total single-thread time: rust {rust_total:.3f} s, GPy {gpy_total:.3f} s, ratio {gpy_total / rust_total:.1f}x")
+    if worst > 1e-6:
+        sys.exit("sgpr_gpy.py: bounds differ by more than 1e-6 relative")
+
+
+if __name__ == "__main__":
+    main()
