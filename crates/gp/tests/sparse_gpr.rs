@@ -163,8 +163,14 @@ fn sparse_training_generalises_like_the_exact_gp_and_round_trips() {
     assert_eq!(back, ms);
     let small = Gpr::train(k, &x.rows(0, 50).into_owned(), &y.rows(0, 50).into_owned(), &sparse).unwrap().0;
     assert!(small.sparse().is_none());
-    assert_eq!(Sparsity::Auto.inducing_for(512), None);
-    assert_eq!(Sparsity::Auto.inducing_for(513), Some(gp::sparse_gpr::AUTO_INDUCING));
+    let m = gp::sparse_gpr::AUTO_INDUCING;
+    assert_eq!(Sparsity::Auto.inducing_for(4 * m), None);
+    assert_eq!(Sparsity::Auto.inducing_for(4 * m + 1), Some(m));
+    for (text, want) in [("auto", Sparsity::Auto), ("exact", Sparsity::Exact), ("64", Sparsity::Inducing(64))] {
+        assert_eq!(text.parse::<Sparsity>(), Ok(want));
+        assert_eq!(want.to_string(), text);
+    }
+    assert!("0".parse::<Sparsity>().is_err() && "many".parse::<Sparsity>().is_err());
 }
 
 /// Bad inducing inputs are an error, not a panic.

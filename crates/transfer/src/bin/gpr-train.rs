@@ -58,7 +58,7 @@ struct Args {
     #[arg(long)]
     learn_noise: bool,
     /// Sparse GP (Titsias' bound) with at most M inducing inputs chosen by greedy variance
-    /// selection; `auto`: exact while cheaper (up to 2 x 256 pairs), 256 inducing inputs above;
+    /// selection; `auto`: exact up to 1024 pairs (faster there), 256 inducing inputs above;
     /// `exact` (default): the exact GP of eqs. 8-13
     #[arg(long, value_name = "M|auto|exact", default_value_t = Sparsity::Exact)]
     sparse: Sparsity,
