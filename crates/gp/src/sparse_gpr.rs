@@ -39,7 +39,7 @@ use crate::gpr::{
 };
 use crate::inducing::greedy_variance;
 use crate::kernel::Kernel;
-use crate::linalg::{tr_mul, Cholesky};
+use crate::linalg::{lower_solve_in_place, mul_tr, Cholesky};
 use crate::optim::minimize_lazy;
 use crate::{check_finite, invalid, Result};
 use nalgebra::{DMatrix, DVector};
@@ -165,7 +165,10 @@ fn check_inducing(z: &DMatrix<f64>, x: &DMatrix<f64>) -> Result<()> {
 }
 
 /// The bound at one hyperparameter setting, factorised so that the gradient can follow
-/// without recomputing the value's products (as the exact GP's `Factored`).
+/// without recomputing the value's products (as the exact GP's `Factored`). Everything is
+/// kept whitened by `L` (`A = L⁻¹ Φᵀ`, `S = A Aᵀ = L⁻¹ T L⁻ᵀ`): `K_uu` is close to singular
+/// whenever the inducing inputs outnumber what the kernel can tell apart, and the whitened
+/// quantities stay well scaled where `K⁻¹ T K⁻¹` does not.
 struct SparseFactored {
     kernel: Kernel,
     noise_var: f64,
@@ -173,21 +176,22 @@ struct SparseFactored {
     kuu: DMatrix<f64>,
     l_uu: DMatrix<f64>,
     jitter: f64,
-    /// `Φ = K_fu` (`F x M`), `T = ΦᵀΦ`, `ΦᵀY`.
-    phi: DMatrix<f64>,
-    t: DMatrix<f64>,
-    phi_y: DMatrix<f64>,
+    /// `A = L⁻¹ K_uf` (`M x F`), `S = A Aᵀ`, `A Y`.
+    a: DMatrix<f64>,
+    s_mat: DMatrix<f64>,
+    a_y: DMatrix<f64>,
     l_b: DMatrix<f64>,
-    /// `tr K_ff`, `tr(K⁻¹ T)`, `|Y|²`.
+    /// `tr K_ff`, `tr S = tr(K⁻¹ T)`, `|Y|²`.
     trace_kff: f64,
     trace_qff: f64,
     yy: f64,
-    /// `β = P⁻¹ Φᵀ Y`.
-    beta: DMatrix<f64>,
+    /// `γ = B⁻¹ A Y`, so that `β = P⁻¹ Φᵀ Y = L⁻ᵀ γ`.
+    gamma: DMatrix<f64>,
     value: f64,
 }
 
 impl SparseFactored {
+    #[allow(clippy::too_many_arguments)]
     fn new(
         kernel: &Kernel,
         noise_var: f64,
@@ -209,20 +213,18 @@ impl SparseFactored {
         }
         let chol = Cholesky::new(&kuu, "K_uu", notes)?;
         let (l_uu, jitter) = (chol.lower(), chol.jitter);
-        let phi = kernel.cross(x, z);
-        let t = tr_mul(&phi, &phi);
-        let phi_y = tr_mul(&phi, y);
-        // L⁻¹ T L⁻ᵀ (T symmetric).
-        let lt = lower_solve(&l_uu, &t);
-        let a = lower_solve(&l_uu, &lt.transpose());
-        let trace_qff = a.trace();
-        let mut bmat = a / s;
+        let mut a = kernel.cross(z, x);
+        lower_solve_in_place(&l_uu, &mut a);
+        let s_mat = mul_tr(&a, &a, true);
+        let a_y = &a * y;
+        let trace_qff = s_mat.trace();
+        let mut bmat = &s_mat / s;
         for i in 0..bmat.nrows() {
             bmat[(i, i)] += 1.0;
         }
         let l_b = Cholesky::new(&bmat, "I + L⁻¹ K_uf K_fu L⁻ᵀ / noise", notes)?.lower();
-        let c = lower_solve(&l_b, &lower_solve(&l_uu, &phi_y)) / s;
-        let beta = upper_solve(&l_uu, &upper_solve(&l_b, &c)) * s;
+        let c = lower_solve(&l_b, &a_y) / s;
+        let gamma = upper_solve(&l_b, &c) * s;
         let log_det_b = 2.0 * l_b.diagonal().iter().map(|v| v.ln()).sum::<f64>();
         let (trace_kff, yy) = (kernel.diag(x).sum(), y.norm_squared());
         let value = -0.5 * m * log_det_b
@@ -236,53 +238,61 @@ impl SparseFactored {
             kuu,
             l_uu,
             jitter,
-            phi,
-            t,
-            phi_y,
+            a,
+            s_mat,
+            a_y,
             l_b,
             trace_kff,
             trace_qff,
             yy,
-            beta,
+            gamma,
             value,
         })
     }
 
+    /// `L⁻¹ D L⁻ᵀ` for a symmetric `D`.
+    fn whiten(&self, d: &DMatrix<f64>) -> DMatrix<f64> {
+        let half = lower_solve(&self.l_uu, d);
+        lower_solve(&self.l_uu, &half.transpose())
+    }
+
     /// Gradient with respect to the kernel's log hyperparameters, then `∂/∂ log σn²` when
-    /// `with_noise` (module documentation).
+    /// `with_noise`: the module documentation's formulas with `G_X = L⁻ᵀ H_X L⁻¹`,
+    /// ```text
+    /// H_P = -½ m B⁻¹ - γγᵀ/(2s²),  H_K = H_P + ½ m I - m/(2s) S,  H_T = H_P / s + m/(2s) I
+    /// ∂F/∂θ = <H_K, L⁻¹ ∂K L⁻ᵀ> + 2 <H_T, A ∂Aᵀ> + <γ, ∂A Y>/s² - m/(2s) tr ∂K_ff,  ∂A = L⁻¹ ∂K_uf
+    /// ```
     fn gradient(&self, z: &DMatrix<f64>, x: &DMatrix<f64>, y: &DMatrix<f64>, with_noise: bool) -> Vec<f64> {
         let (f, m, s) = (x.nrows() as f64, y.ncols() as f64, self.noise_var);
         let mm = self.kuu.nrows();
-        let l_inv = lower_solve(&self.l_uu, &DMatrix::identity(mm, mm));
-        let k_inv = l_inv.tr_mul(&l_inv);
-        // P⁻¹ = L⁻ᵀ L_B⁻ᵀ L_B⁻¹ L⁻¹.
-        let r = upper_solve(&self.l_uu, &upper_solve(&self.l_b, &DMatrix::identity(mm, mm)));
-        let p_inv = &r * r.transpose();
-        let g_p = &p_inv * (-0.5 * m) - &self.beta * self.beta.transpose() * (0.5 / (s * s));
-        let kt = &k_inv * &self.t * &k_inv;
-        let g_k = &g_p + &k_inv * (0.5 * m) - kt * (0.5 * m / s);
-        let g_t = &g_p / s + &k_inv * (0.5 * m / s);
-        let beta_phi_y = self.beta.dot(&self.phi_y);
+        let eye = DMatrix::<f64>::identity(mm, mm);
+        let lb_inv = lower_solve(&self.l_b, &eye);
+        let b_inv = lb_inv.tr_mul(&lb_inv);
+        let h_p = &b_inv * (-0.5 * m) - &self.gamma * self.gamma.transpose() * (0.5 / (s * s));
+        let h_k = &h_p + &eye * (0.5 * m) - &self.s_mat * (0.5 * m / s);
+        let h_t = &h_p / s + &eye * (0.5 * m / s);
+        let gamma_ay = self.gamma.dot(&self.a_y);
         let mut grad = Vec::with_capacity(3);
         if self.kernel.param_names().len() == 2 {
-            let (_, dphi) = self.kernel.cross_with_dlog_l(x, z);
-            let dphi = dphi.expect("kernel with a length scale");
+            let (_, da) = self.kernel.cross_with_dlog_l(z, x);
+            let mut da = da.expect("kernel with a length scale");
+            lower_solve_in_place(&self.l_uu, &mut da);
             let dkuu = self.kernel.gram_with_grads(z).1.swap_remove(0);
             let (_, dkff) = self.kernel.diag_with_dlog_l(x);
-            let c = tr_mul(&self.phi, &dphi);
-            let dphi_y = tr_mul(&dphi, y);
+            let c = mul_tr(&self.a, &da, false);
+            let da_y = &da * y;
             grad.push(
-                g_k.dot(&dkuu) + 2.0 * g_t.dot(&c) + self.beta.dot(&dphi_y) / (s * s)
+                h_k.dot(&self.whiten(&dkuu)) + 2.0 * h_t.dot(&c) + self.gamma.dot(&da_y) / (s * s)
                     - 0.5 * m / s * dkff.sum(),
             );
         }
         grad.push(
-            2.0 * g_k.dot(&self.kuu) + 4.0 * g_t.dot(&self.t) + 2.0 * beta_phi_y / (s * s)
+            2.0 * h_k.dot(&self.whiten(&self.kuu)) + 4.0 * h_t.dot(&self.s_mat) + 2.0 * gamma_ay / (s * s)
                 - m / s * self.trace_kff,
         );
         if with_noise {
-            let d_s = -g_p.dot(&self.t) / (s * s) - 0.5 * f * m / s + 0.5 * self.yy / (s * s)
-                - beta_phi_y / (s * s * s)
+            let d_s = -h_p.dot(&self.s_mat) / (s * s) - 0.5 * f * m / s + 0.5 * self.yy / (s * s)
+                - gamma_ay / (s * s * s)
                 + 0.5 * m / (s * s) * (self.trace_kff - self.trace_qff);
             grad.push(s * d_s);
         }
@@ -291,7 +301,7 @@ impl SparseFactored {
 
     fn into_model(self, x: &DMatrix<f64>, z: &DMatrix<f64>) -> Gpr {
         let l_p = &self.l_uu * &self.l_b;
-        let alpha = &self.beta / self.noise_var;
+        let alpha = upper_solve(&self.l_uu, &self.gamma) / self.noise_var;
         Gpr::from_sparse(
             self.kernel,
             self.noise_var,
