@@ -154,6 +154,15 @@ pub fn lower_solve_in_place(l: &DMatrix<f64>, b: &mut DMatrix<f64>) {
     );
 }
 
+/// `L⁻ᵀ B` in place for a lower-triangular `L` (only its lower triangle is read).
+pub fn lower_tr_solve_in_place(l: &DMatrix<f64>, b: &mut DMatrix<f64>) {
+    faer::linalg::triangular_solve::solve_upper_triangular_in_place(
+        view(l).transpose(),
+        view_mut(b),
+        faer::get_global_parallelism(),
+    );
+}
+
 /// `A Bᵀ` by faer's blocked matrix product (no transposed copy of `B`). With `symmetric`
 /// (`B = A`) only the lower triangle is computed, then mirrored.
 pub fn mul_tr(a: &DMatrix<f64>, b: &DMatrix<f64>, symmetric: bool) -> DMatrix<f64> {

@@ -39,17 +39,18 @@ use crate::gpr::{
 };
 use crate::inducing::greedy_variance;
 use crate::kernel::Kernel;
-use crate::linalg::{lower_solve_in_place, mul_tr, Cholesky};
+use crate::linalg::{lower_solve_in_place, lower_tr_solve_in_place, mul_tr, Cholesky};
 use crate::optim::minimize_lazy;
 use crate::{check_finite, invalid, Result};
 use nalgebra::{DMatrix, DVector};
 use serde::{Deserialize, Serialize};
 
-/// Jitter added to `K_uu`, relative to the signal variance `σf²` (so `K_uu + ε σf² I` stays
-/// proportional to `σf²` and `∂/∂log σf` is still twice the matrix). The NN kernel tends to a
-/// rank-`D+1` linear kernel as `l` grows, so with more inducing inputs than that `K_uu`
-/// becomes singular during the optimisation; GPy and GPflow add a fixed `1e-6` for the same
-/// reason. Training uses this value; the lower-level functions take it as an argument (0
+/// Jitter added to `K_uu`, relative to the mean of its diagonal: `K_uu + ε mean(diag K_uu) I`
+/// (a differentiable function of the hyperparameters, included in the gradient). The NN kernel
+/// tends to a rank-`D+1` linear kernel as `l` grows, so with more inducing inputs than that
+/// `K_uu` becomes singular during the optimisation; GPy and GPflow add a fixed absolute `1e-6`
+/// for the same reason (relative here because the NN kernel's prior variance falls as
+/// `σf² / (2 l²)` in that limit, where an absolute or `σf²`-relative jitter would dominate). Training uses this value; the lower-level functions take it as an argument (0
 /// gives the bound exactly as written, e.g. to compare with the exact GP at `Z = X`).
 pub const KUU_JITTER: f64 = 1e-6;
 
@@ -142,14 +143,25 @@ impl SparsePosterior {
 
 fn lower_solve(l: &DMatrix<f64>, b: &DMatrix<f64>) -> DMatrix<f64> {
     let mut x = b.clone();
-    l.solve_lower_triangular_unchecked_mut(&mut x);
+    lower_solve_in_place(l, &mut x);
     x
 }
 
+/// `L⁻ᵀ B` for the lower-triangular `l`.
 fn upper_solve(l: &DMatrix<f64>, b: &DMatrix<f64>) -> DMatrix<f64> {
     let mut x = b.clone();
-    l.tr_solve_lower_triangular_unchecked_mut(&mut x);
+    lower_tr_solve_in_place(l, &mut x);
     x
+}
+
+/// `D += ε mean(diag D) I` (linear in `D`, so the derivative of the jittered `K_uu` is the
+/// jittered derivative).
+fn add_relative_jitter(d: &mut DMatrix<f64>, eps: f64) {
+    let n = d.nrows();
+    let add = eps * d.trace() / n.max(1) as f64;
+    for i in 0..n {
+        d[(i, i)] += add;
+    }
 }
 
 fn check_inducing(z: &DMatrix<f64>, x: &DMatrix<f64>) -> Result<()> {
@@ -172,8 +184,10 @@ fn check_inducing(z: &DMatrix<f64>, x: &DMatrix<f64>) -> Result<()> {
 struct SparseFactored {
     kernel: Kernel,
     noise_var: f64,
-    /// `K_uu + ε σf² I` ([`KUU_JITTER`]) and the lower factor of it plus any jitter retry.
+    /// `K_uu + ε mean(diag K_uu) I` ([`KUU_JITTER`]) and the lower factor of it plus any
+    /// jitter retry.
     kuu: DMatrix<f64>,
+    kuu_jitter: f64,
     l_uu: DMatrix<f64>,
     jitter: f64,
     /// `A = L⁻¹ K_uf` (`M x F`), `S = A Aᵀ`, `A Y`.
@@ -207,10 +221,7 @@ impl SparseFactored {
             return invalid(format!("sparse GP: noise variance must be > 0, got {s}"));
         }
         let mut kuu = kernel.gram(z);
-        let sf2 = (2.0 * kernel.log_params().last().copied().unwrap_or(0.0)).exp();
-        for i in 0..kuu.nrows() {
-            kuu[(i, i)] += kuu_jitter * sf2;
-        }
+        add_relative_jitter(&mut kuu, kuu_jitter);
         let chol = Cholesky::new(&kuu, "K_uu", notes)?;
         let (l_uu, jitter) = (chol.lower(), chol.jitter);
         let mut a = kernel.cross(z, x);
@@ -236,6 +247,7 @@ impl SparseFactored {
             kernel: *kernel,
             noise_var,
             kuu,
+            kuu_jitter,
             l_uu,
             jitter,
             a,
@@ -267,7 +279,7 @@ impl SparseFactored {
         let mm = self.kuu.nrows();
         let eye = DMatrix::<f64>::identity(mm, mm);
         let lb_inv = lower_solve(&self.l_b, &eye);
-        let b_inv = lb_inv.tr_mul(&lb_inv);
+        let b_inv = mul_tr(&lb_inv.transpose(), &lb_inv.transpose(), true);
         let h_p = &b_inv * (-0.5 * m) - &self.gamma * self.gamma.transpose() * (0.5 / (s * s));
         let h_k = &h_p + &eye * (0.5 * m) - &self.s_mat * (0.5 * m / s);
         let h_t = &h_p / s + &eye * (0.5 * m / s);
@@ -277,7 +289,8 @@ impl SparseFactored {
             let (_, da) = self.kernel.cross_with_dlog_l(z, x);
             let mut da = da.expect("kernel with a length scale");
             lower_solve_in_place(&self.l_uu, &mut da);
-            let dkuu = self.kernel.gram_with_grads(z).1.swap_remove(0);
+            let mut dkuu = self.kernel.gram_with_grads(z).1.swap_remove(0);
+            add_relative_jitter(&mut dkuu, self.kuu_jitter);
             let (_, dkff) = self.kernel.diag_with_dlog_l(x);
             let c = mul_tr(&self.a, &da, false);
             let da_y = &da * y;
@@ -318,7 +331,7 @@ impl SparseFactored {
 }
 
 /// Titsias' bound on the log marginal likelihood of `Y` given `X` with inducing inputs `Z`,
-/// summed over the output columns, with `K_uu + kuu_jitter σf² I`.
+/// summed over the output columns, with `K_uu + kuu_jitter · mean(diag K_uu) I`.
 pub fn sparse_bound(
     kernel: &Kernel,
     noise_var: f64,
