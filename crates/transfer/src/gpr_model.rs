@@ -619,6 +619,29 @@ mod tests {
         }
     }
 
+    /// `--sparse`: with enough inducing inputs for the training inputs (which lie on a curve:
+    /// greedy selection stops once they are explained) the sparse model predicts as the exact
+    /// one, through the same model type and the same confidence code.
+    #[test]
+    fn sparse_training_predicts_like_exact_through_the_same_model() {
+        let names = vec!["p".to_string()];
+        let data = pair(120, &|x| x.tanh() + 0.3 * x * x);
+        let train_with = |sparse| {
+            let opts = GprOptions { noise_var: 1e-2, sparse, ..Default::default() };
+            train(Method::GprNn, true, MeanFunction::Affine, &names, &[data.clone()], 1.0, false, &opts).unwrap()
+        };
+        let exact = train_with(gp::sparse_gpr::Sparsity::Exact);
+        let sparse = train_with(gp::sparse_gpr::Sparsity::Inducing(60));
+        assert!(sparse.reports[0].inducing.is_some_and(|m| m > 0 && m <= 60));
+        assert_eq!(exact.reports[0].inducing, None);
+        let xs = DMatrix::from_fn(7, 2, |i, c| (i as f64 * 0.9 + c as f64).cos());
+        let (ye, ys) = (exact.parts[0].predict(&xs).unwrap(), sparse.parts[0].predict(&xs).unwrap());
+        assert!((&ye - &ys).amax() < 1e-3 * ye.amax(), "{ye} vs {ys}");
+        let disp = DMatrix::from_fn(7, 6, |i, c| 0.01 * ((i + c) as f64).sin());
+        let c = crate::confidence::confidence(&sparse, &[xs], &disp).unwrap();
+        assert!(c.variance_ratio["p"].as_ref().unwrap().iter().all(|v| (0.0..=1.0).contains(v)));
+    }
+
     /// A linear map is learnt exactly by the linear-kernel GP (up to the
     /// noise's shrinkage), and a smooth non-linear one by the NN kernel.
     #[test]
