@@ -10,8 +10,9 @@
 //! T = Φᵀ Φ,  K = L Lᵀ,  B = I + L⁻¹ T L⁻ᵀ / s = L_B L_Bᵀ,  c = L_B⁻¹ L⁻¹ Φᵀ Y / s
 //! ```
 //! (matrix determinant lemma and Woodbury, with `P = K + T/s = L B Lᵀ`). Only `M x M` and
-//! `F x M` matrices appear: a value costs one `F x M` kernel block and the product `ΦᵀΦ`
-//! (`F M²`), never an `F x F` matrix.
+//! `M x F` matrices appear, never an `F x F` one: a value costs one `M x F` kernel block, the
+//! whitened features `A = L⁻¹ Φᵀ` (a triangular solve, `F M²`) and `S = A Aᵀ = L⁻¹ T L⁻ᵀ`
+//! (`F M²/2`); the code works with `S` rather than `T` (see `SparseFactored`).
 //!
 //! Gradient, through `K`, `Φ` and `diag K_ff` (each kernel's `∂/∂log σf` is twice itself):
 //! ```text
@@ -20,9 +21,9 @@
 //! ∂F/∂θ = <G_K, ∂K> + 2 <G_T, Φᵀ ∂Φ> + <β, ∂Φᵀ Y>/s² - m/(2s) tr ∂K_ff
 //! ∂F/∂s = -<G_P, T>/s² - F m/(2s) + |Y|²/(2s²) - <β, ΦᵀY>/s³ + m/(2s²)(tr K_ff - tr(K⁻¹T))
 //! ```
-//! (`<·,·>` the Frobenius product); the gradient adds one `F M²` product `Φᵀ ∂Φ/∂log l` and
-//! the elements of the `M x M` inverses `K⁻¹`, `P⁻¹` (needed for the trace terms, as in the
-//! exact GP's gradient). The inducing inputs are fixed during optimisation
+//! (`<·,·>` the Frobenius product); computed whitened (`SparseFactored::gradient`), it adds
+//! one `M x F` kernel-derivative block, its triangular solve and one product (`2 F M²`), and the
+//! elements of `B⁻¹` (`M x M`, needed for the trace terms, as in the exact GP's gradient). The inducing inputs are fixed during optimisation
 //! ([`crate::inducing::greedy_variance`] at the starting hyperparameters); the kernel
 //! hyperparameters (and optionally `σn²`) are optimised, as for the exact GP.
 //!
