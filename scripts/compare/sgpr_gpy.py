@@ -30,22 +30,13 @@ try:
 except ImportError:
     sys.exit("sgpr_gpy.py: GPy not installed (pip install GPy==1.15.0 numpy scipy)")
 
+from gpr_gpy import from_gpy, mlp_kernel  # the same kernel mapping (this script's folder)
+
 KUU_JITTER = 1e-6  # crates/gp/src/sparse_gpr.rs, relative to mean(diag K_uu)
 
 
-def to_gpy(l, sf):
-    return 1.0 / (2.0 * l * l), sf * sf * math.pi / 2.0
-
-
-def from_gpy(w, var):
-    return math.sqrt(1.0 / (2.0 * w)), math.sqrt(2.0 * var / math.pi)
-
-
 def model_for(x, y, z, noise, l, sf):
-    w, var = to_gpy(l, sf)
-    k = GPy.kern.MLP(input_dim=x.shape[1], variance=var, weight_variance=w, bias_variance=1e-300)
-    with np.errstate(divide="ignore"):
-        k.bias_variance.fix(0.0)  # eq. 10 has no bias
+    k = mlp_kernel(x.shape[1], l, sf)
     m = GPy.models.SparseGPRegression(x, y, kernel=k, Z=z.copy())
     m.inducing_inputs.fix()
     m.Gaussian_noise.variance = noise

@@ -263,6 +263,22 @@ impl SparseFactored {
         })
     }
 
+    /// [`SparseFactored::new`] after checking the arrays' shapes and values.
+    #[allow(clippy::too_many_arguments)]
+    fn checked(
+        kernel: &Kernel,
+        noise_var: f64,
+        z: &DMatrix<f64>,
+        x: &DMatrix<f64>,
+        y: &DMatrix<f64>,
+        kuu_jitter: f64,
+        notes: &mut Vec<String>,
+    ) -> Result<Self> {
+        check_xy(x, y)?;
+        check_inducing(z, x)?;
+        Self::new(kernel, noise_var, z, x, y, kuu_jitter, notes)
+    }
+
     /// `L⁻¹ D L⁻ᵀ` for a symmetric `D`.
     fn whiten(&self, d: &DMatrix<f64>) -> DMatrix<f64> {
         let half = lower_solve(&self.l_uu, d);
@@ -342,9 +358,7 @@ pub fn sparse_bound(
     kuu_jitter: f64,
     notes: &mut Vec<String>,
 ) -> Result<f64> {
-    check_xy(x, y)?;
-    check_inducing(z, x)?;
-    Ok(SparseFactored::new(kernel, noise_var, z, x, y, kuu_jitter, notes)?.value)
+    Ok(SparseFactored::checked(kernel, noise_var, z, x, y, kuu_jitter, notes)?.value)
 }
 
 /// The bound and its gradient with respect to the kernel's log hyperparameters
@@ -359,9 +373,7 @@ pub fn sparse_bound_grad(
     kuu_jitter: f64,
     notes: &mut Vec<String>,
 ) -> Result<(f64, Vec<f64>)> {
-    check_xy(x, y)?;
-    check_inducing(z, x)?;
-    let f = SparseFactored::new(kernel, noise_var, z, x, y, kuu_jitter, notes)?;
+    let f = SparseFactored::checked(kernel, noise_var, z, x, y, kuu_jitter, notes)?;
     Ok((f.value, f.gradient(z, x, y, with_noise)))
 }
 
@@ -375,9 +387,7 @@ pub fn fit_sparse(
     kuu_jitter: f64,
     notes: &mut Vec<String>,
 ) -> Result<Gpr> {
-    check_xy(x, y)?;
-    check_inducing(z, x)?;
-    Ok(SparseFactored::new(&kernel, noise_var, z, x, y, kuu_jitter, notes)?.into_model(x, z))
+    Ok(SparseFactored::checked(&kernel, noise_var, z, x, y, kuu_jitter, notes)?.into_model(x, z))
 }
 
 /// Trains the sparse GP with at most `m` inducing inputs: starting hyperparameters as the
