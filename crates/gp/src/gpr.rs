@@ -356,6 +356,80 @@ pub(crate) fn summarise_notes(mut notes: Vec<String>) -> Vec<String> {
     notes
 }
 
+/// Where [`maximise`] ended: the hyperparameters, how, and the factorisation at that point
+/// when the optimiser's last request was there.
+pub(crate) struct Maximised<F> {
+    pub kernel: Kernel,
+    pub noise_var: f64,
+    pub exit: ExitState,
+    pub iterations: usize,
+    pub evaluations: usize,
+    pub gradient_evaluations: usize,
+    pub at_optimum: Option<F>,
+}
+
+/// Maximises a likelihood (exact, or the sparse bound) over the kernel's log hyperparameters
+/// (and `log σn²` with `opts.learn_noise`) in the search coordinates of [`to_search`], with the
+/// lazy-gradient CG. `factor` factorises at one setting (`Err`: treated as `-∞`), `value` and
+/// `gradient` read a factorisation; the last one is kept, so the gradient that follows a value
+/// at the same point reuses it. `seed` is the factorisation at `start`, if already made.
+pub(crate) fn maximise<F>(
+    start: Kernel,
+    opts: &GprOptions,
+    seed: Option<F>,
+    mut factor: impl FnMut(&Kernel, f64) -> Result<F>,
+    value: impl Fn(&F) -> f64,
+    gradient: impl Fn(&F) -> Vec<f64>,
+) -> Maximised<F> {
+    let nk = start.param_names().len();
+    let valley = matches!(start, Kernel::NeuralNetwork { .. });
+    let mut phi0 = to_search(&start.log_params(), valley);
+    if opts.learn_noise {
+        phi0.push(opts.noise_var.ln());
+    }
+    let at = |phi: &[f64]| {
+        let kern = start.with_log_params(&from_search(&phi[..nk], valley));
+        let noise = if opts.learn_noise { phi[nk].exp() } else { opts.noise_var };
+        (kern, noise)
+    };
+    let mut last: Option<(Vec<f64>, Result<F>)> = seed.map(|f| (phi0.clone(), Ok(f)));
+    let r = minimize_lazy(
+        |phi: &[f64], need_grad: bool| {
+            if last.as_ref().is_none_or(|(p, _)| p.as_slice() != phi) {
+                let (kern, noise) = at(phi);
+                last = Some((phi.to_vec(), factor(&kern, noise)));
+            }
+            let Some((_, Ok(f))) = &last else {
+                return (f64::INFINITY, None);
+            };
+            if !need_grad {
+                return (-value(f), None);
+            }
+            let mut g = gradient(f);
+            if valley {
+                g[0] += g[1]; // chain rule for (log l, log σf) = (φ0, φ0 + φ1)
+            }
+            (-value(f), Some(g.into_iter().map(|d| -d).collect()))
+        },
+        &phi0,
+        &opts.cg,
+    );
+    let (kernel, noise_var) = at(&r.x);
+    let at_optimum = match last {
+        Some((p, Ok(f))) if p == r.x => Some(f),
+        _ => None,
+    };
+    Maximised {
+        kernel,
+        noise_var,
+        exit: r.exit,
+        iterations: r.iterations,
+        evaluations: r.evaluations,
+        gradient_evaluations: r.gradient_evaluations,
+        at_optimum,
+    }
+}
+
 impl Gpr {
     /// Conditions the GP on `(X, Y)` with fixed hyperparameters (no optimisation).
     pub fn fit(
@@ -414,52 +488,19 @@ impl Gpr {
         let mut first = Some(Factored::new(&start, opts.noise_var, x, y, &mut notes)?);
         let initial_lml = first.as_ref().map_or(f64::NAN, |f| f.value);
         let (kernel, noise_var, exit, iterations, evaluations) = if opts.optimise {
-            let nk = start.param_names().len();
-            let valley = matches!(start, Kernel::NeuralNetwork { .. });
-            let mut phi0 = to_search(&start.log_params(), valley);
-            if opts.learn_noise {
-                phi0.push(opts.noise_var.ln());
-            }
-            // The factorisation of the last point asked for, reused when the optimiser then
-            // asks for the gradient at the same point.
             // Seeded with the starting point, where the optimiser begins (not with a learnt
             // noise, whose start exp(ln σn²) may differ from σn² in the last bit).
-            let mut last: Option<(Vec<f64>, Result<Factored>)> = match opts.learn_noise {
-                false => first.take().map(|f| (phi0.clone(), Ok(f))),
-                true => None,
-            };
-            let objective = |phi: &[f64], need_grad: bool| {
-                if last.as_ref().is_none_or(|(p, _)| p.as_slice() != phi) {
-                    let kern = start.with_log_params(&from_search(&phi[..nk], valley));
-                    let noise = if opts.learn_noise {
-                        phi[nk].exp()
-                    } else {
-                        opts.noise_var
-                    };
-                    let f = Factored::new(&kern, noise, x, y, &mut notes);
-                    last = Some((phi.to_vec(), f));
-                }
-                let Some((_, Ok(f))) = &last else {
-                    return (f64::INFINITY, None);
-                };
-                if !need_grad {
-                    return (-f.value, None);
-                }
-                let mut g = f.gradient(x, opts.learn_noise);
-                if valley {
-                    g[0] += g[1]; // chain rule for (log l, log σf) = (φ0, φ0 + φ1)
-                }
-                (-f.value, Some(g.into_iter().map(|d| -d).collect()))
-            };
-            let r = minimize_lazy(objective, &phi0, &opts.cg);
-            let kern = start.with_log_params(&from_search(&r.x[..nk], valley));
-            let noise = if opts.learn_noise {
-                r.x[nk].exp()
-            } else {
-                opts.noise_var
-            };
+            let seed = if opts.learn_noise { None } else { first.take() };
+            let r = maximise(
+                start,
+                opts,
+                seed,
+                |kern, noise| Factored::new(kern, noise, x, y, &mut notes),
+                |f| f.value,
+                |f| f.gradient(x, opts.learn_noise),
+            );
             let counts = (r.evaluations, r.gradient_evaluations);
-            (kern, noise, Some(r.exit), r.iterations, counts)
+            (r.kernel, r.noise_var, Some(r.exit), r.iterations, counts)
         } else {
             (start, opts.noise_var, None, 0, (0, 0))
         };

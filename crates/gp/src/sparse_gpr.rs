@@ -34,14 +34,10 @@
 //! Cross-check: `scripts/compare/sgpr_gpy.py` against GPy's `SparseGPRegression` with the
 //! same inducing inputs.
 
-use crate::gpr::{
-    check_xy, from_search, initial_kernel, summarise_notes, to_search, warm_start, Gpr,
-    GprOptions, TrainReport,
-};
+use crate::gpr::{check_xy, initial_kernel, maximise, summarise_notes, warm_start, Gpr, GprOptions, TrainReport};
 use crate::inducing::greedy_variance;
 use crate::kernel::Kernel;
 use crate::linalg::{lower_solve_in_place, lower_tr_solve_in_place, mul_tr, Cholesky};
-use crate::optim::minimize_lazy;
 use crate::{check_finite, invalid, Result};
 use nalgebra::{DMatrix, DVector};
 use serde::{Deserialize, Serialize};
@@ -216,6 +212,8 @@ impl SparseFactored {
         kuu_jitter: f64,
         notes: &mut Vec<String>,
     ) -> Result<Self> {
+        check_xy(x, y)?;
+        check_inducing(z, x)?;
         let (f, m) = (x.nrows() as f64, y.ncols() as f64);
         let s = noise_var;
         if !(s > 0.0 && s.is_finite()) {
@@ -261,22 +259,6 @@ impl SparseFactored {
             gamma,
             value,
         })
-    }
-
-    /// [`SparseFactored::new`] after checking the arrays' shapes and values.
-    #[allow(clippy::too_many_arguments)]
-    fn checked(
-        kernel: &Kernel,
-        noise_var: f64,
-        z: &DMatrix<f64>,
-        x: &DMatrix<f64>,
-        y: &DMatrix<f64>,
-        kuu_jitter: f64,
-        notes: &mut Vec<String>,
-    ) -> Result<Self> {
-        check_xy(x, y)?;
-        check_inducing(z, x)?;
-        Self::new(kernel, noise_var, z, x, y, kuu_jitter, notes)
     }
 
     /// `L⁻¹ D L⁻ᵀ` for a symmetric `D`.
@@ -358,7 +340,7 @@ pub fn sparse_bound(
     kuu_jitter: f64,
     notes: &mut Vec<String>,
 ) -> Result<f64> {
-    Ok(SparseFactored::checked(kernel, noise_var, z, x, y, kuu_jitter, notes)?.value)
+    Ok(SparseFactored::new(kernel, noise_var, z, x, y, kuu_jitter, notes)?.value)
 }
 
 /// The bound and its gradient with respect to the kernel's log hyperparameters
@@ -373,7 +355,7 @@ pub fn sparse_bound_grad(
     kuu_jitter: f64,
     notes: &mut Vec<String>,
 ) -> Result<(f64, Vec<f64>)> {
-    let f = SparseFactored::checked(kernel, noise_var, z, x, y, kuu_jitter, notes)?;
+    let f = SparseFactored::new(kernel, noise_var, z, x, y, kuu_jitter, notes)?;
     Ok((f.value, f.gradient(z, x, y, with_noise)))
 }
 
@@ -387,7 +369,7 @@ pub fn fit_sparse(
     kuu_jitter: f64,
     notes: &mut Vec<String>,
 ) -> Result<Gpr> {
-    Ok(SparseFactored::checked(&kernel, noise_var, z, x, y, kuu_jitter, notes)?.into_model(x, z))
+    Ok(SparseFactored::new(&kernel, noise_var, z, x, y, kuu_jitter, notes)?.into_model(x, z))
 }
 
 /// Trains the sparse GP with at most `m` inducing inputs: starting hyperparameters as the
@@ -428,44 +410,19 @@ pub fn train_sparse_with_inducing(
     let mut notes = Vec::new();
     let first = SparseFactored::new(&start, opts.noise_var, z, x, y, KUU_JITTER, &mut notes)?;
     let initial_lml = first.value;
-    let nk = start.param_names().len();
-    let valley = matches!(start, Kernel::NeuralNetwork { .. });
     let (fitted, exit, iterations, evaluations, gradient_evaluations) = if opts.optimise {
-        let mut phi0 = to_search(&start.log_params(), valley);
-        if opts.learn_noise {
-            phi0.push(opts.noise_var.ln());
-        }
-        let mut last: Option<(Vec<f64>, Result<SparseFactored>)> = match opts.learn_noise {
-            false => Some((phi0.clone(), Ok(first))),
-            true => None,
-        };
-        let r = minimize_lazy(
-            |phi: &[f64], need_grad: bool| {
-                if last.as_ref().is_none_or(|(p, _)| p.as_slice() != phi) {
-                    let kern = start.with_log_params(&from_search(&phi[..nk], valley));
-                    let noise = if opts.learn_noise { phi[nk].exp() } else { opts.noise_var };
-                    last = Some((phi.to_vec(), SparseFactored::new(&kern, noise, z, x, y, KUU_JITTER, &mut notes)));
-                }
-                let Some((_, Ok(f))) = &last else {
-                    return (f64::INFINITY, None);
-                };
-                if !need_grad {
-                    return (-f.value, None);
-                }
-                let mut g = f.gradient(z, x, y, opts.learn_noise);
-                if valley {
-                    g[0] += g[1];
-                }
-                (-f.value, Some(g.into_iter().map(|d| -d).collect()))
-            },
-            &phi0,
-            &opts.cg,
+        let seed = if opts.learn_noise { None } else { Some(first) };
+        let r = maximise(
+            start,
+            opts,
+            seed,
+            |kern, noise| SparseFactored::new(kern, noise, z, x, y, KUU_JITTER, &mut notes),
+            |f| f.value,
+            |f| f.gradient(z, x, y, opts.learn_noise),
         );
-        let kern = start.with_log_params(&from_search(&r.x[..nk], valley));
-        let noise = if opts.learn_noise { r.x[nk].exp() } else { opts.noise_var };
-        let fitted = match last {
-            Some((p, Ok(f))) if p == r.x => f,
-            _ => SparseFactored::new(&kern, noise, z, x, y, KUU_JITTER, &mut notes)?,
+        let fitted = match r.at_optimum {
+            Some(f) => f,
+            None => SparseFactored::new(&r.kernel, r.noise_var, z, x, y, KUU_JITTER, &mut notes)?,
         };
         (fitted, Some(r.exit), r.iterations, r.evaluations, r.gradient_evaluations)
     } else {
