@@ -38,11 +38,17 @@ def from_gpy(w, var):
     return math.sqrt(1.0 / (2.0 * w)), math.sqrt(2.0 * var / math.pi)
 
 
-def model_for(x, y, noise, l, sf):
+def mlp_kernel(dim, l, sf):
+    """GPy's MLP kernel equal to eq. 10 with length scale l and signal sigma_f = sf."""
     w, var = to_gpy(l, sf)
-    k = GPy.kern.MLP(input_dim=x.shape[1], variance=var, weight_variance=w, bias_variance=1e-300)
+    k = GPy.kern.MLP(input_dim=dim, variance=var, weight_variance=w, bias_variance=1e-300)
     with np.errstate(divide="ignore"):
         k.bias_variance.fix(0.0)  # eq. 10 has no bias
+    return k
+
+
+def model_for(x, y, noise, l, sf):
+    k = mlp_kernel(x.shape[1], l, sf)
     m = GPy.models.GPRegression(x, y, kernel=k, noise_var=noise)
     m.Gaussian_noise.variance.fix(noise)
     return m

@@ -78,5 +78,32 @@ fn predict(c: &mut Criterion) {
     g.finish();
 }
 
-criterion_group!(benches, lml_grad, predict, train);
+/// The sparse GP (issue 17 targets: 12 models <= 10 s at 10⁴ pairs, <= 100 s at 10⁵; the 10⁵
+/// run is `examples/sgpr_compare.rs --pairs 100000`, too long for criterion's samples):
+/// one bound + gradient evaluation at 10³ and 10⁴ pairs, and training the 12 models at 10³.
+fn sparse(c: &mut Criterion) {
+    use gp::sparse_gpr::{sparse_bound_grad, Sparsity, KUU_JITTER};
+    let mut g = c.benchmark_group("sparse_bound_and_gradient_one_model_m256");
+    g.sample_size(10);
+    for n in [1000usize, 10_000] {
+        let p = synthetic_pairs::pairs(n, 7);
+        let (x, y) = &p[0];
+        let k = Kernel::neural_network(3.0, 1.5);
+        let z = x.select_rows(gp::inducing::greedy_variance(&k, x, 256).iter());
+        g.bench_function(BenchmarkId::from_parameter(n), |b| {
+            b.iter(|| sparse_bound_grad(&k, 0.1, false, &z, x, y, KUU_JITTER, &mut Vec::new()).unwrap())
+        });
+    }
+    g.finish();
+    let mut g = c.benchmark_group("sparse_train_all_parts_both_directions_m256");
+    g.sample_size(10).measurement_time(Duration::from_secs(30));
+    let problems = synthetic_pairs::both_directions(1000, 7);
+    let opts = GprOptions { sparse: Sparsity::Inducing(256), ..Default::default() };
+    g.bench_function(BenchmarkId::from_parameter(1000), |b| {
+        b.iter(|| train_many(Kernel::neural_network(1.0, 1.0), &problems, &opts))
+    });
+    g.finish();
+}
+
+criterion_group!(benches, lml_grad, predict, train, sparse);
 criterion_main!(benches);

@@ -6,52 +6,13 @@
 //! e.g.: `OPENBLAS_NUM_THREADS=1 cargo run --release -p gp --example gpr_compare -- --pairs 1100 --dump /tmp/gpr1100`
 #[path = "../benches/synthetic_pairs.rs"]
 mod synthetic_pairs;
+mod support;
 
 use gp::gpr::{initial_kernel, train_many, Gpr, GprOptions};
 use gp::kernel::Kernel;
-use nalgebra::DMatrix;
+use support::{cpu_seconds, l_sf, write_csv};
 use rayon::prelude::*;
-use std::io::Write;
 use std::time::Instant;
-
-fn write_csv(path: &std::path::Path, m: &DMatrix<f64>) -> std::io::Result<()> {
-    let mut f = std::io::BufWriter::new(std::fs::File::create(path)?);
-    for r in m.row_iter() {
-        let line: Vec<String> = r.iter().map(|v| format!("{v:.17e}")).collect();
-        writeln!(f, "{}", line.join(","))?;
-    }
-    Ok(())
-}
-
-/// CPU time (user + system, all threads) of this process in seconds, from /proc/self/stat
-/// (Linux; NaN elsewhere): the machine is shared, so wall time alone misleads.
-fn cpu_seconds() -> f64 {
-    let Ok(stat) = std::fs::read_to_string("/proc/self/stat") else {
-        return f64::NAN;
-    };
-    // Fields after the parenthesised command name; utime and stime are fields 14 and 15.
-    let rest = stat.rsplit_once(')').map_or("", |(_, r)| r);
-    let f: Vec<f64> = rest
-        .split_whitespace()
-        .skip(11)
-        .take(2)
-        .filter_map(|v| v.parse().ok())
-        .collect();
-    if f.len() == 2 {
-        (f[0] + f[1]) / 100.0 // USER_HZ is 100 on Linux
-    } else {
-        f64::NAN
-    }
-}
-
-fn l_sf(k: &Kernel) -> (f64, f64) {
-    match *k {
-        Kernel::NeuralNetwork { l, sigma_f, .. } | Kernel::SquaredExponential { l, sigma_f } => {
-            (l, sigma_f)
-        }
-        Kernel::Linear { sigma_f } => (f64::NAN, sigma_f),
-    }
-}
 
 fn main() {
     let args: Vec<String> = std::env::args().collect();

@@ -34,6 +34,7 @@
 use crate::kernel::Kernel;
 use crate::linalg::Cholesky;
 use crate::optim::{minimize_lazy, CgOptions, ExitState};
+use crate::sparse_gpr::{train_sparse, SparsePosterior, Sparsity};
 use crate::{check_finite, invalid, Result};
 use nalgebra::{DMatrix, DVector};
 use rayon::prelude::*;
@@ -62,6 +63,9 @@ pub struct GprOptions {
     /// the 12 benchmark models: 1100 pairs, 256 -> 167 to 90-139 full-size evaluations.
     #[serde(default)]
     pub warm_start_pairs: usize,
+    /// Exact GP or Titsias' sparse bound ([`crate::sparse_gpr`]); exact by default.
+    #[serde(default)]
+    pub sparse: Sparsity,
 }
 
 impl Default for GprOptions {
@@ -73,6 +77,7 @@ impl Default for GprOptions {
             data_init: true,
             cg: CgOptions::default(),
             warm_start_pairs: 256,
+            sparse: Sparsity::Exact,
         }
     }
 }
@@ -97,18 +102,22 @@ pub struct TrainReport {
     pub notes: Vec<String>,
 }
 
-/// A trained GP regressor: hyperparameters, training inputs and `α = (K + σn² I)⁻¹ Y`.
+/// A trained GP regressor: hyperparameters, training inputs and `α = (K + σn² I)⁻¹ Y`; or,
+/// trained sparse ([`crate::sparse_gpr`]), the training inputs, `α = β / σn²` over the
+/// inducing inputs and the factors of the sparse posterior. Both predict through the same
+/// methods.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct Gpr {
     pub kernel: Kernel,
     pub noise_var: f64,
-    /// Jitter that had to be added to `K + σn² I` (0 normally).
+    /// Jitter that had to be added to `K + σn² I` (sparse: to `K_uu`; 0 normally).
     pub jitter: f64,
     x: DMatrix<f64>,
     alpha: DMatrix<f64>,
+    sparse: Option<SparsePosterior>,
 }
 
-fn check_xy(x: &DMatrix<f64>, y: &DMatrix<f64>) -> Result<()> {
+pub(crate) fn check_xy(x: &DMatrix<f64>, y: &DMatrix<f64>) -> Result<()> {
     if x.nrows() == 0 {
         return invalid("GP regression needs at least one training pair");
     }
@@ -297,7 +306,7 @@ pub fn initial_kernel(kernel: &Kernel, x: &DMatrix<f64>, y: &DMatrix<f64>) -> Ke
 /// `σf / l` fixed (eq. 10 tends to the linear kernel `σf²/(2l²) xᵀx'`); in these coordinates
 /// the valley is aligned with an axis and conjugate gradients need fewer steps. The optimum
 /// is the same (an invertible linear change of variables).
-fn to_search(theta: &[f64], valley: bool) -> Vec<f64> {
+pub(crate) fn to_search(theta: &[f64], valley: bool) -> Vec<f64> {
     if valley {
         vec![theta[0], theta[1] - theta[0]]
     } else {
@@ -305,7 +314,7 @@ fn to_search(theta: &[f64], valley: bool) -> Vec<f64> {
     }
 }
 
-fn from_search(phi: &[f64], valley: bool) -> Vec<f64> {
+pub(crate) fn from_search(phi: &[f64], valley: bool) -> Vec<f64> {
     if valley {
         vec![phi[0], phi[1] + phi[0]]
     } else {
@@ -316,7 +325,7 @@ fn from_search(phi: &[f64], valley: bool) -> Vec<f64> {
 /// The kernel hyperparameters maximising the likelihood on `opts.warm_start_pairs` evenly
 /// spaced training pairs (see [`GprOptions::warm_start_pairs`]), or `start` unchanged when
 /// the option is off, the data are small, or that fit fails.
-fn warm_start(start: Kernel, x: &DMatrix<f64>, y: &DMatrix<f64>, opts: &GprOptions) -> Kernel {
+pub(crate) fn warm_start(start: Kernel, x: &DMatrix<f64>, y: &DMatrix<f64>, opts: &GprOptions) -> Kernel {
     let n = x.nrows();
     let s = opts.warm_start_pairs.min(n / 3);
     if !opts.optimise || s < 32 {
@@ -328,6 +337,7 @@ fn warm_start(start: Kernel, x: &DMatrix<f64>, y: &DMatrix<f64>, opts: &GprOptio
         learn_noise: false,
         data_init: false,
         warm_start_pairs: 0,
+        sparse: Sparsity::Exact,
         ..*opts
     };
     match Gpr::train(start, &xs, &ys, &sub) {
@@ -336,7 +346,7 @@ fn warm_start(start: Kernel, x: &DMatrix<f64>, y: &DMatrix<f64>, opts: &GprOptio
     }
 }
 
-fn summarise_notes(mut notes: Vec<String>) -> Vec<String> {
+pub(crate) fn summarise_notes(mut notes: Vec<String>) -> Vec<String> {
     const KEEP: usize = 5;
     if notes.len() > KEEP {
         let extra = notes.len() - KEEP;
@@ -344,6 +354,80 @@ fn summarise_notes(mut notes: Vec<String>) -> Vec<String> {
         notes.push(format!("... and {extra} more jitter retries"));
     }
     notes
+}
+
+/// Where [`maximise`] ended: the hyperparameters, how, and the factorisation at that point
+/// when the optimiser's last request was there.
+pub(crate) struct Maximised<F> {
+    pub kernel: Kernel,
+    pub noise_var: f64,
+    pub exit: ExitState,
+    pub iterations: usize,
+    pub evaluations: usize,
+    pub gradient_evaluations: usize,
+    pub at_optimum: Option<F>,
+}
+
+/// Maximises a likelihood (exact, or the sparse bound) over the kernel's log hyperparameters
+/// (and `log σn²` with `opts.learn_noise`) in the search coordinates of [`to_search`], with the
+/// lazy-gradient CG. `factor` factorises at one setting (`Err`: treated as `-∞`), `value` and
+/// `gradient` read a factorisation; the last one is kept, so the gradient that follows a value
+/// at the same point reuses it. `seed` is the factorisation at `start`, if already made.
+pub(crate) fn maximise<F>(
+    start: Kernel,
+    opts: &GprOptions,
+    seed: Option<F>,
+    mut factor: impl FnMut(&Kernel, f64) -> Result<F>,
+    value: impl Fn(&F) -> f64,
+    gradient: impl Fn(&F) -> Vec<f64>,
+) -> Maximised<F> {
+    let nk = start.param_names().len();
+    let valley = matches!(start, Kernel::NeuralNetwork { .. });
+    let mut phi0 = to_search(&start.log_params(), valley);
+    if opts.learn_noise {
+        phi0.push(opts.noise_var.ln());
+    }
+    let at = |phi: &[f64]| {
+        let kern = start.with_log_params(&from_search(&phi[..nk], valley));
+        let noise = if opts.learn_noise { phi[nk].exp() } else { opts.noise_var };
+        (kern, noise)
+    };
+    let mut last: Option<(Vec<f64>, Result<F>)> = seed.map(|f| (phi0.clone(), Ok(f)));
+    let r = minimize_lazy(
+        |phi: &[f64], need_grad: bool| {
+            if last.as_ref().is_none_or(|(p, _)| p.as_slice() != phi) {
+                let (kern, noise) = at(phi);
+                last = Some((phi.to_vec(), factor(&kern, noise)));
+            }
+            let Some((_, Ok(f))) = &last else {
+                return (f64::INFINITY, None);
+            };
+            if !need_grad {
+                return (-value(f), None);
+            }
+            let mut g = gradient(f);
+            if valley {
+                g[0] += g[1]; // chain rule for (log l, log σf) = (φ0, φ0 + φ1)
+            }
+            (-value(f), Some(g.into_iter().map(|d| -d).collect()))
+        },
+        &phi0,
+        &opts.cg,
+    );
+    let (kernel, noise_var) = at(&r.x);
+    let at_optimum = match last {
+        Some((p, Ok(f))) if p == r.x => Some(f),
+        _ => None,
+    };
+    Maximised {
+        kernel,
+        noise_var,
+        exit: r.exit,
+        iterations: r.iterations,
+        evaluations: r.evaluations,
+        gradient_evaluations: r.gradient_evaluations,
+        at_optimum,
+    }
 }
 
 impl Gpr {
@@ -371,6 +455,7 @@ impl Gpr {
             jitter: chol.jitter,
             x: x.clone(),
             alpha,
+            sparse: None,
         })
     }
 
@@ -384,6 +469,9 @@ impl Gpr {
         opts: &GprOptions,
     ) -> Result<(Self, TrainReport)> {
         check_xy(x, y)?;
+        if let Some(m) = opts.sparse.inducing_for(x.nrows()) {
+            return train_sparse(kernel, x, y, m, opts);
+        }
         let mut notes = Vec::new();
         let start = if opts.data_init {
             initial_kernel(&kernel, x, y)
@@ -400,52 +488,19 @@ impl Gpr {
         let mut first = Some(Factored::new(&start, opts.noise_var, x, y, &mut notes)?);
         let initial_lml = first.as_ref().map_or(f64::NAN, |f| f.value);
         let (kernel, noise_var, exit, iterations, evaluations) = if opts.optimise {
-            let nk = start.param_names().len();
-            let valley = matches!(start, Kernel::NeuralNetwork { .. });
-            let mut phi0 = to_search(&start.log_params(), valley);
-            if opts.learn_noise {
-                phi0.push(opts.noise_var.ln());
-            }
-            // The factorisation of the last point asked for, reused when the optimiser then
-            // asks for the gradient at the same point.
             // Seeded with the starting point, where the optimiser begins (not with a learnt
             // noise, whose start exp(ln σn²) may differ from σn² in the last bit).
-            let mut last: Option<(Vec<f64>, Result<Factored>)> = match opts.learn_noise {
-                false => first.take().map(|f| (phi0.clone(), Ok(f))),
-                true => None,
-            };
-            let objective = |phi: &[f64], need_grad: bool| {
-                if last.as_ref().is_none_or(|(p, _)| p.as_slice() != phi) {
-                    let kern = start.with_log_params(&from_search(&phi[..nk], valley));
-                    let noise = if opts.learn_noise {
-                        phi[nk].exp()
-                    } else {
-                        opts.noise_var
-                    };
-                    let f = Factored::new(&kern, noise, x, y, &mut notes);
-                    last = Some((phi.to_vec(), f));
-                }
-                let Some((_, Ok(f))) = &last else {
-                    return (f64::INFINITY, None);
-                };
-                if !need_grad {
-                    return (-f.value, None);
-                }
-                let mut g = f.gradient(x, opts.learn_noise);
-                if valley {
-                    g[0] += g[1]; // chain rule for (log l, log σf) = (φ0, φ0 + φ1)
-                }
-                (-f.value, Some(g.into_iter().map(|d| -d).collect()))
-            };
-            let r = minimize_lazy(objective, &phi0, &opts.cg);
-            let kern = start.with_log_params(&from_search(&r.x[..nk], valley));
-            let noise = if opts.learn_noise {
-                r.x[nk].exp()
-            } else {
-                opts.noise_var
-            };
+            let seed = if opts.learn_noise { None } else { first.take() };
+            let r = maximise(
+                start,
+                opts,
+                seed,
+                |kern, noise| Factored::new(kern, noise, x, y, &mut notes),
+                |f| f.value,
+                |f| f.gradient(x, opts.learn_noise),
+            );
             let counts = (r.evaluations, r.gradient_evaluations);
-            (kern, noise, Some(r.exit), r.iterations, counts)
+            (r.kernel, r.noise_var, Some(r.exit), r.iterations, counts)
         } else {
             (start, opts.noise_var, None, 0, (0, 0))
         };
@@ -462,6 +517,7 @@ impl Gpr {
             jitter: fitted.chol.jitter,
             x: x.clone(),
             alpha: fitted.alpha,
+            sparse: None,
         };
         let report = TrainReport {
             exit,
@@ -473,6 +529,29 @@ impl Gpr {
             notes: summarise_notes(notes),
         };
         Ok((model, report))
+    }
+
+    /// A sparse model (built by [`crate::sparse_gpr`]): `alpha` weights the inducing inputs.
+    pub(crate) fn from_sparse(
+        kernel: Kernel,
+        noise_var: f64,
+        jitter: f64,
+        x: DMatrix<f64>,
+        alpha: DMatrix<f64>,
+        sparse: SparsePosterior,
+    ) -> Self {
+        Self { kernel, noise_var, jitter, x, alpha, sparse: Some(sparse) }
+    }
+
+    /// The sparse posterior (inducing inputs), `None` for the exact GP.
+    pub fn sparse(&self) -> Option<&SparsePosterior> {
+        self.sparse.as_ref()
+    }
+
+    /// The inputs the posterior mean is a kernel expansion over: the training inputs, or
+    /// the inducing inputs of a sparse model.
+    fn basis(&self) -> &DMatrix<f64> {
+        self.sparse.as_ref().map_or(&self.x, |s| &s.inducing)
     }
 
     /// Number of training pairs `F`.
@@ -509,7 +588,7 @@ impl Gpr {
     /// Posterior mean (eq. 13) for every row of `xs` (`N x D` -> `N x m`): `K_* α`.
     pub fn predict_mean(&self, xs: &DMatrix<f64>) -> Result<DMatrix<f64>> {
         self.check_inputs(xs)?;
-        Ok(self.kernel.cross(xs, &self.x) * &self.alpha)
+        Ok(self.kernel.cross(xs, self.basis()) * &self.alpha)
     }
 
     /// Posterior mean (eq. 13) and latent variance (eq. 12, shared by all outputs) for every
@@ -522,8 +601,11 @@ impl Gpr {
         notes: &mut Vec<String>,
     ) -> Result<(DMatrix<f64>, DVector<f64>)> {
         self.check_inputs(xs)?;
-        let ks = self.kernel.cross(xs, &self.x);
+        let ks = self.kernel.cross(xs, self.basis());
         let mean = &ks * &self.alpha;
+        if let Some(sp) = &self.sparse {
+            return Ok((mean, sp.variance(&ks.transpose(), &self.kernel.diag(xs))));
+        }
         let mut ky = noisy_gram(self.kernel.gram_lower(&self.x, false).0, self.noise_var);
         for i in 0..ky.nrows() {
             ky[(i, i)] += self.jitter;

@@ -160,6 +160,55 @@ impl Kernel {
     }
 }
 
+impl Kernel {
+    /// Cross covariance `K(xs, x)` (`N x F`, as [`Kernel::cross`]) and, for kernels with a
+    /// length scale, its derivative `∂K/∂log l` (the sparse GP's `K_uf` and its gradient).
+    pub(crate) fn cross_with_dlog_l(
+        &self,
+        xs: &DMatrix<f64>,
+        x: &DMatrix<f64>,
+    ) -> (DMatrix<f64>, Option<DMatrix<f64>>) {
+        let mut k = xs * x.transpose();
+        let mut dl = (self.param_names().len() == 2).then(|| DMatrix::zeros(k.nrows(), k.ncols()));
+        let (rs, rt) = (self.rows(xs), self.rows(x));
+        let n = k.nrows().max(1);
+        for (j, col) in k.as_mut_slice().chunks_exact_mut(n).enumerate() {
+            match dl.as_mut() {
+                Some(dl) => {
+                    let dcol = &mut dl.as_mut_slice()[j * n..(j + 1) * n];
+                    for (i, v) in col.iter_mut().enumerate() {
+                        let (e, d) = self.entry(*v, &rs, i, &rt, j, true);
+                        *v = e;
+                        dcol[i] = d;
+                    }
+                }
+                None => {
+                    for (i, v) in col.iter_mut().enumerate() {
+                        *v = self.entry(*v, &rs, i, &rt, j, false).0;
+                    }
+                }
+            }
+        }
+        (k, dl)
+    }
+
+    /// Prior variances `k(x_i, x_i)` and their derivatives `∂/∂log l` (zeros for kernels
+    /// without a length scale).
+    pub(crate) fn diag_with_dlog_l(&self, xs: &DMatrix<f64>) -> (DVector<f64>, DVector<f64>) {
+        let r = self.rows(xs);
+        let bias = matches!(self, Kernel::NeuralNetwork { bias: true, .. });
+        let n = xs.nrows();
+        let (mut k, mut d) = (DVector::zeros(n), DVector::zeros(n));
+        for i in 0..n {
+            let s = if bias { r.p[i] - 1.0 } else { r.p[i] };
+            let (v, dv) = self.entry(s, &r, i, &r, i, true);
+            k[i] = v;
+            d[i] = if self.param_names().len() == 2 { dv } else { 0.0 };
+        }
+        (k, d)
+    }
+}
+
 fn mirror_lower(m: &mut DMatrix<f64>) {
     let n = m.nrows();
     for j in 0..n {

@@ -16,6 +16,8 @@
 //! - [`dtw`]: constrained least-cost path through the cost matrix (eq. 7);
 //! - [`kernel`]: covariance functions, including the neural-network kernel (eq. 10);
 //! - [`gpr`]: multi-output GP regression and its marginal likelihood (eqs. 8-13);
+//! - [`sparse_gpr`]: the same regression for large training sets, Titsias' (2009) bound with
+//!   inducing inputs chosen by [`inducing`] (greedy variance selection);
 //! - [`optim`]: non-linear conjugate gradients (Polak-Ribière+) with a strong-Wolfe line search;
 //! - [`affine_keypose`]: the Semantic Deformation Transfer baseline (Baran et al. 2009);
 //! - [`affine_mean`]: an explicit affine mean function, the GP then fitted on the residuals.
@@ -25,10 +27,12 @@ pub mod affine_mean;
 pub mod blr;
 pub mod dtw;
 pub mod gpr;
+pub mod inducing;
 pub mod kernel;
 pub mod linalg;
 pub mod optim;
 pub mod pca;
+pub mod sparse_gpr;
 
 /// Errors of the numerics: bad shapes/values passed in, or a matrix that stays
 /// indefinite after the jitter retries.

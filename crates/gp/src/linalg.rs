@@ -143,3 +143,51 @@ pub fn symmetric_eigen(a: &DMatrix<f64>) -> Result<(Vec<f64>, DMatrix<f64>)> {
     let vectors = DMatrix::from_fn(u.nrows(), n, |i, j| u[(i, n - 1 - j)]);
     Ok((values, vectors))
 }
+
+/// `L⁻¹ B` in place for a lower-triangular `L` (only its lower triangle is read), by faer's
+/// blocked triangular solve: the sparse GP's whitened features `L⁻¹ K_uf` over all pairs.
+pub fn lower_solve_in_place(l: &DMatrix<f64>, b: &mut DMatrix<f64>) {
+    faer::linalg::triangular_solve::solve_lower_triangular_in_place(
+        view(l),
+        view_mut(b),
+        faer::get_global_parallelism(),
+    );
+}
+
+/// `L⁻ᵀ B` in place for a lower-triangular `L` (only its lower triangle is read).
+pub fn lower_tr_solve_in_place(l: &DMatrix<f64>, b: &mut DMatrix<f64>) {
+    faer::linalg::triangular_solve::solve_upper_triangular_in_place(
+        view(l).transpose(),
+        view_mut(b),
+        faer::get_global_parallelism(),
+    );
+}
+
+/// `A Bᵀ` by faer's blocked matrix product (no transposed copy of `B`). With `symmetric`
+/// (`B = A`) only the lower triangle is computed, then mirrored.
+pub fn mul_tr(a: &DMatrix<f64>, b: &DMatrix<f64>, symmetric: bool) -> DMatrix<f64> {
+    assert_eq!(a.ncols(), b.ncols(), "mul_tr: column counts differ");
+    use faer::linalg::matmul::triangular::{matmul, BlockStructure};
+    let mut out = DMatrix::zeros(a.nrows(), b.nrows());
+    let dst = if symmetric { BlockStructure::TriangularLower } else { BlockStructure::Rectangular };
+    matmul(
+        view_mut(&mut out),
+        dst,
+        faer::Accum::Replace,
+        view(a),
+        BlockStructure::Rectangular,
+        view(b).transpose(),
+        BlockStructure::Rectangular,
+        1.0,
+        faer::get_global_parallelism(),
+    );
+    if symmetric {
+        let n = out.nrows();
+        for j in 0..n {
+            for i in j + 1..n {
+                out[(j, i)] = out[(i, j)];
+            }
+        }
+    }
+    out
+}

@@ -175,7 +175,10 @@ pub struct RegressorReport {
     pub exit: Option<String>,
     pub iterations: usize,
     pub initial_lml: f64,
+    /// Log marginal likelihood, or Titsias' lower bound on it for a sparse GP.
     pub lml: f64,
+    /// Inducing-input count of a sparse GP (`None`: exact GP or no GP).
+    pub inducing: Option<usize>,
     /// Numerical notes (Cholesky jitter retries).
     pub notes: Vec<String>,
 }
@@ -189,6 +192,7 @@ impl RegressorReport {
             iterations: r.iterations,
             initial_lml: r.initial_lml,
             lml: r.lml,
+            inducing: gpr.sparse().map(|s| s.inducing().nrows()),
             notes: r.notes.clone(),
         }
     }
@@ -197,9 +201,13 @@ impl RegressorReport {
     pub fn line(&self) -> String {
         match (&self.kernel, &self.exit) {
             (Some(k), exit) => format!(
-                "{}: kernel {:?}, log marginal likelihood {:.3} -> {:.3}, {} iterations, exit: {}",
+                "{}: kernel {:?}, {} {:.3} -> {:.3}, {} iterations, exit: {}",
                 self.name,
                 k,
+                match self.inducing {
+                    Some(m) => format!("sparse bound ({m} inducing inputs)"),
+                    None => "log marginal likelihood".to_string(),
+                },
                 self.initial_lml,
                 self.lml,
                 self.iterations,
@@ -232,7 +240,7 @@ pub struct GprModel {
 
 impl Artifact for GprModel {
     const KIND: &'static str = "gpr-model";
-    const VERSION: u32 = 2;
+    const VERSION: u32 = 3;
 }
 
 /// The coefficients and displacements of one training pair of motions, with
@@ -481,6 +489,7 @@ fn train_parts(
                     iterations: 0,
                     initial_lml: f64::NAN,
                     lml: f64::NAN,
+                    inducing: None,
                     notes: Vec::new(),
                 });
             }
@@ -620,6 +629,29 @@ mod tests {
             pairs: (0..f).map(|i| [i, i]).collect(),
             keyposes: vec![[0, 0], [f / 2, f / 2], [f - 1, f - 1]],
         }
+    }
+
+    /// `--sparse`: with enough inducing inputs for the training inputs (which lie on a curve:
+    /// greedy selection stops once they are explained) the sparse model predicts as the exact
+    /// one, through the same model type and the same confidence code.
+    #[test]
+    fn sparse_training_predicts_like_exact_through_the_same_model() {
+        let names = vec!["p".to_string()];
+        let data = pair(120, &|x| x.tanh() + 0.3 * x * x);
+        let train_with = |sparse| {
+            let opts = GprOptions { noise_var: 1e-2, sparse, ..Default::default() };
+            train(Method::GprNn, true, MeanFunction::Affine, MEAN_RIDGE, &names, &[data.clone()], 1.0, false, &opts).unwrap()
+        };
+        let exact = train_with(gp::sparse_gpr::Sparsity::Exact);
+        let sparse = train_with(gp::sparse_gpr::Sparsity::Inducing(60));
+        assert!(sparse.reports[0].inducing.is_some_and(|m| m > 0 && m <= 60));
+        assert_eq!(exact.reports[0].inducing, None);
+        let xs = DMatrix::from_fn(7, 2, |i, c| (i as f64 * 0.9 + c as f64).cos());
+        let (ye, ys) = (exact.parts[0].predict(&xs).unwrap(), sparse.parts[0].predict(&xs).unwrap());
+        assert!((&ye - &ys).amax() < 1e-3 * ye.amax(), "{ye} vs {ys}");
+        let disp = DMatrix::from_fn(7, 6, |i, c| 0.01 * ((i + c) as f64).sin());
+        let c = crate::confidence::confidence(&sparse, &[xs], &disp).unwrap();
+        assert!(c.variance_ratio["p"].as_ref().unwrap().iter().all(|v| (0.0..=1.0).contains(v)));
     }
 
     /// A linear map is learnt exactly by the linear-kernel GP (up to the

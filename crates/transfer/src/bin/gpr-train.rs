@@ -4,6 +4,7 @@ use std::process::ExitCode;
 use anyhow::bail;
 use clap::Parser;
 use gp::gpr::{GprOptions, PAPER_NOISE_VAR};
+use gp::sparse_gpr::Sparsity;
 use mesh_core::artifact::Artifact;
 use mesh_core::cli::{run_stage, CommonArgs};
 use transfer::gpr_model::{train, GprModel, MeanFunction, Method, PairFiles, MEAN_RIDGE};
@@ -60,6 +61,11 @@ struct Args {
     /// Also learn σn² by maximising the marginal likelihood (the paper fixes it)
     #[arg(long)]
     learn_noise: bool,
+    /// Sparse GP (Titsias' bound) with at most M inducing inputs chosen by greedy variance
+    /// selection; `auto`: exact up to 1024 pairs (faster there), 256 inducing inputs above;
+    /// `exact` (default): the exact GP of eqs. 8-13
+    #[arg(long, value_name = "M|auto|exact", default_value_t = Sparsity::Exact)]
+    sparse: Sparsity,
     /// Maximum conjugate-gradient iterations per GP
     #[arg(long, default_value_t = 100)]
     max_iter: usize,
@@ -113,6 +119,7 @@ fn main() -> ExitCode {
         let opts = GprOptions {
             noise_var: args.noise_var,
             learn_noise: args.learn_noise,
+            sparse: args.sparse,
             cg: gp::optim::CgOptions {
                 max_iter: args.max_iter,
                 ..Default::default()
@@ -148,7 +155,7 @@ fn main() -> ExitCode {
             .common
             .header("gpr-train", env!("CARGO_PKG_VERSION"))
             .with_params(&serde_json::json!({
-                "method": method.name(), "nn_bias": args.nn_bias, "keyposes_only": args.keyposes_only, "noise_var": args.noise_var, "learn_noise": args.learn_noise, "mean": args.mean, "mean_ridge": args.mean_ridge,
+                "method": method.name(), "nn_bias": args.nn_bias, "keyposes_only": args.keyposes_only, "noise_var": args.noise_var, "learn_noise": args.learn_noise, "mean": args.mean, "mean_ridge": args.mean_ridge, "sparse": args.sparse.to_string(),
                 "reverse": args.reverse, "source_fps": args.source_fps, "target_fps": args.target_fps,
             }))?
             .with_input(&args.source_pca)?

@@ -1,0 +1,442 @@
+//! Sparse GP regression: Titsias' (2009) collapsed variational bound with `M` inducing inputs
+//! `Z`, for training sets too large for the exact GP of CVPR eqs. 8-13 (whose cost is cubic in
+//! the number of pairs `F`).
+//!
+//! With `K = K_uu` (`M x M`), `Φ = K_fu` (`F x M`), `Q_ff = Φ K⁻¹ Φᵀ`, `s = σn²` and `m` output
+//! columns sharing the kernel (as in eq. 8), the bound on the log marginal likelihood is
+//! ```text
+//! F(θ) = Σ_i log N(Y_i | 0, Q_ff + s I) - m/(2s) tr(K_ff - Q_ff)
+//!      = -½ m log|B| - ½ F m log(2π s) - |Y|²/(2s) + ½ |c|² - m/(2s) (tr K_ff - tr(L⁻¹ T L⁻ᵀ))
+//! T = Φᵀ Φ,  K = L Lᵀ,  B = I + L⁻¹ T L⁻ᵀ / s = L_B L_Bᵀ,  c = L_B⁻¹ L⁻¹ Φᵀ Y / s
+//! ```
+//! (matrix determinant lemma and Woodbury, with `P = K + T/s = L B Lᵀ`). Only `M x M` and
+//! `M x F` matrices appear, never an `F x F` one: a value costs one `M x F` kernel block, the
+//! whitened features `A = L⁻¹ Φᵀ` (a triangular solve, `F M²`) and `S = A Aᵀ = L⁻¹ T L⁻ᵀ`
+//! (`F M²/2`); the code works with `S` rather than `T` (see `SparseFactored`).
+//!
+//! Gradient, through `K`, `Φ` and `diag K_ff` (each kernel's `∂/∂log σf` is twice itself):
+//! ```text
+//! β = P⁻¹ Φᵀ Y,   G_P = -½ m P⁻¹ - ββᵀ/(2s²)
+//! G_K = G_P + ½ m K⁻¹ - m/(2s) K⁻¹ T K⁻¹,    G_T = G_P / s + m/(2s) K⁻¹
+//! ∂F/∂θ = <G_K, ∂K> + 2 <G_T, Φᵀ ∂Φ> + <β, ∂Φᵀ Y>/s² - m/(2s) tr ∂K_ff
+//! ∂F/∂s = -<G_P, T>/s² - F m/(2s) + |Y|²/(2s²) - <β, ΦᵀY>/s³ + m/(2s²)(tr K_ff - tr(K⁻¹T))
+//! ```
+//! (`<·,·>` the Frobenius product); computed whitened (`SparseFactored::gradient`), it adds
+//! one `M x F` kernel-derivative block, its triangular solve and one product (`2 F M²`), and the
+//! elements of `B⁻¹` (`M x M`, needed for the trace terms, as in the exact GP's gradient). The inducing inputs are fixed during optimisation
+//! ([`crate::inducing::greedy_variance`] at the starting hyperparameters); the kernel
+//! hyperparameters (and optionally `σn²`) are optimised, as for the exact GP.
+//!
+//! Prediction (Titsias eq. 6, the optimal `q(u)`): mean `K_*u β / s`, latent variance
+//! `k_** - |L⁻¹ k_u*|² + |L_P⁻¹ k_u*|²` with `L_P = L L_B` (the factor of `P`). At `Z = X` the
+//! bound, mean and variance equal the exact GP's (`Q_ff = K_ff`, `K⁻¹ - P⁻¹ = (K + sI)⁻¹`).
+//!
+//! Cross-check: `scripts/compare/sgpr_gpy.py` against GPy's `SparseGPRegression` with the
+//! same inducing inputs.
+
+use crate::gpr::{check_xy, initial_kernel, maximise, summarise_notes, warm_start, Gpr, GprOptions, TrainReport};
+use crate::inducing::greedy_variance;
+use crate::kernel::Kernel;
+use crate::linalg::{lower_solve_in_place, lower_tr_solve_in_place, mul_tr, Cholesky};
+use crate::{check_finite, invalid, Result};
+use nalgebra::{DMatrix, DVector};
+use serde::{Deserialize, Serialize};
+
+/// Jitter added to `K_uu`, relative to the mean of its diagonal: `K_uu + ε mean(diag K_uu) I`
+/// (a differentiable function of the hyperparameters, included in the gradient). The NN kernel
+/// tends to a rank-`D+1` linear kernel as `l` grows, so with more inducing inputs than that
+/// `K_uu` becomes singular during the optimisation; GPy and GPflow add a fixed absolute `1e-6`
+/// for the same reason (relative here because the NN kernel's prior variance falls as
+/// `σf² / (2 l²)` in that limit, where an absolute or `σf²`-relative jitter would dominate). Training uses this value; the lower-level functions take it as an argument (0
+/// gives the bound exactly as written, e.g. to compare with the exact GP at `Z = X`).
+pub const KUU_JITTER: f64 = 1e-6;
+
+/// Inducing-input count used by [`Sparsity::Auto`].
+pub const AUTO_INDUCING: usize = 256;
+
+/// Exact or sparse training.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+pub enum Sparsity {
+    /// The exact GP (CVPR eqs. 8-13).
+    #[default]
+    Exact,
+    /// Titsias' bound with at most this many inducing inputs (exact when `F` is not larger).
+    Inducing(usize),
+    /// Exact while it is faster than the sparse GP with [`AUTO_INDUCING`] inputs, sparse above
+    /// (see [`Sparsity::inducing_for`]).
+    Auto,
+}
+
+impl Sparsity {
+    /// The inducing-input count to train `pairs` pairs with, `None` for the exact GP. For
+    /// [`Sparsity::Auto`]: sparse when `F > 4 M`. Counting flops, an exact evaluation (`~F³`:
+    /// Cholesky and the inverse's elements) costs more than a sparse one (`~4 F M²`: `ΦᵀΦ`,
+    /// `Φᵀ∂Φ`, the kernel blocks) from `F ≈ 2 M`, but measured on the demo set (588 pairs,
+    /// M = 256) the exact GP still trained faster (5.8 s against 8.5 s for the two directions);
+    /// at 1100 pairs the sparse GP took half the exact time (docs/PERFORMANCE.md).
+    pub fn inducing_for(&self, pairs: usize) -> Option<usize> {
+        match *self {
+            Sparsity::Exact => None,
+            Sparsity::Inducing(m) => (pairs > m).then_some(m),
+            Sparsity::Auto => (pairs > 4 * AUTO_INDUCING).then_some(AUTO_INDUCING),
+        }
+    }
+}
+
+impl std::str::FromStr for Sparsity {
+    type Err = String;
+
+    /// `exact`, `auto`, or an inducing-input count `M >= 1` (the command-line syntax).
+    fn from_str(s: &str) -> std::result::Result<Self, String> {
+        match s {
+            "exact" => Ok(Sparsity::Exact),
+            "auto" => Ok(Sparsity::Auto),
+            _ => match s.parse::<usize>() {
+                Ok(m) if m >= 1 => Ok(Sparsity::Inducing(m)),
+                _ => Err(format!("expected an inducing-input count >= 1, 'auto' or 'exact', got '{s}'")),
+            },
+        }
+    }
+}
+
+impl std::fmt::Display for Sparsity {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            Sparsity::Exact => write!(f, "exact"),
+            Sparsity::Inducing(m) => write!(f, "{m}"),
+            Sparsity::Auto => write!(f, "auto"),
+        }
+    }
+}
+
+/// What a sparse [`Gpr`] keeps for prediction: the inducing inputs and two `M x M` lower
+/// factors (`L` of `K_uu` and `L_P` of `K_uu + K_uf K_fu / s`); the model's `alpha` is `β / s`.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct SparsePosterior {
+    pub(crate) inducing: DMatrix<f64>,
+    pub(crate) l_uu: DMatrix<f64>,
+    pub(crate) l_p: DMatrix<f64>,
+}
+
+impl SparsePosterior {
+    /// The inducing inputs `Z` (`M x D`).
+    pub fn inducing(&self) -> &DMatrix<f64> {
+        &self.inducing
+    }
+
+    /// Latent variance `k_** - |L⁻¹ k_u*|² + |L_P⁻¹ k_u*|²` for each row of `ks_t` (`K_u*` as
+    /// `M x N`) with prior variances `prior`.
+    pub(crate) fn variance(&self, ku_star: &DMatrix<f64>, prior: &DVector<f64>) -> DVector<f64> {
+        let a = lower_solve(&self.l_uu, ku_star);
+        let b = lower_solve(&self.l_p, ku_star);
+        DVector::from_iterator(
+            prior.len(),
+            (0..prior.len()).map(|i| {
+                (prior[i] - a.column(i).norm_squared() + b.column(i).norm_squared()).max(0.0)
+            }),
+        )
+    }
+}
+
+fn lower_solve(l: &DMatrix<f64>, b: &DMatrix<f64>) -> DMatrix<f64> {
+    let mut x = b.clone();
+    lower_solve_in_place(l, &mut x);
+    x
+}
+
+/// `L⁻ᵀ B` for the lower-triangular `l`.
+fn upper_solve(l: &DMatrix<f64>, b: &DMatrix<f64>) -> DMatrix<f64> {
+    let mut x = b.clone();
+    lower_tr_solve_in_place(l, &mut x);
+    x
+}
+
+/// `D += ε mean(diag D) I` (linear in `D`, so the derivative of the jittered `K_uu` is the
+/// jittered derivative).
+fn add_relative_jitter(d: &mut DMatrix<f64>, eps: f64) {
+    let n = d.nrows();
+    let add = eps * d.trace() / n.max(1) as f64;
+    for i in 0..n {
+        d[(i, i)] += add;
+    }
+}
+
+fn check_inducing(z: &DMatrix<f64>, x: &DMatrix<f64>) -> Result<()> {
+    if z.nrows() == 0 || z.ncols() != x.ncols() {
+        return invalid(format!(
+            "sparse GP: {} inducing inputs of dimension {} for inputs of dimension {}",
+            z.nrows(),
+            z.ncols(),
+            x.ncols()
+        ));
+    }
+    check_finite("inducing inputs", z)
+}
+
+/// The bound at one hyperparameter setting, factorised so that the gradient can follow
+/// without recomputing the value's products (as the exact GP's `Factored`). Everything is
+/// kept whitened by `L` (`A = L⁻¹ Φᵀ`, `S = A Aᵀ = L⁻¹ T L⁻ᵀ`): `K_uu` is close to singular
+/// whenever the inducing inputs outnumber what the kernel can tell apart, and the whitened
+/// quantities stay well scaled where `K⁻¹ T K⁻¹` does not.
+struct SparseFactored {
+    kernel: Kernel,
+    noise_var: f64,
+    /// `K_uu + ε mean(diag K_uu) I` ([`KUU_JITTER`]) and the lower factor of it plus any
+    /// jitter retry.
+    kuu: DMatrix<f64>,
+    kuu_jitter: f64,
+    l_uu: DMatrix<f64>,
+    jitter: f64,
+    /// `A = L⁻¹ K_uf` (`M x F`), `S = A Aᵀ`, `A Y`.
+    a: DMatrix<f64>,
+    s_mat: DMatrix<f64>,
+    a_y: DMatrix<f64>,
+    l_b: DMatrix<f64>,
+    /// `tr K_ff`, `tr S = tr(K⁻¹ T)`, `|Y|²`.
+    trace_kff: f64,
+    trace_qff: f64,
+    yy: f64,
+    /// `γ = B⁻¹ A Y`, so that `β = P⁻¹ Φᵀ Y = L⁻ᵀ γ`.
+    gamma: DMatrix<f64>,
+    value: f64,
+}
+
+impl SparseFactored {
+    #[allow(clippy::too_many_arguments)]
+    fn new(
+        kernel: &Kernel,
+        noise_var: f64,
+        z: &DMatrix<f64>,
+        x: &DMatrix<f64>,
+        y: &DMatrix<f64>,
+        kuu_jitter: f64,
+        notes: &mut Vec<String>,
+    ) -> Result<Self> {
+        check_xy(x, y)?;
+        check_inducing(z, x)?;
+        let (f, m) = (x.nrows() as f64, y.ncols() as f64);
+        let s = noise_var;
+        if !(s > 0.0 && s.is_finite()) {
+            return invalid(format!("sparse GP: noise variance must be > 0, got {s}"));
+        }
+        let mut kuu = kernel.gram(z);
+        add_relative_jitter(&mut kuu, kuu_jitter);
+        let chol = Cholesky::new(&kuu, "K_uu", notes)?;
+        let (l_uu, jitter) = (chol.lower(), chol.jitter);
+        let mut a = kernel.cross(z, x);
+        lower_solve_in_place(&l_uu, &mut a);
+        let s_mat = mul_tr(&a, &a, true);
+        let a_y = &a * y;
+        let trace_qff = s_mat.trace();
+        let mut bmat = &s_mat / s;
+        for i in 0..bmat.nrows() {
+            bmat[(i, i)] += 1.0;
+        }
+        let l_b = Cholesky::new(&bmat, "I + L⁻¹ K_uf K_fu L⁻ᵀ / noise", notes)?.lower();
+        let c = lower_solve(&l_b, &a_y) / s;
+        let gamma = upper_solve(&l_b, &c) * s;
+        let log_det_b = 2.0 * l_b.diagonal().iter().map(|v| v.ln()).sum::<f64>();
+        let (trace_kff, yy) = (kernel.diag(x).sum(), y.norm_squared());
+        let value = -0.5 * m * log_det_b
+            - 0.5 * f * m * (2.0 * std::f64::consts::PI * s).ln()
+            - 0.5 * yy / s
+            + 0.5 * c.norm_squared()
+            - 0.5 * m / s * (trace_kff - trace_qff);
+        Ok(Self {
+            kernel: *kernel,
+            noise_var,
+            kuu,
+            kuu_jitter,
+            l_uu,
+            jitter,
+            a,
+            s_mat,
+            a_y,
+            l_b,
+            trace_kff,
+            trace_qff,
+            yy,
+            gamma,
+            value,
+        })
+    }
+
+    /// `L⁻¹ D L⁻ᵀ` for a symmetric `D`.
+    fn whiten(&self, d: &DMatrix<f64>) -> DMatrix<f64> {
+        let half = lower_solve(&self.l_uu, d);
+        lower_solve(&self.l_uu, &half.transpose())
+    }
+
+    /// Gradient with respect to the kernel's log hyperparameters, then `∂/∂ log σn²` when
+    /// `with_noise`: the module documentation's formulas with `G_X = L⁻ᵀ H_X L⁻¹`,
+    /// ```text
+    /// H_P = -½ m B⁻¹ - γγᵀ/(2s²),  H_K = H_P + ½ m I - m/(2s) S,  H_T = H_P / s + m/(2s) I
+    /// ∂F/∂θ = <H_K, L⁻¹ ∂K L⁻ᵀ> + 2 <H_T, A ∂Aᵀ> + <γ, ∂A Y>/s² - m/(2s) tr ∂K_ff,  ∂A = L⁻¹ ∂K_uf
+    /// ```
+    fn gradient(&self, z: &DMatrix<f64>, x: &DMatrix<f64>, y: &DMatrix<f64>, with_noise: bool) -> Vec<f64> {
+        let (f, m, s) = (x.nrows() as f64, y.ncols() as f64, self.noise_var);
+        let mm = self.kuu.nrows();
+        let eye = DMatrix::<f64>::identity(mm, mm);
+        let lb_inv = lower_solve(&self.l_b, &eye);
+        let b_inv = mul_tr(&lb_inv.transpose(), &lb_inv.transpose(), true);
+        let h_p = &b_inv * (-0.5 * m) - &self.gamma * self.gamma.transpose() * (0.5 / (s * s));
+        let h_k = &h_p + &eye * (0.5 * m) - &self.s_mat * (0.5 * m / s);
+        let h_t = &h_p / s + &eye * (0.5 * m / s);
+        let gamma_ay = self.gamma.dot(&self.a_y);
+        let mut grad = Vec::with_capacity(3);
+        if self.kernel.param_names().len() == 2 {
+            let (_, da) = self.kernel.cross_with_dlog_l(z, x);
+            let mut da = da.expect("kernel with a length scale");
+            lower_solve_in_place(&self.l_uu, &mut da);
+            let mut dkuu = self.kernel.gram_with_grads(z).1.swap_remove(0);
+            add_relative_jitter(&mut dkuu, self.kuu_jitter);
+            let (_, dkff) = self.kernel.diag_with_dlog_l(x);
+            let c = mul_tr(&self.a, &da, false);
+            let da_y = &da * y;
+            grad.push(
+                h_k.dot(&self.whiten(&dkuu)) + 2.0 * h_t.dot(&c) + self.gamma.dot(&da_y) / (s * s)
+                    - 0.5 * m / s * dkff.sum(),
+            );
+        }
+        grad.push(
+            2.0 * h_k.dot(&self.whiten(&self.kuu)) + 4.0 * h_t.dot(&self.s_mat) + 2.0 * gamma_ay / (s * s)
+                - m / s * self.trace_kff,
+        );
+        if with_noise {
+            let d_s = -h_p.dot(&self.s_mat) / (s * s) - 0.5 * f * m / s + 0.5 * self.yy / (s * s)
+                - gamma_ay / (s * s * s)
+                + 0.5 * m / (s * s) * (self.trace_kff - self.trace_qff);
+            grad.push(s * d_s);
+        }
+        grad
+    }
+
+    fn into_model(self, x: &DMatrix<f64>, z: &DMatrix<f64>) -> Gpr {
+        let l_p = &self.l_uu * &self.l_b;
+        let alpha = upper_solve(&self.l_uu, &self.gamma) / self.noise_var;
+        Gpr::from_sparse(
+            self.kernel,
+            self.noise_var,
+            self.jitter,
+            x.clone(),
+            alpha,
+            SparsePosterior {
+                inducing: z.clone(),
+                l_uu: self.l_uu,
+                l_p,
+            },
+        )
+    }
+}
+
+/// Titsias' bound on the log marginal likelihood of `Y` given `X` with inducing inputs `Z`,
+/// summed over the output columns, with `K_uu + kuu_jitter · mean(diag K_uu) I`.
+pub fn sparse_bound(
+    kernel: &Kernel,
+    noise_var: f64,
+    z: &DMatrix<f64>,
+    x: &DMatrix<f64>,
+    y: &DMatrix<f64>,
+    kuu_jitter: f64,
+    notes: &mut Vec<String>,
+) -> Result<f64> {
+    Ok(SparseFactored::new(kernel, noise_var, z, x, y, kuu_jitter, notes)?.value)
+}
+
+/// The bound and its gradient with respect to the kernel's log hyperparameters
+/// ([`Kernel::log_params`] order), followed by `∂/∂ log σn²` when `with_noise`.
+pub fn sparse_bound_grad(
+    kernel: &Kernel,
+    noise_var: f64,
+    with_noise: bool,
+    z: &DMatrix<f64>,
+    x: &DMatrix<f64>,
+    y: &DMatrix<f64>,
+    kuu_jitter: f64,
+    notes: &mut Vec<String>,
+) -> Result<(f64, Vec<f64>)> {
+    let f = SparseFactored::new(kernel, noise_var, z, x, y, kuu_jitter, notes)?;
+    Ok((f.value, f.gradient(z, x, y, with_noise)))
+}
+
+/// Conditions the sparse GP on `(X, Y)` with fixed hyperparameters and inducing inputs `Z`.
+pub fn fit_sparse(
+    kernel: Kernel,
+    noise_var: f64,
+    z: &DMatrix<f64>,
+    x: &DMatrix<f64>,
+    y: &DMatrix<f64>,
+    kuu_jitter: f64,
+    notes: &mut Vec<String>,
+) -> Result<Gpr> {
+    Ok(SparseFactored::new(&kernel, noise_var, z, x, y, kuu_jitter, notes)?.into_model(x, z))
+}
+
+/// Trains the sparse GP with at most `m` inducing inputs: starting hyperparameters as the
+/// exact GP's ([`initial_kernel`], then the warm start on a subset), inducing inputs by
+/// [`greedy_variance`] at those hyperparameters, then the bound maximised over the kernel's
+/// hyperparameters (and `σn²` if asked) with the same optimiser and search coordinates.
+pub fn train_sparse(
+    kernel: Kernel,
+    x: &DMatrix<f64>,
+    y: &DMatrix<f64>,
+    m: usize,
+    opts: &GprOptions,
+) -> Result<(Gpr, TrainReport)> {
+    check_xy(x, y)?;
+    if m == 0 {
+        return invalid("sparse GP: at least one inducing input is needed");
+    }
+    if !(opts.noise_var > 0.0 && opts.noise_var.is_finite()) {
+        return invalid(format!("sparse GP: noise variance must be > 0, got {}", opts.noise_var));
+    }
+    let start = if opts.data_init { initial_kernel(&kernel, x, y) } else { kernel };
+    let start = warm_start(start, x, y, opts);
+    let z = x.select_rows(greedy_variance(&start, x, m).iter());
+    train_sparse_with_inducing(start, x, y, &z, opts)
+}
+
+/// Maximises the bound with the inducing inputs `z` fixed, starting from `start` as given
+/// (no data-driven start, no warm start), then conditions on the data.
+pub fn train_sparse_with_inducing(
+    start: Kernel,
+    x: &DMatrix<f64>,
+    y: &DMatrix<f64>,
+    z: &DMatrix<f64>,
+    opts: &GprOptions,
+) -> Result<(Gpr, TrainReport)> {
+    check_xy(x, y)?;
+    check_inducing(z, x)?;
+    let mut notes = Vec::new();
+    let first = SparseFactored::new(&start, opts.noise_var, z, x, y, KUU_JITTER, &mut notes)?;
+    let initial_lml = first.value;
+    let (fitted, exit, iterations, evaluations, gradient_evaluations) = if opts.optimise {
+        let seed = if opts.learn_noise { None } else { Some(first) };
+        let r = maximise(
+            start,
+            opts,
+            seed,
+            |kern, noise| SparseFactored::new(kern, noise, z, x, y, KUU_JITTER, &mut notes),
+            |f| f.value,
+            |f| f.gradient(z, x, y, opts.learn_noise),
+        );
+        let fitted = match r.at_optimum {
+            Some(f) => f,
+            None => SparseFactored::new(&r.kernel, r.noise_var, z, x, y, KUU_JITTER, &mut notes)?,
+        };
+        (fitted, Some(r.exit), r.iterations, r.evaluations, r.gradient_evaluations)
+    } else {
+        (first, None, 0, 0, 0)
+    };
+    let lml = fitted.value;
+    let report = TrainReport {
+        exit,
+        iterations,
+        evaluations,
+        gradient_evaluations,
+        initial_lml,
+        lml,
+        notes: summarise_notes(notes),
+    };
+    Ok((fitted.into_model(x, z), report))
+}
