@@ -145,6 +145,15 @@ pub trait Artifact: Serialize + DeserializeOwned {
     /// Version of this kind's payload layout; bump it when the struct changes.
     const VERSION: u32;
 
+    /// Checks every index and size of a decoded payload against the rest of
+    /// it, so consumers can index without bounds failures. A valid checksum only
+    /// says the file was not corrupted in transit; a rewritten file with a
+    /// recomputed checksum reaches this check. The error is the problem,
+    /// without the file name.
+    fn validate(&self) -> std::result::Result<(), String> {
+        Ok(())
+    }
+
     /// Writes `self` to `path` atomically.
     fn save(&self, path: impl AsRef<Path>, header: &Header) -> Result<()> {
         write_artifact(path, Self::KIND, Self::VERSION, header, self)
@@ -153,9 +162,37 @@ pub trait Artifact: Serialize + DeserializeOwned {
     fn load(path: impl AsRef<Path>) -> Result<Self> {
         Ok(Self::load_with_header(path)?.1)
     }
-    /// Reads header and payload, checking kind, version and checksum.
+    /// Reads header and payload, checking kind, version, checksum and
+    /// [`Artifact::validate`].
     fn load_with_header(path: impl AsRef<Path>) -> Result<(Header, Self)> {
-        read_artifact(path, Self::KIND, Self::VERSION)
+        let path = path.as_ref();
+        let (header, payload): (Header, Self) = read_artifact(path, Self::KIND, Self::VERSION)?;
+        payload
+            .validate()
+            .map_err(|msg| Error::file(path, format!("invalid '{}' payload: {msg}", Self::KIND)))?;
+        Ok((header, payload))
+    }
+
+    /// Decodes and validates an artifact held in memory (the error without the file name).
+    fn decode(bytes: &[u8]) -> std::result::Result<(Header, Self), String> {
+        let (header, payload): (Header, Self) = decode_artifact(bytes, Self::KIND, Self::VERSION)?;
+        payload
+            .validate()
+            .map_err(|msg| format!("invalid '{}' payload: {msg}", Self::KIND))?;
+        Ok((header, payload))
+    }
+}
+
+/// For [`Artifact::validate`]: the first index in `indices` that is not below
+/// `bound`, as an error naming `what()`.
+pub fn check_indices(
+    indices: impl IntoIterator<Item = u32>,
+    bound: usize,
+    what: impl Fn() -> String,
+) -> std::result::Result<(), String> {
+    match indices.into_iter().find(|&i| i as usize >= bound) {
+        Some(i) => Err(format!("{} has index {i}, but only {bound} are valid", what())),
+        None => Ok(()),
     }
 }
 
@@ -224,7 +261,7 @@ pub fn read_artifact<T: DeserializeOwned>(
     kind_version: u32,
 ) -> Result<(Header, T)> {
     let path = path.as_ref();
-    let bytes = std::fs::read(path).map_err(|e| Error::io(path, e))?;
+    let bytes = crate::input::read_regular_file(path)?;
     decode_artifact(&bytes, kind, kind_version).map_err(|msg| Error::file(path, msg))
 }
 
@@ -237,7 +274,7 @@ pub fn read_header(path: impl AsRef<Path>) -> Result<(String, u32, Header)> {
 /// Reads everything but the payload of any artifact (checksum verified).
 pub fn inspect_artifact(path: impl AsRef<Path>) -> Result<ArtifactInfo> {
     let path = path.as_ref();
-    let bytes = std::fs::read(path).map_err(|e| Error::io(path, e))?;
+    let bytes = crate::input::read_regular_file(path)?;
     let file = |msg: String| Error::file(path, msg);
     let raw = split(&bytes).map_err(file)?;
     let header = parse_header(raw.header_json).map_err(file)?;
@@ -292,7 +329,7 @@ pub fn decode_artifact<T: DeserializeOwned>(
 /// SHA-256 of a file's bytes as lowercase hex (streamed, for input records).
 pub fn sha256_file(path: impl AsRef<Path>) -> Result<String> {
     let path = path.as_ref();
-    let mut f = std::fs::File::open(path).map_err(|e| Error::io(path, e))?;
+    let mut f = crate::input::open_regular_file(path)?;
     let mut hasher = Sha256::new();
     let mut buf = vec![0u8; 1 << 16];
     loop {

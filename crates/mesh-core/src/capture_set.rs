@@ -76,7 +76,7 @@ fn default_up() -> String {
 
 /// Reads and parses a JSON file; errors are one line naming the file.
 fn load_json<T: serde::de::DeserializeOwned>(path: &Path) -> Result<T> {
-    let bytes = std::fs::read(path).map_err(|e| Error::io(path, e))?;
+    let bytes = crate::input::read_regular_file(path)?;
     serde_json::from_slice(&bytes).map_err(|e| Error::file(path, format!("invalid JSON: {e}")))
 }
 

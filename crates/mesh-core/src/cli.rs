@@ -153,7 +153,11 @@ pub fn stage_name() -> &'static str {
 macro_rules! info {
     ($($arg:tt)*) => {
         if $crate::cli::verbosity() >= 1 {
-            eprintln!("{}: {}", $crate::cli::stage_name(), format_args!($($arg)*));
+            eprintln!(
+                "{}: {}",
+                $crate::cli::stage_name(),
+                $crate::input::escape_control(&format!($($arg)*))
+            );
         }
     };
 }
@@ -163,7 +167,11 @@ macro_rules! info {
 macro_rules! warn {
     ($($arg:tt)*) => {
         if !$crate::cli::is_quiet() {
-            eprintln!("{}: warning: {}", $crate::cli::stage_name(), format_args!($($arg)*));
+            eprintln!(
+                "{}: warning: {}",
+                $crate::cli::stage_name(),
+                $crate::input::escape_control(&format!($($arg)*))
+            );
         }
     };
 }
@@ -196,7 +204,8 @@ pub fn error_line(err: &anyhow::Error) -> String {
         }
         line.push_str(&text);
     }
-    line.split_whitespace().collect::<Vec<_>>().join(" ")
+    let line = line.split_whitespace().collect::<Vec<_>>().join(" ");
+    crate::input::escape_control(&line).into_owned()
 }
 
 /// Prints `stage: <error>` as one line on stderr (for stages that report a
@@ -222,6 +231,7 @@ pub fn run_stage(stage_name: &str, main: impl FnOnce() -> anyhow::Result<()>) ->
             .location()
             .map(|l| format!(" at {}:{}", l.file(), l.line()));
         let msg = msg.split_whitespace().collect::<Vec<_>>().join(" ");
+        let msg = crate::input::escape_control(&msg);
         eprintln!(
             "{hook_stage}: internal error: {msg}{}",
             place.unwrap_or_default()

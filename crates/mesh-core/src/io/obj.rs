@@ -27,7 +27,7 @@ use crate::mesh::TriMesh;
 /// Reads and validates an OBJ mesh; errors are one line naming the file.
 pub fn read_obj(path: impl AsRef<Path>) -> Result<TriMesh> {
     let path = path.as_ref();
-    let bytes = std::fs::read(path).map_err(|e| Error::io(path, e))?;
+    let bytes = crate::input::read_regular_file(path)?;
     parse_obj(&bytes).map_err(|msg| Error::file(path, msg))
 }
 

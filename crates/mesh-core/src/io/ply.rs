@@ -59,7 +59,7 @@ pub struct PlyOptions {
 /// naming the file.
 pub fn read_ply(path: impl AsRef<Path>) -> Result<TriMesh> {
     let path = path.as_ref();
-    let bytes = std::fs::read(path).map_err(|e| Error::io(path, e))?;
+    let bytes = crate::input::read_regular_file(path)?;
     parse_ply(&bytes).map_err(|msg| Error::file(path, msg))
 }
 
