@@ -19,10 +19,11 @@
 //!
 //! Reading trusts nothing: every length is checked against the bytes that
 //! remain before anything is allocated, the checksum is verified before the
-//! header or payload is parsed, and the payload decoder has a byte limit
-//! below 4x the payload's length, so a crafted string length inside the
-//! payload cannot allocate more than the file justifies (sequences are
-//! capped by serde itself at 1 MiB of up-front reservation). Each failure is one
+//! header or payload is parsed, and the payload decoder has a byte limit of
+//! [`DECODE_EXPANSION`] (32) times the payload's length, so a crafted length
+//! inside the payload cannot allocate more than the file justifies (sequences
+//! are capped by serde itself at 1 MiB of up-front reservation). Decoded
+//! payloads are then checked by [`Artifact::validate`]. Each failure is one
 //! [`Error::File`] line naming the file, e.g.
 //! `model.art: expected artifact kind 'pca-model', found 'gpr-model'`.
 

@@ -88,12 +88,17 @@ impl CommonArgs {
     /// global pool with `--threads` workers, and makes BLAS single-threaded
     /// (`OPENBLAS_NUM_THREADS=1` for child processes, plus
     /// `openblas_set_num_threads(1)` if OpenBLAS is linked in, because OpenBLAS
-    /// reads the variable when it is loaded, before `main`).
+    /// reads the variable when it is loaded, before `main`) and faer sequential.
     pub fn init(&self) -> anyhow::Result<()> {
         VERBOSITY.store(if self.quiet { 0 } else { self.verbose }, Ordering::Relaxed);
         QUIET.store(self.quiet, Ordering::Relaxed);
         std::env::set_var("OPENBLAS_NUM_THREADS", "1");
         blas_single_thread();
+        // faer's own parallel kernels split reductions by thread count, so
+        // results would differ in the last digits between `--threads 1` and
+        // `2`; sequential faer keeps every output independent of the core
+        // count (and is faster on 2 cores, STACK.md).
+        faer::set_global_parallelism(faer::Par::Seq);
         if let Some(n) = self.threads {
             rayon::ThreadPoolBuilder::new()
                 .num_threads(n as usize)
