@@ -209,7 +209,15 @@ fn artifact_bytes<T: Artifact>(value: &T, header: &Header) -> Vec<u8> {
     mesh_core::artifact::encode_artifact(T::KIND, T::VERSION, header, value).unwrap()
 }
 
-/// Reads every file under `dir` (recursively) that has a target.
+/// A numbered frame file other than `000000.*`.
+fn is_later_frame(p: &Path) -> bool {
+    p.file_stem()
+        .and_then(|s| s.to_str())
+        .is_some_and(|s| !s.is_empty() && s.bytes().all(|b| b.is_ascii_digit()) && s.bytes().any(|b| b != b'0'))
+}
+
+/// Reads every file under `dir` (recursively) that has a target, but only the
+/// first frame of each motion folder.
 pub fn load_corpus(dir: &Path) -> Vec<(Target, Vec<u8>)> {
     let mut out = Vec::new();
     let mut stack = vec![dir.to_path_buf()];
@@ -220,6 +228,9 @@ pub fn load_corpus(dir: &Path) -> Vec<(Target, Vec<u8>)> {
         for p in paths {
             if p.is_dir() {
                 stack.push(p);
+            } else if is_later_frame(&p) {
+                // One frame per motion folder is enough: the others share its layout.
+                continue;
             } else if let Some(t) = Target::of_path(&p) {
                 if let Ok(b) = std::fs::read(&p) {
                     if b.len() <= 4 << 20 {

@@ -197,6 +197,31 @@ pub fn check_indices(
     }
 }
 
+/// For [`Artifact::validate`] of part sets: `parts` (each part's template
+/// vertex list) hold only indices below `n_vertices` and together cover
+/// every template vertex. Checks the count first, so a crafted `n_vertices`
+/// allocates nothing the file does not justify.
+pub fn check_cover(n_vertices: usize, parts: &[&[u32]]) -> std::result::Result<(), String> {
+    let total: usize = parts.iter().map(|p| p.len()).sum();
+    if parts.is_empty() || n_vertices == 0 || n_vertices > total {
+        return Err(format!(
+            "{} parts holding {total} vertices cannot cover a template of {n_vertices} vertices",
+            parts.len()
+        ));
+    }
+    let mut covered = vec![false; n_vertices];
+    for (k, p) in parts.iter().enumerate() {
+        check_indices(p.iter().copied(), n_vertices, || format!("part {k}'s vertex list"))?;
+        for &v in p.iter() {
+            covered[v as usize] = true;
+        }
+    }
+    match covered.iter().position(|c| !c) {
+        Some(v) => Err(format!("template vertex {v} is in no part")),
+        None => Ok(()),
+    }
+}
+
 /// What `inspect` reports about an artifact (checksum verified).
 #[derive(Clone, Debug, PartialEq, Serialize)]
 pub struct ArtifactInfo {

@@ -3,10 +3,13 @@
 //! failed, interrupted or killed stage therefore never leaves a partial
 //! output under its final name.
 //!
-//! Temporary names carry the writer's process id (`.surfcap-<pid>-*.tmp` for
-//! files, `.surfcap-<name>.<pid>.<n>.tmpdir` for folders); each write first
-//! removes the temporaries of dead processes in the same folder (left by a
-//! `kill -9` or a power cut), so they do not accumulate.
+//! Temporary names carry the writer's process id and host
+//! (`.surfcap-<pid>@<host>-*.tmp` for files,
+//! `.surfcap-<name>.<pid>@<host>.<n>.tmpdir` for folders); each write first
+//! removes the temporaries of dead processes of this host in the same folder
+//! (left by a `kill -9` or a power cut), so they do not accumulate. Another
+//! host's temporaries on a shared file system are never touched: its
+//! processes cannot be seen from here.
 
 use std::io::{BufWriter, Write};
 use std::path::{Path, PathBuf};
@@ -33,18 +36,42 @@ fn process_alive(pid: u32) -> bool {
     }
 }
 
-/// The writer's pid in a temporary name written by this module, if it is one.
+/// This host's name reduced to ASCII letters and digits (`host` if unknown),
+/// so that it cannot contain the separators of temporary names.
+fn host() -> &'static str {
+    static HOST: std::sync::OnceLock<String> = std::sync::OnceLock::new();
+    HOST.get_or_init(|| {
+        let raw = std::fs::read_to_string("/proc/sys/kernel/hostname")
+            .or_else(|_| std::fs::read_to_string("/etc/hostname"))
+            .unwrap_or_default();
+        let h: String = raw.chars().filter(char::is_ascii_alphanumeric).take(32).collect();
+        if h.is_empty() { "host".to_string() } else { h }
+    })
+}
+
+/// `<pid>@<host>` of this process, as temporary names carry it.
+fn owner_tag() -> String {
+    format!("{}@{}", std::process::id(), host())
+}
+
+/// The writer's pid in a temporary name written by this module on this host.
 fn temp_owner(name: &str) -> Option<u32> {
     let rest = name.strip_prefix(PREFIX)?;
-    if let Some(body) = rest.strip_suffix(".tmp") {
-        // .surfcap-<pid>-<random>.tmp
-        return body.split('-').next()?.parse().ok();
+    let tag = if let Some(body) = rest.strip_suffix(".tmp") {
+        // .surfcap-<pid>@<host>-<random>.tmp
+        body.split('-').next()?
+    } else {
+        // .surfcap-<name>.<pid>@<host>.<n>.tmpdir / .old
+        let body = rest.strip_suffix(".tmpdir").or_else(|| rest.strip_suffix(".old"))?;
+        let mut fields = body.rsplit('.');
+        fields.next()?;
+        fields.next()?
+    };
+    let (pid, h) = tag.split_once('@')?;
+    if h != host() {
+        return None;
     }
-    let body = rest.strip_suffix(".tmpdir").or_else(|| rest.strip_suffix(".old"))?;
-    // .surfcap-<name>.<pid>.<n>.tmpdir / .old
-    let mut fields = body.rsplit('.');
-    fields.next()?;
-    fields.next()?.parse().ok()
+    pid.parse().ok()
 }
 
 /// Removes temporaries of dead writers from `dir` (best effort: another
@@ -82,7 +109,7 @@ where
     }
     remove_stale_temporaries(dir);
     let mut builder = tempfile::Builder::new();
-    let prefix = format!("{PREFIX}{}-", std::process::id());
+    let prefix = format!("{PREFIX}{}-", owner_tag());
     builder.prefix(&prefix).suffix(".tmp");
     // Temporary files are created owner-only (0600); outputs are ordinary
     // files that other users and web servers may read.
@@ -111,10 +138,10 @@ pub fn write_bytes_atomic(path: &Path, bytes: &[u8]) -> Result<()> {
 
 static FOLDER_SERIAL: AtomicU64 = AtomicU64::new(0);
 
-/// A fresh sibling name of `dir` for this process: `.surfcap-<name>.<pid>.<n>.<suffix>`.
+/// A fresh sibling name of `dir` for this process: `.surfcap-<name>.<pid>@<host>.<n>.<suffix>`.
 fn sibling(parent: &Path, name: &str, suffix: &str) -> PathBuf {
     let n = FOLDER_SERIAL.fetch_add(1, Ordering::Relaxed);
-    parent.join(format!("{PREFIX}{name}.{}.{n}.{suffix}", std::process::id()))
+    parent.join(format!("{PREFIX}{name}.{}.{n}.{suffix}", owner_tag()))
 }
 
 /// Hard-links (or copies) every entry of `from` that `keep` accepts and
@@ -234,6 +261,34 @@ mod tests {
         write_bytes_atomic(&out, b"x").unwrap();
         let mode = std::fs::metadata(&out).unwrap().permissions().mode() & 0o777;
         assert_eq!(mode & 0o044, 0o044, "mode {mode:o}");
+    }
+
+    #[test]
+    fn stale_temporaries_of_dead_local_writers_only_are_removed() {
+        let dir = tempfile::tempdir().unwrap();
+        let dead = u32::MAX - 1; // no such process
+        let names = [
+            format!(".surfcap-{dead}@{}-abc.tmp", host()),
+            format!(".surfcap-seq.{dead}@{}.0.tmpdir", host()),
+            format!(".surfcap-{dead}@otherhost-abc.tmp"),
+            format!(".surfcap-{}-abc.tmp", owner_tag()),
+            "notes.tmp".to_string(),
+        ];
+        for n in &names[..3] {
+            std::fs::create_dir_all(dir.path().join(n)).unwrap();
+        }
+        for n in &names[3..] {
+            std::fs::write(dir.path().join(n), "x").unwrap();
+        }
+        remove_stale_temporaries(dir.path());
+        let mut left: Vec<String> = std::fs::read_dir(dir.path())
+            .unwrap()
+            .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+            .collect();
+        left.sort();
+        let mut want = names[2..].to_vec();
+        want.sort();
+        assert_eq!(left, want);
     }
 
     #[test]

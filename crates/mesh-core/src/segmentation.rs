@@ -20,7 +20,7 @@
 
 use std::collections::BTreeMap;
 
-use crate::artifact::{check_indices, Artifact};
+use crate::artifact::{check_cover, check_indices, Artifact};
 use crate::capture_set::SubjectSpec;
 use crate::topology::Topology;
 use crate::{Error, Result, TriMesh};
@@ -63,15 +63,8 @@ impl Segmentation {
     /// local faces and overlap below the part's vertex count, loops below
     /// `n_vertices`, unique part names and one tree from a single root.
     pub fn check(&self) -> std::result::Result<(), String> {
-        let total: usize = self.parts.iter().map(|p| p.vertices.len()).sum();
-        if self.parts.is_empty() || self.n_vertices == 0 || self.n_vertices > total {
-            return Err(format!(
-                "{} parts holding {total} vertices cannot cover a template of {} vertices",
-                self.parts.len(),
-                self.n_vertices
-            ));
-        }
-        let mut covered = vec![false; self.n_vertices];
+        let lists: Vec<&[u32]> = self.parts.iter().map(|p| p.vertices.as_slice()).collect();
+        check_cover(self.n_vertices, &lists)?;
         for (k, p) in self.parts.iter().enumerate() {
             let name = || format!("part {k} ('{}')", p.name);
             if self.parts[..k].iter().any(|q| q.name == p.name) {
@@ -80,7 +73,6 @@ impl Segmentation {
             if p.vertices.windows(2).any(|w| w[0] >= w[1]) {
                 return Err(format!("{}: vertices are not strictly ascending", name()));
             }
-            check_indices(p.vertices.iter().copied(), self.n_vertices, || format!("{} vertex list", name()))?;
             let local = p.vertices.len();
             check_indices(p.faces.iter().flatten().copied(), local, || format!("{} face list", name()))?;
             check_indices(p.overlap.iter().copied(), local, || format!("{} overlap", name()))?;
@@ -90,12 +82,6 @@ impl Segmentation {
                     return Err(format!("{}: parent '{parent}' is not a part", name()));
                 }
             }
-            for &v in &p.vertices {
-                covered[v as usize] = true;
-            }
-        }
-        if let Some(v) = covered.iter().position(|c| !c) {
-            return Err(format!("template vertex {v} is in no part"));
         }
         self.tree_order().map_err(|e| e.to_string())?;
         Ok(())

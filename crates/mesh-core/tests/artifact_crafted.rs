@@ -155,6 +155,7 @@ fn peak_memory_of_a_payload_of_empty_lists_is_within_the_documented_bound() {
     assert_eq!(v.len(), n as usize);
     // The file's bytes are held while decoding: count them apart.
     let decode_peak = peak - file_len;
+    eprintln!("{} empty lists ({} payload bytes): decode peak {decode_peak} bytes", n, payload.len());
     assert!(
         decode_peak <= 2 * DECODE_EXPANSION * payload.len(),
         "peak {decode_peak} bytes for a {}-byte payload",

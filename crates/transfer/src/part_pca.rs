@@ -20,7 +20,7 @@
 //! coefficients per frame (20 by default).
 
 use gp::pca::{Components, Pca};
-use mesh_core::artifact::{check_indices, Artifact};
+use mesh_core::artifact::{check_cover, check_indices, Artifact};
 use mesh_core::rigid::procrustes;
 use mesh_core::{Error, Result};
 use nalgebra::{DMatrix, Vector3};
@@ -71,20 +71,9 @@ impl Artifact for PcaModel {
     /// some part), one reference point per vertex, a PCA of dimension
     /// `3 x vertices`, the anchor below `n_vertices`.
     fn validate(&self) -> std::result::Result<(), String> {
-        let total: usize = self.parts.iter().map(|p| p.vertices.len()).sum();
-        if self.parts.is_empty() || self.n_vertices == 0 || self.n_vertices > total {
-            return Err(format!(
-                "{} parts holding {total} vertices cannot cover a template of {} vertices",
-                self.parts.len(),
-                self.n_vertices
-            ));
-        }
-        let mut covered = vec![false; self.n_vertices];
+        let lists: Vec<&[u32]> = self.parts.iter().map(|p| p.vertices.as_slice()).collect();
+        check_cover(self.n_vertices, &lists)?;
         for (k, p) in self.parts.iter().enumerate() {
-            let name = || format!("part {k} ('{}')", p.name);
-            check_indices(p.vertices.iter().copied(), self.n_vertices, || {
-                format!("{} vertex list", name())
-            })?;
             let d = 3 * p.vertices.len();
             let pca = &p.pca;
             if p.reference.len() != p.vertices.len()
@@ -93,8 +82,8 @@ impl Artifact for PcaModel {
                 || pca.variances.len() != pca.components.nrows()
             {
                 return Err(format!(
-                    "{}: {} vertices, {} reference points, PCA of dimension {} (mean {}) with {} axes and {} variances",
-                    name(),
+                    "part {k} ('{}'): {} vertices, {} reference points, PCA of dimension {} (mean {}) with {} axes and {} variances",
+                    p.name,
                     p.vertices.len(),
                     p.reference.len(),
                     pca.components.ncols(),
@@ -103,12 +92,6 @@ impl Artifact for PcaModel {
                     pca.variances.len()
                 ));
             }
-            for &v in &p.vertices {
-                covered[v as usize] = true;
-            }
-        }
-        if let Some(v) = covered.iter().position(|c| !c) {
-            return Err(format!("template vertex {v} is in no part"));
         }
         check_indices(self.anchor.iter().copied(), self.n_vertices, || "the anchor".into())
     }
