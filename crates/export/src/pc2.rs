@@ -136,7 +136,7 @@ pub fn parse_pc2(bytes: &[u8]) -> std::result::Result<PointCache, String> {
 /// Reads a PC2 file; errors are one line naming the file.
 pub fn read_pc2(path: impl AsRef<Path>) -> Result<PointCache> {
     let path = path.as_ref();
-    let bytes = std::fs::read(path).map_err(|e| Error::io(path, e))?;
+    let bytes = mesh_core::input::read_regular_file(path)?;
     parse_pc2(&bytes).map_err(|m| Error::file(path, m))
 }
 

@@ -69,9 +69,8 @@ fn is_numbered(path: &Path) -> bool {
 
 fn has_artifact_magic(path: &Path) -> bool {
     let mut magic = [0u8; 8];
-    std::fs::File::open(path)
-        .and_then(|mut f| f.read_exact(&mut magic))
-        .is_ok()
+    mesh_core::input::open_regular_file(path)
+        .is_ok_and(|mut f| f.read_exact(&mut magic).is_ok())
         && magic == mesh_core::artifact::MAGIC
 }
 

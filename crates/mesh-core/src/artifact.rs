@@ -19,10 +19,11 @@
 //!
 //! Reading trusts nothing: every length is checked against the bytes that
 //! remain before anything is allocated, the checksum is verified before the
-//! header or payload is parsed, and the payload decoder has a byte limit
-//! below 4x the payload's length, so a crafted string length inside the
-//! payload cannot allocate more than the file justifies (sequences are
-//! capped by serde itself at 1 MiB of up-front reservation). Each failure is one
+//! header or payload is parsed, and the payload decoder has a byte limit of
+//! [`DECODE_EXPANSION`] (32) times the payload's length, so a crafted length
+//! inside the payload cannot allocate more than the file justifies (sequences
+//! are capped by serde itself at 1 MiB of up-front reservation). Decoded
+//! payloads are then checked by [`Artifact::validate`]. Each failure is one
 //! [`Error::File`] line naming the file, e.g.
 //! `model.art: expected artifact kind 'pca-model', found 'gpr-model'`.
 
@@ -145,6 +146,15 @@ pub trait Artifact: Serialize + DeserializeOwned {
     /// Version of this kind's payload layout; bump it when the struct changes.
     const VERSION: u32;
 
+    /// Checks every index and size of a decoded payload against the rest of
+    /// it, so consumers can index without bounds failures. A valid checksum only
+    /// says the file was not corrupted in transit; a rewritten file with a
+    /// recomputed checksum reaches this check. The error is the problem,
+    /// without the file name.
+    fn validate(&self) -> std::result::Result<(), String> {
+        Ok(())
+    }
+
     /// Writes `self` to `path` atomically.
     fn save(&self, path: impl AsRef<Path>, header: &Header) -> Result<()> {
         write_artifact(path, Self::KIND, Self::VERSION, header, self)
@@ -153,9 +163,62 @@ pub trait Artifact: Serialize + DeserializeOwned {
     fn load(path: impl AsRef<Path>) -> Result<Self> {
         Ok(Self::load_with_header(path)?.1)
     }
-    /// Reads header and payload, checking kind, version and checksum.
+    /// Reads header and payload, checking kind, version, checksum and
+    /// [`Artifact::validate`].
     fn load_with_header(path: impl AsRef<Path>) -> Result<(Header, Self)> {
-        read_artifact(path, Self::KIND, Self::VERSION)
+        let path = path.as_ref();
+        let (header, payload): (Header, Self) = read_artifact(path, Self::KIND, Self::VERSION)?;
+        payload
+            .validate()
+            .map_err(|msg| Error::file(path, format!("invalid '{}' payload: {msg}", Self::KIND)))?;
+        Ok((header, payload))
+    }
+
+    /// Decodes and validates an artifact held in memory (the error without the file name).
+    fn decode(bytes: &[u8]) -> std::result::Result<(Header, Self), String> {
+        let (header, payload): (Header, Self) = decode_artifact(bytes, Self::KIND, Self::VERSION)?;
+        payload
+            .validate()
+            .map_err(|msg| format!("invalid '{}' payload: {msg}", Self::KIND))?;
+        Ok((header, payload))
+    }
+}
+
+/// For [`Artifact::validate`]: the first index in `indices` that is not below
+/// `bound`, as an error naming `what()`.
+pub fn check_indices(
+    indices: impl IntoIterator<Item = u32>,
+    bound: usize,
+    what: impl Fn() -> String,
+) -> std::result::Result<(), String> {
+    match indices.into_iter().find(|&i| i as usize >= bound) {
+        Some(i) => Err(format!("{} has index {i}, but only {bound} are valid", what())),
+        None => Ok(()),
+    }
+}
+
+/// For [`Artifact::validate`] of part sets: `parts` (each part's template
+/// vertex list) hold only indices below `n_vertices` and together cover
+/// every template vertex. Checks the count first, so a crafted `n_vertices`
+/// allocates nothing the file does not justify.
+pub fn check_cover(n_vertices: usize, parts: &[&[u32]]) -> std::result::Result<(), String> {
+    let total: usize = parts.iter().map(|p| p.len()).sum();
+    if parts.is_empty() || n_vertices == 0 || n_vertices > total {
+        return Err(format!(
+            "{} parts holding {total} vertices cannot cover a template of {n_vertices} vertices",
+            parts.len()
+        ));
+    }
+    let mut covered = vec![false; n_vertices];
+    for (k, p) in parts.iter().enumerate() {
+        check_indices(p.iter().copied(), n_vertices, || format!("part {k}'s vertex list"))?;
+        for &v in p.iter() {
+            covered[v as usize] = true;
+        }
+    }
+    match covered.iter().position(|c| !c) {
+        Some(v) => Err(format!("template vertex {v} is in no part")),
+        None => Ok(()),
     }
 }
 
@@ -224,7 +287,7 @@ pub fn read_artifact<T: DeserializeOwned>(
     kind_version: u32,
 ) -> Result<(Header, T)> {
     let path = path.as_ref();
-    let bytes = std::fs::read(path).map_err(|e| Error::io(path, e))?;
+    let bytes = crate::input::read_regular_file(path)?;
     decode_artifact(&bytes, kind, kind_version).map_err(|msg| Error::file(path, msg))
 }
 
@@ -237,7 +300,7 @@ pub fn read_header(path: impl AsRef<Path>) -> Result<(String, u32, Header)> {
 /// Reads everything but the payload of any artifact (checksum verified).
 pub fn inspect_artifact(path: impl AsRef<Path>) -> Result<ArtifactInfo> {
     let path = path.as_ref();
-    let bytes = std::fs::read(path).map_err(|e| Error::io(path, e))?;
+    let bytes = crate::input::read_regular_file(path)?;
     let file = |msg: String| Error::file(path, msg);
     let raw = split(&bytes).map_err(file)?;
     let header = parse_header(raw.header_json).map_err(file)?;
@@ -292,7 +355,7 @@ pub fn decode_artifact<T: DeserializeOwned>(
 /// SHA-256 of a file's bytes as lowercase hex (streamed, for input records).
 pub fn sha256_file(path: impl AsRef<Path>) -> Result<String> {
     let path = path.as_ref();
-    let mut f = std::fs::File::open(path).map_err(|e| Error::io(path, e))?;
+    let mut f = crate::input::open_regular_file(path)?;
     let mut hasher = Sha256::new();
     let mut buf = vec![0u8; 1 << 16];
     loop {

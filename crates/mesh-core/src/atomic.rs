@@ -1,11 +1,100 @@
-//! Atomic file output: write to a temporary file in the destination folder,
-//! flush it to disk, then rename it over the destination. A failed or
-//! interrupted stage therefore never leaves a partial artifact behind.
+//! Atomic file and folder output: write under a temporary name in the
+//! destination's folder, flush to disk, then rename onto the destination. A
+//! failed, interrupted or killed stage therefore never leaves a partial
+//! output under its final name.
+//!
+//! Temporary names carry the writer's process id and host
+//! (`.surfcap-<pid>@<host>-*.tmp` for files,
+//! `.surfcap-<name>.<pid>@<host>.<n>.tmpdir` for folders); each write first
+//! removes the temporaries of dead processes of this host in the same folder
+//! (left by a `kill -9` or a power cut), so they do not accumulate. Another
+//! host's temporaries on a shared file system are never touched: its
+//! processes cannot be seen from here.
 
 use std::io::{BufWriter, Write};
-use std::path::Path;
+use std::path::{Path, PathBuf};
+use std::sync::atomic::{AtomicU64, Ordering};
 
 use crate::error::{Error, Result};
+
+const PREFIX: &str = ".surfcap-";
+
+/// The folder `path` is written into (`.` for a bare file name).
+fn parent_of(path: &Path) -> &Path {
+    match path.parent() {
+        Some(p) if !p.as_os_str().is_empty() => p,
+        _ => Path::new("."),
+    }
+}
+
+/// Whether process `pid` still runs (conservatively `true` where this cannot be told).
+fn process_alive(pid: u32) -> bool {
+    if cfg!(target_os = "linux") {
+        pid == std::process::id() || Path::new("/proc").join(pid.to_string()).exists()
+    } else {
+        true
+    }
+}
+
+/// This host's name reduced to ASCII letters and digits (`host` if unknown),
+/// so that it cannot contain the separators of temporary names.
+fn host() -> &'static str {
+    static HOST: std::sync::OnceLock<String> = std::sync::OnceLock::new();
+    HOST.get_or_init(|| {
+        let raw = std::fs::read_to_string("/proc/sys/kernel/hostname")
+            .or_else(|_| std::fs::read_to_string("/etc/hostname"))
+            .unwrap_or_default();
+        let h: String = raw.chars().filter(char::is_ascii_alphanumeric).take(32).collect();
+        if h.is_empty() { "host".to_string() } else { h }
+    })
+}
+
+/// `<pid>@<host>` of this process, as temporary names carry it.
+fn owner_tag() -> String {
+    format!("{}@{}", std::process::id(), host())
+}
+
+/// The writer's pid in a temporary name written by this module on this host.
+fn temp_owner(name: &str) -> Option<u32> {
+    let rest = name.strip_prefix(PREFIX)?;
+    let tag = if let Some(body) = rest.strip_suffix(".tmp") {
+        // .surfcap-<pid>@<host>-<random>.tmp
+        body.split('-').next()?
+    } else {
+        // .surfcap-<name>.<pid>@<host>.<n>.tmpdir / .old
+        let body = rest.strip_suffix(".tmpdir").or_else(|| rest.strip_suffix(".old"))?;
+        let mut fields = body.rsplit('.');
+        fields.next()?;
+        fields.next()?
+    };
+    let (pid, h) = tag.split_once('@')?;
+    if h != host() {
+        return None;
+    }
+    pid.parse().ok()
+}
+
+/// Removes temporaries of dead writers from `dir` (best effort: another
+/// cleaner may remove the same entry first).
+pub fn remove_stale_temporaries(dir: &Path) {
+    let Ok(entries) = std::fs::read_dir(dir) else {
+        return;
+    };
+    for entry in entries.flatten() {
+        let name = entry.file_name();
+        let Some(pid) = name.to_str().and_then(temp_owner) else {
+            continue;
+        };
+        if process_alive(pid) {
+            continue;
+        }
+        let path = entry.path();
+        let _ = match entry.file_type() {
+            Ok(t) if t.is_dir() => std::fs::remove_dir_all(&path),
+            _ => std::fs::remove_file(&path),
+        };
+    }
+}
 
 /// Writes `path` atomically. `fill` receives a buffered writer; if it fails,
 /// the temporary file is removed and `path` is left untouched.
@@ -13,13 +102,15 @@ pub fn write_atomic<F>(path: &Path, fill: F) -> Result<()>
 where
     F: FnOnce(&mut dyn Write) -> std::io::Result<()>,
 {
-    let dir = match path.parent() {
-        Some(p) if !p.as_os_str().is_empty() => p,
-        _ => Path::new("."),
-    };
+    let dir = parent_of(path);
     std::fs::create_dir_all(dir).map_err(|e| Error::io(dir, e))?;
+    if path.is_dir() {
+        return Err(Error::file(path, "is a directory: cannot write a file there"));
+    }
+    remove_stale_temporaries(dir);
     let mut builder = tempfile::Builder::new();
-    builder.prefix(".surfcap-").suffix(".tmp");
+    let prefix = format!("{PREFIX}{}-", owner_tag());
+    builder.prefix(&prefix).suffix(".tmp");
     // Temporary files are created owner-only (0600); outputs are ordinary
     // files that other users and web servers may read.
     #[cfg(unix)]
@@ -43,6 +134,105 @@ where
 /// Writes a byte buffer atomically.
 pub fn write_bytes_atomic(path: &Path, bytes: &[u8]) -> Result<()> {
     write_atomic(path, |w| w.write_all(bytes))
+}
+
+static FOLDER_SERIAL: AtomicU64 = AtomicU64::new(0);
+
+/// A fresh sibling name of `dir` for this process: `.surfcap-<name>.<pid>@<host>.<n>.<suffix>`.
+fn sibling(parent: &Path, name: &str, suffix: &str) -> PathBuf {
+    let n = FOLDER_SERIAL.fetch_add(1, Ordering::Relaxed);
+    parent.join(format!("{PREFIX}{name}.{}.{n}.{suffix}", owner_tag()))
+}
+
+/// Hard-links (or copies) every entry of `from` that `keep` accepts and
+/// `to` does not already have into `to`, recursively.
+fn carry_over(from: &Path, to: &Path, keep: &dyn Fn(&Path) -> bool) -> std::io::Result<()> {
+    for entry in std::fs::read_dir(from)? {
+        let entry = entry?;
+        let (src, dst) = (entry.path(), to.join(entry.file_name()));
+        if !keep(&src) || dst.exists() {
+            continue;
+        }
+        let t = entry.file_type()?;
+        if t.is_dir() {
+            std::fs::create_dir(&dst)?;
+            carry_over(&src, &dst, &|_| true)?;
+        } else if t.is_file() && std::fs::hard_link(&src, &dst).is_err() {
+            std::fs::copy(&src, &dst)?;
+        }
+    }
+    Ok(())
+}
+
+/// Writes the folder `dir` atomically: `fill` writes the new contents into a
+/// temporary sibling folder, which then replaces `dir` by rename. Entries of
+/// an existing `dir` that `keep` accepts (and `fill` did not write) are
+/// carried over into the new folder; the rest of the old folder is removed.
+///
+/// Readers see the old folder, no folder (for the instant between two
+/// renames), or the complete new one; never a mix. Two writers racing on one
+/// folder each install a complete folder, and the last rename wins. If `fill`
+/// fails, the temporary folder is removed and `dir` is left untouched.
+pub fn write_dir_atomic<F>(dir: &Path, keep: &dyn Fn(&Path) -> bool, fill: F) -> Result<()>
+where
+    F: FnOnce(&Path) -> Result<()>,
+{
+    let name = match dir.file_name().and_then(|n| n.to_str()) {
+        Some(n) if n != "." && n != ".." => n.to_string(),
+        _ => return Err(Error::file(dir, "an output folder needs a plain name (not '.' or '..')")),
+    };
+    let parent = parent_of(dir);
+    std::fs::create_dir_all(parent).map_err(|e| Error::io(parent, e))?;
+    if dir.exists() && !dir.is_dir() {
+        return Err(Error::file(dir, "exists and is not a folder"));
+    }
+    remove_stale_temporaries(parent);
+    let tmp = sibling(parent, &name, "tmpdir");
+    std::fs::create_dir(&tmp).map_err(|e| Error::io(&tmp, e))?;
+    let filled = fill(&tmp).and_then(|()| {
+        if dir.is_dir() {
+            carry_over(dir, &tmp, keep).map_err(|e| Error::io(dir, e))?;
+        }
+        sync_dir(&tmp).map_err(|e| Error::io(&tmp, e))
+    });
+    if let Err(e) = filled {
+        let _ = std::fs::remove_dir_all(&tmp);
+        return Err(e);
+    }
+    let mut retired = Vec::new();
+    let mut installed = Err(std::io::Error::other("no attempt"));
+    for _ in 0..64 {
+        installed = std::fs::rename(&tmp, dir);
+        match &installed {
+            Ok(()) => break,
+            // `dir` exists and is not empty: move it aside, then try again
+            // (another writer may move it first, or install its own).
+            Err(_) if dir.is_dir() => {
+                let old = sibling(parent, &name, "old");
+                if std::fs::rename(dir, &old).is_ok() {
+                    retired.push(old);
+                }
+            }
+            Err(_) if dir.exists() => break,
+            // `dir` vanished between the two calls: the next rename installs.
+            Err(_) => {}
+        }
+    }
+    for old in &retired {
+        let _ = std::fs::remove_dir_all(old);
+    }
+    if let Err(e) = installed {
+        let _ = std::fs::remove_dir_all(&tmp);
+        return Err(Error::io(dir, e));
+    }
+    sync_dir(parent).map_err(|e| Error::io(parent, e))
+}
+
+/// Flushes a folder's entries (the renames into it) to disk.
+fn sync_dir(dir: &Path) -> std::io::Result<()> {
+    #[cfg(unix)]
+    std::fs::File::open(dir)?.sync_all()?;
+    Ok(())
 }
 
 #[cfg(test)]
@@ -71,6 +261,34 @@ mod tests {
         write_bytes_atomic(&out, b"x").unwrap();
         let mode = std::fs::metadata(&out).unwrap().permissions().mode() & 0o777;
         assert_eq!(mode & 0o044, 0o044, "mode {mode:o}");
+    }
+
+    #[test]
+    fn stale_temporaries_of_dead_local_writers_only_are_removed() {
+        let dir = tempfile::tempdir().unwrap();
+        let dead = u32::MAX - 1; // no such process
+        let names = [
+            format!(".surfcap-{dead}@{}-abc.tmp", host()),
+            format!(".surfcap-seq.{dead}@{}.0.tmpdir", host()),
+            format!(".surfcap-{dead}@otherhost-abc.tmp"),
+            format!(".surfcap-{}-abc.tmp", owner_tag()),
+            "notes.tmp".to_string(),
+        ];
+        for n in &names[..3] {
+            std::fs::create_dir_all(dir.path().join(n)).unwrap();
+        }
+        for n in &names[3..] {
+            std::fs::write(dir.path().join(n), "x").unwrap();
+        }
+        remove_stale_temporaries(dir.path());
+        let mut left: Vec<String> = std::fs::read_dir(dir.path())
+            .unwrap()
+            .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+            .collect();
+        left.sort();
+        let mut want = names[2..].to_vec();
+        want.sort();
+        assert_eq!(left, want);
     }
 
     #[test]

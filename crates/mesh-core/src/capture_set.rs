@@ -74,10 +74,9 @@ fn default_up() -> String {
     "+y".to_string()
 }
 
-/// Reads and parses a JSON file; errors are one line naming the file.
-fn load_json<T: serde::de::DeserializeOwned>(path: &Path) -> Result<T> {
-    let bytes = std::fs::read(path).map_err(|e| Error::io(path, e))?;
-    serde_json::from_slice(&bytes).map_err(|e| Error::file(path, format!("invalid JSON: {e}")))
+/// Parses JSON; the error is one line.
+fn parse_json<T: serde::de::DeserializeOwned>(bytes: &[u8]) -> std::result::Result<T, String> {
+    serde_json::from_slice(bytes).map_err(|e| format!("invalid JSON: {e}"))
 }
 
 /// A subject or motion name must be a plain directory name.
@@ -101,8 +100,14 @@ impl SetSpec {
     /// directory names and that there is at least one training pair.
     pub fn load(path: impl AsRef<Path>) -> Result<Self> {
         let path = path.as_ref();
-        let spec: SetSpec = load_json(path)?;
-        spec.check().map_err(|m| Error::file(path, m))?;
+        let bytes = crate::input::read_regular_file(path)?;
+        Self::parse(&bytes).map_err(|m| Error::file(path, m))
+    }
+
+    /// [`SetSpec::load`] of bytes held in memory (the error without the file name).
+    pub fn parse(bytes: &[u8]) -> std::result::Result<Self, String> {
+        let spec: SetSpec = parse_json(bytes)?;
+        spec.check()?;
         Ok(spec)
     }
 
@@ -135,21 +140,20 @@ impl SubjectSpec {
     /// mesh by [`SubjectSpec::validate`].
     pub fn load(path: impl AsRef<Path>) -> Result<Self> {
         let path = path.as_ref();
-        let spec: SubjectSpec = load_json(path)?;
+        let bytes = crate::input::read_regular_file(path)?;
+        Self::parse(&bytes).map_err(|m| Error::file(path, m))
+    }
+
+    /// [`SubjectSpec::load`] of bytes held in memory (the error without the file name).
+    pub fn parse(bytes: &[u8]) -> std::result::Result<Self, String> {
+        let spec: SubjectSpec = parse_json(bytes)?;
         if !(spec.fps.is_finite() && spec.fps > 0.0) {
-            return Err(Error::file(
-                path,
-                format!("fps must be a positive number, got {}", spec.fps),
-            ));
+            return Err(format!("fps must be a positive number, got {}", spec.fps));
         }
         if spec.up_vector().is_none() {
-            return Err(Error::file(
-                path,
-                format!("up must be one of +x -x +y -y +z -z, got '{}'", spec.up),
-            ));
+            return Err(format!("up must be one of +x -x +y -y +z -z, got '{}'", spec.up));
         }
-        spec.check_parts()
-            .map_err(|e| Error::file(path, e.to_string()))?;
+        spec.check_parts().map_err(|e| e.to_string())?;
         Ok(spec)
     }
 

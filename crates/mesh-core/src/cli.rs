@@ -88,12 +88,17 @@ impl CommonArgs {
     /// global pool with `--threads` workers, and makes BLAS single-threaded
     /// (`OPENBLAS_NUM_THREADS=1` for child processes, plus
     /// `openblas_set_num_threads(1)` if OpenBLAS is linked in, because OpenBLAS
-    /// reads the variable when it is loaded, before `main`).
+    /// reads the variable when it is loaded, before `main`) and faer sequential.
     pub fn init(&self) -> anyhow::Result<()> {
         VERBOSITY.store(if self.quiet { 0 } else { self.verbose }, Ordering::Relaxed);
         QUIET.store(self.quiet, Ordering::Relaxed);
         std::env::set_var("OPENBLAS_NUM_THREADS", "1");
         blas_single_thread();
+        // faer's own parallel kernels split reductions by thread count, so
+        // results would differ in the last digits between `--threads 1` and
+        // `2`; sequential faer keeps every output independent of the core
+        // count (and is faster on 2 cores, STACK.md).
+        faer::set_global_parallelism(faer::Par::Seq);
         if let Some(n) = self.threads {
             rayon::ThreadPoolBuilder::new()
                 .num_threads(n as usize)
@@ -153,7 +158,11 @@ pub fn stage_name() -> &'static str {
 macro_rules! info {
     ($($arg:tt)*) => {
         if $crate::cli::verbosity() >= 1 {
-            eprintln!("{}: {}", $crate::cli::stage_name(), format_args!($($arg)*));
+            eprintln!(
+                "{}: {}",
+                $crate::cli::stage_name(),
+                $crate::input::escape_control(&format!($($arg)*))
+            );
         }
     };
 }
@@ -163,7 +172,11 @@ macro_rules! info {
 macro_rules! warn {
     ($($arg:tt)*) => {
         if !$crate::cli::is_quiet() {
-            eprintln!("{}: warning: {}", $crate::cli::stage_name(), format_args!($($arg)*));
+            eprintln!(
+                "{}: warning: {}",
+                $crate::cli::stage_name(),
+                $crate::input::escape_control(&format!($($arg)*))
+            );
         }
     };
 }
@@ -196,7 +209,8 @@ pub fn error_line(err: &anyhow::Error) -> String {
         }
         line.push_str(&text);
     }
-    line.split_whitespace().collect::<Vec<_>>().join(" ")
+    let line = line.split_whitespace().collect::<Vec<_>>().join(" ");
+    crate::input::escape_control(&line).into_owned()
 }
 
 /// Prints `stage: <error>` as one line on stderr (for stages that report a
@@ -222,6 +236,7 @@ pub fn run_stage(stage_name: &str, main: impl FnOnce() -> anyhow::Result<()>) ->
             .location()
             .map(|l| format!(" at {}:{}", l.file(), l.line()));
         let msg = msg.split_whitespace().collect::<Vec<_>>().join(" ");
+        let msg = crate::input::escape_control(&msg);
         eprintln!(
             "{hook_stage}: internal error: {msg}{}",
             place.unwrap_or_default()

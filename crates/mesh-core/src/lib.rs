@@ -10,6 +10,7 @@
 pub mod error;
 pub mod mesh;
 pub mod topology;
+pub mod input;
 pub mod io;
 pub mod sequence;
 pub mod capture_set;

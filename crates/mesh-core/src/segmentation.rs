@@ -20,7 +20,7 @@
 
 use std::collections::BTreeMap;
 
-use crate::artifact::Artifact;
+use crate::artifact::{check_cover, check_indices, Artifact};
 use crate::capture_set::SubjectSpec;
 use crate::topology::Topology;
 use crate::{Error, Result, TriMesh};
@@ -51,6 +51,41 @@ pub struct Segmentation {
 impl Artifact for Segmentation {
     const KIND: &'static str = "segmentation";
     const VERSION: u32 = 1;
+
+    fn validate(&self) -> std::result::Result<(), String> {
+        self.check()
+    }
+}
+
+impl Segmentation {
+    /// Checks what consumers index with: every part's template vertices
+    /// ascending and below `n_vertices`, every template vertex in some part,
+    /// local faces and overlap below the part's vertex count, loops below
+    /// `n_vertices`, unique part names and one tree from a single root.
+    pub fn check(&self) -> std::result::Result<(), String> {
+        let lists: Vec<&[u32]> = self.parts.iter().map(|p| p.vertices.as_slice()).collect();
+        check_cover(self.n_vertices, &lists)?;
+        for (k, p) in self.parts.iter().enumerate() {
+            let name = || format!("part {k} ('{}')", p.name);
+            if self.parts[..k].iter().any(|q| q.name == p.name) {
+                return Err(format!("{} appears twice", name()));
+            }
+            if p.vertices.windows(2).any(|w| w[0] >= w[1]) {
+                return Err(format!("{}: vertices are not strictly ascending", name()));
+            }
+            let local = p.vertices.len();
+            check_indices(p.faces.iter().flatten().copied(), local, || format!("{} face list", name()))?;
+            check_indices(p.overlap.iter().copied(), local, || format!("{} overlap", name()))?;
+            check_indices(p.loops.iter().flatten().copied(), self.n_vertices, || format!("{} loops", name()))?;
+            if let Some(parent) = &p.parent {
+                if !self.parts.iter().any(|q| &q.name == parent) {
+                    return Err(format!("{}: parent '{parent}' is not a part", name()));
+                }
+            }
+        }
+        self.tree_order().map_err(|e| e.to_string())?;
+        Ok(())
+    }
 }
 
 impl Segmentation {

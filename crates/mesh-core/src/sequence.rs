@@ -212,26 +212,29 @@ impl MeshSequence {
         Ok(MeshSequence { faces, frames })
     }
 
-    /// Writes the frames as `dir/000000.ply`, `000001.ply`, ... (binary PLY),
-    /// each atomically, then removes stale frame files left in `dir` by an
-    /// earlier, longer sequence (or with the other extension), so that
-    /// [`MeshSequence::load_dir`] reads back exactly this sequence.
+    /// Writes the frames as `dir/000000.ply`, `000001.ply`, ... (binary PLY)
+    /// with [`write_frames_atomic`]: the folder is replaced as a whole, so it
+    /// holds exactly this sequence or (after a failure or a kill) what it held
+    /// before, and [`MeshSequence::load_dir`] reads back exactly this sequence.
     pub fn write_dir(&self, dir: impl AsRef<Path>) -> Result<()> {
-        let dir = dir.as_ref();
-        std::fs::create_dir_all(dir).map_err(|e| Error::io(dir, e))?;
-        let names: Vec<PathBuf> = (0..self.n_frames())
-            .map(|i| dir.join(format!("{i:06}.ply")))
-            .collect();
-        names
-            .par_iter()
-            .enumerate()
-            .try_for_each(|(i, p)| write_ply(p, &self.frame_mesh(i)))?;
-        for entry in std::fs::read_dir(dir).map_err(|e| Error::io(dir, e))? {
-            let path = entry.map_err(|e| Error::io(dir, e))?.path();
-            if frame_number(&path).is_some() && !names.contains(&path) {
-                std::fs::remove_file(&path).map_err(|e| Error::io(&path, e))?;
-            }
-        }
-        Ok(())
+        write_frames_atomic(dir.as_ref(), self.n_frames(), "ply", |i, p| {
+            write_ply(p, &self.frame_mesh(i))
+        })
     }
+}
+
+/// Writes a folder of `n` numbered frames `000000.<ext>`, ... atomically
+/// ([`crate::atomic::write_dir_atomic`]): `write(i, path)` writes frame `i`
+/// (in parallel). Non-frame files of an existing folder are kept; its frame
+/// files (an earlier, longer sequence, or the other format) are not.
+pub fn write_frames_atomic<F>(dir: &Path, n: usize, ext: &str, write: F) -> Result<()>
+where
+    F: Fn(usize, &Path) -> Result<()> + Sync,
+{
+    let keep = |p: &Path| frame_number(p).is_none();
+    crate::atomic::write_dir_atomic(dir, &keep, |tmp| {
+        (0..n)
+            .into_par_iter()
+            .try_for_each(|i| write(i, &tmp.join(format!("{i:06}.{ext}"))))
+    })
 }

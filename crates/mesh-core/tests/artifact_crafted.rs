@@ -10,21 +10,36 @@ use sha2::{Digest, Sha256};
 
 struct Counting;
 static LARGEST: AtomicUsize = AtomicUsize::new(0);
+/// Bytes currently allocated, and the most allocated at once since the last reset.
+static CURRENT: AtomicUsize = AtomicUsize::new(0);
+static PEAK: AtomicUsize = AtomicUsize::new(0);
+
+fn grow(by: usize) {
+    let now = CURRENT.fetch_add(by, Ordering::Relaxed) + by;
+    PEAK.fetch_max(now, Ordering::Relaxed);
+}
 
 unsafe impl GlobalAlloc for Counting {
     unsafe fn alloc(&self, layout: Layout) -> *mut u8 {
         LARGEST.fetch_max(layout.size(), Ordering::Relaxed);
+        grow(layout.size());
         System.alloc(layout)
     }
     unsafe fn alloc_zeroed(&self, layout: Layout) -> *mut u8 {
         LARGEST.fetch_max(layout.size(), Ordering::Relaxed);
+        grow(layout.size());
         System.alloc_zeroed(layout)
     }
     unsafe fn realloc(&self, ptr: *mut u8, layout: Layout, new_size: usize) -> *mut u8 {
         LARGEST.fetch_max(new_size, Ordering::Relaxed);
+        // Counted as a fresh allocation before the old one is released (the
+        // worst case, a moving realloc).
+        grow(new_size);
+        CURRENT.fetch_sub(layout.size(), Ordering::Relaxed);
         System.realloc(ptr, layout, new_size)
     }
     unsafe fn dealloc(&self, ptr: *mut u8, layout: Layout) {
+        CURRENT.fetch_sub(layout.size(), Ordering::Relaxed);
         System.dealloc(ptr, layout)
     }
 }
@@ -114,4 +129,38 @@ fn crafted_sequence_length_inside_a_valid_payload_is_bounded() {
         .contains("payload does not decode"));
     // serde's sequence visitor caps its up-front reservation at 1 MiB.
     assert!(largest <= 1 << 20, "allocated {largest} bytes");
+}
+
+/// FORMATS.md's memory bound: a payload of `p` bytes decodes into at most
+/// `DECODE_EXPANSION * p` bytes of values (bincode's accounting), and vector
+/// growth at most doubles that transiently. The worst legal payload for
+/// the expansion is a long list of empty lists (1 byte on disk, 24 in memory).
+#[test]
+fn peak_memory_of_a_payload_of_empty_lists_is_within_the_documented_bound() {
+    use mesh_core::artifact::DECODE_EXPANSION;
+    let _g = SERIAL.lock().unwrap();
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("lists.art");
+    let n: u32 = 1_000_000;
+    let mut payload = vec![252u8];
+    payload.extend_from_slice(&n.to_le_bytes());
+    payload.extend(std::iter::repeat_n(0u8, n as usize));
+    let header = serde_json::to_vec(&Header::default()).unwrap();
+    std::fs::write(&path, container(header.len() as u64, &header, &payload)).unwrap();
+    let file_len = std::fs::metadata(&path).unwrap().len() as usize;
+    let base = CURRENT.load(Ordering::Relaxed);
+    PEAK.store(base, Ordering::Relaxed);
+    let (_, v): (Header, Vec<Vec<u32>>) = read_artifact(&path, "test", 1).unwrap();
+    let peak = PEAK.load(Ordering::Relaxed) - base;
+    assert_eq!(v.len(), n as usize);
+    // The file's bytes are held while decoding: count them apart.
+    let decode_peak = peak - file_len;
+    eprintln!("{} empty lists ({} payload bytes): decode peak {decode_peak} bytes", n, payload.len());
+    assert!(
+        decode_peak <= 2 * DECODE_EXPANSION * payload.len(),
+        "peak {decode_peak} bytes for a {}-byte payload",
+        payload.len()
+    );
+    // And the bound is not loose by more than a small factor: 24 bytes per list.
+    assert!(decode_peak >= 24 * n as usize, "{decode_peak}");
 }

@@ -103,6 +103,9 @@ fn init_makes_blas_single_threaded() {
     .unwrap();
     assert_eq!(std::env::var("OPENBLAS_NUM_THREADS").unwrap(), "1");
     assert_eq!(rayon::current_num_threads(), 2);
+    // faer sequential: its parallel kernels split reductions by thread count
+    // (pca-fit's eigen-decomposition differed between --threads 1 and 2).
+    assert!(matches!(faer::get_global_parallelism(), faer::Par::Seq));
     // The global pool can only be set once: a second request is an error, not a panic.
     assert!(CommonArgs {
         threads: Some(1),

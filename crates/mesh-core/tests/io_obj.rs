@@ -51,12 +51,13 @@ fn polygons_corner_syntaxes_and_relative_indices() {
 #[test]
 fn bad_obj_input_gives_one_line_errors_naming_the_file() {
     let dir = tempfile::tempdir().unwrap();
-    let cases: [(&[u8], &str); 7] = [
+    let cases: [(&[u8], &str); 8] = [
         (b"v 0 0\nf 1 1 1\n", "3 coordinates"),
         (b"v 0 0 x\n", "bad coordinate"),
         (b"v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 4\n", "vertex 3"),
         (b"v 0 0 0\nv 1 0 0\nv 0 1 0\nf 0 1 2\n", "index 0"),
-        (b"v 0 0 0\nv 1 0 0\nf 1 2\n", "at least 3"),
+        (b"v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\nv 3.1+e2 0 0\n", "'3.1+e2'"),
+        (b"# nothing\n", "no vertices"),
         (b"v 0 0 0\nv 1 0 0\nv 0 1 0\nf -4 1 2\n", "out of range"),
         (b"v 0 0 0\nv 1 0 NaN\nv 0 1 0\nf 1 2 3\n", "non-finite"),
     ];
@@ -72,4 +73,16 @@ fn bad_obj_input_gives_one_line_errors_naming_the_file() {
     let p = dir.path().join("bin.obj");
     std::fs::write(&p, [0xff, 0xfe, 0x00]).unwrap();
     assert!(read_mesh(&p).unwrap_err().to_string().contains("bin.obj"));
+}
+
+/// What MeshLab reads and the geometry leaves no doubt about: a Latin-1 byte
+/// in a comment, an empty face, a face repeating a vertex (skipped).
+#[test]
+fn tolerates_unambiguous_oddities_like_meshlab() {
+    let mut bytes = b"# caf\xe9 (Latin-1)\nv 0 0 0\nv 1 0 0\nv 0 1 0\nv 1 1 0\n".to_vec();
+    bytes.extend_from_slice(b"f\nf 1 2\nf 1 2 2\nf 1 2 3\nf 2 4 4 3\n");
+    let m = parse_obj(&bytes).unwrap();
+    assert_eq!(m.vertices.len(), 4);
+    // f 2 4 4 3 fans into (2 4 4) skipped and (2 4 3) kept.
+    assert_eq!(m.faces, vec![[0, 1, 2], [1, 3, 2]]);
 }

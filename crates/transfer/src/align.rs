@@ -138,6 +138,32 @@ pub struct AlignedMotion {
 impl Artifact for AlignedMotion {
     const KIND: &'static str = "aligned-motion";
     const VERSION: u32 = 2;
+
+    /// At least one frame, every frame with the same vertex count and finite
+    /// coordinates, faces and anchor below it, one pose and one displacement
+    /// per frame.
+    fn validate(&self) -> std::result::Result<(), String> {
+        let Some(n) = self.frames.first().map(Vec::len) else {
+            return Err("no frames".into());
+        };
+        if let Some(i) = self.frames.iter().position(|f| f.len() != n) {
+            return Err(format!("frame {i} has {} vertices, frame 0 has {n}", self.frames[i].len()));
+        }
+        if let Some(i) = self.frames.iter().position(|f| f.iter().any(|v| !v.iter().all(|c| c.is_finite()))) {
+            return Err(format!("frame {i} has a non-finite coordinate"));
+        }
+        mesh_core::artifact::check_indices(self.faces.iter().flatten().copied(), n, || "the face list".into())?;
+        mesh_core::artifact::check_indices(self.anchor.iter().copied(), n, || "the anchor".into())?;
+        if self.poses.len() != self.frames.len() || self.displacements.len() != self.frames.len() {
+            return Err(format!(
+                "{} frames but {} poses and {} displacements",
+                self.frames.len(),
+                self.poses.len(),
+                self.displacements.len()
+            ));
+        }
+        Ok(())
+    }
 }
 
 impl AlignedMotion {

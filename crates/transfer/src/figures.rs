@@ -450,7 +450,7 @@ pub fn correction_example(
         .map(|&k| {
             let mut meshes = Vec::new();
             for t in training {
-                let rows = target_pca.part_rows(t);
+                let rows = target_pca.part_rows(t)?;
                 meshes.extend(crate::reconstruct::rows_to_meshes(&rows[k]));
             }
             Ok((k, Corrector::new(seg.parts[k].faces.clone(), meshes)?))
@@ -480,7 +480,7 @@ pub fn correction_example(
     let mut all_training = Vec::new();
     for t in training {
         all_training.extend(crate::reconstruct::rows_to_meshes(
-            &target_pca.part_rows(t)[*k],
+            &target_pca.part_rows(t)?[*k],
         ));
     }
     let nearest: Vec<(Vec<Vector3<f64>>, f64)> = near

@@ -166,7 +166,7 @@ impl EncodedPair {
 /// Squared truncation residual `|x - decode(encode(x))|²` of every part of
 /// every frame of `motion`: `result[part][frame]`.
 pub fn truncation_residuals(pca: &PcaModel, motion: &AlignedMotion) -> Result<Vec<Vec<f64>>> {
-    let rows = pca.part_rows(motion);
+    let rows = pca.part_rows(motion)?;
     let coeffs = pca.encode_rows(&rows)?;
     pca.parts
         .iter()

@@ -20,7 +20,7 @@
 //! coefficients per frame (20 by default).
 
 use gp::pca::{Components, Pca};
-use mesh_core::artifact::Artifact;
+use mesh_core::artifact::{check_cover, check_indices, Artifact};
 use mesh_core::rigid::procrustes;
 use mesh_core::{Error, Result};
 use nalgebra::{DMatrix, Vector3};
@@ -66,6 +66,35 @@ pub struct PcaModel {
 impl Artifact for PcaModel {
     const KIND: &'static str = "pca-model";
     const VERSION: u32 = 3;
+
+    /// Every part's vertices below `n_vertices` (and every template vertex in
+    /// some part), one reference point per vertex, a PCA of dimension
+    /// `3 x vertices`, the anchor below `n_vertices`.
+    fn validate(&self) -> std::result::Result<(), String> {
+        let lists: Vec<&[u32]> = self.parts.iter().map(|p| p.vertices.as_slice()).collect();
+        check_cover(self.n_vertices, &lists)?;
+        for (k, p) in self.parts.iter().enumerate() {
+            let d = 3 * p.vertices.len();
+            let pca = &p.pca;
+            if p.reference.len() != p.vertices.len()
+                || pca.mean.len() != d
+                || pca.components.ncols() != d
+                || pca.variances.len() != pca.components.nrows()
+            {
+                return Err(format!(
+                    "part {k} ('{}'): {} vertices, {} reference points, PCA of dimension {} (mean {}) with {} axes and {} variances",
+                    p.name,
+                    p.vertices.len(),
+                    p.reference.len(),
+                    pca.components.ncols(),
+                    pca.mean.len(),
+                    pca.components.nrows(),
+                    pca.variances.len()
+                ));
+            }
+        }
+        check_indices(self.anchor.iter().copied(), self.n_vertices, || "the anchor".into())
+    }
 }
 
 /// Explained variance and reconstruction error of one part on its training data.
@@ -148,16 +177,17 @@ pub fn fit(
             parts.n_vertices
         )));
     }
-    if let Some(m) = motions
-        .iter()
-        .find(|m| m.frames.first().map_or(0, |f| f.len()) != template.len())
-    {
-        return Err(Error::invalid(format!(
-            "an aligned motion has {} vertices per frame, the template {}",
-            m.frames.first().map_or(0, |f| f.len()),
-            template.len()
-        )));
+    for (k, m) in motions.iter().enumerate() {
+        if let Some(f) = m.frames.iter().find(|f| f.len() != template.len()) {
+            return Err(Error::invalid(format!(
+                "aligned motion {} has {} vertices per frame, the template {}",
+                k + 1,
+                f.len(),
+                template.len()
+            )));
+        }
     }
+    parts.check().map_err(Error::invalid)?;
     let anchor = motions.first().map(|m| m.anchor.clone()).unwrap_or_default();
     if motions.iter().any(|m| m.anchor != anchor) {
         return Err(Error::invalid(
@@ -225,22 +255,46 @@ impl PcaModel {
         template
     }
 
+    /// Fails unless every frame of `motion` has this model's vertex count (a
+    /// motion of another subject or template).
+    pub fn check_motion(&self, motion: &AlignedMotion) -> Result<()> {
+        match motion.frames.iter().position(|f| f.len() != self.n_vertices) {
+            Some(i) => Err(Error::invalid(format!(
+                "the motion's frame {i} has {} vertices but the PCA model was fitted on {}: \
+                 the motion and the model belong to different subjects or templates",
+                motion.frames[i].len(),
+                self.n_vertices
+            ))),
+            None => Ok(()),
+        }
+    }
+
     /// The part vertices of every frame of `motion` in the frame PCA works in
     /// (`F x 3n_k` per part), as the model's [`PartAlignment`] prescribes.
-    pub fn part_rows(&self, motion: &AlignedMotion) -> Vec<DMatrix<f64>> {
-        self.parts
+    /// Fails unless the motion has the model's vertex count.
+    pub fn part_rows(&self, motion: &AlignedMotion) -> Result<Vec<DMatrix<f64>>> {
+        self.check_motion(motion)?;
+        Ok(self
+            .parts
             .par_iter()
             .map(|p| part_rows(&[motion], &p.vertices, &p.reference, self.alignment))
-            .collect()
+            .collect())
     }
 
     /// Coefficients of every frame of `motion`, per part (`F x m_k` each).
     pub fn encode(&self, motion: &AlignedMotion) -> Result<Vec<DMatrix<f64>>> {
-        self.encode_rows(&self.part_rows(motion))
+        self.encode_rows(&self.part_rows(motion)?)
     }
 
     /// Coefficients of part rows as from [`PcaModel::part_rows`].
     pub fn encode_rows(&self, rows: &[DMatrix<f64>]) -> Result<Vec<DMatrix<f64>>> {
+        if rows.len() != self.parts.len() {
+            return Err(Error::invalid(format!(
+                "{} row blocks for {} parts",
+                rows.len(),
+                self.parts.len()
+            )));
+        }
         self.parts
             .par_iter()
             .zip(rows)

@@ -91,7 +91,7 @@ impl Reconstructor {
             }
             let mut per_part: Vec<Vec<Vec<Vector3<f64>>>> = vec![Vec::new(); pca.parts.len()];
             for m in training {
-                for (k, rows) in pca.part_rows(m).iter().enumerate() {
+                for (k, rows) in pca.part_rows(m)?.iter().enumerate() {
                     per_part[k].extend(rows_to_meshes(rows).into_iter().step_by(stride.max(1)));
                 }
             }
@@ -288,7 +288,7 @@ mod tests {
         let r = Reconstructor::new(&pca, &seg, &mesh.faces, &[&motion], Surface::Correct, 3, 1)
             .unwrap();
         let mut parts: Vec<Vec<Vec<Vector3<f64>>>> =
-            pca.part_rows(&motion).iter().map(rows_to_meshes).collect();
+            pca.part_rows(&motion).unwrap().iter().map(rows_to_meshes).collect();
         let limb = &mut parts[1][5];
         let c = surface::centroid(limb);
         limb.iter_mut().for_each(|v| *v = c + 0.85 * (*v - c));
@@ -299,7 +299,7 @@ mod tests {
                 .sum::<f64>()
                 / f.len() as f64
         };
-        let want = mean_edge(&rows_to_meshes(&pca.part_rows(&motion)[1])[5]);
+        let want = mean_edge(&rows_to_meshes(&pca.part_rows(&motion).unwrap()[1])[5]);
         let before = mean_edge(&parts[1][5]) / want;
         let after = mean_edge(&r.correct(&parts).unwrap()[1][5]) / want;
         assert!((before - 0.85).abs() < 1e-9);

@@ -15,7 +15,7 @@ use crate::reconstruct::{rows_to_meshes, Reconstructor};
 /// Per part, the RMS per-vertex distance between the truth part (in the PCA's frame)
 /// and its PCA reconstruction: the truncation error alone.
 pub fn truncation_rms(pca: &PcaModel, truth: &AlignedMotion) -> Result<Vec<(String, f64)>> {
-    let rows = pca.part_rows(truth);
+    let rows = pca.part_rows(truth)?;
     let coeffs = pca.encode_rows(&rows)?;
     let decoded = pca.decode(&coeffs)?;
     Ok(pca
@@ -55,7 +55,7 @@ pub fn rebuilt_error(
     truth: &AlignedMotion,
     through_pca: bool,
 ) -> Result<f64> {
-    let rows = pca.part_rows(truth);
+    let rows = pca.part_rows(truth)?;
     let parts = if through_pca {
         pca.decode(&pca.encode_rows(&rows)?)?
     } else {

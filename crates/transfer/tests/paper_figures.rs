@@ -60,7 +60,7 @@ fn vertex_rms_measures_against_the_true_parts() {
     let pair: Vec<[usize; 2]> = (0..40).map(|i| [i, i]).collect();
     let enc = encode_pair(&m, &m, &pair, &[[0, 0]], &model, &model).unwrap();
     let truth = &enc.data.target_coeffs;
-    let rows = model.part_rows(&m);
+    let rows = model.part_rows(&m).unwrap();
     let n = t.n_vertices();
     let brute = |c: &DMatrix<f64>| {
         let dec = model.parts[0].pca.decode(c).unwrap();
@@ -108,7 +108,7 @@ fn perfect_mapping_scores_the_truncation_error() {
     let trunc = floor[0].test_rms_m;
     assert!(trunc > 1e-4, "{trunc}");
     // Every frame's own truncation error, by decoding: the held-out floor lies within it.
-    let rows = model.part_rows(&m);
+    let rows = model.part_rows(&m).unwrap();
     let coeffs = model.encode_rows(&rows).unwrap();
     let dec = model.parts[0].pca.decode(&coeffs[0]).unwrap();
     let per_frame: Vec<f64> = (0..60)

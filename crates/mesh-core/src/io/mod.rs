@@ -2,8 +2,14 @@
 //!
 //! [`read_mesh`] and [`write_mesh`] pick the format from the file extension
 //! (`.ply` or `.obj`, case-insensitive). Reading validates the mesh (finite
-//! coordinates, face indices in range, no repeated index); every error is one
-//! line naming the file. Writing is atomic (temporary file, then rename).
+//! coordinates, face indices in range); every error is one line naming the
+//! file. Writing is atomic (temporary file, then rename).
+//!
+//! Tolerated as MeshLab tolerates them, because the geometry is unambiguous:
+//! a degenerate face (fewer than 3 corners, or a triangle of its fan that
+//! repeats a vertex) is skipped, with one warning per file giving the count.
+//! Everything whose meaning is ambiguous stays an error (OBJ index 0, a
+//! malformed number such as `3.1+e2`, an index out of range).
 
 pub mod obj;
 pub mod ply;
@@ -17,6 +23,36 @@ pub use ply::{
 
 use crate::error::{Error, Result};
 use crate::mesh::TriMesh;
+
+/// Appends polygon `poly` (vertex indices) fan-triangulated to `faces`:
+/// `(p0, p1, p2), (p0, p2, p3), ...`, leaving out every triangle that repeats
+/// a vertex (and the whole polygon if it has fewer than 3 corners). Returns 1
+/// if anything was left out (one degenerate face), else 0.
+pub fn push_fan(faces: &mut Vec<[u32; 3]>, poly: &[u32]) -> usize {
+    if poly.len() < 3 {
+        return 1;
+    }
+    let mut skipped = 0;
+    for j in 1..poly.len() - 1 {
+        let t = [poly[0], poly[j], poly[j + 1]];
+        if t[0] == t[1] || t[1] == t[2] || t[0] == t[2] {
+            skipped = 1;
+        } else {
+            faces.push(t);
+        }
+    }
+    skipped
+}
+
+/// The one warning per file a reader gives for skipped degenerate faces.
+fn warn_skipped_faces(path: &Path, skipped: usize) {
+    if skipped > 0 {
+        crate::warn!(
+            "{}: skipped {skipped} degenerate face(s) (fewer than 3 distinct corners)",
+            path.display()
+        );
+    }
+}
 
 /// Mesh file formats known by extension.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]

@@ -27,13 +27,23 @@ use crate::mesh::TriMesh;
 /// Reads and validates an OBJ mesh; errors are one line naming the file.
 pub fn read_obj(path: impl AsRef<Path>) -> Result<TriMesh> {
     let path = path.as_ref();
-    let bytes = std::fs::read(path).map_err(|e| Error::io(path, e))?;
-    parse_obj(&bytes).map_err(|msg| Error::file(path, msg))
+    let bytes = crate::input::read_regular_file(path)?;
+    let (mesh, skipped) = parse(&bytes).map_err(|msg| Error::file(path, msg))?;
+    super::warn_skipped_faces(path, skipped);
+    Ok(mesh)
 }
 
 /// Parses OBJ text held in memory; the mesh is validated.
 pub fn parse_obj(bytes: &[u8]) -> std::result::Result<TriMesh, String> {
-    let text = std::str::from_utf8(bytes).map_err(|e| format!("not a text OBJ file ({e})"))?;
+    parse(bytes).map(|(mesh, _)| mesh)
+}
+
+/// The validated mesh and the number of degenerate faces skipped. Lines are
+/// decoded as UTF-8 where they are (a Latin-1 byte in a comment or a group
+/// name is harmless); a `v` or `f` line that is not text fails on its numbers.
+fn parse(bytes: &[u8]) -> std::result::Result<(TriMesh, usize), String> {
+    let text = String::from_utf8_lossy(bytes);
+    let mut skipped = 0;
     let mut vertices = Vec::new();
     let mut faces = Vec::new();
     let mut poly: Vec<u32> = Vec::with_capacity(8);
@@ -49,7 +59,7 @@ pub fn parse_obj(bytes: &[u8]) -> std::result::Result<TriMesh, String> {
                         .ok_or_else(|| format!("line {ln}: vertex needs 3 coordinates"))?;
                     *c = t
                         .parse()
-                        .map_err(|_| format!("line {ln}: bad coordinate '{t}'"))?;
+                        .map_err(|_| format!("line {ln}: bad coordinate '{}'", short(t)))?;
                 }
                 vertices.push(Vector3::new(xyz[0], xyz[1], xyz[2]));
             }
@@ -59,7 +69,7 @@ pub fn parse_obj(bytes: &[u8]) -> std::result::Result<TriMesh, String> {
                     let first = t.split('/').next().unwrap_or_default();
                     let i: i64 = first
                         .parse()
-                        .map_err(|_| format!("line {ln}: bad face index '{t}'"))?;
+                        .map_err(|_| format!("line {ln}: bad face index '{}'", short(t)))?;
                     let n = vertices.len() as i64;
                     let idx = match i {
                         0 => {
@@ -73,22 +83,25 @@ pub fn parse_obj(bytes: &[u8]) -> std::result::Result<TriMesh, String> {
                     }
                     poly.push(idx as u32);
                 }
-                if poly.len() < 3 {
-                    return Err(format!(
-                        "line {ln}: face has {} vertices; at least 3 are needed",
-                        poly.len()
-                    ));
-                }
-                for j in 1..poly.len() - 1 {
-                    faces.push([poly[0], poly[j], poly[j + 1]]);
-                }
+                skipped += super::push_fan(&mut faces, &poly);
             }
             _ => {}
         }
     }
+    if vertices.is_empty() {
+        return Err("no vertices (no 'v' lines)".into());
+    }
     let mesh = TriMesh { vertices, faces };
     mesh.validate().map_err(|e| e.to_string())?;
-    Ok(mesh)
+    Ok((mesh, skipped))
+}
+
+/// A token quoted in a message, cut to 40 characters.
+fn short(t: &str) -> String {
+    match t.char_indices().nth(40) {
+        Some((cut, _)) => format!("{}...", &t[..cut]),
+        None => t.to_string(),
+    }
 }
 
 /// Writes `mesh` as OBJ (`v x y z` printed to round-trip exactly, 1-based

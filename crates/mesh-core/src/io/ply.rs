@@ -59,20 +59,22 @@ pub struct PlyOptions {
 /// naming the file.
 pub fn read_ply(path: impl AsRef<Path>) -> Result<TriMesh> {
     let path = path.as_ref();
-    let bytes = std::fs::read(path).map_err(|e| Error::io(path, e))?;
-    parse_ply(&bytes).map_err(|msg| Error::file(path, msg))
+    let bytes = crate::input::read_regular_file(path)?;
+    let (mesh, skipped) = parse(&bytes, true).map_err(|msg| Error::file(path, msg))?;
+    super::warn_skipped_faces(path, skipped);
+    Ok(mesh)
 }
 
 /// Parses a PLY file held in memory (fast path for common binary layouts).
 /// The mesh is validated ([`TriMesh::validate`]).
 pub fn parse_ply(bytes: &[u8]) -> std::result::Result<TriMesh, String> {
-    parse(bytes, true)
+    parse(bytes, true).map(|(mesh, _)| mesh)
 }
 
 /// Parses a PLY file held in memory always through ply-rs-bw's generic
 /// payload reader (the reference the fast path is tested against).
 pub fn parse_ply_generic(bytes: &[u8]) -> std::result::Result<TriMesh, String> {
-    parse(bytes, false)
+    parse(bytes, false).map(|(mesh, _)| mesh)
 }
 
 /// Writes `mesh` as binary little-endian PLY (double coordinates), atomically.
@@ -155,7 +157,8 @@ pub fn encode_ply(w: &mut dyn Write, mesh: &TriMesh, opts: PlyOptions) -> std::i
 
 const INDEX_NAMES: [&str; 2] = ["vertex_indices", "vertex_index"];
 
-fn parse(bytes: &[u8], allow_fast: bool) -> std::result::Result<TriMesh, String> {
+/// The validated mesh and the number of degenerate faces skipped.
+fn parse(bytes: &[u8], allow_fast: bool) -> std::result::Result<(TriMesh, usize), String> {
     let mut reader = Reader::new(bytes);
     let header = Parser::<Skip>::new()
         .read_header(&mut reader)
@@ -163,14 +166,17 @@ fn parse(bytes: &[u8], allow_fast: bool) -> std::result::Result<TriMesh, String>
     let payload_len = reader.get_ref().len();
     check_counts(&header, payload_len)?;
     let layout = Layout::of(&header)?;
-    let mesh = if allow_fast && header.encoding != Encoding::Ascii && layout.fast {
+    let (mesh, skipped) = if allow_fast && header.encoding != Encoding::Ascii && layout.fast {
         let payload: &[u8] = reader.get_ref();
         read_binary_fast(payload, &header, &layout)?
     } else {
         read_generic(&mut reader, &header, &layout)?
     };
+    if mesh.vertices.is_empty() {
+        return Err("no vertices (element vertex is empty)".into());
+    }
     mesh.validate().map_err(|e| e.to_string())?;
-    Ok(mesh)
+    Ok((mesh, skipped))
 }
 
 /// Where the vertex coordinates and face indices live in the header.
@@ -314,19 +320,15 @@ fn one_line(s: &str) -> String {
     out
 }
 
-/// Appends polygon `poly` fan-triangulated to `faces`, checking the indices.
+/// Appends polygon `poly` fan-triangulated to `faces`, checking the indices;
+/// counts in `skipped` the degenerate faces left out ([`super::push_fan`]).
 fn push_polygon(
     faces: &mut Vec<[u32; 3]>,
+    skipped: &mut usize,
     poly: &[i64],
     face: usize,
     n_vertices: usize,
 ) -> std::result::Result<(), String> {
-    if poly.len() < 3 {
-        return Err(format!(
-            "face {face} has {} vertices; at least 3 are needed",
-            poly.len()
-        ));
-    }
     if let Some(&i) = poly
         .iter()
         .find(|&&i| i < 0 || i as u64 >= n_vertices as u64)
@@ -335,9 +337,8 @@ fn push_polygon(
             "face {face} uses vertex {i}, but the file has {n_vertices} vertices"
         ));
     }
-    for j in 1..poly.len() - 1 {
-        faces.push([poly[0] as u32, poly[j] as u32, poly[j + 1] as u32]);
-    }
+    let poly: Vec<u32> = poly.iter().map(|&i| i as u32).collect();
+    *skipped += super::push_fan(faces, &poly);
     Ok(())
 }
 
@@ -408,7 +409,8 @@ fn read_binary_fast(
     payload: &[u8],
     header: &Header,
     layout: &Layout,
-) -> std::result::Result<TriMesh, String> {
+) -> std::result::Result<(TriMesh, usize), String> {
+    let mut skipped = 0;
     let le = header.encoding == Encoding::BinaryLittleEndian;
     let elements: Vec<&ElementDef> = header.elements.values().collect();
     let vdef = elements[layout.vertex];
@@ -474,10 +476,10 @@ fn read_binary_fast(
                     }
                 }
             }
-            push_polygon(&mut faces, &poly, face, n)?;
+            push_polygon(&mut faces, &mut skipped, &poly, face, n)?;
         }
     }
-    Ok(TriMesh { vertices, faces })
+    Ok((TriMesh { vertices, faces }, skipped))
 }
 
 // ---- generic path (ply-rs-bw payload reader)
@@ -557,7 +559,8 @@ fn read_generic(
     reader: &mut Reader<&[u8]>,
     header: &Header,
     layout: &Layout,
-) -> std::result::Result<TriMesh, String> {
+) -> std::result::Result<(TriMesh, usize), String> {
+    let mut skipped = 0;
     let err = |e: ply_rs_bw::parser::ParseError| one_line(&e.to_string());
     let mut vertices = Vec::new();
     let mut faces = Vec::new();
@@ -573,7 +576,13 @@ fn read_generic(
                 .map_err(err)?;
             faces.reserve(fs.len());
             for (k, f) in fs.iter().enumerate() {
-                push_polygon(&mut faces, &f.0, k, layout_vertex_count(header, layout))?;
+                push_polygon(
+                    &mut faces,
+                    &mut skipped,
+                    &f.0,
+                    k,
+                    layout_vertex_count(header, layout),
+                )?;
             }
         } else {
             Parser::<Skip>::new()
@@ -581,7 +590,7 @@ fn read_generic(
                 .map_err(err)?;
         }
     }
-    Ok(TriMesh { vertices, faces })
+    Ok((TriMesh { vertices, faces }, skipped))
 }
 
 fn layout_vertex_count(header: &Header, layout: &Layout) -> usize {

@@ -1,0 +1,532 @@
+//! An in-process mutation fuzzer on stable Rust over every surfcap reader.
+//!
+//! Targets ([`Target`]): PLY and OBJ meshes, PC2 point caches, the capture
+//! set's `set.json` and `subject.json` (with the subject's curves resolved on
+//! a template, as `segment` does), and artifacts: every kind's decoder and
+//! validator (segmentation, pca-model, aligned-motion, correspondences,
+//! gpr-model, variation-group, variation-model), followed by the consumers
+//! that index with what validation let through.
+//!
+//! Each round takes a seed input ([`seed_corpus`], plus any files given with
+//! `--corpus`) and applies 1-4 mutations ([`mutate`]): bit flips, interesting
+//! bytes, truncation, insertion, splices from other inputs, token swaps and
+//! replacements in text, and for artifacts rewrites of length fields and
+//! varints with the checksum recomputed (so mutated payloads reach the
+//! decoder instead of stopping at the checksum). A panic is caught
+//! (`catch_unwind`), counted and its input kept; an input slower than
+//! [`HANG_SECONDS`] counts as a hang.
+
+use std::panic::{catch_unwind, AssertUnwindSafe};
+use std::path::{Path, PathBuf};
+use std::time::{Duration, Instant};
+
+use mesh_core::artifact::{Artifact, Header, MAGIC};
+use mesh_core::capture_set::{SetSpec, SubjectSpec};
+use mesh_core::sequence::MeshSequence;
+use mesh_core::shapes::capsule_body;
+use mesh_core::topology::Topology;
+use mesh_core::TriMesh;
+use nalgebra::Vector3;
+use rand::{RngExt, SeedableRng};
+use rand_chacha::ChaCha8Rng;
+use sha2::{Digest, Sha256};
+
+/// An input slower than this counts as a hang.
+pub const HANG_SECONDS: f64 = 2.0;
+
+/// Which reader an input goes to.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord)]
+pub enum Target {
+    Ply,
+    Obj,
+    Pc2,
+    SetJson,
+    SubjectJson,
+    Artifact,
+}
+
+impl Target {
+    pub fn name(self) -> &'static str {
+        match self {
+            Target::Ply => "ply",
+            Target::Obj => "obj",
+            Target::Pc2 => "pc2",
+            Target::SetJson => "set-json",
+            Target::SubjectJson => "subject-json",
+            Target::Artifact => "artifact",
+        }
+    }
+
+    /// The target of a corpus file, from its name.
+    pub fn of_path(path: &Path) -> Option<Target> {
+        let name = path.file_name()?.to_str()?.to_ascii_lowercase();
+        let ext = path.extension().and_then(|e| e.to_str()).unwrap_or("").to_ascii_lowercase();
+        Some(match ext.as_str() {
+            "ply" => Target::Ply,
+            "obj" => Target::Obj,
+            "pc2" => Target::Pc2,
+            "json" if name == "set.json" => Target::SetJson,
+            "json" if name == "subject.json" => Target::SubjectJson,
+            _ => {
+                let mut magic = [0u8; 8];
+                let mut f = std::fs::File::open(path).ok()?;
+                std::io::Read::read_exact(&mut f, &mut magic).ok()?;
+                if magic != MAGIC {
+                    return None;
+                }
+                Target::Artifact
+            }
+        })
+    }
+}
+
+/// The template subject.json curves are resolved on, and its segmentation.
+struct Fixture {
+    template: TriMesh,
+    topology: Topology,
+}
+
+fn fixture() -> &'static Fixture {
+    static F: std::sync::OnceLock<Fixture> = std::sync::OnceLock::new();
+    F.get_or_init(|| {
+        let (template, _) = capsule_body(20, 10, 0.15, 1.6);
+        let topology = Topology::new(template.n_vertices(), &template.faces);
+        Fixture { template, topology }
+    })
+}
+
+/// Runs every reader of `target` on `bytes`, and the consumers of what it accepts.
+pub fn exercise(target: Target, bytes: &[u8]) {
+    match target {
+        Target::Ply => {
+            let _ = mesh_core::io::ply::parse_ply(bytes);
+            let _ = mesh_core::io::ply::parse_ply_generic(bytes);
+        }
+        Target::Obj => {
+            let _ = mesh_core::io::obj::parse_obj(bytes);
+        }
+        Target::Pc2 => {
+            let _ = export::pc2::parse_pc2(bytes);
+        }
+        Target::SetJson => {
+            let _ = SetSpec::parse(bytes);
+        }
+        Target::SubjectJson => {
+            if let Ok(s) = SubjectSpec::parse(bytes) {
+                let f = fixture();
+                if s.validate(&f.template, &f.topology).is_ok() {
+                    let _ = mesh_core::segmentation::segment(&f.template, &s);
+                }
+            }
+        }
+        Target::Artifact => exercise_artifact(bytes),
+    }
+}
+
+fn exercise_artifact(bytes: &[u8]) {
+    use mesh_core::segmentation::Segmentation;
+    use transfer::part_pca::PcaModel;
+    if let Ok((_, s)) = Segmentation::decode(bytes) {
+        let _ = s.tree_order();
+        let _ = s.vertex_labels();
+    }
+    if let Ok((_, m)) = <PcaModel as Artifact>::decode(bytes) {
+        let _ = m.template_vertices();
+        let _ = transfer::assemble::plan(&m);
+    }
+    if let Ok((_, m)) = transfer::align::AlignedMotion::decode(bytes) {
+        let _ = m.frames.len();
+    }
+    let _ = transfer::densify::Correspondences::decode(bytes);
+    let _ = transfer::gpr_model::GprModel::decode(bytes);
+    let _ = variation::group::Group::decode(bytes);
+    let _ = variation::train::VariationModel::decode(bytes);
+    let _ = mesh_core::artifact::decode_artifact::<serde_json::Value>(bytes, "any", 1);
+}
+
+/// The built-in seed corpus: one or more valid inputs per target, made the way
+/// the stages make them (a small capsule body, its aligned motion, part
+/// PCA and segmentation).
+pub fn seed_corpus() -> Vec<(Target, Vec<u8>)> {
+    use gp::pca::Components;
+    use mesh_core::io::ply::{encode_ply, PlyEncoding, PlyOptions, PlyPrecision};
+    let (mesh, l) = capsule_body(20, 10, 0.15, 1.6);
+    let mut out = Vec::new();
+    for encoding in [PlyEncoding::Ascii, PlyEncoding::BinaryLittleEndian] {
+        for precision in [PlyPrecision::Float, PlyPrecision::Double] {
+            let mut b = Vec::new();
+            encode_ply(&mut b, &mesh, PlyOptions { encoding, precision }).unwrap();
+            out.push((Target::Ply, b));
+        }
+    }
+    let mut b = Vec::new();
+    mesh_core::io::obj::encode_obj(&mut b, &mesh).unwrap();
+    out.push((Target::Obj, b));
+    out.push((Target::Obj, b"# caf\xe9\nv 0 0 0\nv 1 0 0\nv 0 1 0\nv 1 1 0\nf 1/1/1 2//2 3\nf -1 -2 -3 -4\nf\n".to_vec()));
+    let frames: Vec<Vec<Vector3<f64>>> = (0..6)
+        .map(|k| {
+            mesh.vertices
+                .iter()
+                .map(|v| Vector3::new(v.x + 0.02 * k as f64 * v.y, v.y, v.z))
+                .collect()
+        })
+        .collect();
+    let mut b = Vec::new();
+    export::pc2::encode_pc2(&mut b, &frames[..3]).unwrap();
+    out.push((Target::Pc2, b));
+    out.push((Target::SetJson, br#"{"source": "A", "target": "B", "train": [{"source": "walk", "target": "walk", "keyposes": [[0, 0], [12, 25]]}], "test": ["punch"]}"#.to_vec()));
+    let near = l.ring(l.body_ring(8));
+    let far = l.ring(l.body_ring(12));
+    let subject = serde_json::json!({"fps": 25, "units": "m", "up": "+y",
+        "parts": {"torso": null, "limb": "torso"}, "curves": {"limb": [near, far]}});
+    out.push((Target::SubjectJson, subject.to_string().into_bytes()));
+    let spec = SubjectSpec::parse(subject.to_string().as_bytes()).unwrap();
+    let seg = mesh_core::segmentation::segment(&mesh, &spec).unwrap();
+    let aligned = transfer::align::align_motion(&mesh, &MeshSequence::new(mesh.faces.clone(), frames)).unwrap();
+    let (pca, _) = transfer::part_pca::fit(
+        &mesh.vertices,
+        &seg,
+        &[&aligned],
+        Components::Count(3),
+        transfer::part_pca::PartAlignment::Body,
+    )
+    .unwrap();
+    let header = Header::new("fuzz", "0").with_seed(0);
+    out.push((Target::Artifact, artifact_bytes(&seg, &header)));
+    out.push((Target::Artifact, artifact_bytes(&aligned, &header)));
+    out.push((Target::Artifact, artifact_bytes(&pca, &header)));
+    let corr = transfer::densify::Correspondences {
+        source_motion: "walk".into(),
+        target_motion: "walk".into(),
+        keyposes: vec![[0, 0], [5, 5]],
+        pairs: (0..6).map(|i| [i, i]).collect(),
+    };
+    out.push((Target::Artifact, artifact_bytes(&corr, &header)));
+    out
+}
+
+fn artifact_bytes<T: Artifact>(value: &T, header: &Header) -> Vec<u8> {
+    mesh_core::artifact::encode_artifact(T::KIND, T::VERSION, header, value).unwrap()
+}
+
+/// A numbered frame file other than `000000.*`.
+fn is_later_frame(p: &Path) -> bool {
+    p.file_stem()
+        .and_then(|s| s.to_str())
+        .is_some_and(|s| !s.is_empty() && s.bytes().all(|b| b.is_ascii_digit()) && s.bytes().any(|b| b != b'0'))
+}
+
+/// Reads every file under `dir` (recursively) that has a target, but only the
+/// first frame of each motion folder.
+pub fn load_corpus(dir: &Path) -> Vec<(Target, Vec<u8>)> {
+    let mut out = Vec::new();
+    let mut stack = vec![dir.to_path_buf()];
+    while let Some(d) = stack.pop() {
+        let Ok(entries) = std::fs::read_dir(&d) else { continue };
+        let mut paths: Vec<PathBuf> = entries.flatten().map(|e| e.path()).collect();
+        paths.sort();
+        for p in paths {
+            if p.is_dir() {
+                stack.push(p);
+            } else if is_later_frame(&p) {
+                // One frame per motion folder is enough: the others share its layout.
+                continue;
+            } else if let Some(t) = Target::of_path(&p) {
+                if let Ok(b) = std::fs::read(&p) {
+                    if b.len() <= 4 << 20 {
+                        out.push((t, b));
+                    }
+                }
+            }
+        }
+    }
+    out
+}
+
+const INTERESTING_BYTES: [u8; 10] = [0, 1, 0x7f, 0x80, 0xff, 251, 252, 253, b'\n', b' '];
+const TOKENS: [&str; 16] = [
+    "0", "-1", "1", "3", "255", "4294967295", "-2147483648", "18446744073709551615", "nan", "inf",
+    "1e999", "3.1+e2", "null", "[]", "{}", "\u{1b}[2J",
+];
+
+/// The offsets of the artifact sections' length fields: kind, header, payload.
+fn artifact_length_fields(b: &[u8]) -> Vec<(usize, usize)> {
+    let mut out = Vec::new();
+    if b.len() < 16 || b[..8] != MAGIC {
+        return out;
+    }
+    out.push((12, 4));
+    let k = u32::from_le_bytes(b[12..16].try_into().unwrap()) as usize;
+    let h_at = 16 + k + 4;
+    if b.len() < h_at + 8 {
+        return out;
+    }
+    out.push((h_at, 8));
+    let h = u64::from_le_bytes(b[h_at..h_at + 8].try_into().unwrap()) as usize;
+    let p_at = h_at + 8 + h;
+    if b.len() >= p_at + 8 {
+        out.push((p_at, 8));
+    }
+    out
+}
+
+/// Recomputes an artifact's trailing SHA-256 over everything before it.
+pub fn fix_checksum(b: &mut [u8]) {
+    if b.len() >= 8 + 32 && b[..8] == MAGIC {
+        let n = b.len() - 32;
+        let d = Sha256::digest(&b[..n]);
+        b[n..].copy_from_slice(&d);
+    }
+}
+
+/// One mutation of `input` (see the module documentation).
+pub fn mutate(rng: &mut ChaCha8Rng, input: &[u8], target: Target, corpus: &[(Target, Vec<u8>)]) -> Vec<u8> {
+    let mut b = input.to_vec();
+    let rounds = rng.random_range(1..=4);
+    for _ in 0..rounds {
+        let len = b.len();
+        match rng.random_range(0..10) {
+            0 if len > 0 => {
+                let i = rng.random_range(0..len);
+                b[i] ^= 1 << rng.random_range(0..8);
+            }
+            1 if len > 0 => {
+                let i = rng.random_range(0..len);
+                b[i] = INTERESTING_BYTES[rng.random_range(0..INTERESTING_BYTES.len())];
+            }
+            2 if len > 0 => {
+                b.truncate(rng.random_range(0..len));
+            }
+            3 => {
+                let i = rng.random_range(0..=len);
+                let n = rng.random_range(1..16);
+                let ins: Vec<u8> = (0..n).map(|_| rng.random()).collect();
+                b.splice(i..i, ins);
+            }
+            4 if !corpus.is_empty() => {
+                // Splice a chunk of another input (of any target) in.
+                let other = &corpus[rng.random_range(0..corpus.len())].1;
+                if !other.is_empty() {
+                    let s = rng.random_range(0..other.len());
+                    let e = (s + rng.random_range(1..256)).min(other.len());
+                    let i = rng.random_range(0..=len);
+                    let j = (i + rng.random_range(0..64)).min(len);
+                    b.splice(i..j, other[s..e].iter().copied());
+                }
+            }
+            5 if len > 8 => {
+                // Rewrite an integer somewhere: a length field or a varint.
+                let fields = artifact_length_fields(&b);
+                let (at, width) = if !fields.is_empty() && rng.random_bool(0.5) {
+                    fields[rng.random_range(0..fields.len())]
+                } else {
+                    (rng.random_range(0..len - 8), [1, 2, 4, 8][rng.random_range(0..4)])
+                };
+                let v: u64 = match rng.random_range(0..4) {
+                    0 => rng.random_range(0..16),
+                    1 => 1 << rng.random_range(0..64),
+                    2 => u64::MAX >> rng.random_range(0..64),
+                    _ => rng.random(),
+                };
+                if at + width <= b.len() {
+                    b[at..at + width].copy_from_slice(&v.to_le_bytes()[..width]);
+                }
+            }
+            6 if len > 9 => {
+                // A bincode varint length marker followed by a large value.
+                let at = rng.random_range(0..len - 9);
+                b[at] = [251u8, 252, 253][rng.random_range(0..3)];
+                let v: u64 = 1 << rng.random_range(8..63);
+                b[at + 1..at + 9].copy_from_slice(&v.to_le_bytes());
+            }
+            7 | 8 if target != Target::Artifact && target != Target::Pc2 => {
+                // Token swap or replacement in text.
+                let spans = token_spans(&b);
+                if spans.len() >= 2 {
+                    let (s1, e1) = spans[rng.random_range(0..spans.len())];
+                    if rng.random_bool(0.5) {
+                        let (s2, e2) = spans[rng.random_range(0..spans.len())];
+                        let (a, c) = if s1 <= s2 { ((s1, e1), (s2, e2)) } else { ((s2, e2), (s1, e1)) };
+                        if a.1 <= c.0 {
+                            let (ta, tc) = (b[a.0..a.1].to_vec(), b[c.0..c.1].to_vec());
+                            b.splice(c.0..c.1, ta);
+                            b.splice(a.0..a.1, tc);
+                        }
+                    } else {
+                        let t = TOKENS[rng.random_range(0..TOKENS.len())];
+                        b.splice(s1..e1, t.bytes());
+                    }
+                }
+            }
+            _ if len > 1 => {
+                // Duplicate or delete a range.
+                let s = rng.random_range(0..len);
+                let e = (s + rng.random_range(1..64)).min(len);
+                if rng.random_bool(0.5) {
+                    let chunk = b[s..e].to_vec();
+                    b.splice(e..e, chunk);
+                } else {
+                    b.drain(s..e);
+                }
+            }
+            _ => {}
+        }
+        if b.len() > 8 << 20 {
+            b.truncate(8 << 20);
+        }
+    }
+    if target == Target::Artifact && rng.random_bool(0.85) {
+        fix_checksum(&mut b);
+    }
+    b
+}
+
+/// Byte ranges of whitespace- or punctuation-separated tokens.
+fn token_spans(b: &[u8]) -> Vec<(usize, usize)> {
+    let sep = |c: u8| c.is_ascii_whitespace() || b",:[]{}\"/".contains(&c);
+    let mut out = Vec::new();
+    let mut start = None;
+    for (i, &c) in b.iter().enumerate() {
+        match (sep(c), start) {
+            (false, None) => start = Some(i),
+            (true, Some(s)) => {
+                out.push((s, i));
+                start = None;
+            }
+            _ => {}
+        }
+    }
+    if let Some(s) = start {
+        out.push((s, b.len()));
+    }
+    out
+}
+
+/// What a run found.
+#[derive(Clone, Debug, Default)]
+pub struct Report {
+    pub inputs: u64,
+    pub per_target: std::collections::BTreeMap<&'static str, u64>,
+    pub panics: u64,
+    pub hangs: u64,
+    pub slowest_seconds: f64,
+    /// Peak resident memory of the process (VmHWM), kB; 0 where unknown.
+    pub peak_rss_kb: u64,
+    /// Where the inputs that panicked or hung were written.
+    pub kept: Vec<PathBuf>,
+    pub seconds: f64,
+}
+
+/// Peak resident set size of this process, kB (Linux; 0 elsewhere).
+pub fn peak_rss_kb() -> u64 {
+    std::fs::read_to_string("/proc/self/status")
+        .ok()
+        .and_then(|s| {
+            s.lines()
+                .find(|l| l.starts_with("VmHWM:"))
+                .and_then(|l| l.split_whitespace().nth(1)?.parse().ok())
+        })
+        .unwrap_or(0)
+}
+
+/// Fuzzes until `inputs` inputs or `duration` have been spent, whichever
+/// comes first; keeps panicking / hanging inputs in `keep` (if given).
+pub fn fuzz(
+    seed: u64,
+    corpus: &[(Target, Vec<u8>)],
+    inputs: u64,
+    duration: Duration,
+    keep: Option<&Path>,
+) -> Report {
+    let mut rng = ChaCha8Rng::seed_from_u64(seed);
+    let mut report = Report::default();
+    let start = Instant::now();
+    let previous = std::panic::take_hook();
+    std::panic::set_hook(Box::new(|_| {}));
+    // The first inputs are the seeds themselves, unmutated.
+    let mut pool: Vec<(Target, Vec<u8>)> = corpus.to_vec();
+    while report.inputs < inputs && start.elapsed() < duration {
+        let k = rng.random_range(0..pool.len());
+        let (target, input) = (pool[k].0, &pool[k].1);
+        let bytes = if report.inputs < pool.len() as u64 {
+            pool[report.inputs as usize].1.clone()
+        } else {
+            mutate(&mut rng, input, target, &pool)
+        };
+        let target = if report.inputs < pool.len() as u64 { pool[report.inputs as usize].0 } else { target };
+        let t0 = Instant::now();
+        let ok = catch_unwind(AssertUnwindSafe(|| exercise(target, &bytes))).is_ok();
+        let dt = t0.elapsed().as_secs_f64();
+        report.inputs += 1;
+        *report.per_target.entry(target.name()).or_default() += 1;
+        report.slowest_seconds = report.slowest_seconds.max(dt);
+        let hang = dt > HANG_SECONDS;
+        report.panics += (!ok) as u64;
+        report.hangs += hang as u64;
+        if !ok || hang {
+            if let Some(dir) = keep {
+                let _ = std::fs::create_dir_all(dir);
+                let digest = Sha256::digest(&bytes);
+                let name = format!(
+                    "{}-{}-{:02x}{:02x}{:02x}{:02x}",
+                    if ok { "hang" } else { "panic" },
+                    target.name(),
+                    digest[0], digest[1], digest[2], digest[3]
+                );
+                let p = dir.join(name);
+                let _ = std::fs::write(&p, &bytes);
+                report.kept.push(p);
+            }
+        }
+        // Occasionally keep a mutated input that still parses as a new seed
+        // (bounded pool), so mutations compound.
+        if ok && pool.len() < 4 * corpus.len() + 64 && rng.random_ratio(1, 64) {
+            pool.push((target, bytes));
+        }
+    }
+    std::panic::set_hook(previous);
+    report.seconds = start.elapsed().as_secs_f64();
+    report.peak_rss_kb = peak_rss_kb();
+    report
+}
+
+/// Re-runs a kept input (`<kind>-<target>-<hash>`, as [`fuzz`] names them):
+/// `true` if it no longer panics.
+pub fn replay(path: &Path) -> Option<bool> {
+    let name = path.file_name()?.to_str()?;
+    let target = [Target::Ply, Target::Obj, Target::Pc2, Target::SetJson, Target::SubjectJson, Target::Artifact]
+        .into_iter()
+        .find(|t| name.contains(&format!("-{}-", t.name())))?;
+    let bytes = std::fs::read(path).ok()?;
+    Some(catch_unwind(AssertUnwindSafe(|| exercise(target, &bytes))).is_ok())
+}
+
+/// [`fuzz`] over the built-in seeds plus the `corpus` folders, as the JSON
+/// the `fuzz` binary writes.
+pub fn run_to_json(
+    seed: u64,
+    corpus: &[PathBuf],
+    inputs: u64,
+    duration: Duration,
+    keep: Option<&Path>,
+) -> serde_json::Value {
+    let mut seeds = seed_corpus();
+    for dir in corpus {
+        seeds.extend(load_corpus(dir));
+    }
+    let r = fuzz(seed, &seeds, inputs, duration, keep);
+    serde_json::json!({
+        "seed": seed,
+        "seed_inputs": seeds.len(),
+        "inputs": r.inputs,
+        "per_target": r.per_target,
+        "panics": r.panics,
+        "hangs": r.hangs,
+        "hang_seconds": HANG_SECONDS,
+        "slowest_input_s": r.slowest_seconds,
+        "peak_rss_kb": r.peak_rss_kb,
+        "seconds": r.seconds,
+        "inputs_per_second": r.inputs as f64 / r.seconds.max(1e-9),
+        "kept": r.kept.iter().map(|p| p.display().to_string()).collect::<Vec<_>>(),
+    })
+}
