@@ -1,8 +1,15 @@
 # surfcap: top-level entry points. Pipelines live in pipelines/*.mk.
-#   make demo   fetch the real assets, build, synthesise the demo capture set, render it
+#   make demo   fetch the real assets, build, synthesise the demo capture set, render it, run both pipelines
 #   make test   the whole test suite (release mode: the numerics need it)
 #   make build  release build of every stage binary
 #   make slurm SET=<set> OUT=<dir>   both pipelines as Slurm job arrays: sbatch <dir>/run.sbatch
+#   make transfer SET=<set> OUT=<dir>   the transfer pipeline (CVPR 2017), results.json + report
+#   make variation SET=<set> OUT=<dir>  the variation pipeline (3DV 2017), variation.json + report
+#   make demo-data | holdout-data   synthesise the demo / held-out benchmark capture set (out/...)
+#   make demo-render   contact sheets and GIFs of the demo set
+#   make report OUT=<dir>   the HTML report of a run;  make assets   fetch the real bodies and mocap
+#   make setup | setup-web   system packages (OpenBLAS) / the report tests' web tools (Chromium)
+#   make clean-out   remove $(OUT);  make help   this list
 
 SHELL := bash
 .SHELLFLAGS := -eu -o pipefail -c
@@ -21,7 +28,7 @@ export OPENBLAS_NUM_THREADS := 1
 all: build
 
 help:
-	@sed -n '2,6p' Makefile
+	@sed -n '2,13p' Makefile
 
 setup:
 	@scripts/setup-system
