@@ -45,6 +45,18 @@ impl AffineMean {
         ridge: f64,
         notes: &mut Vec<String>,
     ) -> Result<Self> {
+        Self::fit_toward(x, y, ridge, None, notes)
+    }
+
+    /// As [`AffineMean::fit`], shrunk toward `prior` (`(d + 1) x p`) instead of zero:
+    /// `W = argmin ‖Y - X_1 W‖² + λ ‖W - W_0‖²`, i.e. `(X_1ᵀ X_1 + λ I) W = X_1ᵀ Y + λ W_0`.
+    pub fn fit_toward(
+        x: &DMatrix<f64>,
+        y: &DMatrix<f64>,
+        ridge: f64,
+        prior: Option<&DMatrix<f64>>,
+        notes: &mut Vec<String>,
+    ) -> Result<Self> {
         if x.nrows() == 0 || x.nrows() != y.nrows() {
             return invalid(format!(
                 "affine mean: {} input rows and {} output rows",
@@ -64,8 +76,20 @@ impl AffineMean {
         for i in 0..k {
             a[(i, i)] += lambda;
         }
+        let mut rhs = x1.tr_mul(y);
+        if let Some(w0) = prior {
+            if w0.shape() != rhs.shape() {
+                return invalid(format!(
+                    "affine mean: prior of shape {:?}, the map is {:?}",
+                    w0.shape(),
+                    rhs.shape()
+                ));
+            }
+            check_finite("affine mean prior", w0)?;
+            rhs += w0 * lambda;
+        }
         let chol = Cholesky::new(&a, "affine mean normal equations", notes)?;
-        Ok(AffineMean { w: chol.solve(&x1.tr_mul(y)) })
+        Ok(AffineMean { w: chol.solve(&rhs) })
     }
 
     /// Input dimension `d`.
@@ -122,5 +146,24 @@ mod tests {
         for r in 0..3 {
             assert!((p[r] - r as f64).abs() < 1e-3, "{r}: {}", p[r]);
         }
+    }
+
+    /// Along an input direction the data never excite the fit keeps the prior's slope (zero
+    /// without a prior); along the excited ones it follows the data; a prior of the wrong shape
+    /// is an error.
+    #[test]
+    fn shrinks_toward_the_prior_where_the_data_say_nothing() {
+        // Inputs vary in column 0 only; y = 2 x0 + 1.
+        let x = DMatrix::from_fn(30, 2, |r, c| if c == 0 { (r as f64 * 0.37).sin() } else { 0.0 });
+        let y = DMatrix::from_fn(30, 1, |r, _| 2.0 * x[(r, 0)] + 1.0);
+        let prior = DMatrix::from_row_slice(3, 1, &[0.0, 5.0, 0.0]);
+        let mut notes = Vec::new();
+        let with = AffineMean::fit_toward(&x, &y, 1e-3, Some(&prior), &mut notes).unwrap();
+        let without = AffineMean::fit(&x, &y, 1e-3, &mut notes).unwrap();
+        assert!((with.w[(0, 0)] - 2.0).abs() < 0.05 && (with.w[(2, 0)] - 1.0).abs() < 0.05);
+        assert!((with.w[(1, 0)] - 5.0).abs() < 1e-9, "unexcited slope {}", with.w[(1, 0)]);
+        assert!(without.w[(1, 0)].abs() < 1e-9);
+        let wrong = DMatrix::zeros(2, 1);
+        assert!(AffineMean::fit_toward(&x, &y, 1e-3, Some(&wrong), &mut notes).is_err());
     }
 }

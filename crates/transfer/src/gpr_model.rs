@@ -109,6 +109,17 @@ pub enum MeanFunction {
     Zero,
 }
 
+/// What the ridge of the affine mean shrinks the map toward.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize, clap::ValueEnum)]
+#[serde(rename_all = "kebab-case")]
+pub enum MeanPrior {
+    /// Zero: plain ridge regression.
+    #[default]
+    Zero,
+    /// The linear map the two subjects' part shapes predict (`crate::geometric_prior`).
+    Geometric,
+}
+
 /// Relative ridge of the affine mean (`gp::affine_mean`): it shrinks the map along the
 /// input directions the training poses barely span, where an unseen motion's pose would
 /// otherwise be extrapolated on noise (docs/RESULTS.md, study 2: 1e-6 to 3e-4 measured on
@@ -150,6 +161,7 @@ impl Regressor {
 fn fit_mean(
     mean_fn: MeanFunction,
     ridge: f64,
+    prior: Option<&DMatrix<f64>>,
     x: &DMatrix<f64>,
     y: &DMatrix<f64>,
     notes: &mut Vec<String>,
@@ -157,7 +169,7 @@ fn fit_mean(
     match mean_fn {
         MeanFunction::Zero => Ok((None, y.clone())),
         MeanFunction::Affine => {
-            let m = AffineMean::fit(x, y, ridge, notes)
+            let m = AffineMean::fit_toward(x, y, ridge, prior, notes)
                 .map_err(|e| Error::invalid(e.to_string()))?;
             let r = y - m.predict(x).map_err(|e| Error::invalid(e.to_string()))?;
             Ok((Some(m), r))
@@ -445,6 +457,7 @@ fn train_parts(
     nn_bias: bool,
     mean_fn: MeanFunction,
     mean_ridge: f64,
+    mean_priors: Option<&[DMatrix<f64>]>,
     names: &[String],
     data: &TrainingSet,
     keys: &TrainingSet,
@@ -457,7 +470,8 @@ fn train_parts(
             let mut mean_notes = Vec::new();
             for (k, name) in names.iter().enumerate() {
                 let mut notes = Vec::new();
-                let (m, r) = fit_mean(mean_fn, mean_ridge, &data.x_parts[k], &data.y_parts[k], &mut notes)
+                let prior = mean_priors.map(|p| &p[k]);
+                let (m, r) = fit_mean(mean_fn, mean_ridge, prior, &data.x_parts[k], &data.y_parts[k], &mut notes)
                     .map_err(|e| Error::invalid(format!("part '{name}': {e}")))?;
                 means.push(m);
                 mean_notes.push(notes);
@@ -507,7 +521,7 @@ pub fn train_displacement(
     opts: &GprOptions,
 ) -> Result<(Regressor, RegressorReport)> {
     let mut notes = Vec::new();
-    let (mean, resid) = fit_mean(mean_fn, mean_ridge, &data.x_disp, &data.y_disp, &mut notes)
+    let (mean, resid) = fit_mean(mean_fn, mean_ridge, None, &data.x_disp, &data.y_disp, &mut notes)
         .map_err(|e| Error::invalid(format!("displacement: {e}")))?;
     let y_scale = rms(&resid).max(1e-9);
     let y = &resid / y_scale;
@@ -543,6 +557,29 @@ pub fn train(
     keyposes_only: bool,
     opts: &GprOptions,
 ) -> Result<GprModel> {
+    train_toward(method, nn_bias, mean_fn, mean_ridge, None, part_names, pairs, frame_ratio, keyposes_only, opts)
+}
+
+/// As [`train`], with the affine means of the parts shrunk toward `mean_priors` (one
+/// `(d + 1) x p` map per part, e.g. [`crate::geometric_prior::part_priors`]) instead of zero.
+#[allow(clippy::too_many_arguments)]
+pub fn train_toward(
+    method: Method,
+    nn_bias: bool,
+    mean_fn: MeanFunction,
+    mean_ridge: f64,
+    mean_priors: Option<&[DMatrix<f64>]>,
+    part_names: &[String],
+    pairs: &[PairData],
+    frame_ratio: f64,
+    keyposes_only: bool,
+    opts: &GprOptions,
+) -> Result<GprModel> {
+    if let Some(p) = mean_priors {
+        if p.len() != part_names.len() {
+            return Err(Error::invalid(format!("{} mean priors for {} parts", p.len(), part_names.len())));
+        }
+    }
     if !(frame_ratio > 0.0 && frame_ratio.is_finite()) {
         return Err(Error::invalid(format!(
             "frame-rate ratio must be positive, got {frame_ratio}"
@@ -562,7 +599,7 @@ pub fn train(
         data.clone()
     };
     let (parts, disp) = rayon::join(
-        || train_parts(method, nn_bias, mean_fn, mean_ridge, part_names, &data, &keys, opts),
+        || train_parts(method, nn_bias, mean_fn, mean_ridge, mean_priors, part_names, &data, &keys, opts),
         || train_displacement(&data, nn_bias, mean_fn, mean_ridge, opts),
     );
     let (parts, mut reports) = parts?;

@@ -9,6 +9,7 @@ pub mod align;
 pub mod part_pca;
 pub mod densify;
 pub mod gpr_model;
+pub mod geometric_prior;
 pub mod predict;
 pub mod confidence;
 pub mod assemble;

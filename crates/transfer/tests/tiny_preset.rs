@@ -3,7 +3,9 @@
 //! `make test` does), run stage by stage as `make transfer` runs them. Checked against the
 //! set's ground truth on every test motion: the full pipeline (correction and stitching)
 //! is no worse than the raw regression, and the default placement beats the paper's
-//! regressed displacement.
+//! regressed displacement. And the affine mean held at its geometric prior (no training pair
+//! shapes the map; the residual GPs still learn) carries the source's pose: its transfer is far
+//! closer than the target's mean pose (a transfer that ignores the source).
 
 mod common;
 
@@ -11,6 +13,7 @@ use common::run;
 
 use std::path::{Path, PathBuf};
 
+use mesh_core::artifact::Artifact;
 use mesh_core::sequence::MeshSequence;
 use transfer::evaluate::rms_errors;
 
@@ -61,10 +64,15 @@ fn defaults_on_the_tiny_preset_never_lose_to_raw_regression_or_the_papers_placem
         train_args.extend(["--pair".into(), s(&w(format!("A/{m}.aligned"))), s(&w(format!("B/{m}.aligned"))), s(&corr)]);
     }
     run("gpr-train", &train_args);
-    let predict = |m: &str, extra: &[&str], name: &str| -> (f64, f64) {
+    let mut prior_args = train_args.clone();
+    let at = prior_args.iter().position(|a| a == "--out").unwrap();
+    prior_args[at + 1] = s(&w("prior-model".into()));
+    prior_args.extend(["--mean-prior".into(), "geometric".into(), "--mean-ridge".into(), "1e3".into()]);
+    run("gpr-train", &prior_args);
+    let predict_with = |model: &str, m: &str, extra: &[&str], name: &str| -> (f64, f64) {
         let out = w(format!("out/{m}/{name}"));
         let mut args = vec![
-            "--model".into(), s(&w("model".into())), "--source-pca".into(), s(&w("A/pca.model".into())),
+            "--model".into(), s(&w(model.into())), "--source-pca".into(), s(&w("A/pca.model".into())),
             "--target-pca".into(), s(&w("B/pca.model".into())), "--target-template".into(), s(&tpl("B")),
             s(&w(format!("A/{m}.aligned"))), "--out".into(), s(&out),
         ];
@@ -73,6 +81,22 @@ fn defaults_on_the_tiny_preset_never_lose_to_raw_regression_or_the_papers_placem
         let pred = MeshSequence::load_dir(&out).unwrap();
         let truth = MeshSequence::load_dir(&set.join("truth").join("B").join(m)).unwrap();
         rms_errors(&pred, &truth).unwrap()
+    };
+    let predict = |m: &str, extra: &[&str], name: &str| predict_with("model", m, extra, name);
+    // The target's mean pose on every frame: a transfer that ignores the source.
+    let target_pca = transfer::part_pca::PcaModel::load(w("B/pca.model".into())).unwrap();
+    let template_b = MeshSequence::load_files(&[tpl("B")]).unwrap();
+    let mean_pose_error = |m: &str| -> f64 {
+        let truth = MeshSequence::load_dir(&set.join("truth").join("B").join(m)).unwrap();
+        let zeros: Vec<nalgebra::DMatrix<f64>> = target_pca
+            .parts
+            .iter()
+            .map(|p| nalgebra::DMatrix::zeros(truth.n_frames(), p.pca.components.nrows()))
+            .collect();
+        let plan = transfer::assemble::plan(&target_pca).unwrap();
+        let frames = transfer::assemble::assemble(&plan, &target_pca, &target_pca.decode(&zeros).unwrap());
+        let mean = MeshSequence::new(template_b.faces.clone(), frames);
+        rms_errors(&mean, &truth).unwrap().0
     };
     let seg_b = s(&w("B/parts.seg".into()));
     let mut surface_args: Vec<String> = vec!["--surface".into(), "correct-stitch".into(), "--segmentation".into(), seg_b];
@@ -88,6 +112,10 @@ fn defaults_on_the_tiny_preset_never_lose_to_raw_regression_or_the_papers_placem
             "{m}: pose raw {raw_pose:.4} full {full_pose:.4}; placed default {default_placed:.4} regressed {regressed_placed:.4}"
         );
         assert!(full_pose <= raw_pose, "{m}: full pipeline {full_pose} worse than raw regression {raw_pose}");
+        let (prior_pose, _) = predict_with("prior-model", m, &[], "gpr-nn-prior");
+        let mean_pose = mean_pose_error(m);
+        eprintln!("{m}: geometric prior alone {prior_pose:.4}, target mean pose {mean_pose:.4}");
+        assert!(prior_pose < mean_pose, "{m}: geometric prior {prior_pose} no better than the mean pose {mean_pose}");
         assert!(
             default_placed < regressed_placed,
             "{m}: default placement {default_placed} not below regressed {regressed_placed}"

@@ -7,7 +7,7 @@ use gp::gpr::{GprOptions, PAPER_NOISE_VAR};
 use gp::sparse_gpr::Sparsity;
 use mesh_core::artifact::Artifact;
 use mesh_core::cli::{run_stage, CommonArgs};
-use transfer::gpr_model::{train, GprModel, MeanFunction, Method, PairFiles, MEAN_RIDGE};
+use transfer::gpr_model::{train_toward, GprModel, MeanFunction, MeanPrior, Method, PairFiles, MEAN_RIDGE};
 use transfer::part_pca::PcaModel;
 
 /// Train the source-to-target GP regression per body part and for the rigid displacement (eqs. 8-13)
@@ -55,6 +55,10 @@ struct Args {
     /// poses barely span; 1e-6 is the plain least-squares fit)
     #[arg(long, default_value_t = MEAN_RIDGE)]
     mean_ridge: f64,
+    /// What the ridge shrinks the affine mean toward: `zero`, or `geometric` = the map the two
+    /// subjects' part shapes predict (transfer::geometric_prior)
+    #[arg(long, value_enum, default_value_t = MeanPrior::Zero)]
+    mean_prior: MeanPrior,
     /// Observation-noise variance σn² (the paper's 0.1; the starting value with --learn-noise)
     #[arg(long, default_value_t = PAPER_NOISE_VAR)]
     noise_var: f64,
@@ -128,11 +132,16 @@ fn main() -> ExitCode {
         };
         let ratio = args.target_fps / args.source_fps;
         let start = std::time::Instant::now();
-        let model: GprModel = train(
+        let priors = match args.mean_prior {
+            MeanPrior::Zero => None,
+            MeanPrior::Geometric => Some(transfer::geometric_prior::part_priors(&src_pca, &tgt_pca)),
+        };
+        let model: GprModel = train_toward(
             method,
             args.nn_bias,
             args.mean,
             args.mean_ridge,
+            priors.as_deref(),
             &names,
             &pairs,
             ratio,
@@ -155,7 +164,7 @@ fn main() -> ExitCode {
             .common
             .header("gpr-train", env!("CARGO_PKG_VERSION"))
             .with_params(&serde_json::json!({
-                "method": method.name(), "nn_bias": args.nn_bias, "keyposes_only": args.keyposes_only, "noise_var": args.noise_var, "learn_noise": args.learn_noise, "mean": args.mean, "mean_ridge": args.mean_ridge, "sparse": args.sparse.to_string(),
+                "method": method.name(), "nn_bias": args.nn_bias, "keyposes_only": args.keyposes_only, "noise_var": args.noise_var, "learn_noise": args.learn_noise, "mean": args.mean, "mean_ridge": args.mean_ridge, "mean_prior": args.mean_prior, "sparse": args.sparse.to_string(),
                 "reverse": args.reverse, "source_fps": args.source_fps, "target_fps": args.target_fps,
             }))?
             .with_input(&args.source_pca)?
