@@ -13,9 +13,9 @@
 //! toward this one rather than toward zero (`gp::affine_mean`) keeps the prediction sensible
 //! along the input directions the training poses barely span, which is where unseen motions go.
 //!
-//! The correspondence `P` and the similarity `(s, Q)` come from the two parts' mean shapes by
-//! iterative closest points: centroids and RMS radii matched, then nearest neighbours and a
-//! Procrustes rotation alternated a few times (from the identity rotation: the two subjects'
+//! The correspondence `P` and the rotation `Q` come from the two parts' mean shapes by iterative
+//! closest points: centroids matched, A scaled by `s` (the templates' height ratio), then nearest
+//! neighbours and a Procrustes rotation alternated a few times (from the identity rotation: the two subjects'
 //! templates face the same way, as `align` expresses every frame in its template's frame).
 
 use gp::pca::Pca;
@@ -66,13 +66,16 @@ pub struct PartCorrespondence {
     pub rotation: Matrix3<f64>,
     pub source_centroid: Vector3<f64>,
     pub target_centroid: Vector3<f64>,
+    /// RMS distance of B's vertices to their carried A vertices, over B's RMS radius.
+    pub residual: f64,
 }
 
-/// ICP between the two mean shapes (see the module documentation).
-pub fn correspond(source_mean: &[Vector3<f64>], target_mean: &[Vector3<f64>]) -> PartCorrespondence {
+/// ICP between the two mean shapes (see the module documentation), at the scale `body_scale`
+/// (`None`: the ratio of the two shapes' RMS radii).
+pub fn correspond(source_mean: &[Vector3<f64>], target_mean: &[Vector3<f64>], body_scale: Option<f64>) -> PartCorrespondence {
     let (ca, cb) = (centroid(source_mean), centroid(target_mean));
     let (ra, rb) = (rms_radius(source_mean, &ca), rms_radius(target_mean, &cb));
-    let scale = if ra > 0.0 { rb / ra } else { 1.0 };
+    let scale = body_scale.unwrap_or(if ra > 0.0 { rb / ra } else { 1.0 });
     // Source points in the target's frame: s Q (v_A - c_A) + c_B.
     let mut rotation = Matrix3::identity();
     let mut to_source = Vec::new();
@@ -87,20 +90,35 @@ pub fn correspond(source_mean: &[Vector3<f64>], target_mean: &[Vector3<f64>]) ->
         let fit = procrustes(&src, &dst, None);
         rotation = *fit.rotation.matrix();
     }
+    let residual = (to_source
+        .iter()
+        .zip(target_mean)
+        .map(|(&a, b)| (rotation * (source_mean[a] - ca) * scale + cb - b).norm_squared())
+        .sum::<f64>()
+        / target_mean.len().max(1) as f64)
+        .sqrt()
+        / rb.max(f64::MIN_POSITIVE);
     PartCorrespondence {
         to_source,
         scale,
         rotation,
         source_centroid: ca,
         target_centroid: cb,
+        residual,
     }
 }
 
 /// The prior of the affine mean `m(x) = Wᵀ [x; 1]` of one part: `W0` of shape `(d + 1) x p`
 /// (`d`, `p`: source and target coefficient counts), as in the module documentation.
-pub fn affine_prior(source: &Pca, target: &Pca) -> DMatrix<f64> {
+pub fn affine_prior(source: &Pca, target: &Pca, body_scale: Option<f64>) -> DMatrix<f64> {
     let (mu_a, mu_b) = (points(&source.mean), points(&target.mean));
-    let c = correspond(&mu_a, &mu_b);
+    let c = correspond(&mu_a, &mu_b, body_scale);
+    let angle = ((c.rotation.trace() - 1.0) / 2.0).clamp(-1.0, 1.0).acos().to_degrees();
+    mesh_core::info!(
+        "geometric prior: scale {:.3}, turn {angle:.1} deg, ICP residual {:.3} of the part's radius",
+        c.scale,
+        c.residual
+    );
     let (d, p) = (source.components.nrows(), target.components.nrows());
     // M = (I ⊗ s Q) P C_Aᵀ: 3 n_B x d, and the offset vector s (I ⊗ Q) P (μ_A - c_A) + c_B - μ_B.
     let n_b = mu_b.len();
@@ -137,16 +155,19 @@ pub fn affine_prior(source: &Pca, target: &Pca) -> DMatrix<f64> {
 }
 
 /// The prior of every part of two subjects' PCA models (parts paired by position, as the
-/// regressions are).
+/// regressions are), every part scaled by the templates' height ratio (the scale of the default
+/// placement): a part's own extent depends on where its curves cut it, its motions do not.
 pub fn part_priors(
     source: &crate::part_pca::PcaModel,
     target: &crate::part_pca::PcaModel,
 ) -> Vec<DMatrix<f64>> {
+    let hs = crate::placement::template_height(source);
+    let body_scale = (hs > 0.0).then(|| crate::placement::template_height(target) / hs);
     source
         .parts
         .iter()
         .zip(&target.parts)
-        .map(|(a, b)| affine_prior(&a.pca, &b.pca))
+        .map(|(a, b)| affine_prior(&a.pca, &b.pca, body_scale))
         .collect()
 }
 
@@ -191,7 +212,7 @@ mod tests {
         let (ya, yb) = (rows(&limb, false), rows(&b_rest, true));
         let pa = Pca::fit(&ya, Components::Count(6)).unwrap();
         let pb = Pca::fit(&yb, Components::Count(6)).unwrap();
-        let w0 = affine_prior(&pa, &pb);
+        let w0 = affine_prior(&pa, &pb, None);
         let (d, p) = (pa.components.nrows(), pb.components.nrows());
         assert_eq!(w0.shape(), (d + 1, p));
         // A pose beyond the fitted angles.
