@@ -120,6 +120,23 @@ pub enum MeanPrior {
     Geometric,
 }
 
+/// A prior map for each part's affine mean (e.g. [`crate::geometric_prior::part_priors`]) and
+/// how it enters: as the ridge's target, and mixed into the fitted map.
+#[derive(Clone, Copy, Debug)]
+pub struct MeanPriors<'a> {
+    /// One `(d + 1) x p` map per part.
+    pub maps: &'a [DMatrix<f64>],
+    /// The ridge shrinks the fit toward the map (otherwise toward zero).
+    pub ridge_toward: bool,
+    /// The stored mean is `(1 - weight) · fit + weight · map`; the part's GP is trained on the
+    /// residuals of the fit.
+    pub weight: f64,
+}
+
+/// Weight of the geometric prior in each part's affine mean (`gpr-train --prior-weight`):
+/// measured on the demo, holdout and tiny sets (docs/RESULTS.md, study 2).
+pub const PRIOR_WEIGHT: f64 = 0.25;
+
 /// Relative ridge of the affine mean (`gp::affine_mean`): it shrinks the map along the
 /// input directions the training poses barely span, where an unseen motion's pose would
 /// otherwise be extrapolated on noise (docs/RESULTS.md, study 2: 1e-6 to 3e-4 measured on
@@ -457,7 +474,7 @@ fn train_parts(
     nn_bias: bool,
     mean_fn: MeanFunction,
     mean_ridge: f64,
-    mean_priors: Option<&[DMatrix<f64>]>,
+    mean_priors: Option<MeanPriors>,
     names: &[String],
     data: &TrainingSet,
     keys: &TrainingSet,
@@ -470,9 +487,21 @@ fn train_parts(
             let mut mean_notes = Vec::new();
             for (k, name) in names.iter().enumerate() {
                 let mut notes = Vec::new();
-                let prior = mean_priors.map(|p| &p[k]);
-                let (m, r) = fit_mean(mean_fn, mean_ridge, prior, &data.x_parts[k], &data.y_parts[k], &mut notes)
+                let toward = mean_priors.filter(|p| p.ridge_toward).map(|p| &p.maps[k]);
+                let (mut m, r) = fit_mean(mean_fn, mean_ridge, toward, &data.x_parts[k], &data.y_parts[k], &mut notes)
                     .map_err(|e| Error::invalid(format!("part '{name}': {e}")))?;
+                if let (Some(mean), Some(p)) = (m.as_mut(), mean_priors) {
+                    if p.weight > 0.0 {
+                        if p.maps[k].shape() != mean.w.shape() {
+                            return Err(Error::invalid(format!(
+                                "part '{name}': prior map of shape {:?} for a mean of shape {:?}",
+                                p.maps[k].shape(),
+                                mean.w.shape()
+                            )));
+                        }
+                        mean.w = &mean.w * (1.0 - p.weight) + &p.maps[k] * p.weight;
+                    }
+                }
                 means.push(m);
                 mean_notes.push(notes);
                 problems.push((data.x_parts[k].clone(), r));
@@ -560,15 +589,14 @@ pub fn train(
     train_toward(method, nn_bias, mean_fn, mean_ridge, None, part_names, pairs, frame_ratio, keyposes_only, opts)
 }
 
-/// As [`train`], with the affine means of the parts shrunk toward `mean_priors` (one
-/// `(d + 1) x p` map per part, e.g. [`crate::geometric_prior::part_priors`]) instead of zero.
+/// As [`train`], with prior maps for the parts' affine means ([`MeanPriors`]).
 #[allow(clippy::too_many_arguments)]
 pub fn train_toward(
     method: Method,
     nn_bias: bool,
     mean_fn: MeanFunction,
     mean_ridge: f64,
-    mean_priors: Option<&[DMatrix<f64>]>,
+    mean_priors: Option<MeanPriors>,
     part_names: &[String],
     pairs: &[PairData],
     frame_ratio: f64,
@@ -576,8 +604,11 @@ pub fn train_toward(
     opts: &GprOptions,
 ) -> Result<GprModel> {
     if let Some(p) = mean_priors {
-        if p.len() != part_names.len() {
-            return Err(Error::invalid(format!("{} mean priors for {} parts", p.len(), part_names.len())));
+        if p.maps.len() != part_names.len() {
+            return Err(Error::invalid(format!("{} mean priors for {} parts", p.maps.len(), part_names.len())));
+        }
+        if !(0.0..=1.0).contains(&p.weight) {
+            return Err(Error::invalid(format!("prior weight must be in [0, 1], got {}", p.weight)));
         }
     }
     if !(frame_ratio > 0.0 && frame_ratio.is_finite()) {
@@ -666,6 +697,39 @@ mod tests {
             pairs: (0..f).map(|i| [i, i]).collect(),
             keyposes: vec![[0, 0], [f / 2, f / 2], [f - 1, f - 1]],
         }
+    }
+
+    /// The prior weight mixes the fitted affine map with the prior map, and nothing else: at
+    /// weight 0 the model is the one trained without a prior, at 1 the stored mean is the prior,
+    /// at 0.25 a quarter of the way; the GP is the same in all three (trained on the fit's
+    /// residuals). A weight outside [0, 1] or a prior per part missing is refused.
+    #[test]
+    fn prior_weight_mixes_the_fitted_map_with_the_prior() {
+        let names = vec!["p".to_string()];
+        let data = pair(60, &|x| 0.8 * x + 0.1 * x * x);
+        let opts = GprOptions { noise_var: 1e-2, ..Default::default() };
+        let prior = vec![DMatrix::from_fn(3, 3, |r, c| 0.1 * (r + 2 * c) as f64 - 0.3)];
+        let with = |weight: f64| {
+            let p = MeanPriors { maps: &prior, ridge_toward: false, weight };
+            train_toward(Method::GprNn, false, MeanFunction::Affine, MEAN_RIDGE, Some(p), &names, &[data.clone()], 1.0, false, &opts)
+        };
+        let plain = train(Method::GprNn, false, MeanFunction::Affine, MEAN_RIDGE, &names, &[data.clone()], 1.0, false, &opts).unwrap();
+        let parts = |m: &GprModel| match &m.parts[0] {
+            Regressor::Gp { gpr, mean: Some(mean), .. } => (gpr.clone(), mean.w.clone()),
+            _ => panic!("expected a GP with an affine mean"),
+        };
+        let (gp0, fit) = parts(&plain);
+        assert_eq!(with(0.0).unwrap(), plain);
+        let (gp1, w1) = parts(&with(1.0).unwrap());
+        assert!((&w1 - &prior[0]).abs().max() < 1e-15);
+        let (gpq, wq) = parts(&with(0.25).unwrap());
+        assert!((&wq - (&fit * 0.75 + &prior[0] * 0.25)).abs().max() < 1e-12);
+        assert_eq!(gp1, gp0);
+        assert_eq!(gpq, gp0);
+        assert!(with(1.5).is_err());
+        let none: Vec<DMatrix<f64>> = Vec::new();
+        let p = MeanPriors { maps: &none, ridge_toward: false, weight: 0.25 };
+        assert!(train_toward(Method::GprNn, false, MeanFunction::Affine, MEAN_RIDGE, Some(p), &names, &[data], 1.0, false, &opts).is_err());
     }
 
     /// `--sparse`: with enough inducing inputs for the training inputs (which lie on a curve:

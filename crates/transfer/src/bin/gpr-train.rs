@@ -7,7 +7,7 @@ use gp::gpr::{GprOptions, PAPER_NOISE_VAR};
 use gp::sparse_gpr::Sparsity;
 use mesh_core::artifact::Artifact;
 use mesh_core::cli::{run_stage, CommonArgs};
-use transfer::gpr_model::{train_toward, GprModel, MeanFunction, MeanPrior, Method, PairFiles, MEAN_RIDGE};
+use transfer::gpr_model::{train_toward, GprModel, MeanFunction, MeanPrior, MeanPriors, Method, PairFiles, MEAN_RIDGE, PRIOR_WEIGHT};
 use transfer::part_pca::PcaModel;
 
 /// Train the source-to-target GP regression per body part and for the rigid displacement (eqs. 8-13)
@@ -59,6 +59,9 @@ struct Args {
     /// subjects' part shapes predict (transfer::geometric_prior)
     #[arg(long, value_enum, default_value_t = MeanPrior::Zero)]
     mean_prior: MeanPrior,
+    /// Weight of the geometric prior mixed into each part's affine mean (0: the fitted map alone)
+    #[arg(long, default_value_t = PRIOR_WEIGHT, value_name = "W")]
+    prior_weight: f64,
     /// Observation-noise variance σn² (the paper's 0.1; the starting value with --learn-noise)
     #[arg(long, default_value_t = PAPER_NOISE_VAR)]
     noise_var: f64,
@@ -132,16 +135,19 @@ fn main() -> ExitCode {
         };
         let ratio = args.target_fps / args.source_fps;
         let start = std::time::Instant::now();
-        let priors = match args.mean_prior {
-            MeanPrior::Zero => None,
-            MeanPrior::Geometric => Some(transfer::geometric_prior::part_priors(&src_pca, &tgt_pca)),
-        };
+        if !(0.0..=1.0).contains(&args.prior_weight) {
+            return Err(mesh_core::Error::invalid(format!("--prior-weight must be in [0, 1], got {}", args.prior_weight)).into());
+        }
+        let ridge_toward = args.mean_prior == MeanPrior::Geometric;
+        let maps = (args.mean == MeanFunction::Affine && (ridge_toward || args.prior_weight > 0.0))
+            .then(|| transfer::geometric_prior::part_priors(&src_pca, &tgt_pca));
+        let priors = maps.as_deref().map(|maps| MeanPriors { maps, ridge_toward, weight: args.prior_weight });
         let model: GprModel = train_toward(
             method,
             args.nn_bias,
             args.mean,
             args.mean_ridge,
-            priors.as_deref(),
+            priors,
             &names,
             &pairs,
             ratio,
@@ -164,7 +170,7 @@ fn main() -> ExitCode {
             .common
             .header("gpr-train", env!("CARGO_PKG_VERSION"))
             .with_params(&serde_json::json!({
-                "method": method.name(), "nn_bias": args.nn_bias, "keyposes_only": args.keyposes_only, "noise_var": args.noise_var, "learn_noise": args.learn_noise, "mean": args.mean, "mean_ridge": args.mean_ridge, "mean_prior": args.mean_prior, "sparse": args.sparse.to_string(),
+                "method": method.name(), "nn_bias": args.nn_bias, "keyposes_only": args.keyposes_only, "noise_var": args.noise_var, "learn_noise": args.learn_noise, "mean": args.mean, "mean_ridge": args.mean_ridge, "mean_prior": args.mean_prior, "prior_weight": args.prior_weight, "sparse": args.sparse.to_string(),
                 "reverse": args.reverse, "source_fps": args.source_fps, "target_fps": args.target_fps,
             }))?
             .with_input(&args.source_pca)?
