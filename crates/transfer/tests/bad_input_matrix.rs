@@ -14,8 +14,8 @@ use std::sync::OnceLock;
 
 use mesh_core::artifact::Artifact;
 use mesh_core::segmentation::Segmentation;
-use transfer::align::AlignedMotion;
-use transfer::part_pca::PcaModel;
+use capture::align::AlignedMotion;
+use capture::part_pca::PcaModel;
 
 /// Inputs shared by the rows: the synthetic set, A's and B's segmentations,
 /// aligned motions and PCA models.

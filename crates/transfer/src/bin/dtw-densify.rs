@@ -6,9 +6,9 @@ use clap::Parser;
 use mesh_core::artifact::Artifact;
 use mesh_core::capture_set::SetSpec;
 use mesh_core::cli::{run_stage, CommonArgs};
-use transfer::align::AlignedMotion;
+use capture::align::AlignedMotion;
 use transfer::densify::{densify, path_error, Correspondences, PAPER_SIGMA2};
-use transfer::part_pca::PcaModel;
+use capture::part_pca::PcaModel;
 
 /// Densify one training pair's key-pose correspondences by DTW on a Bayesian-linear-regression cost
 #[derive(Parser, Debug)]

@@ -8,7 +8,7 @@ use gp::sparse_gpr::Sparsity;
 use mesh_core::artifact::Artifact;
 use mesh_core::cli::{run_stage, CommonArgs};
 use transfer::gpr_model::{train, GprModel, MeanFunction, Method, PairFiles, MEAN_RIDGE};
-use transfer::part_pca::PcaModel;
+use capture::part_pca::PcaModel;
 
 /// Train the source-to-target GP regression per body part and for the rigid displacement (eqs. 8-13)
 #[derive(Parser, Debug)]

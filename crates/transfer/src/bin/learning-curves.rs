@@ -7,14 +7,14 @@ use gp::gpr::{GprOptions, PAPER_NOISE_VAR};
 use mesh_core::artifact::Artifact;
 use mesh_core::capture_set::SetSpec;
 use mesh_core::cli::{run_stage, CommonArgs};
-use transfer::align::AlignedMotion;
+use capture::align::AlignedMotion;
 use transfer::densify::Correspondences;
 use transfer::gpr_model::MeanFunction;
 use transfer::learning_curves::{
     encode_pair, fit_whole_body, plot_all, run_direction, sizes, total_components,
     train_side_len, true_correspondences, write_csv, Correspondence, DirectionData,
 };
-use transfer::part_pca::PcaModel;
+use capture::part_pca::PcaModel;
 
 /// Learning curves of the pose regression, both directions (paper figures 7-9): CSV, PNG and SVG plots
 #[derive(Parser, Debug)]

@@ -8,7 +8,7 @@ use mesh_core::cli::{run_stage, CommonArgs};
 use mesh_core::io::read_mesh;
 use mesh_core::segmentation::Segmentation;
 use mesh_core::sequence::MeshSequence;
-use transfer::align::{align_motion_on, anchor_vertices, AlignFrame};
+use capture::align::{align_motion_on, anchor_vertices, AlignFrame};
 
 /// Rigidly align every frame of a motion to the subject's template and record per-frame displacements
 #[derive(Parser, Debug)]

@@ -7,8 +7,8 @@ use mesh_core::artifact::Artifact;
 use mesh_core::cli::{run_stage, CommonArgs};
 use mesh_core::io::read_mesh;
 use mesh_core::segmentation::Segmentation;
-use transfer::align::AlignedMotion;
-use transfer::part_pca;
+use capture::align::AlignedMotion;
+use capture::part_pca;
 
 /// Fit a PCA per body part on a subject's aligned training motions
 #[derive(Parser, Debug)]
