@@ -237,6 +237,7 @@ mod tests {
             displacements: vec![[0.0; 6]; frames.len()],
             anchor: Vec::new(),
             frames,
+            capture: Default::default(),
         };
         (mesh, seg, motion)
     }

@@ -68,7 +68,7 @@ pub struct Group {
 
 impl Artifact for Group {
     const KIND: &'static str = "variation-group";
-    const VERSION: u32 = 1;
+    const VERSION: u32 = 2;
 }
 
 impl Group {
@@ -348,6 +348,7 @@ pub fn blend_sequences(
             poses,
             displacements: disp,
             anchor: a.motion.anchor.clone(),
+            capture: a.motion.capture.clone(),
         },
         contacts,
         map: (0..n).collect(),

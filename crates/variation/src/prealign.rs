@@ -180,6 +180,7 @@ pub fn apply(motion: &AlignedMotion, map: &[usize]) -> AlignedMotion {
         poses,
         displacements,
         anchor: motion.anchor.clone(),
+        capture: motion.capture.clone(),
     }
 }
 

@@ -167,6 +167,7 @@ fn blends_at_zero_and_one_reproduce_the_endpoints() {
                 poses,
                 displacements: disp,
                 anchor: Vec::new(),
+                capture: Default::default(),
             },
             contacts: None,
             map: (0..n).collect(),
