@@ -125,16 +125,16 @@ pub fn exercise(target: Target, bytes: &[u8]) {
 
 fn exercise_artifact(bytes: &[u8]) {
     use mesh_core::segmentation::Segmentation;
-    use transfer::part_pca::PcaModel;
+    use capture::part_pca::PcaModel;
     if let Ok((_, s)) = Segmentation::decode(bytes) {
         let _ = s.tree_order();
         let _ = s.vertex_labels();
     }
     if let Ok((_, m)) = <PcaModel as Artifact>::decode(bytes) {
         let _ = m.template_vertices();
-        let _ = transfer::assemble::plan(&m);
+        let _ = capture::assemble::plan(&m);
     }
-    if let Ok((_, m)) = transfer::align::AlignedMotion::decode(bytes) {
+    if let Ok((_, m)) = capture::align::AlignedMotion::decode(bytes) {
         let _ = m.frames.len();
     }
     let _ = transfer::densify::Correspondences::decode(bytes);
@@ -182,13 +182,13 @@ pub fn seed_corpus() -> Vec<(Target, Vec<u8>)> {
     out.push((Target::SubjectJson, subject.to_string().into_bytes()));
     let spec = SubjectSpec::parse(subject.to_string().as_bytes()).unwrap();
     let seg = mesh_core::segmentation::segment(&mesh, &spec).unwrap();
-    let aligned = transfer::align::align_motion(&mesh, &MeshSequence::new(mesh.faces.clone(), frames)).unwrap();
-    let (pca, _) = transfer::part_pca::fit(
+    let aligned = capture::align::align_motion(&mesh, &MeshSequence::new(mesh.faces.clone(), frames)).unwrap();
+    let (pca, _) = capture::part_pca::fit(
         &mesh.vertices,
         &seg,
         &[&aligned],
         Components::Count(3),
-        transfer::part_pca::PartAlignment::Body,
+        capture::part_pca::PartAlignment::Body,
     )
     .unwrap();
     let header = Header::new("fuzz", "0").with_seed(0);

@@ -16,8 +16,8 @@ fn seeds_are_valid_inputs_of_their_readers() {
             fuzz::Target::Artifact => {
                 use mesh_core::artifact::Artifact;
                 mesh_core::segmentation::Segmentation::decode(&bytes).is_ok()
-                    || <transfer::part_pca::PcaModel as Artifact>::decode(&bytes).is_ok()
-                    || transfer::align::AlignedMotion::decode(&bytes).is_ok()
+                    || <capture::part_pca::PcaModel as Artifact>::decode(&bytes).is_ok()
+                    || capture::align::AlignedMotion::decode(&bytes).is_ok()
                     || transfer::densify::Correspondences::decode(&bytes).is_ok()
             }
         };

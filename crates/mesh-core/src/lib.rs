@@ -22,6 +22,7 @@ pub mod cli;
 pub mod shapes;
 pub mod contacts;
 pub mod feet;
+pub mod font;
 
 pub use error::{Error, Result};
 pub use mesh::TriMesh;

@@ -5,10 +5,10 @@
 use std::path::PathBuf;
 
 use clap::{Args, ValueEnum};
-pub use transfer::align::AlignFrame;
-pub use transfer::gpr_model::{MeanFunction, Method};
-pub use transfer::part_pca::PartAlignment;
-pub use transfer::placement::Placement;
+pub use capture::align::AlignFrame;
+pub use capture::choices::{MeanFunction, Method};
+pub use capture::part_pca::PartAlignment;
+pub use capture::choices::Placement;
 
 /// `gpr-train --method`, parsed by the stage's own names.
 fn parse_method(s: &str) -> Result<Method, String> {

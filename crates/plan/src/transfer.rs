@@ -63,7 +63,6 @@ pub fn plan(set: &CaptureSet, out: &str, opt: &TransferOptions, graph: &mut Grap
         tpl.insert(x.clone(), set.template_path(x, &sp)?.to_string_lossy().into_owned());
         spec.insert(x.clone(), sp);
     }
-    let fps = |x: &str| fmt_g(spec[x].fps);
     let train: BTreeMap<&str, Vec<String>> = BTreeMap::from([
         (src_subj.as_str(), set.spec.train.iter().map(|p| p.source.clone()).collect()),
         (tgt_subj.as_str(), set.spec.train.iter().map(|p| p.target.clone()).collect()),
@@ -88,11 +87,13 @@ pub fn plan(set: &CaptureSet, out: &str, opt: &TransferOptions, graph: &mut Grap
     for x in &subjects {
         for m in set.motions(x)? {
             let frames = set.frames(x, &m).with_context(|| format!("subject {x}, motion {m}"))?;
-            let mut inputs = vec![tpl[x].clone(), seg(x)];
+            let subject = set.subject_json(x).to_string_lossy().into_owned();
+            let mut inputs = vec![subject.clone(), tpl[x].clone(), seg(x)];
             inputs.extend(frames.iter().map(|f| f.to_string_lossy().into_owned()));
             let args = vec![
                 s("-q"), s("--frame"), value_name(opt.align_frame), s("--segmentation"), seg(x),
-                s("--template"), tpl[x].clone(), join(root, &[x, &m]), s("--out"), aligned(x, &m),
+                s("--subject"), subject, s("--template"), tpl[x].clone(), join(root, &[x, &m]),
+                s("--out"), aligned(x, &m),
             ];
             graph.push(Task::run("align", aligned(x, &m), inputs, args).mkdir_target());
         }
@@ -137,7 +138,7 @@ pub fn plan(set: &CaptureSet, out: &str, opt: &TransferOptions, graph: &mut Grap
         let (sa, ta) = (aligned(sn, &p.source), aligned(tn, &p.target));
         let args = vec![
             s("-q"), s("--set"), set_json.clone(), s("--pair"), p.source.clone(), s("--source-pca"),
-            pca(sn, "pca"), s("--target-pca"), pca(tn, "pca"), s("--target-fps"), fps(tn), sa.clone(),
+            pca(sn, "pca"), s("--target-pca"), pca(tn, "pca"), sa.clone(),
             ta.clone(), s("--out"), c.clone(), s("--report"), format!("{w}/pairs/{}.json", p.source),
         ];
         let inputs = vec![set_json.clone(), sa.clone(), ta.clone(), pca(sn, "pca"), pca(tn, "pca")];
@@ -189,7 +190,6 @@ pub fn plan(set: &CaptureSet, out: &str, opt: &TransferOptions, graph: &mut Grap
             }
             args.extend([
                 s("--source-pca"), pca(src, kind), s("--target-pca"), pca(tgt, kind),
-                s("--source-fps"), fps(src), s("--target-fps"), fps(tgt),
             ]);
             args.extend(pair_args.iter().cloned());
             args.extend([s("--out"), model.clone()]);
@@ -315,8 +315,8 @@ pub fn plan(set: &CaptureSet, out: &str, opt: &TransferOptions, graph: &mut Grap
     let mut inputs = vec![set_json.clone(), pca(sn, "pca"), pca(tn, "pca")];
     let mut args = vec![
         s("-q"), s("--seed"), s("0"), s("--mean"), s("zero"), s("--set"), set_json.clone(),
-        s("--source-pca"), pca(sn, "pca"), s("--target-pca"), pca(tn, "pca"), s("--source-fps"),
-        fps(sn), s("--target-fps"), fps(tn), s("--source-name"), s(sn), s("--target-name"), s(tn),
+        s("--source-pca"), pca(sn, "pca"), s("--target-pca"), pca(tn, "pca"),
+        s("--source-name"), s(sn), s("--target-name"), s(tn),
     ];
     for p in &set.spec.train {
         args.extend([s("--true-pair"), p.source.clone(), aligned(sn, &p.source), aligned(tn, &p.target)]);

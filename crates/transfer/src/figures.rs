@@ -397,11 +397,11 @@ impl CorrectionFigure {
 #[allow(clippy::too_many_arguments)]
 pub fn correction_example(
     model: &crate::gpr_model::GprModel,
-    source_pca: &crate::part_pca::PcaModel,
-    target_pca: &crate::part_pca::PcaModel,
+    source_pca: &capture::part_pca::PcaModel,
+    target_pca: &capture::part_pca::PcaModel,
     seg: &mesh_core::segmentation::Segmentation,
-    training: &[&crate::align::AlignedMotion],
-    source: &crate::align::AlignedMotion,
+    training: &[&capture::align::AlignedMotion],
+    source: &capture::align::AlignedMotion,
     part: Option<&str>,
     frame: Option<usize>,
     m: usize,

@@ -158,8 +158,8 @@ pub fn affine_prior(source: &Pca, target: &Pca, body_scale: Option<f64>) -> DMat
 /// regressions are), every part scaled by the templates' height ratio (the scale of the default
 /// placement): a part's own extent depends on where its curves cut it, its motions do not.
 pub fn part_priors(
-    source: &crate::part_pca::PcaModel,
-    target: &crate::part_pca::PcaModel,
+    source: &capture::part_pca::PcaModel,
+    target: &capture::part_pca::PcaModel,
 ) -> Vec<DMatrix<f64>> {
     let hs = crate::placement::template_height(source);
     let body_scale = (hs > 0.0).then(|| crate::placement::template_height(target) / hs);

@@ -34,79 +34,33 @@ use mesh_core::rigid::{integrate, RigidMotion};
 use mesh_core::{Error, Result};
 use std::path::PathBuf;
 
-use crate::align::AlignedMotion;
+pub use capture::choices::{MeanFunction, Method};
+use capture::align::AlignedMotion;
 use crate::densify::Correspondences;
-use crate::part_pca::PcaModel;
+use capture::part_pca::PcaModel;
 use nalgebra::{DMatrix, Vector6};
 use serde::{Deserialize, Serialize};
 
-/// The transfer methods compared in the paper (§7).
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
-pub enum Method {
-    GprNn,
-    GprSe,
-    GprLinear,
-    KeyposeAffine,
-    WholeBody,
-}
-
-impl Method {
-    pub const ALL: [Method; 5] = [
-        Method::GprNn,
-        Method::GprSe,
-        Method::GprLinear,
-        Method::KeyposeAffine,
-        Method::WholeBody,
-    ];
-
-    /// The name used on the command line, in file paths and in results.json.
-    pub fn name(&self) -> &'static str {
-        match self {
-            Method::GprNn => "gpr-nn",
-            Method::GprSe => "gpr-se",
-            Method::GprLinear => "gpr-linear",
-            Method::KeyposeAffine => "keypose-affine",
-            Method::WholeBody => "whole-body",
-        }
+/// The kernel of `method`'s pose GPs (`None` for the affine baseline). Starting
+/// hyperparameters are replaced by `gp::gpr::initial_kernel` when training.
+/// `nn_bias` selects the NN kernel with the bias input (R&W eq. 4.29):
+/// eq. 10 as printed has none, which makes every function of the GP odd,
+/// `f(-x) = -f(x)` (asin is odd), so it cannot learn even components of a
+/// mapping between centred PCA coefficients.
+pub fn method_kernel(method: Method, nn_bias: bool) -> Option<Kernel> {
+    match method {
+        Method::GprNn | Method::WholeBody => Some(Kernel::NeuralNetwork {
+            l: 1.0,
+            sigma_f: 1.0,
+            bias: nn_bias,
+        }),
+        Method::GprSe => Some(Kernel::SquaredExponential {
+            l: 1.0,
+            sigma_f: 1.0,
+        }),
+        Method::GprLinear => Some(Kernel::Linear { sigma_f: 1.0 }),
+        Method::KeyposeAffine => None,
     }
-
-    pub fn from_name(name: &str) -> Option<Method> {
-        Method::ALL.into_iter().find(|m| m.name() == name)
-    }
-
-    /// The kernel of the pose GPs (`None` for the affine baseline). Starting
-    /// hyperparameters are replaced by `gp::gpr::initial_kernel` when training.
-    /// `nn_bias` selects the NN kernel with the bias input (R&W eq. 4.29):
-    /// eq. 10 as printed has none, which makes every function of the GP odd,
-    /// `f(-x) = -f(x)` (asin is odd), so it cannot learn even components of a
-    /// mapping between centred PCA coefficients.
-    pub fn kernel(&self, nn_bias: bool) -> Option<Kernel> {
-        match self {
-            Method::GprNn | Method::WholeBody => Some(Kernel::NeuralNetwork {
-                l: 1.0,
-                sigma_f: 1.0,
-                bias: nn_bias,
-            }),
-            Method::GprSe => Some(Kernel::SquaredExponential {
-                l: 1.0,
-                sigma_f: 1.0,
-            }),
-            Method::GprLinear => Some(Kernel::Linear { sigma_f: 1.0 }),
-            Method::KeyposeAffine => None,
-        }
-    }
-}
-
-/// The mean function of the GPs (CVPR eq. 11 assumes a zero mean).
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize, clap::ValueEnum)]
-#[serde(rename_all = "kebab-case")]
-pub enum MeanFunction {
-    /// An affine map fitted by least squares, the GP on the residuals (`gp::affine_mean`):
-    /// far from the training inputs the prediction degrades to the linear mapping.
-    #[default]
-    Affine,
-    /// Zero mean (the paper): far from the data the prediction falls back to the PCA mean.
-    Zero,
 }
 
 /// What the ridge of the affine mean shrinks the map toward.
@@ -480,7 +434,7 @@ fn train_parts(
     keys: &TrainingSet,
     opts: &GprOptions,
 ) -> Result<(Vec<Regressor>, Vec<RegressorReport>)> {
-    match method.kernel(nn_bias) {
+    match method_kernel(method, nn_bias) {
         Some(kernel) => {
             let mut means = Vec::new();
             let mut problems: Vec<(DMatrix<f64>, DMatrix<f64>)> = Vec::new();

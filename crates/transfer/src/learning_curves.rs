@@ -48,9 +48,9 @@ use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
 use serde::{Deserialize, Serialize};
 
-use crate::align::AlignedMotion;
+use capture::align::AlignedMotion;
 use crate::gpr_model::{train, GprModel, MeanFunction, Method, PairData, TrainingSet, MEAN_RIDGE};
-use crate::part_pca::PcaModel;
+use capture::part_pca::PcaModel;
 
 /// Which frame pairs the curves learn from and are tested on.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
@@ -260,13 +260,13 @@ pub fn fit_whole_body(motions: &[&AlignedMotion], components: usize) -> Result<P
         .first()
         .and_then(|m| m.frames.first())
         .ok_or_else(|| Error::invalid("no aligned frames to fit a whole-body PCA on"))?;
-    let seg = crate::part_pca::whole_body(first.len());
-    let (model, _) = crate::part_pca::fit(
+    let seg = capture::part_pca::whole_body(first.len());
+    let (model, _) = capture::part_pca::fit(
         first,
         &seg,
         motions,
         gp::pca::Components::Count(components),
-        crate::part_pca::PartAlignment::Body,
+        capture::part_pca::PartAlignment::Body,
     )?;
     Ok(model)
 }
@@ -570,7 +570,7 @@ pub fn figures() -> Vec<(&'static str, &'static str, Vec<String>)> {
     ]
 }
 
-static FONT: &[u8] = include_bytes!("../assets/DejaVuSans.ttf");
+use mesh_core::font::DEJAVU_SANS as FONT;
 
 /// Registers the embedded DejaVu Sans as plotters' "sans-serif" (once).
 pub fn register_font() {

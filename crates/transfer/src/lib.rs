@@ -1,18 +1,15 @@
 //! The stages of surface motion transfer (Boukhayma, Franco, Boyer, CVPR 2017).
 //!
 //! Each module is one stage's logic; `src/bin/<stage>.rs` parses arguments
-//! and calls it. Data flows one way: capture set -> [`align`] (per motion)
-//! and `segment` (per subject, `mesh_core::segmentation`) -> PCA per part -> dense correspondences ->
-//! GP models -> predicted target sequences -> evaluation.
+//! and calls it. Data flows one way: capture set -> the front end of crate `capture`
+//! (`segment`, `align`, PCA per part) -> dense correspondences -> GP models -> predicted
+//! target sequences -> evaluation.
 
-pub mod align;
-pub mod part_pca;
 pub mod densify;
 pub mod gpr_model;
 pub mod geometric_prior;
 pub mod predict;
 pub mod confidence;
-pub mod assemble;
 pub mod reconstruct;
 pub mod representation;
 pub mod quality;

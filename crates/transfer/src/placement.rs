@@ -23,34 +23,11 @@
 //!   the GP extrapolates (its mean falls back to the prior mean, 0, which
 //!   integrates to a standing body, while the scaled source keeps moving).
 
-use clap::ValueEnum;
 use mesh_core::rigid::{integrate, RigidMotion};
 use nalgebra::{Vector3, Vector6};
-use serde::{Deserialize, Serialize};
 
-use crate::part_pca::PcaModel;
-
-/// Which per-frame displacement places the transferred poses.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize, ValueEnum)]
-#[serde(rename_all = "kebab-case")]
-pub enum Placement {
-    /// The source displacement, translation scaled by the height ratio
-    ScaledSource,
-    /// The displacement GP's prediction (the paper)
-    Regressed,
-    /// Regressed, falling back to scaled-source where the GP's variance is high
-    Blended,
-}
-
-impl Placement {
-    pub fn name(&self) -> &'static str {
-        match self {
-            Placement::Regressed => "regressed",
-            Placement::ScaledSource => "scaled-source",
-            Placement::Blended => "blended",
-        }
-    }
-}
+pub use capture::choices::Placement;
+use capture::part_pca::PcaModel;
 
 /// Extent along +y of a subject's template, from the union of the PCA parts'
 /// reference vertices (each part's reference is the template part).
@@ -69,9 +46,9 @@ pub fn template_height(pca: &PcaModel) -> f64 {
     }
 }
 
-/// The template's root point (see [`crate::align::root_point`]).
+/// The template's root point (see [`capture::align::root_point`]).
 pub fn root_point(pca: &PcaModel) -> Vector3<f64> {
-    crate::align::root_point(&pca.template_vertices(), &pca.anchor)
+    capture::align::root_point(&pca.template_vertices(), &pca.anchor)
 }
 
 /// World poses `P_i = Q_i ∘ T(-c)` of root poses `Q_i`.

@@ -104,13 +104,13 @@ pub struct Transferred {
 /// stitching) -> placed from the source's first world pose.
 pub fn transfer_motion(
     model: &GprModel,
-    source_pca: &crate::part_pca::PcaModel,
-    target_pca: &crate::part_pca::PcaModel,
-    motion: &crate::align::AlignedMotion,
+    source_pca: &capture::part_pca::PcaModel,
+    target_pca: &capture::part_pca::PcaModel,
+    motion: &capture::align::AlignedMotion,
     placement: crate::placement::Placement,
     reconstructor: Option<&mut crate::reconstruct::Reconstructor>,
 ) -> Result<Transferred> {
-    use crate::align::root_poses;
+    use capture::align::root_poses;
     use crate::placement::{
         blend, place, poses, root_point, scaled_source, scaled_start, template_height,
         world_poses, Placement,
@@ -128,8 +128,8 @@ pub fn transfer_motion(
     let frames = match reconstructor {
         Some(r) => r.reconstruct(target_pca, &decoded)?,
         None => {
-            let plan = crate::assemble::plan(target_pca)?;
-            crate::assemble::assemble(&plan, target_pca, &decoded)
+            let plan = capture::assemble::plan(target_pca)?;
+            capture::assemble::assemble(&plan, target_pca, &decoded)
         }
     };
     let (source_root, target_root) = (root_point(source_pca), root_point(target_pca));

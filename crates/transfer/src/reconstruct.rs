@@ -1,5 +1,5 @@
 //! From decoded target part meshes to one target mesh (transfer paper §6):
-//! [`Surface::Assemble`] (overlaps averaged, `crate::assemble`),
+//! [`Surface::Assemble`] (overlaps averaged, `capture::assemble`),
 //! [`Surface::Correct`] (§6.1 body part correction with the `M` nearest
 //! training part meshes, then the same assembly) and
 //! [`Surface::CorrectStitch`] (§6.2: correction, then the `surface` crate's
@@ -18,9 +18,9 @@ use rayon::prelude::*;
 use surface::correct::Corrector;
 use surface::stitch::Stitcher;
 
-use crate::align::AlignedMotion;
-use crate::assemble::{assemble, plan, AssemblyPlan};
-use crate::part_pca::{PartAlignment, PcaModel};
+use capture::align::AlignedMotion;
+use capture::assemble::{assemble, plan, AssemblyPlan};
+use capture::part_pca::{PartAlignment, PcaModel};
 
 /// Which surface reconstruction follows the PCA decoding.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, clap::ValueEnum)]
@@ -180,7 +180,7 @@ impl Reconstructor {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::part_pca::{fit, PartAlignment};
+    use capture::part_pca::{fit, PartAlignment};
     use crate::representation::rebuilt_error;
     use gp::pca::Components;
     use mesh_core::rigid::{so3_exp, RigidMotion};
@@ -237,6 +237,7 @@ mod tests {
             displacements: vec![[0.0; 6]; frames.len()],
             anchor: Vec::new(),
             frames,
+            capture: Default::default(),
         };
         (mesh, seg, motion)
     }

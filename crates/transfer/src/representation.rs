@@ -8,8 +8,8 @@ use mesh_core::sequence::MeshSequence;
 use mesh_core::Result;
 use serde::Serialize;
 
-use crate::align::AlignedMotion;
-use crate::part_pca::PcaModel;
+use capture::align::AlignedMotion;
+use capture::part_pca::PcaModel;
 use crate::reconstruct::{rows_to_meshes, Reconstructor};
 
 /// Per part, the RMS per-vertex distance between the truth part (in the PCA's frame)

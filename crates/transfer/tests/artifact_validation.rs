@@ -9,8 +9,8 @@ use mesh_core::sequence::MeshSequence;
 use mesh_core::shapes::cylinder;
 use mesh_core::TriMesh;
 use nalgebra::Vector3;
-use transfer::align::{align_motion, AlignedMotion};
-use transfer::part_pca::{fit, whole_body, PartAlignment, PcaModel};
+use capture::align::{align_motion, AlignedMotion};
+use capture::part_pca::{fit, whole_body, PartAlignment, PcaModel};
 
 fn motion_of(t: &TriMesh, n: usize) -> AlignedMotion {
     let frames: Vec<Vec<Vector3<f64>>> = (0..n)

@@ -14,8 +14,8 @@ use std::sync::OnceLock;
 
 use mesh_core::artifact::Artifact;
 use mesh_core::segmentation::Segmentation;
-use transfer::align::AlignedMotion;
-use transfer::part_pca::PcaModel;
+use capture::align::AlignedMotion;
+use capture::part_pca::PcaModel;
 
 /// Inputs shared by the rows: the synthetic set, A's and B's segmentations,
 /// aligned motions and PCA models.
@@ -46,7 +46,7 @@ fn base() -> &'static Base {
             for m in ["walk", "run"] {
                 common::run(
                     "align",
-                    &["-q", "--segmentation", &b.p(&format!("{s}.seg")), "--template", &tpl,
+                    &["-q", "--segmentation", &b.p(&format!("{s}.seg")), "--subject", &b.p(&format!("set/{s}/subject.json")), "--template", &tpl,
                       &b.p(&format!("set/{s}/{m}")), "--out", &b.p(&format!("{s}-{m}.aligned"))],
                 );
             }
@@ -91,8 +91,8 @@ fn motion_with_frame(b: &Base, dir: &Path, name: &str, bytes: &[u8]) -> String {
 /// `align` arguments for the motion folder `motion`, output `dir/out.aligned`.
 fn align_args(b: &Base, dir: &Path, motion: String) -> Vec<String> {
     vec![
-        "-q".into(), "--segmentation".into(), b.p("A.seg"), "--template".into(),
-        b.p("set/A/walk/000000.ply"), motion, "--out".into(), s(&dir.join("out.aligned")),
+        "-q".into(), "--segmentation".into(), b.p("A.seg"), "--subject".into(), b.p("set/A/subject.json"),
+        "--template".into(), b.p("set/A/walk/000000.ply"), motion, "--out".into(), s(&dir.join("out.aligned")),
     ]
 }
 

@@ -6,14 +6,14 @@ use gp::gpr::GprOptions;
 use mesh_core::sequence::MeshSequence;
 use mesh_core::shapes::cylinder;
 use nalgebra::{DMatrix, Vector3};
-use transfer::align::{align_motion, AlignedMotion};
+use capture::align::{align_motion, AlignedMotion};
 use transfer::figures::{CorrectionFigure, CostFigure, PATH_COLOUR, TRUTH_COLOUR};
 use transfer::gpr_model::MeanFunction;
 use transfer::learning_curves::{
     encode_pair, run_direction, sizes, train_side_len, truncation_label, vertex_rms,
     Correspondence, DirectionData,
 };
-use transfer::part_pca::{fit, whole_body, PartAlignment, PcaModel};
+use capture::part_pca::{fit, whole_body, PartAlignment, PcaModel};
 
 /// A bending, swelling cylinder driven by four hidden factors: a 3-component
 /// PCA cannot represent it exactly (non-zero truncation error).

@@ -39,26 +39,22 @@ fn defaults_on_the_tiny_preset_never_lose_to_raw_regression_or_the_papers_placem
         run("segment", &[s(&set.join(x).join("subject.json")), "--template".into(), s(&tpl(x)), "--out".into(), s(&seg)]);
         let motions: Vec<&str> = TRAIN.iter().chain(if x == "A" { &TEST[..] } else { &[] }).copied().collect();
         for m in motions {
-            run("align", &["--segmentation".into(), s(&seg), "--template".into(), s(&tpl(x)), s(&set.join(x).join(m)), "--out".into(), s(&w(format!("{x}/{m}.aligned")))]);
+            run("align", &["--segmentation".into(), s(&seg), "--subject".into(), s(&set.join(x).join("subject.json")), "--template".into(), s(&tpl(x)), s(&set.join(x).join(m)), "--out".into(), s(&w(format!("{x}/{m}.aligned")))]);
         }
         let mut args = vec!["--template".into(), s(&tpl(x)), "--parts".into(), s(&seg), "--out".into(), s(&w(format!("{x}/pca.model")))];
         args.extend(TRAIN.iter().map(|m| s(&w(format!("{x}/{m}.aligned")))));
         run("pca-fit", &args);
     }
-    let fps = |x: &str| {
-        let spec = mesh_core::capture_set::SubjectSpec::load(&set.join(x).join("subject.json")).unwrap();
-        spec.fps.to_string()
-    };
     let mut train_args = vec![
         "--source-pca".into(), s(&w("A/pca.model".into())), "--target-pca".into(), s(&w("B/pca.model".into())),
-        "--source-fps".into(), fps("A"), "--target-fps".into(), fps("B"), "--out".into(), s(&w("model".into())),
+        "--out".into(), s(&w("model".into())),
     ];
     for m in TRAIN {
         let corr = w(format!("{m}.corr"));
         run("dtw-densify", &[
             "--set".into(), s(&set.join("set.json")), "--pair".into(), m.into(),
             "--source-pca".into(), s(&w("A/pca.model".into())), "--target-pca".into(), s(&w("B/pca.model".into())),
-            "--target-fps".into(), fps("B"), s(&w(format!("A/{m}.aligned"))), s(&w(format!("B/{m}.aligned"))),
+            s(&w(format!("A/{m}.aligned"))), s(&w(format!("B/{m}.aligned"))),
             "--out".into(), s(&corr),
         ]);
         train_args.extend(["--pair".into(), s(&w(format!("A/{m}.aligned"))), s(&w(format!("B/{m}.aligned"))), s(&corr)]);
@@ -84,7 +80,7 @@ fn defaults_on_the_tiny_preset_never_lose_to_raw_regression_or_the_papers_placem
     };
     let predict = |m: &str, extra: &[&str], name: &str| predict_with("model", m, extra, name);
     // The target's mean pose on every frame: a transfer that ignores the source.
-    let target_pca = transfer::part_pca::PcaModel::load(w("B/pca.model".into())).unwrap();
+    let target_pca = capture::part_pca::PcaModel::load(w("B/pca.model".into())).unwrap();
     let template_b = MeshSequence::load_files(&[tpl("B")]).unwrap();
     let mean_pose_error = |m: &str| -> f64 {
         let truth = MeshSequence::load_dir(&set.join("truth").join("B").join(m)).unwrap();
@@ -93,8 +89,8 @@ fn defaults_on_the_tiny_preset_never_lose_to_raw_regression_or_the_papers_placem
             .iter()
             .map(|p| nalgebra::DMatrix::zeros(truth.n_frames(), p.pca.components.nrows()))
             .collect();
-        let plan = transfer::assemble::plan(&target_pca).unwrap();
-        let frames = transfer::assemble::assemble(&plan, &target_pca, &target_pca.decode(&zeros).unwrap());
+        let plan = capture::assemble::plan(&target_pca).unwrap();
+        let frames = capture::assemble::assemble(&plan, &target_pca, &target_pca.decode(&zeros).unwrap());
         let mean = MeshSequence::new(template_b.faces.clone(), frames);
         rms_errors(&mean, &truth).unwrap().0
     };

@@ -18,7 +18,7 @@ use mesh_core::sequence::MeshSequence;
 use mesh_core::{Error, Result};
 use nalgebra::{Rotation3, Unit, Vector3};
 use serde::{Deserialize, Serialize};
-use transfer::align::{align_motion, AlignedMotion};
+use capture::align::{align_motion, AlignedMotion};
 
 use crate::contacts::{self, Contacts};
 use crate::gait;
@@ -68,7 +68,7 @@ pub struct Group {
 
 impl Artifact for Group {
     const KIND: &'static str = "variation-group";
-    const VERSION: u32 = 1;
+    const VERSION: u32 = 2;
 }
 
 impl Group {
@@ -144,7 +144,7 @@ pub fn build(set: &CaptureSet, spec: &GroupSpec) -> Result<(Group, Vec<String>)>
         .map(|m| format!("motion '{m}' is not in the set: skipped"))
         .collect();
     let seg = if spec.whole_body {
-        transfer::part_pca::whole_body(template.n_vertices())
+        capture::part_pca::whole_body(template.n_vertices())
     } else {
         match mesh_core::segmentation::segment(template, &subject_spec) {
             Ok(s) => s,
@@ -153,7 +153,7 @@ pub fn build(set: &CaptureSet, spec: &GroupSpec) -> Result<(Group, Vec<String>)>
                     "{}: {e}: body parts unusable, modelling the whole body as one part",
                     set.subject_json(&spec.subject).display()
                 ));
-                transfer::part_pca::whole_body(template.n_vertices())
+                capture::part_pca::whole_body(template.n_vertices())
             }
             Err(e) => return Err(Error::file(set.subject_json(&spec.subject), e.to_string())),
         }
@@ -348,6 +348,7 @@ pub fn blend_sequences(
             poses,
             displacements: disp,
             anchor: a.motion.anchor.clone(),
+            capture: a.motion.capture.clone(),
         },
         contacts,
         map: (0..n).collect(),

@@ -1,6 +1,6 @@
 //! Per-part pose vectors (paper §4, "Body parts"): each aligned frame's part vertices, rigidly
 //! aligned (Procrustes) to the template part so that the model sees only the part's own
-//! deformation (as `transfer::part_pca` does), stacked `(x_1, y_1, z_1, x_2, ...)`. The torso
+//! deformation (as `capture::part_pca` does), stacked `(x_1, y_1, z_1, x_2, ...)`. The torso
 //! (root part) vector is appended with the frame's 6 rigid-displacement values.
 //!
 //! **Displacement scale.** The 6 values `(t, h)` (metres, radians per frame) are multiplied by
@@ -22,7 +22,7 @@
 use mesh_core::rigid::procrustes;
 use nalgebra::{DMatrix, Vector3};
 use serde::{Deserialize, Serialize};
-use transfer::align::AlignedMotion;
+use capture::align::AlignedMotion;
 
 use crate::group::PartDef;
 

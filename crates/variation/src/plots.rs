@@ -7,7 +7,7 @@ use std::path::Path;
 use mesh_core::{Error, Result};
 use nalgebra::DMatrix;
 
-static FONT: &[u8] = include_bytes!("../../transfer/assets/DejaVuSans.ttf");
+use mesh_core::font::DEJAVU_SANS as FONT;
 
 fn register_font() {
     static ONCE: std::sync::Once = std::sync::Once::new();

@@ -2,7 +2,7 @@
 //! and §8): dynamic time warping of each motion to a reference motion, guided by feet-contact
 //! annotations.
 //!
-//! Frames are compared after rigid alignment to the template (`transfer::align`), so the cost
+//! Frames are compared after rigid alignment to the template (`capture::align`), so the cost
 //! sees pose only: `C_ij = mean_v ‖s_i(v) − r_j(v)‖ + λ · #feet whose contact differs`, with the
 //! vertices subsampled to at most `max_vertices` and `λ` by default the median pose cost (a
 //! contact disagreement costs as much as a typical pose difference, so contact changes snap
@@ -16,7 +16,7 @@ use mesh_core::rigid::relative_in_body_frame;
 use mesh_core::{Error, Result};
 use nalgebra::{DMatrix, Vector3};
 use rayon::prelude::*;
-use transfer::align::AlignedMotion;
+use capture::align::AlignedMotion;
 
 use crate::contacts::{mismatch, Contacts};
 
@@ -180,6 +180,7 @@ pub fn apply(motion: &AlignedMotion, map: &[usize]) -> AlignedMotion {
         poses,
         displacements,
         anchor: motion.anchor.clone(),
+        capture: motion.capture.clone(),
     }
 }
 

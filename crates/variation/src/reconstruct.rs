@@ -1,13 +1,13 @@
 //! Pose reconstruction of sampled latent trajectories (paper §6, eqs. 11-13) and assembly of the
 //! body: every part's pose from its GP (mean, eq. 12, or a draw from eq. 11), the parts merged
 //! into one template mesh, the result rigidly aligned to the template (the same normalisation
-//! `transfer::align` applied to the training frames), then placed in the world by integrating
+//! `capture::align` applied to the training frames), then placed in the world by integrating
 //! the predicted displacements from the source sequence's starting pose.
 //!
 //! Merging: [`Assembly::Stitch`] is the paper's (child aligned to parent on the overlap band,
 //! optimal boundary loop, Poisson merge: `surface::stitch::Stitcher`); [`Assembly::Average`]
 //! aligns each child to its parent on the band and averages vertices shared by several parts
-//! (as `transfer::assemble`), about 100 times cheaper, used for bulk decoding and statistics.
+//! (as `capture::assemble`), about 100 times cheaper, used for bulk decoding and statistics.
 
 use gpdm::predict::Predictor;
 use mesh_core::rigid::{procrustes, rigid_from_moments, RigidMotion};

@@ -137,7 +137,7 @@ fn metrics_match_hand_computed_values() {
 #[test]
 fn blends_at_zero_and_one_reproduce_the_endpoints() {
     use mesh_core::rigid::RigidMotion;
-    use transfer::align::AlignedMotion;
+    use capture::align::AlignedMotion;
     use variation::group::{blend_sequences, GroupSequence};
     let mesh = mesh_core::shapes::icosphere(2);
     let n = 4;
@@ -167,6 +167,7 @@ fn blends_at_zero_and_one_reproduce_the_endpoints() {
                 poses,
                 displacements: disp,
                 anchor: Vec::new(),
+                capture: Default::default(),
             },
             contacts: None,
             map: (0..n).collect(),

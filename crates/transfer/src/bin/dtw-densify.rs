@@ -6,9 +6,9 @@ use clap::Parser;
 use mesh_core::artifact::Artifact;
 use mesh_core::capture_set::SetSpec;
 use mesh_core::cli::{run_stage, CommonArgs};
-use transfer::align::AlignedMotion;
+use capture::align::AlignedMotion;
 use transfer::densify::{densify, path_error, Correspondences, PAPER_SIGMA2};
-use transfer::part_pca::PcaModel;
+use capture::part_pca::PcaModel;
 
 /// Densify one training pair's key-pose correspondences by DTW on a Bayesian-linear-regression cost
 #[derive(Parser, Debug)]
@@ -35,9 +35,6 @@ struct Args {
     /// Observation noise variance σ² of the key-pose regression (eq. 1)
     #[arg(long, default_value_t = PAPER_SIGMA2)]
     sigma2: f64,
-    /// Target frame rate, to report the path error in seconds
-    #[arg(long, default_value_t = 50.0)]
-    target_fps: f64,
     /// Aligned source motion
     source: PathBuf,
     /// Aligned target motion
@@ -79,10 +76,13 @@ fn main() -> ExitCode {
             .header("dtw-densify", env!("CARGO_PKG_VERSION"))
             .with_params(&serde_json::json!({"pair": args.pair, "sigma2": args.sigma2}))?
             .with_input(&args.set)?
+            .with_input(&args.source_pca)?
+            .with_input(&args.target_pca)?
             .with_input(&args.source)?
             .with_input(&args.target)?;
         result.save(&args.out, &header)?;
         if let Some(report) = &args.report {
+            let target_fps = tgt.capture.require_fps().with_context(|| args.target.display().to_string())?;
             let truth: Option<Vec<[usize; 2]>> = pair
                 .extra
                 .get("correspondences")
@@ -92,7 +92,7 @@ fn main() -> ExitCode {
             let json = serde_json::json!({
                 "pair": args.pair,
                 "pairs": result.pairs.len(),
-                "error_vs_truth": truth.map(|t| path_error(&result.pairs, &t, args.target_fps)),
+                "error_vs_truth": truth.map(|t| path_error(&result.pairs, &t, target_fps)),
             });
             mesh_core::atomic::write_bytes_atomic(report, serde_json::to_string_pretty(&json)?.as_bytes())?;
         }

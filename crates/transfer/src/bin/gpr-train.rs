@@ -1,21 +1,21 @@
 use std::path::PathBuf;
 use std::process::ExitCode;
 
-use anyhow::bail;
+use anyhow::{bail, Context};
 use clap::Parser;
 use gp::gpr::{GprOptions, PAPER_NOISE_VAR};
 use gp::sparse_gpr::Sparsity;
 use mesh_core::artifact::Artifact;
 use mesh_core::cli::{run_stage, CommonArgs};
 use transfer::gpr_model::{train_toward, GprModel, MeanFunction, MeanPrior, MeanPriors, Method, PairFiles, MEAN_RIDGE, PRIOR_WEIGHT};
-use transfer::part_pca::PcaModel;
+use capture::part_pca::PcaModel;
 
 /// Train the source-to-target GP regression per body part and for the rigid displacement (eqs. 8-13)
 #[derive(Parser, Debug)]
 #[command(
     name = "gpr-train",
     version,
-    after_help = "e.g.: gpr-train --source-pca work/A/pca.model --target-pca work/B/pca.model --source-fps 25 --target-fps 50 \\\n        --pair work/A/walk.aligned work/B/walk.aligned work/pairs/walk.corr --method gpr-nn --out work/A-to-B/gpr-nn.model"
+    after_help = "e.g.: gpr-train --source-pca work/A/pca.model --target-pca work/B/pca.model \\\n        --pair work/A/walk.aligned work/B/walk.aligned work/pairs/walk.corr --method gpr-nn --out work/A-to-B/gpr-nn.model"
 )]
 struct Args {
     #[command(flatten)]
@@ -26,16 +26,10 @@ struct Args {
     /// PCA model of this direction's target subject (same part names)
     #[arg(long)]
     target_pca: PathBuf,
-    /// Frame rate of this direction's source subject
-    #[arg(long)]
-    source_fps: f64,
-    /// Frame rate of this direction's target subject
-    #[arg(long)]
-    target_fps: f64,
     /// A training pair as in the set: aligned motion of the set's source subject, of its target subject, and their correspondences (repeat per pair)
     #[arg(long, num_args = 3, value_names = ["SET_SOURCE", "SET_TARGET", "CORR"], required = true, action = clap::ArgAction::Append)]
     pair: Vec<PathBuf>,
-    /// Train the reverse direction (set target -> set source): --source-pca/--source-fps are then the set target's
+    /// Train the reverse direction (set target -> set source): --source-pca is then the set target's
     #[arg(long)]
     reverse: bool,
     /// gpr-nn, gpr-se, gpr-linear, keypose-affine or whole-body (gpr-nn on whole-body PCA models)
@@ -119,10 +113,36 @@ fn main() -> ExitCode {
         } else {
             (&src_pca, &tgt_pca)
         };
+        // Frame rates of the set's source and target subjects, from the aligned motions.
+        let mut set_fps: Option<(f64, f64)> = None;
         for files in args.pair.chunks(3) {
-            let data = PairFiles::load(files)?.encode(set_source_pca, set_target_pca)?;
+            let loaded = PairFiles::load(files)?;
+            let fps = (
+                loaded.source.capture.require_fps().with_context(|| files[0].display().to_string())?,
+                loaded.target.capture.require_fps().with_context(|| files[1].display().to_string())?,
+            );
+            if let Some(first) = set_fps.filter(|f| *f != fps) {
+                bail!(
+                    "{}: frame rates {} and {} differ from the first pair's {} and {}",
+                    files[0].display(),
+                    fps.0,
+                    fps.1,
+                    first.0,
+                    first.1
+                );
+            }
+            set_fps = Some(fps);
+            let data = loaded.encode(set_source_pca, set_target_pca)?;
             pairs.push(if args.reverse { data.reversed() } else { data });
         }
+        let Some((set_source_fps, set_target_fps)) = set_fps else {
+            bail!("no --pair given");
+        };
+        let (source_fps, target_fps) = if args.reverse {
+            (set_target_fps, set_source_fps)
+        } else {
+            (set_source_fps, set_target_fps)
+        };
         let opts = GprOptions {
             noise_var: args.noise_var,
             learn_noise: args.learn_noise,
@@ -133,7 +153,7 @@ fn main() -> ExitCode {
             },
             ..Default::default()
         };
-        let ratio = args.target_fps / args.source_fps;
+        let ratio = target_fps / source_fps;
         let start = std::time::Instant::now();
         if !(0.0..=1.0).contains(&args.prior_weight) {
             return Err(mesh_core::Error::invalid(format!("--prior-weight must be in [0, 1], got {}", args.prior_weight)).into());
@@ -171,7 +191,7 @@ fn main() -> ExitCode {
             .header("gpr-train", env!("CARGO_PKG_VERSION"))
             .with_params(&serde_json::json!({
                 "method": method.name(), "nn_bias": args.nn_bias, "keyposes_only": args.keyposes_only, "noise_var": args.noise_var, "learn_noise": args.learn_noise, "mean": args.mean, "mean_ridge": args.mean_ridge, "mean_prior": args.mean_prior, "prior_weight": args.prior_weight, "sparse": args.sparse.to_string(),
-                "reverse": args.reverse, "source_fps": args.source_fps, "target_fps": args.target_fps,
+                "reverse": args.reverse, "max_iter": args.max_iter, "source_fps": source_fps, "target_fps": target_fps,
             }))?
             .with_input(&args.source_pca)?
             .with_input(&args.target_pca)?;

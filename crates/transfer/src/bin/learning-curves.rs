@@ -7,21 +7,21 @@ use gp::gpr::{GprOptions, PAPER_NOISE_VAR};
 use mesh_core::artifact::Artifact;
 use mesh_core::capture_set::SetSpec;
 use mesh_core::cli::{run_stage, CommonArgs};
-use transfer::align::AlignedMotion;
+use capture::align::AlignedMotion;
 use transfer::densify::Correspondences;
 use transfer::gpr_model::MeanFunction;
 use transfer::learning_curves::{
     encode_pair, fit_whole_body, plot_all, run_direction, sizes, total_components,
     train_side_len, true_correspondences, write_csv, Correspondence, DirectionData,
 };
-use transfer::part_pca::PcaModel;
+use capture::part_pca::PcaModel;
 
 /// Learning curves of the pose regression, both directions (paper figures 7-9): CSV, PNG and SVG plots
 #[derive(Parser, Debug)]
 #[command(
     name = "learning-curves",
     version,
-    after_help = "e.g.: learning-curves --source-pca work/A/pca.model --target-pca work/B/pca.model --source-fps 25 --target-fps 50 \\\n        --set set/set.json --true-pair walk work/A/walk.aligned work/B/walk.aligned --out out/learning-curves\n      learning-curves --source-pca work/A/pca.model --target-pca work/B/pca.model --source-whole work/A/pca-whole.model \\\n        --target-whole work/B/pca-whole.model --source-fps 25 --target-fps 50 \\\n        --pair work/A/walk.aligned work/B/walk.aligned work/pairs/walk.corr --out out/learning-curves-dtw"
+    after_help = "e.g.: learning-curves --source-pca work/A/pca.model --target-pca work/B/pca.model \\\n        --set set/set.json --true-pair walk work/A/walk.aligned work/B/walk.aligned --out out/learning-curves\n      learning-curves --source-pca work/A/pca.model --target-pca work/B/pca.model --source-whole work/A/pca-whole.model \\\n        --target-whole work/B/pca-whole.model \\\n        --pair work/A/walk.aligned work/B/walk.aligned work/pairs/walk.corr --out out/learning-curves-dtw"
 )]
 struct Args {
     #[command(flatten)]
@@ -41,10 +41,6 @@ struct Args {
     /// Components of the whole-body PCA fitted on the training motions [default: as many as the subject's parts together]
     #[arg(long)]
     whole_components: Option<usize>,
-    #[arg(long)]
-    source_fps: f64,
-    #[arg(long)]
-    target_fps: f64,
     /// Source subject name (for the direction labels)
     #[arg(long, default_value = "A")]
     source_name: String,
@@ -136,6 +132,11 @@ fn main() -> ExitCode {
             bail!("{}: the part names differ from the source's {:?}", args.target_pca.display(), names);
         }
         let (correspondence, loaded) = load_pairs(&args)?;
+        let Some(first) = loaded.first() else {
+            bail!("no training pair given (--pair or --true-pair)");
+        };
+        let source_fps = first.source.capture.require_fps().with_context(|| first.what.clone())?;
+        let target_fps = first.target.capture.require_fps().with_context(|| first.what.clone())?;
         let (sw, tw) = match (&args.source_whole, &args.target_whole) {
             (Some(s), Some(t)) => (PcaModel::load(s)?, PcaModel::load(t)?),
             _ => {
@@ -193,7 +194,7 @@ fn main() -> ExitCode {
         };
         let forward = direction(
             format!("{}->{}", args.source_name, args.target_name),
-            args.target_fps / args.source_fps,
+            target_fps / source_fps,
             &tp,
             tw.n_vertices,
             parts.clone(),
@@ -201,7 +202,7 @@ fn main() -> ExitCode {
         );
         let reverse = direction(
             format!("{}->{}", args.target_name, args.source_name),
-            args.source_fps / args.target_fps,
+            source_fps / target_fps,
             &sp,
             sw.n_vertices,
             parts.into_iter().map(|p| p.reversed()).collect(),

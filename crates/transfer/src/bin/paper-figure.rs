@@ -8,7 +8,7 @@ use mesh_core::capture_set::SetSpec;
 use mesh_core::cli::{run_stage, CommonArgs};
 use mesh_core::segmentation::Segmentation;
 use mesh_core::sequence::MeshSequence;
-use transfer::align::AlignedMotion;
+use capture::align::AlignedMotion;
 use transfer::densify::PAPER_SIGMA2;
 use transfer::figures::{
     correction_example, cost_and_path, load_confidence, load_eval, ConfidenceFigure, CostFigure,
@@ -16,7 +16,7 @@ use transfer::figures::{
 };
 use transfer::gpr_model::GprModel;
 use transfer::learning_curves::true_correspondences;
-use transfer::part_pca::PcaModel;
+use capture::part_pca::PcaModel;
 
 /// The paper's figures 3 (BLR cost matrix with the DTW path) and 5 (a body part correction example), and the per-frame confidence of a transfer
 #[derive(Parser, Debug)]

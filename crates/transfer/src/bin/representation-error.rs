@@ -8,8 +8,8 @@ use mesh_core::cli::{run_stage, CommonArgs};
 use mesh_core::io::read_mesh;
 use mesh_core::segmentation::Segmentation;
 use mesh_core::sequence::MeshSequence;
-use transfer::align::{align_motion_on, AlignedMotion};
-use transfer::part_pca::{fit, PartAlignment};
+use capture::align::{align_motion_on, AlignedMotion};
+use capture::part_pca::{fit, PartAlignment};
 use transfer::reconstruct::{Reconstructor, Surface};
 use transfer::representation::{rebuilt_error, truncation_rms, RepresentationRow};
 

@@ -230,12 +230,12 @@ pub fn write_set(dir: &Path) {
     std::fs::write(dir.join("set.json"), set.to_string()).unwrap();
 }
 
-/// The stage binary `name` of this crate.
-pub fn bin(name: &str) -> &'static str {
+/// The stage binary `name`: this crate's own, or one of the front end (`align`, `segment`,
+/// `pca-fit`, crate `capture`), which cargo builds into the same folder when the workspace is
+/// built (`cargo test --release --workspace`, or `cargo build --release --workspace` first).
+pub fn bin(name: &str) -> String {
     match name {
-        "align" => env!("CARGO_BIN_EXE_align"),
-        "segment" => env!("CARGO_BIN_EXE_segment"),
-        "pca-fit" => env!("CARGO_BIN_EXE_pca-fit"),
+        "align" | "segment" | "pca-fit" => return front_end_bin(name),
         "dtw-densify" => env!("CARGO_BIN_EXE_dtw-densify"),
         "gpr-train" => env!("CARGO_BIN_EXE_gpr-train"),
         "gpr-predict" => env!("CARGO_BIN_EXE_gpr-predict"),
@@ -243,6 +243,20 @@ pub fn bin(name: &str) -> &'static str {
         "learning-curves" => env!("CARGO_BIN_EXE_learning-curves"),
         _ => unreachable!(),
     }
+    .to_string()
+}
+
+/// A front-end stage binary, next to this test's own folder (`target/<profile>/deps/..`).
+fn front_end_bin(name: &str) -> String {
+    let exe = std::env::current_exe().unwrap();
+    let dir = exe.parent().and_then(|d| d.parent()).unwrap();
+    let path = dir.join(name);
+    assert!(
+        path.is_file(),
+        "{} is missing: build the workspace first (cargo build --release --workspace)",
+        path.display()
+    );
+    path.to_string_lossy().into_owned()
 }
 
 /// Runs stage `name` with `args` (one BLAS thread); panics with its stderr on failure.

@@ -3,7 +3,7 @@ use std::process::ExitCode;
 
 use clap::Parser;
 use mesh_core::artifact::Artifact;
-use mesh_core::capture_set::CaptureSet;
+use mesh_core::capture_set::{CaptureSet, SubjectSpec};
 use mesh_core::cli::{run_stage, CommonArgs};
 use variation::group::{build, GroupSpec};
 use variation::prealign::PrealignOptions;
@@ -99,11 +99,25 @@ fn main() -> ExitCode {
         {
             mesh_core::warn!("group '{}' has one motion: no blends", group.name);
         }
-        let header = args
+        let subject_json = set.subject_json(&spec.subject);
+        let subject_spec = SubjectSpec::load(&subject_json)?;
+        let mut header = args
             .common
             .header("prealign", env!("CARGO_PKG_VERSION"))
             .with_input(set.set_json())?
-            .with_params(&blends)?;
+            .with_input(&subject_json)?
+            .with_input(set.template_path(&spec.subject, &subject_spec)?)?
+            .with_params(&serde_json::json!({
+                "subject": spec.subject, "group": spec.name, "motions": spec.motions,
+                "reference": spec.reference, "blend_weights": blends, "contact_weight": args.contact_weight,
+                "whole_body": spec.whole_body, "fallback_whole_body": spec.fallback_whole_body,
+                "gait_cycles": spec.gait_cycles,
+            }))?;
+        for m in &spec.motions {
+            for f in set.frames(&spec.subject, m)? {
+                header = header.with_input(f)?;
+            }
+        }
         group.save(&args.out, &header)?;
         if let Some(dir) = &args.export {
             for s in &group.sequences {

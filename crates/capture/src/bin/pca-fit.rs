@@ -7,8 +7,8 @@ use mesh_core::artifact::Artifact;
 use mesh_core::cli::{run_stage, CommonArgs};
 use mesh_core::io::read_mesh;
 use mesh_core::segmentation::Segmentation;
-use transfer::align::AlignedMotion;
-use transfer::part_pca;
+use capture::align::AlignedMotion;
+use capture::part_pca;
 
 /// Fit a PCA per body part on a subject's aligned training motions
 #[derive(Parser, Debug)]
@@ -80,7 +80,11 @@ fn main() -> ExitCode {
         let mut header = args
             .common
             .header("pca-fit", env!("CARGO_PKG_VERSION"))
-            .with_params(&serde_json::json!({"components": args.components, "variance": args.variance, "whole_body": args.whole_body, "part_alignment": format!("{:?}", args.part_alignment)}))?;
+            .with_params(&serde_json::json!({"components": args.components, "variance": args.variance, "whole_body": args.whole_body, "part_alignment": format!("{:?}", args.part_alignment)}))?
+            .with_input(&args.template)?;
+        if let (Some(p), false) = (&args.parts, args.whole_body) {
+            header = header.with_input(p)?;
+        }
         for m in &args.motions {
             header = header.with_input(m)?;
         }

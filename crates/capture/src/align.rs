@@ -119,6 +119,38 @@ pub fn fit_on(src: &[Vector3<f64>], dst: &[Vector3<f64>], anchor: &[u32]) -> Rig
     procrustes(&pick(src), &pick(dst), None)
 }
 
+/// What the stages after `align` need to know about the capture a motion came from, so
+/// that no frame rate or axis travels through their command lines.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct CaptureInfo {
+    /// Frames per second of the subject's captures (`subject.json` `fps`); 0 when the motion
+    /// was aligned in memory without one ([`align_motion_on`]).
+    pub fps: f64,
+    /// Unit up axis of the capture's world (`subject.json` `up`).
+    pub up: [f64; 3],
+    /// SHA-256 (hex) of the template file the frames were aligned to; empty when aligned in
+    /// memory.
+    pub template_sha256: String,
+}
+
+impl Default for CaptureInfo {
+    /// Unknown frame rate and template, `+y` up.
+    fn default() -> Self {
+        CaptureInfo { fps: 0.0, up: [0.0, 1.0, 0.0], template_sha256: String::new() }
+    }
+}
+
+impl CaptureInfo {
+    /// The frame rate, or an error naming `align --subject` when the motion carries none.
+    pub fn require_fps(&self) -> Result<f64> {
+        if self.fps > 0.0 {
+            Ok(self.fps)
+        } else {
+            Err(Error::invalid("the aligned motion has no frame rate (aligned without `align --subject`)"))
+        }
+    }
+}
+
 /// A motion after alignment: the aligned frames, each frame's world pose and
 /// its displacement from the previous frame.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
@@ -133,15 +165,17 @@ pub struct AlignedMotion {
     pub displacements: Vec<[f64; 6]>,
     /// Template vertices the poses were fitted on ([`anchor_vertices`]; empty: all).
     pub anchor: Vec<u32>,
+    /// Frame rate, up axis and template of the capture.
+    pub capture: CaptureInfo,
 }
 
 impl Artifact for AlignedMotion {
     const KIND: &'static str = "aligned-motion";
-    const VERSION: u32 = 2;
+    const VERSION: u32 = 3;
 
     /// At least one frame, every frame with the same vertex count and finite
     /// coordinates, faces and anchor below it, one pose and one displacement
-    /// per frame.
+    /// per frame, a finite non-negative frame rate and a unit up axis.
     fn validate(&self) -> std::result::Result<(), String> {
         let Some(n) = self.frames.first().map(Vec::len) else {
             return Err("no frames".into());
@@ -161,6 +195,14 @@ impl Artifact for AlignedMotion {
                 self.poses.len(),
                 self.displacements.len()
             ));
+        }
+        let c = &self.capture;
+        if !(c.fps.is_finite() && c.fps >= 0.0) {
+            return Err(format!("frame rate {} is not a non-negative number", c.fps));
+        }
+        let up = Vector3::from(c.up);
+        if !up.iter().all(|x| x.is_finite()) || (up.norm() - 1.0).abs() > 1e-9 {
+            return Err(format!("up axis {:?} is not a unit vector", c.up));
         }
         Ok(())
     }
@@ -230,6 +272,7 @@ pub fn align_motion_on(
         poses,
         displacements,
         anchor: anchor.to_vec(),
+        capture: CaptureInfo::default(),
     })
 }
 

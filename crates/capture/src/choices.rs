@@ -1,0 +1,75 @@
+//! The transfer stages' named choices: the GP method, the mean function and the placement of
+//! the transferred poses. They live below the stages so that `plan`, which writes the stages'
+//! command lines, names them without depending on the transfer crate.
+
+use clap::ValueEnum;
+use serde::{Deserialize, Serialize};
+
+/// The transfer methods compared in the paper (§7).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+pub enum Method {
+    GprNn,
+    GprSe,
+    GprLinear,
+    KeyposeAffine,
+    WholeBody,
+}
+
+impl Method {
+    pub const ALL: [Method; 5] = [
+        Method::GprNn,
+        Method::GprSe,
+        Method::GprLinear,
+        Method::KeyposeAffine,
+        Method::WholeBody,
+    ];
+
+    /// The name used on the command line, in file paths and in results.json.
+    pub fn name(&self) -> &'static str {
+        match self {
+            Method::GprNn => "gpr-nn",
+            Method::GprSe => "gpr-se",
+            Method::GprLinear => "gpr-linear",
+            Method::KeyposeAffine => "keypose-affine",
+            Method::WholeBody => "whole-body",
+        }
+    }
+
+    pub fn from_name(name: &str) -> Option<Method> {
+        Method::ALL.into_iter().find(|m| m.name() == name)
+    }
+}
+
+/// The mean function of the GPs (CVPR eq. 11 assumes a zero mean).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize, clap::ValueEnum)]
+#[serde(rename_all = "kebab-case")]
+pub enum MeanFunction {
+    /// An affine map fitted by least squares, the GP on the residuals (`gp::affine_mean`):
+    /// far from the training inputs the prediction degrades to the linear mapping.
+    #[default]
+    Affine,
+    /// Zero mean (the paper): far from the data the prediction falls back to the PCA mean.
+    Zero,
+}
+
+/// Which per-frame displacement places the transferred poses.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize, ValueEnum)]
+#[serde(rename_all = "kebab-case")]
+pub enum Placement {
+    /// The source displacement, translation scaled by the height ratio
+    ScaledSource,
+    /// The displacement GP's prediction (the paper)
+    Regressed,
+    /// Regressed, falling back to scaled-source where the GP's variance is high
+    Blended,
+}
+
+impl Placement {
+    pub fn name(&self) -> &'static str {
+        match self {
+            Placement::Regressed => "regressed",
+            Placement::ScaledSource => "scaled-source",
+            Placement::Blended => "blended",
+        }
+    }
+}

@@ -1,0 +1,13 @@
+//! The front end both papers share (CVPR 2017 surface motion transfer, 3DV variation synthesis).
+//!
+//! Data flows one way: capture set -> `segment` (per subject, `mesh_core::segmentation`) and
+//! [`align`] (per motion) -> [`part_pca`] (PCA per part, or of the whole body) -> coefficients;
+//! [`assemble`] turns per-part meshes decoded from the coefficients back into one mesh.
+//! [`choices`] names the transfer stages' options, so that `plan` can write their command
+//! lines without depending on the stages' crate. `src/bin/<stage>.rs` parses arguments and
+//! calls the library.
+
+pub mod align;
+pub mod part_pca;
+pub mod assemble;
+pub mod choices;

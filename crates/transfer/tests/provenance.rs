@@ -1,0 +1,137 @@
+//! Provenance on the small synthetic capture set of `common` (subjects at 25 and 50 fps): every
+//! artifact a stage writes lists, in its header, every input file it was given with that
+//! file's SHA-256 (computed here independently), and the aligned motions carry the subject's
+//! frame rate, up axis and template hash, which is where `dtw-densify`, `gpr-train` and
+//! `learning-curves` take the frame rates from.
+
+mod common;
+
+use std::path::{Path, PathBuf};
+
+use capture::align::AlignedMotion;
+use common::run;
+use mesh_core::artifact::{read_header, Artifact, Header};
+use sha2::{Digest, Sha256};
+
+fn s(p: &Path) -> String {
+    p.to_string_lossy().into_owned()
+}
+
+fn sha256(path: &Path) -> String {
+    let bytes = std::fs::read(path).unwrap();
+    Sha256::digest(&bytes).iter().map(|b| format!("{b:02x}")).collect()
+}
+
+/// Asserts that `artifact`'s header records every file of `given`, by path and hash.
+fn assert_inputs(artifact: &Path, given: &[PathBuf]) -> Header {
+    let (_, _, header) = read_header(artifact).unwrap();
+    for f in given {
+        let rec = header.inputs.iter().find(|r| r.path == s(f));
+        let rec = rec.unwrap_or_else(|| panic!("{}: input {} not recorded", artifact.display(), f.display()));
+        assert_eq!(rec.sha256, sha256(f), "{}: hash of {}", artifact.display(), f.display());
+    }
+    header
+}
+
+fn frames(dir: &Path) -> Vec<PathBuf> {
+    let mut v: Vec<PathBuf> = std::fs::read_dir(dir)
+        .unwrap()
+        .map(|e| e.unwrap().path())
+        .filter(|p| p.extension().is_some_and(|e| e == "ply"))
+        .collect();
+    v.sort();
+    v
+}
+
+fn subject_fps(set: &Path, x: &str) -> f64 {
+    let text = std::fs::read_to_string(set.join(x).join("subject.json")).unwrap();
+    let json: serde_json::Value = serde_json::from_str(&text).unwrap();
+    json["fps"].as_f64().unwrap()
+}
+
+#[test]
+fn every_artifact_header_lists_every_input_file_and_its_hash() {
+    let dir = tempfile::tempdir().unwrap();
+    let w = |rel: &str| dir.path().join(rel);
+    let set = dir.path().join("set");
+    common::write_set(&set);
+    let tpl = |x: &str| set.join(x).join("walk").join("000000.ply");
+    let motions = ["walk", "run"];
+    for x in ["A", "B"] {
+        let subject = set.join(x).join("subject.json");
+        let seg = w(&format!("{x}.seg"));
+        run("segment", &[s(&subject), "--template".into(), s(&tpl(x)), "--out".into(), s(&seg)]);
+        assert_inputs(&seg, &[subject.clone(), tpl(x)]);
+        for m in motions {
+            let out = w(&format!("{x}-{m}.aligned"));
+            let motion = set.join(x).join(m);
+            run("align", &[
+                "--segmentation".into(), s(&seg), "--subject".into(), s(&subject), "--template".into(),
+                s(&tpl(x)), s(&motion), "--out".into(), s(&out),
+            ]);
+            let mut given = vec![subject.clone(), tpl(x), seg.clone()];
+            given.extend(frames(&motion));
+            assert!(given.len() > 10, "the motion has frames");
+            assert_inputs(&out, &given);
+            let aligned = AlignedMotion::load(&out).unwrap();
+            assert_eq!(aligned.capture.fps, subject_fps(&set, x));
+            assert_eq!(aligned.capture.up, [0.0, 1.0, 0.0], "subject.json says +y");
+            assert_eq!(aligned.capture.template_sha256, sha256(&tpl(x)));
+        }
+        let aligned: Vec<PathBuf> = motions.iter().map(|m| w(&format!("{x}-{m}.aligned"))).collect();
+        let pca = w(&format!("{x}.pca"));
+        let mut args = vec!["--template".into(), s(&tpl(x)), "--parts".into(), s(&seg), "--out".into(), s(&pca)];
+        args.extend(aligned.iter().map(|p| s(p)));
+        run("pca-fit", &args);
+        let mut given = vec![tpl(x), seg.clone()];
+        given.extend(aligned.iter().cloned());
+        assert_inputs(&pca, &given);
+        let whole = w(&format!("{x}-whole.pca"));
+        let mut args = vec!["--whole-body".into(), "--template".into(), s(&tpl(x)), "--out".into(), s(&whole)];
+        args.extend(aligned.iter().map(|p| s(p)));
+        run("pca-fit", &args);
+        let mut given = vec![tpl(x)];
+        given.extend(aligned.iter().cloned());
+        let header = assert_inputs(&whole, &given);
+        assert_eq!(header.params["whole_body"], true);
+    }
+
+    let set_json = set.join("set.json");
+    let corr = w("walk.corr");
+    let (sa, ta) = (w("A-walk.aligned"), w("B-walk.aligned"));
+    run("dtw-densify", &[
+        "--set".into(), s(&set_json), "--pair".into(), "walk".into(), "--source-pca".into(), s(&w("A.pca")),
+        "--target-pca".into(), s(&w("B.pca")), s(&sa), s(&ta), "--out".into(), s(&corr),
+    ]);
+    assert_inputs(&corr, &[set_json, w("A.pca"), w("B.pca"), sa.clone(), ta.clone()]);
+
+    for (reverse, src, tgt) in [(false, "A", "B"), (true, "B", "A")] {
+        let model = w(&format!("{src}-{tgt}.model"));
+        let mut args = vec![
+            "--source-pca".into(), s(&w(&format!("{src}.pca"))), "--target-pca".into(),
+            s(&w(&format!("{tgt}.pca"))), "--max-iter".into(), "5".into(), "--pair".into(), s(&sa), s(&ta),
+            s(&corr), "--out".into(), s(&model),
+        ];
+        if reverse {
+            args.push("--reverse".into());
+        }
+        run("gpr-train", &args);
+        let header = assert_inputs(&model, &[w(&format!("{src}.pca")), w(&format!("{tgt}.pca")), sa.clone(), ta.clone(), corr.clone()]);
+        assert_eq!(header.params["source_fps"], subject_fps(&set, src), "from the aligned motions");
+        assert_eq!(header.params["target_fps"], subject_fps(&set, tgt));
+        assert_eq!(header.params["max_iter"], 5);
+    }
+}
+
+#[test]
+fn an_aligned_motion_of_the_previous_version_is_refused_with_its_version() {
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("old.aligned");
+    let mesh = mesh_core::shapes::cylinder(8, 4, 0.1, 1.0);
+    let seq = mesh_core::sequence::MeshSequence::new(mesh.faces.clone(), vec![mesh.vertices.clone(); 2]);
+    let m = capture::align::align_motion(&mesh, &seq).unwrap();
+    let header = Header::new("align", "0");
+    mesh_core::artifact::write_artifact(&path, AlignedMotion::KIND, AlignedMotion::VERSION - 1, &header, &m).unwrap();
+    let err = AlignedMotion::load(&path).unwrap_err().to_string();
+    assert!(err.contains("old.aligned") && err.contains("version 2"), "{err}");
+}
