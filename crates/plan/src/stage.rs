@@ -93,7 +93,7 @@ pub enum Collect {
         /// Output table (results.json)
         #[arg(short, long)]
         out: PathBuf,
-        /// Evaluation records (evaluate --out)
+        /// Evaluation records (transfer-eval --out)
         #[arg(required = true)]
         records: Vec<PathBuf>,
     },

@@ -1,4 +1,4 @@
-//! `report`: the static HTML page of a pipeline run (OUT/index.html).
+//! `html-report`: the static HTML page of a pipeline run (OUT/index.html).
 use std::path::PathBuf;
 use std::process::ExitCode;
 
@@ -9,10 +9,10 @@ use mesh_core::cli::{run_stage, CommonArgs};
 /// Write OUT/index.html: 3D view, result tables, contact sheets, GIFs, plots and provenance of a pipeline run
 #[derive(Parser)]
 #[command(
-    name = "report",
+    name = "html-report",
     version,
     after_help = "The page works from disk (file://), with no server and no network.\n\
-                  e.g.: report out --view source=data/set/A/test/walk \\\n\
+                  e.g.: html-report out --view source=data/set/A/test/walk \\\n\
                   \x20      --view transfer=out/transfer/A-to-B/walk/gpr-nn --view truth=data/set/truth/B/walk"
 )]
 struct Args {
@@ -51,7 +51,7 @@ fn parse_view(s: &str) -> Result<(String, PathBuf), String> {
 
 fn main() -> ExitCode {
     let args = Args::parse();
-    run_stage("report", || {
+    run_stage("html-report", || {
         args.common.init()?;
         let page = write_report(&ReportOptions {
             out: args.out.clone(),

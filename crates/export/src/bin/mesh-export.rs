@@ -1,4 +1,4 @@
-//! `export`: a mesh sequence folder to OBJ/PLY frames, OBJ + PC2, or glTF .glb.
+//! `mesh-export`: a mesh sequence folder to OBJ/PLY frames, OBJ + PC2, or glTF .glb.
 use std::path::PathBuf;
 use std::process::ExitCode;
 
@@ -10,12 +10,12 @@ use mesh_core::sequence::MeshSequence;
 /// Write a mesh sequence for other tools: OBJ/PLY per frame, template OBJ + PC2 point cache, or animated glTF (.glb)
 #[derive(Parser)]
 #[command(
-    name = "export",
+    name = "mesh-export",
     version,
     after_help = "The format follows OUT: a .glb file, a .pc2 file (plus the template OBJ beside it,\n\
                   same stem), or a folder of numbered frames (--frame-format obj|ply).\n\
-                  e.g.: export out/transfer/A-to-B/walk/gpr-nn walk.glb --stride 2\n\
-                  e.g.: export out/transfer/A-to-B/walk/gpr-nn walk.pc2   # writes walk.obj + walk.pc2"
+                  e.g.: mesh-export out/transfer/A-to-B/walk/gpr-nn walk.glb --stride 2\n\
+                  e.g.: mesh-export out/transfer/A-to-B/walk/gpr-nn walk.pc2   # writes walk.obj + walk.pc2"
 )]
 struct Args {
     #[command(flatten)]
@@ -43,7 +43,7 @@ struct Args {
 
 fn main() -> ExitCode {
     let args = Args::parse();
-    run_stage("export", || {
+    run_stage("mesh-export", || {
         args.common.init()?;
         let seq = MeshSequence::load_dir(&args.input)?;
         let ext = args
