@@ -30,9 +30,9 @@ struct Args {
     /// glb: keep every N-th frame
     #[arg(long, default_value_t = 1, value_name = "N", value_parser = clap::value_parser!(u32).range(1..))]
     stride: u32,
-    /// glb: frames per second of the sequence
-    #[arg(long, default_value_t = 30.0, value_name = "F")]
-    fps: f64,
+    /// glb: frames per second [default: the folder's rate.json, else its capture's subject.json, else 30]
+    #[arg(long, value_name = "F")]
+    fps: Option<f64>,
     /// glb: blend linearly between frames instead of stepping
     #[arg(long)]
     linear: bool,
@@ -53,9 +53,18 @@ fn main() -> ExitCode {
             .map(str::to_ascii_lowercase);
         match ext.as_deref() {
             Some("glb") => {
+                let (fps, from) = export::rate::sequence_fps(&args.input, args.fps)?;
+                if from == export::rate::RateSource::Fallback {
+                    mesh_core::warn!(
+                        "{}: no frame rate recorded (rate.json or subject.json): {fps} fps assumed, pass --fps",
+                        args.input.display()
+                    );
+                } else {
+                    mesh_core::info!("{fps} fps ({from})");
+                }
                 let opts = GlbOptions {
                     stride: args.stride as usize,
-                    fps: args.fps,
+                    fps,
                     interpolation: if args.linear {
                         Interpolation::Linear
                     } else {
