@@ -26,9 +26,9 @@ struct Args {
     /// Page title
     #[arg(long, default_value = "surfcap report")]
     title: String,
-    /// Frames per second of the sequences
-    #[arg(long, default_value_t = 30.0, value_name = "F")]
-    fps: f64,
+    /// Frames per second of the sequences [default: the first view's rate.json or subject.json, else 30]
+    #[arg(long, value_name = "F")]
+    fps: Option<f64>,
     /// Frames kept at most per sequence in the 3D view (evenly subsampled)
     #[arg(long, default_value_t = 60, value_name = "N", value_parser = clap::value_parser!(u32).range(1..))]
     max_frames: u32,
@@ -53,11 +53,30 @@ fn main() -> ExitCode {
     let args = Args::parse();
     run_stage("html-report", || {
         args.common.init()?;
+        // The player runs at the views' own rate: the first view's, checked against the others.
+        let mut fps = args.fps;
+        if fps.is_none() {
+            let rates = args
+                .view
+                .iter()
+                .map(|(label, dir)| Ok((label, export::rate::sequence_fps(dir, None)?)))
+                .collect::<anyhow::Result<Vec<_>>>()?;
+            if let Some((_, (first, _))) = rates.first() {
+                for (label, (f, from)) in &rates {
+                    if *from == export::rate::RateSource::Fallback {
+                        mesh_core::warn!("view {label}: no frame rate recorded (rate.json or subject.json), pass --fps");
+                    } else if f != first {
+                        mesh_core::warn!("view {label}: {f} fps ({from}), played at the first view's {first} fps");
+                    }
+                }
+                fps = Some(*first);
+            }
+        }
         let page = write_report(&ReportOptions {
             out: args.out.clone(),
             views: args.view.clone(),
             title: args.title.clone(),
-            fps: args.fps,
+            fps: fps.unwrap_or(export::rate::FALLBACK_FPS),
             max_frames: args.max_frames as usize,
             max_data_bytes: args.max_data_mb as usize * 1_000_000,
             three_dir: args
