@@ -128,6 +128,10 @@ fn main() -> ExitCode {
         };
         let ratio = args.target_fps / args.source_fps;
         let start = std::time::Instant::now();
+        let spin = mesh_core::cli::spinner(
+            &format!("gpr-train: {} parts + displacement, {} pairs", names.len(), pairs.len()),
+            &args.common,
+        );
         let model: GprModel = train(
             method,
             args.nn_bias,
@@ -139,6 +143,7 @@ fn main() -> ExitCode {
             args.keyposes_only,
             &opts,
         )?;
+        spin.finish_and_clear();
         mesh_core::info!(
             "trained {} on {} pairs in {:.3} s",
             method.name(),
