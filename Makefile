@@ -41,6 +41,7 @@ build: setup
 # scripts/slurm-test installs Slurm + munge and runs the tiny preset's pipelines as job arrays.
 test: build assets setup-web
 	$(CARGO) test --release --workspace
+	scripts/blender-check
 	scripts/slurm-test
 
 clean-out:
