@@ -1,6 +1,6 @@
 // Opens a report page from disk in headless Debian Chromium and checks it.
 //   node browser-test.mjs OUT/index.html SCREENSHOT.png
-// Checks: no console errors or page errors; the 3D canvas exists and is not
+// Checks: the page opens (loaded, 3D canvas present) in under 2 s; no console errors or page errors; the 3D canvas exists and is not
 // blank (pixel variance of the rendered canvas); pressing Play advances the
 // frame counter at the stated rate (capture frames per second = counter steps x stride / time,
 // within 15% of the data's fps). Writes a PNG of the canvas, prints one JSON line, exits 1 on
@@ -45,9 +45,13 @@ try {
   page.on('console', (m) => { if (m.type() === 'error') problems.push(`console error: ${m.text()}`); });
   page.on('pageerror', (e) => problems.push(`page error: ${e.message}`));
   page.on('requestfailed', (r) => problems.push(`request failed: ${r.url().slice(0, 120)}`));
+  const opened = Date.now();
   await page.goto(pathToFileURL(page_path).href, { waitUntil: 'load' });
   const canvas = page.locator('#viewer canvas');
   await canvas.waitFor({ timeout: 20000 });
+  // From navigation to the loaded page with its 3D view drawn: under 2 s from disk.
+  result.openSeconds = (Date.now() - opened) / 1000;
+  if (!(result.openSeconds < 2)) problems.push(`the page took ${result.openSeconds} s to open (limit 2 s)`);
   await page.waitForTimeout(500);
   await canvas.screenshot({ path: shot });
   // Pixel variance of the canvas as drawn (preserveDrawingBuffer is on).
