@@ -61,15 +61,23 @@ fn main() -> ExitCode {
                 .iter()
                 .map(|(label, dir)| Ok((label, export::rate::sequence_fps(dir, None)?)))
                 .collect::<anyhow::Result<Vec<_>>>()?;
-            if let Some((_, (first, _))) = rates.first() {
-                for (label, (f, from)) in &rates {
-                    if *from == export::rate::RateSource::Fallback {
-                        mesh_core::warn!("view {label}: no frame rate recorded (rate.json or subject.json), pass --fps");
-                    } else if f != first {
-                        mesh_core::warn!("view {label}: {f} fps ({from}), played at the first view's {first} fps");
+            // Views without a recorded rate (a truth folder, an old output) follow the others.
+            let recorded: Vec<_> =
+                rates.iter().filter(|(_, (_, from))| *from != export::rate::RateSource::Fallback).collect();
+            match recorded.first() {
+                Some((_, (first, _))) => {
+                    for (label, (f, from)) in &recorded {
+                        if f != first {
+                            mesh_core::warn!("view {label}: {f} fps ({from}), played at {first} fps");
+                        }
                     }
+                    fps = Some(*first);
                 }
-                fps = Some(*first);
+                None if !rates.is_empty() => mesh_core::warn!(
+                    "no view records its frame rate (rate.json or subject.json): {} fps assumed, pass --fps",
+                    export::rate::FALLBACK_FPS
+                ),
+                None => {}
             }
         }
         let page = write_report(&ReportOptions {
