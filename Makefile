@@ -8,6 +8,7 @@
 #   make demo-data | holdout-data   synthesise the demo / held-out benchmark capture set (out/...)
 #   make demo-render   contact sheets and GIFs of the demo set
 #   make report OUT=<dir>   the HTML report of a run;  make assets   fetch the real bodies and mocap
+#   make export OUT=<dir>   .glb and OBJ + PC2 of a run's final transfers and the report's variations
 #   make setup | setup-web   system packages (OpenBLAS) / the report tests' web tools (Chromium)
 #   make clean-out   remove $(OUT);  make help   this list
 
@@ -40,6 +41,7 @@ build: setup
 # scripts/slurm-test installs Slurm + munge and runs the tiny preset's pipelines as job arrays.
 test: build assets setup-web
 	$(CARGO) test --release --workspace
+	scripts/blender-check
 	scripts/slurm-test
 
 clean-out:

@@ -27,6 +27,7 @@ transfer:
 	$(CARGO) build --release --workspace --quiet
 	@$(MAKE) --no-print-directory transfer-results SET=$(SET) OUT=$(OUT)
 	@$(MAKE) --no-print-directory transfer-report SET=$(SET) OUT=$(OUT)
+	@$(MAKE) --no-print-directory export SET=$(SET) OUT=$(OUT)
 
 # The run's HTML report (pipelines/report.mk), with source / transfer / truth in the 3D view. The
 # rules of every stage invocation, results.json's among them, are the task graph that

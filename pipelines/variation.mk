@@ -39,6 +39,7 @@ variation:
 	$(CARGO) build --release --workspace --quiet
 	@$(MAKE) --no-print-directory variation-results SET=$(SET) OUT=$(OUT)
 	@$(MAKE) --no-print-directory report OUT=$(OUT) REPORT_VIEWS="$(VARIATION_REPORT_VIEWS)" REPORT_TITLE="surfcap variation: $(SET)"
+	@$(MAKE) --no-print-directory export SET=$(SET) OUT=$(OUT)
 
 # The rules (prealign, gpdm-train, hmc-sample and its contact sheets, variation-eval per group,
 # then variation.json) are the task graph that pipelines/plan.mk includes under this goal.

@@ -1,5 +1,5 @@
 #!/usr/bin/env python3
-"""Recompute `evaluate`'s errors of one transferred sequence with pymeshlab (issue 4).
+"""Recompute `transfer-eval`'s errors of one transferred sequence with pymeshlab (issue 4).
 
     python3 scripts/compare/evaluate_pymeshlab.py PRED_DIR TRUTH_DIR [--record EVAL.json]
 
@@ -9,7 +9,7 @@ Frames (000000.ply, ...) are loaded with pymeshlab (the user's comparison tool),
                 Procrustes, rotation + translation, no scale, reflection guarded; numpy SVD);
   hausdorff:    pymeshlab's `get_hausdorff_distance` (predicted vertices to the closest point of the
                 truth surface, as placed): RMS and max, a correspondence-free lower bound.
-With --record, compares with the `evaluate` record (rms_pose_m, rms_placed_m) and exits 1 when
+With --record, compares with the `transfer-eval` record (rms_pose_m, rms_placed_m) and exits 1 when
 they differ by more than 1e-6 relative. Needs `pip install pymeshlab numpy`.
 """
 import argparse, json, os, sys

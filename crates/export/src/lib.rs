@@ -6,6 +6,8 @@
 //! - [`glb`]: a glTF 2.0 binary with the animation as morph targets whose
 //!   weights are sampled one-hot per frame (validator-clean by default;
 //!   frame stride and int16 quantisation on request).
+//! - [`rate`]: the frame rate a sequence folder plays at (its rate file, its
+//!   capture's `subject.json`, or `--fps`).
 //! - [`report`]: the static `OUT/index.html` page of a pipeline run, with
 //!   [`viewer`] the embedded three.js player of source / transfer / truth.
 //!
@@ -17,5 +19,6 @@ pub mod frames;
 pub mod glb;
 pub mod html;
 pub mod pc2;
+pub mod rate;
 pub mod report;
 pub mod viewer;

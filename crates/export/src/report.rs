@@ -222,11 +222,11 @@ pub fn write_report(opts: &ReportOptions) -> Result<PathBuf> {
              <div class=\"controls\"><button id=\"play\">Play</button>\
              <input id=\"slider\" type=\"range\" min=\"0\" max=\"0\" value=\"0\">\
              <span>frame <span id=\"frame\">0</span></span></div>\
-             <p>Drag to orbit, wheel to zoom. Frames are subsampled to at most {} per sequence.</p></section>\
+             <p>Drag to orbit, wheel to zoom. {}</p></section>\
              <script src=\"{ASSETS_DIR}/view-data.js\"></script>\
              <script type=\"module\">{}</script>",
             legend.join(""),
-            max_frames,
+            playback_note(&views, max_frames, opts.fps),
             VIEWER_JS.replace("</script", "<\\/script")
         );
     }
@@ -307,3 +307,15 @@ fn provenance(out: &Path, artifacts: &[PathBuf], three_dir: &Path) -> String {
     }
     s + "</section>"
 }
+
+/// What the 3D view plays, stated from the numbers the viewer uses: the common stride, the
+/// frames shown and the rate (each shown frame lasts `stride / fps` seconds, so the motion
+/// plays at its real speed).
+pub fn playback_note(views: &[ViewSequence], max_frames: usize, fps: f64) -> String {
+    let longest = views.iter().map(|v| v.seq.n_frames()).max().unwrap_or(0);
+    let stride = crate::viewer::view_stride(longest, max_frames);
+    let shown = longest.div_ceil(stride.max(1));
+    let which = if stride == 1 { "Every frame".to_string() } else { format!("One frame in {stride}") };
+    format!("{which} of {longest} is shown ({shown} frames), each for {stride}/{fps} s: the capture's speed.")
+}
+

@@ -1,4 +1,4 @@
-//! `export` killed while it writes (SIGKILL at random moments): every output
+//! `mesh-export` killed while it writes (SIGKILL at random moments): every output
 //! kind (frame folder, `.glb`, `.pc2`) is absent or complete under its final
 //! name, and the next run leaves no temporary behind.
 
@@ -25,7 +25,7 @@ fn killed_export_leaves_absent_or_complete_outputs_and_no_temporary_after_the_ne
     let seq = common::bending_capsule(120, 0.6, 0.0);
     seq.write_dir(&src).unwrap();
     let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(3);
-    let export = env!("CARGO_BIN_EXE_export");
+    let export = env!("CARGO_BIN_EXE_mesh-export");
     for (k, name) in ["frames", "anim.glb", "anim.pc2"].iter().cycle().take(15).enumerate() {
         let out = dir.path().join(name);
         let mut child = Command::new(export)

@@ -225,3 +225,46 @@ fn khronos_validator_reports_no_errors() {
         "three.js could not load or play the files:\n{stdout}"
     );
 }
+
+/// `mesh-export` writes the animation at the sequence's own rate: a capture-set motion folder
+/// plays at its subject's `fps`, a stage output at its rate file's, `--fps` overrides both, and
+/// a folder with neither falls back to 30 fps with a warning. Read back from the glb's times.
+#[test]
+fn cli_export_keeps_the_sequence_rate() {
+    let seq = common::bending_capsule(6, 0.7, 0.2);
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let subject = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../fixtures/tiny-set/A/subject.json");
+    let capture_fps = mesh_core::capture_set::SubjectSpec::load(&subject).unwrap().fps;
+    std::fs::create_dir_all(d.join("set/A")).unwrap();
+    std::fs::copy(&subject, d.join("set/A/subject.json")).unwrap();
+    seq.write_dir(d.join("set/A/walk")).unwrap();
+    seq.write_dir(d.join("set/A/test/run")).unwrap();
+    seq.write_dir_at(d.join("pred"), Some(50.0)).unwrap();
+    seq.write_dir(d.join("bare")).unwrap();
+    let cases: [(&str, Option<&str>, f64, bool); 5] = [
+        ("set/A/walk", None, capture_fps, false),
+        ("set/A/test/run", None, capture_fps, false),
+        ("pred", None, 50.0, false),
+        ("pred", Some("12"), 12.0, false),
+        ("bare", None, 30.0, true),
+    ];
+    for (input, given, fps, warned) in cases {
+        let out = d.join("out.glb");
+        let mut cmd = std::process::Command::new(env!("CARGO_BIN_EXE_mesh-export"));
+        cmd.arg(d.join(input)).arg(&out);
+        if let Some(f) = given {
+            cmd.args(["--fps", f]);
+        }
+        let res = cmd.output().unwrap();
+        let err = String::from_utf8_lossy(&res.stderr);
+        assert!(res.status.success(), "{input}: {err}");
+        assert_eq!(err.contains("no frame rate recorded"), warned, "{input}: {err:?}");
+        let bytes = std::fs::read(&out).unwrap();
+        let (_, times, _) = decoded_frames(&bytes);
+        for (k, t) in times.iter().enumerate() {
+            assert!((t - k as f64 / fps).abs() < 1e-5, "{input}: key {k} at {t} s, expected {fps} fps");
+        }
+    }
+    assert_ne!(capture_fps, 30.0, "the fixture must not hide the fallback");
+}

@@ -136,7 +136,7 @@ fn page_works_in_headless_chromium_from_disk() {
         out,
         views,
         title: "surfcap report test".into(),
-        fps: 30.0,
+        fps: 25.0,
         max_frames: 60,
         max_data_bytes: 12_000_000,
         three_dir: export::viewer::DEFAULT_THREE_DIR.into(),
@@ -151,6 +151,13 @@ fn page_works_in_headless_chromium_from_disk() {
         "browser test failed: {stdout}{}",
         String::from_utf8_lossy(&res.stderr)
     );
+    let json: serde_json::Value = serde_json::from_str(stdout.lines().last().unwrap()).unwrap();
+    let open = json["openSeconds"].as_f64().unwrap();
+    assert!(open < 2.0, "the page opened in {open} s");
+    let rate = &json["rate"];
+    assert_eq!(rate["fps"].as_f64(), Some(25.0), "{rate}");
+    let played = rate["playedFps"].as_f64().unwrap();
+    assert!((played - 25.0).abs() <= 0.15 * 25.0, "played at {played} fps: {rate}");
     let var = png_variance(&shot);
     assert!(
         var > 10.0,

@@ -69,7 +69,7 @@ fn cli_export_then_import_through_pc2() {
     let src = dir.path().join("src");
     seq.write_dir(&src).unwrap();
     let pc2 = dir.path().join("out/walk.pc2");
-    let st = Command::new(env!("CARGO_BIN_EXE_export"))
+    let st = Command::new(env!("CARGO_BIN_EXE_mesh-export"))
         .arg(&src)
         .arg(&pc2)
         .output()
@@ -85,7 +85,7 @@ fn cli_export_then_import_through_pc2() {
     );
     assert!(dir.path().join("out/walk.obj").is_file());
     let back = dir.path().join("back");
-    let st = Command::new(env!("CARGO_BIN_EXE_import"))
+    let st = Command::new(env!("CARGO_BIN_EXE_mesh-import"))
         .arg(&pc2)
         .arg(&back)
         .output()
@@ -109,7 +109,7 @@ fn cli_rejects_a_truncated_pc2_with_one_line_and_no_output() {
     let bytes = std::fs::read(&pc2).unwrap();
     std::fs::write(&pc2, &bytes[..bytes.len() - 5]).unwrap();
     let back = dir.path().join("back");
-    let st = Command::new(env!("CARGO_BIN_EXE_import"))
+    let st = Command::new(env!("CARGO_BIN_EXE_mesh-import"))
         .arg(&pc2)
         .arg(&back)
         .output()
@@ -118,7 +118,7 @@ fn cli_rejects_a_truncated_pc2_with_one_line_and_no_output() {
     let err = String::from_utf8_lossy(&st.stderr);
     assert_eq!(err.lines().count(), 1, "{err}");
     assert!(
-        err.starts_with("import: ") && err.contains("w.pc2") && err.contains("bytes follow"),
+        err.starts_with("mesh-import: ") && err.contains("w.pc2") && err.contains("bytes follow"),
         "{err}"
     );
     assert!(!back.exists(), "no partial output");
@@ -132,7 +132,7 @@ fn cli_refuses_unknown_formats_with_one_line() {
         .write_dir(&src)
         .unwrap();
     let fbx = dir.path().join("walk.fbx");
-    let st = Command::new(env!("CARGO_BIN_EXE_export"))
+    let st = Command::new(env!("CARGO_BIN_EXE_mesh-export"))
         .arg(&src)
         .arg(&fbx)
         .output()
@@ -140,7 +140,7 @@ fn cli_refuses_unknown_formats_with_one_line() {
     assert_eq!(st.status.code(), Some(1));
     let err = String::from_utf8_lossy(&st.stderr);
     assert!(
-        err.starts_with("export: ")
+        err.starts_with("mesh-export: ")
             && err.contains("walk.fbx")
             && err.contains("unknown output format"),
         "{err}"
@@ -148,7 +148,7 @@ fn cli_refuses_unknown_formats_with_one_line() {
     assert!(!fbx.exists());
     let glb = dir.path().join("walk.glb");
     std::fs::write(&glb, b"glTF").unwrap();
-    let st = Command::new(env!("CARGO_BIN_EXE_import"))
+    let st = Command::new(env!("CARGO_BIN_EXE_mesh-import"))
         .arg(&glb)
         .arg(dir.path().join("b"))
         .output()

@@ -1,8 +1,9 @@
 // Opens a report page from disk in headless Debian Chromium and checks it.
 //   node browser-test.mjs OUT/index.html SCREENSHOT.png
-// Checks: no console errors or page errors; the 3D canvas exists and is not
+// Checks: the page opens (loaded, 3D canvas present) in under 2 s; no console errors or page errors; the 3D canvas exists and is not
 // blank (pixel variance of the rendered canvas); pressing Play advances the
-// frame counter. Writes a PNG of the canvas, prints one JSON line, exits 1 on
+// frame counter at the stated rate (capture frames per second = counter steps x stride / time,
+// within 15% of the data's fps). Writes a PNG of the canvas, prints one JSON line, exits 1 on
 // any failure.
 import { chromium } from 'playwright-core';
 import { pathToFileURL } from 'node:url';
@@ -44,9 +45,13 @@ try {
   page.on('console', (m) => { if (m.type() === 'error') problems.push(`console error: ${m.text()}`); });
   page.on('pageerror', (e) => problems.push(`page error: ${e.message}`));
   page.on('requestfailed', (r) => problems.push(`request failed: ${r.url().slice(0, 120)}`));
+  const opened = Date.now();
   await page.goto(pathToFileURL(page_path).href, { waitUntil: 'load' });
   const canvas = page.locator('#viewer canvas');
   await canvas.waitFor({ timeout: 20000 });
+  // From navigation to the loaded page with its 3D view drawn: under 2 s from disk.
+  result.openSeconds = (Date.now() - opened) / 1000;
+  if (!(result.openSeconds < 2)) problems.push(`the page took ${result.openSeconds} s to open (limit 2 s)`);
   await page.waitForTimeout(500);
   await canvas.screenshot({ path: shot });
   // Pixel variance of the canvas as drawn (preserveDrawingBuffer is on).
@@ -74,6 +79,29 @@ try {
     result.framesSeen.push(Number(await page.locator('#frame').textContent()));
   }
   if (!result.framesSeen.some((f) => f !== result.frameBefore)) problems.push(`play did not advance the frame (stayed at ${result.frameBefore})`);
+  // The playback rate, measured on the page's clock from the counter's changes (wrap-around
+  // unwrapped; timed from the first change so the phase of the first step does not count).
+  result.rate = await page.evaluate(() => new Promise((resolve) => {
+    const v = window.SURFCAP_VIEW;
+    const el = document.querySelector('#frame');
+    const t0 = performance.now();
+    let last = Number(el.textContent), tFirst = null, tLast = null, steps = 0;
+    function tick() {
+      const f = Number(el.textContent), now = performance.now();
+      if (f !== last) {
+        if (tFirst === null) tFirst = now; else steps += (f - last + v.nFrames) % v.nFrames;
+        tLast = now;
+        last = f;
+      }
+      if (now - t0 < 3000) requestAnimationFrame(tick);
+      else resolve({ fps: v.fps, stride: v.stride, steps, seconds: (tLast - tFirst) / 1000 });
+    }
+    requestAnimationFrame(tick);
+  }));
+  result.rate.playedFps = (result.rate.steps * result.rate.stride) / result.rate.seconds;
+  if (!(Math.abs(result.rate.playedFps - result.rate.fps) <= 0.15 * result.rate.fps)) {
+    problems.push(`played at ${result.rate.playedFps.toFixed(1)} capture fps, the data says ${result.rate.fps}`);
+  }
   await page.click('#play');
 } catch (e) {
   problems.push(`browser: ${e.message.split('\n')[0]}`);

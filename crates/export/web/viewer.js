@@ -80,8 +80,15 @@ function start(view) {
   }
 
   setFrame(0);
+  // Frame the whole motion of every body, not only frame 0: a sequence's positions span
+  // centre +- scale over all its frames (the quantisation box), offset by its mesh position.
   const box = new THREE.Box3();
-  for (const it of seqs) box.expandByObject(it.mesh);
+  for (const it of seqs) {
+    const c = new THREE.Vector3(...it.s.centre).add(it.mesh.position);
+    const h = new THREE.Vector3(...it.s.scale);
+    box.expandByPoint(c.clone().sub(h));
+    box.expandByPoint(c.clone().add(h));
+  }
   const centre = box.getCenter(new THREE.Vector3());
   const size = box.getSize(new THREE.Vector3());
   const camera = new THREE.PerspectiveCamera(35, host.clientWidth / host.clientHeight, 0.01, 1000);

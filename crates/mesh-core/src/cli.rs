@@ -57,7 +57,8 @@ use std::process::ExitCode;
 use std::sync::atomic::{AtomicBool, AtomicU8, Ordering};
 use std::sync::OnceLock;
 
-use indicatif::{ProgressBar, ProgressStyle};
+pub use indicatif::ProgressBar;
+use indicatif::ProgressStyle;
 
 use crate::artifact::Header;
 
@@ -267,4 +268,20 @@ pub fn progress_bar(len: u64, message: &str, args: &CommonArgs) -> ProgressBar {
     ProgressBar::new(len)
         .with_style(style)
         .with_message(message.to_string())
+}
+
+/// A spinner with the elapsed time on stderr for work of unknown length (a
+/// message that can carry counts), hidden like [`progress_bar`]. It ticks on
+/// its own; `finish_and_clear` it when the work ends.
+pub fn spinner(message: &str, args: &CommonArgs) -> ProgressBar {
+    if args.quiet || !std::io::stderr().is_terminal() {
+        return ProgressBar::hidden();
+    }
+    let style = ProgressStyle::with_template("{spinner} {msg} {elapsed}")
+        .expect("valid spinner template");
+    let bar = ProgressBar::new_spinner()
+        .with_style(style)
+        .with_message(message.to_string());
+    bar.enable_steady_tick(std::time::Duration::from_millis(200));
+    bar
 }

@@ -72,6 +72,31 @@ fn frame_number(path: &Path) -> Option<usize> {
     stem.parse().ok()
 }
 
+fn is_rate_file(p: &Path) -> bool {
+    p.file_name().is_some_and(|n| n == RATE_FILE)
+}
+
+/// The frame-rate sidecar of a sequence folder: `{"fps": 25.0}`, written beside the frames by
+/// the stages that know the rate (`gpr-predict` from the model's source rate, `hmc-sample` from
+/// the capture's) and read by `mesh-export` and the report's player. Frame loaders ignore it.
+pub const RATE_FILE: &str = "rate.json";
+
+/// The frame rate recorded in `dir`'s [`RATE_FILE`], `None` when the folder has none.
+pub fn read_rate(dir: impl AsRef<Path>) -> Result<Option<f64>> {
+    let path = dir.as_ref().join(RATE_FILE);
+    let text = match std::fs::read_to_string(&path) {
+        Ok(t) => t,
+        Err(e) if e.kind() == std::io::ErrorKind::NotFound => return Ok(None),
+        Err(e) => return Err(Error::io(&path, e)),
+    };
+    let value: serde_json::Value =
+        serde_json::from_str(&text).map_err(|e| Error::file(&path, format!("not JSON: {e}")))?;
+    match value.get("fps").and_then(|f| f.as_f64()) {
+        Some(fps) if fps.is_finite() && fps > 0.0 => Ok(Some(fps)),
+        _ => Err(Error::file(&path, "needs \"fps\": a positive number")),
+    }
+}
+
 /// The frame files of `dir` in frame order: files named `<digits>.ply` or
 /// `<digits>.obj` (other files are ignored), numbered `0, 1, 2, ...` without
 /// gaps or duplicates.
@@ -217,8 +242,26 @@ impl MeshSequence {
     /// holds exactly this sequence or (after a failure or a kill) what it held
     /// before, and [`MeshSequence::load_dir`] reads back exactly this sequence.
     pub fn write_dir(&self, dir: impl AsRef<Path>) -> Result<()> {
-        write_frames_atomic(dir.as_ref(), self.n_frames(), "ply", |i, p| {
-            write_ply(p, &self.frame_mesh(i))
+        self.write_dir_at(dir, None)
+    }
+
+    /// [`MeshSequence::write_dir`] with the frame rate `fps` recorded in the folder's
+    /// [`RATE_FILE`] (in the same atomic replacement); `None` leaves no rate file.
+    pub fn write_dir_at(&self, dir: impl AsRef<Path>, fps: Option<f64>) -> Result<()> {
+        if let Some(f) = fps.filter(|f| !(f.is_finite() && *f > 0.0)) {
+            return Err(Error::invalid(format!("frame rate must be a positive number, got {f}")));
+        }
+        let keep = |p: &Path| frame_number(p).is_none() && !is_rate_file(p);
+        crate::atomic::write_dir_atomic(dir.as_ref(), &keep, |tmp| {
+            (0..self.n_frames())
+                .into_par_iter()
+                .try_for_each(|i| write_ply(&tmp.join(format!("{i:06}.ply")), &self.frame_mesh(i)))?;
+            if let Some(fps) = fps {
+                let path = tmp.join(RATE_FILE);
+                let text = serde_json::json!({ "fps": fps }).to_string() + "\n";
+                std::fs::write(&path, text).map_err(|e| Error::io(&path, e))?;
+            }
+            Ok(())
         })
     }
 }
@@ -231,7 +274,7 @@ pub fn write_frames_atomic<F>(dir: &Path, n: usize, ext: &str, write: F) -> Resu
 where
     F: Fn(usize, &Path) -> Result<()> + Sync,
 {
-    let keep = |p: &Path| frame_number(p).is_none();
+    let keep = |p: &Path| frame_number(p).is_none() && !is_rate_file(p);
     crate::atomic::write_dir_atomic(dir, &keep, |tmp| {
         (0..n)
             .into_par_iter()

@@ -10,6 +10,7 @@ pub mod options;
 pub mod resources;
 pub mod slurm;
 pub mod stage;
+pub mod step_line;
 pub mod task;
 pub mod task_table;
 pub mod transfer;

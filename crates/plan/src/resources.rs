@@ -32,7 +32,7 @@ impl Resources {
 const TINY_PEAKS: [(&str, f64, f64); 15] = [
     ("align", 15.0, 80.0),
     ("dtw-densify", 13.0, 40.0),
-    ("evaluate", 9.0, 100.0),
+    ("transfer-eval", 9.0, 100.0),
     ("gpdm-train", 19.0, 49.0),
     ("gpr-predict", 101.0, 66.0),
     ("gpr-train", 35.0, 57.0),

@@ -17,7 +17,8 @@ use crate::task::Graph;
     version,
     after_help = "e.g.: plan make --set out/demo/set --pipeline-out out --out out/work/plan.mk\n      \
                   plan slurm --set out/demo/set --pipeline-out out/slurm --out out/slurm\n      \
-                  plan run-task --table out/slurm/slurm/align.tasks --task 0"
+                  plan run-task --table out/slurm/slurm/align.tasks --task 0\n      \
+                  plan step --label 'align A/walk' --of 3/120 -- target/release/align ..."
 )]
 pub struct Args {
     #[command(subcommand)]
@@ -35,6 +36,23 @@ pub enum Command {
     /// Merge the pipelines' records into one table (results.json, variation.json)
     #[command(subcommand)]
     Collect(Collect),
+    /// Run one command of a pipeline recipe and print one line: its label, place and time
+    Step(StepArgs),
+}
+
+#[derive(ClapArgs, Debug)]
+pub struct StepArgs {
+    #[command(flatten)]
+    pub common: CommonArgs,
+    /// What the line calls the step (e.g. `gpr-predict A-to-B/punch/gpr-nn`)
+    #[arg(long)]
+    pub label: String,
+    /// The step's place among the graph's tasks
+    #[arg(long, value_name = "I/N", value_parser = crate::step_line::parse_place)]
+    pub of: Option<(usize, usize)>,
+    /// The command and its arguments, after `--`
+    #[arg(required = true, last = true)]
+    pub command: Vec<String>,
 }
 
 #[derive(ClapArgs, Debug)]
@@ -93,7 +111,7 @@ pub enum Collect {
         /// Output table (results.json)
         #[arg(short, long)]
         out: PathBuf,
-        /// Evaluation records (evaluate --out)
+        /// Evaluation records (transfer-eval --out)
         #[arg(required = true)]
         records: Vec<PathBuf>,
     },
@@ -131,7 +149,8 @@ pub fn run(args: &Args) -> Result<()> {
     match &args.command {
         Command::Make(a) => {
             a.common.init()?;
-            let text = crate::make_fragment::fragment(&graph(&a.options)?);
+            let out = a.options.paths.pipeline_out.to_string_lossy();
+            let text = crate::make_fragment::fragment(&graph(&a.options)?, &out);
             mesh_core::atomic::write_bytes_atomic(&a.out, text.as_bytes())?;
         }
         Command::Slurm(a) => {
@@ -173,6 +192,14 @@ pub fn run(args: &Args) -> Result<()> {
         Command::Collect(Collect::Variation { common, work, out, groups }) => {
             common.init()?;
             crate::collect::variation(work, groups, out)?;
+        }
+        Command::Step(a) => {
+            a.common.init()?;
+            let line = crate::step_line::StepLine { label: a.label.clone(), place: a.of };
+            let status = crate::step_line::run(&line, &a.command[0], &a.command[1..], &a.common)?;
+            if !status.success() {
+                return Err(mesh_core::cli::AlreadyReported.into());
+            }
         }
     }
     Ok(())

@@ -2,7 +2,7 @@
 //! per subject `segment`, `align` of every motion, `pca-fit` (per part and whole body); per
 //! training pair `dtw-densify`; per direction and method `gpr-train`; per test motion
 //! `gpr-predict` (every placement for gpr-nn, plus correction and stitching, CVPR §6),
-//! `evaluate` where truth exists, contact sheets; the learning curves (CVPR figs. 7-9) and the
+//! `transfer-eval` where truth exists, contact sheets; the learning curves (CVPR figs. 7-9) and the
 //! paper figures 3, 5 and 10; and the merge of every evaluation record into `results.json`.
 
 use std::collections::BTreeMap;
@@ -70,7 +70,7 @@ pub fn plan(set: &CaptureSet, out: &str, opt: &TransferOptions, graph: &mut Grap
     let seg = |x: &str| format!("{w}/{x}/parts.seg");
     let aligned = |x: &str, m: &str| format!("{w}/{x}/{m}.aligned");
     let pca = |x: &str, kind: &str| format!("{w}/{x}/{kind}.model");
-    // evaluate's foot-sliding inputs: the subject's truth contacts, its parts and its template.
+    // transfer-eval's foot-sliding inputs: the subject's truth contacts, its parts and its template.
     let feet = |x: &str| {
         vec![
             s("--contacts"),
@@ -229,7 +229,7 @@ pub fn plan(set: &CaptureSet, out: &str, opt: &TransferOptions, graph: &mut Grap
                             method.name().into(), s("--placement"), pl.name().into(), s("--training"),
                             s(if *keys { "keyposes" } else { "dense" }), s("--out"), rec.clone(),
                         ]);
-                        records.push(graph.push(Task::run("evaluate", rec, vec![timing.clone()], args).mkdir_target()));
+                        records.push(graph.push(Task::run("transfer-eval", rec, vec![timing.clone()], args).mkdir_target()));
                     }
                 }
                 if name != "gpr-nn" {
@@ -270,7 +270,7 @@ pub fn plan(set: &CaptureSet, out: &str, opt: &TransferOptions, graph: &mut Grap
                             s(meth), s("--placement"), default_pl.name().into(), s("--training"),
                             s("dense"), s("--out"), rec.clone(),
                         ]);
-                        records.push(graph.push(Task::run("evaluate", rec.clone(), vec![timing.clone()], args).mkdir_target()));
+                        records.push(graph.push(Task::run("transfer-eval", rec.clone(), vec![timing.clone()], args).mkdir_target()));
                     }
                     if surf == "correct-stitch" {
                         // Per-frame confidence beside the error (where truth exists), for the report.

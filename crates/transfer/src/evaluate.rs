@@ -1,4 +1,4 @@
-//! `evaluate`: per-vertex RMS error of a transferred sequence against the
+//! `transfer-eval`: per-vertex RMS error of a transferred sequence against the
 //! ground truth (paper §7, "Quantitative Evaluation").
 //!
 //! - `rms_pose_m`: each predicted frame is first rigidly aligned to its truth

@@ -15,7 +15,7 @@
 //! - The per-frame confidence figure, [`ConfidenceFigure`] (not in the
 //!   paper): for one transferred motion, the normalised nearest distance and
 //!   the GP variance ratio of every part (`crate::confidence`) and, with an
-//!   `evaluate` record, the pose error, frame by frame; frames where a body
+//!   `transfer-eval` record, the pose error, frame by frame; frames where a body
 //!   part is at least [`DEFAULT_EXTRAPOLATION_THRESHOLD`] from its training
 //!   inputs are shaded, and the Pearson correlation of the per-frame maximum
 //!   distance with the error is reported.
@@ -584,7 +584,7 @@ pub fn load_confidence(path: &Path) -> Result<crate::confidence::Confidence> {
     Ok(c)
 }
 
-/// Reads an `evaluate` record and checks that its per-frame pose errors
+/// Reads an `transfer-eval` record and checks that its per-frame pose errors
 /// cover the `frames` frames of `confidence_path`. Errors name the file.
 pub fn load_eval(path: &Path, frames: usize, confidence_path: &Path) -> Result<crate::evaluate::EvalRecord> {
     let text = std::fs::read_to_string(path).map_err(|e| Error::io(path, e))?;
@@ -607,7 +607,7 @@ pub fn load_eval(path: &Path, frames: usize, confidence_path: &Path) -> Result<c
 }
 
 /// Per frame, the largest normalised nearest distance over the body parts
-/// (the displacement left out: the pose error of `evaluate` is measured after
+/// (the displacement left out: the pose error of `transfer-eval` is measured after
 /// a rigid alignment, which the displacement does not change). `None` when no
 /// body part has distances (the affine baseline).
 pub fn max_part_distance(c: &crate::confidence::Confidence) -> Option<Vec<f64>> {
@@ -648,7 +648,7 @@ pub struct ConfidenceSeries {
 
 /// The per-frame confidence figure (`paper-figure confidence`): panel 1 the
 /// normalised nearest distance of every part, panel 2 the variance ratio,
-/// panel 3 (with an `evaluate` record) the pose error in cm; frames where
+/// panel 3 (with an `transfer-eval` record) the pose error in cm; frames where
 /// [`max_part_distance`] reaches `threshold` are shaded in every panel.
 #[derive(Clone, Debug)]
 pub struct ConfidenceFigure {

@@ -12,7 +12,7 @@
 //! the floor is `y = 0`): the target performs the motion in the same capture
 //! volume, at its own size. `P_i = Q_i ∘ T(-c_t)` places the target's frames.
 //!
-//! Three choices of per-frame displacement, all reported by `evaluate`:
+//! Three choices of per-frame displacement, all reported by `transfer-eval`:
 //! - `scaled-source` (the default): the source's own root displacement with its
 //!   translation scaled by `s`; rotation unchanged;
 //! - `regressed` (the paper): the displacement GP's prediction;

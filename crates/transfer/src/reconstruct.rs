@@ -11,6 +11,7 @@
 //! frames cut into parts exactly as PCA sees them ([`PcaModel::part_rows`]),
 //! so prediction and training meshes share one frame.
 
+use mesh_core::cli::ProgressBar;
 use mesh_core::segmentation::Segmentation;
 use mesh_core::{Error, Result};
 use nalgebra::{DMatrix, Vector3};
@@ -56,6 +57,8 @@ pub struct Reconstructor {
     neighbours: usize,
     /// Stitcher and the PCA part index of each of its parts (tree order).
     stitcher: Option<(Stitcher, Vec<usize>)>,
+    /// Counts corrected parts and stitched frames (hidden unless set).
+    progress: ProgressBar,
 }
 
 impl Reconstructor {
@@ -120,7 +123,15 @@ impl Reconstructor {
             correctors,
             neighbours,
             stitcher,
+            progress: ProgressBar::hidden(),
         })
+    }
+
+    /// Shows the work of [`Reconstructor::reconstruct`] on `bar`: one step per corrected part
+    /// of a frame and per stitched frame.
+    pub fn with_progress(mut self, bar: ProgressBar) -> Self {
+        self.progress = bar;
+        self
     }
 
     /// §6.1 on every part of every frame: `decoded[part][frame]` in, same shape out.
@@ -137,7 +148,11 @@ impl Reconstructor {
             .map(|(frames, c)| {
                 frames
                     .par_iter()
-                    .map(|p| c.correct(p, self.neighbours))
+                    .map(|p| {
+                        let r = c.correct(p, self.neighbours);
+                        self.progress.inc(1);
+                        r
+                    })
                     .collect()
             })
             .collect()
@@ -161,6 +176,7 @@ impl Reconstructor {
                     .stitch(&frame)
                     .map_err(|e| Error::invalid(format!("frame {f}: {e}")))?
                     .vertices;
+                self.progress.inc(1);
                 Ok(self.plan.to_template_frame(&v))
             })
             .collect()
@@ -172,8 +188,14 @@ impl Reconstructor {
         pca: &PcaModel,
         decoded: &[Vec<Vec<Vector3<f64>>>],
     ) -> Result<Vec<Vec<Vector3<f64>>>> {
+        let n_frames = decoded.first().map_or(0, |p| p.len());
+        let corrections = if self.correctors.is_empty() { 0 } else { decoded.len() * n_frames };
+        let stitches = if self.stitcher.is_some() { n_frames } else { 0 };
+        self.progress.set_length((corrections + stitches) as u64);
         let corrected = self.correct(decoded)?;
-        self.merge(pca, &corrected)
+        let merged = self.merge(pca, &corrected);
+        self.progress.finish_and_clear();
+        merged
     }
 }
 

@@ -1,7 +1,7 @@
 //! How much of the transfer error the representation alone causes: the
 //! target's own truth frames are cut into parts, optionally passed through the
 //! part PCA (encode + decode, no regression), and rebuilt into one mesh by each
-//! [`Surface`] method; `rms_pose_m` against the truth (as `evaluate`) is then the
+//! [`Surface`] method; `rms_pose_m` against the truth (as `transfer-eval`) is then the
 //! floor any regression can reach with that representation.
 
 use mesh_core::sequence::MeshSequence;

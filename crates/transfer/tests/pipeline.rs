@@ -191,7 +191,7 @@ fn transfer_pipeline_on_a_known_synthetic_set() {
             );
             assert_eq!(pred.faces, truth.faces, "the target's topology");
             let json = run(
-                "evaluate",
+                "transfer-eval",
                 &[
                     "-q",
                     p(&out),

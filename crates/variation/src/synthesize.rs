@@ -565,7 +565,7 @@ pub fn run_with_progress(
         }
         for (k, d) in decoded.iter().enumerate() {
             MeshSequence::new(model.faces.clone(), d.meshes.clone())
-                .write_dir(out.join(&job.label).join(format!("var{k}")))?;
+                .write_dir_at(out.join(&job.label).join(format!("var{k}")), Some(model.fps))?;
         }
         sequences.push(measure(job, &decoded, model));
         progress(j + 1, jobs.len());

@@ -45,11 +45,17 @@ fn main() -> ExitCode {
         let pred = read_frames(&args.prediction)?;
         check_same_topology(&training, &args.training, &pred, &args.prediction)?;
         let corrector = Corrector::new(training.faces.clone(), training.frames)?;
+        let bar = mesh_core::cli::progress_bar(pred.frames.len() as u64, "correct: frames", &args.common);
         let out: Vec<_> = pred
             .frames
             .par_iter()
-            .map(|p| corrector.correct(p, args.neighbours as usize))
+            .map(|p| {
+                let c = corrector.correct(p, args.neighbours as usize);
+                bar.inc(1);
+                c
+            })
             .collect::<Result<_, _>>()?;
+        bar.finish_and_clear();
         write_frames(&args.out, &pred.faces, out, pred.is_dir)?;
         Ok(())
     })

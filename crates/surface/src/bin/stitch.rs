@@ -83,7 +83,9 @@ fn main() -> ExitCode {
             );
         }
         let mut out = Vec::with_capacity(n_frames);
+        let bar = mesh_core::cli::progress_bar(n_frames as u64, "stitch: frames", &args.common);
         for i in 0..n_frames {
+            bar.inc(1);
             let frame: Vec<_> = parts.iter().map(|p| p.frames[i].clone()).collect();
             out.push(
                 stitcher
@@ -92,6 +94,7 @@ fn main() -> ExitCode {
                     .vertices,
             );
         }
+        bar.finish_and_clear();
         write_frames(&args.out, &template.faces, out, parts[0].is_dir)?;
         Ok(())
     })

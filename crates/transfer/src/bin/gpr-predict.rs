@@ -125,7 +125,12 @@ fn main() -> ExitCode {
                         args.neighbours.into(),
                         args.correct_stride.into(),
                     )
-                    .with_context(|| seg_path.display().to_string())?,
+                    .with_context(|| seg_path.display().to_string())?
+                    .with_progress(mesh_core::cli::progress_bar(
+                        0,
+                        "gpr-predict: surface",
+                        &args.common,
+                    )),
                 )
             }
         };
@@ -155,7 +160,11 @@ fn main() -> ExitCode {
             mesh_core::atomic::write_bytes_atomic(path, serde_json::to_string(&c)?.as_bytes())?;
         }
         let t1 = Instant::now();
-        MeshSequence::new(faces, result.frames).write_dir(&args.out)?;
+        // One output frame per source frame: the sequence plays at the source's rate, which
+        // gpr-train records in the model's header.
+        let (_, _, model_header) = mesh_core::artifact::read_header(&args.model)?;
+        let fps = model_header.params.get("source_fps").and_then(|f| f.as_f64());
+        MeshSequence::new(faces, result.frames).write_dir_at(&args.out, fps)?;
         let write = t1.elapsed().as_secs_f64();
         let n = motion.n_frames() as f64;
         mesh_core::info!(

@@ -162,6 +162,10 @@ fn main() -> ExitCode {
         let maps = (args.mean == MeanFunction::Affine && (ridge_toward || args.prior_weight > 0.0))
             .then(|| transfer::geometric_prior::part_priors(&src_pca, &tgt_pca));
         let priors = maps.as_deref().map(|maps| MeanPriors { maps, ridge_toward, weight: args.prior_weight });
+        let spin = mesh_core::cli::spinner(
+            &format!("gpr-train: {} parts + displacement, {} pairs", names.len(), pairs.len()),
+            &args.common,
+        );
         let model: GprModel = train_toward(
             method,
             args.nn_bias,
@@ -174,6 +178,7 @@ fn main() -> ExitCode {
             args.keyposes_only,
             &opts,
         )?;
+        spin.finish_and_clear();
         mesh_core::info!(
             "trained {} on {} pairs in {:.3} s",
             method.name(),

@@ -209,11 +209,15 @@ fn main() -> ExitCode {
             whole.into_iter().map(|p| p.reversed()).collect(),
         );
         let mut points = Vec::new();
+        let bar = mesh_core::cli::progress_bar(2, "learning-curves: directions", &args.common);
+        bar.enable_steady_tick(std::time::Duration::from_millis(200));
         for d in [&forward, &reverse] {
             let t = std::time::Instant::now();
             points.extend(run_direction(d, &train_sizes, args.nn_bias, args.mean, &opts, args.common.seed)?);
+            bar.inc(1);
             mesh_core::info!("{}: sizes {:?} in {:.1} s", d.label, train_sizes, t.elapsed().as_secs_f64());
         }
+        bar.finish_and_clear();
         std::fs::create_dir_all(&args.out).with_context(|| args.out.display().to_string())?;
         let plots = plot_all(&args.out, &points)?;
         mesh_core::info!("wrote {} plots", plots.len());

@@ -124,7 +124,7 @@ struct ConfidenceArgs {
     /// Confidence JSON of one transferred motion (gpr-predict --confidence)
     #[arg(long)]
     confidence: PathBuf,
-    /// Evaluate record of the same motion (evaluate --out): adds the per-frame pose error panel
+    /// Evaluate record of the same motion (transfer-eval --out): adds the per-frame pose error panel
     #[arg(long)]
     eval: Option<PathBuf>,
     /// Shade the frames where some body part's nearest distance is at least this

@@ -239,7 +239,7 @@ pub fn bin(name: &str) -> String {
         "dtw-densify" => env!("CARGO_BIN_EXE_dtw-densify"),
         "gpr-train" => env!("CARGO_BIN_EXE_gpr-train"),
         "gpr-predict" => env!("CARGO_BIN_EXE_gpr-predict"),
-        "evaluate" => env!("CARGO_BIN_EXE_evaluate"),
+        "transfer-eval" => env!("CARGO_BIN_EXE_transfer-eval"),
         "learning-curves" => env!("CARGO_BIN_EXE_learning-curves"),
         _ => unreachable!(),
     }

@@ -37,7 +37,12 @@ fn main() -> ExitCode {
         args.common.init()?;
         let model = VariationModel::load(&args.model)?;
         let group = Group::load(&args.group)?;
+        let spin = mesh_core::cli::spinner(
+            &format!("variation-eval: {} sequences x {} parts", model.sequences.len(), model.parts.len()),
+            &args.common,
+        );
         let report = evaluate(&model, &group, args.plots.as_deref(), args.common.seed)?;
+        spin.finish_and_clear();
         mesh_core::atomic::write_bytes_atomic(
             &args.out,
             (serde_json::to_string_pretty(&report)? + "\n").as_bytes(),

@@ -1,4 +1,4 @@
-//! `import`: OBJ/PLY frames or a template + PC2 point cache to a surfcap sequence folder.
+//! `mesh-import`: OBJ/PLY frames or a template + PC2 point cache to a surfcap sequence folder.
 use std::path::PathBuf;
 use std::process::ExitCode;
 
@@ -8,11 +8,11 @@ use mesh_core::cli::{run_stage, CommonArgs};
 /// Read a mesh sequence made by other tools (PC2 point cache + template, or OBJ/PLY frames) into a folder of PLY frames
 #[derive(Parser)]
 #[command(
-    name = "import",
+    name = "mesh-import",
     version,
-    after_help = "e.g.: import walk.pc2 work/walk            # template: walk.obj beside it\n\
-                  e.g.: import walk.pc2 work/walk --template body.ply\n\
-                  e.g.: import blender-export/ work/walk   # folder of 000000.obj, ..."
+    after_help = "e.g.: mesh-import walk.pc2 work/walk            # template: walk.obj beside it\n\
+                  e.g.: mesh-import walk.pc2 work/walk --template body.ply\n\
+                  e.g.: mesh-import blender-export/ work/walk   # folder of 000000.obj, ..."
 )]
 struct Args {
     #[command(flatten)]
@@ -28,7 +28,7 @@ struct Args {
 
 fn main() -> ExitCode {
     let args = Args::parse();
-    run_stage("import", || {
+    run_stage("mesh-import", || {
         args.common.init()?;
         let is_pc2 = args
             .input

@@ -13,9 +13,9 @@ use transfer::evaluate::{foot_sliding, rms_errors_per_frame, EvalRecord};
 /// Per-vertex RMS error of a transferred sequence against its ground truth (pose-aligned and as placed)
 #[derive(Parser, Debug)]
 #[command(
-    name = "evaluate",
+    name = "transfer-eval",
     version,
-    after_help = "e.g.: evaluate out/transfer/A-to-B/punch/gpr-nn set/truth/B/punch --direction 'A->B' --motion punch --method gpr-nn --out out/eval/A-to-B/punch/gpr-nn.json"
+    after_help = "e.g.: transfer-eval out/transfer/A-to-B/punch/gpr-nn set/truth/B/punch --direction 'A->B' --motion punch --method gpr-nn --out out/eval/A-to-B/punch/gpr-nn.json"
 )]
 struct Args {
     #[command(flatten)]
@@ -56,7 +56,7 @@ struct Args {
 
 fn main() -> ExitCode {
     let args = Args::parse();
-    run_stage("evaluate", || {
+    run_stage("transfer-eval", || {
         args.common.init()?;
         let pred = MeshSequence::load_dir(&args.prediction)?;
         let truth = MeshSequence::load_dir(&args.truth)?;

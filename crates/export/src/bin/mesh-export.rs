@@ -1,4 +1,4 @@
-//! `export`: a mesh sequence folder to OBJ/PLY frames, OBJ + PC2, or glTF .glb.
+//! `mesh-export`: a mesh sequence folder to OBJ/PLY frames, OBJ + PC2, or glTF .glb.
 use std::path::PathBuf;
 use std::process::ExitCode;
 
@@ -10,12 +10,12 @@ use mesh_core::sequence::MeshSequence;
 /// Write a mesh sequence for other tools: OBJ/PLY per frame, template OBJ + PC2 point cache, or animated glTF (.glb)
 #[derive(Parser)]
 #[command(
-    name = "export",
+    name = "mesh-export",
     version,
     after_help = "The format follows OUT: a .glb file, a .pc2 file (plus the template OBJ beside it,\n\
                   same stem), or a folder of numbered frames (--frame-format obj|ply).\n\
-                  e.g.: export out/transfer/A-to-B/walk/gpr-nn walk.glb --stride 2\n\
-                  e.g.: export out/transfer/A-to-B/walk/gpr-nn walk.pc2   # writes walk.obj + walk.pc2"
+                  e.g.: mesh-export out/transfer/A-to-B/walk/gpr-nn walk.glb --stride 2\n\
+                  e.g.: mesh-export out/transfer/A-to-B/walk/gpr-nn walk.pc2   # writes walk.obj + walk.pc2"
 )]
 struct Args {
     #[command(flatten)]
@@ -30,9 +30,9 @@ struct Args {
     /// glb: keep every N-th frame
     #[arg(long, default_value_t = 1, value_name = "N", value_parser = clap::value_parser!(u32).range(1..))]
     stride: u32,
-    /// glb: frames per second of the sequence
-    #[arg(long, default_value_t = 30.0, value_name = "F")]
-    fps: f64,
+    /// glb: frames per second [default: the folder's rate.json, else its capture's subject.json, else 30]
+    #[arg(long, value_name = "F")]
+    fps: Option<f64>,
     /// glb: blend linearly between frames instead of stepping
     #[arg(long)]
     linear: bool,
@@ -43,7 +43,7 @@ struct Args {
 
 fn main() -> ExitCode {
     let args = Args::parse();
-    run_stage("export", || {
+    run_stage("mesh-export", || {
         args.common.init()?;
         let seq = MeshSequence::load_dir(&args.input)?;
         let ext = args
@@ -53,9 +53,18 @@ fn main() -> ExitCode {
             .map(str::to_ascii_lowercase);
         match ext.as_deref() {
             Some("glb") => {
+                let (fps, from) = export::rate::sequence_fps(&args.input, args.fps)?;
+                if from == export::rate::RateSource::Fallback {
+                    mesh_core::warn!(
+                        "{}: no frame rate recorded (rate.json or subject.json): {fps} fps assumed, pass --fps",
+                        args.input.display()
+                    );
+                } else {
+                    mesh_core::info!("{fps} fps ({from})");
+                }
                 let opts = GlbOptions {
                     stride: args.stride as usize,
-                    fps: args.fps,
+                    fps,
                     interpolation: if args.linear {
                         Interpolation::Linear
                     } else {
