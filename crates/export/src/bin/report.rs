@@ -50,7 +50,7 @@ fn parse_view(s: &str) -> Result<(String, PathBuf), String> {
 }
 
 fn main() -> ExitCode {
-    let args = Args::parse();
+    let args = mesh_core::cli::parse::<Args>();
     run_stage("report", || {
         args.common.init()?;
         let page = write_report(&ReportOptions {
