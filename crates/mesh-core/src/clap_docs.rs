@@ -19,7 +19,7 @@ pub const GENERATE_FLAG: &str = "--surfcap-generate";
 pub enum Kind {
     /// `DIR/man1/<name>.1` (roff).
     Man,
-    /// `DIR/bash/<name>`, `DIR/zsh/_<name>`, `DIR/fish/<name>.fish`.
+    /// `DIR/bash/<name>.bash`, `DIR/zsh/_<name>`, `DIR/fish/<name>.fish`.
     Completions,
 }
 

@@ -13,8 +13,9 @@
 //!   ([`crate::segmentation::segment`]);
 //! - every motion named (training pairs, `test`, `target_test`): its folder
 //!   exists and holds a readable frame sequence ([`crate::sequence::frame_files`]);
-//! - every frame of every motion folder of both subjects (and of their
-//!   ground truth): readable, with the template's vertex count and faces;
+//! - every frame of every motion folder of both subjects and of every folder
+//!   of their ground truth (`truth/<subject>/*`): readable, with the
+//!   template's vertex count and faces;
 //! - every key-pose `[source frame, target frame]` within its two motions.
 
 use std::collections::BTreeMap;
@@ -134,8 +135,19 @@ pub fn check_set(dir: impl AsRef<Path>) -> Report {
             if let Some(n) = check_frames(&d, template.as_ref(), &mut report) {
                 n_frames.insert((subject.to_string(), m.clone()), n);
             }
-            let t = set.truth_dir(subject, &m);
-            if t.is_dir() {
+        }
+        // Ground truth: the subject performing motions (its own or the other subject's).
+        let truth = set.root.join("truth").join(subject);
+        if truth.is_dir() {
+            let mut dirs: Vec<PathBuf> = match std::fs::read_dir(&truth) {
+                Ok(rd) => rd.filter_map(|e| e.ok()).map(|e| e.path()).filter(|p| p.is_dir()).collect(),
+                Err(e) => {
+                    report.add(&truth, e.to_string());
+                    Vec::new()
+                }
+            };
+            dirs.sort();
+            for t in dirs {
                 check_frames(&t, template.as_ref(), &mut report);
             }
         }

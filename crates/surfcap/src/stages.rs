@@ -27,6 +27,7 @@ pub const STAGES: &[Stage] = &[
     st("synth", "synth", DATA, "build a capture set from real bodies and real mocap, with ground truth"),
     st("mesh-import", "import", DATA, "read OBJ/PLY frames (any naming) or OBJ + PC2 into a folder of PLY frames"),
     st("check-set", "check-set", DATA, "validate a capture set and list every problem, one line each"),
+    st("propose-curves", "propose-curves", DATA, "find limb loops on a template without annotation, into a copy of subject.json"),
     st("render", "render", DATA, "draw mesh sequences to PNG frames, a contact sheet and a GIF"),
     st("inspect", "inspect", DATA, "print an artifact's kind, version and provenance header as JSON"),
     st("segment", "segment", TRANSFER, "cut the template into overlapping parts along the subject's curves"),

@@ -8,6 +8,7 @@ use std::collections::BTreeSet;
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
 
+use mesh_core::clap_docs::Kind;
 use surfcap::stages::STAGES;
 
 fn surfcap(args: &[&str]) -> Output {
@@ -49,7 +50,7 @@ fn help_lists_every_stage_binary_in_pipeline_order() {
     // Listed: the stages whose binary is built beside surfcap (all of them after a workspace build).
     let listed: Vec<&str> = text
         .lines()
-        .filter(|l| l.starts_with("    "))
+        .filter(|l| l.starts_with("    ") && !l[4..].starts_with(' '))
         .map(|l| l.split_whitespace().next().unwrap())
         .collect();
     let built: Vec<&str> = STAGES.iter().filter(|s| bin_dir().join(s.bin).is_file()).map(|s| s.name).collect();
@@ -99,15 +100,17 @@ fn man_pages_and_completions_are_written_for_every_stage() {
     for n in &names {
         let page = std::fs::read_to_string(man.join(format!("man1/{n}.1"))).unwrap();
         assert!(page.contains(".TH") && page.contains(".SH SYNOPSIS"), "{n}");
-        for f in [format!("bash/{n}"), format!("zsh/_{n}"), format!("fish/{n}.fish")] {
-            let text = std::fs::read_to_string(comp.join(&f)).unwrap();
-            assert!(text.len() > 100, "{f}");
+        let files = mesh_core::clap_docs::files(Kind::Completions, n);
+        assert_eq!(files.len(), 3);
+        for f in &files {
+            let text = std::fs::read_to_string(comp.join(f)).unwrap_or_else(|e| panic!("{}: {e}", f.display()));
+            assert!(text.len() > 100 && text.contains(n), "{}", f.display());
         }
-        let st = Command::new("bash").arg("-n").arg(comp.join(format!("bash/{n}"))).status().unwrap();
+        let st = Command::new("bash").arg("-n").arg(comp.join(&files[0])).status().unwrap();
         assert!(st.success(), "bash -n {n}");
     }
     // surfcap's own completion offers the stage names.
-    let own = std::fs::read_to_string(comp.join("bash/surfcap")).unwrap();
+    let own = std::fs::read_to_string(comp.join(&mesh_core::clap_docs::files(Kind::Completions, "surfcap")[0])).unwrap();
     assert!(STAGES.iter().all(|s| own.contains(s.name)));
     assert_eq!(std::fs::read_dir(man.join("man1")).unwrap().count(), names.len(), "no stray pages");
 }
