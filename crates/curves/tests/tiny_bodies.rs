@@ -11,7 +11,8 @@ use mesh_core::capture_set::SubjectSpec;
 fn synthesised() -> (tempfile::TempDir, PathBuf) {
     let tmp = tempfile::tempdir().unwrap();
     let set = tmp.path().join("set");
-    let cfg = synth::preset::preset("tiny", 0, false).unwrap();
+    // As `synth --preset tiny` writes it (with its capture noise).
+    let cfg = synth::preset::preset("tiny", 0, true).unwrap();
     synth::capture_set_writer::synthesise(&cfg, &set, false, &|_| {}, &|| {})
         .expect("synth failed (are the assets fetched? run scripts/fetch-assets)");
     (tmp, set)
@@ -60,15 +61,21 @@ fn curves_proposed_for_the_tiny_bodies_agree_with_the_hand_built_ones() {
     assert!(st.status.success(), "{}", String::from_utf8_lossy(&st.stderr));
 }
 
-/// Whole-body agreement and per-part intersection over union required on the tiny bodies.
-const MIN_AGREEMENT: f64 = 0.9;
+/// Whole-body agreement and per-part intersection over union required on the tiny bodies
+/// (measured: 91.5 % for both, every part's IoU at least 0.77; docs/RESULTS.md).
+const MIN_AGREEMENT: f64 = 0.88;
 const MIN_PART_IOU: f64 = 0.7;
 
 #[test]
 fn a_mesh_that_is_no_body_is_a_one_line_error() {
     let dir = tempfile::tempdir().unwrap();
-    let tpl = dir.path().join("tri.ply");
-    mesh_core::io::write_ply(&tpl, &mesh_core::shapes::cylinder(3, 2, 0.1, 0.2)).unwrap();
+    let tpl = dir.path().join("tet.ply");
+    let v = |x: f64, y: f64, z: f64| nalgebra::Vector3::new(x, y, z);
+    let tet = mesh_core::TriMesh::new(
+        vec![v(0.0, 0.0, 0.0), v(1.0, 0.0, 0.0), v(0.0, 1.0, 0.0), v(0.0, 0.0, 1.0)],
+        vec![[0, 2, 1], [0, 1, 3], [0, 3, 2], [1, 2, 3]],
+    );
+    mesh_core::io::write_ply(&tpl, &tet).unwrap();
     let json = dir.path().join("subject.json");
     std::fs::write(&json, r#"{"fps": 25}"#).unwrap();
     let out = Command::new(env!("CARGO_BIN_EXE_propose-curves"))
