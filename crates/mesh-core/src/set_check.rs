@@ -240,7 +240,13 @@ fn check_subject(set: &CaptureSet, subject: &str, report: &mut Report) -> Option
     let spec: SubjectSpec = match serde_json::from_value(value) {
         Ok(s) => s,
         Err(e) => {
-            report.add(&json, format!("invalid subject description: {e}"));
+            let text = e.to_string();
+            let hint = if text.contains("`parts`") || text.contains("`curves`") {
+                " (no part curves: `propose-curves` can find them)"
+            } else {
+                ""
+            };
+            report.add(&json, format!("invalid subject description: {text}{hint}"));
             return None;
         }
     };

@@ -226,3 +226,13 @@ fn a_set_with_several_problems_lists_all_of_them() {
         );
     }
 }
+
+#[test]
+fn a_subject_without_curves_is_pointed_to_propose_curves() {
+    let (_t, set) = copy();
+    edit_json(&set.join("B/subject.json"), |v| {
+        v.as_object_mut().unwrap().remove("curves");
+        v.as_object_mut().unwrap().remove("parts");
+    });
+    one_problem(&check_set(&set), &set.join("B/subject.json"), &["missing field", "propose-curves"]);
+}
