@@ -10,6 +10,7 @@
 #   make report OUT=<dir>   the HTML report of a run;  make assets   fetch the real bodies and mocap
 #   make export OUT=<dir>   .glb and OBJ + PC2 of a run's final transfers and the report's variations
 #   make setup | setup-web   system packages (OpenBLAS) / the report tests' web tools (Chromium)
+#   make man | completions   man pages / bash, zsh, fish completions of every stage: target/man, target/completions
 #   make clean-out   remove $(OUT);  make help   this list
 
 SHELL := bash
@@ -25,11 +26,16 @@ export SURFCAP_CACHE
 # rayon does the parallelism; OpenBLAS threads would fight it (see docs/PERFORMANCE.md).
 export OPENBLAS_NUM_THREADS := 1
 
-.PHONY: all build test setup assets clean-out help
+.PHONY: all build test setup assets clean-out help man completions
 all: build
 
 help:
-	@sed -n '2,13p' Makefile
+	@sed -n '2,14p' Makefile
+	@echo "Stages: $(BIN)/surfcap help (after make build)"
+
+# Generated from every stage's clap definition (surfcap man / completions).
+man completions: build
+	$(BIN)/surfcap $@ --out target/$@
 
 setup:
 	@scripts/setup-system

@@ -1,4 +1,5 @@
-# The pipelines' task graph (crates/plan). `plan make` writes every stage invocation of
+# The pipelines' task graph (crates/plan). `check-set` validates the capture set first (every
+# problem one line, exit 1), then `plan make` writes every stage invocation of
 # `make transfer` and `make variation` (target, inputs, recipe) into $(PLAN_MK) from the capture
 # set and the options of pipelines/transfer.mk and pipelines/variation.mk; the pipelines' result
 # goals include it. It is rewritten when the set's description or folders, the plan binary or the
@@ -26,7 +27,8 @@ $(shell mkdir -p $(dir $(PLAN_OPTIONS)))
 $(file >$(PLAN_OPTIONS),$(strip $(PLAN_ARGS)))
 endif
 
-$(PLAN_MK): $(PLAN_OPTIONS) $(BIN)/plan $(SET)/set.json $(wildcard $(SET)/* $(SET)/*/* $(SET)/truth/*)
+$(PLAN_MK): $(PLAN_OPTIONS) $(BIN)/plan $(BIN)/check-set $(SET)/set.json $(wildcard $(SET)/* $(SET)/*/* $(SET)/truth/*)
+	@$(BIN)/check-set -q $(SET)
 	$(BIN)/plan make -q $(PLAN_ARGS) --out $@
 
 include $(PLAN_MK)
@@ -37,4 +39,5 @@ SLURM_RESOURCES ?=
 slurm:
 	@test -f $(SET)/set.json || { echo "slurm: $(SET)/set.json: no capture set (run 'make demo-data' or pass SET=<dir>)" >&2; exit 1; }
 	$(CARGO) build --release --workspace --quiet
+	@$(BIN)/check-set -q $(SET)
 	$(BIN)/plan slurm -q $(PLAN_ARGS) --bin $(BIN) $(if $(SLURM_RESOURCES),--resources $(SLURM_RESOURCES)) --out $(OUT)

@@ -39,7 +39,12 @@ pub fn write_frames(dir: &Path, seq: &MeshSequence, format: FrameFormat) -> Resu
     }
 }
 
-/// Reads a folder of numbered OBJ or PLY frames (see [`MeshSequence::load_dir`]).
-pub fn read_frames(dir: &Path) -> Result<MeshSequence> {
-    MeshSequence::load_dir(dir)
+/// Reads a folder of numbered OBJ or PLY frames: the files `pattern` names
+/// (`walk.%04d.obj`), or without one the sequence detected in the folder
+/// (see [`mesh_core::sequence::frame_files`]).
+pub fn read_frames(dir: &Path, pattern: Option<&mesh_core::frame_pattern::FramePattern>) -> Result<MeshSequence> {
+    match pattern {
+        Some(p) => MeshSequence::load_files(&mesh_core::sequence::frame_files_matching(dir, p)?),
+        None => MeshSequence::load_dir(dir),
+    }
 }

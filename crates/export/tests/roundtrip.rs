@@ -50,7 +50,7 @@ fn frame_folders_round_trip_in_both_formats_and_drop_stale_frames() {
     for format in [FrameFormat::Obj, FrameFormat::Ply] {
         let d = dir.path().join(format!("{format:?}"));
         write_frames(&d, &long, format).unwrap();
-        assert_eq!(read_frames(&d).unwrap(), long, "{format:?}");
+        assert_eq!(read_frames(&d, None).unwrap(), long, "{format:?}");
         // A shorter sequence in the other format replaces every old frame.
         let other = if format == FrameFormat::Obj {
             FrameFormat::Ply
@@ -58,7 +58,7 @@ fn frame_folders_round_trip_in_both_formats_and_drop_stale_frames() {
             FrameFormat::Obj
         };
         write_frames(&d, &short, other).unwrap();
-        assert_eq!(read_frames(&d).unwrap(), short, "{format:?} then {other:?}");
+        assert_eq!(read_frames(&d, None).unwrap(), short, "{format:?} then {other:?}");
     }
 }
 

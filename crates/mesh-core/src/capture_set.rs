@@ -80,7 +80,7 @@ fn parse_json<T: serde::de::DeserializeOwned>(bytes: &[u8]) -> std::result::Resu
 }
 
 /// A subject or motion name must be a plain directory name.
-fn check_name(what: &str, name: &str) -> std::result::Result<(), String> {
+pub(crate) fn check_name(what: &str, name: &str) -> std::result::Result<(), String> {
     let bad = name.is_empty()
         || name == "."
         || name == ".."

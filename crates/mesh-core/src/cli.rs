@@ -62,6 +62,33 @@ use indicatif::ProgressStyle;
 
 use crate::artifact::Header;
 
+/// Parses a stage's arguments (`A::parse()`: usage errors exit 2). The
+/// hidden first argument `--surfcap-generate man|completions DIR` instead
+/// writes the stage's man page or shell completions, generated from `A`'s
+/// clap definition ([`crate::clap_docs`]), and exits (0, or 1 with one error line).
+pub fn parse<A: clap::Parser>() -> A {
+    let args: Vec<std::ffi::OsString> = std::env::args_os().collect();
+    if args.get(1).is_some_and(|a| a == crate::clap_docs::GENERATE_FLAG) {
+        let cmd = A::command();
+        let name = cmd.get_name().to_string();
+        let result = (|| -> anyhow::Result<()> {
+            let [kind, dir] = &args[2..] else {
+                anyhow::bail!("usage: {name} {} man|completions DIR", crate::clap_docs::GENERATE_FLAG);
+            };
+            let kind: crate::clap_docs::Kind = kind.to_string_lossy().parse()?;
+            crate::clap_docs::write(cmd, kind, std::path::Path::new(dir))
+        })();
+        match result {
+            Ok(()) => std::process::exit(0),
+            Err(e) => {
+                eprintln!("{name}: {}", error_line(&e));
+                std::process::exit(1);
+            }
+        }
+    }
+    A::parse()
+}
+
 /// Flags every stage accepts; `#[command(flatten)]` it into the stage's args.
 #[derive(clap::Args, Clone, Debug, Default, PartialEq, Eq)]
 pub struct CommonArgs {

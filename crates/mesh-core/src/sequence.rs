@@ -97,46 +97,52 @@ pub fn read_rate(dir: impl AsRef<Path>) -> Result<Option<f64>> {
     }
 }
 
-/// The frame files of `dir` in frame order: files named `<digits>.ply` or
-/// `<digits>.obj` (other files are ignored), numbered `0, 1, 2, ...` without
-/// gaps or duplicates.
+/// The frame files of `dir` in frame order, found by
+/// [`crate::frame_pattern::detect`]: surfcap's own `000000.ply`, ... (`.obj`
+/// too), or one prefixed sequence (`frame_0001.ply`, `walk.0001.obj`,
+/// Blender's `punch0.obj`, ...), numbered without gaps or duplicates from
+/// its first number. A reading other than surfcap's own is stated once per
+/// folder on stderr (not with `-q`).
 pub fn frame_files(dir: impl AsRef<Path>) -> Result<Vec<PathBuf>> {
     let dir = dir.as_ref();
-    let mut found: Vec<(usize, PathBuf)> = Vec::new();
-    for entry in std::fs::read_dir(dir).map_err(|e| Error::io(dir, e))? {
-        let path = entry.map_err(|e| Error::io(dir, e))?.path();
-        if let Some(n) = frame_number(&path) {
-            found.push((n, path));
-        }
+    let listing = crate::frame_pattern::detect(dir)?;
+    if !listing.is_native() {
+        state_reading(dir, &listing);
     }
-    if found.is_empty() {
-        return Err(Error::file(
-            dir,
-            "no frame files (000000.ply, 000001.ply, ... or .obj)",
-        ));
+    Ok(listing.files)
+}
+
+/// The frame files of `dir` named by `pattern` (e.g. `walk.%04d.obj`), in
+/// frame order; the reading is stated as by [`frame_files`].
+pub fn frame_files_matching(
+    dir: impl AsRef<Path>,
+    pattern: &crate::frame_pattern::FramePattern,
+) -> Result<Vec<PathBuf>> {
+    let dir = dir.as_ref();
+    let listing = crate::frame_pattern::list(dir, pattern)?;
+    if !listing.is_native() {
+        state_reading(dir, &listing);
     }
-    found.sort();
-    for (i, (n, p)) in found.iter().enumerate() {
-        if *n != i {
-            let name = |p: &Path| {
-                p.file_name()
-                    .unwrap_or_default()
-                    .to_string_lossy()
-                    .into_owned()
-            };
-            let msg = if *n < i {
-                format!(
-                    "frame {n} appears twice ({} and {})",
-                    name(&found[i - 1].1),
-                    name(p)
-                )
-            } else {
-                format!("frame {i:06} is missing (numbering jumps to {})", name(p))
-            };
-            return Err(Error::file(dir, msg));
-        }
+    Ok(listing.files)
+}
+
+/// `stage: dir: frames walk.%04d.obj, ...` on stderr, once per folder and
+/// process, unless `-q`.
+fn state_reading(dir: &Path, listing: &crate::frame_pattern::FrameListing) {
+    static STATED: std::sync::Mutex<std::collections::BTreeSet<PathBuf>> =
+        std::sync::Mutex::new(std::collections::BTreeSet::new());
+    if crate::cli::is_quiet() {
+        return;
     }
-    Ok(found.into_iter().map(|(_, p)| p).collect())
+    let first = STATED.lock().map(|mut s| s.insert(dir.to_path_buf())).unwrap_or(false);
+    if first {
+        eprintln!(
+            "{}: {}: {}",
+            crate::cli::stage_name(),
+            crate::input::escape_control(&dir.display().to_string()),
+            listing.describe()
+        );
+    }
 }
 
 impl MeshSequence {

@@ -42,7 +42,7 @@ struct Args {
 }
 
 fn main() -> ExitCode {
-    let args = Args::parse();
+    let args = mesh_core::cli::parse::<Args>();
     run_stage("align", || {
         args.common.init()?;
         if args.frame == AlignFrame::Root && args.segmentation.is_none() {

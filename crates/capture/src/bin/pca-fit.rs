@@ -52,7 +52,7 @@ struct Args {
 }
 
 fn main() -> ExitCode {
-    let args = Args::parse();
+    let args = mesh_core::cli::parse::<Args>();
     run_stage("pca-fit", || {
         args.common.init()?;
         let template = read_mesh(&args.template)?;

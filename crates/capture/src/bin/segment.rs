@@ -29,7 +29,7 @@ struct Args {
 }
 
 fn main() -> ExitCode {
-    let args = Args::parse();
+    let args = mesh_core::cli::parse::<Args>();
     run_stage("segment", || {
         args.common.init()?;
         let subject = SubjectSpec::load(&args.subject)?;

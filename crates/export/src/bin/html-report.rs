@@ -50,7 +50,7 @@ fn parse_view(s: &str) -> Result<(String, PathBuf), String> {
 }
 
 fn main() -> ExitCode {
-    let args = Args::parse();
+    let args = mesh_core::cli::parse::<Args>();
     run_stage("html-report", || {
         args.common.init()?;
         // The player runs at the views' own rate: the first view's, checked against the others.

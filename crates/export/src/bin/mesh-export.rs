@@ -42,7 +42,7 @@ struct Args {
 }
 
 fn main() -> ExitCode {
-    let args = Args::parse();
+    let args = mesh_core::cli::parse::<Args>();
     run_stage("mesh-export", || {
         args.common.init()?;
         let seq = MeshSequence::load_dir(&args.input)?;

@@ -12,7 +12,8 @@ use mesh_core::cli::{run_stage, CommonArgs};
     version,
     after_help = "e.g.: mesh-import walk.pc2 work/walk            # template: walk.obj beside it\n\
                   e.g.: mesh-import walk.pc2 work/walk --template body.ply\n\
-                  e.g.: mesh-import blender-export/ work/walk   # folder of 000000.obj, ..."
+                  e.g.: mesh-import blender-export/ work/walk   # frames detected: 000000.obj, frame_0001.ply, punch0.obj, ...\n\
+                  e.g.: mesh-import --frames 'walk.%04d.obj' shots/ work/walk"
 )]
 struct Args {
     #[command(flatten)]
@@ -24,10 +25,14 @@ struct Args {
     /// Mesh holding the faces for a .pc2 input [default: INPUT with .obj]
     #[arg(long, value_name = "MESH")]
     template: Option<PathBuf>,
+    /// Frame file names in a folder INPUT, as a printf pattern (`walk.%04d.obj`, `punch%d.obj`)
+    /// [default: detected; the reading is stated on stderr]
+    #[arg(long, value_name = "PATTERN")]
+    frames: Option<mesh_core::frame_pattern::FramePattern>,
 }
 
 fn main() -> ExitCode {
-    let args = Args::parse();
+    let args = mesh_core::cli::parse::<Args>();
     run_stage("mesh-import", || {
         args.common.init()?;
         let is_pc2 = args
@@ -46,7 +51,7 @@ fn main() -> ExitCode {
                 args.input.display()
             )
         } else {
-            export::frames::read_frames(&args.input)?
+            export::frames::read_frames(&args.input, args.frames.as_ref())?
         };
         seq.write_dir(&args.out)?;
         mesh_core::info!("wrote {} frames to {}", seq.n_frames(), args.out.display());

@@ -31,7 +31,7 @@ struct Args {
 }
 
 fn main() -> ExitCode {
-    let args = Args::parse();
+    let args = mesh_core::cli::parse::<Args>();
     run_stage("fuzz", || {
         args.common.init()?;
         let report = fuzz::run_to_json(

@@ -2,9 +2,8 @@
 
 use std::process::ExitCode;
 
-use clap::Parser;
 
 fn main() -> ExitCode {
-    let args = plan::stage::Args::parse();
+    let args = mesh_core::cli::parse::<plan::stage::Args>();
     mesh_core::cli::run_stage("plan", || plan::stage::run(&args))
 }

@@ -2,10 +2,8 @@
 
 use std::process::ExitCode;
 
-use clap::Parser;
-
 fn main() -> ExitCode {
-    let args = render::stage::Args::parse();
+    let args = mesh_core::cli::parse::<render::stage::Args>();
     mesh_core::cli::run_stage("render", || {
         args.common.init()?;
         render::stage::run(&args)

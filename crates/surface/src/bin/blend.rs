@@ -37,7 +37,7 @@ struct Args {
 }
 
 fn main() -> ExitCode {
-    let args = Args::parse();
+    let args = mesh_core::cli::parse::<Args>();
     run_stage("blend", || {
         args.common.init()?;
         if !(0.0..=1.0).contains(&args.weight) {

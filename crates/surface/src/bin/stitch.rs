@@ -35,7 +35,7 @@ struct Args {
 }
 
 fn main() -> ExitCode {
-    let args = Args::parse();
+    let args = mesh_core::cli::parse::<Args>();
     run_stage("stitch", || {
         args.common.init()?;
         let seg = Segmentation::load(&args.segmentation)?;

@@ -27,7 +27,7 @@ struct Args {
 }
 
 fn main() -> ExitCode {
-    let args = Args::parse();
+    let args = mesh_core::cli::parse::<Args>();
     run_stage("synth", || {
         args.common.init()?;
         let cfg = synth::preset::preset(&args.preset, args.common.seed, !args.no_noise)

@@ -48,7 +48,7 @@ struct Args {
 }
 
 fn main() -> ExitCode {
-    let args = Args::parse();
+    let args = mesh_core::cli::parse::<Args>();
     run_stage("dtw-densify", || {
         args.common.init()?;
         let set = SetSpec::load(&args.set)?;

@@ -71,7 +71,7 @@ struct Args {
 }
 
 fn main() -> ExitCode {
-    let args = Args::parse();
+    let args = mesh_core::cli::parse::<Args>();
     run_stage("gpr-predict", || {
         args.common.init()?;
         let model = GprModel::load(&args.model)?;

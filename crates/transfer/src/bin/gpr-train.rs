@@ -76,7 +76,7 @@ struct Args {
 }
 
 fn main() -> ExitCode {
-    let args = Args::parse();
+    let args = mesh_core::cli::parse::<Args>();
     run_stage("gpr-train", || {
         args.common.init()?;
         let Some(method) = Method::from_name(&args.method) else {

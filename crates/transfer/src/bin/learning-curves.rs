@@ -123,7 +123,7 @@ fn load_pairs(args: &Args) -> anyhow::Result<(Correspondence, Vec<Loaded>)> {
 }
 
 fn main() -> ExitCode {
-    let args = Args::parse();
+    let args = mesh_core::cli::parse::<Args>();
     run_stage("learning-curves", || {
         args.common.init()?;
         let (sp, tp) = (PcaModel::load(&args.source_pca)?, PcaModel::load(&args.target_pca)?);

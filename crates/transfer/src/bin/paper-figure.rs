@@ -215,7 +215,7 @@ fn correction(a: &CorrectionArgs) -> anyhow::Result<()> {
 }
 
 fn main() -> ExitCode {
-    let args = Args::parse();
+    let args = mesh_core::cli::parse::<Args>();
     run_stage("paper-figure", || {
         match &args.figure {
             Figure::CostMatrix(a) => a.common.init().and_then(|_| cost_matrix(a)),

@@ -47,7 +47,7 @@ struct Args {
 }
 
 fn main() -> ExitCode {
-    let args = Args::parse();
+    let args = mesh_core::cli::parse::<Args>();
     run_stage("representation-error", || {
         args.common.init()?;
         let template = read_mesh(&args.template)?;

@@ -34,7 +34,7 @@ struct Args {
 }
 
 fn main() -> ExitCode {
-    let args = Args::parse();
+    let args = mesh_core::cli::parse::<Args>();
     run_stage("surface-quality", || {
         args.common.init()?;
         let seg = Segmentation::load(&args.segmentation)?;

@@ -55,7 +55,7 @@ struct Args {
 }
 
 fn main() -> ExitCode {
-    let args = Args::parse();
+    let args = mesh_core::cli::parse::<Args>();
     run_stage("transfer-eval", || {
         args.common.init()?;
         let pred = MeshSequence::load_dir(&args.prediction)?;

@@ -60,7 +60,7 @@ struct Args {
 }
 
 fn main() -> ExitCode {
-    let args = Args::parse();
+    let args = mesh_core::cli::parse::<Args>();
     run_stage("gpdm-train", || {
         args.common.init()?;
         let group = Group::load(&args.group)?;

@@ -126,7 +126,7 @@ fn parse_weights(s: &str) -> Result<Weights, String> {
 }
 
 fn main() -> ExitCode {
-    let args = Args::parse();
+    let args = mesh_core::cli::parse::<Args>();
     run_stage("hmc-sample", || {
         args.common.init()?;
         let model = VariationModel::load(&args.model)?;

@@ -63,7 +63,7 @@ struct Args {
 }
 
 fn main() -> ExitCode {
-    let args = Args::parse();
+    let args = mesh_core::cli::parse::<Args>();
     run_stage("prealign", || {
         args.common.init()?;
         let set = CaptureSet::open(&args.set)?;

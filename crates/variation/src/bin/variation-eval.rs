@@ -32,7 +32,7 @@ struct Args {
 }
 
 fn main() -> ExitCode {
-    let args = Args::parse();
+    let args = mesh_core::cli::parse::<Args>();
     run_stage("variation-eval", || {
         args.common.init()?;
         let model = VariationModel::load(&args.model)?;

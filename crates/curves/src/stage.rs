@@ -1,0 +1,33 @@
+//! The `propose-curves` stage: read, propose, check by segmenting, write.
+
+use std::path::Path;
+
+use anyhow::{Context, Result};
+use mesh_core::capture_set::SubjectSpec;
+
+use crate::limb_loops::{propose, with_curves, Settings};
+
+pub fn run(subject: &Path, template: &Path, out: &Path) -> Result<()> {
+    let bytes = mesh_core::input::read_regular_file(subject)?;
+    let value: serde_json::Value =
+        serde_json::from_slice(&bytes).map_err(|e| anyhow::anyhow!("{}: invalid JSON: {e}", subject.display()))?;
+    let up = match value.get("up").and_then(|u| u.as_str()).unwrap_or("+y") {
+        u => SubjectSpec { fps: 1.0, units: "m".into(), up: u.into(), parts: Default::default(), curves: Default::default(), extra: Default::default() }
+            .up_vector()
+            .with_context(|| format!("{}: 'up' must be one of +x -x +y -y +z -z", subject.display()))?,
+    };
+    let mesh = mesh_core::io::read_mesh(template)?;
+    let limbs = propose(&mesh, &up, &Settings::default()).with_context(|| template.display().to_string())?;
+    let proposed = with_curves(value, &limbs).with_context(|| subject.display().to_string())?;
+    let spec: SubjectSpec = serde_json::from_value(proposed.clone()).with_context(|| subject.display().to_string())?;
+    let seg = mesh_core::segmentation::segment(&mesh, &spec)
+        .with_context(|| format!("{}: the proposed curves do not cut the template into parts", template.display()))?;
+    for l in &limbs {
+        let n = seg.part(&l.part).map_or(0, |p| p.vertices.len());
+        mesh_core::info!("{}: loops at {:.3} and {:.3} m from vertex {}, {n} vertices", l.part, l.levels[0], l.levels[1], l.extremity);
+    }
+    let mut text = serde_json::to_string_pretty(&proposed)?;
+    text.push('\n');
+    mesh_core::atomic::write_bytes_atomic(out, text.as_bytes())?;
+    Ok(())
+}
