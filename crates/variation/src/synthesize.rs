@@ -4,7 +4,8 @@
 //! ([`crate::metrics`]): the training sequence, or for a blend the non-linear mesh blend of the
 //! pair at that weight. Post-processes, on by default, follow the decoding: [`grounding`]
 //! (vertical) then [`footskate`] (horizontal root shift), both driven by the DTW correspondence
-//! of each variation to its source, then [`foot_lock`] (planted soles pinned by their legs).
+//! of each variation to its source, then [`foot_height`] (each sole at the source's height, swing
+//! feet at least at its clearance) and [`foot_lock`] (planted soles pinned by their legs).
 
 use std::path::Path;
 
@@ -17,6 +18,8 @@ use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 
 use crate::contacts::Contacts;
+use crate::diversity::{self, Diversity};
+use crate::foot_height;
 use crate::foot_lock;
 use crate::footskate;
 use crate::grounding::{self, FloorContact};
@@ -64,6 +67,11 @@ pub struct SynthConfig {
     /// ([`crate::foot_lock`]); on by default.
     #[serde(default = "yes")]
     pub foot_lock: bool,
+    /// After the root clean-up, bring each sole to the source's height at the matched frame
+    /// (planted) or at least to its clearance (swing) by deforming its leg
+    /// ([`crate::foot_height`]); on by default.
+    #[serde(default = "yes")]
+    pub foot_height: bool,
     /// Gaussian σ in frames of the temporal smoothing of every sampled latent trajectory
     /// before decoding ([`crate::latent_smoothing`]); 0 (the default) leaves them as sampled.
     #[serde(default)]
@@ -154,6 +162,10 @@ pub struct SequenceReport {
     /// Largest horizontal root correction of each variation by the clean-up (m).
     #[serde(default)]
     pub footskate_max_m: Vec<f64>,
+    /// Coverage, global and local diversity of the variations against the source
+    /// ([`crate::diversity`]).
+    #[serde(default)]
+    pub diversity: Option<Diversity>,
 }
 
 /// Everything `hmc-sample` reports.
@@ -305,6 +317,7 @@ fn measure(job: &Job, decoded: &[Decoded], model: &VariationModel) -> SequenceRe
         raw_contact_sliding_m: decoded.iter().map(|d| d.raw_sliding.1).collect(),
         source_contact_sliding_m: contact_sliding(source, &job.contacts),
         footskate_max_m: decoded.iter().map(|d| d.footskate_max).collect(),
+        diversity: Some(diversity::measure(&vars, source, &model.template, model.fps)),
     }
 }
 
@@ -542,6 +555,9 @@ pub fn run_with_progress(
                         &mut notes,
                     )?;
                     footskate_max = d.iter().map(|v| v.norm()).fold(0.0, f64::max);
+                    if let (true, Some(legs)) = (cfg.foot_height, &leg_weights) {
+                        foot_height::lift(&mut m, &job.source, &matches, legs, f, c, &model.up);
+                    }
                     if let (true, Some(legs)) = (cfg.foot_lock, &leg_weights) {
                         foot_lock::lock(&mut m, legs, f, c, &model.up);
                     }
