@@ -3,7 +3,10 @@
 //! contacts the clean-ups used (the source's, transferred along the DTW): both frames planted,
 //! one (a contact's start or end), or none (a swing foot passing low over the floor).
 //!
-//! Usage: slide_sources GROUP MODEL DIR (DIR = hmc-sample --out; training sequences only)
+//! Also prints the lowest vertex of each variation, and with BASE (another hmc-sample --out of
+//! the same model and seed) how far the clean-ups moved it.
+//!
+//! Usage: slide_sources GROUP MODEL DIR [BASE] (DIR = hmc-sample --out; training sequences only)
 
 use mesh_core::artifact::Artifact;
 use mesh_core::sequence::MeshSequence;
@@ -54,6 +57,22 @@ fn main() -> mesh_core::Result<()> {
                         cnt[cls] += 1;
                     }
                 }
+            }
+            let (mut lo, mut lv, mut lt) = (f64::INFINITY, 0usize, 0usize);
+            for (t, f) in v.iter().enumerate() {
+                for (i, p) in f.iter().enumerate() {
+                    if p.dot(&up) < lo {
+                        (lo, lv, lt) = (p.dot(&up), i, t);
+                    }
+                }
+            }
+            let src_lo = source.iter().flat_map(|f| f.iter().map(|p| p.dot(&up))).fold(f64::INFINITY, f64::min);
+            println!("  lowest vertex {lv} at frame {lt}: {:.3} m below the source's lowest point; sole floor {:.3}; in a sole: {}", src_lo - lo, src_lo - ground, soles.iter().any(|s| s.contains(&(lv as u32))));
+            if let Some(b) = a.get(4) {
+                let base = MeshSequence::load_dir(std::path::Path::new(b).join(&s.name).join(format!("var{k}")))?.frames;
+                let d = (v[lt][lv] - base[lt][lv]).dot(&up);
+                let legs: Vec<_> = parts.iter().filter(|p| p.name.starts_with("leg")).map(|p| (p.name.clone(), p.vertices.contains(&(lv as u32)))).collect();
+                println!("  vs base: vertex moved {d:.3} up; template height {:.3}; legs {legs:?}; base lowest {:.3}", model.template[lv].dot(&up), base[lt][lv].dot(&up));
             }
             let tot: usize = cnt.iter().sum();
             let all: f64 = sum.iter().sum();

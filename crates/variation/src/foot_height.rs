@@ -5,9 +5,9 @@
 //! Grounding moves the whole body, so only the lower foot can follow the source's floor. The two
 //! leg parts are sampled independently, and a sampled swing foot often passes a centimetre over
 //! the floor while the planted one floats: that swing is what a height rule counts as sliding.
-//! Per foot `f` and frame `t`, with `h_f(t)` the height of the lowest sole vertex of the
-//! variation and `g_f(t) = h^s_f(m(t))` the source's at the DTW-matched frame `m(t)`, the vertical
-//! offset
+//! Per foot `f` and frame `t`, with `h_f(t)` the height of the lowest vertex of the variation's
+//! leg (its foot, toes included: a sampled foot may point its toes below its sole) and
+//! `g_f(t) = h^s_f(m(t))` the source's at the DTW-matched frame `m(t)`, the vertical offset
 //!
 //! `o_f(t) = g_f(t) − h_f(t)` on frames where the source plants the foot,
 //! `o_f(t) = max(0, g_f(t) − h_f(t))` elsewhere (a swing foot is raised to the source's
@@ -57,28 +57,29 @@ pub fn offsets(
 }
 
 /// Applies the clean-up in place (module doc); returns the largest |offset| (m). `legs[f]` are
-/// the leg weights, `soles[f]` the sole vertices, `contacts[t][f]` the source's contacts at the
-/// matched frames, `matches` the DTW correspondence to `source`.
+/// the leg weights (their vertices are the leg whose lowest point is measured),
+/// `contacts[t][f]` the source's contacts at the matched frames, `matches` the DTW
+/// correspondence to `source`.
 pub fn lift(
     frames: &mut [Vec<Vector3<f64>>],
     source: &[Vec<Vector3<f64>>],
     matches: &[f64],
     legs: &[Vec<(u32, f64)>; 2],
-    soles: &[Vec<u32>; 2],
     contacts: &[[bool; 2]],
     up: &Vector3<f64>,
 ) -> f64 {
     let mut max: f64 = 0.0;
     for f in 0..2 {
-        if soles[f].is_empty() {
+        let leg: Vec<u32> = legs[f].iter().map(|&(v, _)| v).collect();
+        if leg.is_empty() {
             continue;
         }
         let planted: Vec<bool> = (0..frames.len())
             .map(|t| contacts.get(t).is_some_and(|c| c[f]))
             .collect();
         let o = offsets(
-            &lowest(frames, &soles[f], up),
-            &lowest(source, &soles[f], up),
+            &lowest(frames, &leg, up),
+            &lowest(source, &leg, up),
             matches,
             &planted,
             SIGMA_FRAMES,
@@ -140,10 +141,9 @@ mod tests {
         let source: Vec<_> = (0..6).map(|_| frame(0.0)).collect();
         let mut var: Vec<_> = (0..6).map(|_| frame(0.02)).collect();
         let legs = [vec![(0, 1.0), (1, 0.5)], vec![(2, 1.0), (3, 0.5)]];
-        let soles = [vec![0], vec![2]];
         let matches: Vec<f64> = (0..6).map(|t| t as f64).collect();
         let contacts = vec![[true, true]; 6];
-        let m = lift(&mut var, &source, &matches, &legs, &soles, &contacts, &up);
+        let m = lift(&mut var, &source, &matches, &legs, &contacts, &up);
         assert!((m - 0.02).abs() < 1e-12);
         for f in &var {
             assert!(f[0].z.abs() < 1e-12, "sole on the source's floor");

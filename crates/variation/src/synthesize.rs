@@ -556,7 +556,7 @@ pub fn run_with_progress(
                     )?;
                     footskate_max = d.iter().map(|v| v.norm()).fold(0.0, f64::max);
                     if let (true, Some(legs)) = (cfg.foot_height, &leg_weights) {
-                        foot_height::lift(&mut m, &job.source, &matches, legs, f, c, &model.up);
+                        foot_height::lift(&mut m, &job.source, &matches, legs, c, &model.up);
                     }
                     if let (true, Some(legs)) = (cfg.foot_lock, &leg_weights) {
                         foot_lock::lock(&mut m, legs, f, c, &model.up);
