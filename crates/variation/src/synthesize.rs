@@ -72,6 +72,10 @@ pub struct SynthConfig {
     /// ([`crate::foot_height`]); on by default.
     #[serde(default = "yes")]
     pub foot_height: bool,
+    /// Measure every sequence against its source ([`SequenceReport`]); off, the report's
+    /// `sequences` is empty (a query that only wants meshes skips most of the cost).
+    #[serde(default = "yes")]
+    pub statistics: bool,
     /// Gaussian σ in frames of the temporal smoothing of every sampled latent trajectory
     /// before decoding ([`crate::latent_smoothing`]); 0 (the default) leaves them as sampled.
     #[serde(default)]
@@ -178,7 +182,14 @@ pub struct SynthReport {
     pub sequences: Vec<SequenceReport>,
     pub notes: Vec<String>,
     pub seconds_sampling: f64,
+    /// Decoding, grounding, clean-ups, writing and statistics together (wall, s).
     pub seconds_decoding: f64,
+    /// The parts of `seconds_decoding` spent writing the PLY files and computing the
+    /// statistics ([`measure`]) (wall, s).
+    #[serde(default)]
+    pub seconds_writing: f64,
+    #[serde(default)]
+    pub seconds_statistics: f64,
 }
 
 /// Sole vertices of the model's template (both feet, [`metrics::soles`]).
@@ -481,6 +492,7 @@ pub fn run_with_progress(
     let fused = (cfg.assembly == Assembly::Average && !cfg.sample_poses)
         .then(|| dec.fused())
         .transpose()?;
+    let (mut seconds_writing, mut seconds_statistics) = (0.0, 0.0);
     for (j, job) in jobs.iter().enumerate() {
         if cfg.footskate && job.contacts.is_none() {
             notes.push(format!(
@@ -579,11 +591,17 @@ pub fn run_with_progress(
         for (k, n) in var_notes.into_iter().enumerate() {
             notes.extend(n.into_iter().map(|n| format!("{} var{k}: {n}", job.label)));
         }
+        let write_clock = std::time::Instant::now();
         for (k, d) in decoded.iter().enumerate() {
             MeshSequence::new(model.faces.clone(), d.meshes.clone())
                 .write_dir(out.join(&job.label).join(format!("var{k}")))?;
         }
-        sequences.push(measure(job, &decoded, model));
+        seconds_writing += write_clock.elapsed().as_secs_f64();
+        let stats_clock = std::time::Instant::now();
+        if cfg.statistics {
+            sequences.push(measure(job, &decoded, model));
+        }
+        seconds_statistics += stats_clock.elapsed().as_secs_f64();
         progress(j + 1, jobs.len());
     }
     let rates: Vec<f64> = chains.iter().map(|c| c.accept_rate).collect();
@@ -596,5 +614,7 @@ pub fn run_with_progress(
         notes,
         seconds_sampling,
         seconds_decoding: clock.elapsed().as_secs_f64(),
+        seconds_writing,
+        seconds_statistics,
     })
 }

@@ -98,7 +98,7 @@ struct Args {
     /// Output folder: <out>/<sequence>/var<k>/NNNNNN.ply
     #[arg(short, long)]
     out: PathBuf,
-    /// Statistics (JSON)
+    /// Statistics against the sources (JSON); without it they are not computed
     #[arg(long)]
     report: Option<PathBuf>,
 }
@@ -156,6 +156,8 @@ fn main() -> ExitCode {
             footskate_smoothness: args.footskate_smoothness,
             foot_lock: !args.no_foot_lock,
             foot_height: !args.no_foot_height,
+            // The statistics against the sources are the report's content: skipped without one.
+            statistics: args.report.is_some(),
             latent_smoothing: args.latent_smoothing,
             query: match (&args.motion, &args.blend, args.weight) {
                 (Some(m), _, _) => Some(Query::Motion(m.clone())),
