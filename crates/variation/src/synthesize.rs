@@ -571,7 +571,30 @@ pub fn run_with_progress(
                         foot_height::lift(&mut m, &job.source, &matches, legs, c, &model.up);
                     }
                     if let (true, Some(legs)) = (cfg.foot_lock, &leg_weights) {
-                        foot_lock::lock(&mut m, legs, f, c, &model.up);
+                        let c = match cfg.foot_height {
+                            // The legs now follow the source's heights: extend each contact while
+                            // the variation's foot is still on the source's floor.
+                            true => {
+                                let lows: [Vec<f64>; 2] = [0, 1].map(|f| {
+                                    let leg: Vec<u32> = legs[f].iter().map(|p| p.0).collect();
+                                    grounding::lowest(&m, &leg, &model.up)
+                                });
+                                let floor = grounding::lowest(&job.source, &[], &model.up)
+                                    .into_iter()
+                                    .fold(f64::INFINITY, f64::min);
+                                let low: Vec<[f64; 2]> = (0..m.len())
+                                    .map(|t| [lows[0][t] - floor, lows[1][t] - floor])
+                                    .collect();
+                                foot_lock::grow_while_down(
+                                    c,
+                                    &low,
+                                    CONTACT_HEIGHT,
+                                    foot_lock::EASE_FRAMES,
+                                )
+                            }
+                            false => c.clone(),
+                        };
+                        foot_lock::lock(&mut m, legs, f, &c, &model.up);
                     }
                 }
                 Ok((
