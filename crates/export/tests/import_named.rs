@@ -38,7 +38,7 @@ fn blender_sequence_export_is_imported_in_numeric_order() {
     assert!(st.status.success(), "{}", String::from_utf8_lossy(&st.stderr));
     let err = String::from_utf8(st.stderr).unwrap();
     assert_eq!(err.lines().count(), 1, "{err}");
-    assert!(err.starts_with("import: ") && err.contains("punch%d.obj") && err.contains("0 to 10") && err.contains("0-based"), "{err}");
+    assert!(err.starts_with("mesh-import: ") && err.contains("punch%d.obj") && err.contains("0 to 10") && err.contains("0-based"), "{err}");
     same(&MeshSequence::load_dir(&out).unwrap(), &seq);
     assert!(out.join("000010.ply").is_file());
     // -q: nothing on stderr.

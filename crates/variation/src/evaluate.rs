@@ -11,7 +11,9 @@
 //! - **Mean prediction**: from each training sequence's first latent point, the mean
 //!   dynamics (eqs. 8-10) over the sequence length, decoded, against the sequence: shows
 //!   whether the learned dynamics stay on the cycle (issue 6, noise floor).
-//! - Latent plots (figs. 3 and 5) via [`crate::plots`].
+//! - Latent plots via [`crate::plots`]: figs. 3 and 5; fig. 6 (each learned pre-blend `X_w` against
+//!   the linear interpolation `(1 − w) X₁ + w X₂`, per part) and fig. 7a (at w = 0.25, first part:
+//!   the unguided and the guided interpolations of fig. 7b with the trajectories they come from).
 
 use std::path::Path;
 
@@ -158,9 +160,32 @@ pub fn evaluate(
         &reconstruction.iter().map(|r| r.pca_m).collect::<Vec<_>>(),
     );
 
-    // Fig. 7b.
+    // Fig. 7b (and the latent plots of figs. 6 and 7a, drawn below with the others).
     let mut latent_blend = Vec::new();
+    let mut blend_figs: Vec<(String, String, Vec<(String, DMatrix<f64>)>)> = Vec::new();
     if let Some((a, b)) = model.pair {
+        // Fig. 6: the learned trajectory of each pre-blend against the linear interpolation of
+        // the pair's trajectories at the same weight, per part.
+        for (k, pm) in model.parts.iter().enumerate() {
+            let (xa, xb) = (&model.latents(a)[k], &model.latents(b)[k]);
+            let mut series = vec![
+                (model.sequences[a].name.clone(), xa.clone()),
+                (model.sequences[b].name.clone(), xb.clone()),
+            ];
+            for (i, info) in model.sequences.iter().enumerate() {
+                if let Some(w) = info.blend {
+                    series.push((format!("linear w = {w}"), xa * (1.0 - w) + xb * w));
+                    series.push((format!("learned pre-blend w = {w}"), model.latents(i)[k].clone()));
+                }
+            }
+            if series.len() > 2 {
+                blend_figs.push((
+                    format!("fig6-preblend-{}.png", pm.part.name),
+                    format!("{}: pre-blended trajectory vs linear interpolation ({})", model.group, pm.part.name),
+                    series,
+                ));
+            }
+        }
         let learned: Vec<(f64, usize)> = {
             let mut v = vec![(0.0, a), (1.0, b)];
             v.extend(
@@ -196,6 +221,21 @@ pub fn evaluate(
             let unguided: Vec<DMatrix<f64>> = (0..model.parts.len())
                 .map(|k| &xa[k] * (1.0 - w) + &xb[k] * w)
                 .collect();
+            if w == 0.25 && (lo.1, hi.1) != (a, b) {
+                // Fig. 7a: the two interpolations at w of the first part.
+                let pm = &model.parts[0];
+                blend_figs.push((
+                    format!("fig7a-interpolation-{w}-{}.png", pm.part.name),
+                    format!("{}: X_{w} guided vs unguided ({})", model.group, pm.part.name),
+                    vec![
+                        (model.sequences[a].name.clone(), xa[0].clone()),
+                        (model.sequences[b].name.clone(), xb[0].clone()),
+                        (format!("learned w = {}", hi.0), xh[0].clone()),
+                        (format!("unguided w = {w} (from w = 0, 1)"), unguided[0].clone()),
+                        (format!("guided w = {w} (from w = {}, {})", lo.0, hi.0), guided[0].clone()),
+                    ],
+                ));
+            }
             let (rg, ru) = (decode_rows(&dec, &guided)?, decode_rows(&dec, &unguided)?);
             let t_n = truth.motion.n_frames();
             let mut gpf = vec![0.0; t_n];
@@ -273,6 +313,11 @@ pub fn evaluate(
                 ),
                 &series,
             )?;
+            written.push(p.display().to_string());
+        }
+        for (file, title, series) in &blend_figs {
+            let p = dir.join(file);
+            crate::plots::latent_plot(&p, title, series)?;
             written.push(p.display().to_string());
         }
         let hmc = HmcOptions {

@@ -119,6 +119,39 @@ pub fn displacements(
     d
 }
 
+/// Contacts for the lock: each interval of `contacts[t][f]` grown, one frame at a time on either
+/// side and by at most `max_frames`, while that foot's lowest point `low[t][f]` stays within
+/// `height` of the floor. A contact carried over from the source by the DTW can end a frame or two
+/// before the variation's own foot leaves the floor; easing the lock out while the foot is still
+/// down drags it along the floor.
+pub fn grow_while_down(
+    contacts: &[[bool; 2]],
+    low: &[[f64; 2]],
+    height: f64,
+    max_frames: usize,
+) -> Vec<[bool; 2]> {
+    let n = contacts.len().min(low.len());
+    let mut out = contacts[..n].to_vec();
+    for f in 0..2 {
+        let flags: Vec<bool> = contacts[..n].iter().map(|c| c[f]).collect();
+        for (s, e) in intervals(&flags) {
+            for k in 1..=max_frames {
+                match s.checked_sub(k) {
+                    Some(t) if low[t][f] <= height => out[t][f] = true,
+                    _ => break,
+                }
+            }
+            for t in e..(e + max_frames).min(n) {
+                if low[t][f] > height {
+                    break;
+                }
+                out[t][f] = true;
+            }
+        }
+    }
+    out
+}
+
 /// Locks planted feet in place (module doc), in place; returns the largest displacement.
 /// `legs[f]` are the weights of [`leg_weights`], `soles[f]` the sole vertices, `contacts[t][f]`.
 pub fn lock(
@@ -219,6 +252,25 @@ mod tests {
             let step = (frames[k][0] - frames[k - 1][0]).norm();
             assert!(step < 0.02, "frame {k}: step {step}");
         }
+    }
+
+    #[test]
+    fn contacts_grow_only_while_the_foot_is_down() {
+        // Left planted in frames 3-5; its foot stays within 2 cm in frames 1-7, then lifts.
+        // Right never planted: never grown. At most 3 frames each side.
+        let contacts: Vec<[bool; 2]> = (0..12).map(|t| [(3..6).contains(&t), false]).collect();
+        let low: Vec<[f64; 2]> = (0..12)
+            .map(|t| [if (1..8).contains(&t) { 0.01 } else { 0.2 }, 0.0])
+            .collect();
+        let g = grow_while_down(&contacts, &low, 0.02, 3);
+        let left: Vec<bool> = g.iter().map(|c| c[0]).collect();
+        let want: Vec<bool> = (0..12).map(|t| (1..8).contains(&t)).collect();
+        assert_eq!(left, want);
+        assert!(g.iter().all(|c| !c[1]));
+        // A cap of one frame.
+        let g = grow_while_down(&contacts, &low, 0.02, 1);
+        let left: Vec<bool> = g.iter().map(|c| c[0]).collect();
+        assert_eq!(left, (0..12).map(|t| (2..7).contains(&t)).collect::<Vec<_>>());
     }
 
     #[test]

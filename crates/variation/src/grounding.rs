@@ -108,7 +108,7 @@ pub fn correspondence(
 }
 
 /// Linear interpolation of `values` at fractional index `x` (clamped to the ends).
-fn at(values: &[f64], x: f64) -> f64 {
+pub(crate) fn at(values: &[f64], x: f64) -> f64 {
     let x = x.clamp(0.0, (values.len() - 1) as f64);
     let i = (x.floor() as usize).min(values.len() - 1);
     let j = (i + 1).min(values.len() - 1);

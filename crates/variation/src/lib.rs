@@ -11,7 +11,9 @@
 
 pub mod contact_detector;
 pub mod contacts;
+pub mod diversity;
 pub mod evaluate;
+pub mod foot_height;
 pub mod foot_lock;
 pub mod footskate;
 pub mod frame_stride;

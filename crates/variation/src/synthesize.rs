@@ -4,7 +4,8 @@
 //! ([`crate::metrics`]): the training sequence, or for a blend the non-linear mesh blend of the
 //! pair at that weight. Post-processes, on by default, follow the decoding: [`grounding`]
 //! (vertical) then [`footskate`] (horizontal root shift), both driven by the DTW correspondence
-//! of each variation to its source, then [`foot_lock`] (planted soles pinned by their legs).
+//! of each variation to its source, then [`foot_height`] (each sole at the source's height, swing
+//! feet at least at its clearance) and [`foot_lock`] (planted soles pinned by their legs).
 
 use std::path::Path;
 
@@ -17,6 +18,8 @@ use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 
 use crate::contacts::Contacts;
+use crate::diversity::{self, Diversity};
+use crate::foot_height;
 use crate::foot_lock;
 use crate::footskate;
 use crate::grounding::{self, FloorContact};
@@ -64,6 +67,15 @@ pub struct SynthConfig {
     /// ([`crate::foot_lock`]); on by default.
     #[serde(default = "yes")]
     pub foot_lock: bool,
+    /// After the root clean-up, bring each sole to the source's height at the matched frame
+    /// (planted) or at least to its clearance (swing) by deforming its leg
+    /// ([`crate::foot_height`]); on by default.
+    #[serde(default = "yes")]
+    pub foot_height: bool,
+    /// Measure every sequence against its source ([`SequenceReport`]); off, the report's
+    /// `sequences` is empty (a query that only wants meshes skips most of the cost).
+    #[serde(default = "yes")]
+    pub statistics: bool,
     /// Gaussian σ in frames of the temporal smoothing of every sampled latent trajectory
     /// before decoding ([`crate::latent_smoothing`]); 0 (the default) leaves them as sampled.
     #[serde(default)]
@@ -154,6 +166,10 @@ pub struct SequenceReport {
     /// Largest horizontal root correction of each variation by the clean-up (m).
     #[serde(default)]
     pub footskate_max_m: Vec<f64>,
+    /// Coverage, global and local diversity of the variations against the source
+    /// ([`crate::diversity`]).
+    #[serde(default)]
+    pub diversity: Option<Diversity>,
 }
 
 /// Everything `hmc-sample` reports.
@@ -166,7 +182,14 @@ pub struct SynthReport {
     pub sequences: Vec<SequenceReport>,
     pub notes: Vec<String>,
     pub seconds_sampling: f64,
+    /// Decoding, grounding, clean-ups, writing and statistics together (wall, s).
     pub seconds_decoding: f64,
+    /// The parts of `seconds_decoding` spent writing the PLY files and computing the
+    /// statistics ([`measure`]) (wall, s).
+    #[serde(default)]
+    pub seconds_writing: f64,
+    #[serde(default)]
+    pub seconds_statistics: f64,
 }
 
 /// Sole vertices of the model's template (both feet, [`metrics::soles`]).
@@ -305,6 +328,7 @@ fn measure(job: &Job, decoded: &[Decoded], model: &VariationModel) -> SequenceRe
         raw_contact_sliding_m: decoded.iter().map(|d| d.raw_sliding.1).collect(),
         source_contact_sliding_m: contact_sliding(source, &job.contacts),
         footskate_max_m: decoded.iter().map(|d| d.footskate_max).collect(),
+        diversity: Some(diversity::measure(&vars, source, &model.template, model.fps)),
     }
 }
 
@@ -468,6 +492,7 @@ pub fn run_with_progress(
     let fused = (cfg.assembly == Assembly::Average && !cfg.sample_poses)
         .then(|| dec.fused())
         .transpose()?;
+    let (mut seconds_writing, mut seconds_statistics) = (0.0, 0.0);
     for (j, job) in jobs.iter().enumerate() {
         if cfg.footskate && job.contacts.is_none() {
             notes.push(format!(
@@ -542,8 +567,34 @@ pub fn run_with_progress(
                         &mut notes,
                     )?;
                     footskate_max = d.iter().map(|v| v.norm()).fold(0.0, f64::max);
+                    if let (true, Some(legs)) = (cfg.foot_height, &leg_weights) {
+                        foot_height::lift(&mut m, &job.source, &matches, legs, c, &model.up);
+                    }
                     if let (true, Some(legs)) = (cfg.foot_lock, &leg_weights) {
-                        foot_lock::lock(&mut m, legs, f, c, &model.up);
+                        let c = match cfg.foot_height {
+                            // The legs now follow the source's heights: extend each contact while
+                            // the variation's foot is still on the source's floor.
+                            true => {
+                                let lows: [Vec<f64>; 2] = [0, 1].map(|f| {
+                                    let leg: Vec<u32> = legs[f].iter().map(|p| p.0).collect();
+                                    grounding::lowest(&m, &leg, &model.up)
+                                });
+                                let floor = grounding::lowest(&job.source, &[], &model.up)
+                                    .into_iter()
+                                    .fold(f64::INFINITY, f64::min);
+                                let low: Vec<[f64; 2]> = (0..m.len())
+                                    .map(|t| [lows[0][t] - floor, lows[1][t] - floor])
+                                    .collect();
+                                foot_lock::grow_while_down(
+                                    c,
+                                    &low,
+                                    CONTACT_HEIGHT,
+                                    foot_lock::EASE_FRAMES,
+                                )
+                            }
+                            false => c.clone(),
+                        };
+                        foot_lock::lock(&mut m, legs, f, &c, &model.up);
                     }
                 }
                 Ok((
@@ -563,11 +614,17 @@ pub fn run_with_progress(
         for (k, n) in var_notes.into_iter().enumerate() {
             notes.extend(n.into_iter().map(|n| format!("{} var{k}: {n}", job.label)));
         }
+        let write_clock = std::time::Instant::now();
         for (k, d) in decoded.iter().enumerate() {
             MeshSequence::new(model.faces.clone(), d.meshes.clone())
                 .write_dir_at(out.join(&job.label).join(format!("var{k}")), Some(model.fps))?;
         }
-        sequences.push(measure(job, &decoded, model));
+        seconds_writing += write_clock.elapsed().as_secs_f64();
+        let stats_clock = std::time::Instant::now();
+        if cfg.statistics {
+            sequences.push(measure(job, &decoded, model));
+        }
+        seconds_statistics += stats_clock.elapsed().as_secs_f64();
         progress(j + 1, jobs.len());
     }
     let rates: Vec<f64> = chains.iter().map(|c| c.accept_rate).collect();
@@ -580,5 +637,7 @@ pub fn run_with_progress(
         notes,
         seconds_sampling,
         seconds_decoding: clock.elapsed().as_secs_f64(),
+        seconds_writing,
+        seconds_statistics,
     })
 }

@@ -86,6 +86,11 @@ struct Args {
     /// sole up to the hip)
     #[arg(long)]
     no_foot_lock: bool,
+    /// Do not set the feet's heights by deforming the legs (by default, after the root
+    /// clean-up, each planted sole is brought to the source's height at the matched frame and
+    /// each swing foot raised to at least the source's clearance)
+    #[arg(long)]
+    no_foot_height: bool,
     /// Smooth every sampled latent trajectory in time with a Gaussian of SIGMA frames before
     /// decoding (first point kept; 0 = off: the trajectories as sampled)
     #[arg(long, value_name = "SIGMA", default_value_t = 0.0)]
@@ -93,7 +98,7 @@ struct Args {
     /// Output folder: <out>/<sequence>/var<k>/NNNNNN.ply
     #[arg(short, long)]
     out: PathBuf,
-    /// Statistics (JSON)
+    /// Statistics against the sources (JSON); without it they are not computed
     #[arg(long)]
     report: Option<PathBuf>,
 }
@@ -150,6 +155,9 @@ fn main() -> ExitCode {
             footskate: !args.no_footskate,
             footskate_smoothness: args.footskate_smoothness,
             foot_lock: !args.no_foot_lock,
+            foot_height: !args.no_foot_height,
+            // The statistics against the sources are the report's content: skipped without one.
+            statistics: args.report.is_some(),
             latent_smoothing: args.latent_smoothing,
             query: match (&args.motion, &args.blend, args.weight) {
                 (Some(m), _, _) => Some(Query::Motion(m.clone())),

@@ -1,0 +1,92 @@
+//! Where the foot sliding of written variations comes from: every frame pair that the
+//! independent height rule ([`variation::metrics::foot_sliding`]) counts is classed by the
+//! contacts the clean-ups used (the source's, transferred along the DTW): both frames planted,
+//! one (a contact's start or end), or none (a swing foot passing low over the floor).
+//!
+//! Also prints the lowest vertex of each variation, and with BASE (another hmc-sample --out of
+//! the same model and seed) how far the clean-ups moved it.
+//!
+//! Usage: slide_sources GROUP MODEL DIR [BASE] (DIR = hmc-sample --out; training sequences only)
+
+use mesh_core::artifact::Artifact;
+use mesh_core::sequence::MeshSequence;
+use nalgebra::Vector3;
+use variation::footskate::transfer_contacts;
+use variation::group::Group;
+use variation::train::VariationModel;
+
+fn main() -> mesh_core::Result<()> {
+    let a: Vec<String> = std::env::args().collect();
+    let group = Group::load(&a[1])?;
+    let model = VariationModel::load(&a[2])?;
+    let parts: Vec<_> = model.parts.iter().map(|p| p.part.clone()).collect();
+    let soles = variation::metrics::soles(&parts, &model.template, &model.up, 0.015);
+    let up = model.up;
+    for s in &group.sequences {
+        let source = s.motion.world_frames();
+        let Some(c) = &s.contacts else { continue };
+        let mut k = 0;
+        loop {
+            let dir = std::path::Path::new(&a[3]).join(&s.name).join(format!("var{k}"));
+            if !dir.exists() {
+                break;
+            }
+            let v = MeshSequence::load_dir(&dir)?.frames;
+            let m = variation::grounding::correspondence(&v, &source, &model.template);
+            let tc = transfer_contacts(c, &m);
+            let ground = soles
+                .iter()
+                .flat_map(|so| v.iter().flat_map(move |f| so.iter().map(move |&i| f[i as usize].dot(&up))))
+                .fold(f64::INFINITY, f64::min);
+            // classes: both planted, one, none
+            let mut sum = [0.0f64; 3];
+            let mut cnt = [0usize; 3];
+            for (foot, so) in soles.iter().enumerate() {
+                let low = |f: &Vec<Vector3<f64>>| so.iter().map(|&i| f[i as usize].dot(&up)).fold(f64::INFINITY, f64::min);
+                let centre = |f: &Vec<Vector3<f64>>| so.iter().map(|&i| f[i as usize]).sum::<Vector3<f64>>() / so.len() as f64;
+                for t in 0..v.len() - 1 {
+                    if low(&v[t]) - ground <= 0.02 && low(&v[t + 1]) - ground <= 0.02 {
+                        let d = centre(&v[t + 1]) - centre(&v[t]);
+                        let d = (d - up * d.dot(&up)).norm();
+                        let cls = match (tc[t][foot], tc[t + 1][foot]) {
+                            (true, true) => 0,
+                            (false, false) => 2,
+                            _ => 1,
+                        };
+                        sum[cls] += d;
+                        cnt[cls] += 1;
+                    }
+                }
+            }
+            let (mut lo, mut lv, mut lt) = (f64::INFINITY, 0usize, 0usize);
+            for (t, f) in v.iter().enumerate() {
+                for (i, p) in f.iter().enumerate() {
+                    if p.dot(&up) < lo {
+                        (lo, lv, lt) = (p.dot(&up), i, t);
+                    }
+                }
+            }
+            let src_lo = source.iter().flat_map(|f| f.iter().map(|p| p.dot(&up))).fold(f64::INFINITY, f64::min);
+            println!("  lowest vertex {lv} at frame {lt}: {:.3} m below the source's lowest point; sole floor {:.3}; in a sole: {}", src_lo - lo, src_lo - ground, soles.iter().any(|s| s.contains(&(lv as u32))));
+            if let Some(b) = a.get(4) {
+                let base = MeshSequence::load_dir(std::path::Path::new(b).join(&s.name).join(format!("var{k}")))?.frames;
+                let d = (v[lt][lv] - base[lt][lv]).dot(&up);
+                let legs: Vec<_> = parts.iter().filter(|p| p.name.starts_with("leg")).map(|p| (p.name.clone(), p.vertices.contains(&(lv as u32)))).collect();
+                println!("  vs base: vertex moved {d:.3} up; template height {:.3}; legs {legs:?}; base lowest {:.3}", model.template[lv].dot(&up), base[lt][lv].dot(&up));
+            }
+            let tot: usize = cnt.iter().sum();
+            let all: f64 = sum.iter().sum();
+            println!(
+                "{} var{k}: height-rule pairs {tot}, mean {:.3} m/frame; planted {} ({:.3}), boundary {} ({:.3}), swing {} ({:.3}); transferred contact frames {}",
+                s.name,
+                if tot > 0 { all / tot as f64 } else { f64::NAN },
+                cnt[0], if cnt[0] > 0 { sum[0] / cnt[0] as f64 } else { 0.0 },
+                cnt[1], if cnt[1] > 0 { sum[1] / cnt[1] as f64 } else { 0.0 },
+                cnt[2], if cnt[2] > 0 { sum[2] / cnt[2] as f64 } else { 0.0 },
+                tc.iter().map(|c| c[0] as usize + c[1] as usize).sum::<usize>()
+            );
+            k += 1;
+        }
+    }
+    Ok(())
+}

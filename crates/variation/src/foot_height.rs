@@ -1,0 +1,155 @@
+//! Per-foot height clean-up: a post-process between the root clean-up of [`crate::footskate`]
+//! and the horizontal [`crate::foot_lock`] (the variation paper's "traditional post-processing
+//! such as foot-skating correction"; not part of the GPDM model).
+//!
+//! Grounding moves the whole body, so only the lower foot can follow the source's floor. The two
+//! leg parts are sampled independently, and a sampled swing foot often passes a centimetre over
+//! the floor while the planted one floats: that swing is what a height rule counts as sliding.
+//! Per foot `f` and frame `t`, with `h_f(t)` the height of the lowest vertex of the variation's
+//! leg (its foot, toes included: a sampled foot may point its toes below its sole) and
+//! `g_f(t) = h^s_f(m(t))` the source's at the DTW-matched frame `m(t)`, the vertical offset
+//!
+//! `o_f(t) = g_f(t) − h_f(t)` on frames where the source plants the foot,
+//! `o_f(t) = max(0, g_f(t) − h_f(t))` elsewhere (a swing foot is raised to the source's
+//! clearance, never lowered),
+//!
+//! smoothed in time by [`grounding::smooth`] (σ = [`SIGMA_FRAMES`]), moves every vertex `v` of
+//! that leg by `w(v) o_f(t) up`, with the leg weights of [`foot_lock::leg_weights`] (1 on the
+//! sole, 0 at the hip seam, so the seam never opens).
+//!
+//! [`grounding::smooth`]: crate::grounding::smooth
+//! [`foot_lock::leg_weights`]: crate::foot_lock::leg_weights
+
+use nalgebra::Vector3;
+
+use crate::grounding::{at, lowest, smooth};
+
+/// Smoothing width of the offsets (frames): one frame, so that a swing's peak clearance is kept.
+pub const SIGMA_FRAMES: f64 = 1.0;
+
+/// The smoothed offsets `o_f(t)` of one foot (module doc). `var_low[t]` = `h_f(t)`,
+/// `source_low` the source's lowest sole heights per source frame, `matches[t]` = `m(t)`,
+/// `planted[t]` the source's contact at `m(t)`.
+pub fn offsets(
+    var_low: &[f64],
+    source_low: &[f64],
+    matches: &[f64],
+    planted: &[bool],
+    sigma: f64,
+) -> Vec<f64> {
+    if source_low.is_empty() {
+        return vec![0.0; var_low.len()];
+    }
+    let raw: Vec<f64> = var_low
+        .iter()
+        .zip(matches)
+        .zip(planted)
+        .map(|((&h, &m), &p)| {
+            let d = at(source_low, m) - h;
+            if p {
+                d
+            } else {
+                d.max(0.0)
+            }
+        })
+        .collect();
+    smooth(&raw, sigma)
+}
+
+/// Applies the clean-up in place (module doc); returns the largest |offset| (m). `legs[f]` are
+/// the leg weights (their vertices are the leg whose lowest point is measured),
+/// `contacts[t][f]` the source's contacts at the matched frames, `matches` the DTW
+/// correspondence to `source`.
+pub fn lift(
+    frames: &mut [Vec<Vector3<f64>>],
+    source: &[Vec<Vector3<f64>>],
+    matches: &[f64],
+    legs: &[Vec<(u32, f64)>; 2],
+    contacts: &[[bool; 2]],
+    up: &Vector3<f64>,
+) -> f64 {
+    let mut max: f64 = 0.0;
+    for f in 0..2 {
+        let leg: Vec<u32> = legs[f].iter().map(|&(v, _)| v).collect();
+        if leg.is_empty() {
+            continue;
+        }
+        let planted: Vec<bool> = (0..frames.len())
+            .map(|t| contacts.get(t).is_some_and(|c| c[f]))
+            .collect();
+        let o = offsets(
+            &lowest(frames, &leg, up),
+            &lowest(source, &leg, up),
+            matches,
+            &planted,
+            SIGMA_FRAMES,
+        );
+        for (frame, &d) in frames.iter_mut().zip(&o) {
+            max = max.max(d.abs());
+            let shift = up * d;
+            for &(v, w) in &legs[f] {
+                frame[v as usize] += shift * w;
+            }
+        }
+    }
+    max
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn planted_feet_follow_the_source_and_swings_are_only_raised() {
+        // Source sole heights 0 (planted) then 0.10 (swing); the variation's foot floats 3 cm
+        // while planted, then swings 6 cm too low (frames 5-9) and 5 cm too high (frames 10-14).
+        let src: Vec<f64> = (0..15).map(|t| if t < 5 { 0.0 } else { 0.10 }).collect();
+        let var: Vec<f64> = (0..15)
+            .map(|t| match t {
+                0..=4 => 0.03,
+                5..=9 => 0.04,
+                _ => 0.15,
+            })
+            .collect();
+        let matches: Vec<f64> = (0..15).map(|t| t as f64).collect();
+        let planted: Vec<bool> = (0..15).map(|t| t < 5).collect();
+        let o = offsets(&var, &src, &matches, &planted, 0.0);
+        for t in 0..5 {
+            assert!((o[t] + 0.03).abs() < 1e-12, "planted: lowered onto the floor");
+        }
+        for t in 5..10 {
+            assert!((o[t] - 0.06).abs() < 1e-12, "low swing raised to the source's clearance");
+        }
+        for t in 10..15 {
+            assert_eq!(o[t], 0.0, "a higher swing is kept");
+        }
+    }
+
+    #[test]
+    fn a_leg_is_lifted_by_its_weights_and_the_seam_stays() {
+        // Two "vertices" per foot: sole (w = 1) and knee (w = 0.5); vertex 4 is the torso.
+        let up = Vector3::z();
+        let frame = |h: f64| {
+            vec![
+                Vector3::new(0.0, 0.0, h),
+                Vector3::new(0.0, 0.0, 0.5),
+                Vector3::new(0.3, 0.0, 0.0),
+                Vector3::new(0.3, 0.0, 0.5),
+                Vector3::new(0.1, 0.0, 1.0),
+            ]
+        };
+        let source: Vec<_> = (0..6).map(|_| frame(0.0)).collect();
+        let mut var: Vec<_> = (0..6).map(|_| frame(0.02)).collect();
+        let legs = [vec![(0, 1.0), (1, 0.5)], vec![(2, 1.0), (3, 0.5)]];
+        let matches: Vec<f64> = (0..6).map(|t| t as f64).collect();
+        let contacts = vec![[true, true]; 6];
+        let m = lift(&mut var, &source, &matches, &legs, &contacts, &up);
+        assert!((m - 0.02).abs() < 1e-12);
+        for f in &var {
+            assert!(f[0].z.abs() < 1e-12, "sole on the source's floor");
+            assert!((f[1].z - 0.49).abs() < 1e-12, "knee moved by half");
+            assert_eq!(f[2], Vector3::new(0.3, 0.0, 0.0), "the other foot already matches");
+            assert_eq!(f[4], Vector3::new(0.1, 0.0, 1.0), "torso untouched");
+        }
+    }
+}
