@@ -149,7 +149,8 @@ fn mesh_files(dir: &Path) -> Result<Vec<PathBuf>> {
     let mut out = Vec::new();
     for entry in std::fs::read_dir(dir).map_err(|e| Error::io(dir, e))? {
         let path = entry.map_err(|e| Error::io(dir, e))?.path();
-        if MeshFormat::from_path(&path).is_some() && !path.is_dir() {
+        // A directory named like a frame stays in: reading it then says what it is.
+        if MeshFormat::from_path(&path).is_some() {
             out.push(path);
         }
     }
