@@ -526,26 +526,11 @@ pub fn train_displacement(
 
 /// Trains a transfer model: the pose mapping of `method` per part and the
 /// displacement GP. `part_names` are the parts of both PCA models (equal).
-/// `nn_bias`: see [`Method::kernel`]; `mean_ridge`: the affine mean's relative ridge
-/// ([`MEAN_RIDGE`] by default).
+/// `nn_bias`: see [`method_kernel`]; `mean_ridge`: the affine mean's relative ridge
+/// ([`MEAN_RIDGE`] by default); `mean_priors`: prior maps for the parts' affine means
+/// ([`MeanPriors`]; `None`: the ridge shrinks toward zero and nothing is mixed in).
 #[allow(clippy::too_many_arguments)]
 pub fn train(
-    method: Method,
-    nn_bias: bool,
-    mean_fn: MeanFunction,
-    mean_ridge: f64,
-    part_names: &[String],
-    pairs: &[PairData],
-    frame_ratio: f64,
-    keyposes_only: bool,
-    opts: &GprOptions,
-) -> Result<GprModel> {
-    train_toward(method, nn_bias, mean_fn, mean_ridge, None, part_names, pairs, frame_ratio, keyposes_only, opts)
-}
-
-/// As [`train`], with prior maps for the parts' affine means ([`MeanPriors`]).
-#[allow(clippy::too_many_arguments)]
-pub fn train_toward(
     method: Method,
     nn_bias: bool,
     mean_fn: MeanFunction,
@@ -665,9 +650,9 @@ mod tests {
         let prior = vec![DMatrix::from_fn(3, 3, |r, c| 0.1 * (r + 2 * c) as f64 - 0.3)];
         let with = |weight: f64| {
             let p = MeanPriors { maps: &prior, ridge_toward: false, weight };
-            train_toward(Method::GprNn, false, MeanFunction::Affine, MEAN_RIDGE, Some(p), &names, &[data.clone()], 1.0, false, &opts)
+            train(Method::GprNn, false, MeanFunction::Affine, MEAN_RIDGE, Some(p), &names, &[data.clone()], 1.0, false, &opts)
         };
-        let plain = train(Method::GprNn, false, MeanFunction::Affine, MEAN_RIDGE, &names, &[data.clone()], 1.0, false, &opts).unwrap();
+        let plain = train(Method::GprNn, false, MeanFunction::Affine, MEAN_RIDGE, None, &names, &[data.clone()], 1.0, false, &opts).unwrap();
         let parts = |m: &GprModel| match &m.parts[0] {
             Regressor::Gp { gpr, mean: Some(mean), .. } => (gpr.clone(), mean.w.clone()),
             _ => panic!("expected a GP with an affine mean"),
@@ -683,7 +668,7 @@ mod tests {
         assert!(with(1.5).is_err());
         let none: Vec<DMatrix<f64>> = Vec::new();
         let p = MeanPriors { maps: &none, ridge_toward: false, weight: 0.25 };
-        assert!(train_toward(Method::GprNn, false, MeanFunction::Affine, MEAN_RIDGE, Some(p), &names, &[data], 1.0, false, &opts).is_err());
+        assert!(train(Method::GprNn, false, MeanFunction::Affine, MEAN_RIDGE, Some(p), &names, &[data], 1.0, false, &opts).is_err());
     }
 
     /// `--sparse`: with enough inducing inputs for the training inputs (which lie on a curve:
@@ -695,7 +680,7 @@ mod tests {
         let data = pair(120, &|x| x.tanh() + 0.3 * x * x);
         let train_with = |sparse| {
             let opts = GprOptions { noise_var: 1e-2, sparse, ..Default::default() };
-            train(Method::GprNn, true, MeanFunction::Affine, MEAN_RIDGE, &names, &[data.clone()], 1.0, false, &opts).unwrap()
+            train(Method::GprNn, true, MeanFunction::Affine, MEAN_RIDGE, None, &names, &[data.clone()], 1.0, false, &opts).unwrap()
         };
         let exact = train_with(gp::sparse_gpr::Sparsity::Exact);
         let sparse = train_with(gp::sparse_gpr::Sparsity::Inducing(60));
@@ -723,7 +708,7 @@ mod tests {
             Method::GprLinear,
             false,
             MeanFunction::Zero,
-            MEAN_RIDGE,
+            MEAN_RIDGE, None,
             &names,
             &[lin.clone()],
             1.0,
@@ -750,7 +735,7 @@ mod tests {
             Method::GprNn,
             false,
             MeanFunction::Zero,
-            MEAN_RIDGE,
+            MEAN_RIDGE, None,
             &names,
             &[nl.clone()],
             1.0,
@@ -764,7 +749,7 @@ mod tests {
             (y_odd + y_neg).abs() < 1e-12,
             "no-bias NN GP is odd: {y_odd} {y_neg}"
         );
-        let m = train(Method::GprNn, true, MeanFunction::Zero, MEAN_RIDGE, &names, &[nl], 1.0, false, &opts).unwrap();
+        let m = train(Method::GprNn, true, MeanFunction::Zero, MEAN_RIDGE, None, &names, &[nl], 1.0, false, &opts).unwrap();
         let y = m.parts[0].predict(&x).unwrap();
         assert!((y[0] - want0).abs() < 0.02, "{} vs {want0}", y[0]);
         assert!((y_odd - want0).abs() > 0.05, "{y_odd} vs {want0}");
@@ -774,7 +759,7 @@ mod tests {
             Method::KeyposeAffine,
             false,
             MeanFunction::Zero,
-            MEAN_RIDGE,
+            MEAN_RIDGE, None,
             &names,
             &[lin.clone()],
             1.0,

@@ -531,7 +531,7 @@ fn fit_on(
         pairs: (0..n).map(|r| [r, r]).collect(),
         keyposes: (0..n).map(|r| [r, r]).collect(),
     };
-    train(method, nn_bias, mean, MEAN_RIDGE, names, &[one], ratio.max(1e-9), false, opts)
+    train(method, nn_bias, mean, MEAN_RIDGE, None, names, &[one], ratio.max(1e-9), false, opts)
 }
 
 /// Writes the points as CSV.

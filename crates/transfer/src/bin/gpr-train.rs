@@ -7,7 +7,7 @@ use gp::gpr::{GprOptions, PAPER_NOISE_VAR};
 use gp::sparse_gpr::Sparsity;
 use mesh_core::artifact::Artifact;
 use mesh_core::cli::{run_stage, CommonArgs};
-use transfer::gpr_model::{train_toward, GprModel, MeanFunction, MeanPrior, MeanPriors, Method, PairFiles, MEAN_RIDGE, PRIOR_WEIGHT};
+use transfer::gpr_model::{train, GprModel, MeanFunction, MeanPrior, MeanPriors, Method, PairFiles, MEAN_RIDGE, PRIOR_WEIGHT};
 use capture::part_pca::PcaModel;
 
 /// Train the source-to-target GP regression per body part and for the rigid displacement (eqs. 8-13)
@@ -166,7 +166,7 @@ fn main() -> ExitCode {
             &format!("gpr-train: {} parts + displacement, {} pairs", names.len(), pairs.len()),
             &args.common,
         );
-        let model: GprModel = train_toward(
+        let model: GprModel = train(
             method,
             args.nn_bias,
             args.mean,
