@@ -3,6 +3,9 @@
 
 use nalgebra::Vector3;
 
+/// Height above a leg's lowest template vertex (m) within which its vertices form the sole.
+pub const SOLE_TOLERANCE: f64 = 0.015;
+
 /// Sole vertices of the two legs: of the parts (`(name, template vertices)`) named `leg*`,
 /// the vertices within `tol` of the part's lowest template vertex along `up` (left first if
 /// named `*_l`). Without leg parts, the lowest vertices of the whole template split in two.

@@ -14,6 +14,7 @@ pub mod reconstruct;
 pub mod representation;
 pub mod quality;
 pub mod placement;
+pub mod feet;
 pub mod evaluate;
 pub mod learning_curves;
 pub mod figures;

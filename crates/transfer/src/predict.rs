@@ -95,13 +95,16 @@ pub struct Transferred {
     pub poses: Vec<mesh_core::rigid::RigidMotion>,
     /// Per-frame weight of the scaled source in the `blended` placement.
     pub blend_weights: Option<Vec<f64>>,
+    /// What the foot-skating clean-up did (None: not asked for, or no two leg parts).
+    pub planted: Option<crate::feet::Planted>,
     pub timing: Timing,
 }
 
 /// The whole of `gpr-predict` but the file writing: source aligned motion ->
 /// source coefficients -> target coefficients (and displacements) -> target
 /// parts -> assembled target mesh (or `reconstructor`'s §6 correction and
-/// stitching) -> placed from the source's first world pose.
+/// stitching) -> placed from the source's first world pose -> with `footskate` (its smoothness
+/// λ), planted feet pinned ([`crate::feet`]).
 pub fn transfer_motion(
     model: &GprModel,
     source_pca: &capture::part_pca::PcaModel,
@@ -109,6 +112,7 @@ pub fn transfer_motion(
     motion: &capture::align::AlignedMotion,
     placement: crate::placement::Placement,
     reconstructor: Option<&mut crate::reconstruct::Reconstructor>,
+    footskate: Option<f64>,
 ) -> Result<Transferred> {
     use capture::align::root_poses;
     use crate::placement::{
@@ -159,12 +163,17 @@ pub fn transfer_motion(
     let source_start = root_poses(&motion.poses[..motion.poses.len().min(1)], &source_root);
     let start = scaled_start(&source_start.first().copied().unwrap_or_default(), ratio);
     let world_poses = world_poses(&poses(&start, &steps), &target_root);
-    let frames = place(&world_poses, &frames);
+    let mut frames = place(&world_poses, &frames);
+    let planted = match footskate {
+        Some(smoothness) => crate::feet::plant(&mut frames, source_pca, target_pca, motion, ratio, smoothness)?,
+        None => None,
+    };
     let decode_s = t2.elapsed().as_secs_f64();
     Ok(Transferred {
         frames,
         poses: world_poses,
         blend_weights: pred.variance_ratio,
+        planted,
         timing: Timing {
             encode_s,
             gp_s,

@@ -1,11 +1,11 @@
-//! Precision and recall of `variation::contact_detector` against a capture set's contact
+//! Precision and recall of `capture::contact_detector` against a capture set's contact
 //! annotations (synth writes them from the skeleton's feet), per subject and motion.
 //!
 //! Usage: contact_check [capture set] (default out/demo/set; subjects A and B)
 
 use mesh_core::capture_set::{CaptureSet, SubjectSpec};
 use mesh_core::sequence::MeshSequence;
-use variation::contact_detector::{detect, precision_recall, Rule};
+use capture::contact_detector::{detect, precision_recall, Rule};
 use variation::contacts;
 
 fn main() -> mesh_core::Result<()> {
@@ -17,7 +17,7 @@ fn main() -> mesh_core::Result<()> {
         let spec = SubjectSpec::load(set.subject_json(&subject))?;
         let template = mesh_core::io::read_mesh(set.template_path(&subject, &spec)?)?;
         let up = spec.up_vector().expect("valid up");
-        let soles = mesh_core::feet::soles(&[], &template.vertices, &up, 0.015);
+        let soles = mesh_core::feet::soles(&[], &template.vertices, &up, mesh_core::feet::SOLE_TOLERANCE);
         for m in set.motions(&subject)? {
             let seq = MeshSequence::load_dir(set.motion_dir(&subject, &m))?;
             let Some(truth) = contacts::from_subject(&spec, &m, seq.n_frames())? else {

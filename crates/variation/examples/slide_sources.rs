@@ -20,7 +20,7 @@ fn main() -> mesh_core::Result<()> {
     let group = Group::load(&a[1])?;
     let model = VariationModel::load(&a[2])?;
     let parts: Vec<_> = model.parts.iter().map(|p| p.part.clone()).collect();
-    let soles = variation::metrics::soles(&parts, &model.template, &model.up, 0.015);
+    let soles = variation::metrics::soles(&parts, &model.template, &model.up, mesh_core::feet::SOLE_TOLERANCE);
     let up = model.up;
     for s in &group.sequences {
         let source = s.motion.world_frames();

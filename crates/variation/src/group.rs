@@ -172,7 +172,7 @@ pub fn build(set: &CaptureSet, spec: &GroupSpec) -> Result<(Group, Vec<String>)>
         .collect::<Vec<PartDef>>();
     let up = subject_spec.up_vector().unwrap_or(Vector3::y());
     // Soles of the two leg parts, left first, for motions without contact annotations.
-    let soles = crate::metrics::soles(&parts, &template.vertices, &up, 0.015);
+    let soles = crate::metrics::soles(&parts, &template.vertices, &up, mesh_core::feet::SOLE_TOLERANCE);
     let has_legs = parts.iter().filter(|p| p.name.starts_with("leg")).count() == 2;
     let mut loaded = Vec::new();
     for m in &present {
@@ -183,12 +183,12 @@ pub fn build(set: &CaptureSet, spec: &GroupSpec) -> Result<(Group, Vec<String>)>
         let mut c = contacts::from_subject(&subject_spec, m, aligned.n_frames())
             .map_err(|e| Error::file(set.subject_json(&spec.subject), e.to_string()))?;
         if c.is_none() && has_legs {
-            c = crate::contact_detector::detect(
+            c = capture::contact_detector::detect(
                 &seq.frames,
                 &soles,
                 &up,
                 subject_spec.fps,
-                &crate::contact_detector::Rule::default(),
+                &capture::contact_detector::Rule::default(),
             );
             if c.is_some() {
                 notes.push(format!(

@@ -9,7 +9,6 @@
 //! post-process) -> [`footskate`] (planted feet kept in place by a root shift, a post-process) ->
 //! [`foot_lock`] (the rest of each planted sole's slide absorbed by its leg) -> [`metrics`] and [`plots`].
 
-pub mod contact_detector;
 pub mod contacts;
 pub mod diversity;
 pub mod evaluate;

@@ -202,7 +202,7 @@ fn model_soles(model: &VariationModel) -> Vec<Vec<u32>> {
             .collect::<Vec<_>>(),
         &model.template,
         &model.up,
-        0.015,
+        mesh_core::feet::SOLE_TOLERANCE,
     )
 }
 

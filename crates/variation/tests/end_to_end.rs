@@ -65,7 +65,7 @@ fn tiny_set_end_to_end() {
         );
         for (a, b) in group.sequences.iter().zip(&detected.sequences).take(2) {
             let (truth, found) = (a.contacts.as_ref().unwrap(), b.contacts.as_ref().unwrap());
-            let (p, r) = variation::contact_detector::precision_recall(found, truth);
+            let (p, r) = capture::contact_detector::precision_recall(found, truth);
             eprintln!("{}: detected contacts precision {p:?} recall {r:?}", a.name);
             assert!(
                 p.unwrap() > 0.8 && r.unwrap() > 0.5,

@@ -56,6 +56,15 @@ struct Args {
     /// Use every n-th training frame for the correction
     #[arg(long, default_value_t = 1, value_parser = clap::value_parser!(u16).range(1..))]
     correct_stride: u16,
+    /// Do not clean up foot skating (by default each placed frame is shifted horizontally,
+    /// smoothly in time, so that where the source has a foot down the target's sole moves as the
+    /// source's does, scaled: planted feet stay planted; the pose is unchanged)
+    #[arg(long)]
+    no_footskate: bool,
+    /// Smoothness λ of the foot-skating correction (weight of its second differences against
+    /// the contact residuals; larger: smoother root, feet pinned less tightly)
+    #[arg(long, default_value_t = transfer::feet::SMOOTHNESS)]
+    footskate_smoothness: f64,
     /// Aligned source motion (from align)
     motion: PathBuf,
     /// Output folder of PLY frames 000000.ply, ... (the target's topology, one frame per source frame)
@@ -142,6 +151,7 @@ fn main() -> ExitCode {
             &motion,
             args.placement,
             recon.as_mut(),
+            (!args.no_footskate).then_some(args.footskate_smoothness),
         )
         .with_context(|| args.motion.display().to_string())?;
         let total = t0.elapsed().as_secs_f64();
@@ -150,6 +160,13 @@ fn main() -> ExitCode {
             let max = w.iter().cloned().fold(0.0, f64::max);
             mesh_core::info!(
                 "blended placement: scaled-source weight mean {mean:.3}, max {max:.3}"
+            );
+        }
+        if let Some(p) = &result.planted {
+            mesh_core::info!(
+                "foot skating: {} frames with a planted foot, root shifted by at most {:.3} m",
+                p.planted_frames,
+                p.max_shift_m
             );
         }
         if let Some(path) = &args.confidence {

@@ -82,7 +82,7 @@ fn main() -> ExitCode {
             }
             let legs: Vec<(&str, &[u32])> =
                 seg.parts.iter().map(|p| (p.name.as_str(), p.vertices.as_slice())).collect();
-            let soles = mesh_core::feet::soles(&legs, &template.vertices, &up, 0.015);
+            let soles = mesh_core::feet::soles(&legs, &template.vertices, &up, mesh_core::feet::SOLE_TOLERANCE);
             if let Some(c) = mesh_core::contacts::from_subject_field(
                 &spec,
                 "truth_contacts",

@@ -11,7 +11,7 @@
 
 use nalgebra::Vector3;
 
-use crate::contacts::Contacts;
+use mesh_core::contacts::Contacts;
 
 /// Thresholds of [`detect`].
 #[derive(Clone, Copy, Debug, PartialEq)]
