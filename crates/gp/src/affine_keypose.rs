@@ -42,6 +42,22 @@ impl AffineKeypose {
         })
     }
 
+    /// What [`AffineKeypose::fit`] guarantees, for a mapping read from a file. The error is
+    /// the problem.
+    pub fn validate(&self) -> std::result::Result<(), String> {
+        if self.source_keys.nrows() != self.target_keys.nrows() || self.source_keys.nrows() == 0 {
+            return Err(format!(
+                "affine key-pose mapping of {} source and {} target key-poses",
+                self.source_keys.nrows(),
+                self.target_keys.nrows()
+            ));
+        }
+        if !self.source_keys.iter().chain(self.target_keys.iter()).all(|v| v.is_finite()) {
+            return Err("affine key-pose mapping has a non-finite key-pose".into());
+        }
+        Ok(())
+    }
+
     /// Affine weights (`N x L`, rows sum to 1) of every row of `xs` (`N x D_s`).
     pub fn weights(&self, xs: &DMatrix<f64>) -> Result<DMatrix<f64>> {
         let (l, ds) = (self.source_keys.nrows(), self.source_keys.ncols());

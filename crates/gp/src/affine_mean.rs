@@ -37,6 +37,18 @@ fn with_ones(x: &DMatrix<f64>) -> DMatrix<f64> {
 }
 
 impl AffineMean {
+    /// The shape prediction relies on, for a map read from a file: `(d + 1) x p` finite
+    /// weights. The error is the problem.
+    pub fn validate(&self, d: usize, p: usize) -> std::result::Result<(), String> {
+        if self.w.shape() != (d + 1, p) {
+            return Err(format!("affine mean of {} x {} for {d} inputs and {p} outputs", self.w.nrows(), self.w.ncols()));
+        }
+        if !self.w.iter().all(|v| v.is_finite()) {
+            return Err("affine mean has a non-finite weight".into());
+        }
+        Ok(())
+    }
+
     /// Ridge least squares of `y` (`n x p`) on `[x 1]` (`x`: `n x d`); `ridge` relative to
     /// the mean diagonal of `X_1ᵀ X_1`. `notes` receives any jitter retry of the solve.
     pub fn fit(

@@ -550,6 +550,55 @@ impl Gpr {
 
     /// The inputs the posterior mean is a kernel expansion over: the training inputs, or
     /// the inducing inputs of a sparse model.
+    /// The invariants prediction relies on, for a model read from a file: positive finite
+    /// kernel parameters, finite non-negative noise and jitter, finite training inputs and
+    /// weights, one weight row per basis row (training or inducing input), inducing inputs of
+    /// the training inputs' dimension and square factors of their count. The error is the
+    /// problem.
+    pub fn validate(&self) -> std::result::Result<(), String> {
+        let positive = |v: f64| v.is_finite() && v > 0.0;
+        let ok_kernel = match self.kernel {
+            Kernel::NeuralNetwork { l, sigma_f, .. } | Kernel::SquaredExponential { l, sigma_f } => {
+                positive(l) && positive(sigma_f)
+            }
+            Kernel::Linear { sigma_f } => positive(sigma_f),
+        };
+        if !ok_kernel {
+            return Err(format!("kernel {:?} has a parameter that is not a finite positive number", self.kernel));
+        }
+        if !(self.noise_var.is_finite() && self.noise_var >= 0.0 && self.jitter.is_finite() && self.jitter >= 0.0) {
+            return Err(format!("noise variance {} or jitter {} is not a finite number >= 0", self.noise_var, self.jitter));
+        }
+        if self.x.nrows() == 0 || self.x.ncols() == 0 {
+            return Err(format!("{} x {} training inputs", self.x.nrows(), self.x.ncols()));
+        }
+        let basis = self.basis();
+        if basis.ncols() != self.x.ncols() || self.alpha.nrows() != basis.nrows() || self.alpha.ncols() == 0 {
+            return Err(format!(
+                "weights of {} x {} for {} basis inputs of dimension {} (training inputs {} x {})",
+                self.alpha.nrows(),
+                self.alpha.ncols(),
+                basis.nrows(),
+                basis.ncols(),
+                self.x.nrows(),
+                self.x.ncols()
+            ));
+        }
+        if let Some(s) = &self.sparse {
+            let m = s.inducing.nrows();
+            if s.l_uu.shape() != (m, m) || s.l_p.shape() != (m, m) {
+                return Err(format!("sparse factors of {:?} and {:?} for {m} inducing inputs", s.l_uu.shape(), s.l_p.shape()));
+            }
+            if !s.l_uu.iter().chain(s.l_p.iter()).all(|v| v.is_finite()) {
+                return Err("a sparse factor has a non-finite entry".into());
+            }
+        }
+        if !self.x.iter().chain(self.alpha.iter()).chain(basis.iter()).all(|v| v.is_finite()) {
+            return Err("training inputs or weights have a non-finite entry".into());
+        }
+        Ok(())
+    }
+
     fn basis(&self) -> &DMatrix<f64> {
         self.sparse.as_ref().map_or(&self.x, |s| &s.inducing)
     }
@@ -647,4 +696,53 @@ pub fn train_many(
         .par_iter()
         .map(|(x, y)| Gpr::train(kernel, x, y, opts))
         .collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn fitted() -> Gpr {
+        let x = DMatrix::from_fn(12, 2, |i, c| ((i * 3 + c) as f64 * 0.41).sin());
+        let y = DMatrix::from_fn(12, 3, |i, c| x[(i, c % 2)] * (c + 1) as f64);
+        let k = Kernel::NeuralNetwork { l: 1.2, sigma_f: 0.8, bias: false };
+        Gpr::fit(k, 0.1, &x, &y, &mut Vec::new()).unwrap()
+    }
+
+    /// A GP as fitted is valid; each broken invariant prediction relies on is named.
+    #[test]
+    fn validate_names_each_broken_invariant() {
+        let gp = fitted();
+        assert_eq!(gp.validate(), Ok(()));
+        let broken: Vec<(Box<dyn Fn(&mut Gpr)>, &str)> = vec![
+            (Box::new(|g| g.alpha = g.alpha.rows(0, 11).into_owned()), "weights of 11 x 3"),
+            (Box::new(|g| g.kernel = Kernel::NeuralNetwork { l: -1.0, sigma_f: 0.8, bias: false }), "kernel"),
+            (Box::new(|g| g.noise_var = f64::NAN), "noise variance"),
+            (Box::new(|g| g.alpha[(3, 1)] = f64::INFINITY), "non-finite"),
+            (
+                Box::new(|g| {
+                    g.sparse = Some(SparsePosterior {
+                        inducing: g.x.rows(0, 4).into_owned(),
+                        l_uu: DMatrix::identity(4, 4),
+                        l_p: DMatrix::identity(3, 3),
+                    })
+                }),
+                "weights of 12 x 3 for 4 basis inputs",
+            ),
+        ];
+        for (breaks, want) in broken {
+            let mut g = gp.clone();
+            breaks(&mut g);
+            let e = g.validate().unwrap_err();
+            assert!(e.contains(want), "{e} (wanted '{want}')");
+        }
+        let mut g = gp.clone();
+        g.sparse = Some(SparsePosterior {
+            inducing: g.x.rows(0, 4).into_owned(),
+            l_uu: DMatrix::identity(4, 4),
+            l_p: DMatrix::identity(3, 3),
+        });
+        g.alpha = g.alpha.rows(0, 4).into_owned();
+        assert!(g.validate().unwrap_err().contains("sparse factors"));
+    }
 }

@@ -680,6 +680,40 @@ impl Gpdm {
         })
     }
 
+    /// What [`Gpdm::new`] and training guarantee, for a model read from a file: a valid
+    /// sequence layout, `N x D` centred poses and `N x d` latents with `N` the summed lengths,
+    /// a `D`-vector mean, finite positive hyperparameters, every number finite. The error is
+    /// the problem.
+    pub fn validate(&self) -> std::result::Result<(), String> {
+        Layout::new(&self.seq_lens).map_err(|e| e.to_string())?;
+        let n: usize = self.seq_lens.iter().sum();
+        let d = self.config.latent_dim;
+        if self.y.nrows() != n || self.x.nrows() != n || self.x.ncols() != d || d == 0 {
+            return Err(format!(
+                "poses {} x {} and latents {} x {} for {n} frames of latent dimension {d}",
+                self.y.nrows(),
+                self.y.ncols(),
+                self.x.nrows(),
+                self.x.ncols()
+            ));
+        }
+        if self.y_mean.len() != self.y.ncols() || self.y.ncols() == 0 {
+            return Err(format!("a mean pose of {} values for poses of {}", self.y_mean.len(), self.y.ncols()));
+        }
+        if !self.alpha.iter().chain(&self.beta).all(|v| v.is_finite() && *v > 0.0)
+            || !(self.config.first_point_var.is_finite() && self.config.first_point_var > 0.0)
+        {
+            return Err(format!(
+                "hyperparameters α {:?}, β {:?} or first-point variance {} not finite positive numbers",
+                self.alpha, self.beta, self.config.first_point_var
+            ));
+        }
+        if !self.y.iter().chain(self.x.iter()).chain(self.y_mean.iter()).all(|v| v.is_finite()) {
+            return Err("poses or latents have a non-finite entry".into());
+        }
+        Ok(())
+    }
+
     /// The sequence layout.
     pub fn layout(&self) -> Layout {
         Layout::new(&self.seq_lens).expect("layout validated at construction")

@@ -31,6 +31,22 @@ pub struct Correspondences {
 impl Artifact for Correspondences {
     const KIND: &'static str = "correspondences";
     const VERSION: u32 = 1;
+
+    /// A path: at least one pair, both frame indices non-decreasing from pair to pair, and
+    /// every key-pose on it. (Whether the indices lie inside the two motions is checked where
+    /// the motions are known, `gpr_model::training_set`.)
+    fn validate(&self) -> std::result::Result<(), String> {
+        if self.pairs.is_empty() {
+            return Err("no frame pairs".into());
+        }
+        if let Some(w) = self.pairs.windows(2).find(|w| w[1][0] < w[0][0] || w[1][1] < w[0][1]) {
+            return Err(format!("frame pairs {:?} then {:?}: the path goes backwards", w[0], w[1]));
+        }
+        if let Some(k) = self.keyposes.iter().find(|k| self.pairs.binary_search(k).is_err()) {
+            return Err(format!("key-pose {k:?} is not on the path"));
+        }
+        Ok(())
+    }
 }
 
 /// How far a path is from the true correspondences: for every source frame,

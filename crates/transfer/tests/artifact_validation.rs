@@ -123,3 +123,25 @@ fn segmentation_indices_are_validated_after_decoding() {
     bad.parts[0].parent = Some("nowhere".into());
     assert!(reload(&bad).contains("parent"));
 }
+
+#[test]
+fn correspondences_are_a_path_through_their_key_poses() {
+    use transfer::densify::Correspondences;
+    let good = Correspondences {
+        source_motion: "walk".into(),
+        target_motion: "walk".into(),
+        keyposes: vec![[0, 0], [2, 3]],
+        pairs: vec![[0, 0], [1, 1], [1, 2], [2, 3], [3, 3]],
+    };
+    assert_eq!(good.validate(), Ok(()));
+    let mut bad = good.clone();
+    bad.pairs.swap(1, 2);
+    bad.pairs[1] = [2, 2];
+    assert!(reload(&bad).contains("backwards"));
+    let mut bad = good.clone();
+    bad.keyposes.push([3, 0]);
+    assert!(reload(&bad).contains("key-pose [3, 0]"));
+    let mut bad = good.clone();
+    bad.pairs.clear();
+    assert!(reload(&bad).contains("no frame pairs"));
+}

@@ -69,6 +69,81 @@ pub struct Group {
 impl Artifact for Group {
     const KIND: &'static str = "variation-group";
     const VERSION: u32 = 2;
+
+    /// A valid body ([`check_body`]); at least one sequence, each a valid aligned motion of
+    /// the template's vertex count, all of one frame count, with contacts and a frame map of
+    /// that length and a blend weight in [0, 1]; the reference and the blend pair among them.
+    fn validate(&self) -> std::result::Result<(), String> {
+        check_body(&self.template, &self.faces, &self.up, self.fps, &self.parts)?;
+        let n = self.n_frames();
+        if self.sequences.is_empty() || n == 0 {
+            return Err("no sequences".into());
+        }
+        for s in &self.sequences {
+            let what = |e: String| format!("sequence '{}': {e}", s.name);
+            s.motion.validate().map_err(what)?;
+            let vertices = s.motion.frames[0].len();
+            if vertices != self.template.len() {
+                return Err(what(format!("{vertices} vertices, the template has {}", self.template.len())));
+            }
+            if s.motion.n_frames() != n || s.map.len() != n || s.contacts.as_ref().is_some_and(|c| c.len() != n) {
+                return Err(what(format!("frames, frame map or contacts differ from the group's {n} frames")));
+            }
+            if s.blend.is_some_and(|w| !(0.0..=1.0).contains(&w)) {
+                return Err(what(format!("blend weight {:?} outside [0, 1]", s.blend)));
+            }
+        }
+        if self.index(&self.reference).is_none() {
+            return Err(format!("reference '{}' is not one of the sequences", self.reference));
+        }
+        check_pair(self.pair, self.sequences.len())
+    }
+}
+
+/// The body both variation artifacts carry: a non-empty finite template, faces inside it, a
+/// unit up axis, a finite frame rate >= 0, parts whose vertices lie in the template with part 0
+/// the root and every other part's parent an earlier part. The error is the problem.
+pub fn check_body(
+    template: &[Vector3<f64>],
+    faces: &[[u32; 3]],
+    up: &Vector3<f64>,
+    fps: f64,
+    parts: &[PartDef],
+) -> std::result::Result<(), String> {
+    let n = template.len();
+    if n == 0 || !template.iter().all(|v| v.iter().all(|c| c.is_finite())) {
+        return Err(format!("a template of {n} vertices, or one with a non-finite coordinate"));
+    }
+    if let Some(f) = faces.iter().find(|f| f.iter().any(|&v| v as usize >= n)) {
+        return Err(format!("face {f:?} indexes past the template's {n} vertices"));
+    }
+    if !((up.norm() - 1.0).abs() < 1e-6) || !(fps.is_finite() && fps >= 0.0) {
+        return Err(format!("up axis {up:?} not a unit vector or frame rate {fps} not a finite number >= 0"));
+    }
+    if parts.is_empty() {
+        return Err("no parts".into());
+    }
+    for (k, p) in parts.iter().enumerate() {
+        if let Some(&v) = p.vertices.iter().find(|&&v| v as usize >= n) {
+            return Err(format!("part '{}': vertex index {v} past the template's {n} vertices", p.name));
+        }
+        let parent_ok = match p.parent {
+            None => k == 0,
+            Some(q) => k > 0 && q < k,
+        };
+        if !parent_ok {
+            return Err(format!("part '{}' (part {k}) has parent {:?}: part 0 is the root, others name an earlier part", p.name, p.parent));
+        }
+    }
+    Ok(())
+}
+
+/// A blend pair of two distinct sequence indices below `n`, or none.
+pub fn check_pair(pair: Option<(usize, usize)>, n: usize) -> std::result::Result<(), String> {
+    match pair {
+        Some((a, b)) if a >= n || b >= n || a == b => Err(format!("blend pair ({a}, {b}) for {n} sequences")),
+        _ => Ok(()),
+    }
 }
 
 impl Group {

@@ -67,6 +67,37 @@ pub struct VariationModel {
 impl Artifact for VariationModel {
     const KIND: &'static str = "variation-model";
     const VERSION: u32 = 2;
+
+    /// A valid body (`group::check_body`); per part a reference of its vertex count and a
+    /// valid GPDM with one latent trajectory per training sequence, each of the
+    /// `frame_stride::kept_count(frames, stride)` training steps; a stride >= 1; contacts of
+    /// `frames` entries; the blend pair among the sequences.
+    fn validate(&self) -> std::result::Result<(), String> {
+        let defs: Vec<PartDef> = self.parts.iter().map(|p| p.part.clone()).collect();
+        crate::group::check_body(&self.template, &self.faces, &self.up, self.fps, &defs)?;
+        if self.stride == 0 || self.frames == 0 || self.sequences.is_empty() {
+            return Err(format!("stride {}, {} frames, {} sequences", self.stride, self.frames, self.sequences.len()));
+        }
+        let steps = frame_stride::kept_count(self.frames, self.stride);
+        for p in &self.parts {
+            let what = |e: String| format!("part '{}': {e}", p.part.name);
+            if p.reference.len() != p.part.vertices.len() {
+                return Err(what(format!("{} reference points for {} vertices", p.reference.len(), p.part.vertices.len())));
+            }
+            p.gpdm.validate().map_err(what)?;
+            if p.gpdm.seq_lens.len() != self.sequences.len() || p.gpdm.seq_lens.iter().any(|&l| l != steps) {
+                return Err(what(format!(
+                    "latent trajectories of {:?} steps for {} sequences of {steps}",
+                    p.gpdm.seq_lens,
+                    self.sequences.len()
+                )));
+            }
+        }
+        if let Some(s) = self.sequences.iter().find(|s| s.contacts.as_ref().is_some_and(|c| c.len() != self.frames)) {
+            return Err(format!("sequence '{}': contacts of other than {} frames", s.name, self.frames));
+        }
+        crate::group::check_pair(self.pair, self.sequences.len())
+    }
 }
 
 impl VariationModel {
