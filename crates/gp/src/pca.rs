@@ -49,6 +49,9 @@ impl Pca {
     /// Fits the basis on the rows of `data` (`F x D`, `F >= 2`).
     pub fn fit(data: &DMatrix<f64>, choice: Components) -> Result<Self> {
         let (f, d) = (data.nrows(), data.ncols());
+        if choice == Components::Count(0) {
+            return invalid("the PCA needs at least 1 component, got 0");
+        }
         if f < 2 || d == 0 {
             return invalid(format!(
                 "PCA needs at least 2 frames and 1 dimension, got {f} x {d}"

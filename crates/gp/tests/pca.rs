@@ -111,4 +111,6 @@ fn bad_shapes_are_errors() {
     assert!(pca.encode(&DMatrix::zeros(2, 4)).is_err());
     assert!(pca.decode(&DMatrix::zeros(2, 5)).is_err());
     assert!(Pca::fit(&DMatrix::zeros(1, 5), Components::default()).is_err());
+    let e = Pca::fit(&data, Components::Count(0)).unwrap_err().to_string();
+    assert!(e.contains("at least 1 component"), "{e}");
 }
