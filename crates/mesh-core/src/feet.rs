@@ -3,6 +3,18 @@
 
 use nalgebra::Vector3;
 
+/// Fails unless the smoothness `λ` of a foot-skating clean-up (the weight of its second
+/// differences) is a finite number >= 0.
+pub fn check_smoothness(smoothness: f64) -> crate::Result<()> {
+    if smoothness.is_finite() && smoothness >= 0.0 {
+        Ok(())
+    } else {
+        Err(crate::Error::invalid(format!(
+            "foot-skating smoothness must be a finite number >= 0, got {smoothness}"
+        )))
+    }
+}
+
 /// Height above a leg's lowest template vertex (m) within which its vertices form the sole.
 pub const SOLE_TOLERANCE: f64 = 0.015;
 
@@ -63,6 +75,16 @@ fn split_soles(template: &[Vector3<f64>], up: &Vector3<f64>, tol: f64) -> Vec<Ve
         .iter()
         .partition(|&&v| (template[v as usize] - c).dot(&axis) > 0.0);
     vec![l, r]
+}
+
+/// Sole centroid of each foot in every frame.
+pub fn feet_tracks(frames: &[Vec<Vector3<f64>>], soles: &[Vec<u32>; 2]) -> [Vec<Vector3<f64>>; 2] {
+    soles.clone().map(|s| {
+        frames
+            .iter()
+            .map(|f| s.iter().map(|&v| f[v as usize]).sum::<Vector3<f64>>() / s.len().max(1) as f64)
+            .collect()
+    })
 }
 
 /// Foot sliding on annotated contacts (m per frame): mean horizontal motion of each sole's

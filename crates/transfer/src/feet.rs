@@ -63,15 +63,6 @@ pub struct Planted {
     pub max_shift_m: f64,
 }
 
-/// Sole centroid of each foot in every frame.
-fn sole_tracks(frames: &[Vec<Vector3<f64>>], soles: &[Vec<u32>; 2]) -> [Vec<Vector3<f64>>; 2] {
-    soles.clone().map(|s| {
-        frames
-            .iter()
-            .map(|f| s.iter().filter_map(|&v| f.get(v as usize)).sum::<Vector3<f64>>() / s.len().max(1) as f64)
-            .collect()
-    })
-}
 
 /// The horizontal shifts `d(t)` of the module doc: `target` and `source` the two subjects' sole
 /// tracks (same frame count as `contacts`), `ratio` the scale `r`.
@@ -85,11 +76,7 @@ pub fn corrections(
     notes: &mut Vec<String>,
 ) -> Result<Vec<Vector3<f64>>> {
     let n = contacts.len();
-    if !(smoothness.is_finite() && smoothness >= 0.0) {
-        return Err(Error::invalid(format!(
-            "foot-skating smoothness must be a finite number >= 0, got {smoothness}"
-        )));
-    }
+    mesh_core::feet::check_smoothness(smoothness)?;
     if target.iter().chain(source).any(|f| f.len() != n) {
         return Err(Error::invalid(format!(
             "foot-skating clean-up: {n} contact frames but sole tracks of other lengths"
@@ -169,8 +156,8 @@ pub fn plant(
     };
     let mut notes = Vec::new();
     let shifts = corrections(
-        &sole_tracks(frames, &target_soles),
-        &sole_tracks(&world, &source_soles),
+        &mesh_core::feet::feet_tracks(frames, &target_soles),
+        &mesh_core::feet::feet_tracks(&world, &source_soles),
         &contacts,
         ratio,
         &up,

@@ -17,7 +17,8 @@
 //! interpolated across gaps too short for that ([`displacements`]): no popping when a contact
 //! starts or ends.
 
-use crate::footskate::{feet_tracks, intervals};
+use crate::footskate::intervals;
+use mesh_core::feet::feet_tracks;
 use crate::group::PartDef;
 use nalgebra::Vector3;
 use std::collections::HashSet;

@@ -31,6 +31,7 @@
 //! because its feet slide (0.03-0.16 m per frame before the clean-up).
 
 use gp::linalg::Cholesky;
+use mesh_core::feet::feet_tracks;
 use mesh_core::{Error, Result};
 use nalgebra::{DMatrix, Vector3};
 
@@ -83,11 +84,7 @@ pub fn corrections(
     notes: &mut Vec<String>,
 ) -> Result<Vec<Vector3<f64>>> {
     let n = contacts.len();
-    if !(smoothness.is_finite() && smoothness >= 0.0) {
-        return Err(Error::invalid(format!(
-            "foot-skating smoothness must be a finite number >= 0, got {smoothness}"
-        )));
-    }
+    mesh_core::feet::check_smoothness(smoothness)?;
     if feet.iter().any(|f| f.len() != n) {
         return Err(Error::invalid(format!(
             "foot-skating clean-up: {n} contact frames but feet tracks of {} and {} frames",
@@ -149,15 +146,6 @@ pub fn corrections(
         .collect())
 }
 
-/// Sole centroid of each foot in every frame.
-pub fn feet_tracks(frames: &[Vec<Vector3<f64>>], soles: &[Vec<u32>; 2]) -> [Vec<Vector3<f64>>; 2] {
-    soles.clone().map(|s| {
-        frames
-            .iter()
-            .map(|f| s.iter().map(|&v| f[v as usize]).sum::<Vector3<f64>>() / s.len().max(1) as f64)
-            .collect()
-    })
-}
 
 /// Cleans `frames` in place (module doc): shifts every frame by its correction; returns the
 /// corrections. `soles` are the left and right sole vertices, `contacts` per frame
