@@ -184,7 +184,7 @@ fn propose_curves_then_make_transfer_on_a_set_without_curves() {
     assert_eq!(proposed.len(), hand.len());
     // Parts cut by the proposed loops (91 % vertex agreement on these bodies) transfer about as
     // well as the hand-built ones: each method's mean over the test motions within
-    // MEAN_RATIO of the hand-built curves' (measured: 0.93-1.08), no single motion beyond
+    // MEAN_RATIO of the hand-built curves' (measured: 0.96-1.03), no single motion beyond
     // CELL_RATIO plus 5 mm (measured: at most 1.56, B->A dance_b stitched).
     let mut table = String::new();
     let mut worse = Vec::new();
