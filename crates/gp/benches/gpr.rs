@@ -2,7 +2,7 @@
 //! - training all 5 parts (20-D -> 20-D) plus the displacement (6-D -> 6-D), both directions
 //!   (12 models, rayon over models on the machine's cores): <= 1 s with 350 dense pairs,
 //!   <= 5 s with 1100;
-//! - prediction (eq. 13, 5 parts + displacement): >= 5000 frames/s.
+//! - prediction (CVPR eq. 13, 5 parts + displacement): >= 5000 frames/s.
 //! - one log-marginal-likelihood + gradient evaluation, and one value alone (the optimiser's
 //!   units of work: rejected line-search trials need only the value).
 use criterion::{criterion_group, criterion_main, BenchmarkId, Criterion, Throughput};

@@ -1,18 +1,18 @@
-//! The GPDM negative log posterior, paper eqs. 3-7, with analytic gradients.
+//! The GPDM negative log posterior, 3DV eqs. 3-7, with analytic gradients.
 //!
 //! With `Y` the centred poses (N × D, sequences stacked), `X` the latent points (N × d),
 //! `X_in`/`X_out` the latent points that have a successor/predecessor in the same sequence
 //! (M = N − #sequences rows each), the minimised objective is (constants dropped)
 //!
 //! ```text
-//! L = D/2 ln|K_Y| + 1/2 tr(K_Y⁻¹ Y Yᵀ)                      eq. 3 (N × N form, Y Yᵀ precomputed)
-//!   + d/2 ln|K_X| + 1/2 tr(K_X⁻¹ X_out X_outᵀ)              eq. 5, K_X = k_X(X_in, X_in)
+//! L = D/2 ln|K_Y| + 1/2 tr(K_Y⁻¹ Y Yᵀ)                      3DV eq. 3 (N × N form, Y Yᵀ precomputed)
+//!   + d/2 ln|K_X| + 1/2 tr(K_X⁻¹ X_out X_outᵀ)              3DV eq. 5, K_X = k_X(X_in, X_in)
 //!   + Σ_seq ‖x_first‖² / (2 σ0²)                            isotropic prior on each first point
 //!   + Σ_k ln α_k + Σ_k ln β_k                               priors P(α) = ∏ 1/α_k, P(β) = ∏ 1/β_k
 //!   + Σ_{k=1..3} (ln β_k)² / (2 s²)                          weak log-normal factor (deviation)
 //! ```
 //!
-//! Well-posedness (issue 6, deviation from eq. 7 as printed): with `∏ 1/β` alone the objective
+//! Well-posedness (issue 6, deviation from 3DV eq. 7 as printed): with `∏ 1/β` alone the objective
 //! has no minimum whenever the data do not need a dynamics-kernel component: `ln β1`, `ln β2`
 //! (RBF part) or `ln β3` (linear part) then fall without bound (β → 5e-324 in the demo fits)
 //! and an optimiser stops only at its iteration limit. [`GpdmConfig::beta_log_sd`] multiplies
@@ -30,7 +30,7 @@
 //! below where plain L-BFGS stalls after 2000 iterations). With
 //! [`GpdmConfig::fixed_latent_scale`] the optimisation coordinates hold `X̃` and the model uses
 //! `X = √(N d) X̃ / ‖X̃‖_F` (unit mean square, the PCA start's scale, the scale the floors are
-//! stated in): one gauge direction removed, every other minimum of eq. 7 kept.
+//! stated in): one gauge direction removed, every other minimum of 3DV eq. 7 kept.
 //!
 //! Optimisation coordinates `θ` (see [`Gpdm::theta`]): X column-major, then `ln α1, ln α2,
 //! ln(1/α3 − floor_Y)`, then `ln β1, ln β2, ln β3, ln(1/β4 − floor_X)`. The noise-variance floor
@@ -183,9 +183,9 @@ fn noise_theta(prec: f64, floor: Option<f64>) -> f64 {
 pub struct Eval {
     /// Total negative log posterior (constants dropped).
     pub value: f64,
-    /// Pose term, eq. 3.
+    /// Pose term, 3DV eq. 3.
     pub pose: f64,
-    /// Dynamics term, eq. 5 (including the first-point priors).
+    /// Dynamics term, 3DV eq. 5 (including the first-point priors).
     pub dynamics: f64,
     /// Hyperparameter priors.
     pub prior: f64,
@@ -195,7 +195,7 @@ pub struct Eval {
     pub jitter_x: f64,
 }
 
-/// The negative log posterior of eq. 7 for fixed data; `S = Y Yᵀ` and its pivoted Cholesky
+/// The negative log posterior of 3DV eq. 7 for fixed data; `S = Y Yᵀ` and its pivoted Cholesky
 /// factor `Pᵀ S P = R Rᵀ` are formed once here.
 #[derive(Clone, Debug)]
 pub struct Objective {
@@ -598,15 +598,15 @@ pub struct Gpdm {
     pub config: GpdmConfig,
     /// Lengths of the stacked training sequences.
     pub seq_lens: Vec<usize>,
-    /// Mean pose subtracted from the data (the GP of eq. 3 has zero mean).
+    /// Mean pose subtracted from the data (the GP of 3DV eq. 3 has zero mean).
     pub y_mean: DVector<f64>,
     /// Centred training poses, N × D.
     pub y: DMatrix<f64>,
     /// Latent points, N × d.
     pub x: DMatrix<f64>,
-    /// Pose-kernel hyperparameters (α1, α2, α3), eq. 4.
+    /// Pose-kernel hyperparameters (α1, α2, α3), 3DV eq. 4.
     pub alpha: [f64; 3],
-    /// Dynamics-kernel hyperparameters (β1, β2, β3, β4), eq. 6.
+    /// Dynamics-kernel hyperparameters (β1, β2, β3, β4), 3DV eq. 6.
     pub beta: [f64; 4],
 }
 
@@ -685,7 +685,7 @@ impl Gpdm {
         Layout::new(&self.seq_lens).expect("layout validated at construction")
     }
 
-    /// Builds the objective of eq. 7 (forms Y Yᵀ once).
+    /// Builds the objective of 3DV eq. 7 (forms Y Yᵀ once).
     pub fn objective(&self) -> Result<Objective> {
         Objective::new(view(&self.y), self.layout(), self.config.clone())
     }

@@ -1,4 +1,4 @@
-//! Fitting the GPDM: PCA initialisation and an L-BFGS minimiser of eq. 7.
+//! Fitting the GPDM: PCA initialisation and an L-BFGS minimiser of 3DV eq. 7.
 //!
 //! The hyperparameters are optimised in log coordinates (see [`crate::model`]); on top of
 //! that, [`Schedule::Alternate`] interleaves (X, α) phases with β-only phases, because the
@@ -564,7 +564,7 @@ fn phase_blocks(idx: &[usize], nx: usize, scaling: Scaling) -> Vec<std::ops::Ran
 /// What training did.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct TrainReport {
-    /// Objective (eq. 7, negative log posterior without constants) at the start.
+    /// Objective (3DV eq. 7, negative log posterior without constants) at the start.
     pub initial_value: f64,
     /// Objective at the end.
     pub final_value: f64,
@@ -580,7 +580,7 @@ pub struct TrainReport {
     pub trace: Vec<(f64, f64)>,
 }
 
-/// Minimises eq. 7 over X, α and β starting from the model's current parameters and stores
+/// Minimises 3DV eq. 7 over X, α and β starting from the model's current parameters and stores
 /// the best point found back into `model`.
 pub fn train(model: &mut Gpdm, opts: &TrainOptions) -> Result<TrainReport> {
     let clock = std::time::Instant::now();

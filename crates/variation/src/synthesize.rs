@@ -41,7 +41,7 @@ pub struct SynthConfig {
     /// Blend weights w* to synthesise (besides the training sequences).
     pub blends: Vec<f64>,
     pub seed: u64,
-    /// Draw poses from eq. 11 instead of the mean (eq. 12).
+    /// Draw poses from 3DV eq. 11 instead of the mean (eq. 12).
     pub sample_poses: bool,
     pub assembly: Assembly,
     /// Trajectory sampler (HMC, the paper's, by default).

@@ -1,9 +1,9 @@
 //! `gpdm-train`: one GPDM per body part on the group's time-aligned sequences (originals and
 //! pre-blended `Y_w`), sharing one latent space per part with no dynamics across sequence
-//! boundaries (paper §5, eqs. 3-7; numerics in the `gpdm` crate).
+//! boundaries (3DV §5, eqs. 3-7; numerics in the `gpdm` crate).
 //!
 //! Defaults follow the paper (d = 3, PCA start, α_k = β_k = 1, noise variances 0.1) plus the
-//! issue's findings, which make eq. 7 well-posed: a pose-noise floor of 1e-6 m² (the noise-free
+//! issue's findings, which make 3DV eq. 7 well-posed: a pose-noise floor of 1e-6 m² (the noise-free
 //! fit has no minimum), a dynamics-noise floor [`DYN_NOISE_FLOOR`], a weak log-normal factor on
 //! β1..β3 and the latent scale fixed at unit mean square (`gpdm::model` module doc). The fit is
 //! one joint L-BFGS run (memory [`LBFGS_MEMORY`]) that stops by convergence: relative decrease
