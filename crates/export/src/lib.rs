@@ -1,4 +1,4 @@
-//! export: results people can open (issue 7).
+//! export: results people can open.
 //!
 //! - [`frames`]: a mesh sequence as one OBJ or PLY file per frame, and back.
 //! - [`pc2`]: the PC2 point cache (Blender's Mesh Cache modifier, 3ds Max),

@@ -626,7 +626,7 @@ impl Gpr {
     }
 }
 
-// NOTE(next): at 1100 pairs (h12, loaded machine) a likelihood value costs ~25-35 ms (kernel
+// NOTE(next): at 1100 pairs (loaded machine) a likelihood value costs ~25-35 ms (kernel
 // matrix ~5-10 ms of libm asin, Cholesky ~10-15 ms) and a gradient another ~45-70 ms (the
 // potri-style inverse ~36-48 ms dominates; faer and OpenBLAS dpotri measured alike). Training
 // the 12 benchmark models takes ~140 values and ~70 gradients. Ideas not yet tried: a

@@ -1,4 +1,4 @@
-//! Speed of the GPDM numerics (issue 6 targets, numpy reference in brackets):
+//! Speed of the GPDM numerics (targets in docs/PERFORMANCE.md, numpy reference in brackets):
 //! - objective + gradient of 3DV eq. 7 for N = 446 frames, D = 15000 (numpy ~20 ms, one core);
 //! - HMC: 100 samples of a 100-frame latent trajectory (numpy ~11 s);
 //! - decoding 10,000 frames to D = 3000 poses (a body part), exact, via a pose basis, and

@@ -175,7 +175,7 @@ pub fn sample<E: Energy + ?Sized>(energy: &E, q0: &[f64], opts: &HmcOptions) -> 
     // Step-size adaptation in two halves of burn-in.
     // 1. Dual averaging (Hoffman & Gelman 2014, alg. 5): finds the scale quickly, but its
     //    iterates spread widely and the acceptance is concave in log ε near the stability
-    //    limit, so the averaged step accepts more often than the target (issue 6 saw 0.82-0.88
+    //    limit, so the averaged step accepts more often than the target (0.82-0.88 measured
     //    for 0.7).
     // 2. Robbins-Monro on log ε with a small decreasing gain, started from the dual-averaged
     //    step, and Polyak averaging over its second half: low spread, acceptance on target.

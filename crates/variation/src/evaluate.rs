@@ -1,4 +1,4 @@
-//! `variation-eval`: the model-level figures of issue 6.
+//! `variation-eval`: the model-level figures of the 3DV paper (figs. 3-5, 7b) and the mean prediction.
 //!
 //! - **Fig. 4**: reconstruction error of the training poses, GPDM (3DV eq. 12 at the learned
 //!   latent points, interpolated to every captured frame when trained at a stride) against
@@ -10,7 +10,7 @@
 //!   one (`(1 − w) X₁ + w X₂`) are decoded (3DV eq. 12) and compared per frame with the truth.
 //! - **Mean prediction**: from each training sequence's first latent point, the mean
 //!   dynamics (3DV eqs. 8-10) over the sequence length, decoded, against the sequence: shows
-//!   whether the learned dynamics stay on the cycle (issue 6, noise floor).
+//!   whether the learned dynamics stay on the cycle (a test of the noise floor).
 //! - Latent plots via [`crate::plots`]: figs. 3 and 5; fig. 6 (each learned pre-blend `X_w` against
 //!   the linear interpolation `(1 − w) X₁ + w X₂`, per part) and fig. 7a (at w = 0.25, first part:
 //!   the unguided and the guided interpolations of fig. 7b with the trajectories they come from).

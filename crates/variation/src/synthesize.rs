@@ -475,7 +475,7 @@ pub fn run_with_progress(
     let clock = std::time::Instant::now();
     let mut sequences = Vec::new();
     // Ground on the lowest point of the whole body: sampled feet often point their toes through
-    // the floor while the template soles sit at the right height (h15, render check).
+    // the floor while the template soles sit at the right height (seen in the renders).
     let ground_soles: Vec<u32> = Vec::new();
     let all_soles = model_soles(model);
     let feet: Option<[Vec<u32>; 2]> = match all_soles.as_slice() {
