@@ -325,7 +325,6 @@ fn check_frames(dir: &Path, template: Option<&Template>, report: &mut Report, ba
     // Per frame: None when it matches, else the problem.
     let results: Vec<Option<(PathBuf, String, bool)>> = files
         .par_iter()
-        .inspect(|_| bar.inc(1))
         .map(|f| match crate::io::read_mesh(f) {
             Err(e) => Some((f.clone(), strip(&e.to_string(), f), true)),
             Ok(m) => {
@@ -339,6 +338,7 @@ fn check_frames(dir: &Path, template: Option<&Template>, report: &mut Report, ba
                 }
             }
         })
+        .inspect(|_| bar.inc(1))
         .collect();
     // Unreadable frames one line each; topology mismatches one line per
     // folder (naming the first), since a whole folder usually shares the cause.
