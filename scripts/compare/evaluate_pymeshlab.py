@@ -1,5 +1,5 @@
 #!/usr/bin/env python3
-"""Recompute `transfer-eval`'s errors of one transferred sequence with pymeshlab (issue 4).
+"""Recompute `transfer-eval`'s errors of one transferred sequence with pymeshlab.
 
     python3 scripts/compare/evaluate_pymeshlab.py PRED_DIR TRUTH_DIR [--record EVAL.json]
 

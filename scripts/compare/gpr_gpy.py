@@ -43,7 +43,7 @@ def mlp_kernel(dim, l, sf):
     w, var = to_gpy(l, sf)
     k = GPy.kern.MLP(input_dim=dim, variance=var, weight_variance=w, bias_variance=1e-300)
     with np.errstate(divide="ignore"):
-        k.bias_variance.fix(0.0)  # eq. 10 has no bias
+        k.bias_variance.fix(0.0)  # CVPR eq. 10 has no bias
     return k
 
 

@@ -25,6 +25,7 @@ use mesh_core::rigid::procrustes;
 use mesh_core::{Error, Result};
 use nalgebra::{DMatrix, Vector3};
 use rayon::prelude::*;
+use mesh_core::cli::ProgressBar;
 use serde::{Deserialize, Serialize};
 
 use crate::align::AlignedMotion;
@@ -170,6 +171,19 @@ pub fn fit(
     components: Components,
     alignment: PartAlignment,
 ) -> Result<(PcaModel, Vec<PartReport>)> {
+    fit_with_progress(template, parts, motions, components, alignment, &ProgressBar::hidden())
+}
+
+/// [`fit`], advancing `bar` by one per part fitted (its length is set to the part count).
+pub fn fit_with_progress(
+    template: &[Vector3<f64>],
+    parts: &Segmentation,
+    motions: &[&AlignedMotion],
+    components: Components,
+    alignment: PartAlignment,
+    bar: &ProgressBar,
+) -> Result<(PcaModel, Vec<PartReport>)> {
+    bar.set_length(parts.parts.len() as u64);
     if template.len() != parts.n_vertices {
         return Err(Error::invalid(format!(
             "the template has {} vertices but the segmentation was made for {}",
@@ -227,7 +241,9 @@ pub fn fit(
                 report,
             ))
         })
+        .inspect(|_| bar.inc(1))
         .collect::<Result<_>>()?;
+    bar.finish_and_clear();
     let (parts_pca, reports) = fitted.into_iter().unzip();
     Ok((
         PcaModel {

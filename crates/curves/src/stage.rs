@@ -1,4 +1,4 @@
-//! The `propose-curves` stage: read, propose, check by segmenting, write.
+//! The `propose-curves` stage: read, propose, check by segmenting, write (and draw, on request).
 
 use std::path::Path;
 
@@ -7,7 +7,9 @@ use mesh_core::capture_set::SubjectSpec;
 
 use crate::limb_loops::{propose, with_curves, Settings};
 
-pub fn run(subject: &Path, template: &Path, out: &Path) -> Result<()> {
+/// Proposes curves for `template`, writes `subject` with them to `out`, and with `render` a
+/// PNG of the loops and parts there ([`crate::check_image`]).
+pub fn run(subject: &Path, template: &Path, out: &Path, render: Option<&Path>) -> Result<()> {
     let bytes = mesh_core::input::read_regular_file(subject)?;
     let value: serde_json::Value =
         serde_json::from_slice(&bytes).map_err(|e| anyhow::anyhow!("{}: invalid JSON: {e}", subject.display()))?;
@@ -29,5 +31,8 @@ pub fn run(subject: &Path, template: &Path, out: &Path) -> Result<()> {
     let mut text = serde_json::to_string_pretty(&proposed)?;
     text.push('\n');
     mesh_core::atomic::write_bytes_atomic(out, text.as_bytes())?;
+    if let Some(png) = render {
+        crate::check_image::write_check_image(&mesh, &spec, out, png)?;
+    }
     Ok(())
 }

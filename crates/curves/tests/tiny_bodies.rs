@@ -35,12 +35,15 @@ fn curves_proposed_for_the_tiny_bodies_agree_with_the_hand_built_ones() {
         let bare_path = set.join(x).join("bare.json");
         std::fs::write(&bare_path, serde_json::to_string(&bare).unwrap()).unwrap();
         let tpl = set.join(x).join("walk/000000.ply");
+        let png = set.join(x).join("curves.png");
         let out = Command::new(env!("CARGO_BIN_EXE_propose-curves"))
             .arg(&bare_path)
             .arg("--template")
             .arg(&tpl)
             .arg("--out")
             .arg(&json)
+            .arg("--render")
+            .arg(&png)
             .output()
             .unwrap();
         assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
@@ -56,6 +59,7 @@ fn curves_proposed_for_the_tiny_bodies_agree_with_the_hand_built_ones() {
         for (part, iou) in &per {
             assert!(*iou > MIN_PART_IOU, "{x} {part}: IoU {iou:.3}");
         }
+        check_picture(&png, &proposed);
     }
     let st = Command::new(bin("check-set")).arg(&set).output().unwrap();
     assert!(st.status.success(), "{}", String::from_utf8_lossy(&st.stderr));
@@ -86,4 +90,39 @@ fn a_mesh_that_is_no_body_is_a_one_line_error() {
     assert_eq!(err.lines().count(), 1, "{err}");
     assert!(err.starts_with("propose-curves: "), "{err}");
     assert!(!dir.path().join("o.json").exists());
+}
+
+/// The `--render` picture, decoded independently: the loops drawn in their colour, and every
+/// limb part visible in its own hue (shading scales a colour's brightness, not its direction
+/// in RGB space) above the legend strip.
+fn check_picture(path: &Path, spec: &SubjectSpec) {
+    let dec = png::Decoder::new(std::io::BufReader::new(std::fs::File::open(path).unwrap()));
+    let mut reader = dec.read_info().unwrap();
+    let mut buf = vec![0; reader.output_buffer_size().unwrap()];
+    let info = reader.next_frame(&mut buf).unwrap();
+    assert_eq!((info.width, info.height, info.color_type), (1080, 568, png::ColorType::Rgb));
+    let views = &buf[..(info.width * 540 * 3) as usize];
+    let px: Vec<[u8; 3]> = views.chunks(3).map(|p| [p[0], p[1], p[2]]).collect();
+    let loops = px.iter().filter(|p| **p == curves::check_image::LOOP_COLOUR).count();
+    assert!(loops > 300, "{}: {loops} loop pixels", path.display());
+    let dir = |c: [u8; 3]| {
+        let v = [c[0] as f64, c[1] as f64, c[2] as f64];
+        let n = (v[0] * v[0] + v[1] * v[1] + v[2] * v[2]).sqrt().max(1e-9);
+        [v[0] / n, v[1] / n, v[2] / n]
+    };
+    for (part, colour) in render::parts::part_palette(spec) {
+        if spec.parts[&part].is_none() {
+            continue;
+        }
+        let d = dir(colour);
+        let n = px
+            .iter()
+            .filter(|p| p.iter().map(|&c| c as u32).sum::<u32>() > 120)
+            .filter(|p| {
+                let e = dir(**p);
+                e[0] * d[0] + e[1] * d[1] + e[2] * d[2] > 0.995
+            })
+            .count();
+        assert!(n > 1000, "{}: part {part} covers {n} pixels in its colour", path.display());
+    }
 }

@@ -1,4 +1,4 @@
-//! export: results people can open (issue 7).
+//! export: results people can open.
 //!
 //! - [`frames`]: a mesh sequence as one OBJ or PLY file per frame, and back.
 //! - [`pc2`]: the PC2 point cache (Blender's Mesh Cache modifier, 3ds Max),
@@ -9,7 +9,9 @@
 //! - [`rate`]: the frame rate a sequence folder plays at (its rate file, its
 //!   capture's `subject.json`, or `--fps`).
 //! - [`report`]: the static `OUT/index.html` page of a pipeline run, with
-//!   [`viewer`] the embedded three.js player of source / transfer / truth.
+//!   [`viewer`] the embedded three.js player of source / transfer / truth,
+//!   [`transfer_summary`] the pose error per motion (table and SVG plot) and
+//!   [`variation_summary`] the variation tables.
 //!
 //! Everything written goes through [`mesh_core::atomic`], so an output is
 //! either complete or absent.
@@ -21,4 +23,6 @@ pub mod html;
 pub mod pc2;
 pub mod rate;
 pub mod report;
+pub mod transfer_summary;
+pub mod variation_summary;
 pub mod viewer;

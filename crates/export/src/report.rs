@@ -3,8 +3,10 @@
 //!
 //! Content, from whatever exists under `OUT`: the 3D viewer of the given
 //! sequences (source / transfer / truth side by side, play/pause and a frame
-//! slider, see [`crate::viewer`]); tables from every `results.json` and
-//! `variation.json`; contact sheets (PNG files whose name contains
+//! slider, see [`crate::viewer`]); every `results.json` as the pose error per
+//! motion and method, a table and an inline SVG plot ([`crate::transfer_summary`]), and every
+//! `variation.json` as the tables of docs/RESULTS.md ([`crate::variation_summary`]), other
+//! JSON layouts as nested tables; contact sheets (PNG files whose name contains
 //! `contact`), GIFs, and plots (other PNG and SVG files; numbered frame
 //! images such as `frames/000012.png` are skipped); the provenance of every
 //! surfcap artifact found (kind, producer, seed, parameters, via
@@ -170,7 +172,10 @@ const STYLE: &str = "body{font-family:system-ui,sans-serif;margin:1.5em;color:#2
 h1{font-size:1.5em}h2{font-size:1.2em;border-bottom:1px solid #ccc;padding-bottom:.2em;margin-top:1.6em}
 table{border-collapse:collapse;margin:.5em 0;font-size:.9em}th,td{border:1px solid #ccc;padding:.2em .5em;text-align:left;vertical-align:top}
 th{background:#f0f0f0}td{font-variant-numeric:tabular-nums}figure{display:inline-block;margin:.5em;vertical-align:top}
-figure img{max-width:640px;max-height:480px;border:1px solid #ddd}figcaption{font-size:.8em;color:#555}
+figure img{max-width:640px;max-height:480px;border:1px solid #ddd}
+table.pose-error td,table.variation-figures td,table.variation-sequences td{text-align:right;white-space:nowrap}
+table.variation-sequences td:nth-child(-n+2){text-align:left}
+tr.pooled{font-weight:bold}figure.plot{display:block;overflow-x:auto}section{overflow-x:auto}figcaption{font-size:.8em;color:#555}
 #viewer{width:100%;max-width:1100px;height:480px;border:1px solid #ccc;background:#f4f4f0}
 .controls{margin:.5em 0;display:flex;gap:1em;align-items:center}.controls input{width:400px}
 .legend span{display:inline-block;margin-right:1.5em}.legend i{display:inline-block;width:1em;height:1em;margin-right:.3em;vertical-align:middle}";
@@ -235,10 +240,15 @@ pub fn write_report(opts: &ReportOptions) -> Result<PathBuf> {
         let text = std::fs::read_to_string(&path).map_err(|e| Error::io(&path, e))?;
         let v: serde_json::Value = serde_json::from_str(&text)
             .map_err(|e| Error::file(&path, format!("not valid JSON: {e}")))?;
+        let content = match t.file_name().and_then(|n| n.to_str()) {
+            Some("results.json") => crate::transfer_summary::section_html(&v),
+            Some("variation.json") => crate::variation_summary::section_html(&v),
+            _ => None,
+        };
         body += &format!(
             "<section><h2>{}</h2>{}</section>",
             escape(&t.to_string_lossy()),
-            json_to_html(&v)
+            content.unwrap_or_else(|| json_to_html(&v))
         );
     }
     body += &images("Contact sheets", &found.contact_sheets);

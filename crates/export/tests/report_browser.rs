@@ -35,6 +35,17 @@ fn png_variance(path: &Path) -> f64 {
     ys.iter().map(|y| (y - mean).powi(2)).sum::<f64>() / ys.len() as f64
 }
 
+/// A pipeline's table: `tests/data/results.json` is the demo run's (per-frame arrays cut to 3
+/// values), `tests/data/variation.json` the tiny preset's `make variation-results` (seed 0,
+/// training settings and most chains left out).
+fn data_file(name: &str) -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data").join(name)
+}
+
+fn load_json(path: &Path) -> serde_json::Value {
+    serde_json::from_str(&std::fs::read_to_string(path).unwrap()).unwrap()
+}
+
 /// OUT of a fake transfer run: sequences, results.json, variation.json,
 /// a contact sheet, a plot, a numbered frame image (to be skipped), an artifact.
 fn fake_run(root: &Path) -> (PathBuf, Vec<(String, PathBuf)>) {
@@ -56,19 +67,9 @@ fn fake_run(root: &Path) -> (PathBuf, Vec<(String, PathBuf)>) {
     })
     .collect();
     std::fs::create_dir_all(&out).unwrap();
-    std::fs::write(
-        out.join("results.json"),
-        r#"[{"direction":"A->B","motion":"walk","method":"gpr-nn","rms_pose_m":0.0123,"rms_placed_m":0.0456,"frames":24},
-            {"direction":"A->B","motion":"walk","method":"gpr-se","rms_pose_m":0.0234,"rms_placed_m":0.0567,"frames":24}]"#,
-    )
-    .unwrap();
-    std::fs::write(out.join("variation/variation.json"), "").ok();
+    std::fs::copy(data_file("results.json"), out.join("results.json")).unwrap();
     std::fs::create_dir_all(out.join("variation")).unwrap();
-    std::fs::write(
-        out.join("variation/variation.json"),
-        r#"{"hmc_acceptance":0.71,"variations":5}"#,
-    )
-    .unwrap();
+    std::fs::copy(data_file("variation.json"), out.join("variation/variation.json")).unwrap();
     write_png(&out.join("transfer/A-to-B/walk/contact.png"), 64, 32);
     write_png(&out.join("curves/learning-curve.png"), 40, 30);
     write_png(&out.join("transfer/A-to-B/walk/frames/000000.png"), 8, 8);
@@ -103,8 +104,10 @@ fn page_lists_what_the_run_produced() {
     for needle in [
         "<th>rms_pose_m</th>",
         "gpr-se",
-        "<th>hmc_acceptance</th>",
-        "0.7100",
+        "<table class=\"pose-error\">",
+        "<svg class=\"error-plot\"",
+        "<table class=\"variation-figures\">",
+        "<table class=\"variation-sequences\">",
         "src=\"transfer/A-to-B/walk/contact.png\"",
         "src=\"curves/learning-curve.png\"",
         "pca-model",
@@ -113,6 +116,7 @@ fn page_lists_what_the_run_produced() {
     ] {
         assert!(html.contains(needle), "page lacks {needle}");
     }
+    assert!(!html.contains("frame_pose_m") && !html.contains("guided_per_frame_m"), "no per-frame dumps");
     assert!(
         !html.contains("frames/000000.png"),
         "numbered frame images are not listed"
@@ -158,6 +162,11 @@ fn page_works_in_headless_chromium_from_disk() {
     assert_eq!(rate["fps"].as_f64(), Some(25.0), "{rate}");
     let played = rate["playedFps"].as_f64().unwrap();
     assert!((played - 25.0).abs() <= 0.15 * 25.0, "played at {played} fps: {rate}");
+    check_pose_table(&json["tables"]["pose-error"], &load_json(&data_file("results.json")));
+    check_bars(&json["bars"], &load_json(&data_file("results.json")));
+    let variation = load_json(&data_file("variation.json"));
+    check_variation_figures(&json["tables"]["variation-figures"], &variation);
+    check_variation_sequences(&json["tables"]["variation-sequences"], &variation);
     let var = png_variance(&shot);
     assert!(
         var > 10.0,
@@ -185,4 +194,133 @@ fn data_budget_limits_the_viewer_frames() {
         data.contains("\"nFrames\":3,"),
         "24 frames under a 3-frame budget"
     );
+}
+
+/// The cell texts of a table the browser read: rows of cells.
+fn rows(table: &serde_json::Value) -> Vec<Vec<String>> {
+    let rows = table.as_array().unwrap_or_else(|| panic!("table missing from the page: {table}"));
+    rows.iter()
+        .map(|r| r.as_array().unwrap().iter().map(|c| c.as_str().unwrap().to_string()).collect())
+        .collect()
+}
+
+/// The records of `results.json` at the pipelines' default placement, keyed as the page
+/// names them: (`direction motion`, method with `-keyposes` for key-pose training) -> (cm, frames).
+fn default_records(results: &serde_json::Value) -> Vec<(String, String, f64, f64)> {
+    results
+        .as_array()
+        .unwrap()
+        .iter()
+        .filter(|r| r["placement"] == "scaled-source")
+        .map(|r| {
+            let mut m = r["method"].as_str().unwrap().to_string();
+            if r["training"] == "keyposes" {
+                m += "-keyposes";
+            }
+            let row = format!("{} {}", r["direction"].as_str().unwrap(), r["motion"].as_str().unwrap());
+            (row, m, 100.0 * r["rms_pose_m"].as_f64().unwrap(), r["frames"].as_f64().unwrap())
+        })
+        .collect()
+}
+
+/// Every default-placement record's pose error is in its row and column, to 0.1 cm, and the
+/// pooled row is the RMS over all frames.
+fn check_pose_table(table: &serde_json::Value, results: &serde_json::Value) {
+    let rows = rows(table);
+    let head = &rows[0];
+    let recs = default_records(results);
+    assert_eq!(head.len(), 1 + 8, "a column per method: {head:?}");
+    for (row, method, cm, frames) in &recs {
+        let col = head.iter().position(|h| h == method).unwrap_or_else(|| panic!("no column {method}: {head:?}"));
+        let r = rows
+            .iter()
+            .find(|r| r[0] == format!("{row} ({frames})"))
+            .unwrap_or_else(|| panic!("no row {row}: {rows:?}"));
+        assert_eq!(r[col], format!("{cm:.1}"), "{row} {method}");
+    }
+    let pooled = rows.last().unwrap();
+    assert_eq!(pooled[0], "pooled");
+    for (col, method) in head.iter().enumerate().skip(1) {
+        let (s, n) = recs
+            .iter()
+            .filter(|r| &r.1 == method)
+            .fold((0.0, 0.0), |(s, n), r| (s + r.2 * r.2 * r.3, n + r.3));
+        assert_eq!(pooled[col], format!("{:.1}", (s / n).sqrt()), "pooled {method}");
+    }
+    assert_eq!(rows.len(), 1 + 4 + 1, "four test motions and the pooled row");
+}
+
+/// One bar per default-placement record carrying its value, drawn from a common baseline at a
+/// height proportional to the value (the same px per cm for every bar, as rendered).
+fn check_bars(bars: &serde_json::Value, results: &serde_json::Value) {
+    let bars = bars.as_array().unwrap();
+    let recs = default_records(results);
+    assert_eq!(bars.len(), recs.len(), "one bar per record");
+    let px_per_cm = bars[0]["height"].as_f64().unwrap() / bars[0]["cm"].as_f64().unwrap();
+    assert!(px_per_cm > 1.0, "{px_per_cm} px per cm");
+    let bottom = bars[0]["bottom"].as_f64().unwrap();
+    for (row, method, cm, _) in &recs {
+        let b = bars
+            .iter()
+            .find(|b| b["row"] == row.as_str() && b["column"] == method.as_str())
+            .unwrap_or_else(|| panic!("no bar for {row} {method}"));
+        assert!((b["cm"].as_f64().unwrap() - cm).abs() < 1e-9, "{row} {method}: {b}");
+        let h = b["height"].as_f64().unwrap();
+        assert!((h - cm * px_per_cm).abs() < 0.5, "{row} {method}: {h} px for {cm} cm at {px_per_cm} px/cm");
+        assert!((b["bottom"].as_f64().unwrap() - bottom).abs() < 0.5, "common baseline");
+        assert!(b["width"].as_f64().unwrap() > 2.0, "visible");
+    }
+}
+
+fn range_mm(list: &serde_json::Value, scale: f64, decimals: usize) -> String {
+    let v: Vec<f64> = list.as_array().unwrap().iter().filter_map(|x| x.as_f64()).map(|x| x * scale).collect();
+    let lo = v.iter().copied().fold(f64::INFINITY, f64::min);
+    let hi = v.iter().copied().fold(f64::NEG_INFINITY, f64::max);
+    let (a, b) = (format!("{lo:.decimals$}"), format!("{hi:.decimals$}"));
+    if a == b { a } else { format!("{a}-{b}") }
+}
+
+/// The figures table: fig. 4 and fig. 7b in mm and the acceptance rate, per group column.
+fn check_variation_figures(table: &serde_json::Value, v: &serde_json::Value) {
+    let rows = rows(table);
+    let groups: Vec<&String> = v.as_object().unwrap().keys().collect();
+    assert_eq!(rows[0][1..].iter().collect::<Vec<_>>(), groups);
+    let find = |prefix: &str| rows.iter().find(|r| r[0].starts_with(prefix)).unwrap_or_else(|| panic!("{prefix}: {rows:?}"));
+    for (i, g) in groups.iter().enumerate() {
+        let e = &v[g.as_str()]["eval"];
+        let fig4 = format!(
+            "{:.2} vs {:.2} mm",
+            1e3 * e["reconstruction_gpdm_m"].as_f64().unwrap(),
+            1e3 * e["reconstruction_pca_m"].as_f64().unwrap()
+        );
+        assert_eq!(find("fig. 4")[1 + i], fig4, "{g}");
+        for b in e["latent_blend"].as_array().unwrap() {
+            let w = b["w"].as_f64().unwrap();
+            let text = format!("{:.2} vs {:.2} mm", 1e3 * b["guided_m"].as_f64().unwrap(), 1e3 * b["unguided_m"].as_f64().unwrap());
+            let r = rows.iter().find(|r| r[0].ends_with(&format!("w = {w}"))).unwrap();
+            assert_eq!(r[1 + i], text, "{g} w = {w}");
+        }
+        let a = &v[g.as_str()]["samples"]["accept_rate"];
+        assert!(find("HMC acceptance")[1 + i].starts_with(&format!("{:.2} (", a["mean"].as_f64().unwrap())));
+    }
+}
+
+/// The per-sequence table: a row per sampled sequence with its pose-distance range in mm and
+/// its mean distance between variations.
+fn check_variation_sequences(table: &serde_json::Value, v: &serde_json::Value) {
+    let rows = rows(table);
+    let head = &rows[0];
+    let pose = head.iter().position(|h| h.starts_with("pose distance")).unwrap();
+    let between = head.iter().position(|h| h.starts_with("distance between")).unwrap();
+    let mut n = 0;
+    for (g, grp) in v.as_object().unwrap() {
+        for q in grp["samples"]["sequences"].as_array().unwrap() {
+            n += 1;
+            let label = format!("{} ({})", q["label"].as_str().unwrap(), q["frames"]);
+            let r = rows.iter().find(|r| &r[0] == g && r[1] == label).unwrap_or_else(|| panic!("{g} {label}"));
+            assert_eq!(r[pose], range_mm(&q["pose_distance_to_source_m"], 1e3, 0), "{g} {label}");
+            assert_eq!(r[between], format!("{:.2}", q["pairwise_distance_m"]["mean"].as_f64().unwrap()));
+        }
+    }
+    assert_eq!(rows.len(), 1 + n);
 }

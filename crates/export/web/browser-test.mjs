@@ -3,7 +3,8 @@
 // Checks: the page opens (loaded, 3D canvas present) in under 2 s; no console errors or page errors; the 3D canvas exists and is not
 // blank (pixel variance of the rendered canvas); pressing Play advances the
 // frame counter at the stated rate (capture frames per second = counter steps x stride / time,
-// within 15% of the data's fps). Writes a PNG of the canvas, prints one JSON line, exits 1 on
+// within 15% of the data's fps). Reports the cell texts of every table with a class and the
+// error plot's bars (data and drawn size) for the caller to check. Writes a PNG of the canvas, prints one JSON line, exits 1 on
 // any failure.
 import { chromium } from 'playwright-core';
 import { pathToFileURL } from 'node:url';
@@ -52,6 +53,15 @@ try {
   // From navigation to the loaded page with its 3D view drawn: under 2 s from disk.
   result.openSeconds = (Date.now() - opened) / 1000;
   if (!(result.openSeconds < 2)) problems.push(`the page took ${result.openSeconds} s to open (limit 2 s)`);
+  // The summary tables and the error plot as laid out: every table's cell texts by class, and
+  // every bar's data and drawn box (the caller compares them with the JSON the page came from).
+  result.tables = await page.evaluate(() => Object.fromEntries(
+    [...document.querySelectorAll('table[class]')].map((t) => [t.className,
+      [...t.querySelectorAll('tr')].map((tr) => [...tr.children].map((c) => c.textContent))])));
+  result.bars = await page.evaluate(() => [...document.querySelectorAll('svg.error-plot rect.bar')].map((r) => {
+    const b = r.getBoundingClientRect();
+    return { row: r.dataset.row, column: r.dataset.column, cm: Number(r.dataset.cm), height: b.height, bottom: b.bottom, width: b.width };
+  }));
   await page.waitForTimeout(500);
   await canvas.screenshot({ path: shot });
   // Pixel variance of the canvas as drawn (preserveDrawingBuffer is on).

@@ -1,8 +1,8 @@
-//! Speed goals of issue 4 for the GP numerics (run with `OPENBLAS_NUM_THREADS=1 cargo bench -p gp`):
+//! Speed goals for the GP numerics (docs/PERFORMANCE.md) (run with `OPENBLAS_NUM_THREADS=1 cargo bench -p gp`):
 //! - training all 5 parts (20-D -> 20-D) plus the displacement (6-D -> 6-D), both directions
 //!   (12 models, rayon over models on the machine's cores): <= 1 s with 350 dense pairs,
 //!   <= 5 s with 1100;
-//! - prediction (eq. 13, 5 parts + displacement): >= 5000 frames/s.
+//! - prediction (CVPR eq. 13, 5 parts + displacement): >= 5000 frames/s.
 //! - one log-marginal-likelihood + gradient evaluation, and one value alone (the optimiser's
 //!   units of work: rejected line-search trials need only the value).
 use criterion::{criterion_group, criterion_main, BenchmarkId, Criterion, Throughput};
@@ -78,7 +78,7 @@ fn predict(c: &mut Criterion) {
     g.finish();
 }
 
-/// The sparse GP (issue 17 targets: 12 models <= 10 s at 10⁴ pairs, <= 100 s at 10⁵; the 10⁵
+/// The sparse GP (targets: 12 models <= 10 s at 10⁴ pairs, <= 100 s at 10⁵; the 10⁵
 /// run is `examples/sgpr_compare.rs --pairs 100000`, too long for criterion's samples):
 /// one bound + gradient evaluation at 10³ and 10⁴ pairs, and training the 12 models at 10³.
 fn sparse(c: &mut Criterion) {

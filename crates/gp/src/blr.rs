@@ -1,24 +1,24 @@
-//! Bayesian linear regression association cost for temporal densification, eqs. 1-6.
+//! Bayesian linear regression association cost for temporal densification, CVPR eqs. 1-6.
 //!
-//! Per body part, target pose `y = M x + ε`, `ε ~ N(0, σ² I)` with `σ² = 0.01` (eqs. 1-2),
+//! Per body part, target pose `y = M x + ε`, `ε ~ N(0, σ² I)` with `σ² = 0.01` (CVPR eqs. 1-2),
 //! a unit Gaussian prior on the rows of `M`, and `L` key-pose pairs. In the paper's notation
 //! `X = (x_1 .. x_L)` and `Y = (y_1 .. y_L)` stack the key-poses as **columns**; here they are
 //! passed as rows (`L x m_s`, `L x m_t`), i.e. the transposes. With `A = X Xᵀ/σ² + I`:
-//! - posterior mean of `M` (eq. 3): `M̄ = Y Xᵀ A⁻ᵀ / σ²`;
-//! - predictive mean at `x_i` (eq. 4): `μ_i = M̄ x_i`;
-//! - predictive variance (eq. 4): `Σ_i = (x_iᵀ A⁻¹ x_i) I`, isotropic;
-//! - association cost (eq. 5): `-log P^k_ij = ½ |y_j - μ_i|² / (x_iᵀ A⁻¹ x_i)`;
-//! - whole body (eq. 6): the product over parts becomes a **sum** of the per-part costs.
+//! - posterior mean of `M` (CVPR eq. 3): `M̄ = Y Xᵀ A⁻ᵀ / σ²`;
+//! - predictive mean at `x_i` (CVPR eq. 4): `μ_i = M̄ x_i`;
+//! - predictive variance (CVPR eq. 4): `Σ_i = (x_iᵀ A⁻¹ x_i) I`, isotropic;
+//! - association cost (CVPR eq. 5): `-log P^k_ij = ½ |y_j - μ_i|² / (x_iᵀ A⁻¹ x_i)`;
+//! - whole body (CVPR eq. 6): the product over parts becomes a **sum** of the per-part costs.
 //!
 //! `A` is factorised once (Cholesky, it is `I` plus a PSD matrix) and solved against; it is
-//! never inverted. The predictive variance is that of `M x` (no added `σ²`), as in eq. 4; it is
+//! never inverted. The predictive variance is that of `M x` (no added `σ²`), as in CVPR eq. 4; it is
 //! floored at `1e-300` so that a source pose at the PCA origin gives a large finite cost
 //! instead of `0/0`.
 
 use crate::{check_finite, invalid, Result};
 use nalgebra::{DMatrix, DVector};
 
-/// The paper's noise variance for the key-pose linear model (after eq. 1).
+/// The paper's noise variance for the key-pose linear model (after CVPR eq. 1).
 pub const PAPER_SIGMA2: f64 = 0.01;
 
 /// Smallest predictive variance used in the cost (see the module doc).
@@ -34,7 +34,7 @@ pub struct Blr {
 }
 
 impl Blr {
-    /// Fits eq. 3 on key-pose pairs given as rows: `xk` (`L x m_s`), `yk` (`L x m_t`).
+    /// Fits CVPR eq. 3 on key-pose pairs given as rows: `xk` (`L x m_s`), `yk` (`L x m_t`).
     pub fn fit(xk: &DMatrix<f64>, yk: &DMatrix<f64>, sigma2: f64) -> Result<Self> {
         if xk.nrows() != yk.nrows() || xk.nrows() == 0 {
             return invalid(format!(
@@ -63,7 +63,7 @@ impl Blr {
         })
     }
 
-    /// Predictive means `μ_i` (rows, `N x m_t`) and variances `x_iᵀ A⁻¹ x_i` (eq. 4) for the
+    /// Predictive means `μ_i` (rows, `N x m_t`) and variances `x_iᵀ A⁻¹ x_i` (CVPR eq. 4) for the
     /// rows of `xs` (`N x m_s`).
     pub fn predict(&self, xs: &DMatrix<f64>) -> Result<(DMatrix<f64>, DVector<f64>)> {
         if xs.ncols() != self.mean_map_t.nrows() {
@@ -82,7 +82,7 @@ impl Blr {
         Ok((mu, var))
     }
 
-    /// `-log P^k_ij` (eq. 5) for every source frame `i` (rows of `xs`, `f_s x m_s`) and target
+    /// `-log P^k_ij` (CVPR eq. 5) for every source frame `i` (rows of `xs`, `f_s x m_s`) and target
     /// frame `j` (rows of `ys`, `f_t x m_t`): an `f_s x f_t` matrix.
     pub fn neg_log_cost(&self, xs: &DMatrix<f64>, ys: &DMatrix<f64>) -> Result<DMatrix<f64>> {
         if ys.ncols() != self.mean_map_t.ncols() {
@@ -107,7 +107,7 @@ pub struct PartFrames<'a> {
     pub target: &'a DMatrix<f64>,
 }
 
-/// Whole-body association cost (eq. 6 as a sum of eq. 5 over parts): fits one [`Blr`] per
+/// Whole-body association cost (CVPR eq. 6 as a sum of eq. 5 over parts): fits one [`Blr`] per
 /// part on the key-pose pairs `keys` = `(source frame, target frame)` and returns the
 /// `f_s x f_t` matrix of `-log P_ij`.
 pub fn cost_matrix(

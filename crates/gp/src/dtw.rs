@@ -1,4 +1,4 @@
-//! Constrained dynamic time warping (eq. 7): the least-cost monotonic, continuous path through
+//! Constrained dynamic time warping (CVPR eq. 7): the least-cost monotonic, continuous path through
 //! the `f_s x f_t` cost matrix `C_ij = -log P_ij` that passes through every key-pose pair.
 //!
 //! Conventions pinned here:

@@ -1,7 +1,7 @@
-//! Multi-output Gaussian-process regression, eqs. 8-13.
+//! Multi-output Gaussian-process regression, CVPR eqs. 8-13.
 //!
 //! Each output column `Y_i` (a target PCA coefficient, or one of the 6 rigid-displacement
-//! values) is an independent GP over the same inputs with the **same kernel** (eq. 8), so one
+//! values) is an independent GP over the same inputs with the **same kernel** (CVPR eq. 8), so one
 //! Cholesky factorisation of `K + σn² I` serves all outputs and the log marginal likelihood is
 //! the sum over outputs:
 //! ```text
@@ -27,8 +27,8 @@
 //! variance internally, so its likelihood at identical hyperparameters is lower than ours by
 //! about `1e-8 · ½ tr(W)` (~3e-4 on the 350-pair benchmark).
 //!
-//! Prediction is the posterior mean of eq. 13, `K_* α`, for many inputs at once (one kernel
-//! evaluation and one matrix product), and optionally the latent variance of eq. 12,
+//! Prediction is the posterior mean of CVPR eq. 13, `K_* α`, for many inputs at once (one kernel
+//! evaluation and one matrix product), and optionally the latent variance of CVPR eq. 12,
 //! `K_** - K_* (K + σn² I)⁻¹ K_*ᵀ` (add `noise_var` for the variance of a noisy observation).
 
 use crate::kernel::Kernel;
@@ -40,7 +40,7 @@ use nalgebra::{DMatrix, DVector};
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 
-/// The paper's fixed observation-noise variance (after eq. 8).
+/// The paper's fixed observation-noise variance (after CVPR eq. 8).
 pub const PAPER_NOISE_VAR: f64 = 0.1;
 
 /// Training settings.
@@ -303,7 +303,7 @@ pub fn initial_kernel(kernel: &Kernel, x: &DMatrix<f64>, y: &DMatrix<f64>) -> Ke
 
 /// Search coordinates of the optimiser. For the NN kernel, `(log l, log σf - log l)`: when
 /// the data are nearly linear the likelihood rises slowly along a valley `l, σf -> ∞` with
-/// `σf / l` fixed (eq. 10 tends to the linear kernel `σf²/(2l²) xᵀx'`); in these coordinates
+/// `σf / l` fixed (CVPR eq. 10 tends to the linear kernel `σf²/(2l²) xᵀx'`); in these coordinates
 /// the valley is aligned with an axis and conjugate gradients need fewer steps. The optimum
 /// is the same (an invertible linear change of variables).
 pub(crate) fn to_search(theta: &[f64], valley: bool) -> Vec<f64> {
@@ -634,13 +634,13 @@ impl Gpr {
         check_finite("GP prediction inputs", xs)
     }
 
-    /// Posterior mean (eq. 13) for every row of `xs` (`N x D` -> `N x m`): `K_* α`.
+    /// Posterior mean (CVPR eq. 13) for every row of `xs` (`N x D` -> `N x m`): `K_* α`.
     pub fn predict_mean(&self, xs: &DMatrix<f64>) -> Result<DMatrix<f64>> {
         self.check_inputs(xs)?;
         Ok(self.kernel.cross(xs, self.basis()) * &self.alpha)
     }
 
-    /// Posterior mean (eq. 13) and latent variance (eq. 12, shared by all outputs) for every
+    /// Posterior mean (CVPR eq. 13) and latent variance (eq. 12, shared by all outputs) for every
     /// row of `xs`. The variance refactorises `K + σn² I` (the model does not store the
     /// `F x F` factor, to keep artifacts small): use [`Gpr::predict_mean`] when only the
     /// mean is needed.
@@ -675,7 +675,7 @@ impl Gpr {
     }
 }
 
-// NOTE(next): at 1100 pairs (h12, loaded machine) a likelihood value costs ~25-35 ms (kernel
+// NOTE(next): at 1100 pairs (loaded machine) a likelihood value costs ~25-35 ms (kernel
 // matrix ~5-10 ms of libm asin, Cholesky ~10-15 ms) and a gradient another ~45-70 ms (the
 // potri-style inverse ~36-48 ms dominates; faer and OpenBLAS dpotri measured alike). Training
 // the 12 benchmark models takes ~140 values and ~70 gradients. Ideas not yet tried: a

@@ -1,7 +1,7 @@
-//! Covariance functions `k(x, x')` of the GP (eq. 9), with analytic gradients with respect
+//! Covariance functions `k(x, x')` of the GP (CVPR eq. 9), with analytic gradients with respect
 //! to the **log** hyperparameters (the optimiser works in log space so `l, σf > 0`).
 //!
-//! # Neural-network kernel (eq. 10), convention pinned here
+//! # Neural-network kernel (CVPR eq. 10), convention pinned here
 //! ```text
 //! k_nn(x, x') = σf² asin( a xᵀx' / sqrt((1 + a xᵀx)(1 + a x'ᵀx')) ),   a = 1 / (2 l²)
 //! ```
@@ -287,14 +287,14 @@ impl Kernel {
         self.cross(&a, &b)[(0, 0)]
     }
 
-    /// Gram matrix `K` of eq. 9 over the rows of `x` (`F x F`).
+    /// Gram matrix `K` of CVPR eq. 9 over the rows of `x` (`F x F`).
     pub fn gram(&self, x: &DMatrix<f64>) -> DMatrix<f64> {
         let mut k = self.gram_lower(x, false).0;
         mirror_lower(&mut k);
         k
     }
 
-    /// Cross covariance `K_*` of eq. 9: row `i` holds `k(xs_i, x_j)` for all rows `x_j`
+    /// Cross covariance `K_*` of CVPR eq. 9: row `i` holds `k(xs_i, x_j)` for all rows `x_j`
     /// (`N x F`), for many test inputs at once.
     pub fn cross(&self, xs: &DMatrix<f64>, x: &DMatrix<f64>) -> DMatrix<f64> {
         let mut k = xs * x.transpose();

@@ -3,7 +3,7 @@
 //!
 //! Pure numerics, no meshes. Conventions used throughout the crate:
 //! - data matrices hold **one sample per row** (`F x D`: frames x dimensions), as
-//!   `nalgebra::DMatrix<f64>`; where the paper stacks samples as columns (eqs. 2-4) the
+//!   `nalgebra::DMatrix<f64>`; where the paper stacks samples as columns (CVPR eqs. 2-4) the
 //!   doc comment says so;
 //! - all model numerics are `f64`; linear systems are solved with Cholesky factorisations
 //!   ([`linalg`]), with a jitter retry that is reported in a `notes` list, never an explicit
@@ -12,10 +12,10 @@
 //!
 //! Modules, in pipeline order:
 //! - [`pca`]: per-part dimension reduction (section 4);
-//! - [`blr`]: Bayesian linear regression association cost (eqs. 1-6);
-//! - [`dtw`]: constrained least-cost path through the cost matrix (eq. 7);
-//! - [`kernel`]: covariance functions, including the neural-network kernel (eq. 10);
-//! - [`gpr`]: multi-output GP regression and its marginal likelihood (eqs. 8-13);
+//! - [`blr`]: Bayesian linear regression association cost (CVPR eqs. 1-6);
+//! - [`dtw`]: constrained least-cost path through the cost matrix (CVPR eq. 7);
+//! - [`kernel`]: covariance functions, including the neural-network kernel (CVPR eq. 10);
+//! - [`gpr`]: multi-output GP regression and its marginal likelihood (CVPR eqs. 8-13);
 //! - [`sparse_gpr`]: the same regression for large training sets, Titsias' (2009) bound with
 //!   inducing inputs chosen by [`inducing`] (greedy variance selection);
 //! - [`optim`]: non-linear conjugate gradients (Polak-Ribière+) with a strong-Wolfe line search;

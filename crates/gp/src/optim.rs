@@ -1,7 +1,7 @@
 //! Non-linear conjugate gradients (Polak-Ribière+, Nocedal & Wright 2006 eq. 5.45) with a
 //! line search satisfying the strong Wolfe conditions (N&W algorithms 3.5 and 3.6, cubic
 //! interpolation in the zoom phase). Used to maximise the log marginal likelihood over the
-//! GP hyperparameters (the paper's "conjugate gradients [18]", after eq. 10).
+//! GP hyperparameters (the paper's "conjugate gradients [18]", after CVPR eq. 10).
 //!
 //! Written here rather than taken from argmin (STACK.md): argmin's CG has no gradient stop
 //! and drops its result when the line search fails. This one always returns the best point

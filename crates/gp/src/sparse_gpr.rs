@@ -3,7 +3,7 @@
 //! the number of pairs `F`).
 //!
 //! With `K = K_uu` (`M x M`), `Φ = K_fu` (`F x M`), `Q_ff = Φ K⁻¹ Φᵀ`, `s = σn²` and `m` output
-//! columns sharing the kernel (as in eq. 8), the bound on the log marginal likelihood is
+//! columns sharing the kernel (as in CVPR eq. 8), the bound on the log marginal likelihood is
 //! ```text
 //! F(θ) = Σ_i log N(Y_i | 0, Q_ff + s I) - m/(2s) tr(K_ff - Q_ff)
 //!      = -½ m log|B| - ½ F m log(2π s) - |Y|²/(2s) + ½ |c|² - m/(2s) (tr K_ff - tr(L⁻¹ T L⁻ᵀ))

@@ -1,4 +1,4 @@
-//! Bayesian linear regression (eqs. 1-6) against hand-computed ridge regression.
+//! Bayesian linear regression (CVPR eqs. 1-6) against hand-computed ridge regression.
 mod common;
 use common::Rng;
 use gp::blr::{cost_matrix, Blr, PartFrames, PAPER_SIGMA2};

@@ -1,4 +1,4 @@
-//! DTW (eq. 7): known paths, brute-force optimality on small matrices, key-poses forced, and
+//! DTW (CVPR eq. 7): known paths, brute-force optimality on small matrices, key-poses forced, and
 //! the run-length limit as a property.
 mod common;
 use common::Rng;

@@ -1,5 +1,5 @@
-//! Speed of the GPDM numerics (issue 6 targets, numpy reference in brackets):
-//! - objective + gradient of eq. 7 for N = 446 frames, D = 15000 (numpy ~20 ms, one core);
+//! Speed of the GPDM numerics (targets in docs/PERFORMANCE.md, numpy reference in brackets):
+//! - objective + gradient of 3DV eq. 7 for N = 446 frames, D = 15000 (numpy ~20 ms, one core);
 //! - HMC: 100 samples of a 100-frame latent trajectory (numpy ~11 s);
 //! - decoding 10,000 frames to D = 3000 poses (a body part), exact, via a pose basis, and
 //!   through the bulk column-major path exactly and with a kernel basis.
@@ -65,7 +65,7 @@ fn hmc(c: &mut Criterion) {
     group.finish();
 }
 
-/// Decoding 100 trajectories of 100 frames (eq. 12) at a body part's pose dimension D = 3000,
+/// Decoding 100 trajectories of 100 frames (3DV eq. 12) at a body part's pose dimension D = 3000,
 /// exactly and through the rank-r pose basis (`Predictor::pose_means`, rayon over trajectories).
 fn decode(c: &mut Criterion) {
     let m = Gpdm::new(&synthetic(3000), GpdmConfig::default()).unwrap();

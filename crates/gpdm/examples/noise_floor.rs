@@ -1,7 +1,7 @@
-//! Measures the pose-noise floor (issue 6): trains on noise-free and on noisy synthetic
+//! Measures the pose-noise floor: trains on noise-free and on noisy synthetic
 //! cyclic data with and without the 1e-6 floor on 1/α3, and reports the learned noise
-//! variance, cond(K_Y), optimiser exit, and how well the mean prediction (eq. 8) from the
-//! first frame tracks the 120-frame training cycle (RMS pose error, eq. 12 decoding).
+//! variance, cond(K_Y), optimiser exit, and how well the mean prediction (3DV eq. 8) from the
+//! first frame tracks the 120-frame training cycle (RMS pose error, 3DV eq. 12 decoding).
 //!
 //! Usage: noise_floor [D=300] [single]   (`single`: train on the first sequence only)
 

@@ -6,17 +6,17 @@
 //! Last, the whole objective+gradient (synthetic N = 446, D = 15000) on a rayon pool of 1
 //! and of 2 threads, interleaved (the pose and dynamics terms are `rayon::join`ed).
 //!
-//! Then (h22) the reduced-flop pieces of the pose term against the dense ones, and the whole
-//! objective+gradient `eval` against `eval_reference` (the dense pre-h22 algebra), interleaved,
+//! Then the reduced-flop pieces of the pose term against the dense ones, and the whole
+//! objective+gradient `eval` against `eval_reference` (the dense algebra), interleaved,
 //! on 1- and 2-thread pools.
 //!
-//! h24: the pieces also time `RbfLinear::gram`/`gradients` against copies of their pre-h24
+//! The pieces also time `RbfLinear::gram`/`gradients` against copies of their earlier
 //! versions (`gram_h23`, `gradients_h23`: row-major, libm `exp`, scalar pair loops).
 //!
 //! `target/release/examples/profile_objective [objective-only | old-new [PROBLEM_DIR...]]`
 //! (built by `cargo test --release -p gpdm`; `objective-only` runs just the 1-vs-2-thread
 //! part, longer, e.g. under `perf record`; `old-new` just the old-vs-new comparison on the
-//! synthetic problem, or with directories only on those exported problems, e.g. /tmp/h16/leg_l,
+//! synthetic problem, or with directories only on those exported problems, e.g. /tmp/problems/leg_l,
 //! see `fit_compare`).
 #[path = "common/problem.rs"]
 mod problem;
@@ -256,7 +256,7 @@ fn compare(n: usize, reps: usize) {
     }
 }
 
-/// `eval` (h22) vs `eval_reference` (dense, pre-h22), objective+gradient at the PCA start,
+/// `eval` vs `eval_reference` (dense algebra), objective+gradient at the PCA start,
 /// interleaved on 1- and 2-thread pools; medians.
 fn old_new(name: &str, seqs: &[nalgebra::DMatrix<f64>], reps: usize) {
     let config = GpdmConfig {
@@ -300,7 +300,7 @@ fn old_new(name: &str, seqs: &[nalgebra::DMatrix<f64>], reps: usize) {
     );
 }
 
-/// The pre-h24 `RbfLinear::gram` (row-major coordinates, libm `exp`, one element at a time),
+/// The earlier `RbfLinear::gram` (row-major coordinates, libm `exp`, one element at a time),
 /// kept here as the "old" side of the piece timings.
 fn gram_h23(kern: &RbfLinear, x: MatRef<'_, f64>) -> Gram {
     let n = x.nrows();
@@ -353,7 +353,7 @@ fn gram_h23(kern: &RbfLinear, x: MatRef<'_, f64>) -> Gram {
     Gram { k, rbf }
 }
 
-/// The pre-h24 `RbfLinear::gradients` (row-major, scalar pair loop).
+/// The earlier `RbfLinear::gradients` (row-major, scalar pair loop).
 fn gradients_h23(
     k: &RbfLinear,
     gram: &Gram,

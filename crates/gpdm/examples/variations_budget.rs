@@ -5,7 +5,7 @@
 //! model's poses cut to their first D columns), decoding all 10,000 frames with
 //! `Predictor::pose_means`, exactly and through a pose basis (`with_pose_basis`).
 //!
-//! Then the budget end to end at its reference size (one whole-body model, N = 446,
+//! Then the budget of docs/PERFORMANCE.md end to end at its reference size (one whole-body model, N = 446,
 //! D = 15000): 100 ancestral draws of 100 frames (`gpdm::ancestral`, exact for the HMC's
 //! density) and their 10,000 frames decoded by one kernel-basis GEMM per trajectory
 //! (`Predictor::with_kernel_basis`, bound 1e-4 = 0.1 mm in metres), on the 2-thread pool.
@@ -102,7 +102,7 @@ fn main() {
             frames as f64 / secs_b
         );
     }
-    // The budget at the reference size: sampling + decoding, 2 threads. Two ways to
+    // The budget at its reference size: sampling + decoding, 2 threads. Two ways to
     // hold the result: streamed (each thread decodes one variation at a time into a reused
     // 100 x D buffer, as a writer or renderer consumes it) and all 10,000 frames in one fresh
     // buffer (1.2 GB at D = 15000, whose first-touch page faults are counted).

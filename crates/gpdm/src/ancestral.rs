@@ -1,7 +1,7 @@
 //! Exact sampling of the trajectory density that the HMC sampler targets.
 //!
 //! [`crate::hmc::TrajectoryEnergy`] is the negative log of a product of one-step GP
-//! predictives (eqs. 8-10) with the first point fixed:
+//! predictives (3DV eqs. 8-10) with the first point fixed:
 //!
 //! ```text
 //! P(x_2, …, x_T | x_1) = ∏_{t=1}^{T-1} N(x_{t+1}; μ_X(x_t), σ²_X(x_t) I)
@@ -24,7 +24,7 @@ use crate::predict::Predictor;
 
 /// `n` independent trajectories of `len` points (each `len × d`, first row `x1`) drawn from
 /// the product of one-step predictives. The trajectories advance in lockstep, so each step is
-/// one kernel evaluation and one triangular solve with `n` right-hand sides (eqs. 9-10 for all
+/// one kernel evaluation and one triangular solve with `n` right-hand sides (3DV eqs. 9-10 for all
 /// of them at once). Trajectory `k` draws its noise from its own ChaCha8 stream `k` of `seed`,
 /// so the result does not depend on `n`'s batching or on threads. `variance_scale` κ scales
 /// every one-step variance as in [`crate::hmc::TrajectoryEnergy::with_variance_scale`] (1: the

@@ -1,6 +1,6 @@
 //! Hybrid Monte Carlo over whole latent trajectories (paper §6, "Latent sampling").
 //!
-//! The sampled density is the trajectory likelihood of the learned dynamics, eqs. 8-10,
+//! The sampled density is the trajectory likelihood of the learned dynamics, 3DV eqs. 8-10,
 //! given the first point: `p(x_2..x_T | x_1) = ∏_t N(x_{t+1}; μ_X(x_t), σ²_X(x_t) I)`, i.e. the
 //! energy `E = Σ_t ‖x_{t+1} − μ_X(x_t)‖² / (2σ²_X(x_t)) + d/2 ln σ²_X(x_t)`. Each factor is
 //! the GP predictive conditioned on the training dynamics only (Markov form), so `K_X` is
@@ -175,7 +175,7 @@ pub fn sample<E: Energy + ?Sized>(energy: &E, q0: &[f64], opts: &HmcOptions) -> 
     // Step-size adaptation in two halves of burn-in.
     // 1. Dual averaging (Hoffman & Gelman 2014, alg. 5): finds the scale quickly, but its
     //    iterates spread widely and the acceptance is concave in log ε near the stability
-    //    limit, so the averaged step accepts more often than the target (issue 6 saw 0.82-0.88
+    //    limit, so the averaged step accepts more often than the target (0.82-0.88 measured
     //    for 0.7).
     // 2. Robbins-Monro on log ε with a small decreasing gain, started from the dual-averaged
     //    step, and Polyak averaging over its second half: low spread, acceptance on target.
@@ -377,12 +377,12 @@ impl Energy for TrajectoryEnergy<'_> {
                 *r = exp_fast(half_gamma * s + ln_var);
                 *kv = *r + k.lin * dp;
             }
-            // Mean (eq. 9): μ_t = (K_X⁻¹ X_out)ᵀ k_t.
+            // Mean (3DV eq. 9): μ_t = (K_X⁻¹ X_out)ᵀ k_t.
             for c in 0..d {
                 mu[t * d + c] = kcol.iter().zip(&self.a[c]).map(|(kv, a)| kv * a).sum();
             }
         }
-        // U = L⁻¹ K* gives k*ᵀ K_X⁻¹ k* (eq. 10); V = L⁻ᵀ U = K_X⁻¹ K* its gradient.
+        // U = L⁻¹ K* gives k*ᵀ K_X⁻¹ k* (3DV eq. 10); V = L⁻ᵀ U = K_X⁻¹ K* its gradient.
         let chol = self.pred.dynamics_cholesky();
         let mut v = kst;
         chol.half_solve_in_place(v.as_mut());
@@ -447,7 +447,7 @@ impl Energy for TrajectoryEnergy<'_> {
     }
 }
 
-/// Variations of a latent trajectory: mean prediction (eq. 8) from the first row of
+/// Variations of a latent trajectory: mean prediction (3DV eq. 8) from the first row of
 /// `template` over its length, then an HMC chain started there (first point fixed).
 /// Returns the sampled trajectories (each T × d) and the chain statistics.
 pub fn sample_trajectories(

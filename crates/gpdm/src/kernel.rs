@@ -1,9 +1,9 @@
-//! Covariance functions of the GPDM (paper eqs. 4 and 6) and their gradients.
+//! Covariance functions of the GPDM (3DV eqs. 4 and 6) and their gradients.
 //!
 //! Both kernels are instances of one family
 //! `k(x, x') = var · exp(-γ/2 ‖x − x'‖²) + lin · xᵀx' + δ(x, x') / prec`:
-//! - pose mapping, eq. 4: `k_Y` with `(var, γ, lin, prec) = (α1, α2, 0, α3)`;
-//! - dynamics, eq. 6: `k_X` with `(var, γ, lin, prec) = (β1, β2, β3, β4)`.
+//! - pose mapping, 3DV eq. 4: `k_Y` with `(var, γ, lin, prec) = (α1, α2, 0, α3)`;
+//! - dynamics, 3DV eq. 6: `k_X` with `(var, γ, lin, prec) = (β1, β2, β3, β4)`.
 //!
 //! `δ(x, x')` is the Kronecker delta on training indices (the noise term), so it appears on
 //! the diagonal of a Gram matrix and never in a cross-covariance with a test point.
@@ -27,7 +27,7 @@ pub struct RbfLinear {
 }
 
 impl RbfLinear {
-    /// Pose kernel `k_Y` of eq. 4 from `α = [α1, α2, α3]`.
+    /// Pose kernel `k_Y` of 3DV eq. 4 from `α = [α1, α2, α3]`.
     pub fn pose(alpha: [f64; 3]) -> Self {
         RbfLinear {
             var: alpha[0],
@@ -37,7 +37,7 @@ impl RbfLinear {
         }
     }
 
-    /// Dynamics kernel `k_X` of eq. 6 from `β = [β1, β2, β3, β4]`.
+    /// Dynamics kernel `k_X` of 3DV eq. 6 from `β = [β1, β2, β3, β4]`.
     pub fn dynamics(beta: [f64; 4]) -> Self {
         RbfLinear {
             var: beta[0],

@@ -169,14 +169,14 @@ pub enum Split {
     None,
     /// Two halves of right-hand sides under `rayon::join`: an idle worker of the current pool
     /// may take one (call on a worker). Handing a half to the pool from a thread outside it
-    /// (`in_place_scope`) was measured 18 % slower per evaluation on leg_l (h24): that thread
+    /// (`in_place_scope`) was measured 18 % slower per evaluation on leg_l: that thread
     /// cannot run pool jobs, so it waits until a busy worker gets to the half.
     Join,
 }
 
 /// Recycled matrix buffers: the objective allocates the same few N × N matrices at every
 /// evaluation, and at N = 446 freeing and re-allocating them cost ~1600 page faults per
-/// evaluation (18 % of the CPU time in the kernel; h24). [`zeros_recycled`] reuses a buffer
+/// evaluation (18 % of the CPU time in the kernel). [`zeros_recycled`] reuses a buffer
 /// of the same shape handed back by [`recycle`]; at most [`POOL_BYTES`] are kept.
 static POOL: Mutex<Vec<Mat<f64>>> = Mutex::new(Vec::new());
 
@@ -200,7 +200,7 @@ pub fn zeros_recycled(nrows: usize, ncols: usize) -> Mat<f64> {
 
 /// An `nrows × ncols` matrix with unspecified entries (a recycled buffer's old values, which
 /// may be anything, NaN included; zeros when none is pooled), for callers that write every
-/// entry they later read: saves [`zeros_recycled`]'s fill (h25: memset was ~5 % of a fit).
+/// entry they later read: saves [`zeros_recycled`]'s fill (memset was ~5 % of a fit).
 pub(crate) fn unspecified_recycled(nrows: usize, ncols: usize) -> Mat<f64> {
     take_recycled(nrows, ncols).unwrap_or_else(|| Mat::zeros(nrows, ncols))
 }
@@ -272,7 +272,7 @@ impl Cholesky {
     /// upper triangle of the result is unspecified: [`crate::kernel::RbfLinear::gradients`]
     /// reads the lower one. `F = Q L⁻¹` by one full solve (n³/2; on a rayon worker its
     /// right-hand sides in two `rayon::join`ed halves, [`Split::Join`], so that an idle thread,
-    /// e.g. the one whose objective term finished first, takes one: h22, 5-9 % per evaluation
+    /// e.g. the one whose objective term finished first, takes one: 5-9 % less time per evaluation
     /// at N = 446 on 2 threads, neutral at N = 192), then the lower triangle of
     /// `L⁻ᵀ F` by `lower_back_solve` (n³/6 instead of n³/2). Same result as
     /// [`Cholesky::sandwich`] up to rounding. The strict upper triangle of `Q` is filled from

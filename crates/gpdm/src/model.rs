@@ -1,18 +1,18 @@
-//! The GPDM negative log posterior, paper eqs. 3-7, with analytic gradients.
+//! The GPDM negative log posterior, 3DV eqs. 3-7, with analytic gradients.
 //!
 //! With `Y` the centred poses (N × D, sequences stacked), `X` the latent points (N × d),
 //! `X_in`/`X_out` the latent points that have a successor/predecessor in the same sequence
 //! (M = N − #sequences rows each), the minimised objective is (constants dropped)
 //!
 //! ```text
-//! L = D/2 ln|K_Y| + 1/2 tr(K_Y⁻¹ Y Yᵀ)                      eq. 3 (N × N form, Y Yᵀ precomputed)
-//!   + d/2 ln|K_X| + 1/2 tr(K_X⁻¹ X_out X_outᵀ)              eq. 5, K_X = k_X(X_in, X_in)
+//! L = D/2 ln|K_Y| + 1/2 tr(K_Y⁻¹ Y Yᵀ)                      3DV eq. 3 (N × N form, Y Yᵀ precomputed)
+//!   + d/2 ln|K_X| + 1/2 tr(K_X⁻¹ X_out X_outᵀ)              3DV eq. 5, K_X = k_X(X_in, X_in)
 //!   + Σ_seq ‖x_first‖² / (2 σ0²)                            isotropic prior on each first point
 //!   + Σ_k ln α_k + Σ_k ln β_k                               priors P(α) = ∏ 1/α_k, P(β) = ∏ 1/β_k
 //!   + Σ_{k=1..3} (ln β_k)² / (2 s²)                          weak log-normal factor (deviation)
 //! ```
 //!
-//! Well-posedness (issue 6, deviation from eq. 7 as printed): with `∏ 1/β` alone the objective
+//! Well-posedness (a deviation from 3DV eq. 7 as printed, docs/DEVIATIONS.md): with `∏ 1/β` alone the objective
 //! has no minimum whenever the data do not need a dynamics-kernel component: `ln β1`, `ln β2`
 //! (RBF part) or `ln β3` (linear part) then fall without bound (β → 5e-324 in the demo fits)
 //! and an optimiser stops only at its iteration limit. [`GpdmConfig::beta_log_sd`] multiplies
@@ -23,19 +23,19 @@
 //! noise floors on `1/α3` and `1/β4` (the latter needed to stop the latent scale from collapsing)
 //! every term is bounded below in the directions the optimiser can reach.
 //!
-//! Latent scale (issue 6, deviation): the pose term is exactly invariant under
+//! Latent scale (a deviation, docs/DEVIATIONS.md): the pose term is exactly invariant under
 //! `X → cX, α2 → α2/c²`, so the scale of X is set only by the dynamics term and the priors, and
 //! with an absolute dynamics-noise floor they favour `X → 0` (dynamics reduced to noise: on the
 //! synthetic N = 446 problem an optimiser that follows this valley reaches α2 = 6e4, 728 nats
 //! below where plain L-BFGS stalls after 2000 iterations). With
 //! [`GpdmConfig::fixed_latent_scale`] the optimisation coordinates hold `X̃` and the model uses
 //! `X = √(N d) X̃ / ‖X̃‖_F` (unit mean square, the PCA start's scale, the scale the floors are
-//! stated in): one gauge direction removed, every other minimum of eq. 7 kept.
+//! stated in): one gauge direction removed, every other minimum of 3DV eq. 7 kept.
 //!
 //! Optimisation coordinates `θ` (see [`Gpdm::theta`]): X column-major, then `ln α1, ln α2,
 //! ln(1/α3 − floor_Y)`, then `ln β1, ln β2, ln β3, ln(1/β4 − floor_X)`. The noise-variance floor
 //! (`1/α3 ≥ floor`) is built into the parametrisation, so the objective stays bounded below
-//! when the data are noise-free (issue 6). The MAP point in (X, α, β) is unchanged by the
+//! when the data are noise-free. The MAP point in (X, α, β) is unchanged by the
 //! reparametrisation (no Jacobian term: this is optimisation, not a density change).
 
 use crate::error::{invalid, Result};
@@ -61,7 +61,7 @@ pub struct GpdmConfig {
     /// Lower bound on the dynamics-noise variance 1/β4, in squared latent units (default none,
     /// the paper's unbounded β4). On clean data 1/β4 collapses to ~1e-9 and HMC returns copies
     /// of the source; the PCA start scales the latents to unit mean variance, so a floor of
-    /// 1e-4..1e-3 keeps the one-step noise at ≥ 1-3 % of the latent spread (issue 6,
+    /// 1e-4..1e-3 keeps the one-step noise at ≥ 1-3 % of the latent spread (measured with
     /// `examples/variation`: none → 0 mm variation, 1e-4 → 3 mm, 1e-3 → 12 mm with the mean
     /// prediction within 0.3 mm, 1e-2 → 29 mm and 12 mm off the training poses). Not the
     /// default: on the 2-D rotation test model a 1e-4 floor already lets samples leave the
@@ -183,9 +183,9 @@ fn noise_theta(prec: f64, floor: Option<f64>) -> f64 {
 pub struct Eval {
     /// Total negative log posterior (constants dropped).
     pub value: f64,
-    /// Pose term, eq. 3.
+    /// Pose term, 3DV eq. 3.
     pub pose: f64,
-    /// Dynamics term, eq. 5 (including the first-point priors).
+    /// Dynamics term, 3DV eq. 5 (including the first-point priors).
     pub dynamics: f64,
     /// Hyperparameter priors.
     pub prior: f64,
@@ -195,7 +195,7 @@ pub struct Eval {
     pub jitter_x: f64,
 }
 
-/// The negative log posterior of eq. 7 for fixed data; `S = Y Yᵀ` and its pivoted Cholesky
+/// The negative log posterior of 3DV eq. 7 for fixed data; `S = Y Yᵀ` and its pivoted Cholesky
 /// factor `Pᵀ S P = R Rᵀ` are formed once here.
 #[derive(Clone, Debug)]
 pub struct Objective {
@@ -249,7 +249,7 @@ impl Objective {
         self.eval_with(theta, grad, false)
     }
 
-    /// [`Objective::eval`] by the straightforward dense algebra (the pre-h22 code: two full
+    /// [`Objective::eval`] by the straightforward dense algebra (the algebra before the reduced-flop pose term: two full
     /// solves for `L⁻¹ S L⁻ᵀ`, full sandwiches). Same values up to rounding; for tests and
     /// benchmarks only.
     #[doc(hidden)]
@@ -304,12 +304,12 @@ impl Objective {
             // Called from outside a rayon pool (e.g. `gpdm-train`'s main thread): `join` would
             // inject both terms into the pool and put this thread to sleep (three wake-ups per
             // evaluation). Instead the pose term (the longer one) runs here and only the
-            // dynamics term is handed to a pool worker (h24: 8 % less time per evaluation on
+            // dynamics term is handed to a pool worker (measured 8 % less time per evaluation on
             // leg_l). Neither splits its sandwich: this thread cannot run pool jobs, and a
             // split of the dynamics term would only wake a third thread on two cores.
             //
             // The worker is a dedicated one-thread pool kept spinning between evaluations
-            // (see `eval_pool`): handing it the next dynamics term then needs no wake-up (h25:
+            // (see `eval_pool`): handing it the next dynamics term then needs no wake-up (measured
             // 6 % less time per leg_l fit, with the futex wake-up off this thread).
             let mut px = None;
             let gen = EVAL_GEN.fetch_add(1, Ordering::AcqRel) + 1;
@@ -562,7 +562,7 @@ fn eval_pool() -> Option<&'static rayon::ThreadPool> {
 
 /// Spins until evaluation `gen` is superseded or [`KEEP_WARM`] has passed: between two
 /// evaluations of an optimiser (~0.1 ms on leg_l) a sleeping worker would have to be woken
-/// by a system call and takes ~50 µs to start (h25).
+/// by a system call and takes ~50 µs to start.
 fn keep_warm(gen: u64) {
     let t = Instant::now();
     while EVAL_GEN.load(Ordering::Acquire) == gen && t.elapsed() < KEEP_WARM {
@@ -598,15 +598,15 @@ pub struct Gpdm {
     pub config: GpdmConfig,
     /// Lengths of the stacked training sequences.
     pub seq_lens: Vec<usize>,
-    /// Mean pose subtracted from the data (the GP of eq. 3 has zero mean).
+    /// Mean pose subtracted from the data (the GP of 3DV eq. 3 has zero mean).
     pub y_mean: DVector<f64>,
     /// Centred training poses, N × D.
     pub y: DMatrix<f64>,
     /// Latent points, N × d.
     pub x: DMatrix<f64>,
-    /// Pose-kernel hyperparameters (α1, α2, α3), eq. 4.
+    /// Pose-kernel hyperparameters (α1, α2, α3), 3DV eq. 4.
     pub alpha: [f64; 3],
-    /// Dynamics-kernel hyperparameters (β1, β2, β3, β4), eq. 6.
+    /// Dynamics-kernel hyperparameters (β1, β2, β3, β4), 3DV eq. 6.
     pub beta: [f64; 4],
 }
 
@@ -719,7 +719,7 @@ impl Gpdm {
         Layout::new(&self.seq_lens).expect("layout validated at construction")
     }
 
-    /// Builds the objective of eq. 7 (forms Y Yᵀ once).
+    /// Builds the objective of 3DV eq. 7 (forms Y Yᵀ once).
     pub fn objective(&self) -> Result<Objective> {
         Objective::new(view(&self.y), self.layout(), self.config.clone())
     }

@@ -1,8 +1,8 @@
-//! Fitting the GPDM: PCA initialisation and an L-BFGS minimiser of eq. 7.
+//! Fitting the GPDM: PCA initialisation and an L-BFGS minimiser of 3DV eq. 7.
 //!
 //! The hyperparameters are optimised in log coordinates (see [`crate::model`]); on top of
 //! that, [`Schedule::Alternate`] interleaves (X, α) phases with β-only phases, because the
-//! curvature along β is orders of magnitude smaller than along X (issue 6): a joint quasi-Newton
+//! curvature along β is orders of magnitude smaller than along X (measured on the demo parts): a joint quasi-Newton
 //! step barely moves β. Every phase keeps and returns its best point.
 
 use crate::error::{invalid, Result};
@@ -144,7 +144,7 @@ fn dot(a: &[f64], b: &[f64]) -> f64 {
 /// `q ← q + c v`, then `nextᵀq` (0 when `next` is empty) with [`dot`]'s lanes and order, in
 /// one pass over q. `q_j + c v_j` with `c = −a` equals `q_j − a v_j` exactly. (An AVX2 build
 /// of this loop measured no faster: it streams the stored pairs, ~1.9 MB per iteration at
-/// memory 100, and is bound by cache bandwidth; h25.)
+/// memory 100, and is bound by cache bandwidth.)
 fn axpy_dot(q: &mut [f64], c: f64, v: &[f64], next: &[f64]) -> f64 {
     let n = q.len();
     let v = &v[..n];
@@ -204,7 +204,7 @@ where
 /// block `b` of coordinates is scaled by its own secant estimate `γ_b = s_bᵀy_b / y_bᵀy_b`
 /// from the latest correction pair (the global `sᵀy / yᵀy` when `s_bᵀy_b ≤ 0`), instead of one
 /// scalar for all coordinates. For the GPDM the latent positions, α and β have curvatures 1e3 to
-/// 1e13 apart (issue 6): one scalar sized for X makes every β step tiny. Blocks must be
+/// 1e13 apart: one scalar sized for X makes every β step tiny. Blocks must be
 /// disjoint; coordinates outside every block use the global scalar.
 pub fn lbfgs_blocks<F>(
     mut f: F,
@@ -564,7 +564,7 @@ fn phase_blocks(idx: &[usize], nx: usize, scaling: Scaling) -> Vec<std::ops::Ran
 /// What training did.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct TrainReport {
-    /// Objective (eq. 7, negative log posterior without constants) at the start.
+    /// Objective (3DV eq. 7, negative log posterior without constants) at the start.
     pub initial_value: f64,
     /// Objective at the end.
     pub final_value: f64,
@@ -580,7 +580,7 @@ pub struct TrainReport {
     pub trace: Vec<(f64, f64)>,
 }
 
-/// Minimises eq. 7 over X, α and β starting from the model's current parameters and stores
+/// Minimises 3DV eq. 7 over X, α and β starting from the model's current parameters and stores
 /// the best point found back into `model`.
 pub fn train(model: &mut Gpdm, opts: &TrainOptions) -> Result<TrainReport> {
     let clock = std::time::Instant::now();
@@ -667,7 +667,7 @@ mod tests {
     use super::*;
 
     /// The fused two-loop passes give the same bits as the separate axpy and `dot` (the
-    /// L-BFGS path must not change; h25).
+    /// L-BFGS path must not change).
     #[test]
     fn fused_update_and_dot_equal_separate_ones() {
         let v = |n: usize, s: f64| -> Vec<f64> {

@@ -1,5 +1,5 @@
-//! Predictions of a trained GPDM: latent dynamics (eqs. 8-10) and pose reconstruction
-//! (eqs. 11-13). `K_X` and `K_Y` are factorised once when the predictor is built, and
+//! Predictions of a trained GPDM: latent dynamics (3DV eqs. 8-10) and pose reconstruction
+//! (3DV eqs. 11-13). `K_X` and `K_Y` are factorised once when the predictor is built, and
 //! `K_X⁻¹ X_out` and `K_Y⁻¹ Y` are formed by triangular solves.
 
 use crate::error::{invalid, Result};
@@ -116,7 +116,7 @@ impl Predictor {
         Ok((p, r, rms))
     }
 
-    /// Decoding through the leading eigenvectors of `K_Y` instead of the pose basis: eq. 12,
+    /// Decoding through the leading eigenvectors of `K_Y` instead of the pose basis: 3DV eq. 12,
     /// `μ_Y(x) = ȳ + (K_Y⁻¹ Y)ᵀ k_Y(x)`, with `k_Y(x)` replaced by its projection `Q_R Q_Rᵀ
     /// k_Y(x)` onto the top-R eigenvectors `Q_R` of `K_Y` (N × N; a factorisation, no inverse
     /// is formed: `Q_Rᵀ K_Y⁻¹ Y` comes from the Cholesky solution). The error of coordinate j is
@@ -126,7 +126,7 @@ impl Predictor {
     /// is column i of the noise-free Gram matrix, so the residual has the closed form
     /// `Σ_{l>R} (λ_l − σ²)² q_{l,i}²`); [`Predictor::basis_error_bound`] evaluates it for new
     /// points. Unlike a basis of Y it does not have to reproduce the training poses' noise,
-    /// which the GP mean smooths. Cost of eq. 12: `T·N·R + T·R·D` instead of `T·N·D`.
+    /// which the GP mean smooths. Cost of 3DV eq. 12: `T·N·R + T·R·D` instead of `T·N·D`.
     /// Returns the predictor, R and the bound at the training points.
     pub fn with_kernel_basis(model: &Gpdm, max_abs: f64) -> Result<(Self, usize, f64)> {
         if !(max_abs >= 0.0) {
@@ -453,7 +453,7 @@ impl Predictor {
             .collect())
     }
 
-    /// Eq. 11: poses for the latent rows of `xs`; the mean (eq. 12) when `rng` is `None`,
+    /// Eq. 11: poses for the latent rows of `xs`; the mean (3DV eq. 12) when `rng` is `None`,
     /// otherwise a draw `ỹ ~ N(μ_Y(x), σ²_Y(x) I)`.
     pub fn reconstruct<R: rand::Rng + ?Sized>(
         &self,

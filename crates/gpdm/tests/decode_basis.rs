@@ -1,5 +1,5 @@
 //! Decoding through the leading eigenvectors of K_Y (`Predictor::with_kernel_basis`) against
-//! the exact eq. 12, and the column-major decoding used for bulk decoding.
+//! the exact 3DV eq. 12, and the column-major decoding used for bulk decoding.
 
 use gpdm::predict::Predictor;
 use gpdm::{Gpdm, GpdmConfig};

@@ -1,5 +1,5 @@
 //! The reduced-flop objective (pivoted Cholesky of Y Yᵀ, trapezoidal solves, lower-triangle
-//! sandwiches; h22) against the dense reference evaluation and against plain dense algebra.
+//! sandwiches) against the dense reference evaluation and against plain dense algebra.
 
 mod common;
 #[path = "../examples/common/synthetic.rs"]

@@ -1,4 +1,4 @@
-//! Finite-difference checks of the analytic gradients of eq. 7 and of the HMC energy.
+//! Finite-difference checks of the analytic gradients of 3DV eq. 7 and of the HMC energy.
 
 mod common;
 
@@ -104,7 +104,7 @@ fn objective_gradient_as_printed() {
 
 #[test]
 fn well_posed_terms_match_their_definitions() {
-    // Default model = eq. 7 as printed evaluated at X rescaled to unit mean square, plus
+    // Default model = 3DV eq. 7 as printed evaluated at X rescaled to unit mean square, plus
     // Σ_{k≤3} (ln β_k)² / (2 s²); and invariant to the scale of θ's X block.
     let m = small_model(GpdmConfig::default());
     let s = m.config.beta_log_sd.unwrap();
@@ -131,7 +131,7 @@ fn well_posed_terms_match_their_definitions() {
 
 #[test]
 fn objective_matches_direct_formula() {
-    // Independent evaluation of eq. 7 with nalgebra (explicit determinants and solves).
+    // Independent evaluation of 3DV eq. 7 with nalgebra (explicit determinants and solves).
     let m = small_model(as_printed());
     let e = m.objective().unwrap().eval(&m.theta(), None).unwrap();
     let x = &m.x;
@@ -187,7 +187,7 @@ fn trajectory_energy_gradient_and_value() {
         let q = energy.free_coords(&traj);
         let mut g = vec![0.0; q.len()];
         let e = energy.energy_grad(&q, &mut g).unwrap();
-        // Value: sum of -log N(x_{t+1}; μ(x_t), κ σ²(x_t) I) (constants dropped), eqs. 9-10.
+        // Value: sum of -log N(x_{t+1}; μ(x_t), κ σ²(x_t) I) (constants dropped), 3DV eqs. 9-10.
         let full = energy.trajectory(&q);
         let mut direct = 0.0;
         for t in 0..5 {

@@ -1,5 +1,5 @@
-//! The column-wise `RbfLinear::gram`/`gradients` (h24) against the kernel's definition
-//! (eqs. 4 and 6) written out naively over all pairs (libm `exp`), against finite
+//! The column-wise `RbfLinear::gram`/`gradients` against the kernel's definition
+//! (3DV eqs. 4 and 6) written out naively over all pairs (libm `exp`), against finite
 //! differences, and `Cholesky::factor_owned` against `Cholesky::factor`.
 
 use faer::Mat;

@@ -144,7 +144,7 @@ fn learned_dynamics_predict_the_next_state_of_a_rotation() {
         "one-step error {err} vs persistence {base}"
     );
 
-    // Mean prediction (eq. 8) from the first latent point follows the cycle for 2 periods.
+    // Mean prediction (3DV eq. 8) from the first latent point follows the cycle for 2 periods.
     let traj = pred
         .mean_trajectory(&m.x.row(0).iter().copied().collect::<Vec<_>>(), 32)
         .unwrap();

@@ -1,5 +1,5 @@
 //! 3DV eq. 11 pose sampling against the predictive distribution computed independently here
-//! (eqs. 4, 12 and 13 by nalgebra's dense Cholesky, not the crate's kernels or factors): the
+//! (3DV eqs. 4, 12 and 13 by nalgebra's dense Cholesky, not the crate's kernels or factors): the
 //! sample moments of many draws `ỹ ~ N(μ_Y(x), σ²_Y(x) I)` must match μ_Y and σ²_Y within
 //! their sampling error, and the coordinates of one draw must be uncorrelated.
 
@@ -54,7 +54,7 @@ fn eq11_draws_have_the_predictive_mean_and_variance() {
         let mut rng = ChaCha8Rng::seed_from_u64(11);
         let y = pred.reconstruct(&xs, Some(&mut rng)).unwrap();
         let d = y.ncols();
-        // The mean (eq. 12) without a generator.
+        // The mean (3DV eq. 12) without a generator.
         let mean_only = pred
             .reconstruct::<ChaCha8Rng>(&xs.rows(0, 1).into_owned(), None)
             .unwrap();
@@ -81,7 +81,7 @@ fn eq11_draws_have_the_predictive_mean_and_variance() {
             (s2 / var - 1.0).abs() < 4.5 * rel_sd,
             "variance {s2} vs σ²_Y {var}"
         );
-        // Isotropic and independent across coordinates (eq. 11's σ² I): the sample
+        // Isotropic and independent across coordinates (3DV eq. 11's σ² I): the sample
         // correlation of two coordinates is within 4.5/√draws of 0.
         let z = |c: usize| {
             y.column(c)

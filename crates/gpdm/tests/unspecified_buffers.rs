@@ -1,4 +1,4 @@
-//! h25: the objective's N × N work buffers come from the recycling pool without a zero fill
+//! The objective's N × N work buffers come from the recycling pool without a zero fill
 //! (`gram_lower`, `lower_zzt_scaled_only`, `lower_wwt_scaled_only`, the Z solve). Every entry
 //! they read must be written first: with the pool filled with NaN buffers of every size the
 //! objective uses, the results must be bit-identical to those from fresh zeroed buffers.

@@ -108,6 +108,8 @@ pub struct CommonArgs {
 
 static VERBOSITY: AtomicU8 = AtomicU8::new(0);
 static QUIET: AtomicBool = AtomicBool::new(false);
+/// Set by [`CommonArgs::init`]: library code draws progress only inside a stage.
+static IN_STAGE: AtomicBool = AtomicBool::new(false);
 static STAGE: OnceLock<String> = OnceLock::new();
 
 impl CommonArgs {
@@ -120,6 +122,7 @@ impl CommonArgs {
     pub fn init(&self) -> anyhow::Result<()> {
         VERBOSITY.store(if self.quiet { 0 } else { self.verbose }, Ordering::Relaxed);
         QUIET.store(self.quiet, Ordering::Relaxed);
+        IN_STAGE.store(true, Ordering::Relaxed);
         std::env::set_var("OPENBLAS_NUM_THREADS", "1");
         blas_single_thread();
         // faer's own parallel kernels split reductions by thread count, so
@@ -292,9 +295,47 @@ pub fn progress_bar(len: u64, message: &str, args: &CommonArgs) -> ProgressBar {
         ProgressStyle::with_template("{msg} [{bar:30}] {pos}/{len} {elapsed_precise} (eta {eta})")
             .expect("valid progress template")
             .progress_chars("=> ");
-    ProgressBar::new(len)
+    let bar = ProgressBar::new(len)
         .with_style(style)
-        .with_message(message.to_string())
+        .with_message(message.to_string());
+    register(&bar);
+    bar
+}
+
+/// Whether progress may be drawn: inside a stage ([`CommonArgs::init`] was called), without
+/// `-q`, and stderr is a terminal.
+fn progress_wanted() -> bool {
+    IN_STAGE.load(Ordering::Relaxed) && !is_quiet() && std::io::stderr().is_terminal()
+}
+
+/// Every visible bar or spinner made here, so that a library loop's bar inside a stage's
+/// own bar stays hidden (two bars drawing on one terminal line garble each other).
+static LIVE_BARS: std::sync::Mutex<Vec<indicatif::WeakProgressBar>> = std::sync::Mutex::new(Vec::new());
+
+fn register(bar: &ProgressBar) {
+    if let Ok(mut live) = LIVE_BARS.lock() {
+        live.retain(|w| w.upgrade().is_some_and(|b| !b.is_finished()));
+        live.push(bar.downgrade());
+    }
+}
+
+/// Whether a bar or spinner made here is still drawing (not finished, not dropped).
+fn bar_active() -> bool {
+    LIVE_BARS
+        .lock()
+        .is_ok_and(|live| live.iter().any(|w| w.upgrade().is_some_and(|b| !b.is_finished())))
+}
+
+/// [`progress_bar`] for library loops, which have no [`CommonArgs`] at hand: drawn only in a
+/// stage process after [`CommonArgs::init`], without `-q`, on a terminal, and while no other
+/// bar is drawing (an inner loop of a stage that shows its own bar stays silent); hidden
+/// otherwise, so library calls from tests or other programs print nothing. The message is
+/// prefixed with the stage's name. `finish_and_clear` it when the loop ends.
+pub fn stage_progress(len: u64, message: &str) -> ProgressBar {
+    if !progress_wanted() || bar_active() {
+        return ProgressBar::hidden();
+    }
+    progress_bar(len, &format!("{}: {message}", stage_name()), &CommonArgs::default())
 }
 
 /// A spinner with the elapsed time on stderr for work of unknown length (a
@@ -310,5 +351,6 @@ pub fn spinner(message: &str, args: &CommonArgs) -> ProgressBar {
         .with_style(style)
         .with_message(message.to_string());
     bar.enable_steady_tick(std::time::Duration::from_millis(200));
+    register(&bar);
     bar
 }

@@ -203,7 +203,9 @@ impl MeshSequence {
         let Some(first_path) = files.first() else {
             return Ok(Self::default());
         };
-        let meshes: Vec<Result<TriMesh>> = files.par_iter().map(read_mesh).collect();
+        let bar = crate::cli::stage_progress(files.len() as u64, "frames read");
+        let meshes: Vec<Result<TriMesh>> = files.par_iter().map(read_mesh).inspect(|_| bar.inc(1)).collect();
+        bar.finish_and_clear();
         let mut faces = Vec::new();
         let mut frames = Vec::with_capacity(files.len());
         for (i, (mesh, path)) in meshes.into_iter().zip(files).enumerate() {
@@ -258,17 +260,21 @@ impl MeshSequence {
             return Err(Error::invalid(format!("frame rate must be a positive number, got {f}")));
         }
         let keep = |p: &Path| frame_number(p).is_none() && !is_rate_file(p);
-        crate::atomic::write_dir_atomic(dir.as_ref(), &keep, |tmp| {
-            (0..self.n_frames())
-                .into_par_iter()
-                .try_for_each(|i| write_ply(&tmp.join(format!("{i:06}.ply")), &self.frame_mesh(i)))?;
+        let bar = crate::cli::stage_progress(self.n_frames() as u64, "frames written");
+        let done = crate::atomic::write_dir_atomic(dir.as_ref(), &keep, |tmp| {
+            (0..self.n_frames()).into_par_iter().try_for_each(|i| {
+                bar.inc(1);
+                write_ply(&tmp.join(format!("{i:06}.ply")), &self.frame_mesh(i))
+            })?;
             if let Some(fps) = fps {
                 let path = tmp.join(RATE_FILE);
                 let text = serde_json::json!({ "fps": fps }).to_string() + "\n";
                 std::fs::write(&path, text).map_err(|e| Error::io(&path, e))?;
             }
             Ok(())
-        })
+        });
+        bar.finish_and_clear();
+        done
     }
 }
 
@@ -281,9 +287,13 @@ where
     F: Fn(usize, &Path) -> Result<()> + Sync,
 {
     let keep = |p: &Path| frame_number(p).is_none() && !is_rate_file(p);
-    crate::atomic::write_dir_atomic(dir, &keep, |tmp| {
-        (0..n)
-            .into_par_iter()
-            .try_for_each(|i| write(i, &tmp.join(format!("{i:06}.{ext}"))))
-    })
+    let bar = crate::cli::stage_progress(n as u64, "frames written");
+    let done = crate::atomic::write_dir_atomic(dir, &keep, |tmp| {
+        (0..n).into_par_iter().try_for_each(|i| {
+            bar.inc(1);
+            write(i, &tmp.join(format!("{i:06}.{ext}")))
+        })
+    });
+    bar.finish_and_clear();
+    done
 }

@@ -24,6 +24,7 @@ use std::path::{Path, PathBuf};
 
 use rayon::prelude::*;
 
+use crate::cli::ProgressBar;
 use crate::capture_set::{check_name, CaptureSet, SetSpec, SubjectSpec};
 use crate::mesh::TriMesh;
 use crate::topology::Topology;
@@ -99,6 +100,8 @@ pub fn check_set(dir: impl AsRef<Path>) -> Report {
     let mut subjects: Vec<&str> = vec![&set.spec.source, &set.spec.target];
     subjects.dedup();
     let mut n_frames: BTreeMap<(String, String), usize> = BTreeMap::new();
+    // Frames read so far out of those listed so far (the total grows folder by folder).
+    let bar = crate::cli::stage_progress(0, "frames read");
     for subject in subjects {
         if check_name("subject", subject).is_err() {
             continue;
@@ -132,7 +135,7 @@ pub fn check_set(dir: impl AsRef<Path>) -> Report {
         for m in motions {
             report.motions += 1;
             let d = set.motion_dir(subject, &m);
-            if let Some(n) = check_frames(&d, template.as_ref(), &mut report) {
+            if let Some(n) = check_frames(&d, template.as_ref(), &mut report, &bar) {
                 n_frames.insert((subject.to_string(), m.clone()), n);
             }
         }
@@ -148,11 +151,12 @@ pub fn check_set(dir: impl AsRef<Path>) -> Report {
             };
             dirs.sort();
             for t in dirs {
-                check_frames(&t, template.as_ref(), &mut report);
+                check_frames(&t, template.as_ref(), &mut report, &bar);
             }
         }
     }
 
+    bar.finish_and_clear();
     // Key-poses within their motions.
     for (i, t) in set.spec.train.iter().enumerate() {
         let a = n_frames.get(&(set.spec.source.clone(), t.source.clone()));
@@ -308,7 +312,7 @@ fn strip(msg: &str, path: &Path) -> String {
 /// Checks a folder of frames: the numbering, each frame readable, and (with
 /// a template) each frame's vertex count and faces. Returns the frame count
 /// when the numbering is valid.
-fn check_frames(dir: &Path, template: Option<&Template>, report: &mut Report) -> Option<usize> {
+fn check_frames(dir: &Path, template: Option<&Template>, report: &mut Report, bar: &ProgressBar) -> Option<usize> {
     let files = match crate::frame_pattern::detect(dir) {
         Ok(l) => l.files,
         Err(e) => {
@@ -317,6 +321,7 @@ fn check_frames(dir: &Path, template: Option<&Template>, report: &mut Report) ->
         }
     };
     report.frames += files.len();
+    bar.inc_length(files.len() as u64);
     // Per frame: None when it matches, else the problem.
     let results: Vec<Option<(PathBuf, String, bool)>> = files
         .par_iter()
@@ -333,6 +338,7 @@ fn check_frames(dir: &Path, template: Option<&Template>, report: &mut Report) ->
                 }
             }
         })
+        .inspect(|_| bar.inc(1))
         .collect();
     // Unreadable frames one line each; topology mismatches one line per
     // folder (naming the first), since a whole folder usually shares the cause.

@@ -149,6 +149,13 @@ impl Renderer {
 
     /// Draws the layers (and the floor) into a `width x height` image.
     pub fn render(&self, layers: &[Layer]) -> RgbImage {
+        self.render_with_lines(layers, &[], 0.0)
+    }
+
+    /// [`Renderer::render`], then world segments `(a, b, colour)` drawn over the surfaces
+    /// where they are not hidden (depth-tested, each end moved `bias` world units towards the
+    /// eye so that lines lying on a surface are not hidden by it), one output pixel wide.
+    pub fn render_with_lines(&self, layers: &[Layer], lines: &[(Vector3<f64>, Vector3<f64>, Rgb)], bias: f64) -> RgbImage {
         let s = self.style.supersample.clamp(1, 4);
         let cam = self.camera.scaled(s);
         let rig = LightRig::new(self.style.lights, &cam);
@@ -163,6 +170,18 @@ impl Renderer {
         }
         for layer in layers {
             draw_layer(&mut target, &cam, &rig, layer, self.style.shading);
+        }
+        for (p, q, colour) in lines {
+            let (p, q) = (p + cam.towards_eye(p) * bias, q + cam.towards_eye(q) * bias);
+            if let Some((a, b)) = project_segment(&cam, &p, &q, None) {
+                // One output pixel wide: every supersample offset of the block.
+                for dx in 0..s {
+                    for dy in 0..s {
+                        let o = |v: ScreenVertex| [v[0] + dx as f32, v[1] + dy as f32, v[2]];
+                        target.draw_line(o(a), o(b), *colour);
+                    }
+                }
+            }
         }
         target.resolve(s)
     }

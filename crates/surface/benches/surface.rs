@@ -1,4 +1,4 @@
-//! Speed of the surface stage on a ~13k-vertex body-like mesh (issue 5 goal: correct + stitch
+//! Speed of the surface stage on a ~13k-vertex body-like mesh (goal: correct + stitch
 //! >= 30 frames/s on 2 cores, factorisations reused across frames).
 //!
 //! Run: `OPENBLAS_NUM_THREADS=1 cargo test --release -p surface --bench surface -- --bench`

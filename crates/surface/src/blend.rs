@@ -1,4 +1,4 @@
-//! Non-linear interpolation of two poses of one subject (issue 5 `blend`; the variation
+//! Non-linear interpolation of two poses of one subject (the `blend` stage; the variation
 //! paper's mesh interpolation, its refs [16], [38], [39]).
 //!
 //! For each face, the deformation gradient from the rest mesh to pose `k` (Sumner frame) is

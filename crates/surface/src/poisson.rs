@@ -1,5 +1,5 @@
-//! Poisson reconstruction `L x = div J` with Dirichlet vertices (issue 5, "Poisson core";
-//! transfer paper §6.1 uses it to rebuild the corrected part, §6.2 to merge parts).
+//! Poisson reconstruction `L x = div J` with Dirichlet vertices (CVPR
+//! §6.1 uses it to rebuild the corrected part, §6.2 to merge parts).
 //!
 //! Minimising `Σ_f A_f |∇x - J_f|²` over the free vertices, with the fixed ones held at given
 //! positions, gives `L_FF x_F = (Gᵀ A J)_F - L_FC x_C` (`L = Gᵀ A G`, cotangent Laplacian).

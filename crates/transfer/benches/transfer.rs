@@ -1,4 +1,4 @@
-//! Speed goals of issue 4 (docs/PERFORMANCE.md), on synthetic data of the
+//! Speed goals (docs/PERFORMANCE.md), on synthetic data of the
 //! demo set's shape: 5 parts x 20 PCA coefficients plus the 6-vector
 //! displacement.
 //! - `gpr-train`: all parts plus displacement, one direction, with about 350

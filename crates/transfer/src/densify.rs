@@ -1,11 +1,11 @@
 //! `dtw-densify`: dense pose correspondences for one training pair from its
-//! sparse key-poses (transfer paper §5.1, eqs. 1-7).
+//! sparse key-poses (CVPR §5.1, eqs. 1-7).
 //!
 //! Per part, a Bayesian linear regression from the key-poses' source to
 //! target PCA coefficients gives every (source frame, target frame) pair a
-//! cost `-log P^k_ij` (eq. 5); the costs add over parts (eq. 6) and the
+//! cost `-log P^k_ij` (CVPR eq. 5); the costs add over parts (eq. 6) and the
 //! least-cost continuous, monotonic path through the key-poses with at most 3
-//! vertical or horizontal steps in a row is the dense correspondence (eq. 7).
+//! vertical or horizontal steps in a row is the dense correspondence (CVPR eq. 7).
 
 use gp::blr::{cost_matrix, PartFrames};
 use gp::dtw::{dtw_path, DtwOptions};
@@ -14,7 +14,7 @@ use mesh_core::{Error, Result};
 use nalgebra::DMatrix;
 use serde::{Deserialize, Serialize};
 
-/// The paper's observation noise of the key-pose regression (eq. 1).
+/// The paper's observation noise of the key-pose regression (CVPR eq. 1).
 pub const PAPER_SIGMA2: f64 = 0.01;
 
 /// Dense correspondences of one training pair.

@@ -1,9 +1,9 @@
 //! The paper's illustrations that are not learning curves (`paper-figure`):
 //!
 //! - CVPR figure 3, [`CostFigure`]: the association cost matrix `-log P_ij`
-//!   of one training pair (eqs. 1-6, `gp::blr::cost_matrix`, summed over
+//!   of one training pair (CVPR eqs. 1-6, `gp::blr::cost_matrix`, summed over
 //!   parts) as an image, source frames along x and target frames along y,
-//!   with the DTW path (eq. 7, `gp::dtw::dtw_path`, as `dtw-densify`), the
+//!   with the DTW path (CVPR eq. 7, `gp::dtw::dtw_path`, as `dtw-densify`), the
 //!   key-poses and, when the set has them, the true correspondences overlaid.
 //!   Colours are `ln(1 + cost)` on a viridis-like ramp, clipped to the 2nd-98th
 //!   percentiles (the cost spans many orders of magnitude).
@@ -68,7 +68,7 @@ pub const TRUTH_COLOUR: [u8; 3] = [255, 64, 160];
 /// Colour of the key-pose markers.
 pub const KEY_COLOUR: [u8; 3] = [230, 30, 30];
 
-/// The cost matrix of eqs. 1-6 and the DTW path of eq. 7 through the
+/// The cost matrix of CVPR eqs. 1-6 and the DTW path of eq. 7 through the
 /// key-poses, from per-part coefficients of both motions (as `dtw-densify`).
 pub fn cost_and_path(
     source_parts: &[DMatrix<f64>],

@@ -1,14 +1,14 @@
-//! `gpr-train`: the GP regression model of the transfer (paper §5, eqs. 8-13).
+//! `gpr-train`: the GP regression model of the transfer (CVPR §5, eqs. 8-13).
 //!
 //! For every body part `k`, a multi-output GP maps the source subject's part-`k`
-//! PCA coefficients to the target subject's part-`k` coefficients (eq. 8: one GP
+//! PCA coefficients to the target subject's part-`k` coefficients (CVPR eq. 8: one GP
 //! per output column, all sharing the kernel and its hyperparameters); one more
 //! GP maps the source's rigid displacement 6-vector to the target's (paper §4,
 //! "Rigid Transformation"). Training pairs are the dense correspondences of
-//! `dtw-densify` (eq. 7), or only the key-poses (`--keyposes-only`).
+//! `dtw-densify` (CVPR eq. 7), or only the key-poses (`--keyposes-only`).
 //!
 //! Methods (paper §7 comparisons):
-//! - `gpr-nn` (the paper): neural-network kernel, eq. 10;
+//! - `gpr-nn` (the paper): neural-network kernel, CVPR eq. 10;
 //! - `gpr-se`, `gpr-linear`: squared-exponential and linear kernels;
 //! - `keypose-affine`: Semantic Deformation Transfer (Baran et al. 2009) on the
 //!   key-pose pairs only, per part (`gp::affine_keypose`);
@@ -44,7 +44,7 @@ use serde::{Deserialize, Serialize};
 /// The kernel of `method`'s pose GPs (`None` for the affine baseline). Starting
 /// hyperparameters are replaced by `gp::gpr::initial_kernel` when training.
 /// `nn_bias` selects the NN kernel with the bias input (R&W eq. 4.29):
-/// eq. 10 as printed has none, which makes every function of the GP odd,
+/// CVPR eq. 10 as printed has none, which makes every function of the GP odd,
 /// `f(-x) = -f(x)` (asin is odd), so it cannot learn even components of a
 /// mapping between centred PCA coefficients.
 pub fn method_kernel(method: Method, nn_bias: bool) -> Option<Kernel> {
@@ -833,7 +833,7 @@ mod tests {
         {
             assert!((y[c] - want).abs() < 1e-3, "{c}: {} vs {want}", y[c]);
         }
-        // A smooth non-linear map with an even part: eq. 10 as printed (no
+        // A smooth non-linear map with an even part: CVPR eq. 10 as printed (no
         // bias) can only represent odd functions and misses it; with the bias
         // input it is learnt.
         let nl = pair(80, &|x| x.tanh() + 0.3 * x * x);

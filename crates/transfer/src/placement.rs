@@ -18,7 +18,7 @@
 //! - `regressed` (the paper): the displacement GP's prediction;
 //! - `blended`: per frame `D = (1 - w) D_regressed + w D_scaled`, on the
 //!   6-vectors, with `w = σ²_*(x) / k(x, x)` the displacement GP's latent
-//!   predictive variance (eq. 12) relative to its prior variance: `w ≈ 0`
+//!   predictive variance (CVPR eq. 12) relative to its prior variance: `w ≈ 0`
 //!   where the source displacement is like the training data, `w -> 1` where
 //!   the GP extrapolates (its mean falls back to the prior mean, 0, which
 //!   integrates to a standing body, while the scaled source keeps moving).

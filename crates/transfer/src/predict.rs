@@ -1,6 +1,6 @@
 //! `gpr-predict`: source coefficients and displacements -> target coefficients
-//! and displacements (paper eq. 13, the GP posterior mean `K_* α`, for all
-//! frames at once), and the displacement GP's predictive variance (eq. 12)
+//! and displacements (CVPR eq. 13, the GP posterior mean `K_* α`, for all
+//! frames at once), and the displacement GP's predictive variance (CVPR eq. 12)
 //! used by the `blended` placement.
 
 use mesh_core::{Error, Result};
@@ -82,7 +82,7 @@ pub fn predict(
 pub struct Timing {
     /// Source PCA encoding of the aligned frames.
     pub encode_s: f64,
-    /// GP prediction (eq. 13) of all parts and of the displacement.
+    /// GP prediction (CVPR eq. 13) of all parts and of the displacement.
     pub gp_s: f64,
     /// Target PCA decoding, assembly and placement.
     pub decode_s: f64,

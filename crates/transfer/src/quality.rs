@@ -1,4 +1,4 @@
-//! Quality checks of the surface reconstruction (issue 5, transfer paper §6)
+//! Quality checks of the surface reconstruction (CVPR §6)
 //! against the truth, for one predicted sequence with the target's topology:
 //! * closedness: the output reuses the template's faces, so it is closed exactly where
 //!   the template is (`boundary_edges` counts the template's open edges); geometric

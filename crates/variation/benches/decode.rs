@@ -1,5 +1,5 @@
-//! Speed goal of issue 6: 100 variations of a 100-frame motion decoded to meshes in <= 1 s on
-//! 2 cores. Decoding = pose mean (eq. 12) for every latent point, assembly, displacement and
+//! Speed goal (docs/PERFORMANCE.md): 100 variations of a 100-frame motion decoded to meshes in <= 1 s on
+//! 2 cores. Decoding = pose mean (3DV eq. 12) for every latent point, assembly, displacement and
 //! gravity placement; the latent trajectories are given (HMC is benchmarked in `gpdm`).
 //! Bodies: icospheres of 2562 vertices (the paper's DAN meshes have 2667) and 10242 vertices,
 //! as one part (the part-averaging assembly costs O(vertices) per frame either way), 200

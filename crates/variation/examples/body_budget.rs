@@ -2,7 +2,7 @@
 //! meshes, on 2 cores. Loads a trained variation model (default: the demo's
 //! `out/work/variation/locomotion.model`), samples 100 latent trajectories of 100 frames for
 //! every body part (HMC, burn-in and step-size adaptation included), decodes every frame of
-//! every part (eq. 12) and assembles the body (`Assembly::Average`), in memory, no file writing.
+//! every part (3DV eq. 12) and assembles the body (`Assembly::Average`), in memory, no file writing.
 //! Prints the time of each step for the old path (one chain per part, exact decoding,
 //! per-variation `Decoder::decode`) and the fast path, measured back to back.
 //!

@@ -1,16 +1,16 @@
-//! `variation-eval`: the model-level figures of issue 6.
+//! `variation-eval`: the model-level figures of the 3DV paper (figs. 3-5, 7b) and the mean prediction.
 //!
-//! - **Fig. 4**: reconstruction error of the training poses, GPDM (eq. 12 at the learned
+//! - **Fig. 4**: reconstruction error of the training poses, GPDM (3DV eq. 12 at the learned
 //!   latent points, interpolated to every captured frame when trained at a stride) against
 //!   PCA with the same dimension d on the training rows, as the mean per-vertex distance in
 //!   each part's template frame (torso displacement columns excluded).
 //! - **Fig. 7b**: for w ∈ {0.25, 0.75}, the non-linear mesh blend `Y_w` of the pair is the
 //!   truth; the latent interpolation *guided* by the learned intermediate trajectory
 //!   (`blend_pair` of the bounding learned trajectories, e.g. X₁ and X_0.5) and the *unguided*
-//!   one (`(1 − w) X₁ + w X₂`) are decoded (eq. 12) and compared per frame with the truth.
+//!   one (`(1 − w) X₁ + w X₂`) are decoded (3DV eq. 12) and compared per frame with the truth.
 //! - **Mean prediction**: from each training sequence's first latent point, the mean
-//!   dynamics (eqs. 8-10) over the sequence length, decoded, against the sequence: shows
-//!   whether the learned dynamics stay on the cycle (issue 6, noise floor).
+//!   dynamics (3DV eqs. 8-10) over the sequence length, decoded, against the sequence: shows
+//!   whether the learned dynamics stay on the cycle (a test of the noise floor).
 //! - Latent plots via [`crate::plots`]: figs. 3 and 5; fig. 6 (each learned pre-blend `X_w` against
 //!   the linear interpolation `(1 − w) X₁ + w X₂`, per part) and fig. 7a (at w = 0.25, first part:
 //!   the unguided and the guided interpolations of fig. 7b with the trajectories they come from).
@@ -124,7 +124,7 @@ pub fn evaluate(
     for (k, pm) in model.parts.iter().enumerate() {
         let g = &pm.gpdm;
         let nv = vertex_count(model, k);
-        // GPDM: eq. 12 at the learned latent points, brought to the capture's rate, against
+        // GPDM: 3DV eq. 12 at the learned latent points, brought to the capture's rate, against
         // every captured frame.
         let mut sum = 0.0;
         for s in 0..model.sequences.len() {

@@ -1,15 +1,15 @@
 //! Training at a reduced frame rate, sampling at the capture's (a deviation from the paper,
 //! which fits every frame; `docs/DEVIATIONS.md`, "Frame stride").
 //!
-//! The GPDM's cost grows as N³ in training frames (eqs. 3 and 5 factor N × N kernels every
+//! The GPDM's cost grows as N³ in training frames (3DV eqs. 3 and 5 factor N × N kernels every
 //! objective evaluation), and a 50 fps capture doubles N against a 25 fps one without adding
 //! poses the dynamics need. With a stride `s`, training keeps frames `0, s, 2s, …` of every
-//! time-aligned sequence ([`kept_frames`]), so the first-order dynamics of eq. 2 learn the step
+//! time-aligned sequence ([`kept_frames`]), so the first-order dynamics of 3DV eq. 2 learn the step
 //! over `s` capture frames; the torso's per-frame displacement columns keep their meaning (metres
 //! and radians *per capture frame*) by averaging the `s` displacements of each step
 //! ([`strided_displacements`]). Sampled and learned trajectories are brought back to the
 //! capture's rate by Catmull-Rom interpolation in the latent space ([`upsample`]) before decoding
-//! (eq. 12 is smooth in `x`), so every output keeps the capture's frame count and rate.
+//! (3DV eq. 12 is smooth in `x`), so every output keeps the capture's frame count and rate.
 
 use nalgebra::DMatrix;
 

@@ -1,4 +1,4 @@
-//! Whole gait cycles of locomotion (issue 6 follow-up, before the DTW of [`crate::prealign`]).
+//! Whole gait cycles of locomotion (before the DTW of [`crate::prealign`]).
 //!
 //! Motions of one locomotion group rarely hold the same number of cycles over their length
 //! (the demo's walk has 2 strides in 64 frames, its run 3 in 61), so a corner-to-corner DTW of

@@ -249,8 +249,14 @@ pub fn build(set: &CaptureSet, spec: &GroupSpec) -> Result<(Group, Vec<String>)>
     // Soles of the two leg parts, left first, for motions without contact annotations.
     let soles = crate::metrics::soles(&parts, &template.vertices, &up, mesh_core::feet::SOLE_TOLERANCE);
     let has_legs = parts.iter().filter(|p| p.name.starts_with("leg")).count() == 2;
+    // Steps: reading and aligning each motion, warping each, then each blend.
+    let bar = mesh_core::cli::stage_progress(
+        (2 * present.len() + spec.blend_weights.len()) as u64,
+        "motions read, warped; blends",
+    );
     let mut loaded = Vec::new();
     for m in &present {
+        bar.inc(1);
         let dir = set.motion_dir(&spec.subject, m);
         let seq = MeshSequence::load_dir(&dir)?;
         let aligned = align_motion(template, &seq)
@@ -309,6 +315,7 @@ pub fn build(set: &CaptureSet, spec: &GroupSpec) -> Result<(Group, Vec<String>)>
     let ref_contacts = slice(&loaded[r].2, windows[r]);
     let mut sequences = Vec::new();
     for (q, (name, motion, c)) in loaded.into_iter().enumerate() {
+        bar.inc(1);
         let (w0, len) = windows[q];
         let map: Vec<usize> = if q == r {
             (w0..w0 + len).collect()
@@ -370,6 +377,7 @@ pub fn build(set: &CaptureSet, spec: &GroupSpec) -> Result<(Group, Vec<String>)>
     if let (false, Some((a, b))) = (spec.blend_weights.is_empty(), pair) {
         let blender = surface::blend::Blender::new(group.template.clone(), group.faces.clone())?;
         for &w in &spec.blend_weights {
+            bar.inc(1);
             let s = blend_sequences(
                 &blender,
                 &group.sequences[a],
@@ -380,6 +388,7 @@ pub fn build(set: &CaptureSet, spec: &GroupSpec) -> Result<(Group, Vec<String>)>
             group.sequences.push(s);
         }
     }
+    bar.finish_and_clear();
     Ok((group, notes))
 }
 

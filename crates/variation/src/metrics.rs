@@ -1,4 +1,4 @@
-//! Figures of merit for variations (issue 6): distance to the source, timing offset,
+//! Figures of merit for variations: distance to the source, timing offset,
 //! edge-length distortion, foot sliding; and the reconstruction errors of figures 4 and 7b.
 
 use gp::dtw::{dtw_path, DtwOptions};

@@ -8,7 +8,7 @@
 //! variance over the training frames as all torso vertex coordinates together:
 //! `s_t² Σ_k var(t_k) = Σ_c var(y_c)` (likewise `s_h`). Unscaled, 6 of ~10⁴ columns would be
 //! invisible in `tr(K_Y⁻¹ Y Yᵀ)` and the latent space would ignore timing and travel; with
-//! this scale displacement and deformation weigh equally in the torso's likelihood (eq. 3).
+//! this scale displacement and deformation weigh equally in the torso's likelihood (3DV eq. 3).
 //! Scales fall back to 1 when a triple has no variance. The first frame's displacement
 //! (identity by construction) is replaced by the second's so it is not an outlier.
 //!

@@ -1,5 +1,5 @@
-//! Pose reconstruction of sampled latent trajectories (paper §6, eqs. 11-13) and assembly of the
-//! body: every part's pose from its GP (mean, eq. 12, or a draw from eq. 11), the parts merged
+//! Pose reconstruction of sampled latent trajectories (3DV §6, eqs. 11-13) and assembly of the
+//! body: every part's pose from its GP (mean, 3DV eq. 12, or a draw from eq. 11), the parts merged
 //! into one template mesh, the result rigidly aligned to the template (the same normalisation
 //! `capture::align` applied to the training frames), then placed in the world by integrating
 //! the predicted displacements from the source sequence's starting pose.
@@ -161,8 +161,8 @@ impl<'a> Decoder<'a> {
         })
     }
 
-    /// Part poses for the latent trajectories `latents[k]` (T × d each): the mean (eq. 12) or,
-    /// with `rng`, a draw from eq. 11.
+    /// Part poses for the latent trajectories `latents[k]` (T × d each): the mean (3DV eq. 12) or,
+    /// with `rng`, a draw from 3DV eq. 11.
     pub fn part_poses<R: Rng + ?Sized>(
         &self,
         latents: &[DMatrix<f64>],
@@ -312,7 +312,7 @@ pub struct DecodeScratch {
 }
 
 impl Decoder<'_> {
-    /// The fast path of [`Decoder::decode`] with [`Assembly::Average`] and mean poses (eq. 12),
+    /// The fast path of [`Decoder::decode`] with [`Assembly::Average`] and mean poses (3DV eq. 12),
     /// for bulk decoding: part poses by one GEMM per part with every frame a contiguous column
     /// (`Predictor::pose_mean_cols`), then per frame one pass placing and averaging the parts
     /// and accumulating the body's moments against the template, and one pass applying the
@@ -462,7 +462,7 @@ impl Decoder<'_> {
 /// 5-15 % slower).
 pub const FUSED_BLOCK_VERTICES: usize = 128;
 
-/// One part's eq. 12 as an affine map of coefficients: the poses of latent points `x_*` are
+/// One part's 3DV eq. 12 as an affine map of coefficients: the poses of latent points `x_*` are
 /// `[B | ȳ] · [c(x_*); 1]` (`Predictor::pose_coefficients` and `Predictor::pose_basis`: exact,
 /// `c = k_Y(X, x_*)` and `B = (K_Y⁻¹ Y)ᵀ`; kernel basis of rank R, `c = Q_Rᵀ k_Y(X, x_*)` and
 /// `B = (K_Y⁻¹ Y)ᵀ Q_R`). The fused decoder multiplies `[B | ȳ]` one block of vertex rows at a time.

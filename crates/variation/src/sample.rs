@@ -1,6 +1,6 @@
 //! `hmc-sample`: variations of latent trajectories (paper §6) and of blends (§7).
 //!
-//! For a training sequence, every part's chain starts from the mean prediction (eqs. 8-10) from
+//! For a training sequence, every part's chain starts from the mean prediction (3DV eqs. 8-10) from
 //! the sequence's first learned latent point and draws whole trajectories by Hybrid Monte Carlo
 //! with the first point fixed (`gpdm::hmc::sample_trajectories`: burn-in with step-size
 //! adaptation toward the target acceptance, then thinning). Parts are sampled independently
@@ -154,7 +154,7 @@ pub fn sequence_variations_len(
                 )));
             }
             // Only the first point and the length are used (the chain starts from the mean
-            // prediction, eq. 8), so a longer motion than the training sequence is fine.
+            // prediction, 3DV eq. 8), so a longer motion than the training sequence is fine.
             let template = DMatrix::from_fn(len, x.ncols(), |t, c| x[(t.min(x.nrows() - 1), c)]);
             let o = HmcOptions {
                 n_samples: per,

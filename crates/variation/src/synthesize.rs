@@ -41,7 +41,7 @@ pub struct SynthConfig {
     /// Blend weights w* to synthesise (besides the training sequences).
     pub blends: Vec<f64>,
     pub seed: u64,
-    /// Draw poses from eq. 11 instead of the mean (eq. 12).
+    /// Draw poses from 3DV eq. 11 instead of the mean (eq. 12).
     pub sample_poses: bool,
     pub assembly: Assembly,
     /// Trajectory sampler (HMC, the paper's, by default).
@@ -475,7 +475,7 @@ pub fn run_with_progress(
     let clock = std::time::Instant::now();
     let mut sequences = Vec::new();
     // Ground on the lowest point of the whole body: sampled feet often point their toes through
-    // the floor while the template soles sit at the right height (h15, render check).
+    // the floor while the template soles sit at the right height (seen in the renders).
     let ground_soles: Vec<u32> = Vec::new();
     let all_soles = model_soles(model);
     let feet: Option<[Vec<u32>; 2]> = match all_soles.as_slice() {

@@ -1,9 +1,9 @@
 //! `gpdm-train`: one GPDM per body part on the group's time-aligned sequences (originals and
 //! pre-blended `Y_w`), sharing one latent space per part with no dynamics across sequence
-//! boundaries (paper §5, eqs. 3-7; numerics in the `gpdm` crate).
+//! boundaries (3DV §5, eqs. 3-7; numerics in the `gpdm` crate).
 //!
 //! Defaults follow the paper (d = 3, PCA start, α_k = β_k = 1, noise variances 0.1) plus the
-//! issue's findings, which make eq. 7 well-posed: a pose-noise floor of 1e-6 m² (the noise-free
+//! the deviations of docs/DEVIATIONS.md, which make 3DV eq. 7 well-posed: a pose-noise floor of 1e-6 m² (the noise-free
 //! fit has no minimum), a dynamics-noise floor [`DYN_NOISE_FLOOR`], a weak log-normal factor on
 //! β1..β3 and the latent scale fixed at unit mean square (`gpdm::model` module doc). The fit is
 //! one joint L-BFGS run (memory [`LBFGS_MEMORY`]) that stops by convergence: relative decrease
@@ -136,7 +136,7 @@ impl VariationModel {
 /// Default lower bound on the dynamics-noise variance 1/β4 (latent units², latents start at
 /// unit variance). Without it 1/β4 collapses to ~1e-8 on some parts of the demo locomotion
 /// (arm, legs), HMC's step size adapts down to ~1e-5 and those parts' samples are copies of
-/// the source (h13-results.md).
+/// the source.
 pub const DYN_NOISE_FLOOR: f64 = 1e-3;
 
 /// Which frames train the GPDMs.
@@ -173,7 +173,7 @@ pub struct TrainConfig {
 }
 
 /// L-BFGS memory of gpdm-train: on the N = 446, D = 15000 comparison problem 100 correction
-/// pairs converge in ~2.5x fewer evaluations than the textbook 10 (h16-results.md); the two-loop
+/// pairs converge in ~2.5x fewer evaluations than the textbook 10; the two-loop
 /// recursion costs O(memory · N d), negligible next to the O(N³) objective.
 pub const LBFGS_MEMORY: usize = 100;
 

@@ -70,12 +70,13 @@ fn main() -> ExitCode {
             None => Components::Count(args.components),
         };
         let refs: Vec<&AlignedMotion> = motions.iter().collect();
-        let (model, report) = part_pca::fit(
+        let (model, report) = part_pca::fit_with_progress(
             &template.vertices,
             &parts,
             &refs,
             choice,
             args.part_alignment,
+            &mesh_core::cli::stage_progress(0, "parts fitted"),
         )?;
         let mut header = args
             .common

@@ -10,8 +10,8 @@ use mesh_core::cli::{run_stage, CommonArgs};
 #[command(
     name = "propose-curves",
     version,
-    after_help = "Check them: segment OUT --template MESH --out parts.seg; render --parts parts.seg MESH --out DIR\n\
-                  e.g.: propose-curves set/A/subject.json --template set/A/walk/000000.ply --out set/A/subject.json"
+    after_help = "Check them by eye with --render: the template from the front, the side and the back, parts coloured, loops in black\n\
+                  e.g.: propose-curves set/A/subject.json --template set/A/walk/000000.ply --out set/A/subject.json --render curves-A.png"
 )]
 struct Args {
     #[command(flatten)]
@@ -24,12 +24,15 @@ struct Args {
     /// Output subject.json (may be SUBJECT itself)
     #[arg(short, long)]
     out: PathBuf,
+    /// Also draw the template with its loops and parts coloured (PNG), for checking them
+    #[arg(long, value_name = "PNG")]
+    render: Option<PathBuf>,
 }
 
 fn main() -> ExitCode {
     let args = mesh_core::cli::parse::<Args>();
     run_stage("propose-curves", || {
         args.common.init()?;
-        curves::stage::run(&args.subject, &args.template, &args.out)
+        curves::stage::run(&args.subject, &args.template, &args.out, args.render.as_deref())
     })
 }

@@ -32,7 +32,7 @@ struct Args {
     /// Target subject's PCA model
     #[arg(long)]
     target_pca: PathBuf,
-    /// Observation noise variance σ² of the key-pose regression (eq. 1)
+    /// Observation noise variance σ² of the key-pose regression (CVPR eq. 1)
     #[arg(long, default_value_t = PAPER_SIGMA2)]
     sigma2: f64,
     /// Aligned source motion

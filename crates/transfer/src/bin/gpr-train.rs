@@ -10,7 +10,7 @@ use mesh_core::cli::{run_stage, CommonArgs};
 use transfer::gpr_model::{train, GprModel, MeanFunction, MeanPrior, MeanPriors, Method, PairFiles, MEAN_RIDGE, PRIOR_WEIGHT};
 use capture::part_pca::PcaModel;
 
-/// Train the source-to-target GP regression per body part and for the rigid displacement (eqs. 8-13)
+/// Train the source-to-target GP regression per body part and for the rigid displacement (CVPR eqs. 8-13)
 #[derive(Parser, Debug)]
 #[command(
     name = "gpr-train",
@@ -42,7 +42,7 @@ struct Args {
     #[arg(long)]
     nn_bias: bool,
     /// Mean function of the GPs: `affine` = least-squares affine map, GP on the residuals;
-    /// `zero` = the paper's zero-mean GP (eq. 11)
+    /// `zero` = the paper's zero-mean GP (CVPR eq. 11)
     #[arg(long, value_enum, default_value_t = MeanFunction::Affine)]
     mean: MeanFunction,
     /// Relative ridge of the affine mean (shrinks the map along input directions the training
@@ -64,7 +64,7 @@ struct Args {
     learn_noise: bool,
     /// Sparse GP (Titsias' bound) with at most M inducing inputs chosen by greedy variance
     /// selection; `auto`: exact up to 1024 pairs (faster there), 256 inducing inputs above;
-    /// `exact` (default): the exact GP of eqs. 8-13
+    /// `exact` (default): the exact GP of CVPR eqs. 8-13
     #[arg(long, value_name = "M|auto|exact", default_value_t = Sparsity::Exact)]
     sparse: Sparsity,
     /// Maximum conjugate-gradient iterations per GP

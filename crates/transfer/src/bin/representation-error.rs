@@ -62,6 +62,8 @@ fn main() -> ExitCode {
         let truth = align_motion_on(&template, &MeshSequence::load_dir(&args.truth)?, &anchor)?;
         let mut rows = Vec::new();
         let mut truncation = serde_json::Map::new();
+        // 2 alignments x 4 surface methods x with and without PCA.
+        let bar = mesh_core::cli::progress_bar(16, "representation-error: reconstructions", &args.common);
         for alignment in [PartAlignment::Body, PartAlignment::Part] {
             let (pca, _) = fit(
                 &template.vertices,
@@ -91,6 +93,7 @@ fn main() -> ExitCode {
                 )?;
                 for through_pca in [false, true] {
                     let e = rebuilt_error(&pca, &mut recon, &truth, through_pca)?;
+                    bar.inc(1);
                     mesh_core::info!(
                         "{alignment:?} {surface:?} through_pca={through_pca}: rms_pose_m {e:.4}"
                     );
@@ -103,6 +106,7 @@ fn main() -> ExitCode {
                 }
             }
         }
+        bar.finish_and_clear();
         let json = serde_json::json!({"truth": args.truth, "components": args.components, "rows": rows, "truncation_rms_m": truncation});
         mesh_core::atomic::write_bytes_atomic(
             &args.out,

@@ -48,6 +48,7 @@ fn main() -> ExitCode {
             );
         }
         let mut recs = Vec::new();
+        let bar = mesh_core::cli::progress_bar(args.predictions.len() as u64, "surface-quality: predictions", &args.common);
         for p in &args.predictions {
             let pred = MeshSequence::load_dir(p)?;
             if pred.faces != truth.faces || pred.n_frames() != truth.n_frames() {
@@ -59,7 +60,9 @@ fn main() -> ExitCode {
             }
             let q = measure(&truth.faces, &seg, &pred.frames, &truth.frames);
             recs.push(serde_json::json!({"prediction": p, "quality": q}));
+            bar.inc(1);
         }
+        bar.finish_and_clear();
         mesh_core::atomic::write_bytes_atomic(
             &args.out,
             serde_json::to_string_pretty(&recs)?.as_bytes(),

@@ -46,7 +46,7 @@ struct Args {
     /// Blend weights w* in [0, 1] to synthesise, comma-separated (empty: none)
     #[arg(long, default_value = "0.25,0.75", value_parser = parse_weights)]
     blends: Weights,
-    /// Draw poses from the predictive distribution (eq. 11) instead of its mean (eq. 12)
+    /// Draw poses from the predictive distribution (3DV eq. 11) instead of its mean (eq. 12)
     #[arg(long)]
     sample_poses: bool,
     /// Merge parts by averaging on the overlap bands instead of optimal-boundary Poisson stitching
