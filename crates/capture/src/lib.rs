@@ -11,3 +11,4 @@ pub mod align;
 pub mod part_pca;
 pub mod assemble;
 pub mod choices;
+pub mod stage;

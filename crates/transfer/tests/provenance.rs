@@ -80,7 +80,7 @@ fn every_artifact_header_lists_every_input_file_and_its_hash() {
         }
         let aligned: Vec<PathBuf> = motions.iter().map(|m| w(&format!("{x}-{m}.aligned"))).collect();
         let pca = w(&format!("{x}.pca"));
-        let mut args = vec!["--template".into(), s(&tpl(x)), "--parts".into(), s(&seg), "--out".into(), s(&pca)];
+        let mut args = vec!["--template".into(), s(&tpl(x)), "--segmentation".into(), s(&seg), "--out".into(), s(&pca)];
         args.extend(aligned.iter().map(|p| s(p)));
         run("pca-fit", &args);
         let mut given = vec![tpl(x), seg.clone()];
@@ -100,7 +100,7 @@ fn every_artifact_header_lists_every_input_file_and_its_hash() {
     let corr = w("walk.corr");
     let (sa, ta) = (w("A-walk.aligned"), w("B-walk.aligned"));
     run("dtw-densify", &[
-        "--set".into(), s(&set_json), "--pair".into(), "walk".into(), "--source-pca".into(), s(&w("A.pca")),
+        "--set".into(), s(&set), "--motion".into(), "walk".into(), "--source-pca".into(), s(&w("A.pca")),
         "--target-pca".into(), s(&w("B.pca")), s(&sa), s(&ta), "--out".into(), s(&corr),
     ]);
     assert_inputs(&corr, &[set_json, w("A.pca"), w("B.pca"), sa.clone(), ta.clone()]);

@@ -10,7 +10,7 @@ use mesh_core::cli::{run_stage, CommonArgs};
 #[command(
     name = "propose-curves",
     version,
-    after_help = "Check them: segment OUT --template MESH --out parts.seg; render --parts parts.seg MESH --out DIR\n\
+    after_help = "Check them: segment OUT --template MESH --out parts.seg; render --subject OUT MOTION_DIR --frames 0 --out DIR\n\
                   e.g.: propose-curves set/A/subject.json --template set/A/walk/000000.ply --out set/A/subject.json"
 )]
 struct Args {
@@ -19,7 +19,7 @@ struct Args {
     /// The subject's subject.json (its curves and part tree may be missing)
     subject: PathBuf,
     /// The mesh the curves index into (the subject's template)
-    #[arg(long, value_name = "MESH")]
+    #[arg(long)]
     template: PathBuf,
     /// Output subject.json (may be SUBJECT itself)
     #[arg(short, long)]

@@ -15,17 +15,17 @@ use capture::part_pca::PcaModel;
 #[command(
     name = "dtw-densify",
     version,
-    after_help = "e.g.: dtw-densify --set set/set.json --pair walk --source-pca work/A/pca.model --target-pca work/B/pca.model \\\n        work/A/walk.aligned work/B/walk.aligned --out work/pairs/walk.corr"
+    after_help = "e.g.: dtw-densify --set set --motion walk --source-pca work/A/pca.model --target-pca work/B/pca.model \\\n        work/A/walk.aligned work/B/walk.aligned --out work/pairs/walk.corr"
 )]
 struct Args {
     #[command(flatten)]
     common: CommonArgs,
-    /// The capture set's set.json (key-poses and, if present, true correspondences)
+    /// Capture-set folder (its set.json: key-poses and, if present, true correspondences)
     #[arg(long)]
     set: PathBuf,
-    /// Training pair, by the source motion's name
+    /// Training pair, by its source motion's name
     #[arg(long)]
-    pair: String,
+    motion: String,
     /// Source subject's PCA model
     #[arg(long)]
     source_pca: PathBuf,
@@ -51,9 +51,10 @@ fn main() -> ExitCode {
     let args = mesh_core::cli::parse::<Args>();
     run_stage("dtw-densify", || {
         args.common.init()?;
-        let set = SetSpec::load(&args.set)?;
-        let Some(pair) = set.train.iter().find(|p| p.source == args.pair) else {
-            bail!("{}: no training pair with source motion '{}'", args.set.display(), args.pair);
+        let set_json = args.set.join("set.json");
+        let set = SetSpec::load(&set_json)?;
+        let Some(pair) = set.train.iter().find(|p| p.source == args.motion) else {
+            bail!("{}: no training pair with source motion '{}'", set_json.display(), args.motion);
         };
         let (src_pca, tgt_pca) = (PcaModel::load(&args.source_pca)?, PcaModel::load(&args.target_pca)?);
         let (src, tgt) = (AlignedMotion::load(&args.source)?, AlignedMotion::load(&args.target)?);
@@ -64,7 +65,7 @@ fn main() -> ExitCode {
         }
         let xs = src_pca.encode(&src).with_context(|| args.source.display().to_string())?;
         let ys = tgt_pca.encode(&tgt).with_context(|| args.target.display().to_string())?;
-        let pairs = densify(&xs, &ys, &pair.keyposes, args.sigma2).with_context(|| args.set.display().to_string())?;
+        let pairs = densify(&xs, &ys, &pair.keyposes, args.sigma2).with_context(|| set_json.display().to_string())?;
         let result = Correspondences {
             source_motion: pair.source.clone(),
             target_motion: pair.target.clone(),
@@ -74,8 +75,8 @@ fn main() -> ExitCode {
         let header = args
             .common
             .header("dtw-densify", env!("CARGO_PKG_VERSION"))
-            .with_params(&serde_json::json!({"pair": args.pair, "sigma2": args.sigma2}))?
-            .with_input(&args.set)?
+            .with_params(&serde_json::json!({"pair": args.motion, "sigma2": args.sigma2}))?
+            .with_input(&set_json)?
             .with_input(&args.source_pca)?
             .with_input(&args.target_pca)?
             .with_input(&args.source)?
@@ -88,9 +89,9 @@ fn main() -> ExitCode {
                 .get("correspondences")
                 .map(|v| serde_json::from_value(v.clone()))
                 .transpose()
-                .with_context(|| format!("{}: pair '{}': bad correspondences", args.set.display(), args.pair))?;
+                .with_context(|| format!("{}: pair '{}': bad correspondences", set_json.display(), args.motion))?;
             let json = serde_json::json!({
-                "pair": args.pair,
+                "pair": args.motion,
                 "pairs": result.pairs.len(),
                 "error_vs_truth": truth.map(|t| path_error(&result.pairs, &t, target_fps)),
             });

@@ -32,9 +32,9 @@ struct Args {
     /// Train the reverse direction (set target -> set source): --source-pca is then the set target's
     #[arg(long)]
     reverse: bool,
-    /// gpr-nn, gpr-se, gpr-linear, keypose-affine or whole-body (gpr-nn on whole-body PCA models)
-    #[arg(long, default_value = "gpr-nn")]
-    method: String,
+    /// Transfer method (whole-body: gpr-nn on whole-body PCA models)
+    #[arg(long, value_enum, default_value_t = Method::GprNn)]
+    method: Method,
     /// Train on the key-pose pairs only (instead of the dense DTW pairs)
     #[arg(long)]
     keyposes_only: bool,
@@ -79,12 +79,7 @@ fn main() -> ExitCode {
     let args = mesh_core::cli::parse::<Args>();
     run_stage("gpr-train", || {
         args.common.init()?;
-        let Some(method) = Method::from_name(&args.method) else {
-            bail!(
-                "unknown method '{}' (gpr-nn, gpr-se, gpr-linear, keypose-affine, whole-body)",
-                args.method
-            );
-        };
+        let method = args.method;
         let (src_pca, tgt_pca) = (
             PcaModel::load(&args.source_pca)?,
             PcaModel::load(&args.target_pca)?,

@@ -13,12 +13,13 @@ use variation::train::{train_with_progress, TrainConfig};
 #[command(
     name = "gpdm-train",
     version,
-    after_help = "e.g.: gpdm-train out/work/variation/locomotion.group --out out/work/variation/locomotion.model --report out/work/variation/locomotion-train.json"
+    after_help = "e.g.: gpdm-train --group out/work/variation/locomotion.group --out out/work/variation/locomotion.model --report out/work/variation/locomotion-train.json"
 )]
 struct Args {
     #[command(flatten)]
     common: CommonArgs,
     /// Prealigned group (kind variation-group, from prealign)
+    #[arg(long)]
     group: PathBuf,
     /// Latent dimension d
     #[arg(long, default_value_t = 3)]
