@@ -7,6 +7,7 @@ use serde::{Deserialize, Serialize};
 
 /// The transfer methods compared in the paper (§7).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize, ValueEnum)]
+#[serde(rename_all = "kebab-case")]
 pub enum Method {
     GprNn,
     GprSe,

@@ -17,3 +17,4 @@ pub mod placement;
 pub mod evaluate;
 pub mod learning_curves;
 pub mod figures;
+pub mod stage;
