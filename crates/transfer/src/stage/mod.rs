@@ -2,4 +2,5 @@
 //! [`clap::Parser`] + [`serde::Serialize`] `Params` (the command line, and the parameters
 //! recorded in the artifact header) and its `run`; `src/bin/<stage>.rs` only parses and runs.
 
+pub mod dtw_densify;
 pub mod gpr_train;
