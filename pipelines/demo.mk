@@ -20,7 +20,7 @@ demo: demo-render
 demo-data: $(DEMO_SET)/set.json
 
 $(DEMO_SET)/set.json: | build assets
-	$(BIN)/synth -q --seed $(SEED) $(DEMO_SET)
+	$(BIN)/synth -q --seed $(SEED) --out $(DEMO_SET)
 
 # One contact sheet + GIF per motion of each subject (renders in parallel with make -j).
 demo-render: demo-data
@@ -29,4 +29,4 @@ demo-render: demo-data
 holdout-data: $(HOLDOUT_SET)/set.json
 
 $(HOLDOUT_SET)/set.json: | build assets
-	$(BIN)/synth -q --preset holdout --seed $(SEED) $(HOLDOUT_SET)
+	$(BIN)/synth -q --preset holdout --seed $(SEED) --out $(HOLDOUT_SET)

@@ -15,6 +15,6 @@ export: build
 	    *) rel=$${d#$(OUT)/}; o=$(OUT)/export/$$rel ;; \
 	  esac; \
 	  mkdir -p "$$(dirname "$$o")" && \
-	  $(BIN)/mesh-export "$$d" "$$o.glb" && $(BIN)/mesh-export "$$d" "$$o.pc2" || exit 1; \
+	  $(BIN)/mesh-export "$$d" --out "$$o.glb" && $(BIN)/mesh-export "$$d" --out "$$o.pc2" || exit 1; \
 	  echo "mesh-export $$o.glb, $$o.obj + $$o.pc2" >&2; \
 	done

@@ -11,4 +11,4 @@ TARGETS := $(foreach m,$(MOTIONS),$(RENDER)/$(m)/contact.png)
 all: $(TARGETS)
 
 $(RENDER)/%/contact.png: $(SET)/%/000000.ply
-	$(BIN)/render -q --no-frames --follow --labels $(subst /,-,$*) --parts $(SET)/$(firstword $(subst /, ,$*))/subject.json --out $(@D) $(SET)/$*
+	$(BIN)/render -q --no-frames --follow --labels $(subst /,-,$*) --subject $(SET)/$(firstword $(subst /, ,$*))/subject.json --out $(@D) $(SET)/$*

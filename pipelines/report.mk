@@ -12,4 +12,4 @@ setup-web:
 	@scripts/setup-web
 
 report: build setup-web
-	$(BIN)/html-report $(OUT) --title "$(REPORT_TITLE)" $(foreach v,$(REPORT_VIEWS),--view $(v))
+	$(BIN)/html-report --out $(OUT) --title "$(REPORT_TITLE)" $(foreach v,$(REPORT_VIEWS),--view $(v))

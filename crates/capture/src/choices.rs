@@ -6,7 +6,8 @@ use clap::ValueEnum;
 use serde::{Deserialize, Serialize};
 
 /// The transfer methods compared in the paper (§7).
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize, ValueEnum)]
+#[serde(rename_all = "kebab-case")]
 pub enum Method {
     GprNn,
     GprSe,
@@ -70,6 +71,26 @@ impl Placement {
             Placement::Regressed => "regressed",
             Placement::ScaledSource => "scaled-source",
             Placement::Blended => "blended",
+        }
+    }
+}
+
+/// Which correspondences a transfer model was trained on, as recorded with its errors.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize, ValueEnum)]
+#[serde(rename_all = "kebab-case")]
+pub enum Correspondences {
+    /// Every frame pair of the DTW-densified training pairs
+    #[default]
+    Dense,
+    /// The key-pose pairs only (`gpr-train --keyposes-only`)
+    Keyposes,
+}
+
+impl Correspondences {
+    pub fn name(&self) -> &'static str {
+        match self {
+            Correspondences::Dense => "dense",
+            Correspondences::Keyposes => "keyposes",
         }
     }
 }

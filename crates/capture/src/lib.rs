@@ -12,3 +12,4 @@ pub mod part_pca;
 pub mod assemble;
 pub mod choices;
 pub mod contact_detector;
+pub mod stage;

@@ -1,6 +1,8 @@
 //! `align` on a small written motion: the aligned motion carries the subject's frame rate, up
 //! axis and template hash, and the header lists every input file with its SHA-256 (computed
-//! here independently). The other stages' headers are checked in `transfer/tests/provenance.rs`.
+//! here independently) and every parameter under its flag's name, defaults included (the
+//! stage's `Params` is the record). The other stages' headers are checked in
+//! `transfer/tests/provenance.rs`.
 
 use std::path::{Path, PathBuf};
 use std::process::Command;
@@ -56,4 +58,19 @@ fn align_records_the_capture_and_every_input() {
         assert!(inputs.contains(&want), "{} not recorded with its hash", f.display());
     }
     assert_eq!(inputs.len(), given.len(), "subject, template and the four frames (frame 0 is the template)");
+
+    // Every parameter, as given on the command line or defaulted, and nothing else.
+    let (_, _, header) = read_header(&out).unwrap();
+    let s = |x: &Path| serde_json::Value::from(x.display().to_string());
+    let want = serde_json::json!({
+        "subject": s(&subject), "template": s(&template), "frame": "body", "segmentation": null,
+        "motion": s(&motion), "out": s(&out),
+    });
+    assert_eq!(header.params, want);
+    // The same names as the flags: every non-null parameter is a flag or the positional MOTION.
+    let help = Command::new(env!("CARGO_BIN_EXE_align")).arg("--help").output().unwrap();
+    let help = String::from_utf8(help.stdout).unwrap();
+    for key in header.params.as_object().unwrap().keys().filter(|k| *k != "motion") {
+        assert!(help.contains(&format!("--{}", key.replace('_', "-"))), "{key} is not a flag of align");
+    }
 }

@@ -11,7 +11,7 @@ use mesh_core::sequence::{write_frames_atomic, MeshSequence};
 use mesh_core::Result;
 
 /// Which mesh format the frame files use.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
 pub enum FrameFormat {
     Obj,
     Ply,

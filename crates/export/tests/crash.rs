@@ -31,6 +31,7 @@ fn killed_export_leaves_absent_or_complete_outputs_and_no_temporary_after_the_ne
         let mut child = Command::new(export)
             .arg("-q")
             .arg(&src)
+            .arg("--out")
             .arg(&out)
             .stderr(Stdio::null())
             .spawn()
@@ -49,7 +50,7 @@ fn killed_export_leaves_absent_or_complete_outputs_and_no_temporary_after_the_ne
                 }
             }
         }
-        let again = Command::new(export).arg("-q").arg(&src).arg(&out).status().unwrap();
+        let again = Command::new(export).arg("-q").arg(&src).arg("--out").arg(&out).status().unwrap();
         assert!(again.success());
         assert_eq!(temporaries(dir.path()), Vec::<String>::new(), "trial {k} (killed: {killed})");
     }

@@ -252,7 +252,7 @@ fn cli_export_keeps_the_sequence_rate() {
     for (input, given, fps, warned) in cases {
         let out = d.join("out.glb");
         let mut cmd = std::process::Command::new(env!("CARGO_BIN_EXE_mesh-export"));
-        cmd.arg(d.join(input)).arg(&out);
+        cmd.arg(d.join(input)).arg("--out").arg(&out);
         if let Some(f) = given {
             cmd.args(["--fps", f]);
         }

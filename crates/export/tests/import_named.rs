@@ -34,7 +34,7 @@ fn blender_sequence_export_is_imported_in_numeric_order() {
     let src = dir.path().join("blender");
     write_named(&src, &seq, 0, |n| format!("punch{n}.obj"));
     let out = dir.path().join("punch");
-    let st = import(&[src.as_os_str(), out.as_os_str()]);
+    let st = import(&[src.as_os_str(), "--out".as_ref(), out.as_os_str()]);
     assert!(st.status.success(), "{}", String::from_utf8_lossy(&st.stderr));
     let err = String::from_utf8(st.stderr).unwrap();
     assert_eq!(err.lines().count(), 1, "{err}");
@@ -42,7 +42,7 @@ fn blender_sequence_export_is_imported_in_numeric_order() {
     same(&MeshSequence::load_dir(&out).unwrap(), &seq);
     assert!(out.join("000010.ply").is_file());
     // -q: nothing on stderr.
-    let st = import(&["-q".as_ref(), src.as_os_str(), out.as_os_str()]);
+    let st = import(&["-q".as_ref(), src.as_os_str(), "--out".as_ref(), out.as_os_str()]);
     assert!(st.status.success() && st.stderr.is_empty());
 }
 
@@ -54,23 +54,23 @@ fn one_based_prefixed_frames_and_an_explicit_pattern() {
     let src = dir.path().join("shots");
     write_named(&src, &walk, 1, |n| format!("walk.{n:04}.obj"));
     let out = dir.path().join("walk");
-    let st = import(&[src.as_os_str(), out.as_os_str()]);
+    let st = import(&[src.as_os_str(), "--out".as_ref(), out.as_os_str()]);
     assert!(st.status.success(), "{}", String::from_utf8_lossy(&st.stderr));
     assert!(String::from_utf8_lossy(&st.stderr).contains("walk.%04d.obj, numbers 1 to 6 (6 files, 1-based)"));
     same(&MeshSequence::load_dir(&out).unwrap(), &walk);
 
     // Two sequences in one folder: detection refuses, naming the folder; --frames picks one.
     write_named(&src, &run, 1, |n| format!("run_{n:03}.obj"));
-    let st = import(&[src.as_os_str(), out.as_os_str()]);
+    let st = import(&[src.as_os_str(), "--out".as_ref(), out.as_os_str()]);
     assert_eq!(st.status.code(), Some(1));
     let err = String::from_utf8(st.stderr).unwrap();
     assert_eq!(err.lines().count(), 1, "{err}");
     assert!(err.contains(&*src.to_string_lossy()) && err.contains("2 different prefixes"), "{err}");
     let out2 = dir.path().join("run");
-    let st = import(&["--frames".as_ref(), "run_%03d.obj".as_ref(), src.as_os_str(), out2.as_os_str()]);
+    let st = import(&["--pattern".as_ref(), "run_%03d.obj".as_ref(), src.as_os_str(), "--out".as_ref(), out2.as_os_str()]);
     assert!(st.status.success(), "{}", String::from_utf8_lossy(&st.stderr));
     same(&MeshSequence::load_dir(&out2).unwrap(), &run);
     // A bad pattern is a usage error.
-    let st = import(&["--frames".as_ref(), "run.obj".as_ref(), src.as_os_str(), out2.as_os_str()]);
+    let st = import(&["--pattern".as_ref(), "run.obj".as_ref(), src.as_os_str(), "--out".as_ref(), out2.as_os_str()]);
     assert_eq!(st.status.code(), Some(2));
 }

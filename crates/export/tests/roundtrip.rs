@@ -71,6 +71,7 @@ fn cli_export_then_import_through_pc2() {
     let pc2 = dir.path().join("out/walk.pc2");
     let st = Command::new(env!("CARGO_BIN_EXE_mesh-export"))
         .arg(&src)
+        .arg("--out")
         .arg(&pc2)
         .output()
         .unwrap();
@@ -87,6 +88,7 @@ fn cli_export_then_import_through_pc2() {
     let back = dir.path().join("back");
     let st = Command::new(env!("CARGO_BIN_EXE_mesh-import"))
         .arg(&pc2)
+        .arg("--out")
         .arg(&back)
         .output()
         .unwrap();
@@ -111,6 +113,7 @@ fn cli_rejects_a_truncated_pc2_with_one_line_and_no_output() {
     let back = dir.path().join("back");
     let st = Command::new(env!("CARGO_BIN_EXE_mesh-import"))
         .arg(&pc2)
+        .arg("--out")
         .arg(&back)
         .output()
         .unwrap();
@@ -134,6 +137,7 @@ fn cli_refuses_unknown_formats_with_one_line() {
     let fbx = dir.path().join("walk.fbx");
     let st = Command::new(env!("CARGO_BIN_EXE_mesh-export"))
         .arg(&src)
+        .arg("--out")
         .arg(&fbx)
         .output()
         .unwrap();
@@ -150,6 +154,7 @@ fn cli_refuses_unknown_formats_with_one_line() {
     std::fs::write(&glb, b"glTF").unwrap();
     let st = Command::new(env!("CARGO_BIN_EXE_mesh-import"))
         .arg(&glb)
+        .arg("--out")
         .arg(dir.path().join("b"))
         .output()
         .unwrap();

@@ -65,7 +65,7 @@ pub struct TransferOptions {
 /// `make variation`'s options (pipelines/variation.mk).
 #[derive(Args, Clone, Debug, PartialEq)]
 pub struct VariationOptions {
-    /// prealign --subject (VARIATION_SUBJECT) [default: the set's source subject]
+    /// prealign --subject-name (VARIATION_SUBJECT) [default: the set's source subject]
     #[arg(long)]
     pub variation_subject: Option<String>,
     /// A movement group and its motions, `NAME=M1,M2` (VARIATION_GROUPS, VARIATION_MOTIONS_<g>); repeat

@@ -112,7 +112,7 @@ pub fn plan(set: &CaptureSet, out: &str, opt: &TransferOptions, graph: &mut Grap
         inputs.extend(training.iter().cloned());
         let mut args = vec![
             s("-q"), s("--components"), opt.pca_components.to_string(), s("--part-alignment"),
-            value_name(opt.part_alignment), s("--template"), tpl[x].clone(), s("--parts"), seg(x),
+            value_name(opt.part_alignment), s("--template"), tpl[x].clone(), s("--segmentation"), seg(x),
         ];
         args.extend(training.iter().cloned());
         args.extend([s("--out"), pca(x, "pca"), s("--report"), format!("{w}/{x}/pca.json")]);
@@ -137,7 +137,7 @@ pub fn plan(set: &CaptureSet, out: &str, opt: &TransferOptions, graph: &mut Grap
         let c = format!("{w}/pairs/{}.corr", p.source);
         let (sa, ta) = (aligned(sn, &p.source), aligned(tn, &p.target));
         let args = vec![
-            s("-q"), s("--set"), set_json.clone(), s("--pair"), p.source.clone(), s("--source-pca"),
+            s("-q"), s("--set"), join(root, &[]), s("--motion"), p.source.clone(), s("--source-pca"),
             pca(sn, "pca"), s("--target-pca"), pca(tn, "pca"), sa.clone(),
             ta.clone(), s("--out"), c.clone(), s("--report"), format!("{w}/pairs/{}.json", p.source),
         ];
@@ -226,7 +226,7 @@ pub fn plan(set: &CaptureSet, out: &str, opt: &TransferOptions, graph: &mut Grap
                         args.extend(feet(tgt));
                         args.extend([
                             s("--direction"), label.clone(), s("--motion"), m.clone(), s("--method"),
-                            method.name().into(), s("--placement"), pl.name().into(), s("--training"),
+                            method.name().into(), s("--placement"), pl.name().into(), s("--correspondences"),
                             s(if *keys { "keyposes" } else { "dense" }), s("--out"), rec.clone(),
                         ]);
                         records.push(graph.push(Task::run("transfer-eval", rec, vec![timing.clone()], args).mkdir_target()));
@@ -267,7 +267,7 @@ pub fn plan(set: &CaptureSet, out: &str, opt: &TransferOptions, graph: &mut Grap
                         args.extend(feet(tgt));
                         args.extend([
                             s("--direction"), label.clone(), s("--motion"), m.clone(), s("--method"),
-                            s(meth), s("--placement"), default_pl.name().into(), s("--training"),
+                            s(meth), s("--placement"), default_pl.name().into(), s("--correspondences"),
                             s("dense"), s("--out"), rec.clone(),
                         ]);
                         records.push(graph.push(Task::run("transfer-eval", rec.clone(), vec![timing.clone()], args).mkdir_target()));
@@ -314,7 +314,7 @@ pub fn plan(set: &CaptureSet, out: &str, opt: &TransferOptions, graph: &mut Grap
     let lc = format!("{out}/learning-curves/learning_curves.csv");
     let mut inputs = vec![set_json.clone(), pca(sn, "pca"), pca(tn, "pca")];
     let mut args = vec![
-        s("-q"), s("--seed"), s("0"), s("--mean"), s("zero"), s("--set"), set_json.clone(),
+        s("-q"), s("--seed"), s("0"), s("--mean"), s("zero"), s("--set"), join(root, &[]),
         s("--source-pca"), pca(sn, "pca"), s("--target-pca"), pca(tn, "pca"),
         s("--source-name"), s(sn), s("--target-name"), s(tn),
     ];
@@ -332,7 +332,7 @@ pub fn plan(set: &CaptureSet, out: &str, opt: &TransferOptions, graph: &mut Grap
     let fig3 = format!("{out}/figures/fig3-{}.png", p0.source);
     let inputs = vec![pca(sn, "pca"), pca(tn, "pca"), aligned(sn, &p0.source), aligned(tn, &p0.target)];
     let args = vec![
-        s("cost-matrix"), s("-q"), s("--set"), set_json.clone(), s("--pair"), p0.source.clone(),
+        s("cost-matrix"), s("-q"), s("--set"), join(root, &[]), s("--motion"), p0.source.clone(),
         s("--source-pca"), pca(sn, "pca"), s("--target-pca"), pca(tn, "pca"), aligned(sn, &p0.source),
         aligned(tn, &p0.target), s("--out"), fig3.clone(),
     ];

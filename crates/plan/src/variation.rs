@@ -43,9 +43,9 @@ pub fn plan(set: &CaptureSet, out: &str, opt: &VariationOptions, graph: &mut Gra
         let group = format!("{work}/{g}.group");
         let mut args = vec![s("-q"), s("--set"), set_root.clone()];
         if let Some(sub) = &opt.variation_subject {
-            args.extend([s("--subject"), sub.clone()]);
+            args.extend([s("--subject-name"), sub.clone()]);
         }
-        args.extend([s("--group"), g.clone(), s("--motions"), motions.clone()]);
+        args.extend([s("--group-name"), g.clone(), s("--motions"), motions.clone()]);
         if prealign_defaults && g == "locomotion" {
             args.push(s("--gait-cycles"));
         }
@@ -56,7 +56,7 @@ pub fn plan(set: &CaptureSet, out: &str, opt: &VariationOptions, graph: &mut Gra
         let model = format!("{work}/{g}.model");
         let mut args = vec![s("-q")];
         args.extend(words(&opt.variation_train_flags));
-        args.extend([group.clone(), s("--out"), model.clone(), s("--report"), format!("{work}/{g}-train.json")]);
+        args.extend([s("--group"), group.clone(), s("--out"), model.clone(), s("--report"), format!("{work}/{g}-train.json")]);
         graph.push(Task::run("gpdm-train", model.clone(), vec![group.clone()], args));
 
         // hmc-sample writes its report under a temporary name, the sheets follow, and the
@@ -69,7 +69,7 @@ pub fn plan(set: &CaptureSet, out: &str, opt: &VariationOptions, graph: &mut Gra
             opt.variation_blends.clone(),
         ];
         args.extend(words(&opt.variation_sample_flags));
-        args.extend([s("--group"), group.clone(), model.clone(), s("--out"), format!("{vout}/{g}"), s("--report"), tmp.clone()]);
+        args.extend([s("--group"), group.clone(), s("--model"), model.clone(), s("--out"), format!("{vout}/{g}"), s("--report"), tmp.clone()]);
         graph.push(Task {
             kind: "hmc-sample".into(),
             target: samples.clone(),
@@ -89,7 +89,7 @@ pub fn plan(set: &CaptureSet, out: &str, opt: &VariationOptions, graph: &mut Gra
 
         let eval = format!("{work}/{g}-eval.json");
         let args = vec![
-            s("-q"), s("--seed"), opt.variation_seed.to_string(), s("--group"), group.clone(), model.clone(),
+            s("-q"), s("--seed"), opt.variation_seed.to_string(), s("--group"), group.clone(), s("--model"), model.clone(),
             s("--plots"), format!("{vout}/plots/{g}"), s("--out"), eval.clone(),
         ];
         graph.push(Task::run("variation-eval", eval.clone(), vec![model.clone()], args));

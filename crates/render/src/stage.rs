@@ -32,7 +32,7 @@ pub struct Args {
     #[arg(required = true, value_name = "SEQ_DIR")]
     pub seq_dirs: Vec<PathBuf>,
     /// Output folder: frames/NNNNNN.png (numbered from 0), contact.png, anim.gif
-    #[arg(long, value_name = "DIR")]
+    #[arg(short, long)]
     pub out: PathBuf,
     /// View: front, side, three-quarter, or AZIMUTH,ELEVATION in degrees (azimuth 90 = subject's left)
     #[arg(long, default_value = "three-quarter", value_parser = parse_view)]
@@ -69,7 +69,7 @@ pub struct Args {
     pub colours: Option<Vec<Rgb>>,
     /// Colour vertices by body part from this subject.json's curves (every sequence must fit it)
     #[arg(long, value_name = "SUBJECT_JSON")]
-    pub parts: Option<PathBuf>,
+    pub subject: Option<PathBuf>,
     /// Flat shading (one normal per face) instead of smooth (Gouraud) shading
     #[arg(long)]
     pub flat: bool,
@@ -186,7 +186,7 @@ pub fn run(args: &Args) -> anyhow::Result<()> {
         Some(r) => r.start..r.end.unwrap_or(usize::MAX).min(longest),
         None => 0..longest,
     };
-    let part_colours: Vec<Option<Vec<Rgb>>> = match &args.parts {
+    let part_colours: Vec<Option<Vec<Rgb>>> = match &args.subject {
         None => vec![None; n_seq],
         Some(path) => {
             let spec = crate::parts::read_subject(path)?;
@@ -195,7 +195,7 @@ pub fn run(args: &Args) -> anyhow::Result<()> {
                 .map(|(s, dir)| {
                     crate::parts::part_colours(&spec, path, &s.frames[0], &s.faces)
                         .map(Some)
-                        .with_context(|| format!("{}: with --parts", dir.display()))
+                        .with_context(|| format!("{}: with --subject", dir.display()))
                 })
                 .collect::<anyhow::Result<_>>()?
         }

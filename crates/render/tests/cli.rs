@@ -270,7 +270,7 @@ fn bad_input_fails_with_one_line_and_writes_nothing() {
             good.to_str().unwrap(),
             "--out",
             out.to_str().unwrap(),
-            "--parts",
+            "--subject",
             subj.to_str().unwrap(),
         ],
         "subject.json",

@@ -66,12 +66,12 @@ fn stage_script(set: &str, work: &str) -> (String, Vec<&'static str>) {
         format!("{} $1 {set}/B/subject.json --template {tpl} --out {work}/parts.seg", b("segment")),
         format!("{} $1 --segmentation {work}/parts.seg --subject {set}/B/subject.json --template {tpl} {set}/B/walk --out {work}/walk.aligned", b("align")),
         format!("{} $1 --segmentation {work}/parts.seg --subject {set}/B/subject.json --template {tpl} {set}/B/run --out {work}/run.aligned", b("align")),
-        format!("{} $1 --components 5 --template {tpl} --parts {work}/parts.seg {work}/walk.aligned {work}/run.aligned --out {work}/pca.model", b("pca-fit")),
-        format!("{} $1 --set {set} --subject B --group loc --motions walk,run --blend-weights 0.5 --out {work}/loc.group", b("prealign")),
-        format!("{} $1 {set}/B/walk {work}/objs", b("mesh-export")),
-        format!("{} $1 {work}/objs {work}/imported", b("mesh-import")),
+        format!("{} $1 --components 5 --template {tpl} --segmentation {work}/parts.seg {work}/walk.aligned {work}/run.aligned --out {work}/pca.model", b("pca-fit")),
+        format!("{} $1 --set {set} --subject-name B --group-name loc --motions walk,run --blend-weights 0.5 --out {work}/loc.group", b("prealign")),
+        format!("{} $1 {set}/B/walk --out {work}/objs", b("mesh-export")),
+        format!("{} $1 {work}/objs --out {work}/imported", b("mesh-import")),
         format!("{} $1 --segmentation {work}/parts.seg --truth {set}/truth/B/punch {set}/truth/B/punch {set}/truth/B/punch --out {work}/quality.json", b("surface-quality")),
-        format!("{} $1 --components 5 --template {tpl} --parts {work}/parts.seg --truth {set}/truth/B/punch {work}/walk.aligned {work}/run.aligned --out {work}/representation.json", b("representation-error")),
+        format!("{} $1 --components 5 --template {tpl} --segmentation {work}/parts.seg --truth {set}/truth/B/punch {work}/walk.aligned {work}/run.aligned --out {work}/representation.json", b("representation-error")),
     ];
     let script = format!("set -e\n{}\n", lines.join("\n"));
     let labels = vec![
@@ -93,7 +93,7 @@ fn stage_script(set: &str, work: &str) -> (String, Vec<&'static str>) {
 fn every_long_stage_shows_a_bar_on_a_terminal_only() {
     let dir = tempfile::tempdir().unwrap();
     let p = |x: &str| dir.path().join(x).to_str().unwrap().to_string();
-    let synth = Command::new(sibling("synth")).args(["-q", "--preset", "tiny"]).arg(p("set")).output().unwrap();
+    let synth = Command::new(sibling("synth")).args(["-q", "--preset", "tiny", "--out"]).arg(p("set")).output().unwrap();
     assert!(synth.status.success(), "synth (are the assets fetched? scripts/fetch-assets): {}", String::from_utf8_lossy(&synth.stderr));
     std::fs::create_dir(p("work")).unwrap();
     let (script, labels) = stage_script(&p("set"), &p("work"));

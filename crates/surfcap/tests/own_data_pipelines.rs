@@ -44,7 +44,7 @@ fn run(cmd: &mut Command) -> String {
 }
 
 fn synth_tiny(set: &Path) {
-    run(Command::new(bin("synth")).args(["-q", "--preset", "tiny"]).arg(set));
+    run(Command::new(bin("synth")).args(["-q", "--preset", "tiny", "--out"]).arg(set));
 }
 
 /// `make TARGET SET=set OUT=out` at the workspace root, with the release binaries as built.
@@ -108,7 +108,7 @@ fn blender_named_obj_sequences_through_import_check_set_and_make_transfer() {
     for (rel, dir) in frame_folders(&synth) {
         let motion = rel.file_name().unwrap().to_str().unwrap().to_string();
         let objs = exported.join(&rel);
-        run(Command::new(bin("mesh-export")).arg("-q").arg(&dir).arg(&objs));
+        run(Command::new(bin("mesh-export")).arg("-q").arg(&dir).arg("--out").arg(&objs));
         let blender = !rel.starts_with("B");
         let n = MeshSequence::load_dir(&dir).unwrap().n_frames();
         for k in 0..n {
@@ -126,7 +126,7 @@ fn blender_named_obj_sequences_through_import_check_set_and_make_transfer() {
         std::fs::copy(synth.join(x).join("subject.json"), set.join(x).join("subject.json")).unwrap();
     }
     for (rel, _) in frame_folders(&synth) {
-        run(Command::new(bin("mesh-import")).arg("-q").arg(exported.join(&rel)).arg(set.join(&rel)));
+        run(Command::new(bin("mesh-import")).arg("-q").arg(exported.join(&rel)).arg("--out").arg(set.join(&rel)));
         // OBJ keeps every coordinate exactly: the imported frames are the synthesised ones.
         let (a, b) = (MeshSequence::load_dir(synth.join(&rel)).unwrap(), MeshSequence::load_dir(set.join(&rel)).unwrap());
         assert_eq!((a.faces == b.faces, a.frames == b.frames), (true, true), "{}", rel.display());

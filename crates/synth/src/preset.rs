@@ -198,6 +198,29 @@ pub fn default_noise() -> NoiseLevel {
 /// The preset names [`preset`] knows.
 pub const PRESETS: [&str; 3] = ["default", "tiny", "holdout"];
 
+/// A preset, as the command line names it (one of [`PRESETS`]).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, clap::ValueEnum)]
+pub enum Preset {
+    /// The demo set: full body at 25 fps and the notoes body at 50 fps.
+    #[default]
+    Default,
+    /// Coarse bodies, for tests.
+    Tiny,
+    /// Other bodies, styles, rates and test clips: the second benchmark.
+    Holdout,
+}
+
+impl Preset {
+    /// Its name in [`PRESETS`].
+    pub fn name(self) -> &'static str {
+        match self {
+            Preset::Default => "default",
+            Preset::Tiny => "tiny",
+            Preset::Holdout => "holdout",
+        }
+    }
+}
+
 /// A preset by name (one of [`PRESETS`]).
 pub fn preset(name: &str, seed: u64, noise: bool) -> Option<Config> {
     let (train, test) = motions();

@@ -45,6 +45,7 @@ fn same_seed_gives_byte_identical_sets_whatever_the_threads() {
                 threads,
                 "--seed",
                 seed,
+                "--out",
             ])
             .arg(dir)
             .status()
@@ -62,14 +63,14 @@ fn same_seed_gives_byte_identical_sets_whatever_the_threads() {
 
 #[test]
 fn bad_usage_and_unwritable_output_fail_with_one_line() {
-    let st = synth().args(["--preset", "huge", "x"]).output().unwrap();
+    let st = synth().args(["--preset", "huge", "--out", "x"]).output().unwrap();
     assert_eq!(st.status.code(), Some(2));
     let tmp = tempfile::tempdir().unwrap();
     let f = tmp.path().join("file");
     std::fs::create_dir(&f).unwrap();
     std::fs::write(f.join("keep.txt"), b"precious").unwrap();
     let out = synth()
-        .args(["--preset", "tiny", "-q"])
+        .args(["--preset", "tiny", "-q", "--out"])
         .arg(&f)
         .output()
         .unwrap();

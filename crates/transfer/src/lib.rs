@@ -18,3 +18,4 @@ pub mod feet;
 pub mod evaluate;
 pub mod learning_curves;
 pub mod figures;
+pub mod stage;

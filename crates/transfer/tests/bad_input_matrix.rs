@@ -52,7 +52,7 @@ fn base() -> &'static Base {
             }
             common::run(
                 "pca-fit",
-                &["-q", "--template", &tpl, "--parts", &b.p(&format!("{s}.seg")), "--out",
+                &["-q", "--template", &tpl, "--segmentation", &b.p(&format!("{s}.seg")), "--out",
                   &b.p(&format!("{s}.pca")), &b.p(&format!("{s}-walk.aligned")), &b.p(&format!("{s}-run.aligned"))],
             );
         }
@@ -101,7 +101,7 @@ const PLY_HEAD: &str = "ply\nformat ascii 1.0\nelement vertex 3\nproperty float 
 /// `pca-fit` of A on `aligned` (its template and parts), output `dir/out.pca`.
 fn pca_args(b: &Base, dir: &Path, parts: String, aligned: String) -> Vec<String> {
     vec![
-        "-q".into(), "--template".into(), b.p("set/A/walk/000000.ply"), "--parts".into(), parts,
+        "-q".into(), "--template".into(), b.p("set/A/walk/000000.ply"), "--segmentation".into(), parts,
         "--out".into(), s(&dir.join("out.pca")), aligned,
     ]
 }
@@ -116,7 +116,7 @@ fn rewrite<T: Artifact>(dir: &Path, name: &str, value: &T) -> String {
 /// `dtw-densify` of the walk pair with the given source motion and PCA.
 fn dtw_args(b: &Base, dir: &Path, source: String, source_pca: String) -> Vec<String> {
     vec![
-        "-q".into(), "--set".into(), b.p("set/set.json"), "--pair".into(), "walk".into(),
+        "-q".into(), "--set".into(), b.p("set"), "--motion".into(), "walk".into(),
         "--source-pca".into(), source_pca, "--target-pca".into(), b.p("B.pca"),
         "--out".into(), s(&dir.join("out.corr")), source, b.p("B-walk.aligned"),
     ]
@@ -305,7 +305,7 @@ fn full_disk_leaves_no_output() {
     let _guard = Unmount(mnt.path());
     let out_file = mnt.path().join("out.pca");
     let out = Command::new(common::bin("pca-fit"))
-        .args(["-q", "--template", &b.p("set/A/walk/000000.ply"), "--parts", &b.p("A.seg"), "--out"])
+        .args(["-q", "--template", &b.p("set/A/walk/000000.ply"), "--segmentation", &b.p("A.seg"), "--out"])
         .arg(&out_file)
         .args([b.p("A-walk.aligned"), b.p("A-run.aligned")])
         .env("OPENBLAS_NUM_THREADS", "1")
@@ -327,7 +327,7 @@ fn pca_fit_is_independent_of_threads_and_verbosity() {
     let fit = |name: &str, flags: &[&str]| -> PcaModel {
         let out = s(&dir.path().join(name));
         let mut args: Vec<String> = flags.iter().map(|f| f.to_string()).collect();
-        args.extend(["--template".into(), b.p("set/A/walk/000000.ply"), "--parts".into(), b.p("A.seg"), "--out".into(), out.clone(),
+        args.extend(["--template".into(), b.p("set/A/walk/000000.ply"), "--segmentation".into(), b.p("A.seg"), "--out".into(), out.clone(),
             b.p("A-walk.aligned"), b.p("A-run.aligned")]);
         common::run("pca-fit", &args);
         PcaModel::load(&out).unwrap()

@@ -69,7 +69,7 @@ impl Work {
                 .iter()
                 .map(|m| p(&self.path(&format!("{s}/{m}.aligned"))).to_string())
                 .collect();
-            let mut args = vec!["-q", "--template", p(&tpl), "--parts", p(&seg), "--out"];
+            let mut args = vec!["-q", "--template", p(&tpl), "--segmentation", p(&seg), "--out"];
             let pca = self.path(&format!("{s}/pca.model"));
             args.push(p(&pca));
             args.extend(aligned.iter().map(|s| s.as_str()));
@@ -93,8 +93,8 @@ impl Work {
                 &[
                     "-q",
                     "--set",
-                    p(&self.set.join("set.json")),
-                    "--pair",
+                    p(&self.set),
+                    "--motion",
                     m,
                     "--source-pca",
                     p(&self.path("A/pca.model")),

@@ -80,7 +80,7 @@ fn every_artifact_header_lists_every_input_file_and_its_hash() {
         }
         let aligned: Vec<PathBuf> = motions.iter().map(|m| w(&format!("{x}-{m}.aligned"))).collect();
         let pca = w(&format!("{x}.pca"));
-        let mut args = vec!["--template".into(), s(&tpl(x)), "--parts".into(), s(&seg), "--out".into(), s(&pca)];
+        let mut args = vec!["--template".into(), s(&tpl(x)), "--segmentation".into(), s(&seg), "--out".into(), s(&pca)];
         args.extend(aligned.iter().map(|p| s(p)));
         run("pca-fit", &args);
         let mut given = vec![tpl(x), seg.clone()];
@@ -100,7 +100,7 @@ fn every_artifact_header_lists_every_input_file_and_its_hash() {
     let corr = w("walk.corr");
     let (sa, ta) = (w("A-walk.aligned"), w("B-walk.aligned"));
     run("dtw-densify", &[
-        "--set".into(), s(&set_json), "--pair".into(), "walk".into(), "--source-pca".into(), s(&w("A.pca")),
+        "--set".into(), s(&set), "--motion".into(), "walk".into(), "--source-pca".into(), s(&w("A.pca")),
         "--target-pca".into(), s(&w("B.pca")), s(&sa), s(&ta), "--out".into(), s(&corr),
     ]);
     assert_inputs(&corr, &[set_json, w("A.pca"), w("B.pca"), sa.clone(), ta.clone()]);
@@ -120,6 +120,15 @@ fn every_artifact_header_lists_every_input_file_and_its_hash() {
         assert_eq!(header.params["source_fps"], subject_fps(&set, src), "from the aligned motions");
         assert_eq!(header.params["target_fps"], subject_fps(&set, tgt));
         assert_eq!(header.params["max_iter"], 5);
+        // Every option is recorded under its flag's name, defaults included (the stage's Params).
+        assert_eq!(header.params["reverse"], reverse);
+        assert_eq!(header.params["method"], "gpr-nn", "the command-line name");
+        assert_eq!(header.params["sparse"], "exact");
+        assert_eq!(header.params["pair"], serde_json::json!([s(&sa), s(&ta), s(&corr)]));
+        assert_eq!(header.params["out"], s(&model));
+        for key in ["prior_weight", "mean", "mean_prior", "mean_ridge", "noise_var", "learn_noise", "nn_bias", "keyposes_only", "source_pca", "target_pca"] {
+            assert!(!header.params[key].is_null(), "{key} missing from the header");
+        }
     }
 }
 

@@ -41,7 +41,7 @@ fn defaults_on_the_tiny_preset_never_lose_to_raw_regression_or_the_papers_placem
         for m in motions {
             run("align", &["--segmentation".into(), s(&seg), "--subject".into(), s(&set.join(x).join("subject.json")), "--template".into(), s(&tpl(x)), s(&set.join(x).join(m)), "--out".into(), s(&w(format!("{x}/{m}.aligned")))]);
         }
-        let mut args = vec!["--template".into(), s(&tpl(x)), "--parts".into(), s(&seg), "--out".into(), s(&w(format!("{x}/pca.model")))];
+        let mut args = vec!["--template".into(), s(&tpl(x)), "--segmentation".into(), s(&seg), "--out".into(), s(&w(format!("{x}/pca.model")))];
         args.extend(TRAIN.iter().map(|m| s(&w(format!("{x}/{m}.aligned")))));
         run("pca-fit", &args);
     }
@@ -52,7 +52,7 @@ fn defaults_on_the_tiny_preset_never_lose_to_raw_regression_or_the_papers_placem
     for m in TRAIN {
         let corr = w(format!("{m}.corr"));
         run("dtw-densify", &[
-            "--set".into(), s(&set.join("set.json")), "--pair".into(), m.into(),
+            "--set".into(), s(&set), "--motion".into(), m.into(),
             "--source-pca".into(), s(&w("A/pca.model".into())), "--target-pca".into(), s(&w("B/pca.model".into())),
             s(&w(format!("A/{m}.aligned"))), s(&w(format!("B/{m}.aligned"))),
             "--out".into(), s(&corr),

@@ -26,5 +26,6 @@ pub mod plots;
 pub mod prealign;
 pub mod reconstruct;
 pub mod sample;
+pub mod stage;
 pub mod synthesize;
 pub mod train;

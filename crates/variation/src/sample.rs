@@ -34,7 +34,7 @@ pub struct ChainStats {
 }
 
 /// How trajectories are drawn from the density of a part's GPDM dynamics given the first point.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize, clap::ValueEnum)]
 #[serde(rename_all = "lowercase")]
 pub enum Sampler {
     /// Hybrid Monte Carlo (the paper's sampler): burn-in with step-size adaptation, thinning.

@@ -22,7 +22,7 @@ fn prealign_records_every_input_file_and_parameter() {
     let st = Command::new(env!("CARGO_BIN_EXE_prealign"))
         .args(["-q", "--set"])
         .arg(&set)
-        .args(["--group", "loco", "--motions", "walk,run", "--blend-weights", "0.25,0.75", "--out"])
+        .args(["--group-name", "loco", "--motions", "walk,run", "--blend-weights", "0.25,0.75", "--out"])
         .arg(&out)
         .env("OPENBLAS_NUM_THREADS", "1")
         .output()

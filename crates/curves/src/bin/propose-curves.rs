@@ -19,7 +19,7 @@ struct Args {
     /// The subject's subject.json (its curves and part tree may be missing)
     subject: PathBuf,
     /// The mesh the curves index into (the subject's template)
-    #[arg(long, value_name = "MESH")]
+    #[arg(long)]
     template: PathBuf,
     /// Output subject.json (may be SUBJECT itself)
     #[arg(short, long)]

@@ -12,13 +12,14 @@ use mesh_core::cli::{run_stage, CommonArgs};
     name = "html-report",
     version,
     after_help = "The page works from disk (file://), with no server and no network.\n\
-                  e.g.: html-report out --view source=data/set/A/test/walk \\\n\
+                  e.g.: html-report --out out --view source=data/set/A/test/walk \\\n\
                   \x20      --view transfer=out/transfer/A-to-B/walk/gpr-nn --view truth=data/set/truth/B/walk"
 )]
 struct Args {
     #[command(flatten)]
     common: CommonArgs,
     /// Pipeline output folder to report on; index.html is written there
+    #[arg(short, long)]
     out: PathBuf,
     /// A sequence for the 3D view, LABEL=FOLDER of numbered frames (repeat, shown side by side)
     #[arg(long, value_name = "LABEL=DIR", value_parser = parse_view)]

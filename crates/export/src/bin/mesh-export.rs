@@ -14,8 +14,8 @@ use mesh_core::sequence::MeshSequence;
     version,
     after_help = "The format follows OUT: a .glb file, a .pc2 file (plus the template OBJ beside it,\n\
                   same stem), or a folder of numbered frames (--frame-format obj|ply).\n\
-                  e.g.: mesh-export out/transfer/A-to-B/walk/gpr-nn walk.glb --stride 2\n\
-                  e.g.: mesh-export out/transfer/A-to-B/walk/gpr-nn walk.pc2   # writes walk.obj + walk.pc2"
+                  e.g.: mesh-export out/transfer/A-to-B/walk/gpr-nn --out walk.glb --stride 2\n\
+                  e.g.: mesh-export out/transfer/A-to-B/walk/gpr-nn --out walk.pc2   # writes walk.obj + walk.pc2"
 )]
 struct Args {
     #[command(flatten)]
@@ -23,9 +23,10 @@ struct Args {
     /// Folder of numbered frames (000000.ply, ... or .obj)
     input: PathBuf,
     /// Output: NAME.glb, NAME.pc2, or a folder
+    #[arg(short, long)]
     out: PathBuf,
     /// Frame files' format when OUT is a folder
-    #[arg(long, default_value = "obj", value_name = "obj|ply")]
+    #[arg(long, value_enum, default_value_t = export::frames::FrameFormat::Obj)]
     frame_format: export::frames::FrameFormat,
     /// glb: keep every N-th frame
     #[arg(long, default_value_t = 1, value_name = "N", value_parser = clap::value_parser!(u32).range(1..))]

@@ -10,10 +10,10 @@ use mesh_core::cli::{run_stage, CommonArgs};
 #[command(
     name = "mesh-import",
     version,
-    after_help = "e.g.: mesh-import walk.pc2 work/walk            # template: walk.obj beside it\n\
-                  e.g.: mesh-import walk.pc2 work/walk --template body.ply\n\
-                  e.g.: mesh-import blender-export/ work/walk   # frames detected: 000000.obj, frame_0001.ply, punch0.obj, ...\n\
-                  e.g.: mesh-import --frames 'walk.%04d.obj' shots/ work/walk"
+    after_help = "e.g.: mesh-import walk.pc2 --out work/walk            # template: walk.obj beside it\n\
+                  e.g.: mesh-import walk.pc2 --out work/walk --template body.ply\n\
+                  e.g.: mesh-import blender-export/ --out work/walk   # frames detected: 000000.obj, frame_0001.ply, punch0.obj, ...\n\
+                  e.g.: mesh-import --pattern 'walk.%04d.obj' shots/ --out work/walk"
 )]
 struct Args {
     #[command(flatten)]
@@ -21,14 +21,15 @@ struct Args {
     /// A .pc2 file or a folder of numbered OBJ/PLY frames
     input: PathBuf,
     /// Output folder of numbered PLY frames
+    #[arg(short, long)]
     out: PathBuf,
     /// Mesh holding the faces for a .pc2 input [default: INPUT with .obj]
-    #[arg(long, value_name = "MESH")]
+    #[arg(long)]
     template: Option<PathBuf>,
     /// Frame file names in a folder INPUT, as a printf pattern (`walk.%04d.obj`, `punch%d.obj`)
     /// [default: detected; the reading is stated on stderr]
-    #[arg(long, value_name = "PATTERN")]
-    frames: Option<mesh_core::frame_pattern::FramePattern>,
+    #[arg(long)]
+    pattern: Option<mesh_core::frame_pattern::FramePattern>,
 }
 
 fn main() -> ExitCode {
@@ -51,7 +52,7 @@ fn main() -> ExitCode {
                 args.input.display()
             )
         } else {
-            export::frames::read_frames(&args.input, args.frames.as_ref())?
+            export::frames::read_frames(&args.input, args.pattern.as_ref())?
         };
         seq.write_dir(&args.out)?;
         mesh_core::info!("wrote {} frames to {}", seq.n_frames(), args.out.display());

@@ -23,7 +23,7 @@ struct Args {
     /// Second pose, same topology (a directory needs as many frames as `a`)
     b: PathBuf,
     /// Weight of `b` in [0, 1] (0 gives `a`, 1 gives `b`)
-    #[arg(short, long, default_value_t = 0.5)]
+    #[arg(short, long, default_value_t = 0.5, value_name = "W")]
     weight: f64,
     /// Rest mesh the deformation gradients are measured from [default: first frame of `a`]
     #[arg(long)]

@@ -10,19 +10,20 @@ use mesh_core::cli::{progress_bar, run_stage, CommonArgs};
 #[command(
     name = "synth",
     version,
-    after_help = "e.g.: synth --preset tiny out/tiny\n      synth --seed 7 --no-noise data/demo\n(needs scripts/fetch-assets first)"
+    after_help = "e.g.: synth --preset tiny --out out/tiny\n      synth --seed 7 --no-noise --out data/demo\n(needs scripts/fetch-assets first)"
 )]
 struct Args {
     #[command(flatten)]
     common: CommonArgs,
     /// Preset: `default` (demo set: full body 25 fps + notoes body 50 fps), `tiny` (coarse, for
     /// tests) or `holdout` (other bodies, styles, rates and test clips: the second benchmark)
-    #[arg(long, default_value = "default", value_parser = synth::preset::PRESETS)]
-    preset: String,
+    #[arg(long, value_enum, default_value_t = synth::preset::Preset::Default)]
+    preset: synth::preset::Preset,
     /// No capture-like noise on the input sequences (truth is always clean)
     #[arg(long)]
     no_noise: bool,
     /// Output capture-set folder (replaced if it holds a capture set)
+    #[arg(short, long)]
     out: PathBuf,
 }
 
@@ -30,8 +31,8 @@ fn main() -> ExitCode {
     let args = mesh_core::cli::parse::<Args>();
     run_stage("synth", || {
         args.common.init()?;
-        let cfg = synth::preset::preset(&args.preset, args.common.seed, !args.no_noise)
-            .ok_or_else(|| anyhow::anyhow!("unknown preset {}", args.preset))?;
+        let cfg = synth::preset::preset(args.preset.name(), args.common.seed, !args.no_noise)
+            .ok_or_else(|| anyhow::anyhow!("unknown preset {}", args.preset.name()))?;
         let pb = std::sync::OnceLock::new();
         let start = |n: usize| {
             let _ = pb.set(progress_bar(n as u64, "synth", &args.common));

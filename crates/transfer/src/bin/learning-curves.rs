@@ -21,7 +21,7 @@ use capture::part_pca::PcaModel;
 #[command(
     name = "learning-curves",
     version,
-    after_help = "e.g.: learning-curves --source-pca work/A/pca.model --target-pca work/B/pca.model \\\n        --set set/set.json --true-pair walk work/A/walk.aligned work/B/walk.aligned --out out/learning-curves\n      learning-curves --source-pca work/A/pca.model --target-pca work/B/pca.model --source-whole work/A/pca-whole.model \\\n        --target-whole work/B/pca-whole.model \\\n        --pair work/A/walk.aligned work/B/walk.aligned work/pairs/walk.corr --out out/learning-curves-dtw"
+    after_help = "e.g.: learning-curves --source-pca work/A/pca.model --target-pca work/B/pca.model \\\n        --set set --true-pair walk work/A/walk.aligned work/B/walk.aligned --out out/learning-curves\n      learning-curves --source-pca work/A/pca.model --target-pca work/B/pca.model --source-whole work/A/pca-whole.model \\\n        --target-whole work/B/pca-whole.model \\\n        --pair work/A/walk.aligned work/B/walk.aligned work/pairs/walk.corr --out out/learning-curves-dtw"
 )]
 struct Args {
     #[command(flatten)]
@@ -51,7 +51,7 @@ struct Args {
     #[arg(long, num_args = 3, value_names = ["SET_SOURCE", "SET_TARGET", "CORR"], action = clap::ArgAction::Append,
           required_unless_present = "true_pair", conflicts_with = "true_pair")]
     pair: Vec<PathBuf>,
-    /// The capture set's set.json (key-poses and true correspondences of --true-pair)
+    /// Capture-set folder (its set.json: key-poses and true correspondences of --true-pair)
     #[arg(long)]
     set: Option<PathBuf>,
     /// A training pair with the set's true correspondences: source motion name, aligned source motion, aligned target motion (repeat)
@@ -91,7 +91,8 @@ struct Loaded {
 
 fn load_pairs(args: &Args) -> anyhow::Result<(Correspondence, Vec<Loaded>)> {
     let load = |p: &str| AlignedMotion::load(p);
-    if let Some(set_path) = &args.set {
+    if let Some(set_dir) = &args.set {
+        let set_path = &set_dir.join("set.json");
         if !args.true_pair.is_empty() {
             let set = SetSpec::load(set_path)?;
             let mut out = Vec::new();

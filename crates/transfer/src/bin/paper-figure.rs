@@ -23,7 +23,7 @@ use capture::part_pca::PcaModel;
 #[command(
     name = "paper-figure",
     version,
-    after_help = "e.g.: paper-figure cost-matrix --set set/set.json --pair walk --source-pca work/A/pca.model --target-pca work/B/pca.model \\\n        work/A/walk.aligned work/B/walk.aligned --out figures/fig3-walk.png\n      paper-figure correction --model work/models/A-to-B/gpr-nn.model --source-pca work/A/pca.model --target-pca work/B/pca.model \\\n        --segmentation work/B/parts.seg --target-training work/B/walk.aligned --truth set/truth/B/punch work/A/punch.aligned --out figures/fig5-punch.png\n      paper-figure confidence --confidence work/confidence/A-to-B/punch.json --eval work/eval/A-to-B/punch/gpr-nn.json --out figures/confidence-punch.png"
+    after_help = "e.g.: paper-figure cost-matrix --set set --motion walk --source-pca work/A/pca.model --target-pca work/B/pca.model \\\n        work/A/walk.aligned work/B/walk.aligned --out figures/fig3-walk.png\n      paper-figure correction --model work/models/A-to-B/gpr-nn.model --source-pca work/A/pca.model --target-pca work/B/pca.model \\\n        --segmentation work/B/parts.seg --target-training work/B/walk.aligned --truth set/truth/B/punch work/A/punch.aligned --out figures/fig5-punch.png\n      paper-figure confidence --confidence work/confidence/A-to-B/punch.json --eval work/eval/A-to-B/punch/gpr-nn.json --out figures/confidence-punch.png"
 )]
 struct Args {
     #[command(subcommand)]
@@ -44,12 +44,12 @@ enum Figure {
 struct CostArgs {
     #[command(flatten)]
     common: CommonArgs,
-    /// The capture set's set.json (key-poses and, if present, true correspondences)
+    /// Capture-set folder (its set.json: key-poses and, if present, true correspondences)
     #[arg(long)]
     set: PathBuf,
-    /// Training pair, by the source motion's name
+    /// Training pair, by its source motion's name
     #[arg(long)]
-    pair: String,
+    motion: String,
     /// Source subject's PCA model
     #[arg(long)]
     source_pca: PathBuf,
@@ -96,8 +96,8 @@ struct CorrectionArgs {
     #[arg(long)]
     part: Option<String>,
     /// Source frame to show [default: see --part]
-    #[arg(long)]
-    frame: Option<usize>,
+    #[arg(long, value_name = "N")]
+    source_frame: Option<usize>,
     /// The target's true sequence of the motion (folder of frames): drawn last, and scored in --report
     #[arg(long)]
     truth: Option<PathBuf>,
@@ -160,16 +160,17 @@ fn confidence(a: &ConfidenceArgs) -> anyhow::Result<()> {
 }
 
 fn cost_matrix(a: &CostArgs) -> anyhow::Result<()> {
-    let set = SetSpec::load(&a.set)?;
-    let Some(pair) = set.train.iter().find(|p| p.source == a.pair) else {
-        bail!("{}: no training pair with source motion '{}'", a.set.display(), a.pair);
+    let set_json = a.set.join("set.json");
+    let set = SetSpec::load(&set_json)?;
+    let Some(pair) = set.train.iter().find(|p| p.source == a.motion) else {
+        bail!("{}: no training pair with source motion '{}'", set_json.display(), a.motion);
     };
-    let truth = true_correspondences(&set, &a.set, &a.pair).ok().map(|t| t.1);
+    let truth = true_correspondences(&set, &set_json, &a.motion).ok().map(|t| t.1);
     let (sp, tp) = (PcaModel::load(&a.source_pca)?, PcaModel::load(&a.target_pca)?);
     let (src, tgt) = (AlignedMotion::load(&a.source)?, AlignedMotion::load(&a.target)?);
     let xs = sp.encode(&src).with_context(|| a.source.display().to_string())?;
     let ys = tp.encode(&tgt).with_context(|| a.target.display().to_string())?;
-    let (cost, path) = cost_and_path(&xs, &ys, &pair.keyposes, a.sigma2).with_context(|| a.set.display().to_string())?;
+    let (cost, path) = cost_and_path(&xs, &ys, &pair.keyposes, a.sigma2).with_context(|| set_json.display().to_string())?;
     let fig = CostFigure {
         title: format!("{} / {}: -log P_ij (eqs. 1-6), DTW path (eq. 7)", pair.source, pair.target),
         cost,
@@ -201,7 +202,7 @@ fn correction(a: &CorrectionArgs) -> anyhow::Result<()> {
         &refs,
         &source,
         a.part.as_deref(),
-        a.frame,
+        a.source_frame,
         a.neighbours,
         truth.as_ref().map(|t| t.frames.as_slice()),
     )

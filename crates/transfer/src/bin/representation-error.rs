@@ -18,7 +18,7 @@ use transfer::representation::{rebuilt_error, truncation_rms, RepresentationRow}
 #[command(
     name = "representation-error",
     version,
-    after_help = "e.g.: representation-error --template set/B/walk/000000.ply --parts work/B/parts.seg --truth set/truth/B/punch work/B/*.aligned --out work/B/representation.json"
+    after_help = "e.g.: representation-error --template set/B/walk/000000.ply --segmentation work/B/parts.seg --truth set/truth/B/punch work/B/*.aligned --out work/B/representation.json"
 )]
 struct Args {
     #[command(flatten)]
@@ -28,7 +28,7 @@ struct Args {
     template: PathBuf,
     /// Segmentation artifact from `segment`
     #[arg(long)]
-    parts: PathBuf,
+    segmentation: PathBuf,
     /// Truth frame directory of the subject (a motion not used for training)
     #[arg(long)]
     truth: PathBuf,
@@ -51,7 +51,7 @@ fn main() -> ExitCode {
     run_stage("representation-error", || {
         args.common.init()?;
         let template = read_mesh(&args.template)?;
-        let seg = Segmentation::load(&args.parts)?;
+        let seg = Segmentation::load(&args.segmentation)?;
         let motions = args
             .motions
             .iter()

@@ -8,6 +8,7 @@ use mesh_core::artifact::Artifact;
 use mesh_core::capture_set::SubjectSpec;
 use mesh_core::segmentation::Segmentation;
 use mesh_core::sequence::MeshSequence;
+use capture::choices::{Correspondences, Placement};
 use transfer::evaluate::{foot_sliding, rms_errors_per_frame, EvalRecord};
 
 /// Per-vertex RMS error of a transferred sequence against its ground truth (pose-aligned and as placed)
@@ -33,12 +34,12 @@ struct Args {
     /// Method name for the record
     #[arg(long)]
     method: String,
-    /// Placement name for the record
-    #[arg(long, default_value = "regressed")]
-    placement: String,
-    /// Training-pair label for the record: dense or keyposes
-    #[arg(long, default_value = "dense")]
-    training: String,
+    /// Placement of the prediction, for the record
+    #[arg(long, value_enum, default_value_t = Placement::Regressed)]
+    placement: Placement,
+    /// Correspondences the model was trained on, for the record
+    #[arg(long, value_enum, default_value_t = Correspondences::Dense)]
+    correspondences: Correspondences,
     /// The target's subject.json: foot sliding is measured on its `truth_contacts` of --motion
     /// (needs --segmentation and --template)
     #[arg(long, requires_all = ["segmentation", "template"])]
@@ -99,8 +100,8 @@ fn main() -> ExitCode {
             direction: args.direction.clone(),
             motion: args.motion.clone(),
             method: args.method.clone(),
-            placement: args.placement.clone(),
-            training: args.training.clone(),
+            placement: args.placement.name().to_string(),
+            training: args.correspondences.name().to_string(),
             rms_pose_m,
             rms_placed_m,
             frames: pred.n_frames(),

@@ -15,12 +15,13 @@ use variation::train::VariationModel;
 #[command(
     name = "hmc-sample",
     version,
-    after_help = "e.g.: hmc-sample --seed 0 -n 5 --blends 0.25,0.75 --group work/locomotion.group work/locomotion.model --out out/variation/locomotion --report work/locomotion-samples.json\n      hmc-sample --group work/locomotion.group work/locomotion.model --motion walk -n 20 --frames 300 --seed 7 --out out/walk20\n      hmc-sample --group work/locomotion.group work/locomotion.model --blend walk:run --weight 0.3 -n 10 --sampler ancestral --out out/blend03"
+    after_help = "e.g.: hmc-sample --seed 0 -n 5 --blends 0.25,0.75 --group work/locomotion.group --model work/locomotion.model --out out/variation/locomotion --report work/locomotion-samples.json\n      hmc-sample --group work/locomotion.group --model work/locomotion.model --motion walk -n 20 --frame-count 300 --seed 7 --out out/walk20\n      hmc-sample --group work/locomotion.group --model work/locomotion.model --blend walk:run --weight 0.3 -n 10 --sampler ancestral --out out/blend03"
 )]
 struct Args {
     #[command(flatten)]
     common: CommonArgs,
     /// Trained model (kind variation-model, from gpdm-train)
+    #[arg(long)]
     model: PathBuf,
     /// The prealigned group the model was trained on (sources for the statistics)
     #[arg(long)]
@@ -30,19 +31,19 @@ struct Args {
     n: usize,
     /// Only variations of this training sequence (a motion of the group, or a pre-blend
     /// `blend-<w>`), instead of every sequence and the --blends
-    #[arg(long, value_name = "NAME", conflicts_with = "blend")]
+    #[arg(long, conflicts_with = "blend")]
     motion: Option<String>,
     /// Only variations of the blend of two motions of the group, `A:B` at --weight (guided by
     /// the learned pre-blends for the group's blend pair, the motions' own variants otherwise)
     #[arg(long, value_name = "A:B", requires = "weight", value_parser = parse_pair)]
     blend: Option<(String, String)>,
     /// Weight w* in [0, 1] of the --blend (0: A, 1: B)
-    #[arg(long, value_name = "W", requires = "blend")]
+    #[arg(short, long, value_name = "W", requires = "blend")]
     weight: Option<f64>,
     /// Frames per variation [default: the capture's length]; longer follows the dynamics on
     /// past the capture's end, shorter cuts
     #[arg(long, value_name = "N")]
-    frames: Option<usize>,
+    frame_count: Option<usize>,
     /// Blend weights w* in [0, 1] to synthesise, comma-separated (empty: none)
     #[arg(long, default_value = "0.25,0.75", value_parser = parse_weights)]
     blends: Weights,
@@ -54,7 +55,7 @@ struct Args {
     average: bool,
     /// Trajectory sampler: hmc (the paper's Hybrid Monte Carlo) or ancestral (exact independent
     /// draws of the same density, one forward pass each; burn-in and thinning do not apply)
-    #[arg(long, default_value = "hmc", value_parser = parse_sampler)]
+    #[arg(long, value_enum, default_value_t = Sampler::Hmc)]
     sampler: Sampler,
     /// Scale κ of every one-step variance of the sampled dynamics (1: the model's density, as in
     /// the paper; below 1: trajectories closer to the learned dynamics, less frame-to-frame jitter)
@@ -108,10 +109,6 @@ fn parse_pair(s: &str) -> Result<(String, String), String> {
         Some((a, b)) if !a.is_empty() && !b.is_empty() => Ok((a.into(), b.into())),
         _ => Err(format!("'{s}' is not two motion names A:B")),
     }
-}
-
-fn parse_sampler(s: &str) -> Result<Sampler, String> {
-    Sampler::from_name(s).ok_or_else(|| format!("unknown sampler '{s}' (hmc, ancestral)"))
 }
 
 /// Comma-separated weights; the empty string is an empty list.
@@ -168,7 +165,7 @@ fn main() -> ExitCode {
                 }),
                 _ => None,
             },
-            frames: args.frames,
+            frames: args.frame_count,
         };
         // Sampling first (a spinner), then one step per synthesised sequence.
         let bar = mesh_core::cli::progress_bar(0, "hmc-sample: sampling", &args.common);

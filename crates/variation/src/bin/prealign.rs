@@ -13,7 +13,7 @@ use variation::prealign::PrealignOptions;
 #[command(
     name = "prealign",
     version,
-    after_help = "e.g.: prealign --set out/demo/set --subject A --group locomotion --motions walk,run --gait-cycles --blend-weights 0.5 --out out/work/variation/locomotion.group"
+    after_help = "e.g.: prealign --set out/demo/set --subject-name A --group-name locomotion --motions walk,run --gait-cycles --blend-weights 0.5 --out out/work/variation/locomotion.group"
 )]
 struct Args {
     #[command(flatten)]
@@ -21,12 +21,12 @@ struct Args {
     /// Capture-set folder
     #[arg(long)]
     set: PathBuf,
-    /// Subject (default: the set's source subject)
-    #[arg(long)]
-    subject: Option<String>,
-    /// Group name (e.g. locomotion)
-    #[arg(long)]
-    group: String,
+    /// Subject, by its name in set.json (default: the set's source subject)
+    #[arg(long, value_name = "NAME")]
+    subject_name: Option<String>,
+    /// Name of the group written (e.g. locomotion)
+    #[arg(long, value_name = "NAME")]
+    group_name: String,
     /// Motions of the group, comma-separated; missing motions are skipped with a warning
     #[arg(long, value_delimiter = ',', required = true)]
     motions: Vec<String>,
@@ -46,9 +46,6 @@ struct Args {
     /// [default: fail naming subject.json]
     #[arg(long)]
     fallback_whole_body: bool,
-    /// Kept for old scripts: failing on unusable parts is now the default
-    #[arg(long, hide = true)]
-    strict_parts: bool,
     /// Cut every motion to the same number of whole gait cycles (period from the poses) before
     /// the DTW, so locomotion pairs cycle for cycle
     #[arg(long)]
@@ -68,11 +65,11 @@ fn main() -> ExitCode {
         args.common.init()?;
         let set = CaptureSet::open(&args.set)?;
         let subject = args
-            .subject
+            .subject_name
             .clone()
             .unwrap_or_else(|| set.spec.source.clone());
         let spec = GroupSpec {
-            name: args.group.clone(),
+            name: args.group_name.clone(),
             subject,
             motions: args.motions.clone(),
             reference: args.reference.clone(),
@@ -82,7 +79,7 @@ fn main() -> ExitCode {
                 ..Default::default()
             },
             whole_body: args.whole_body,
-            fallback_whole_body: args.fallback_whole_body && !args.strict_parts,
+            fallback_whole_body: args.fallback_whole_body,
             gait_cycles: args.gait_cycles,
         };
         let (group, notes) = build(&set, &spec)?;

@@ -13,12 +13,13 @@ use variation::train::VariationModel;
 #[command(
     name = "variation-eval",
     version,
-    after_help = "e.g.: variation-eval work/locomotion.model --group work/locomotion.group --plots out/variation/plots --out work/locomotion-eval.json"
+    after_help = "e.g.: variation-eval --model work/locomotion.model --group work/locomotion.group --plots out/variation/plots --out work/locomotion-eval.json"
 )]
 struct Args {
     #[command(flatten)]
     common: CommonArgs,
-    /// Trained model (kind variation-model)
+    /// Trained model (kind variation-model, from gpdm-train)
+    #[arg(long)]
     model: PathBuf,
     /// The prealigned group the model was trained on
     #[arg(long)]

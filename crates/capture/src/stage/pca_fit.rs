@@ -1,0 +1,102 @@
+//! The `pca-fit` stage: a PCA per body part (or of the whole body) of a subject's aligned
+//! training motions.
+
+use std::path::PathBuf;
+
+use clap::Parser;
+use gp::pca::Components;
+use mesh_core::artifact::Artifact;
+use mesh_core::cli::CommonArgs;
+use mesh_core::io::read_mesh;
+use mesh_core::segmentation::Segmentation;
+use serde::Serialize;
+
+use crate::align::AlignedMotion;
+use crate::part_pca;
+
+/// Fit a PCA per body part on a subject's aligned training motions
+#[derive(Parser, Debug, Serialize)]
+#[command(
+    name = "pca-fit",
+    version,
+    after_help = "e.g.: pca-fit --template set/A/walk/000000.ply --segmentation work/A/parts.seg work/A/*.aligned --out work/A/pca.model"
+)]
+pub struct Params {
+    #[command(flatten)]
+    #[serde(skip)]
+    pub common: CommonArgs,
+    /// Template mesh of the subject
+    #[arg(long)]
+    pub template: PathBuf,
+    /// Segmentation artifact from `segment` (omit with --whole-body)
+    #[arg(long, required_unless_present = "whole_body")]
+    pub segmentation: Option<PathBuf>,
+    /// Treat the whole body as one part (the paper's comparison)
+    #[arg(long)]
+    pub whole_body: bool,
+    /// Components per part (the paper uses 20)
+    #[arg(long, default_value_t = 20, conflicts_with = "variance")]
+    pub components: usize,
+    /// Keep the fewest components explaining this fraction of variance instead
+    #[arg(long)]
+    pub variance: Option<f64>,
+    /// How each part is aligned before PCA: `body` = cut from the whole-body-aligned frames
+    /// (assembly averages overlaps); `part` = also Procrustes per part (assembly re-orients
+    /// children on their overlap band)
+    #[arg(long, value_enum, default_value_t = part_pca::PartAlignment::Body)]
+    pub part_alignment: part_pca::PartAlignment,
+    /// Aligned training motions (artifacts from `align`)
+    #[arg(required = true)]
+    pub motions: Vec<PathBuf>,
+    /// Output artifact (kind pca-model)
+    #[arg(short, long)]
+    pub out: PathBuf,
+    /// Also write per-part explained variance and reconstruction error as JSON
+    #[arg(long)]
+    pub report: Option<PathBuf>,
+}
+
+/// Writes the PCA model (and the `--report`); the header records `p`, the template, the
+/// segmentation (unless `--whole-body`) and the motions.
+pub fn run(p: &Params) -> anyhow::Result<()> {
+    let template = read_mesh(&p.template)?;
+    let parts = match &p.segmentation {
+        Some(seg) if !p.whole_body => Segmentation::load(seg)?,
+        _ => part_pca::whole_body(template.n_vertices()),
+    };
+    let motions = p
+        .motions
+        .iter()
+        .map(AlignedMotion::load)
+        .collect::<Result<Vec<_>, _>>()?;
+    let choice = match p.variance {
+        Some(r) => Components::ExplainedVariance(r),
+        None => Components::Count(p.components),
+    };
+    let refs: Vec<&AlignedMotion> = motions.iter().collect();
+    let (model, report) = part_pca::fit_with_progress(
+        &template.vertices,
+        &parts,
+        &refs,
+        choice,
+        p.part_alignment,
+        &mesh_core::cli::stage_progress(0, "parts fitted"),
+    )?;
+    let mut header = p
+        .common
+        .header("pca-fit", env!("CARGO_PKG_VERSION"))
+        .with_params(p)?
+        .with_input(&p.template)?;
+    if let (Some(seg), false) = (&p.segmentation, p.whole_body) {
+        header = header.with_input(seg)?;
+    }
+    for m in &p.motions {
+        header = header.with_input(m)?;
+    }
+    model.save(&p.out, &header)?;
+    if let Some(r) = &p.report {
+        let text = serde_json::to_string_pretty(&report)?;
+        mesh_core::atomic::write_bytes_atomic(r, text.as_bytes())?;
+    }
+    Ok(())
+}

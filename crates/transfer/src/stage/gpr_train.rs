@@ -1,0 +1,213 @@
+//! The `gpr-train` stage: the source-to-target GP regression per body part and for the rigid
+//! displacement (CVPR eqs. 8-13), or a baseline, from a direction's training pairs.
+
+use std::path::PathBuf;
+
+use anyhow::{bail, Context};
+use clap::Parser;
+use gp::gpr::{GprOptions, PAPER_NOISE_VAR};
+use gp::sparse_gpr::Sparsity;
+use mesh_core::artifact::Artifact;
+use mesh_core::cli::CommonArgs;
+use serde::Serialize;
+
+use crate::gpr_model::{train, GprModel, MeanFunction, MeanPrior, MeanPriors, Method, PairFiles, MEAN_RIDGE, PRIOR_WEIGHT};
+use capture::part_pca::PcaModel;
+
+/// Train the source-to-target GP regression per body part and for the rigid displacement (CVPR eqs. 8-13)
+#[derive(Parser, Debug, Serialize)]
+#[command(
+    name = "gpr-train",
+    version,
+    after_help = "e.g.: gpr-train --source-pca work/A/pca.model --target-pca work/B/pca.model \\\n        --pair work/A/walk.aligned work/B/walk.aligned work/pairs/walk.corr --method gpr-nn --out work/A-to-B/gpr-nn.model"
+)]
+pub struct Params {
+    #[command(flatten)]
+    #[serde(skip)]
+    pub common: CommonArgs,
+    /// PCA model (from pca-fit) of this direction's source subject
+    #[arg(long)]
+    pub source_pca: PathBuf,
+    /// PCA model of this direction's target subject (same part names)
+    #[arg(long)]
+    pub target_pca: PathBuf,
+    /// A training pair as in the set: aligned motion of the set's source subject, of its target subject, and their correspondences (repeat per pair)
+    #[arg(long, num_args = 3, value_names = ["SET_SOURCE", "SET_TARGET", "CORR"], required = true, action = clap::ArgAction::Append)]
+    pub pair: Vec<PathBuf>,
+    /// Train the reverse direction (set target -> set source): --source-pca is then the set target's
+    #[arg(long)]
+    pub reverse: bool,
+    /// Transfer method (whole-body: gpr-nn on whole-body PCA models)
+    #[arg(long, value_enum, default_value_t = Method::GprNn)]
+    pub method: Method,
+    /// Train on the key-pose pairs only (instead of the dense DTW pairs)
+    #[arg(long)]
+    pub keyposes_only: bool,
+    /// Neural-network kernel with the bias input (R&W eq. 4.29); eq. 10 as printed has none, which limits the GP to odd functions
+    #[arg(long)]
+    pub nn_bias: bool,
+    /// Mean function of the GPs: `affine` = least-squares affine map, GP on the residuals;
+    /// `zero` = the paper's zero-mean GP (CVPR eq. 11)
+    #[arg(long, value_enum, default_value_t = MeanFunction::Affine)]
+    pub mean: MeanFunction,
+    /// Relative ridge of the affine mean (shrinks the map along input directions the training
+    /// poses barely span; 1e-6 is the plain least-squares fit)
+    #[arg(long, default_value_t = MEAN_RIDGE)]
+    pub mean_ridge: f64,
+    /// What the ridge shrinks the affine mean toward: `zero`, or `geometric` = the map the two
+    /// subjects' part shapes predict (transfer::geometric_prior)
+    #[arg(long, value_enum, default_value_t = MeanPrior::Zero)]
+    pub mean_prior: MeanPrior,
+    /// Weight of the geometric prior mixed into each part's affine mean (0: the fitted map alone)
+    #[arg(long, default_value_t = PRIOR_WEIGHT, value_name = "W")]
+    pub prior_weight: f64,
+    /// Observation-noise variance σn² (the paper's 0.1; the starting value with --learn-noise)
+    #[arg(long, default_value_t = PAPER_NOISE_VAR)]
+    pub noise_var: f64,
+    /// Also learn σn² by maximising the marginal likelihood (the paper fixes it)
+    #[arg(long)]
+    pub learn_noise: bool,
+    /// Sparse GP (Titsias' bound) with at most M inducing inputs chosen by greedy variance
+    /// selection; `auto`: exact up to 1024 pairs (faster there), 256 inducing inputs above;
+    /// `exact` (default): the exact GP of CVPR eqs. 8-13
+    #[arg(long, value_name = "M|auto|exact", default_value_t = Sparsity::Exact)]
+    #[serde(serialize_with = "as_text")]
+    pub sparse: Sparsity,
+    /// Maximum conjugate-gradient iterations per GP
+    #[arg(long, default_value_t = 100)]
+    pub max_iter: usize,
+    /// Output artifact (kind gpr-model)
+    #[arg(short, long)]
+    pub out: PathBuf,
+}
+
+/// `--sparse` as written on the command line (`exact`, `auto` or M).
+fn as_text<S: serde::Serializer>(s: &Sparsity, ser: S) -> Result<S::Ok, S::Error> {
+    ser.serialize_str(&s.to_string())
+}
+
+/// Writes the model; the header records `p` plus the frame rates read from the pairs
+/// (`source_fps`, `target_fps`: `gpr-predict` reads the first), both PCA models and every pair file.
+pub fn run(p: &Params) -> anyhow::Result<()> {
+    let method = p.method;
+    let (src_pca, tgt_pca) = (
+        PcaModel::load(&p.source_pca)?,
+        PcaModel::load(&p.target_pca)?,
+    );
+    let names: Vec<String> = src_pca.parts.iter().map(|p| p.name.clone()).collect();
+    let tgt_names: Vec<String> = tgt_pca.parts.iter().map(|p| p.name.clone()).collect();
+    if names != tgt_names {
+        bail!(
+            "{}: parts {:?} differ from the target's {:?}",
+            p.source_pca.display(),
+            names,
+            tgt_names
+        );
+    }
+    if method == Method::WholeBody && names.len() != 1 {
+        mesh_core::warn!(
+            "method whole-body with a {}-part PCA model (expected pca-fit --whole-body)",
+            names.len()
+        );
+    }
+    let mut pairs = Vec::new();
+    // The files are in the set's order (set source, set target); the PCA models are in
+    // the direction's order.
+    let (set_source_pca, set_target_pca) = if p.reverse {
+        (&tgt_pca, &src_pca)
+    } else {
+        (&src_pca, &tgt_pca)
+    };
+    // Frame rates of the set's source and target subjects, from the aligned motions.
+    let mut set_fps: Option<(f64, f64)> = None;
+    for files in p.pair.chunks(3) {
+        let loaded = PairFiles::load(files)?;
+        let fps = (
+            loaded.source.capture.require_fps().with_context(|| files[0].display().to_string())?,
+            loaded.target.capture.require_fps().with_context(|| files[1].display().to_string())?,
+        );
+        if let Some(first) = set_fps.filter(|f| *f != fps) {
+            bail!(
+                "{}: frame rates {} and {} differ from the first pair's {} and {}",
+                files[0].display(),
+                fps.0,
+                fps.1,
+                first.0,
+                first.1
+            );
+        }
+        set_fps = Some(fps);
+        let data = loaded.encode(set_source_pca, set_target_pca)?;
+        pairs.push(if p.reverse { data.reversed() } else { data });
+    }
+    let Some((set_source_fps, set_target_fps)) = set_fps else {
+        bail!("no --pair given");
+    };
+    let (source_fps, target_fps) = if p.reverse {
+        (set_target_fps, set_source_fps)
+    } else {
+        (set_source_fps, set_target_fps)
+    };
+    let opts = GprOptions {
+        noise_var: p.noise_var,
+        learn_noise: p.learn_noise,
+        sparse: p.sparse,
+        cg: gp::optim::CgOptions {
+            max_iter: p.max_iter,
+            ..Default::default()
+        },
+        ..Default::default()
+    };
+    let ratio = target_fps / source_fps;
+    let start = std::time::Instant::now();
+    if !(0.0..=1.0).contains(&p.prior_weight) {
+        return Err(mesh_core::Error::invalid(format!("--prior-weight must be in [0, 1], got {}", p.prior_weight)).into());
+    }
+    let ridge_toward = p.mean_prior == MeanPrior::Geometric;
+    let maps = (p.mean == MeanFunction::Affine && (ridge_toward || p.prior_weight > 0.0))
+        .then(|| crate::geometric_prior::part_priors(&src_pca, &tgt_pca));
+    let priors = maps.as_deref().map(|maps| MeanPriors { maps, ridge_toward, weight: p.prior_weight });
+    let spin = mesh_core::cli::spinner(
+        &format!("gpr-train: {} parts + displacement, {} pairs", names.len(), pairs.len()),
+        &p.common,
+    );
+    let model: GprModel = train(
+        method,
+        p.nn_bias,
+        p.mean,
+        p.mean_ridge,
+        priors,
+        &names,
+        &pairs,
+        ratio,
+        p.keyposes_only,
+        &opts,
+    )?;
+    spin.finish_and_clear();
+    mesh_core::info!(
+        "trained {} on {} pairs in {:.3} s",
+        method.name(),
+        model.n_train,
+        start.elapsed().as_secs_f64()
+    );
+    for r in &model.reports {
+        mesh_core::info!("{}", r.line());
+        for n in &r.notes {
+            mesh_core::warn!("{}: {n}", r.name);
+        }
+    }
+    let mut params = serde_json::to_value(p)?;
+    params["source_fps"] = source_fps.into();
+    params["target_fps"] = target_fps.into();
+    let mut header = p
+        .common
+        .header("gpr-train", env!("CARGO_PKG_VERSION"))
+        .with_params(&params)?
+        .with_input(&p.source_pca)?
+        .with_input(&p.target_pca)?;
+    for f in &p.pair {
+        header = header.with_input(f)?;
+    }
+    model.save(&p.out, &header)?;
+    Ok(())
+}

@@ -1,0 +1,154 @@
+//! The `gpdm-train` stage: one GPDM per body part (3DV eqs. 1-7) from a prealigned group.
+
+use std::path::PathBuf;
+
+use clap::Parser;
+use gpdm::optim::{Exit, Schedule};
+use mesh_core::artifact::Artifact;
+use mesh_core::cli::CommonArgs;
+use serde::Serialize;
+
+use crate::group::Group;
+use crate::train::{train_with_progress, TrainConfig};
+
+/// Learn one GPDM per body part (shared latent space per part) from a prealigned movement group
+#[derive(Parser, Debug, Serialize)]
+#[command(
+    name = "gpdm-train",
+    version,
+    after_help = "e.g.: gpdm-train --group out/work/variation/locomotion.group --out out/work/variation/locomotion.model --report out/work/variation/locomotion-train.json"
+)]
+pub struct Params {
+    #[command(flatten)]
+    #[serde(skip)]
+    pub common: CommonArgs,
+    /// Prealigned group (kind variation-group, from prealign)
+    #[arg(long)]
+    pub group: PathBuf,
+    /// Latent dimension d
+    #[arg(long, default_value_t = 3)]
+    pub latent_dim: usize,
+    /// Lower bound on the pose-noise variance 1/α3 in m² (0 = none)
+    #[arg(long, default_value_t = 1e-6)]
+    pub noise_floor: f64,
+    /// Lower bound on the dynamics-noise variance 1/β4 in squared latent units (0 = none; without
+    /// it 1/β4 collapses on some parts and HMC returns copies of the source)
+    #[arg(long, default_value_t = crate::train::DYN_NOISE_FLOOR)]
+    pub dyn_noise_floor: f64,
+    /// Alternating rounds of (X, α) and β-only L-BFGS phases (0 = one joint fit, the default)
+    #[arg(long, default_value_t = 0)]
+    pub rounds: usize,
+    /// L-BFGS iterations per phase (with --rounds > 0)
+    #[arg(long, default_value_t = 200)]
+    pub iters: usize,
+    /// L-BFGS iteration limit of the joint fit (it normally stops by convergence first)
+    #[arg(long, default_value_t = 10000)]
+    pub max_iter: usize,
+    /// Training frames: exact (every frame, the paper's fit; cost grows as N³) or strided (every
+    /// s-th frame, s from --fit-rate and --max-fit-frames; sampling interpolates back to the
+    /// capture's rate)
+    #[arg(long, value_enum, default_value_t = crate::train::Fit::default())]
+    pub fit: crate::train::Fit,
+    /// With --fit strided: frame rate the dynamics are learned at (stride round(fps / rate))
+    #[arg(long, value_name = "FPS", default_value_t = crate::train::FIT_RATE)]
+    pub fit_rate: f64,
+    /// With --fit strided: the stride is raised until one part's training frames (all
+    /// sequences) are at most this many, so the cost stays bounded whatever the capture length
+    #[arg(long, value_name = "N", default_value_t = crate::train::MAX_FIT_FRAMES)]
+    pub max_fit_frames: usize,
+    /// Output artifact (kind variation-model)
+    #[arg(short, long)]
+    pub out: PathBuf,
+    /// Training report (JSON: objective, hyperparameters, time per part)
+    #[arg(long)]
+    pub report: Option<PathBuf>,
+}
+
+/// Writes the model (and the `--report`); the header records `p`, the training configuration
+/// derived from it (`config`) and the group.
+pub fn run(p: &Params) -> anyhow::Result<()> {
+    let group = Group::load(&p.group)?;
+    let mut cfg = TrainConfig::default();
+    cfg.gpdm.latent_dim = p.latent_dim;
+    cfg.gpdm.pose_noise_floor = (p.noise_floor > 0.0).then_some(p.noise_floor);
+    cfg.gpdm.dyn_noise_floor = (p.dyn_noise_floor > 0.0).then_some(p.dyn_noise_floor);
+    if p.rounds > 0 {
+        cfg.options.schedule = Schedule::Alternate {
+            rounds: p.rounds,
+            iters: p.iters,
+        };
+    }
+    cfg.options.lbfgs.max_iter = p.max_iter;
+    cfg.fit(p.fit, p.fit_rate, p.max_fit_frames)?;
+    let bar = mesh_core::cli::progress_bar(
+        group.parts.len() as u64,
+        "gpdm-train: parts",
+        &p.common,
+    );
+    let (model, reports) = train_with_progress(&group, &cfg, &|_| bar.inc(1))?;
+    bar.finish_and_clear();
+    if model.stride > 1 {
+        mesh_core::info!(
+            "dynamics learned every {} frames ({:.1} fps of {:.1})",
+            model.stride,
+            model.fps / model.stride as f64,
+            model.fps
+        );
+    }
+    for r in &reports {
+        mesh_core::info!(
+            "{}: {} frames x {} dims, objective {:.4e} -> {:.4e} in {:.1} s",
+            r.part,
+            r.frames,
+            r.pose_dim,
+            r.report.initial_value,
+            r.report.final_value,
+            r.seconds
+        );
+        if let Some(e) = r
+            .report
+            .exits
+            .last()
+            .filter(|e| !matches!(e, Exit::GradientTolerance | Exit::ValueTolerance))
+        {
+            mesh_core::warn!("{}: L-BFGS stopped by {e:?}, not by convergence", r.part);
+        }
+        if r.report.max_jitter > 0.0 {
+            mesh_core::warn!(
+                "{}: Cholesky needed jitter {:e} at the optimum",
+                r.part,
+                r.report.max_jitter
+            );
+        }
+    }
+    let mut params = serde_json::to_value(p)?;
+    params["config"] = serde_json::to_value(&cfg)?;
+    let header = p
+        .common
+        .header("gpdm-train", env!("CARGO_PKG_VERSION"))
+        .with_input(&p.group)?
+        .with_params(&params)?;
+    model.save(&p.out, &header)?;
+    if let Some(report) = &p.report {
+        let light: Vec<_> = reports
+            .iter()
+            .map(|r| {
+                serde_json::json!({
+                    "part": r.part, "frames": r.frames, "pose_dim": r.pose_dim, "seconds": r.seconds,
+                    "alpha": r.alpha, "beta": r.beta, "initial_value": r.report.initial_value,
+                    "final_value": r.report.final_value, "evaluations": r.report.evaluations,
+                    "iterations": r.report.history.len() - 1,
+                    "beta_log_sd": cfg.gpdm.beta_log_sd, "fixed_latent_scale": cfg.gpdm.fixed_latent_scale,
+                    "exits": r.report.exits, "max_jitter": r.report.max_jitter,
+                })
+            })
+            .collect();
+        let json = serde_json::json!({ "group": group.name, "config": cfg, "scale": model.scale,
+            "stride": model.stride, "parts": light });
+        mesh_core::atomic::write_bytes_atomic(
+            report,
+            (serde_json::to_string_pretty(&json)? + "\n").as_bytes(),
+        )?;
+    }
+    Ok(())
+}
