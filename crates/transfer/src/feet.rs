@@ -18,15 +18,15 @@
 //! foot carries every error of the transferred leg into the root and the body drifts (placed
 //! error 6.9 -> 14.0 cm on the holdout benchmark); with it the placement is unchanged
 //! (holdout 6.91 -> 6.90 cm, demo 7.59 -> 7.63) and the sliding comes within 1.15x of the
-//! truth's on 7 of 9 benchmark motions (4 without the clean-up; docs/RESULTS.md). The source's contacts are detected on its own meshes
-//! ([`capture::contact_detector`]), never on the target's, whose sliding soles are what is being
-//! corrected. Whole frames move, so each frame's shape, and its pose error after a per-frame rigid
+//! truth's on 7 of 9 benchmark motions (4 without the clean-up; docs/RESULTS.md). The source's
+//! contacts are detected on its own meshes ([`capture::contact_detector`]), never on the
+//! target's, whose sliding soles are what is being corrected. Whole frames move, so each frame's shape, and its pose error after a per-frame rigid
 //! fit, is unchanged; only the placement changes.
 
 use capture::align::AlignedMotion;
 use capture::contact_detector::{self, Rule};
-use gp::linalg::Cholesky;
 use capture::part_pca::PcaModel;
+use gp::linalg::Cholesky;
 use mesh_core::{Error, Result};
 use nalgebra::{DMatrix, Vector3};
 
@@ -62,7 +62,6 @@ pub struct Planted {
     pub planted_frames: usize,
     pub max_shift_m: f64,
 }
-
 
 /// The horizontal shifts `d(t)` of the module doc: `target` and `source` the two subjects' sole
 /// tracks (same frame count as `contacts`), `ratio` the scale `r`.
