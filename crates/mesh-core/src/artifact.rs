@@ -64,8 +64,8 @@ pub struct InputRecord {
 #[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
 pub struct Header {
     pub producer: Producer,
-    /// The stage's command line; the program name is reduced to its file
-    /// name so the record does not depend on where the binary was built.
+    /// The stage's command line, for stages that record no params; the program name is
+    /// reduced to its file name so the record does not depend on where the binary was built.
     pub command_line: Vec<String>,
     /// The stage's parameters (its parsed options), any JSON value.
     pub params: serde_json::Value,
@@ -114,10 +114,14 @@ impl Header {
         self.with_command_line(args)
     }
 
-    /// Records the stage parameters (anything serde can turn into JSON).
+    /// Records the stage parameters (anything serde can turn into JSON) and drops the
+    /// command line: the parsed parameters describe the run completely, while the command
+    /// line also holds flags that change no output (`-v`, `--threads`), so a header with
+    /// params is the same bytes however the stage was invoked.
     pub fn with_params<P: Serialize>(mut self, params: &P) -> Result<Self> {
         self.params = serde_json::to_value(params)
             .map_err(|e| Error::invalid(format!("cannot record parameters as JSON: {e}")))?;
+        self.command_line.clear();
         Ok(self)
     }
 

@@ -62,16 +62,22 @@ fn err_of<T: std::fmt::Debug>(r: mesh_core::Result<T>) -> String {
 }
 
 #[test]
+fn command_line_is_kept_without_params_and_dropped_with_them() {
+    let h = Header::new("test-stage", "0.1.0").with_command_line(["/build/test-stage", "-v", "x"]);
+    assert_eq!(h.command_line, ["test-stage", "-v", "x"], "program name reduced to its file name");
+    let h = h.with_params(&serde_json::json!({"m": 20})).unwrap();
+    assert!(h.command_line.is_empty());
+    assert_eq!(h.params, serde_json::json!({"m": 20}));
+}
+
+#[test]
 fn round_trip_preserves_header_and_payload() {
     let dir = tempfile::tempdir().unwrap();
     let (path, _) = good_file(dir.path());
     let (h, m) = Model::load_with_header(&path).unwrap();
     assert_eq!(m, model());
     assert_eq!(h, header(dir.path()));
-    assert_eq!(
-        h.command_line[0], "test-stage",
-        "program name reduced to its file name"
-    );
+    assert!(h.command_line.is_empty(), "params replace the command line");
     assert_eq!(
         h.inputs[0].sha256,
         "ba7816bf8f01cfea414140de5dae2223b00361a396177a9cb410ff61f20015ad"
