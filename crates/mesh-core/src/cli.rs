@@ -148,6 +148,33 @@ impl CommonArgs {
     }
 }
 
+/// The options of a stage's `Params` that its JSON record (what [`Header::with_params`] stores)
+/// lacks, after parsing `argv` (the program name first): every argument but the
+/// [`CommonArgs`] must appear under its long flag's name with `_` for `-` (a positional
+/// under its own name), given or not; with subcommands, the chosen subcommand's arguments.
+/// Empty when the record is complete. `Err` is clap's message for a bad `argv`.
+pub fn unrecorded_options<P>(argv: &[&str]) -> Result<Vec<String>, String>
+where
+    P: clap::Parser + serde::Serialize,
+{
+    let params = P::try_parse_from(argv).map_err(|e| e.to_string())?;
+    let record = serde_json::to_value(&params).map_err(|e| e.to_string())?;
+    let mut cmd = P::command();
+    let matches = cmd.try_get_matches_from_mut(argv).map_err(|e| e.to_string())?;
+    let cmd = match matches.subcommand_name() {
+        Some(name) => cmd.find_subcommand(name).cloned().unwrap_or(cmd),
+        None => cmd,
+    };
+    let common = <CommonArgs as clap::Args>::augment_args(clap::Command::new("common"));
+    let skip: Vec<&str> = common.get_arguments().map(|a| a.get_id().as_str()).chain(["help", "version"]).collect();
+    Ok(cmd
+        .get_arguments()
+        .filter(|a| !skip.contains(&a.get_id().as_str()))
+        .map(|a| a.get_long().map_or_else(|| a.get_id().to_string(), |l| l.replace('-', "_")))
+        .filter(|key| record.get(key).is_none())
+        .collect())
+}
+
 /// Calls `openblas_set_num_threads(1)` when the process has OpenBLAS loaded;
 /// does nothing otherwise (looked up with `dlsym` so that stages without BLAS
 /// do not have to link it).
@@ -353,4 +380,33 @@ pub fn spinner(message: &str, args: &CommonArgs) -> ProgressBar {
     bar.enable_steady_tick(std::time::Duration::from_millis(200));
     register(&bar);
     bar
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[derive(clap::Parser, serde::Serialize)]
+    struct Params {
+        #[command(flatten)]
+        #[serde(skip)]
+        common: CommonArgs,
+        #[arg(long, default_value_t = 3)]
+        max_iter: usize,
+        #[arg(long)]
+        #[serde(skip)]
+        hidden: Option<String>,
+        #[arg(long = "renamed-flag")]
+        field: bool,
+        input: String,
+    }
+
+    #[test]
+    fn unrecorded_options_names_the_flags_missing_from_the_record() {
+        let missing = unrecorded_options::<Params>(&["x", "in", "--seed", "4", "-v"]).unwrap();
+        // `max_iter` and `input` are there (the default and the positional); `hidden` is
+        // skipped and `--renamed-flag` recorded as `field`; the common flags are not asked for.
+        assert_eq!(missing, ["hidden", "renamed_flag"]);
+        assert!(unrecorded_options::<Params>(&["x"]).is_err(), "INPUT is required");
+    }
 }
