@@ -24,7 +24,8 @@ use capture::assemble::{assemble, plan, AssemblyPlan};
 use capture::part_pca::{PartAlignment, PcaModel};
 
 /// Which surface reconstruction follows the PCA decoding.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, clap::ValueEnum)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Serialize, clap::ValueEnum)]
+#[serde(rename_all = "kebab-case")]
 pub enum Surface {
     /// Overlaps averaged (no §6).
     #[default]

@@ -1,6 +1,7 @@
-//! The transfer stages whose parameters are one struct: each module holds the stage's
-//! [`clap::Parser`] + [`serde::Serialize`] `Params` (the command line, and the parameters
-//! recorded in the artifact header) and its `run`; `src/bin/<stage>.rs` only parses and runs.
+//! The transfer stages: each module holds the stage's [`clap::Parser`] + [`serde::Serialize`]
+//! `Params` (the command line, and the parameters recorded in the artifact header) and its
+//! `run`; `src/bin/<stage>.rs` only parses and runs.
 
 pub mod dtw_densify;
+pub mod gpr_predict;
 pub mod gpr_train;

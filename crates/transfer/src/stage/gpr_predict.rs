@@ -1,0 +1,214 @@
+//! The `gpr-predict` stage: an aligned source motion transferred to the target subject with a
+//! trained model (CVPR eq. 12 per part and for the displacement), decoded, placed and optionally
+//! corrected and stitched (CVPR §6), written as PLY frames in world coordinates.
+
+use std::path::PathBuf;
+use std::time::Instant;
+
+use anyhow::{bail, Context};
+use clap::Parser;
+use mesh_core::artifact::Artifact;
+use mesh_core::cli::CommonArgs;
+use mesh_core::segmentation::Segmentation;
+use mesh_core::sequence::MeshSequence;
+use serde::Serialize;
+
+use crate::gpr_model::GprModel;
+use crate::placement::Placement;
+use crate::predict::transfer_motion;
+use crate::reconstruct::{Reconstructor, Surface};
+use capture::align::AlignedMotion;
+use capture::part_pca::PcaModel;
+
+/// Transfer an aligned source motion to the target subject with a trained model: PLY frames in world coordinates
+#[derive(Parser, Debug, Serialize)]
+#[command(
+    name = "gpr-predict",
+    version,
+    after_help = "e.g.: gpr-predict --model work/A-to-B/gpr-nn.model --source-pca work/A/pca.model --target-pca work/B/pca.model \\\n        --target-template set/B/walk/000000.ply work/A/punch.aligned --out out/transfer/A-to-B/punch/gpr-nn"
+)]
+pub struct Params {
+    #[command(flatten)]
+    #[serde(skip)]
+    pub common: CommonArgs,
+    /// Trained model (from gpr-train)
+    #[arg(long)]
+    pub model: PathBuf,
+    /// PCA model of the model's source subject (the one it was trained with)
+    #[arg(long)]
+    pub source_pca: PathBuf,
+    /// PCA model of the model's target subject
+    #[arg(long)]
+    pub target_pca: PathBuf,
+    /// Target template mesh (gives the output's faces)
+    #[arg(long)]
+    pub target_template: PathBuf,
+    /// How the poses are placed in the world
+    #[arg(long, value_enum, default_value_t = Placement::ScaledSource)]
+    pub placement: Placement,
+    /// Surface reconstruction after PCA decoding (paper §6): `assemble` averages overlaps,
+    /// `correct` applies §6.1 first, `correct-stitch` also stitches along optimal loops (§6.2)
+    #[arg(long, value_enum, default_value_t = Surface::Assemble)]
+    pub surface: Surface,
+    /// Target segmentation (from segment; needed unless --surface assemble)
+    #[arg(long, required_if_eq_any([("surface", "correct"), ("surface", "correct-stitch"), ("surface", "stitch")]))]
+    pub segmentation: Option<PathBuf>,
+    /// Target's aligned training motions: the correction's training part meshes (repeatable)
+    #[arg(long = "target-training", required_if_eq_any([("surface", "correct"), ("surface", "correct-stitch")]))]
+    pub target_training: Vec<PathBuf>,
+    /// Nearest training part meshes blended by the correction (the paper's M)
+    #[arg(short = 'm', long, default_value_t = surface::correct::DEFAULT_NEIGHBOURS as u16, value_parser = clap::value_parser!(u16).range(1..))]
+    pub neighbours: u16,
+    /// Use every n-th training frame for the correction
+    #[arg(long, default_value_t = 1, value_parser = clap::value_parser!(u16).range(1..))]
+    pub correct_stride: u16,
+    /// Do not clean up foot skating (by default each placed frame is shifted horizontally,
+    /// smoothly in time, so that where the source has a foot down the target's sole moves as the
+    /// source's does, scaled: planted feet stay planted; the pose is unchanged)
+    #[arg(long)]
+    pub no_footskate: bool,
+    /// Smoothness λ of the foot-skating correction (weight of its second differences against
+    /// the contact residuals; larger: smoother root, feet pinned less tightly)
+    #[arg(long, default_value_t = crate::feet::SMOOTHNESS)]
+    pub footskate_smoothness: f64,
+    /// Aligned source motion (from align)
+    pub motion: PathBuf,
+    /// Output folder of PLY frames 000000.ply, ... (the target's topology, one frame per source frame)
+    #[arg(short, long)]
+    pub out: PathBuf,
+    /// Also write timings (frames per second of the prediction) as JSON
+    #[arg(long)]
+    pub timing: Option<PathBuf>,
+    /// Also write per-frame confidence as JSON: per part, the GP's predictive variance over
+    /// its prior variance and the distance to the nearest training input (docs/FORMATS.md)
+    #[arg(long)]
+    pub confidence: Option<PathBuf>,
+}
+
+/// Writes the frames (and the `--timing` and `--confidence` JSON when asked); the folder's
+/// `rate.json` is the source frame rate recorded in the model's header.
+pub fn run(p: &Params) -> anyhow::Result<()> {
+    let model = GprModel::load(&p.model)?;
+    let (src_pca, tgt_pca) = (
+        PcaModel::load(&p.source_pca)?,
+        PcaModel::load(&p.target_pca)?,
+    );
+    for (pca, path) in [(&src_pca, &p.source_pca), (&tgt_pca, &p.target_pca)] {
+        let names: Vec<&String> = pca.parts.iter().map(|part| &part.name).collect();
+        if names
+            .iter()
+            .map(|s| s.as_str())
+            .ne(model.part_names.iter().map(|s| s.as_str()))
+        {
+            bail!(
+                "{}: parts {:?} differ from the model's {:?}",
+                path.display(),
+                names,
+                model.part_names
+            );
+        }
+    }
+    let motion = AlignedMotion::load(&p.motion)?;
+    let template = mesh_core::io::read_mesh(&p.target_template)?;
+    if template.n_vertices() != tgt_pca.n_vertices {
+        bail!(
+            "{}: {} vertices but the target PCA model was fitted on {}",
+            p.target_template.display(),
+            template.n_vertices(),
+            tgt_pca.n_vertices
+        );
+    }
+    let faces = template.faces;
+    let mut recon = match (&p.surface, &p.segmentation) {
+        (Surface::Assemble, _) | (_, None) => None,
+        (surface, Some(seg_path)) => {
+            let seg = Segmentation::load(seg_path)?;
+            let training = p
+                .target_training
+                .iter()
+                .map(AlignedMotion::load)
+                .collect::<Result<Vec<_>, _>>()?;
+            let refs: Vec<&AlignedMotion> = training.iter().collect();
+            Some(
+                Reconstructor::new(
+                    &tgt_pca,
+                    &seg,
+                    &faces,
+                    &refs,
+                    *surface,
+                    p.neighbours.into(),
+                    p.correct_stride.into(),
+                )
+                .with_context(|| seg_path.display().to_string())?
+                .with_progress(mesh_core::cli::progress_bar(
+                    0,
+                    "gpr-predict: surface",
+                    &p.common,
+                )),
+            )
+        }
+    };
+    let t0 = Instant::now();
+    let result = transfer_motion(
+        &model,
+        &src_pca,
+        &tgt_pca,
+        &motion,
+        p.placement,
+        recon.as_mut(),
+        (!p.no_footskate).then_some(p.footskate_smoothness),
+    )
+    .with_context(|| p.motion.display().to_string())?;
+    let total = t0.elapsed().as_secs_f64();
+    if let Some(w) = &result.blend_weights {
+        let mean = w.iter().sum::<f64>() / w.len().max(1) as f64;
+        let max = w.iter().cloned().fold(0.0, f64::max);
+        mesh_core::info!(
+            "blended placement: scaled-source weight mean {mean:.3}, max {max:.3}"
+        );
+    }
+    if let Some(planted) = &result.planted {
+        mesh_core::info!(
+            "foot skating: {} frames with a planted foot, root shifted by at most {:.3} m",
+            planted.planted_frames,
+            planted.max_shift_m
+        );
+    }
+    if let Some(path) = &p.confidence {
+        let xs = src_pca.encode(&motion)?;
+        let xd = crate::predict::displacement_matrix(&motion.displacements);
+        let c = crate::confidence::confidence(&model, &xs, &xd)
+            .with_context(|| p.motion.display().to_string())?;
+        mesh_core::atomic::write_bytes_atomic(path, serde_json::to_string(&c)?.as_bytes())?;
+    }
+    let t1 = Instant::now();
+    // One output frame per source frame: the sequence plays at the source's rate, which
+    // gpr-train records in the model's header.
+    let (_, _, model_header) = mesh_core::artifact::read_header(&p.model)?;
+    let fps = model_header.params.get("source_fps").and_then(|f| f.as_f64());
+    MeshSequence::new(faces, result.frames).write_dir_at(&p.out, fps)?;
+    let write = t1.elapsed().as_secs_f64();
+    let n = motion.n_frames() as f64;
+    mesh_core::info!(
+        "{} frames: encode {:.4} s, GP {:.4} s ({:.0} frames/s), decode+assemble {:.4} s, total {:.4} s, PLY writing {:.3} s",
+        n,
+        result.timing.encode_s,
+        result.timing.gp_s,
+        n / result.timing.gp_s.max(1e-12),
+        result.timing.decode_s,
+        total,
+        write
+    );
+    if let Some(path) = &p.timing {
+        let json = serde_json::json!({
+            "frames": motion.n_frames(), "encode_s": result.timing.encode_s, "gp_s": result.timing.gp_s,
+            "gp_frames_per_s": n / result.timing.gp_s.max(1e-12), "decode_assemble_s": result.timing.decode_s,
+            "total_s": total, "frames_per_s_without_writing": n / total.max(1e-12), "ply_write_s": write,
+        });
+        mesh_core::atomic::write_bytes_atomic(
+            path,
+            serde_json::to_string_pretty(&json)?.as_bytes(),
+        )?;
+    }
+    Ok(())
+}
