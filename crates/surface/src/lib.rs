@@ -23,6 +23,7 @@ pub mod optimal_boundary;
 pub mod poisson;
 pub mod polar;
 pub mod segmentation;
+pub mod stage;
 pub mod stitch;
 mod topo;
 
