@@ -41,9 +41,54 @@ fn prealign_records_every_input_file_and_parameter() {
         let rec = rec.unwrap_or_else(|| panic!("{} not recorded", f.display()));
         assert_eq!(rec.sha256, sha256(f), "{}", f.display());
     }
-    assert_eq!(header.params["group"], "loco");
+    assert_eq!(header.params["group_name"], "loco");
     assert_eq!(header.params["motions"], serde_json::json!(["walk", "run"]));
     assert_eq!(header.params["blend_weights"], serde_json::json!([0.25, 0.75]));
     assert_eq!(header.params["gait_cycles"], false);
-    assert_eq!(header.params["subject"], "A");
+    assert_eq!(header.params["subject"], "A", "the subject it resolved to (the set's source)");
+    // Every option is recorded under its flag's name, defaults included (the stage's Params).
+    assert_eq!(header.params["set"], serde_json::json!(set));
+    assert_eq!(header.params["out"], serde_json::json!(out));
+    for key in ["subject_name", "reference", "contact_weight", "export"] {
+        assert!(header.params[key].is_null(), "{key}: not given");
+    }
+    for key in ["whole_body", "fallback_whole_body"] {
+        assert_eq!(header.params[key], false, "{key}");
+    }
+    assert!(header.command_line.is_empty(), "the params describe the run");
+
+    // Invocation independence: the same options in another order and in `--flag=value` form,
+    // with flags that change no output, write the same bytes.
+    let first = std::fs::read(&out).unwrap();
+    let st = Command::new(env!("CARGO_BIN_EXE_prealign"))
+        .arg(format!("--out={}", out.display()))
+        .args(["--blend-weights=0.25,0.75", "-v", "--threads", "1", "--motions", "walk,run", "--group-name=loco", "--set"])
+        .arg(&set)
+        .env("OPENBLAS_NUM_THREADS", "1")
+        .output()
+        .unwrap();
+    assert!(st.status.success(), "{}", String::from_utf8_lossy(&st.stderr));
+    assert!(std::fs::read(&out).unwrap() == first, "the group's bytes depend on how the options were written");
+}
+
+/// Every option of the variation stages' `Params` is in the JSON record the header stores,
+/// under its flag's name.
+#[test]
+fn variation_stage_params_record_every_option_under_its_flag_name() {
+    use mesh_core::cli::unrecorded_options as missing;
+    let cases = [
+        ("prealign", missing::<variation::stage::prealign::Params>(&["prealign", "--set", "s", "--group-name", "g", "--motions", "a,b", "-o", "g.group"])),
+        ("gpdm-train", missing::<variation::stage::gpdm_train::Params>(&["gpdm-train", "--group", "g", "-o", "m"])),
+        ("hmc-sample", missing::<variation::stage::hmc_sample::Params>(&["hmc-sample", "--model", "m", "--group", "g", "--blend", "walk:run", "--weight", "0.3", "-o", "out"])),
+        ("variation-eval", missing::<variation::stage::variation_eval::Params>(&["variation-eval", "--model", "m", "--group", "g", "-o", "e.json"])),
+    ];
+    for (stage, unrecorded) in cases {
+        assert_eq!(unrecorded.unwrap(), Vec::<String>::new(), "{stage}");
+    }
+    use clap::Parser;
+    let p = variation::stage::hmc_sample::Params::try_parse_from(["hmc-sample", "--model", "m", "--group", "g", "--blend", "walk:run", "--weight", "0.3", "-o", "out"]).unwrap();
+    let record = serde_json::to_value(&p).unwrap();
+    assert_eq!(record["blend"], "walk:run", "as written on the command line");
+    assert_eq!(record["blends"], serde_json::json!([0.25, 0.75]), "the default");
+    assert_eq!(record["sampler"], "hmc");
 }

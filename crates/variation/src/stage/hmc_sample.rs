@@ -1,0 +1,210 @@
+//! The `hmc-sample` stage: variations of every training motion and of blends, sampled by Hybrid
+//! Monte Carlo in the GPDM latent spaces (3DV §5) and written as meshes.
+
+use std::path::PathBuf;
+
+use clap::Parser;
+use mesh_core::artifact::Artifact;
+use mesh_core::cli::CommonArgs;
+use serde::Serialize;
+
+use crate::group::Group;
+use crate::reconstruct::Assembly;
+use crate::sample::Sampler;
+use crate::synthesize::{run_with_progress, Query, SynthConfig};
+use crate::train::VariationModel;
+
+/// Sample variations of every training motion and of blends by HMC in the GPDM latent spaces and write them as meshes
+#[derive(Parser, Debug, Serialize)]
+#[command(
+    name = "hmc-sample",
+    version,
+    after_help = "e.g.: hmc-sample --seed 0 -n 5 --blends 0.25,0.75 --group work/locomotion.group --model work/locomotion.model --out out/variation/locomotion --report work/locomotion-samples.json\n      hmc-sample --group work/locomotion.group --model work/locomotion.model --motion walk -n 20 --frame-count 300 --seed 7 --out out/walk20\n      hmc-sample --group work/locomotion.group --model work/locomotion.model --blend walk:run --weight 0.3 -n 10 --sampler ancestral --out out/blend03"
+)]
+pub struct Params {
+    #[command(flatten)]
+    #[serde(skip)]
+    pub common: CommonArgs,
+    /// Trained model (kind variation-model, from gpdm-train)
+    #[arg(long)]
+    pub model: PathBuf,
+    /// The prealigned group the model was trained on (sources for the statistics)
+    #[arg(long)]
+    pub group: PathBuf,
+    /// Variations per sequence
+    #[arg(short, long, default_value_t = 5)]
+    pub n: usize,
+    /// Only variations of this training sequence (a motion of the group, or a pre-blend
+    /// `blend-<w>`), instead of every sequence and the --blends
+    #[arg(long, conflicts_with = "blend")]
+    pub motion: Option<String>,
+    /// Only variations of the blend of two motions of the group, `A:B` at --weight (guided by
+    /// the learned pre-blends for the group's blend pair, the motions' own variants otherwise)
+    #[arg(long, value_name = "A:B", requires = "weight", value_parser = parse_pair)]
+    #[serde(serialize_with = "pair_as_text")]
+    pub blend: Option<(String, String)>,
+    /// Weight w* in [0, 1] of the --blend (0: A, 1: B)
+    #[arg(short, long, value_name = "W", requires = "blend")]
+    pub weight: Option<f64>,
+    /// Frames per variation [default: the capture's length]; longer follows the dynamics on
+    /// past the capture's end, shorter cuts
+    #[arg(long, value_name = "N")]
+    pub frame_count: Option<usize>,
+    /// Blend weights w* in [0, 1] to synthesise, comma-separated (empty: none)
+    #[arg(long, default_value = "0.25,0.75", value_parser = parse_weights)]
+    pub blends: Weights,
+    /// Draw poses from the predictive distribution (3DV eq. 11) instead of its mean (eq. 12)
+    #[arg(long)]
+    pub sample_poses: bool,
+    /// Merge parts by averaging on the overlap bands instead of optimal-boundary Poisson stitching
+    #[arg(long)]
+    pub average: bool,
+    /// Trajectory sampler: hmc (the paper's Hybrid Monte Carlo) or ancestral (exact independent
+    /// draws of the same density, one forward pass each; burn-in and thinning do not apply)
+    #[arg(long, value_enum, default_value_t = Sampler::Hmc)]
+    pub sampler: Sampler,
+    /// Scale κ of every one-step variance of the sampled dynamics (1: the model's density, as in
+    /// the paper; below 1: trajectories closer to the learned dynamics, less frame-to-frame jitter)
+    #[arg(long, default_value_t = 1.0)]
+    pub variance_scale: f64,
+    /// HMC burn-in iterations (step size adapted)
+    #[arg(long, default_value_t = 200)]
+    pub burn_in: usize,
+    /// Keep one HMC iteration in THIN
+    #[arg(long, default_value_t = 10)]
+    pub thin: usize,
+    /// Target acceptance rate during burn-in
+    #[arg(long, default_value_t = 0.7)]
+    pub target_accept: f64,
+    /// Do not ground the variations (by default each frame is shifted vertically, smoothly in
+    /// time, so that its soles follow the source's at the DTW-matched frame)
+    #[arg(long)]
+    pub no_grounding: bool,
+    /// Do not clean up foot skating (by default each frame is shifted horizontally, smoothly in
+    /// time, so that feet planted in the source at the DTW-matched frame stay put)
+    #[arg(long)]
+    pub no_footskate: bool,
+    /// Smoothness λ of the foot-skating correction (weight of its second differences against
+    /// the contact residuals; larger: smoother root, feet pinned less tightly)
+    #[arg(long, default_value_t = crate::footskate::SMOOTHNESS)]
+    pub footskate_smoothness: f64,
+    /// Do not lock planted feet by deforming the legs (by default, after the root clean-up,
+    /// each planted sole's remaining slide is removed by shifting its leg, weighted from the
+    /// sole up to the hip)
+    #[arg(long)]
+    pub no_foot_lock: bool,
+    /// Do not set the feet's heights by deforming the legs (by default, after the root
+    /// clean-up, each planted sole is brought to the source's height at the matched frame and
+    /// each swing foot raised to at least the source's clearance)
+    #[arg(long)]
+    pub no_foot_height: bool,
+    /// Smooth every sampled latent trajectory in time with a Gaussian of SIGMA frames before
+    /// decoding (first point kept; 0 = off: the trajectories as sampled)
+    #[arg(long, value_name = "SIGMA", default_value_t = 0.0)]
+    pub latent_smoothing: f64,
+    /// Output folder: <out>/<sequence>/var<k>/NNNNNN.ply
+    #[arg(short, long)]
+    pub out: PathBuf,
+    /// Statistics against the sources (JSON); without it they are not computed
+    #[arg(long)]
+    pub report: Option<PathBuf>,
+}
+
+fn parse_pair(s: &str) -> Result<(String, String), String> {
+    match s.split_once(':') {
+        Some((a, b)) if !a.is_empty() && !b.is_empty() => Ok((a.into(), b.into())),
+        _ => Err(format!("'{s}' is not two motion names A:B")),
+    }
+}
+
+/// `--blend` as written on the command line (`A:B`), or `null`.
+fn pair_as_text<S: serde::Serializer>(pair: &Option<(String, String)>, ser: S) -> Result<S::Ok, S::Error> {
+    match pair {
+        Some((a, b)) => ser.serialize_str(&format!("{a}:{b}")),
+        None => ser.serialize_none(),
+    }
+}
+
+/// Comma-separated weights; the empty string is an empty list.
+#[derive(Clone, Debug, Serialize)]
+#[serde(transparent)]
+pub struct Weights(pub Vec<f64>);
+
+fn parse_weights(s: &str) -> Result<Weights, String> {
+    s.split(',')
+        .map(str::trim)
+        .filter(|w| !w.is_empty())
+        .map(|w| {
+            w.parse::<f64>()
+                .map_err(|_| format!("'{w}' is not a number"))
+        })
+        .collect::<Result<_, _>>()
+        .map(Weights)
+}
+
+/// Writes the variations as PLY frames (and the `--report` statistics when asked).
+pub fn run(p: &Params) -> anyhow::Result<()> {
+    let model = VariationModel::load(&p.model)?;
+    let group = Group::load(&p.group)?;
+    let cfg = SynthConfig {
+        n: p.n,
+        blends: p.blends.0.clone(),
+        seed: p.common.seed,
+        sample_poses: p.sample_poses,
+        assembly: if p.average {
+            Assembly::Average
+        } else {
+            Assembly::Stitch
+        },
+        sampler: p.sampler,
+        variance_scale: p.variance_scale,
+        burn_in: p.burn_in,
+        thin: p.thin,
+        target_accept: p.target_accept,
+        grounding: !p.no_grounding,
+        footskate: !p.no_footskate,
+        footskate_smoothness: p.footskate_smoothness,
+        foot_lock: !p.no_foot_lock,
+        foot_height: !p.no_foot_height,
+        // The statistics against the sources are the report's content: skipped without one.
+        statistics: p.report.is_some(),
+        latent_smoothing: p.latent_smoothing,
+        query: match (&p.motion, &p.blend, p.weight) {
+            (Some(m), _, _) => Some(Query::Motion(m.clone())),
+            (None, Some((a, b)), Some(w)) => Some(Query::Blend {
+                a: a.clone(),
+                b: b.clone(),
+                w,
+            }),
+            _ => None,
+        },
+        frames: p.frame_count,
+    };
+    // Sampling first (a spinner), then one step per synthesised sequence.
+    let bar = mesh_core::cli::progress_bar(0, "hmc-sample: sampling", &p.common);
+    bar.enable_steady_tick(std::time::Duration::from_millis(200));
+    let report = run_with_progress(&model, &group, &cfg, &p.out, &|done, total| {
+        if done == 0 {
+            bar.set_length(total as u64);
+            bar.set_message("hmc-sample: sequences");
+        }
+        bar.set_position(done as u64);
+    })?;
+    bar.finish_and_clear();
+    for n in &report.notes {
+        mesh_core::warn!("{n}");
+    }
+    mesh_core::info!(
+        "HMC acceptance {:.2} (min {:.2}, max {:.2})",
+        report.accept_rate.mean,
+        report.accept_rate.min,
+        report.accept_rate.max
+    );
+    if let Some(path) = &p.report {
+        mesh_core::atomic::write_bytes_atomic(
+            path,
+            (serde_json::to_string_pretty(&report)? + "\n").as_bytes(),
+        )?;
+    }
+    Ok(())
+}

@@ -1,0 +1,55 @@
+//! The `variation-eval` stage: a variation model measured on its group: GPDM vs PCA reconstruction
+//! (3DV fig. 4), guided vs unguided latent blending (fig. 7b) and the latent plots (figs. 3, 5).
+
+use std::path::PathBuf;
+
+use clap::Parser;
+use mesh_core::artifact::Artifact;
+use mesh_core::cli::CommonArgs;
+use serde::Serialize;
+
+use crate::evaluate::evaluate;
+use crate::group::Group;
+use crate::train::VariationModel;
+
+/// Measure a variation model: GPDM vs PCA reconstruction (fig. 4), guided vs unguided latent blending (fig. 7b), latent plots (figs. 3, 5)
+#[derive(Parser, Debug, Serialize)]
+#[command(
+    name = "variation-eval",
+    version,
+    after_help = "e.g.: variation-eval --model work/locomotion.model --group work/locomotion.group --plots out/variation/plots --out work/locomotion-eval.json"
+)]
+pub struct Params {
+    #[command(flatten)]
+    #[serde(skip)]
+    pub common: CommonArgs,
+    /// Trained model (kind variation-model, from gpdm-train)
+    #[arg(long)]
+    pub model: PathBuf,
+    /// The prealigned group the model was trained on
+    #[arg(long)]
+    pub group: PathBuf,
+    /// Folder for the latent-trajectory plots (PNG)
+    #[arg(long)]
+    pub plots: Option<PathBuf>,
+    /// Output report (JSON)
+    #[arg(short, long)]
+    pub out: PathBuf,
+}
+
+/// Writes the JSON report (and the plots into `--plots` when asked).
+pub fn run(p: &Params) -> anyhow::Result<()> {
+    let model = VariationModel::load(&p.model)?;
+    let group = Group::load(&p.group)?;
+    let spin = mesh_core::cli::spinner(
+        &format!("variation-eval: {} sequences x {} parts", model.sequences.len(), model.parts.len()),
+        &p.common,
+    );
+    let report = evaluate(&model, &group, p.plots.as_deref(), p.common.seed)?;
+    spin.finish_and_clear();
+    mesh_core::atomic::write_bytes_atomic(
+        &p.out,
+        (serde_json::to_string_pretty(&report)? + "\n").as_bytes(),
+    )?;
+    Ok(())
+}
