@@ -1,15 +1,48 @@
 //! The `propose-curves` stage: read, propose, check by segmenting, write (and draw, on request).
 
-use std::path::Path;
+use std::path::{Path, PathBuf};
 
 use anyhow::{Context, Result};
+use clap::Parser;
 use mesh_core::capture_set::SubjectSpec;
+use mesh_core::cli::CommonArgs;
+use serde::Serialize;
 
 use crate::limb_loops::{propose, with_curves, Settings};
 
+/// Find the limbs' part curves on a template without annotation and write them into a copy of subject.json
+#[derive(Parser, Debug, Serialize)]
+#[command(
+    name = "propose-curves",
+    version,
+    after_help = "Check them by eye with --render: the template from the front, the side and the back, parts coloured, loops in black\n\
+                  e.g.: propose-curves set/A/subject.json --template set/A/walk/000000.ply --out set/A/subject.json --render curves-A.png"
+)]
+pub struct Params {
+    #[command(flatten)]
+    #[serde(skip)]
+    pub common: CommonArgs,
+    /// The subject's subject.json (its curves and part tree may be missing)
+    pub subject: PathBuf,
+    /// The mesh the curves index into (the subject's template)
+    #[arg(long)]
+    pub template: PathBuf,
+    /// Output subject.json (may be SUBJECT itself)
+    #[arg(short, long)]
+    pub out: PathBuf,
+    /// Also draw the template with its loops and parts coloured (PNG), for checking them
+    #[arg(long, value_name = "PNG")]
+    pub render: Option<PathBuf>,
+}
+
+/// Runs [`propose_into`] with the stage's options.
+pub fn run(p: &Params) -> Result<()> {
+    propose_into(&p.subject, &p.template, &p.out, p.render.as_deref())
+}
+
 /// Proposes curves for `template`, writes `subject` with them to `out`, and with `render` a
 /// PNG of the loops and parts there ([`crate::check_image`]).
-pub fn run(subject: &Path, template: &Path, out: &Path, render: Option<&Path>) -> Result<()> {
+pub fn propose_into(subject: &Path, template: &Path, out: &Path, render: Option<&Path>) -> Result<()> {
     let bytes = mesh_core::input::read_regular_file(subject)?;
     let value: serde_json::Value =
         serde_json::from_slice(&bytes).map_err(|e| anyhow::anyhow!("{}: invalid JSON: {e}", subject.display()))?;
