@@ -11,7 +11,8 @@ use mesh_core::sequence::{write_frames_atomic, MeshSequence};
 use mesh_core::Result;
 
 /// Which mesh format the frame files use.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize, clap::ValueEnum)]
+#[serde(rename_all = "kebab-case")]
 pub enum FrameFormat {
     Obj,
     Ply,

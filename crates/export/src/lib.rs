@@ -23,6 +23,7 @@ pub mod html;
 pub mod pc2;
 pub mod rate;
 pub mod report;
+pub mod stage;
 pub mod transfer_summary;
 pub mod variation_summary;
 pub mod viewer;
