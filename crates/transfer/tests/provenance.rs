@@ -9,6 +9,7 @@ mod common;
 use std::path::{Path, PathBuf};
 
 use capture::align::AlignedMotion;
+use clap::Parser;
 use common::run;
 use mesh_core::artifact::{read_header, Artifact, Header};
 use sha2::{Digest, Sha256};
@@ -130,6 +131,43 @@ fn every_artifact_header_lists_every_input_file_and_its_hash() {
             assert!(!header.params[key].is_null(), "{key} missing from the header");
         }
     }
+
+    // Invocation independence: the same options in another order, `--flag=value` and `-o` forms,
+    // with flags that change no output (-v, --threads), write the same bytes.
+    // The loop above wrote A-B.model from `--source-pca A --target-pca B --max-iter 5 --pair ... --out`.
+    let model = w("A-B.model");
+    let first = std::fs::read(&model).unwrap();
+    run("gpr-train", &[
+        "-v".into(), "--max-iter=5".into(), format!("--target-pca={}", s(&w("B.pca"))), "--pair".into(), s(&sa), s(&ta), s(&corr),
+        format!("--out={}", s(&model)), "--threads=1".into(), "--source-pca".into(), s(&w("A.pca")),
+    ]);
+    assert!(std::fs::read(&model).unwrap() == first, "gpr-train: the model's bytes depend on how the options were written");
+
+    let predict = |out: &Path, args: Vec<String>| {
+        let mut all = args;
+        all.extend(["--out".into(), s(out)]);
+        run("gpr-predict", &all);
+    };
+    let (p1, p2) = (w("pred-1"), w("pred-2"));
+    predict(&p1, vec![
+        "--model".into(), s(&model), "--source-pca".into(), s(&w("A.pca")), "--target-pca".into(), s(&w("B.pca")),
+        "--target-template".into(), s(&tpl("B")), "--placement".into(), "regressed".into(), s(&sa),
+    ]);
+    predict(&p2, vec![
+        s(&sa), "--placement=regressed".into(), format!("--target-template={}", s(&tpl("B"))), "-v".into(),
+        format!("--target-pca={}", s(&w("B.pca"))), "--threads".into(), "1".into(), "--source-pca".into(), s(&w("A.pca")),
+        format!("--model={}", s(&model)),
+    ]);
+    let listing = |d: &Path| {
+        let mut v: Vec<String> = std::fs::read_dir(d).unwrap().map(|e| e.unwrap().file_name().to_string_lossy().into_owned()).collect();
+        v.sort();
+        v
+    };
+    assert_eq!(listing(&p1), listing(&p2));
+    assert!(listing(&p1).len() > 10, "one frame per source frame");
+    for name in listing(&p1) {
+        assert!(std::fs::read(p1.join(&name)).unwrap() == std::fs::read(p2.join(&name)).unwrap(), "gpr-predict: {name} differs");
+    }
 }
 
 #[test]
@@ -143,4 +181,70 @@ fn an_aligned_motion_of_the_previous_version_is_refused_with_its_version() {
     mesh_core::artifact::write_artifact(&path, AlignedMotion::KIND, AlignedMotion::VERSION - 1, &header, &m).unwrap();
     let err = AlignedMotion::load(&path).unwrap_err().to_string();
     assert!(err.contains("old.aligned") && err.contains("version 2"), "{err}");
+}
+
+/// Every option of a stage's `Params` is in its JSON record (what `Header::with_params` stores)
+/// under its flag's name, given or left at its default.
+#[test]
+fn every_stage_params_record_every_option_under_its_flag_name() {
+    use mesh_core::cli::unrecorded_options as missing;
+    let cases: Vec<(&str, Vec<String>)> = vec![
+        ("gpr-predict", missing::<transfer::stage::gpr_predict::Params>(&[
+            "gpr-predict", "--model", "m", "--source-pca", "s", "--target-pca", "t", "--target-template", "tpl", "a.aligned", "-o", "out",
+        ]).unwrap()),
+        ("gpr-predict --surface", missing::<transfer::stage::gpr_predict::Params>(&[
+            "gpr-predict", "--model", "m", "--source-pca", "s", "--target-pca", "t", "--target-template", "tpl", "--surface", "correct-stitch",
+            "--segmentation", "seg", "--target-training", "x.aligned", "--timing", "t.json", "--confidence", "c.json", "a.aligned", "-o", "out",
+        ]).unwrap()),
+        ("gpr-train", missing::<transfer::stage::gpr_train::Params>(&[
+            "gpr-train", "--source-pca", "s", "--target-pca", "t", "--pair", "a", "b", "c", "-o", "m",
+        ]).unwrap()),
+        ("dtw-densify", missing::<transfer::stage::dtw_densify::Params>(&[
+            "dtw-densify", "--set", "set", "--motion", "walk", "--source-pca", "s", "--target-pca", "t", "a", "b", "-o", "c",
+        ]).unwrap()),
+        ("transfer-eval", missing::<transfer::stage::transfer_eval::Params>(&[
+            "transfer-eval", "pred", "truth", "--direction", "A->B", "--motion", "punch", "--method", "gpr-nn",
+        ]).unwrap()),
+        ("surface-quality", missing::<transfer::stage::surface_quality::Params>(&[
+            "surface-quality", "--segmentation", "seg", "--truth", "t", "p1", "p2", "-o", "q.json",
+        ]).unwrap()),
+        ("representation-error", missing::<transfer::stage::representation_error::Params>(&[
+            "representation-error", "--template", "tpl", "--segmentation", "seg", "--truth", "t", "a.aligned", "-o", "r.json",
+        ]).unwrap()),
+        ("learning-curves", missing::<transfer::stage::learning_curves::Params>(&[
+            "learning-curves", "--source-pca", "s", "--target-pca", "t", "--pair", "a", "b", "c", "-o", "lc",
+        ]).unwrap()),
+        ("paper-figure cost-matrix", missing::<transfer::stage::paper_figure::Params>(&[
+            "paper-figure", "cost-matrix", "--set", "set", "--motion", "walk", "--source-pca", "s", "--target-pca", "t", "a", "b", "-o", "f.png",
+        ]).unwrap()),
+        ("paper-figure correction", missing::<transfer::stage::paper_figure::Params>(&[
+            "paper-figure", "correction", "--model", "m", "--source-pca", "s", "--target-pca", "t", "--segmentation", "seg",
+            "--target-training", "x", "a.aligned", "-o", "f.png",
+        ]).unwrap()),
+        ("paper-figure confidence", missing::<transfer::stage::paper_figure::Params>(&[
+            "paper-figure", "confidence", "--confidence", "c.json", "-o", "f.png",
+        ]).unwrap()),
+        ("correct", missing::<surface::stage::correct::Params>(&["correct", "--training", "tr", "pred", "-o", "out"]).unwrap()),
+        ("stitch", missing::<surface::stage::stitch::Params>(&[
+            "stitch", "parts", "--segmentation", "seg", "--template", "tpl", "-o", "out",
+        ]).unwrap()),
+        ("blend", missing::<surface::stage::blend::Params>(&["blend", "a.ply", "b.ply", "-o", "out.ply"]).unwrap()),
+        ("align", missing::<capture::stage::align::Params>(&[
+            "align", "--subject", "s.json", "--template", "tpl", "--frame", "body", "motion", "-o", "out",
+        ]).unwrap()),
+    ];
+    for (stage, unrecorded) in cases {
+        assert!(unrecorded.is_empty(), "{stage}: {unrecorded:?} not recorded");
+    }
+    // The record spells choices and paths as the command line does.
+    let p = transfer::stage::gpr_predict::Params::try_parse_from([
+        "gpr-predict", "--model", "m", "--source-pca", "s", "--target-pca", "t", "--target-template", "tpl", "a.aligned", "-o", "out",
+    ]).unwrap();
+    let record = serde_json::to_value(&p).unwrap();
+    assert_eq!(record["surface"], "assemble");
+    assert_eq!(record["placement"], "scaled-source");
+    assert_eq!(record["motion"], "a.aligned");
+    assert_eq!(record["target_training"], serde_json::json!([]));
+    let p = transfer::stage::paper_figure::Params::try_parse_from(["paper-figure", "confidence", "--confidence", "c.json", "-o", "f.png"]).unwrap();
+    assert_eq!(serde_json::to_value(&p).unwrap()["figure"], "confidence");
 }
