@@ -31,8 +31,11 @@ pub struct Params {
     pub out: PathBuf,
 }
 
+/// Joins pieces of one kind into the whole model at a path.
+type Merge = fn(&[PathBuf], &std::path::Path) -> mesh_core::Result<()>;
+
 /// The piece kinds this stage joins, each with its merge.
-const KINDS: &[(&str, fn(&[PathBuf], &std::path::Path) -> mesh_core::Result<()>)] = &[
+const KINDS: &[(&str, Merge)] = &[
     (PcaModel::PIECE_KIND, merge::<PcaModel>),
     (GprModel::PIECE_KIND, merge::<GprModel>),
     (VariationModel::PIECE_KIND, merge::<VariationModel>),
