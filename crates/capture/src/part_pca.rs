@@ -21,6 +21,7 @@
 
 use gp::pca::{Components, Pca};
 use mesh_core::artifact::{check_cover, check_indices, Artifact};
+use mesh_core::part_merge::Partitioned;
 use mesh_core::rigid::procrustes;
 use mesh_core::{Error, Result};
 use nalgebra::{DMatrix, Vector3};
@@ -74,7 +75,46 @@ impl Artifact for PcaModel {
     fn validate(&self) -> std::result::Result<(), String> {
         let lists: Vec<&[u32]> = self.parts.iter().map(|p| p.vertices.as_slice()).collect();
         check_cover(self.n_vertices, &lists)?;
+        self.check_parts()
+    }
+}
+
+/// A piece (`pca-fit --part NAME`) is the model holding that part alone.
+impl Partitioned for PcaModel {
+    const PIECE_KIND: &'static str = "pca-model-part";
+    type Body = PcaModel;
+
+    /// As [`PcaModel::validate`] without the cover of the template: one part, consistent.
+    fn validate_body(body: &PcaModel) -> std::result::Result<(), String> {
+        if body.parts.len() != 1 {
+            return Err(format!("{} parts in a piece, expected 1", body.parts.len()));
+        }
+        body.check_parts()
+    }
+
+    /// The parts of the bodies in order; vertex count, alignment and anchor must agree.
+    fn join(parts: &[String], bodies: Vec<PcaModel>) -> std::result::Result<PcaModel, String> {
+        let mut bodies = bodies.into_iter();
+        let mut whole = bodies.next().ok_or("no parts")?;
+        for (b, name) in bodies.zip(&parts[1..]) {
+            if (b.n_vertices, b.alignment, &b.anchor) != (whole.n_vertices, whole.alignment, &whole.anchor) {
+                return Err(format!("part '{name}' was fitted on another template, alignment or anchor"));
+            }
+            whole.parts.extend(b.parts);
+        }
+        match whole.parts.iter().zip(parts).find(|(p, n)| p.name != **n) {
+            Some((p, n)) => Err(format!("the piece of part '{n}' holds part '{}'", p.name)),
+            None => Ok(whole),
+        }
+    }
+}
+
+impl PcaModel {
+    /// Every part's vertices below `n_vertices`, one reference point per vertex, a PCA of
+    /// dimension `3 x vertices`, the anchor below `n_vertices` (no cover of the template).
+    fn check_parts(&self) -> std::result::Result<(), String> {
         for (k, p) in self.parts.iter().enumerate() {
+            check_indices(p.vertices.iter().copied(), self.n_vertices, || format!("part {k}'s vertex list"))?;
             let d = 3 * p.vertices.len();
             let pca = &p.pca;
             if p.reference.len() != p.vertices.len()
@@ -183,7 +223,27 @@ pub fn fit_with_progress(
     alignment: PartAlignment,
     bar: &ProgressBar,
 ) -> Result<(PcaModel, Vec<PartReport>)> {
-    bar.set_length(parts.parts.len() as u64);
+    fit_selected(template, parts, motions, components, alignment, None, bar)
+}
+
+/// [`fit_with_progress`] of part `only` alone (an index into `parts.parts`; `None`: every
+/// part): the model then holds that part only, fitted exactly as in the whole fit.
+pub fn fit_selected(
+    template: &[Vector3<f64>],
+    parts: &Segmentation,
+    motions: &[&AlignedMotion],
+    components: Components,
+    alignment: PartAlignment,
+    only: Option<usize>,
+    bar: &ProgressBar,
+) -> Result<(PcaModel, Vec<PartReport>)> {
+    let selected: Vec<&mesh_core::segmentation::Part> = match only {
+        Some(k) => vec![parts.parts.get(k).ok_or_else(|| {
+            Error::invalid(format!("part index {k} of {} parts", parts.parts.len()))
+        })?],
+        None => parts.parts.iter().collect(),
+    };
+    bar.set_length(selected.len() as u64);
     if template.len() != parts.n_vertices {
         return Err(Error::invalid(format!(
             "the template has {} vertices but the segmentation was made for {}",
@@ -208,8 +268,7 @@ pub fn fit_with_progress(
             "the aligned motions were aligned on different vertices (align --frame): align them alike",
         ));
     }
-    let fitted: Vec<(PartPca, PartReport)> = parts
-        .parts
+    let fitted: Vec<(PartPca, PartReport)> = selected
         .par_iter()
         .map(|part| {
             let reference: Vec<Vector3<f64>> = part

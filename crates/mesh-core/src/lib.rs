@@ -18,6 +18,7 @@ pub mod capture_set;
 pub mod set_check;
 pub mod segmentation;
 pub mod artifact;
+pub mod part_merge;
 pub mod atomic;
 pub mod rigid;
 pub mod cli;

@@ -50,6 +50,7 @@ pub const STAGES: &[Stage] = &[
     st("variation-eval", "variation-eval", VARIATION, "variation statistics and the papers' comparisons"),
     st("mesh-export", "mesh-export", OUTPUT, "OBJ/PLY frames, OBJ + PC2 point cache, glTF .glb"),
     st("html-report", "html-report", OUTPUT, "a static HTML page with tables, pictures and a 3D player"),
+    st("merge-parts", "merge-parts", PIPELINE, "join per-part fits (pca-fit, gpr-train, gpdm-train --part) into the whole model"),
     st("plan", "plan", PIPELINE, "the pipelines' task graph: make fragment, Slurm job arrays"),
     st("fuzz", "fuzz", PIPELINE, "mutation-fuzz every reader in process"),
 ];

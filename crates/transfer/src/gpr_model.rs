@@ -30,6 +30,7 @@ use gp::affine_mean::AffineMean;
 use gp::gpr::{Gpr, GprOptions, TrainReport};
 use gp::kernel::Kernel;
 use mesh_core::artifact::Artifact;
+use mesh_core::part_merge::Partitioned;
 use mesh_core::rigid::{integrate, RigidMotion};
 use mesh_core::{Error, Result};
 use std::path::PathBuf;
@@ -596,24 +597,7 @@ pub fn train(
             return Err(Error::invalid(format!("prior weight must be in [0, 1], got {}", p.weight)));
         }
     }
-    if !(frame_ratio > 0.0 && frame_ratio.is_finite()) {
-        return Err(Error::invalid(format!(
-            "frame-rate ratio must be positive, got {frame_ratio}"
-        )));
-    }
-    let data = training_set(pairs, frame_ratio, keyposes_only)?;
-    if data.x_parts.len() != part_names.len() {
-        return Err(Error::invalid(format!(
-            "{} part names for {} parts of coefficients",
-            part_names.len(),
-            data.x_parts.len()
-        )));
-    }
-    let keys = if method == Method::KeyposeAffine && !keyposes_only {
-        training_set(pairs, frame_ratio, true)?
-    } else {
-        data.clone()
-    };
+    let (data, keys) = training_sets(method, part_names, pairs, frame_ratio, keyposes_only)?;
     let (parts, disp) = rayon::join(
         || train_parts(method, nn_bias, mean_fn, mean_ridge, mean_priors, part_names, &data, &keys, opts),
         || train_displacement(&data, nn_bias, mean_fn, mean_ridge, opts),
@@ -636,6 +620,172 @@ pub fn train(
         nn_bias,
         mean: mean_fn,
         reports,
+    })
+}
+
+/// The training rows of `method` (the dense or key-pose pairs) and the key-pose rows of the
+/// affine baseline, checked against `part_names`.
+fn training_sets(
+    method: Method,
+    part_names: &[String],
+    pairs: &[PairData],
+    frame_ratio: f64,
+    keyposes_only: bool,
+) -> Result<(TrainingSet, TrainingSet)> {
+    if !(frame_ratio > 0.0 && frame_ratio.is_finite()) {
+        return Err(Error::invalid(format!(
+            "frame-rate ratio must be positive, got {frame_ratio}"
+        )));
+    }
+    let data = training_set(pairs, frame_ratio, keyposes_only)?;
+    if data.x_parts.len() != part_names.len() {
+        return Err(Error::invalid(format!(
+            "{} part names for {} parts of coefficients",
+            part_names.len(),
+            data.x_parts.len()
+        )));
+    }
+    let keys = if method == Method::KeyposeAffine && !keyposes_only {
+        training_set(pairs, frame_ratio, true)?
+    } else {
+        data.clone()
+    };
+    Ok((data, keys))
+}
+
+/// The name of the displacement regressor among a model's pieces: `gpr-train --part
+/// displacement` trains it alone.
+pub const DISPLACEMENT: &str = "displacement";
+
+/// One regressor of a [`GprModel`] (a part's, or the displacement's) with the model's shared
+/// fields: what `gpr-train --part NAME` writes.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct GprPiece {
+    pub method: Method,
+    pub regressor: Regressor,
+    pub report: RegressorReport,
+    pub n_train: usize,
+    pub frame_ratio: f64,
+    pub keyposes_only: bool,
+    pub nn_bias: bool,
+    pub mean: MeanFunction,
+}
+
+impl GprPiece {
+    /// The fields every regressor of one model shares.
+    fn shared(&self) -> (Method, usize, u64, bool, bool, MeanFunction) {
+        (self.method, self.n_train, self.frame_ratio.to_bits(), self.keyposes_only, self.nn_bias, self.mean)
+    }
+}
+
+/// The pieces of a model are its parts' regressors, then the displacement's ([`DISPLACEMENT`]).
+impl Partitioned for GprModel {
+    const PIECE_KIND: &'static str = "gpr-model-part";
+    type Body = GprPiece;
+
+    fn validate_body(body: &GprPiece) -> std::result::Result<(), String> {
+        body.regressor.validate(None)?;
+        if !(body.frame_ratio.is_finite() && body.frame_ratio > 0.0) {
+            return Err(format!("frame ratio {} is not a finite positive number", body.frame_ratio));
+        }
+        Ok(())
+    }
+
+    fn join(parts: &[String], mut bodies: Vec<GprPiece>) -> std::result::Result<GprModel, String> {
+        let (last, names) = parts.split_last().ok_or("no parts")?;
+        if last != DISPLACEMENT || names.is_empty() || bodies.len() != parts.len() {
+            return Err(format!("the pieces of a model are its parts then '{DISPLACEMENT}', not {}", parts.join(", ")));
+        }
+        if let Some((b, name)) = bodies.iter().zip(parts).find(|(b, _)| b.shared() != bodies[0].shared()) {
+            return Err(format!(
+                "part '{name}' was trained with another method, frame ratio, mean or training set ({:?}, not {:?})",
+                b.shared(),
+                bodies[0].shared()
+            ));
+        }
+        let disp = bodies.pop().expect("one body per part");
+        let mut reports: Vec<RegressorReport> = bodies.iter().map(|b| b.report.clone()).collect();
+        reports.push(disp.report);
+        Ok(GprModel {
+            method: disp.method,
+            part_names: names.to_vec(),
+            parts: bodies.into_iter().map(|b| b.regressor).collect(),
+            displacement: disp.regressor,
+            n_train: disp.n_train,
+            frame_ratio: disp.frame_ratio,
+            keyposes_only: disp.keyposes_only,
+            nn_bias: disp.nn_bias,
+            mean: disp.mean,
+            reports,
+        })
+    }
+}
+
+impl TrainingSet {
+    /// Part `k`'s problem alone, with the displacement's.
+    fn part(&self, k: usize) -> TrainingSet {
+        TrainingSet {
+            x_parts: vec![self.x_parts[k].clone()],
+            y_parts: vec![self.y_parts[k].clone()],
+            x_disp: self.x_disp.clone(),
+            y_disp: self.y_disp.clone(),
+        }
+    }
+}
+
+/// [`train`] of one regressor: part `unit` (an index into `part_names`), or the displacement
+/// when `unit == part_names.len()`; the regressor is trained exactly as in the whole model.
+#[allow(clippy::too_many_arguments)]
+pub fn train_piece(
+    method: Method,
+    nn_bias: bool,
+    mean_fn: MeanFunction,
+    mean_ridge: f64,
+    mean_priors: Option<MeanPriors>,
+    part_names: &[String],
+    pairs: &[PairData],
+    frame_ratio: f64,
+    keyposes_only: bool,
+    opts: &GprOptions,
+    unit: usize,
+) -> Result<GprPiece> {
+    if let Some(p) = mean_priors {
+        if p.maps.len() != part_names.len() {
+            return Err(Error::invalid(format!("{} mean priors for {} parts", p.maps.len(), part_names.len())));
+        }
+        if !(0.0..=1.0).contains(&p.weight) {
+            return Err(Error::invalid(format!("prior weight must be in [0, 1], got {}", p.weight)));
+        }
+    }
+    let (data, keys) = training_sets(method, part_names, pairs, frame_ratio, keyposes_only)?;
+    let (regressor, report) = if unit < part_names.len() {
+        let priors = mean_priors.map(|p| MeanPriors { maps: &p.maps[unit..=unit], ..p });
+        let (mut regs, mut reports) = train_parts(
+            method,
+            nn_bias,
+            mean_fn,
+            mean_ridge,
+            priors,
+            &part_names[unit..=unit],
+            &data.part(unit),
+            &keys.part(unit),
+            opts,
+        )?;
+        (regs.remove(0), reports.remove(0))
+    } else if unit == part_names.len() {
+        train_displacement(&data, nn_bias, mean_fn, mean_ridge, opts)?
+    } else {
+        return Err(Error::invalid(format!("regressor {unit} of {} parts and the displacement", part_names.len())));
+    };
+    Ok(GprPiece {
+        method,
+        regressor,
+        report,
+        n_train: if method == Method::KeyposeAffine { keys.len() } else { data.len() },
+        frame_ratio,
+        keyposes_only,
+        nn_bias,
+        mean: mean_fn,
     })
 }
 

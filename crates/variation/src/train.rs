@@ -13,6 +13,7 @@
 use gpdm::optim::{train as fit, Schedule, TrainOptions, TrainReport};
 use gpdm::{Gpdm, GpdmConfig};
 use mesh_core::artifact::Artifact;
+use mesh_core::part_merge::Partitioned;
 use mesh_core::rigid::RigidMotion;
 use mesh_core::{Error, Result};
 use nalgebra::{DMatrix, Vector3};
@@ -74,7 +75,48 @@ impl Artifact for VariationModel {
     /// `frames` entries; the blend pair among the sequences.
     fn validate(&self) -> std::result::Result<(), String> {
         let defs: Vec<PartDef> = self.parts.iter().map(|p| p.part.clone()).collect();
-        crate::group::check_body(&self.template, &self.faces, &self.up, self.fps, &defs)?;
+        self.check(&defs)
+    }
+}
+
+/// A piece (`gpdm-train --part NAME`) is the model holding that part alone.
+impl Partitioned for VariationModel {
+    const PIECE_KIND: &'static str = "variation-model-part";
+    type Body = VariationModel;
+
+    /// As [`VariationModel::validate`] for one part, whose parent (an index into the whole
+    /// model's parts) is not checked.
+    fn validate_body(body: &VariationModel) -> std::result::Result<(), String> {
+        match body.parts.as_slice() {
+            [p] => body.check(&[PartDef { parent: None, ..p.part.clone() }]),
+            parts => Err(format!("{} parts in a piece, expected 1", parts.len())),
+        }
+    }
+
+    /// The parts of the bodies in order; everything else must be equal.
+    fn join(parts: &[String], bodies: Vec<VariationModel>) -> std::result::Result<VariationModel, String> {
+        let mut bodies = bodies.into_iter();
+        let mut whole = bodies.next().ok_or("no parts")?;
+        let mut joined = std::mem::take(&mut whole.parts);
+        for (mut b, name) in bodies.zip(&parts[1..]) {
+            let own = std::mem::take(&mut b.parts);
+            if b != whole {
+                return Err(format!("part '{name}' was trained on another group, body, stride or sequences"));
+            }
+            joined.extend(own);
+        }
+        whole.parts = joined;
+        match whole.parts.iter().zip(parts).find(|(p, n)| p.part.name != **n) {
+            Some((p, n)) => Err(format!("the piece of part '{n}' holds part '{}'", p.part.name)),
+            None => Ok(whole),
+        }
+    }
+}
+
+impl VariationModel {
+    /// [`Artifact::validate`] with `defs` standing for the parts' definitions.
+    fn check(&self, defs: &[PartDef]) -> std::result::Result<(), String> {
+        crate::group::check_body(&self.template, &self.faces, &self.up, self.fps, defs)?;
         if self.stride == 0 || self.frames == 0 || self.sequences.is_empty() {
             return Err(format!("stride {}, {} frames, {} sequences", self.stride, self.frames, self.sequences.len()));
         }
@@ -301,6 +343,21 @@ pub fn train_with_progress(
     cfg: &TrainConfig,
     part_done: &(dyn Fn(&str) + Sync),
 ) -> Result<(VariationModel, Vec<PartTrainReport>)> {
+    train_selected(group, cfg, None, part_done)
+}
+
+/// [`train_with_progress`] of part `only` alone (an index into `group.parts`; `None`: every
+/// part): the model then holds that part only, trained exactly as in the whole model (the
+/// displacement scale still comes from the torso's rows).
+pub fn train_selected(
+    group: &Group,
+    cfg: &TrainConfig,
+    only: Option<usize>,
+    part_done: &(dyn Fn(&str) + Sync),
+) -> Result<(VariationModel, Vec<PartTrainReport>)> {
+    if let Some(k) = only.filter(|&k| k >= group.parts.len()) {
+        return Err(Error::invalid(format!("part index {k} of {} parts", group.parts.len())));
+    }
     if group.sequences.is_empty() || group.parts.is_empty() {
         return Err(Error::invalid(format!(
             "group '{}' has no sequences or no parts",
@@ -320,7 +377,9 @@ pub fn train_with_progress(
         .parts
         .par_iter()
         .zip(data.into_par_iter())
-        .map(|(p, seqs)| {
+        .enumerate()
+        .filter(|(k, _)| only.is_none_or(|o| o == *k))
+        .map(|(_, (p, seqs))| {
             let clock = std::time::Instant::now();
             let err = |e: gpdm::GpdmError| Error::invalid(format!("part '{}': {e}", p.name));
             let mut g = Gpdm::new(&seqs, cfg.gpdm.clone()).map_err(err)?;

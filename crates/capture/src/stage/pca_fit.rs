@@ -8,11 +8,12 @@ use gp::pca::Components;
 use mesh_core::artifact::Artifact;
 use mesh_core::cli::CommonArgs;
 use mesh_core::io::read_mesh;
+use mesh_core::part_merge;
 use mesh_core::segmentation::Segmentation;
 use serde::Serialize;
 
 use crate::align::AlignedMotion;
-use crate::part_pca;
+use crate::part_pca::{self, PcaModel};
 
 /// Fit a PCA per body part on a subject's aligned training motions
 #[derive(Parser, Debug, Serialize)]
@@ -45,6 +46,11 @@ pub struct Params {
     /// children on their overlap band)
     #[arg(long, value_enum, default_value_t = part_pca::PartAlignment::Body)]
     pub part_alignment: part_pca::PartAlignment,
+    /// Fit only this part (a name of the segmentation, `body` with --whole-body) and write it
+    /// alone, as kind pca-model-part: `merge-parts` joins the parts into the whole model
+    #[arg(long, conflicts_with = "report")]
+    #[serde(skip)]
+    pub part: Option<String>,
     /// Aligned training motions (artifacts from `align`)
     #[arg(required = true)]
     pub motions: Vec<PathBuf>,
@@ -57,7 +63,8 @@ pub struct Params {
 }
 
 /// Writes the PCA model (and the `--report`); the header records `p`, the template, the
-/// segmentation (unless `--whole-body`) and the motions.
+/// segmentation (unless `--whole-body`) and the motions. With `--part` the model holds that
+/// part only, written as a piece (`mesh_core::part_merge`).
 pub fn run(p: &Params) -> anyhow::Result<()> {
     let template = read_mesh(&p.template)?;
     let parts = match &p.segmentation {
@@ -74,12 +81,24 @@ pub fn run(p: &Params) -> anyhow::Result<()> {
         None => Components::Count(p.components),
     };
     let refs: Vec<&AlignedMotion> = motions.iter().collect();
-    let (model, report) = part_pca::fit_with_progress(
+    let names: Vec<String> = parts.parts.iter().map(|q| q.name.clone()).collect();
+    let only = match &p.part {
+        Some(name) => {
+            let source = match (&p.segmentation, p.whole_body) {
+                (Some(seg), false) => seg,
+                _ => &p.template,
+            };
+            Some(part_merge::select(&names, name, source)?)
+        }
+        None => None,
+    };
+    let (model, report) = part_pca::fit_selected(
         &template.vertices,
         &parts,
         &refs,
         choice,
         p.part_alignment,
+        only,
         &mesh_core::cli::stage_progress(0, "parts fitted"),
     )?;
     let mut header = p
@@ -93,7 +112,10 @@ pub fn run(p: &Params) -> anyhow::Result<()> {
     for m in &p.motions {
         header = header.with_input(m)?;
     }
-    model.save(&p.out, &header)?;
+    match only {
+        Some(k) => part_merge::save_piece::<PcaModel>(&p.out, &header, &names, k, model)?,
+        None => model.save(&p.out, &header)?,
+    }
     if let Some(r) = &p.report {
         let text = serde_json::to_string_pretty(&report)?;
         mesh_core::atomic::write_bytes_atomic(r, text.as_bytes())?;

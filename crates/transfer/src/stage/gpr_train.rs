@@ -9,9 +9,13 @@ use gp::gpr::{GprOptions, PAPER_NOISE_VAR};
 use gp::sparse_gpr::Sparsity;
 use mesh_core::artifact::Artifact;
 use mesh_core::cli::CommonArgs;
+use mesh_core::part_merge;
 use serde::Serialize;
 
-use crate::gpr_model::{train, GprModel, MeanFunction, MeanPrior, MeanPriors, Method, PairFiles, MEAN_RIDGE, PRIOR_WEIGHT};
+use crate::gpr_model::{
+    train, train_piece, GprModel, MeanFunction, MeanPrior, MeanPriors, Method, PairFiles, RegressorReport, DISPLACEMENT,
+    MEAN_RIDGE, PRIOR_WEIGHT,
+};
 use capture::part_pca::PcaModel;
 
 /// Train the source-to-target GP regression per body part and for the rigid displacement (CVPR eqs. 8-13)
@@ -76,7 +80,12 @@ pub struct Params {
     /// Maximum conjugate-gradient iterations per GP
     #[arg(long, default_value_t = 100)]
     pub max_iter: usize,
-    /// Output artifact (kind gpr-model)
+    /// Train only this part's regressor (a part name of the PCA models, or `displacement`) and
+    /// write it alone, as kind gpr-model-part: `merge-parts` joins them into the whole model
+    #[arg(long)]
+    #[serde(skip)]
+    pub part: Option<String>,
+    /// Output artifact (kind gpr-model; gpr-model-part with --part)
     #[arg(short, long)]
     pub out: PathBuf,
 }
@@ -87,7 +96,9 @@ fn as_text<S: serde::Serializer>(s: &Sparsity, ser: S) -> Result<S::Ok, S::Error
 }
 
 /// Writes the model; the header records `p` plus the frame rates read from the pairs
-/// (`source_fps`, `target_fps`: `gpr-predict` reads the first), both PCA models and every pair file.
+/// (`source_fps`, `target_fps`: `gpr-predict` reads the first), both PCA models and every pair
+/// file. With `--part` only that regressor is trained, written as a piece
+/// (`mesh_core::part_merge`).
 pub fn run(p: &Params) -> anyhow::Result<()> {
     let method = p.method;
     let (src_pca, tgt_pca) = (
@@ -104,6 +115,17 @@ pub fn run(p: &Params) -> anyhow::Result<()> {
             tgt_names
         );
     }
+    // The pieces of a model: its parts' regressors, then the displacement's.
+    let units: Vec<String> = names.iter().cloned().chain([DISPLACEMENT.to_string()]).collect();
+    let unit = match &p.part {
+        Some(name) => {
+            if names.iter().any(|n| n == DISPLACEMENT) {
+                bail!("{}: a part is named '{DISPLACEMENT}', the name of the displacement regressor", p.source_pca.display());
+            }
+            Some(part_merge::select(&units, name, &p.source_pca)?)
+        }
+        None => None,
+    };
     if method == Method::WholeBody && names.len() != 1 {
         mesh_core::warn!(
             "method whole-body with a {}-part PCA model (expected pca-fit --whole-body)",
@@ -167,6 +189,41 @@ pub fn run(p: &Params) -> anyhow::Result<()> {
     let maps = (p.mean == MeanFunction::Affine && (ridge_toward || p.prior_weight > 0.0))
         .then(|| crate::geometric_prior::part_priors(&src_pca, &tgt_pca));
     let priors = maps.as_deref().map(|maps| MeanPriors { maps, ridge_toward, weight: p.prior_weight });
+    let mut params = serde_json::to_value(p)?;
+    params["source_fps"] = source_fps.into();
+    params["target_fps"] = target_fps.into();
+    let mut header = p
+        .common
+        .header("gpr-train", env!("CARGO_PKG_VERSION"))
+        .with_params(&params)?
+        .with_input(&p.source_pca)?
+        .with_input(&p.target_pca)?;
+    for f in &p.pair {
+        header = header.with_input(f)?;
+    }
+    if let Some(unit) = unit {
+        let spin = mesh_core::cli::spinner(
+            &format!("gpr-train: {}, {} pairs", units[unit], pairs.len()),
+            &p.common,
+        );
+        let piece = train_piece(
+            method,
+            p.nn_bias,
+            p.mean,
+            p.mean_ridge,
+            priors,
+            &names,
+            &pairs,
+            ratio,
+            p.keyposes_only,
+            &opts,
+            unit,
+        )?;
+        spin.finish_and_clear();
+        log_report(&piece.report);
+        part_merge::save_piece::<GprModel>(&p.out, &header, &units, unit, piece)?;
+        return Ok(());
+    }
     let spin = mesh_core::cli::spinner(
         &format!("gpr-train: {} parts + displacement, {} pairs", names.len(), pairs.len()),
         &p.common,
@@ -190,24 +247,15 @@ pub fn run(p: &Params) -> anyhow::Result<()> {
         model.n_train,
         start.elapsed().as_secs_f64()
     );
-    for r in &model.reports {
-        mesh_core::info!("{}", r.line());
-        for n in &r.notes {
-            mesh_core::warn!("{}: {n}", r.name);
-        }
-    }
-    let mut params = serde_json::to_value(p)?;
-    params["source_fps"] = source_fps.into();
-    params["target_fps"] = target_fps.into();
-    let mut header = p
-        .common
-        .header("gpr-train", env!("CARGO_PKG_VERSION"))
-        .with_params(&params)?
-        .with_input(&p.source_pca)?
-        .with_input(&p.target_pca)?;
-    for f in &p.pair {
-        header = header.with_input(f)?;
-    }
+    model.reports.iter().for_each(log_report);
     model.save(&p.out, &header)?;
     Ok(())
+}
+
+/// Logs what training one regressor did (`-v`) and its numerical notes.
+fn log_report(r: &RegressorReport) {
+    mesh_core::info!("{}", r.line());
+    for n in &r.notes {
+        mesh_core::warn!("{}: {n}", r.name);
+    }
 }

@@ -6,10 +6,11 @@ use clap::Parser;
 use gpdm::optim::{Exit, Schedule};
 use mesh_core::artifact::Artifact;
 use mesh_core::cli::CommonArgs;
+use mesh_core::part_merge;
 use serde::Serialize;
 
 use crate::group::Group;
-use crate::train::{train_with_progress, TrainConfig};
+use crate::train::{train_selected, TrainConfig, VariationModel};
 
 /// Learn one GPDM per body part (shared latent space per part) from a prealigned movement group
 #[derive(Parser, Debug, Serialize)]
@@ -56,7 +57,12 @@ pub struct Params {
     /// sequences) are at most this many, so the cost stays bounded whatever the capture length
     #[arg(long, value_name = "N", default_value_t = crate::train::MAX_FIT_FRAMES)]
     pub max_fit_frames: usize,
-    /// Output artifact (kind variation-model)
+    /// Train only this part (a part name of the group) and write it alone, as kind
+    /// variation-model-part: `merge-parts` joins the parts into the whole model
+    #[arg(long, conflicts_with = "report")]
+    #[serde(skip)]
+    pub part: Option<String>,
+    /// Output artifact (kind variation-model; variation-model-part with --part)
     #[arg(short, long)]
     pub out: PathBuf,
     /// Training report (JSON: objective, hyperparameters, time per part)
@@ -65,7 +71,8 @@ pub struct Params {
 }
 
 /// Writes the model (and the `--report`); the header records `p`, the training configuration
-/// derived from it (`config`) and the group.
+/// derived from it (`config`) and the group. With `--part` only that part is trained, written
+/// as a piece (`mesh_core::part_merge`).
 pub fn run(p: &Params) -> anyhow::Result<()> {
     let group = Group::load(&p.group)?;
     let mut cfg = TrainConfig::default();
@@ -80,12 +87,17 @@ pub fn run(p: &Params) -> anyhow::Result<()> {
     }
     cfg.options.lbfgs.max_iter = p.max_iter;
     cfg.fit(p.fit, p.fit_rate, p.max_fit_frames)?;
+    let names: Vec<String> = group.parts.iter().map(|q| q.name.clone()).collect();
+    let only = match &p.part {
+        Some(name) => Some(part_merge::select(&names, name, &p.group)?),
+        None => None,
+    };
     let bar = mesh_core::cli::progress_bar(
-        group.parts.len() as u64,
+        if only.is_some() { 1 } else { group.parts.len() as u64 },
         "gpdm-train: parts",
         &p.common,
     );
-    let (model, reports) = train_with_progress(&group, &cfg, &|_| bar.inc(1))?;
+    let (model, reports) = train_selected(&group, &cfg, only, &|_| bar.inc(1))?;
     bar.finish_and_clear();
     if model.stride > 1 {
         mesh_core::info!(
@@ -128,7 +140,11 @@ pub fn run(p: &Params) -> anyhow::Result<()> {
         .header("gpdm-train", env!("CARGO_PKG_VERSION"))
         .with_input(&p.group)?
         .with_params(&params)?;
-    model.save(&p.out, &header)?;
+    let (scale, stride) = (model.scale, model.stride);
+    match only {
+        Some(k) => part_merge::save_piece::<VariationModel>(&p.out, &header, &names, k, model)?,
+        None => model.save(&p.out, &header)?,
+    }
     if let Some(report) = &p.report {
         let light: Vec<_> = reports
             .iter()
@@ -143,8 +159,8 @@ pub fn run(p: &Params) -> anyhow::Result<()> {
                 })
             })
             .collect();
-        let json = serde_json::json!({ "group": group.name, "config": cfg, "scale": model.scale,
-            "stride": model.stride, "parts": light });
+        let json = serde_json::json!({ "group": group.name, "config": cfg, "scale": scale,
+            "stride": stride, "parts": light });
         mesh_core::atomic::write_bytes_atomic(
             report,
             (serde_json::to_string_pretty(&json)? + "\n").as_bytes(),
