@@ -4,8 +4,9 @@
 //! set's `set.json` and `subject.json` (with the subject's curves resolved on
 //! a template, as `segment` does), and artifacts: every kind's decoder and
 //! validator (segmentation, pca-model, aligned-motion, correspondences,
-//! gpr-model, variation-group, variation-model), followed by the consumers
-//! that index with what validation let through.
+//! gpr-model, variation-group, variation-model, and the per-part pieces of
+//! pca-model, gpr-model and variation-model with their join), followed by the
+//! consumers that index with what validation let through.
 //!
 //! Each round takes a seed input ([`seed_corpus`], plus any files given with
 //! `--corpus`) and applies 1-4 mutations ([`mutate`]): bit flips, interesting
@@ -141,7 +142,18 @@ fn exercise_artifact(bytes: &[u8]) {
     let _ = transfer::gpr_model::GprModel::decode(bytes);
     let _ = variation::group::Group::decode(bytes);
     let _ = variation::train::VariationModel::decode(bytes);
+    exercise_piece::<PcaModel>(bytes);
+    exercise_piece::<transfer::gpr_model::GprModel>(bytes);
+    exercise_piece::<variation::train::VariationModel>(bytes);
     let _ = mesh_core::artifact::decode_artifact::<serde_json::Value>(bytes, "any", 1);
+}
+
+/// A piece of a per-part model, and the join `merge-parts` makes of its body as a one-part model.
+fn exercise_piece<M: mesh_core::part_merge::Partitioned>(bytes: &[u8]) {
+    use mesh_core::part_merge::Piece;
+    if let Ok((_, piece)) = Piece::<M>::decode(bytes) {
+        let _ = M::join(std::slice::from_ref(&piece.part), vec![piece.body]);
+    }
 }
 
 /// The built-in seed corpus: one or more valid inputs per target, made the way
@@ -195,6 +207,13 @@ pub fn seed_corpus() -> Vec<(Target, Vec<u8>)> {
     out.push((Target::Artifact, artifact_bytes(&seg, &header)));
     out.push((Target::Artifact, artifact_bytes(&aligned, &header)));
     out.push((Target::Artifact, artifact_bytes(&pca, &header)));
+    let names: Vec<String> = pca.parts.iter().map(|p| p.name.clone()).collect();
+    let piece = mesh_core::part_merge::Piece::<capture::part_pca::PcaModel> {
+        parts: names.clone(),
+        part: names[0].clone(),
+        body: capture::part_pca::PcaModel { parts: pca.parts[..1].to_vec(), ..pca.clone() },
+    };
+    out.push((Target::Artifact, artifact_bytes(&piece, &header)));
     let corr = transfer::densify::Correspondences {
         source_motion: "walk".into(),
         target_motion: "walk".into(),
