@@ -21,7 +21,7 @@
 
 use gp::pca::{Components, Pca};
 use mesh_core::artifact::{check_cover, check_indices, Artifact};
-use mesh_core::part_merge::Partitioned;
+use mesh_core::part_merge::{PartReports, Partitioned};
 use mesh_core::rigid::procrustes;
 use mesh_core::{Error, Result};
 use nalgebra::{DMatrix, Vector3};
@@ -106,6 +106,26 @@ impl Partitioned for PcaModel {
             Some((p, n)) => Err(format!("the piece of part '{n}' holds part '{}'", p.name)),
             None => Ok(whole),
         }
+    }
+}
+
+/// `pca-fit --report`: one [`PartReport`] per part, in the model's order.
+impl PartReports for PcaModel {
+    type Report = Vec<PartReport>;
+
+    fn report_part(report: &Vec<PartReport>) -> std::result::Result<String, String> {
+        match report.as_slice() {
+            [one] => Ok(one.part.clone()),
+            many => Err(format!("a report of {} parts, not of one piece's part", many.len())),
+        }
+    }
+
+    fn join_reports(reports: Vec<Vec<PartReport>>) -> std::result::Result<Vec<PartReport>, String> {
+        Ok(reports.into_iter().flatten().collect())
+    }
+
+    fn report_text(report: &Vec<PartReport>) -> serde_json::Result<String> {
+        serde_json::to_string_pretty(report)
     }
 }
 

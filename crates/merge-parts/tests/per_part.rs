@@ -58,13 +58,37 @@ fn part_names(seg: &Path) -> Vec<String> {
     mesh_core::segmentation::Segmentation::load(seg).unwrap().parts.into_iter().map(|p| p.name).collect()
 }
 
+/// A report's JSON without its measured times (keys starting with `seconds`), which differ
+/// from run to run.
+fn untimed(path: &Path) -> serde_json::Value {
+    fn strip(v: &mut serde_json::Value) {
+        match v {
+            serde_json::Value::Object(m) => {
+                m.retain(|k, _| !k.starts_with("seconds"));
+                m.values_mut().for_each(strip);
+            }
+            serde_json::Value::Array(a) => a.iter_mut().for_each(strip),
+            _ => {}
+        }
+    }
+    let mut v: serde_json::Value = serde_json::from_slice(&std::fs::read(path).unwrap()).unwrap();
+    strip(&mut v);
+    v
+}
+
 /// Runs `stage args` once whole (to `whole`) and once per unit with `--part UNIT` (to
 /// `whole.UNIT`), merges the pieces in reverse order and asserts the merged file is the whole
-/// run's, byte for byte. Returns the piece paths in unit order.
-fn split_and_merge(stage: &str, args: &[String], whole: &Path, units: &[String]) -> Vec<PathBuf> {
+/// run's, byte for byte. With `reports`, every run also writes its `--report` (`<out>.json`)
+/// and the merge joins the pieces' reports, which must be the whole run's but for measured
+/// times. Returns the piece paths in unit order.
+fn split_and_merge(stage: &str, args: &[String], whole: &Path, units: &[String], reports: bool) -> Vec<PathBuf> {
+    let report_of = |out: &Path| PathBuf::from(format!("{}.json", out.display()));
     let with_out = |out: &Path| -> Vec<String> {
         let mut a = args.to_vec();
         a.extend(["--out".to_string(), s(out)]);
+        if reports {
+            a.extend(["--report".to_string(), s(&report_of(out))]);
+        }
         a
     };
     run(stage, &with_out(whole));
@@ -77,16 +101,65 @@ fn split_and_merge(stage: &str, args: &[String], whole: &Path, units: &[String])
     // The merge writes the whole model to the path the whole run wrote (the header records it).
     let w = std::fs::read(whole).unwrap();
     std::fs::remove_file(whole).unwrap();
+    let whole_report = report_of(whole);
+    let before = reports.then(|| (std::fs::read(&whole_report).unwrap(), untimed(&whole_report)));
     let mut a: Vec<String> = pieces.iter().rev().map(|p| s(p)).collect();
     a.extend(["--out".to_string(), s(whole)]);
+    if reports {
+        std::fs::remove_file(&whole_report).unwrap();
+        for p in &pieces {
+            a.extend(["--piece-report".to_string(), s(&report_of(p))]);
+        }
+        a.extend(["--report".to_string(), s(&whole_report)]);
+    }
     run("merge-parts", &a);
     let m = std::fs::read(whole).unwrap();
     assert!(w == m, "{stage}: merged pieces ({} bytes) differ from the whole run ({} bytes)", m.len(), w.len());
+    if let Some((bytes, json)) = before {
+        assert_eq!(untimed(&whole_report), json, "{stage}: the joined report is not the whole run's");
+        let joined = std::fs::read(&whole_report).unwrap();
+        assert_eq!(joined.len(), bytes.len(), "{stage}: the joined report is not laid out as the whole run's");
+        if stage == "pca-fit" {
+            assert!(joined == bytes, "pca-fit: the joined report differs from the whole run's");
+        }
+        report_errors(&pieces.iter().map(|p| report_of(p)).collect::<Vec<_>>(), &pieces, &a);
+    }
     // A piece is not the whole model: its consumers name the kind they expected.
     let (kind, _, header) = mesh_core::artifact::read_header(&pieces[0]).unwrap();
     assert!(kind.ends_with("-part"), "{kind}");
     assert_eq!(header.params["part"], units[0].as_str());
     pieces
+}
+
+/// The report-joining errors: a missing report, a report given twice, a report of the whole
+/// model in place of a piece's. `merge` is the successful merge's arguments; nothing may be
+/// written by a failing one.
+fn report_errors(reports: &[PathBuf], pieces: &[PathBuf], merge: &[String]) {
+    let dir = tempfile::tempdir().unwrap();
+    let (out, report) = (dir.path().join("m.model"), dir.path().join("m.json"));
+    let args = |rs: &[PathBuf]| -> Vec<String> {
+        let mut a: Vec<String> = pieces.iter().map(|p| s(p)).collect();
+        a.extend(["--out".to_string(), s(&out)]);
+        for r in rs {
+            a.extend(["--piece-report".to_string(), s(r)]);
+        }
+        a.extend(["--report".to_string(), s(&report)]);
+        a
+    };
+    let rest = &reports[..reports.len() - 1];
+    if !rest.is_empty() {
+        fails("merge-parts", &args(rest), &["no report for part"]);
+        let mut dup = reports.to_vec();
+        dup.push(reports[0].clone());
+        fails("merge-parts", &args(&dup), &[&s(&reports[0]), "is already"]);
+    }
+    let whole_report = &merge[merge.len() - 1];
+    let mut bad = rest.to_vec();
+    bad.push(PathBuf::from(whole_report));
+    if reports.len() > 1 {
+        fails("merge-parts", &args(&bad), &[whole_report, "not of one piece's part"]);
+    }
+    assert!(!out.exists() && !report.exists(), "a failed merge wrote its outputs");
 }
 
 /// The merge errors, on the pieces of one model.
@@ -140,7 +213,7 @@ fn parts_fitted_alone_and_merged_are_the_whole_run() {
         }
         let mut args = vec!["-q".into(), "--template".into(), s(&tpl(x)), "--segmentation".into(), s(&seg)];
         args.extend(train.iter().map(|m| s(&w(&format!("{x}/{m}.aligned")))));
-        pca_pieces.push(split_and_merge("pca-fit", &args, &w(&format!("{x}/pca.model")), &part_names(&seg)));
+        pca_pieces.push(split_and_merge("pca-fit", &args, &w(&format!("{x}/pca.model")), &part_names(&seg), true));
     }
     let seg_a = w("A/parts.seg");
     let known = part_names(&seg_a);
@@ -148,7 +221,7 @@ fn parts_fitted_alone_and_merged_are_the_whole_run() {
     args.extend(strings(&["--out", &s(&w("A/bad.model")), "--part", "tentacle"]));
     fails("pca-fit", &args, &[&s(&seg_a), "no part 'tentacle'", &known.join(", ")]);
     let whole_body = strings(&["--template", &s(&tpl("A")), "--whole-body", &s(&w("A/walk.aligned"))]);
-    split_and_merge("pca-fit", &whole_body, &w("A/whole-body.model"), &strings(&["body"]));
+    split_and_merge("pca-fit", &whole_body, &w("A/whole-body.model"), &strings(&["body"]), false);
 
     // gpr-train, on the merged PCA models (the same bytes as the whole ones).
     let (pca_a, pca_b) = (s(&w("A/pca.model")), s(&w("B/pca.model")));
@@ -163,7 +236,10 @@ fn parts_fitted_alone_and_merged_are_the_whole_run() {
     }
     let mut units = known.clone();
     units.push("displacement".into());
-    let gpr_pieces = split_and_merge("gpr-train", &args, &w("gpr.model"), &units);
+    let gpr_pieces = split_and_merge("gpr-train", &args, &w("gpr.model"), &units, false);
+    let mut with_report: Vec<String> = gpr_pieces.iter().map(|p| s(p)).collect();
+    with_report.extend(strings(&["--out", &s(&w("never.model")), "--piece-report", &s(&w("A/pca.model.json")), "--report", &s(&w("never.json"))]));
+    fails("merge-parts", &with_report, &["have no reports", "gpr-model-part"]);
     // The same training with the walk pair alone: a piece of another model.
     let walk_only: Vec<String> = args[..args.len() - 4].to_vec();
     let mut bad = args.clone();
@@ -176,7 +252,7 @@ fn parts_fitted_alone_and_merged_are_the_whole_run() {
         "-q", "--set", &s(&set), "--group-name", "locomotion", "--motions", "walk,run", "--blend-weights", "0.5", "--out", &s(&group),
     ]));
     let args = strings(&["-q", "--group", &s(&group), "--max-iter", "20"]);
-    let gpdm_pieces = split_and_merge("gpdm-train", &args, &w("locomotion.model"), &known);
+    let gpdm_pieces = split_and_merge("gpdm-train", &args, &w("locomotion.model"), &known, true);
     let mut bad = args.clone();
     bad.extend(strings(&["--out", &s(&w("bad.model")), "--part", "tentacle"]));
     fails("gpdm-train", &bad, &[&s(&group), "no part 'tentacle'"]);

@@ -13,8 +13,10 @@
 //! * they name the same part list, and each of its parts is in exactly one piece;
 //!
 //! then joins the bodies in the part order ([`Partitioned::join`]) and writes the whole model
-//! under the pieces' header without the part and with the merge's output path as `out`: the
-//! header of the single-process run that wrote to that path.
+//! under the pieces' header without the part, with the merge's output path as `out` and the
+//! merge's report path (or none) as `report`: the header of the single-process run that wrote
+//! to those paths. Kinds whose stage writes a JSON report of its parts ([`PartReports`]) join
+//! the pieces' reports too ([`merge_reporting`]), into the report the whole run writes.
 //! A part fitted alone is computed exactly as in the whole run, so the merged file is
 //! byte-identical to the whole run's.
 
@@ -32,6 +34,9 @@ pub const PART_PARAM: &str = "part";
 /// The params key of the output path (the stages' `--out`): each piece has its own, the merged
 /// model records the one `merge` writes to.
 pub const OUT_PARAM: &str = "out";
+/// The params key of the report path (the stages' `--report`): each piece has its own, the
+/// merged model records the one `merge_reporting` writes (none after [`merge`]).
+pub const REPORT_PARAM: &str = "report";
 
 /// A model kind whose parts are fitted independently and can be written one per piece.
 pub trait Partitioned: Artifact {
@@ -45,6 +50,18 @@ pub trait Partitioned: Artifact {
     /// Joins `bodies`, one per name of `parts` in that order, into the whole model (the error
     /// is the problem, e.g. two pieces disagreeing on a shared field).
     fn join(parts: &[String], bodies: Vec<Self::Body>) -> std::result::Result<Self, String>;
+}
+
+/// A [`Partitioned`] kind whose stage also writes a JSON report of the parts it fits
+/// (`--report`); a piece's report describes its one part.
+pub trait PartReports: Partitioned {
+    type Report: Serialize + DeserializeOwned;
+    /// The part a piece's report describes (the error: it is not the report of one part).
+    fn report_part(report: &Self::Report) -> std::result::Result<String, String>;
+    /// Joins the reports of every part, given in the model's part order, into the whole run's.
+    fn join_reports(reports: Vec<Self::Report>) -> std::result::Result<Self::Report, String>;
+    /// The report file's text, exactly as the stage writes it.
+    fn report_text(report: &Self::Report) -> serde_json::Result<String>;
 }
 
 /// The payload of a piece: one part of a [`Partitioned`] model.
@@ -109,9 +126,10 @@ pub fn save_piece<M: Partitioned>(
     .save(out, &header)
 }
 
-/// The header of the whole model written to `out` that a piece belongs to: its own without the
-/// part, and with `out` as the params' output path ([`OUT_PARAM`]) when they record one.
-fn whole_header(path: &Path, header: &Header, out: &Path) -> Result<Header> {
+/// The header of the whole model written to `out` (and its report to `report`) that a piece
+/// belongs to: its own without the part, with `out` as the params' output path ([`OUT_PARAM`])
+/// and `report` as their report path ([`REPORT_PARAM`]) when they record them.
+fn whole_header(path: &Path, header: &Header, out: &Path, report: Option<&Path>) -> Result<Header> {
     let mut whole = header.clone();
     let Some(map) = whole.params.as_object_mut() else {
         return Err(Error::file(path, "header records no params: not a piece written with --part"));
@@ -122,6 +140,9 @@ fn whole_header(path: &Path, header: &Header, out: &Path) -> Result<Header> {
     }
     if let Some(o) = map.get_mut(OUT_PARAM) {
         *o = serde_json::to_value(out).map_err(|e| Error::invalid(format!("output path: {e}")))?;
+    }
+    if let Some(r) = map.get_mut(REPORT_PARAM) {
+        *r = serde_json::to_value(report).map_err(|e| Error::invalid(format!("report path: {e}")))?;
     }
     Ok(whole)
 }
@@ -160,11 +181,51 @@ fn header_difference(a: &Header, b: &Header) -> Option<String> {
 /// (atomically), checking what the module documentation lists; each failure is one line
 /// naming the offending file.
 pub fn merge<M: Partitioned>(inputs: &[PathBuf], out: &Path) -> Result<()> {
+    let (header, model, _) = join_pieces::<M>(inputs, out, None)?;
+    model.save(out, &header)
+}
+
+/// [`merge`], and the pieces' reports in `reports` (any order, one per part) joined into the
+/// whole run's report at `report`. Nothing is written unless both joins succeed.
+pub fn merge_reporting<M: PartReports>(inputs: &[PathBuf], out: &Path, reports: &[PathBuf], report: &Path) -> Result<()> {
+    let (header, model, parts) = join_pieces::<M>(inputs, out, Some(report))?;
+    let text = join_report_files::<M>(&parts, reports)?;
+    model.save(out, &header)?;
+    crate::atomic::write_bytes_atomic(report, text.as_bytes())
+}
+
+/// The text of the whole run's report from the pieces' reports of the model's `parts`.
+fn join_report_files<M: PartReports>(parts: &[String], paths: &[PathBuf]) -> Result<String> {
+    let mut by_part: BTreeMap<usize, (&PathBuf, M::Report)> = BTreeMap::new();
+    for path in paths {
+        let bytes = crate::input::read_regular_file(path)?;
+        let report: M::Report = serde_json::from_slice(&bytes).map_err(|e| Error::file(path, format!("not a report of {}: {e}", M::PIECE_KIND)))?;
+        let part = M::report_part(&report).map_err(|e| Error::file(path, e))?;
+        let k = parts.iter().position(|p| *p == part).ok_or_else(|| {
+            Error::file(path, format!("a report of part '{part}', not one of the model's ({})", parts.join(", ")))
+        })?;
+        if let Some((other, _)) = by_part.get(&k) {
+            return Err(Error::file(path, format!("the report of part '{part}' is already {}", other.display())));
+        }
+        by_part.insert(k, (path, report));
+    }
+    let missing: Vec<&str> = (0..parts.len()).filter(|k| !by_part.contains_key(k)).map(|k| parts[k].as_str()).collect();
+    if !missing.is_empty() {
+        return Err(Error::invalid(format!("no report for part{} {} of the {} parts", if missing.len() > 1 { "s" } else { "" }, missing.join(", "), parts.len())));
+    }
+    let first = by_part.values().next().map(|(p, _)| (*p).clone()).unwrap_or_default();
+    let joined = M::join_reports(by_part.into_values().map(|(_, r)| r).collect())
+        .map_err(|e| Error::file(&first, format!("cannot join the reports: {e}")))?;
+    M::report_text(&joined).map_err(|e| Error::invalid(format!("cannot write the joined report: {e}")))
+}
+
+/// The whole model's header, the joined model and its part names, from the pieces in `inputs`.
+fn join_pieces<M: Partitioned>(inputs: &[PathBuf], out: &Path, report: Option<&Path>) -> Result<(Header, M, Vec<String>)> {
     let (first_path, rest) = inputs
         .split_first()
         .ok_or_else(|| Error::invalid("no pieces to merge"))?;
     let (first_header, first) = Piece::<M>::load_with_header(first_path)?;
-    let header = whole_header(first_path, &first_header, out)?;
+    let header = whole_header(first_path, &first_header, out, report)?;
     let parts = first.parts.clone();
     let mut bodies: BTreeMap<usize, (PathBuf, M::Body)> = BTreeMap::new();
     let mut add = |path: &Path, piece: Piece<M>| -> Result<()> {
@@ -178,7 +239,7 @@ pub fn merge<M: Partitioned>(inputs: &[PathBuf], out: &Path) -> Result<()> {
     add(first_path, first)?;
     for path in rest {
         let (h, piece) = Piece::<M>::load_with_header(path)?;
-        let h = whole_header(path, &h, out)?;
+        let h = whole_header(path, &h, out, report)?;
         if let Some(diff) = header_difference(&header, &h) {
             return Err(Error::file(
                 path,
@@ -216,5 +277,5 @@ pub fn merge<M: Partitioned>(inputs: &[PathBuf], out: &Path) -> Result<()> {
     model
         .validate()
         .map_err(|e| Error::file(first_path, format!("the joined '{}' is invalid: {e}", M::KIND)))?;
-    model.save(out, &header)
+    Ok((header, model, parts))
 }

@@ -13,7 +13,7 @@
 use gpdm::optim::{train as fit, Schedule, TrainOptions, TrainReport};
 use gpdm::{Gpdm, GpdmConfig};
 use mesh_core::artifact::Artifact;
-use mesh_core::part_merge::Partitioned;
+use mesh_core::part_merge::{PartReports, Partitioned};
 use mesh_core::rigid::RigidMotion;
 use mesh_core::{Error, Result};
 use nalgebra::{DMatrix, Vector3};
@@ -111,6 +111,69 @@ impl Partitioned for VariationModel {
             None => Ok(whole),
         }
     }
+}
+
+/// `gpdm-train --report`: the group, the configuration, the displacement scale and the stride,
+/// then one entry per part (JSON: [`training_report`]).
+impl PartReports for VariationModel {
+    type Report = serde_json::Value;
+
+    fn report_part(report: &serde_json::Value) -> std::result::Result<String, String> {
+        match report["parts"].as_array().map(Vec::as_slice) {
+            Some([one]) => one["part"].as_str().map(str::to_string).ok_or_else(|| "its part has no name".to_string()),
+            Some(many) => Err(format!("a report of {} parts, not of one piece's part", many.len())),
+            None => Err("no \"parts\" list: not a gpdm-train report".to_string()),
+        }
+    }
+
+    /// The parts' entries in order; everything else must be equal.
+    fn join_reports(reports: Vec<serde_json::Value>) -> std::result::Result<serde_json::Value, String> {
+        let mut reports = reports.into_iter();
+        let mut whole = reports.next().ok_or("no reports")?;
+        let mut parts = whole["parts"].take();
+        for mut r in reports {
+            let own = r["parts"].take();
+            if r != whole {
+                return Err(format!("the report of part '{}' is of another group or configuration", own[0]["part"]));
+            }
+            if let (Some(all), Some(own)) = (parts.as_array_mut(), own.as_array()) {
+                all.extend(own.iter().cloned());
+            }
+        }
+        whole["parts"] = parts;
+        Ok(whole)
+    }
+
+    fn report_text(report: &serde_json::Value) -> serde_json::Result<String> {
+        Ok(serde_json::to_string_pretty(report)? + "\n")
+    }
+}
+
+/// The `gpdm-train --report` of a training of `group` under `cfg` (JSON): the group's name, the
+/// configuration, the model's displacement scale and stride, and per trained part its size,
+/// time, hyperparameters and optimiser summary.
+pub fn training_report(
+    group: &str,
+    cfg: &TrainConfig,
+    scale: &DisplacementScale,
+    stride: usize,
+    reports: &[PartTrainReport],
+) -> serde_json::Result<serde_json::Value> {
+    let parts: Vec<_> = reports
+        .iter()
+        .map(|r| {
+            serde_json::json!({
+                "part": r.part, "frames": r.frames, "pose_dim": r.pose_dim, "seconds": r.seconds,
+                "alpha": r.alpha, "beta": r.beta, "initial_value": r.report.initial_value,
+                "final_value": r.report.final_value, "evaluations": r.report.evaluations,
+                "iterations": r.report.history.len().saturating_sub(1),
+                "beta_log_sd": cfg.gpdm.beta_log_sd, "fixed_latent_scale": cfg.gpdm.fixed_latent_scale,
+                "exits": r.report.exits, "max_jitter": r.report.max_jitter,
+            })
+        })
+        .collect();
+    Ok(serde_json::json!({ "group": group, "config": serde_json::to_value(cfg)?, "scale": serde_json::to_value(scale)?,
+        "stride": stride, "parts": parts }))
 }
 
 impl VariationModel {

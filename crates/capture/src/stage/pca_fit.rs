@@ -8,7 +8,7 @@ use gp::pca::Components;
 use mesh_core::artifact::Artifact;
 use mesh_core::cli::CommonArgs;
 use mesh_core::io::read_mesh;
-use mesh_core::part_merge;
+use mesh_core::part_merge::{self, PartReports};
 use mesh_core::segmentation::Segmentation;
 use serde::Serialize;
 
@@ -47,8 +47,9 @@ pub struct Params {
     #[arg(long, value_enum, default_value_t = part_pca::PartAlignment::Body)]
     pub part_alignment: part_pca::PartAlignment,
     /// Fit only this part (a name of the segmentation, `body` with --whole-body) and write it
-    /// alone, as kind pca-model-part: `merge-parts` joins the parts into the whole model
-    #[arg(long, conflicts_with = "report")]
+    /// alone, as kind pca-model-part (its --report of that part alone): `merge-parts` joins the
+    /// parts (and their reports) into the whole model
+    #[arg(long)]
     #[serde(skip)]
     pub part: Option<String>,
     /// Aligned training motions (artifacts from `align`)
@@ -117,7 +118,7 @@ pub fn run(p: &Params) -> anyhow::Result<()> {
         None => model.save(&p.out, &header)?,
     }
     if let Some(r) = &p.report {
-        let text = serde_json::to_string_pretty(&report)?;
+        let text = PcaModel::report_text(&report)?;
         mesh_core::atomic::write_bytes_atomic(r, text.as_bytes())?;
     }
     Ok(())

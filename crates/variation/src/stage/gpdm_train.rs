@@ -6,11 +6,11 @@ use clap::Parser;
 use gpdm::optim::{Exit, Schedule};
 use mesh_core::artifact::Artifact;
 use mesh_core::cli::CommonArgs;
-use mesh_core::part_merge;
+use mesh_core::part_merge::{self, PartReports};
 use serde::Serialize;
 
 use crate::group::Group;
-use crate::train::{train_selected, TrainConfig, VariationModel};
+use crate::train::{train_selected, training_report, TrainConfig, VariationModel};
 
 /// Learn one GPDM per body part (shared latent space per part) from a prealigned movement group
 #[derive(Parser, Debug, Serialize)]
@@ -58,8 +58,9 @@ pub struct Params {
     #[arg(long, value_name = "N", default_value_t = crate::train::MAX_FIT_FRAMES)]
     pub max_fit_frames: usize,
     /// Train only this part (a part name of the group) and write it alone, as kind
-    /// variation-model-part: `merge-parts` joins the parts into the whole model
-    #[arg(long, conflicts_with = "report")]
+    /// variation-model-part (its --report of that part alone): `merge-parts` joins the parts
+    /// (and their reports) into the whole model
+    #[arg(long)]
     #[serde(skip)]
     pub part: Option<String>,
     /// Output artifact (kind variation-model; variation-model-part with --part)
@@ -146,25 +147,8 @@ pub fn run(p: &Params) -> anyhow::Result<()> {
         None => model.save(&p.out, &header)?,
     }
     if let Some(report) = &p.report {
-        let light: Vec<_> = reports
-            .iter()
-            .map(|r| {
-                serde_json::json!({
-                    "part": r.part, "frames": r.frames, "pose_dim": r.pose_dim, "seconds": r.seconds,
-                    "alpha": r.alpha, "beta": r.beta, "initial_value": r.report.initial_value,
-                    "final_value": r.report.final_value, "evaluations": r.report.evaluations,
-                    "iterations": r.report.history.len() - 1,
-                    "beta_log_sd": cfg.gpdm.beta_log_sd, "fixed_latent_scale": cfg.gpdm.fixed_latent_scale,
-                    "exits": r.report.exits, "max_jitter": r.report.max_jitter,
-                })
-            })
-            .collect();
-        let json = serde_json::json!({ "group": group.name, "config": cfg, "scale": scale,
-            "stride": stride, "parts": light });
-        mesh_core::atomic::write_bytes_atomic(
-            report,
-            (serde_json::to_string_pretty(&json)? + "\n").as_bytes(),
-        )?;
+        let json = training_report(&group.name, &cfg, &scale, stride, &reports)?;
+        mesh_core::atomic::write_bytes_atomic(report, VariationModel::report_text(&json)?.as_bytes())?;
     }
     Ok(())
 }
