@@ -33,10 +33,10 @@ pub struct Params {
     pub out: PathBuf,
     /// A piece's report (pca-fit or gpdm-train --report with --part), one per piece, in any
     /// order; repeat
-    #[arg(long, value_name = "FILE", requires = "report")]
+    #[arg(long, value_name = "REPORT", requires = "report")]
     pub piece_report: Vec<PathBuf>,
     /// Output report: the pieces' reports joined into the whole run's (needs --piece-report)
-    #[arg(long, value_name = "FILE", requires = "piece_report")]
+    #[arg(long, value_name = "REPORT", requires = "piece_report")]
     pub report: Option<PathBuf>,
 }
 

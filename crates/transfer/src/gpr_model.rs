@@ -38,6 +38,7 @@ use std::path::PathBuf;
 pub use capture::choices::{MeanFunction, Method};
 use capture::align::AlignedMotion;
 use crate::densify::Correspondences;
+use crate::limb_orientation::{self, LimbMap, LimbOrientation};
 use capture::part_pca::PcaModel;
 use nalgebra::{DMatrix, Vector6};
 use serde::{Deserialize, Serialize};
@@ -247,11 +248,13 @@ pub struct GprModel {
     /// Mean function of the GPs.
     pub mean: MeanFunction,
     pub reports: Vec<RegressorReport>,
+    /// Limb orientation maps applied after the pose GPs (`None`: the paper's model).
+    pub orientation: Option<LimbOrientation>,
 }
 
 impl Artifact for GprModel {
     const KIND: &'static str = "gpr-model";
-    const VERSION: u32 = 3;
+    const VERSION: u32 = 4;
 
     /// One regressor per part name, each internally consistent (GP weights, inducing inputs,
     /// affine mean and key-poses agree in dimensions; finite positive kernel parameters), a
@@ -266,6 +269,9 @@ impl Artifact for GprModel {
         self.displacement
             .validate(Some((6, 6)))
             .map_err(|e| format!("displacement: {e}"))?;
+        if let Some(o) = &self.orientation {
+            o.validate(self.parts.len())?;
+        }
         if !(self.frame_ratio.is_finite() && self.frame_ratio > 0.0) {
             return Err(format!("frame ratio {} is not a finite positive number", self.frame_ratio));
         }
@@ -620,7 +626,40 @@ pub fn train(
         nn_bias,
         mean: mean_fn,
         reports,
+        orientation: None,
     })
+}
+
+/// The limb orientation of a model trained by [`train`] with the same arguments, fitted on the
+/// rows its pose regressions learn from (`crate::limb_orientation`); `None` when `weight` is 0.
+/// With `only`, the map of that part alone (the others `None`: [`train_piece`]'s).
+#[allow(clippy::too_many_arguments)]
+pub fn train_orientation(
+    method: Method,
+    part_names: &[String],
+    pairs: &[PairData],
+    frame_ratio: f64,
+    keyposes_only: bool,
+    source: &PcaModel,
+    target: &PcaModel,
+    weight: f64,
+    only: Option<usize>,
+) -> Result<Option<LimbOrientation>> {
+    if !(0.0..=1.0).contains(&weight) {
+        return Err(Error::invalid(format!("orientation weight must be in [0, 1], got {weight}")));
+    }
+    if weight == 0.0 {
+        return Ok(None);
+    }
+    let (data, keys) = training_sets(method, part_names, pairs, frame_ratio, keyposes_only)?;
+    let rows = if method == Method::KeyposeAffine { &keys } else { &data };
+    let maps = (0..part_names.len())
+        .map(|k| match only {
+            Some(u) if u != k => Ok(None),
+            _ => limb_orientation::fit_part(source, target, k, &rows.x_parts[k], &rows.y_parts[k]),
+        })
+        .collect::<Result<_>>()?;
+    Ok(Some(LimbOrientation { weight, maps }))
 }
 
 /// The training rows of `method` (the dense or key-pose pairs) and the key-pose rows of the
@@ -669,12 +708,24 @@ pub struct GprPiece {
     pub keyposes_only: bool,
     pub nn_bias: bool,
     pub mean: MeanFunction,
+    /// The model's limb orientation weight (0: none) and this part's map (`None` for the
+    /// root and the displacement).
+    pub orientation_weight: f64,
+    pub orientation: Option<LimbMap>,
 }
 
 impl GprPiece {
     /// The fields every regressor of one model shares.
-    fn shared(&self) -> (Method, usize, u64, bool, bool, MeanFunction) {
-        (self.method, self.n_train, self.frame_ratio.to_bits(), self.keyposes_only, self.nn_bias, self.mean)
+    fn shared(&self) -> (Method, usize, u64, bool, bool, MeanFunction, u64) {
+        (
+            self.method,
+            self.n_train,
+            self.frame_ratio.to_bits(),
+            self.keyposes_only,
+            self.nn_bias,
+            self.mean,
+            self.orientation_weight.to_bits(),
+        )
     }
 }
 
@@ -687,6 +738,12 @@ impl Partitioned for GprModel {
         body.regressor.validate(None)?;
         if !(body.frame_ratio.is_finite() && body.frame_ratio > 0.0) {
             return Err(format!("frame ratio {} is not a finite positive number", body.frame_ratio));
+        }
+        if !(0.0..=1.0).contains(&body.orientation_weight) {
+            return Err(format!("limb orientation weight {} is not in [0, 1]", body.orientation_weight));
+        }
+        if body.orientation.iter().any(|m| m.w.iter().flatten().any(|x| !x.is_finite())) {
+            return Err("the limb orientation map holds a non-finite number".into());
         }
         Ok(())
     }
@@ -706,6 +763,10 @@ impl Partitioned for GprModel {
         let disp = bodies.pop().expect("one body per part");
         let mut reports: Vec<RegressorReport> = bodies.iter().map(|b| b.report.clone()).collect();
         reports.push(disp.report);
+        let orientation = (disp.orientation_weight > 0.0).then(|| LimbOrientation {
+            weight: disp.orientation_weight,
+            maps: bodies.iter().map(|b| b.orientation.clone()).collect(),
+        });
         Ok(GprModel {
             method: disp.method,
             part_names: names.to_vec(),
@@ -717,6 +778,7 @@ impl Partitioned for GprModel {
             nn_bias: disp.nn_bias,
             mean: disp.mean,
             reports,
+            orientation,
         })
     }
 }
@@ -786,6 +848,8 @@ pub fn train_piece(
         keyposes_only,
         nn_bias,
         mean: mean_fn,
+        orientation_weight: 0.0,
+        orientation: None,
     })
 }
 
@@ -919,6 +983,18 @@ mod tests {
                     m
                 },
                 "key-poses",
+            ),
+            (
+                GprModel { orientation: Some(LimbOrientation { weight: 0.5, maps: vec![None, None] }), ..model.clone() },
+                "2 limb orientation maps for 1 parts",
+            ),
+            (
+                GprModel { orientation: Some(LimbOrientation { weight: 1.5, maps: vec![None] }), ..model.clone() },
+                "limb orientation weight 1.5",
+            ),
+            (
+                GprModel { orientation: Some(LimbOrientation { weight: 0.5, maps: vec![Some(LimbMap { w: [[f64::NAN; 3]; 4] })] }), ..model.clone() },
+                "non-finite",
             ),
         ];
         for (bad, want) in broken {

@@ -8,6 +8,7 @@
 pub mod densify;
 pub mod gpr_model;
 pub mod geometric_prior;
+pub mod limb_orientation;
 pub mod predict;
 pub mod confidence;
 pub mod reconstruct;

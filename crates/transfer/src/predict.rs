@@ -102,7 +102,8 @@ pub struct Transferred {
 
 /// The whole of `gpr-predict` but the file writing: source aligned motion ->
 /// source coefficients -> target coefficients (and displacements) -> target
-/// parts -> assembled target mesh (or `reconstructor`'s §6 correction and
+/// parts (limbs turned by the model's limb orientation, `crate::limb_orientation`) ->
+/// assembled target mesh (or `reconstructor`'s §6 correction and
 /// stitching) -> placed from the source's first world pose -> with `footskate` (its smoothness
 /// λ), planted feet pinned ([`crate::feet`]).
 pub fn transfer_motion(
@@ -128,7 +129,10 @@ pub fn transfer_motion(
     let pred = predict(model, &xs, &xd, placement == Placement::Blended)?;
     let gp_s = t1.elapsed().as_secs_f64();
     let t2 = Instant::now();
-    let decoded = target_pca.decode(&pred.coeffs)?;
+    let mut decoded = target_pca.decode(&pred.coeffs)?;
+    if let Some(o) = &model.orientation {
+        crate::limb_orientation::apply(o, source_pca, target_pca, &xs, &mut decoded)?;
+    }
     let frames = match reconstructor {
         Some(r) => r.reconstruct(target_pca, &decoded)?,
         None => {

@@ -12,8 +12,9 @@ use mesh_core::cli::CommonArgs;
 use mesh_core::part_merge;
 use serde::Serialize;
 
+use crate::limb_orientation;
 use crate::gpr_model::{
-    train, train_piece, GprModel, MeanFunction, MeanPrior, MeanPriors, Method, PairFiles, RegressorReport, DISPLACEMENT,
+    train, train_orientation, train_piece, GprModel, MeanFunction, MeanPrior, MeanPriors, Method, PairFiles, RegressorReport, DISPLACEMENT,
     MEAN_RIDGE, PRIOR_WEIGHT,
 };
 use capture::part_pca::PcaModel;
@@ -65,6 +66,11 @@ pub struct Params {
     /// Weight of the geometric prior mixed into each part's affine mean (0: the fitted map alone)
     #[arg(long, default_value_t = PRIOR_WEIGHT, value_name = "W")]
     pub prior_weight: f64,
+    /// How far each limb is turned from the orientation the pose GP predicts toward the one a
+    /// map of the source limb's orientation predicts (transfer::limb_orientation; 0: the
+    /// paper's model, no turn)
+    #[arg(long, default_value_t = limb_orientation::WEIGHT, value_name = "W")]
+    pub orientation_weight: f64,
     /// Observation-noise variance σn² (the paper's 0.1; the starting value with --learn-noise)
     #[arg(long, default_value_t = PAPER_NOISE_VAR)]
     pub noise_var: f64,
@@ -185,6 +191,9 @@ pub fn run(p: &Params) -> anyhow::Result<()> {
     if !(0.0..=1.0).contains(&p.prior_weight) {
         return Err(mesh_core::Error::invalid(format!("--prior-weight must be in [0, 1], got {}", p.prior_weight)).into());
     }
+    if !(0.0..=1.0).contains(&p.orientation_weight) {
+        return Err(mesh_core::Error::invalid(format!("--orientation-weight must be in [0, 1], got {}", p.orientation_weight)).into());
+    }
     let ridge_toward = p.mean_prior == MeanPrior::Geometric;
     let maps = (p.mean == MeanFunction::Affine && (ridge_toward || p.prior_weight > 0.0))
         .then(|| crate::geometric_prior::part_priors(&src_pca, &tgt_pca));
@@ -206,7 +215,7 @@ pub fn run(p: &Params) -> anyhow::Result<()> {
             &format!("gpr-train: {}, {} pairs", units[unit], pairs.len()),
             &p.common,
         );
-        let piece = train_piece(
+        let mut piece = train_piece(
             method,
             p.nn_bias,
             p.mean,
@@ -219,6 +228,11 @@ pub fn run(p: &Params) -> anyhow::Result<()> {
             &opts,
             unit,
         )?;
+        if unit < names.len() {
+            let o = train_orientation(method, &names, &pairs, ratio, p.keyposes_only, &src_pca, &tgt_pca, p.orientation_weight, Some(unit))?;
+            piece.orientation = o.and_then(|mut o| o.maps.swap_remove(unit));
+        }
+        piece.orientation_weight = p.orientation_weight;
         spin.finish_and_clear();
         log_report(&piece.report);
         part_merge::save_piece::<GprModel>(&p.out, &header, &units, unit, piece)?;
@@ -228,7 +242,7 @@ pub fn run(p: &Params) -> anyhow::Result<()> {
         &format!("gpr-train: {} parts + displacement, {} pairs", names.len(), pairs.len()),
         &p.common,
     );
-    let model: GprModel = train(
+    let mut model: GprModel = train(
         method,
         p.nn_bias,
         p.mean,
@@ -240,6 +254,8 @@ pub fn run(p: &Params) -> anyhow::Result<()> {
         p.keyposes_only,
         &opts,
     )?;
+    model.orientation =
+        train_orientation(method, &names, &pairs, ratio, p.keyposes_only, &src_pca, &tgt_pca, p.orientation_weight, None)?;
     spin.finish_and_clear();
     mesh_core::info!(
         "trained {} on {} pairs in {:.3} s",

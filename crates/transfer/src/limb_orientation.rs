@@ -1,0 +1,391 @@
+//! Limb orientation: how each limb is turned relative to the root part, mapped from the source
+//! on its own and fused with the orientation the pose GP predicts (a departure from CVPR §5:
+//! docs/DEVIATIONS.md; measured in docs/RESULTS.md, study 6).
+//!
+//! The pose GPs map a part's PCA coefficients, which are linear in vertex positions: a limb
+//! turned further than any training pose is extrapolated along straight lines, and its
+//! orientation relative to the torso is where most of the error of unseen motions lies. A
+//! rotation is better extrapolated in its own coordinates. So per limb (every part but the
+//! root, the first part of the PCA models):
+//! * its **orientation** in a frame is the Procrustes rotation of the limb's *proximal half*
+//!   (the half of its vertices nearest the band it shares with the parts placed before it,
+//!   `capture::assemble::plan`, i.e. its joint) from the PCA mean shape onto the frame;
+//! * an affine map of log-rotations, `log R_t = [log R_s, 1] W` (`3 -> 3`), is fitted on the
+//!   training pairs by ridge least squares shrunk toward the identity map
+//!   (`W = (X₁ᵀX₁ + λI) \ (X₁ᵀY + λ W₀)`, `W₀ = [I; 0]`, `λ` = [`RIDGE`] × the mean diagonal);
+//! * at prediction the limb is turned about its joint from the GP's orientation `R_gp` to
+//!   `R_gp · exp(w · log(R_gpᵀ R_map))`: the geodesic point `w` ([`WEIGHT`]) of the way to the
+//!   map's orientation. `w = 0` is the paper's model (nothing is turned).
+//!
+//! Orientations on both sides are measured on PCA-decoded coefficients, at training and at
+//! prediction alike.
+
+use capture::assemble::plan;
+use capture::part_pca::{PartPca, PcaModel};
+use mesh_core::rigid::{procrustes, so3_exp, so3_log};
+use mesh_core::{Error, Result};
+use nalgebra::{DMatrix, Matrix4, Matrix4x3, Rotation3, Vector3, Vector4};
+use rayon::prelude::*;
+use serde::{Deserialize, Serialize};
+
+/// Default of `gpr-train --orientation-weight`: how far each limb is turned from the GP's
+/// orientation toward the map's (docs/RESULTS.md, study 6).
+pub const WEIGHT: f64 = 0.5;
+
+/// Ridge of the maps, relative to the mean diagonal of the normal equations.
+pub const RIDGE: f64 = 0.1;
+
+/// The share of a limb's vertices, nearest its joint, that its orientation is measured on.
+pub const PROXIMAL_SHARE: f64 = 0.5;
+
+/// A limb of a PCA model: its part index, the part-local vertices of its joint band and of
+/// its proximal half.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Limb {
+    pub part: usize,
+    pub joint: Vec<usize>,
+    pub proximal: Vec<usize>,
+}
+
+/// Points of a flattened `(x1, y1, z1, x2, ...)` row.
+fn points(flat: &[f64]) -> Vec<Vector3<f64>> {
+    flat.chunks_exact(3).map(|c| Vector3::new(c[0], c[1], c[2])).collect()
+}
+
+fn mean_shape(part: &PartPca) -> Vec<Vector3<f64>> {
+    points(part.pca.mean.as_slice())
+}
+
+/// The limbs of `pca`: every part after the root, with the band it shares with the parts
+/// placed before it (its joint) and the [`PROXIMAL_SHARE`] of its vertices nearest the
+/// joint's centroid in the mean shape (ties by vertex order).
+pub fn limbs(pca: &PcaModel) -> Result<Vec<Limb>> {
+    let plan = plan(pca)?;
+    Ok(plan
+        .steps
+        .iter()
+        .skip(1)
+        .map(|step| {
+            let mean = mean_shape(&pca.parts[step.part]);
+            let joint = step.anchor_local.clone();
+            let pivot = centroid(joint.iter().map(|&i| &mean[i]));
+            let mut by_distance: Vec<(f64, usize)> =
+                mean.iter().enumerate().map(|(i, p)| ((p - pivot).norm(), i)).collect();
+            by_distance.sort_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
+            let keep = ((mean.len() as f64) * PROXIMAL_SHARE).ceil().max(3.0) as usize;
+            let mut proximal: Vec<usize> = by_distance.iter().take(keep).map(|&(_, i)| i).collect();
+            proximal.sort_unstable();
+            Limb { part: step.part, joint, proximal }
+        })
+        .collect())
+}
+
+fn centroid<'a>(points: impl Iterator<Item = &'a Vector3<f64>>) -> Vector3<f64> {
+    let (sum, n) = points.fold((Vector3::zeros(), 0usize), |(s, n), p| (s + p, n + 1));
+    sum / n.max(1) as f64
+}
+
+/// The rotation of `subset` of `reference` onto the same vertices of `frame` (Procrustes).
+pub fn orientation(reference: &[Vector3<f64>], frame: &[Vector3<f64>], subset: &[usize]) -> Rotation3<f64> {
+    let a: Vec<Vector3<f64>> = subset.iter().map(|&i| reference[i]).collect();
+    let b: Vec<Vector3<f64>> = subset.iter().map(|&i| frame[i]).collect();
+    procrustes(&a, &b, None).rotation
+}
+
+/// One limb's map of log-rotations, `log R_t = W[0..3]ᵀ log R_s + W[3]`.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct LimbMap {
+    /// Rows: the coefficients of the source log-rotation's x, y, z, then the constant.
+    pub w: [[f64; 3]; 4],
+}
+
+impl LimbMap {
+    /// Ridge least squares of `target` on `[source, 1]`, shrunk toward the identity map
+    /// (see the module documentation), `ridge` relative to the mean diagonal.
+    pub fn fit(source: &[Vector3<f64>], target: &[Vector3<f64>], ridge: f64) -> Result<LimbMap> {
+        if source.is_empty() || source.len() != target.len() {
+            return Err(Error::invalid(format!(
+                "limb orientation: {} source and {} target rotations",
+                source.len(),
+                target.len()
+            )));
+        }
+        let mut xtx = Matrix4::<f64>::zeros();
+        let mut xty = Matrix4x3::<f64>::zeros();
+        for (x, y) in source.iter().zip(target) {
+            let x1 = Vector4::new(x.x, x.y, x.z, 1.0);
+            xtx += x1 * x1.transpose();
+            xty += x1 * y.transpose();
+        }
+        let lambda = ridge * xtx.trace() / 4.0;
+        let mut identity = Matrix4x3::<f64>::zeros();
+        for i in 0..3 {
+            identity[(i, i)] = 1.0;
+        }
+        let lhs = xtx + Matrix4::identity() * lambda;
+        let rhs = xty + identity * lambda;
+        let w = lhs
+            .cholesky()
+            .ok_or_else(|| Error::invalid("limb orientation: the normal equations are not positive definite"))?
+            .solve(&rhs);
+        Ok(LimbMap { w: std::array::from_fn(|r| std::array::from_fn(|c| w[(r, c)])) })
+    }
+
+    /// The mapped log-rotation of `x`.
+    pub fn apply(&self, x: &Vector3<f64>) -> Vector3<f64> {
+        let w = &self.w;
+        Vector3::from_fn(|c, _| x.x * w[0][c] + x.y * w[1][c] + x.z * w[2][c] + w[3][c])
+    }
+}
+
+/// The limb maps of a model and how far they turn the GP's limbs (kept in the `gpr-model`).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct LimbOrientation {
+    /// The geodesic share `w` of the turn toward the map's orientation, in `(0, 1]`.
+    pub weight: f64,
+    /// One per part of the PCA models, `None` for the root.
+    pub maps: Vec<Option<LimbMap>>,
+}
+
+impl LimbOrientation {
+    /// Consistency of a model read from a file with `n_parts` parts.
+    pub fn validate(&self, n_parts: usize) -> std::result::Result<(), String> {
+        if !(self.weight > 0.0 && self.weight <= 1.0) {
+            return Err(format!("limb orientation weight {} is not in (0, 1]", self.weight));
+        }
+        if self.maps.len() != n_parts {
+            return Err(format!("{} limb orientation maps for {n_parts} parts", self.maps.len()));
+        }
+        if self.maps.iter().flatten().any(|m| m.w.iter().flatten().any(|x| !x.is_finite())) {
+            return Err("a limb orientation map holds a non-finite number".into());
+        }
+        Ok(())
+    }
+}
+
+/// The log-orientations of limb `limb` in the decoded coefficient rows `coeffs` of `part`.
+fn log_orientations(part: &PartPca, limb: &Limb, coeffs: &DMatrix<f64>) -> Result<Vec<Vector3<f64>>> {
+    let rows = part.pca.decode(coeffs).map_err(|e| Error::invalid(format!("part '{}': {e}", part.name)))?;
+    let mean = mean_shape(part);
+    Ok((0..rows.nrows())
+        .into_par_iter()
+        .map(|r| {
+            let row: Vec<f64> = rows.row(r).iter().copied().collect();
+            so3_log(&orientation(&mean, &points(&row), &limb.proximal))
+        })
+        .collect())
+}
+
+/// The limb of part `k` in both models, or `None` when `k` is the root.
+fn limb_pair<'a>(source: &'a [Limb], target: &'a [Limb], k: usize) -> Option<(&'a Limb, &'a Limb)> {
+    Some((source.iter().find(|l| l.part == k)?, target.iter().find(|l| l.part == k)?))
+}
+
+/// The map of part `k` from the training rows `x` (source coefficients) and `y` (target
+/// coefficients) of that part; `None` for the root. The models' parts correspond by index.
+pub fn fit_part(source: &PcaModel, target: &PcaModel, k: usize, x: &DMatrix<f64>, y: &DMatrix<f64>) -> Result<Option<LimbMap>> {
+    let (ls, lt) = (limbs(source)?, limbs(target)?);
+    let Some((s, t)) = limb_pair(&ls, &lt, k) else {
+        return Ok(None);
+    };
+    let xs = log_orientations(&source.parts[k], s, x)?;
+    let ys = log_orientations(&target.parts[k], t, y)?;
+    LimbMap::fit(&xs, &ys, RIDGE).map(Some)
+}
+
+/// Every part's map ([`fit_part`]) from the training rows `x_parts` and `y_parts`.
+pub fn fit(
+    source: &PcaModel,
+    target: &PcaModel,
+    x_parts: &[DMatrix<f64>],
+    y_parts: &[DMatrix<f64>],
+    weight: f64,
+) -> Result<LimbOrientation> {
+    let maps = (0..source.parts.len().min(x_parts.len()).min(y_parts.len()))
+        .map(|k| fit_part(source, target, k, &x_parts[k], &y_parts[k]))
+        .collect::<Result<_>>()?;
+    Ok(LimbOrientation { weight, maps })
+}
+
+/// Turns every limb of the decoded target parts (`decoded[part][frame]`, predicted from the
+/// source coefficients `source_coeffs`) about its joint, as the module documentation says.
+pub fn apply(
+    model: &LimbOrientation,
+    source: &PcaModel,
+    target: &PcaModel,
+    source_coeffs: &[DMatrix<f64>],
+    decoded: &mut [Vec<Vec<Vector3<f64>>>],
+) -> Result<()> {
+    if model.maps.len() != target.parts.len() || decoded.len() != target.parts.len() || source_coeffs.len() != source.parts.len() {
+        return Err(Error::invalid(format!(
+            "limb orientation of {} parts for PCA models of {} and {} parts",
+            model.maps.len(),
+            source.parts.len(),
+            target.parts.len()
+        )));
+    }
+    let (ls, lt) = (limbs(source)?, limbs(target)?);
+    for (k, map) in model.maps.iter().enumerate() {
+        let (Some(map), Some((s, t))) = (map, limb_pair(&ls, &lt, k)) else {
+            continue;
+        };
+        let sources = log_orientations(&source.parts[k], s, &source_coeffs[k])?;
+        if sources.len() != decoded[k].len() {
+            return Err(Error::invalid(format!(
+                "part '{}': {} source frames for {} predicted",
+                target.parts[k].name,
+                sources.len(),
+                decoded[k].len()
+            )));
+        }
+        let mean = mean_shape(&target.parts[k]);
+        decoded[k].par_iter_mut().zip(&sources).for_each(|(frame, x)| {
+            let now = orientation(&mean, frame, &t.proximal);
+            let mapped = so3_exp(&map.apply(x));
+            let want = now * so3_exp(&(model.weight * so3_log(&(now.inverse() * mapped))));
+            let turn = want * now.inverse();
+            let pivot = centroid(t.joint.iter().map(|&i| &frame[i]));
+            for p in frame.iter_mut() {
+                *p = pivot + turn * (*p - pivot);
+            }
+        });
+    }
+    Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use capture::align::AlignedMotion;
+    use capture::part_pca::{fit as pca_fit, PartAlignment};
+    use gp::pca::Components;
+    use mesh_core::rigid::RigidMotion;
+    use mesh_core::segmentation::{Part, Segmentation};
+    use rand::{RngExt, SeedableRng};
+
+    /// A capsule whose "limb" (rings 4 and up; rings 4-7 shared with the "torso") turns about
+    /// the z axis through (0, 1, 0) by a different angle in each of 8 frames, and its PCA.
+    fn turning_limb() -> (PcaModel, AlignedMotion, Vec<f64>) {
+        let (mesh, l) = mesh_core::shapes::capsule_body(12, 8, 0.2, 2.0);
+        let n = mesh.n_vertices();
+        let ring = |r: usize| l.ring(l.body_ring(r))[0] as usize;
+        let part = |name: &str, parent: Option<&str>, keep: &dyn Fn(usize) -> bool| Part {
+            name: name.into(),
+            parent: parent.map(Into::into),
+            vertices: (0..n as u32).filter(|&v| keep(v as usize)).collect(),
+            faces: Vec::new(),
+            overlap: Vec::new(),
+            loops: Vec::new(),
+        };
+        let seg = Segmentation {
+            n_vertices: n,
+            parts: vec![part("torso", None, &|v| v < ring(8)), part("limb", Some("torso"), &|v| v >= ring(4))],
+        };
+        let angles: Vec<f64> = (0..8).map(|i| 0.15 * i as f64 - 0.5).collect();
+        let c = Vector3::new(0.0, 1.0, 0.0);
+        let frames: Vec<Vec<Vector3<f64>>> = angles
+            .iter()
+            .map(|&a| {
+                let r = so3_exp(&Vector3::new(0.0, 0.0, a));
+                mesh.vertices.iter().map(|v| if v.y > 1.0 { r * (v - c) + c } else { *v }).collect()
+            })
+            .collect();
+        let motion = AlignedMotion {
+            faces: mesh.faces.clone(),
+            poses: vec![RigidMotion::identity(); frames.len()],
+            displacements: vec![[0.0; 6]; frames.len()],
+            anchor: Vec::new(),
+            frames,
+            capture: Default::default(),
+        };
+        let (pca, _) = pca_fit(&mesh.vertices, &seg, &[&motion], Components::Count(20), PartAlignment::Body).unwrap();
+        (pca, motion, angles)
+    }
+
+    /// Distance of two rotations (Frobenius norm of the difference: precise near zero).
+    fn apart(a: &Rotation3<f64>, b: &Rotation3<f64>) -> f64 {
+        (a.matrix() - b.matrix()).norm()
+    }
+
+    /// The turn of a rigidly turned point set is its orientation, whatever the subset.
+    #[test]
+    fn orientation_of_a_turned_set_is_the_turn() {
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(3);
+        let reference: Vec<Vector3<f64>> =
+            (0..40).map(|_| Vector3::new(rng.random::<f64>(), rng.random::<f64>(), rng.random::<f64>())).collect();
+        let turn = so3_exp(&Vector3::new(0.3, -0.7, 0.4));
+        let moved: Vec<Vector3<f64>> = reference.iter().map(|p| turn * p + Vector3::new(1.0, 2.0, 3.0)).collect();
+        for subset in [(0..40).collect::<Vec<_>>(), vec![1, 5, 9, 30]] {
+            let r = orientation(&reference, &moved, &subset);
+            assert!(apart(&r, &turn) < 1e-9);
+        }
+    }
+
+    /// Exact affine data give back the map; an overwhelming ridge gives the identity map.
+    #[test]
+    fn map_fit_recovers_a_known_map_and_shrinks_toward_the_identity() {
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(7);
+        let m = nalgebra::Matrix3::new(0.9, 0.1, 0.0, -0.2, 1.3, 0.05, 0.0, 0.3, 0.7);
+        let b = Vector3::new(0.05, -0.1, 0.2);
+        let xs: Vec<Vector3<f64>> = (0..60).map(|_| Vector3::from_fn(|_, _| rng.random::<f64>() * 2.0 - 1.0)).collect();
+        let ys: Vec<Vector3<f64>> = xs.iter().map(|x| m * x + b).collect();
+        let exact = LimbMap::fit(&xs, &ys, 1e-12).unwrap();
+        for x in &xs {
+            assert!((exact.apply(x) - (m * x + b)).norm() < 1e-8);
+        }
+        let shrunk = LimbMap::fit(&xs, &ys, 1e9).unwrap();
+        for x in &xs {
+            assert!((shrunk.apply(x) - x).norm() < 1e-6);
+        }
+        assert!(LimbMap::fit(&xs, &ys[1..], 0.1).is_err());
+    }
+
+    /// The limb is the part after the root; its joint is its band with the torso and its
+    /// proximal half the half of its vertices nearest that band.
+    #[test]
+    fn limbs_are_the_parts_after_the_root_with_joint_and_proximal_half() {
+        let (pca, _, _) = turning_limb();
+        let limbs = limbs(&pca).unwrap();
+        assert_eq!(limbs.len(), 1);
+        let limb = &limbs[0];
+        assert_eq!(limb.part, 1);
+        let torso: std::collections::HashSet<u32> = pca.parts[0].vertices.iter().copied().collect();
+        let shared: Vec<usize> = (0..pca.parts[1].vertices.len()).filter(|&i| torso.contains(&pca.parts[1].vertices[i])).collect();
+        assert_eq!(limb.joint, shared);
+        let n = pca.parts[1].vertices.len();
+        assert_eq!(limb.proximal.len(), n.div_ceil(2));
+        let mean = mean_shape(&pca.parts[1]);
+        let pivot = centroid(limb.joint.iter().map(|&i| &mean[i]));
+        let far = (0..n).filter(|i| !limb.proximal.contains(i)).map(|i| (mean[i] - pivot).norm()).fold(f64::INFINITY, f64::min);
+        assert!(limb.proximal.iter().all(|&i| (mean[i] - pivot).norm() <= far));
+    }
+
+    /// A prediction that never turns the limb (its mean shape in every frame), with the
+    /// identity map: weight 1 turns each frame's limb to the source's orientation, weight 0.5
+    /// half way (the geodesic midpoint), and the joint stays where it was.
+    #[test]
+    fn apply_turns_limbs_about_the_joint_toward_the_mapped_orientation() {
+        let (pca, motion, _) = turning_limb();
+        let xs = pca.encode(&motion).unwrap();
+        let source = pca.decode(&xs).unwrap();
+        let limb = limbs(&pca).unwrap().remove(0);
+        let mean = mean_shape(&pca.parts[1]);
+        let identity = LimbMap { w: [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0], [0.0; 3]] };
+        for weight in [1.0, 0.5] {
+            let model = LimbOrientation { weight, maps: vec![None, Some(identity.clone())] };
+            let mut decoded = source.clone();
+            decoded[1].iter_mut().for_each(|f| *f = mean.clone());
+            apply(&model, &pca, &pca, &xs, &mut decoded).unwrap();
+            assert_eq!(decoded[0], source[0], "the root is not moved");
+            for (f, frame) in decoded[1].iter().enumerate() {
+                let want = so3_exp(&(weight * so3_log(&orientation(&mean, &source[1][f], &limb.proximal))));
+                let got = orientation(&mean, frame, &limb.proximal);
+                assert!(apart(&got, &want) < 1e-9, "frame {f}, weight {weight}: {}", apart(&got, &want));
+                let joint = |x: &[Vector3<f64>]| centroid(limb.joint.iter().map(|&i| &x[i]));
+                assert!((joint(frame) - joint(&mean)).norm() < 1e-12);
+            }
+        }
+        // Weight 0 is not a model: gpr-train stores none.
+        assert!(LimbOrientation { weight: 0.0, maps: vec![None, None] }.validate(2).is_err());
+    }
+}
