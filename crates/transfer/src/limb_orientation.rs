@@ -243,14 +243,25 @@ pub fn apply(
             let now = orientation(&mean, frame, &t.proximal);
             let mapped = so3_exp(&map.apply(x));
             let want = now * so3_exp(&(model.weight * so3_log(&(now.inverse() * mapped))));
-            let turn = want * now.inverse();
-            let pivot = centroid(t.joint.iter().map(|&i| &frame[i]));
-            for p in frame.iter_mut() {
-                *p = pivot + turn * (*p - pivot);
-            }
+            turn_to(frame, t, &mean, &want);
         });
     }
     Ok(())
+}
+
+/// Turns the limb `frame` of `limb` about its joint (the centroid of its joint band) so that
+/// its orientation relative to `mean` (the part's PCA mean shape) becomes `want`.
+pub fn turn_to(frame: &mut [Vector3<f64>], limb: &Limb, mean: &[Vector3<f64>], want: &Rotation3<f64>) {
+    let turn = want * orientation(mean, frame, &limb.proximal).inverse();
+    let pivot = centroid(limb.joint.iter().map(|&i| &frame[i]));
+    for p in frame.iter_mut() {
+        *p = pivot + turn * (*p - pivot);
+    }
+}
+
+/// The mean shape of part `k` of `pca`, the reference of its orientations.
+pub fn reference(pca: &PcaModel, k: usize) -> Vec<Vector3<f64>> {
+    mean_shape(&pca.parts[k])
 }
 
 #[cfg(test)]
