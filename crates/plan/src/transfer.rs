@@ -14,7 +14,7 @@ use mesh_core::capture_set::{CaptureSet, SubjectSpec};
 
 use crate::options::{value_name, Method, Placement, TransferOptions};
 use crate::per_part;
-use crate::task::{Graph, Step, Task};
+use crate::task::{s, Graph, Step, Task};
 
 /// Path strings joined as the command line shows them.
 pub(crate) fn join(base: &Path, parts: &[&str]) -> String {
@@ -23,10 +23,6 @@ pub(crate) fn join(base: &Path, parts: &[&str]) -> String {
         p.push(s);
     }
     p.to_string_lossy().into_owned()
-}
-
-fn s(x: impl Into<String>) -> String {
-    x.into()
 }
 
 /// A frame rate as printf's `%g` writes it (6 significant digits, no trailing zeros).

@@ -1,18 +1,14 @@
 //! The variation pipeline's tasks (3DV): per movement group `prealign` (time-aligned motions and
-//! pre-blends), `gpdm-train` (one GPDM per part, one task per part joined by `merge-parts`),
-//! `hmc-sample` (variations, then their contact
-//! sheets), `variation-eval`; and the merge of every group's records into `variation.json`.
+//! pre-blends), `gpdm-train` (one GPDM per part, one task per part joined by `merge-parts`:
+//! [`per_part`]), `hmc-sample` (variations, then their contact sheets), `variation-eval`; and
+//! the merge of every group's records into `variation.json`.
 
 use anyhow::Result;
 use mesh_core::capture_set::{CaptureSet, SubjectSpec};
 
 use crate::options::{words, VariationOptions};
 use crate::per_part;
-use crate::task::{Graph, Step, Task};
-
-fn s(x: impl Into<String>) -> String {
-    x.into()
-}
+use crate::task::{s, Graph, Step, Task};
 
 /// Adds the variation pipeline's tasks and its `VARIATION_RECORDS` variable to `graph`.
 pub fn plan(set: &CaptureSet, out: &str, opt: &VariationOptions, graph: &mut Graph) -> Result<()> {

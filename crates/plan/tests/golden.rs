@@ -109,6 +109,26 @@ fn graph_is_closed_and_targets_unique() {
     }
 }
 
+/// Every stage binary the plan runs has a request in the built-in table (from measured peaks),
+/// the merges of per-part pieces included: none falls back to the 500 MB guess.
+#[test]
+fn every_stage_the_plan_runs_has_a_measured_request() {
+    let set = repo().join("fixtures/tiny-set");
+    let opts = plan::options::PipelineOptions {
+        paths: plan::options::Paths { set, pipeline_out: "out".into() },
+        transfer: parse_default_transfer(),
+        variation: parse_default_variation(),
+    };
+    let g = plan::stage::graph(&opts).unwrap();
+    let table = plan::resources::Table::default();
+    for t in &g.tasks {
+        for b in t.bins() {
+            assert!(table.get(b).is_some(), "{} ({}): no request for {b}", t.target, t.kind);
+        }
+    }
+    assert!(g.tasks.iter().any(|t| t.bins() == ["merge-parts"]), "no merge task in the plan");
+}
+
 #[derive(clap::Parser)]
 struct T {
     #[command(flatten)]
