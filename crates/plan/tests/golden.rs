@@ -81,14 +81,8 @@ fn slurm_arrays_of_the_tiny_set() {
 /// and no two tasks write the same target: the graph is closed and make/Slurm can order it.
 #[test]
 fn graph_is_closed_and_targets_unique() {
-    let root = repo();
-    let set = root.join("fixtures/tiny-set");
-    let opts = plan::options::PipelineOptions {
-        paths: plan::options::Paths { set: set.clone(), pipeline_out: "out".into() },
-        transfer: parse_default_transfer(),
-        variation: parse_default_variation(),
-    };
-    let g = plan::stage::graph(&opts).unwrap();
+    let set = repo().join("fixtures/tiny-set");
+    let g = tiny_graph();
     let mut targets: Vec<&str> = g.tasks.iter().map(|t| t.target.as_str()).collect();
     targets.sort();
     let n = targets.len();
@@ -113,13 +107,7 @@ fn graph_is_closed_and_targets_unique() {
 /// the merges of per-part pieces included: none falls back to the 500 MB guess.
 #[test]
 fn every_stage_the_plan_runs_has_a_measured_request() {
-    let set = repo().join("fixtures/tiny-set");
-    let opts = plan::options::PipelineOptions {
-        paths: plan::options::Paths { set, pipeline_out: "out".into() },
-        transfer: parse_default_transfer(),
-        variation: parse_default_variation(),
-    };
-    let g = plan::stage::graph(&opts).unwrap();
+    let g = tiny_graph();
     let table = plan::resources::Table::default();
     for t in &g.tasks {
         for b in t.bins() {
@@ -137,6 +125,16 @@ struct T {
     v: plan::options::VariationOptions,
 }
 
+/// The plan of the tiny preset's description with the default options, into `out`.
+fn tiny_graph() -> plan::task::Graph {
+    let opts = plan::options::PipelineOptions {
+        paths: plan::options::Paths { set: repo().join("fixtures/tiny-set"), pipeline_out: "out".into() },
+        transfer: parse_default_transfer(),
+        variation: parse_default_variation(),
+    };
+    plan::stage::graph(&opts).unwrap()
+}
+
 fn parse_default_transfer() -> plan::options::TransferOptions {
     <T as clap::Parser>::parse_from(["t"]).t
 }
@@ -150,14 +148,8 @@ fn parse_default_variation() -> plan::options::VariationOptions {
 /// per name of the subject's parts; the whole-body PCA (one part) stays one task.
 #[test]
 fn multi_part_models_are_fitted_part_by_part() {
-    let root = repo();
-    let set = root.join("fixtures/tiny-set");
-    let opts = plan::options::PipelineOptions {
-        paths: plan::options::Paths { set: set.clone(), pipeline_out: "out".into() },
-        transfer: parse_default_transfer(),
-        variation: parse_default_variation(),
-    };
-    let g = plan::stage::graph(&opts).unwrap();
+    let set = repo().join("fixtures/tiny-set");
+    let g = tiny_graph();
     let spec = mesh_core::capture_set::SubjectSpec::load(set.join("A/subject.json")).unwrap();
     let mut parts: Vec<String> = spec.parts.keys().cloned().collect();
     parts.sort();
