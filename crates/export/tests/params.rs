@@ -1,4 +1,5 @@
-//! The export stages' `Params` records hold every option under its flag's name.
+//! The export stages' `Params` records hold every option under its flag's name (html-report's
+//! too, though it writes no artifact).
 
 use clap::Parser;
 use mesh_core::cli::unrecorded_options as missing;
@@ -8,6 +9,7 @@ fn export_stage_params_record_every_option_under_its_flag_name() {
     let cases = [
         ("mesh-export", missing::<export::stage::mesh_export::Params>(&["mesh-export", "in", "-o", "x.glb"])),
         ("mesh-import", missing::<export::stage::mesh_import::Params>(&["mesh-import", "in", "-o", "out", "--pattern", "walk.%04d.obj"])),
+        ("html-report", missing::<export::stage::html_report::Params>(&["html-report", "-o", "out", "--view", "source=set/A/walk"])),
     ];
     for (stage, unrecorded) in cases {
         assert_eq!(unrecorded.unwrap(), Vec::<String>::new(), "{stage}");

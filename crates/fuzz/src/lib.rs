@@ -17,6 +17,8 @@
 //! (`catch_unwind`), counted and its input kept; an input slower than
 //! [`HANG_SECONDS`] counts as a hang.
 
+pub mod stage;
+
 use std::panic::{catch_unwind, AssertUnwindSafe};
 use std::path::{Path, PathBuf};
 use std::time::{Duration, Instant};

@@ -11,11 +11,14 @@ use clap::Parser;
 use mesh_core::artifact::read_header;
 use mesh_core::cli::CommonArgs;
 use mesh_core::part_merge::{merge, merge_reporting, Partitioned};
+use serde::Serialize;
 use transfer::gpr_model::GprModel;
 use variation::train::VariationModel;
 
+// The merged model's header is the pieces' (the single-process run's): nothing records these
+// `Params`, which serialize like every stage's.
 /// Join the per-part artifacts of one model (pca-fit, gpr-train or gpdm-train run with --part) into the whole model
-#[derive(Parser, Debug)]
+#[derive(Parser, Debug, Serialize)]
 #[command(
     name = "merge-parts",
     version,
@@ -24,6 +27,7 @@ use variation::train::VariationModel;
 )]
 pub struct Params {
     #[command(flatten)]
+    #[serde(skip)]
     pub common: CommonArgs,
     /// Pieces of one model (kind pca-model-part, gpr-model-part or variation-model-part), one per part, in any order
     #[arg(required = true)]
@@ -36,7 +40,7 @@ pub struct Params {
     #[arg(long, value_name = "REPORT", requires = "report")]
     pub piece_report: Vec<PathBuf>,
     /// Output report: the pieces' reports joined into the whole run's (needs --piece-report)
-    #[arg(long, value_name = "REPORT", requires = "piece_report")]
+    #[arg(long, requires = "piece_report")]
     pub report: Option<PathBuf>,
 }
 
@@ -76,5 +80,16 @@ pub fn run(p: &Params) -> anyhow::Result<()> {
             ),
         )
         .into()),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn every_option_is_recorded_under_its_flag_name() {
+        let argv = ["merge-parts", "a.piece", "b.piece", "--out", "m.model", "--piece-report", "a.json", "--report", "r.json"];
+        assert_eq!(mesh_core::cli::unrecorded_options::<Params>(&argv).unwrap(), Vec::<String>::new());
     }
 }

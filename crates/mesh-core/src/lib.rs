@@ -22,6 +22,7 @@ pub mod part_merge;
 pub mod atomic;
 pub mod rigid;
 pub mod cli;
+pub mod stage;
 pub mod clap_docs;
 pub mod shapes;
 pub mod contacts;

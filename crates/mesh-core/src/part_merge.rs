@@ -186,12 +186,13 @@ pub fn merge<M: Partitioned>(inputs: &[PathBuf], out: &Path) -> Result<()> {
 }
 
 /// [`merge`], and the pieces' reports in `reports` (any order, one per part) joined into the
-/// whole run's report at `report`. Nothing is written unless both joins succeed.
+/// whole run's report at `report`. Nothing is written unless both joins succeed; the report
+/// is written first, so the model's presence says both are complete.
 pub fn merge_reporting<M: PartReports>(inputs: &[PathBuf], out: &Path, reports: &[PathBuf], report: &Path) -> Result<()> {
     let (header, model, parts) = join_pieces::<M>(inputs, out, Some(report))?;
     let text = join_report_files::<M>(&parts, reports)?;
-    model.save(out, &header)?;
-    crate::atomic::write_bytes_atomic(report, text.as_bytes())
+    crate::atomic::write_bytes_atomic(report, text.as_bytes())?;
+    model.save(out, &header)
 }
 
 /// The text of the whole run's report from the pieces' reports of the model's `parts`.

@@ -21,7 +21,7 @@ pub struct MeshSequence {
 
 /// A half-open frame range `a:b` (`a` defaults to 0, `b` to the end), as
 /// given to `--frames`.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Serialize)]
 pub struct FrameRange {
     pub start: usize,
     pub end: Option<usize>,

@@ -7,6 +7,7 @@ pub mod collect;
 pub mod json_text;
 pub mod make_fragment;
 pub mod options;
+pub mod per_part;
 pub mod resources;
 pub mod slurm;
 pub mod stage;

@@ -5,6 +5,7 @@
 use std::path::PathBuf;
 
 use clap::{Args, ValueEnum};
+use serde::Serialize;
 pub use capture::align::AlignFrame;
 pub use capture::choices::{MeanFunction, Method};
 pub use capture::part_pca::PartAlignment;
@@ -26,7 +27,7 @@ pub fn value_name<T: ValueEnum>(v: T) -> String {
 }
 
 /// Where the pipelines read and write.
-#[derive(Args, Clone, Debug, PartialEq)]
+#[derive(Args, Clone, Debug, PartialEq, Serialize)]
 pub struct Paths {
     /// Capture-set folder (docs/FORMATS.md)
     #[arg(long)]
@@ -37,7 +38,7 @@ pub struct Paths {
 }
 
 /// `make transfer`'s options (pipelines/transfer.mk).
-#[derive(Args, Clone, Debug, PartialEq)]
+#[derive(Args, Clone, Debug, PartialEq, Serialize)]
 pub struct TransferOptions {
     /// Transfer methods (TRANSFER_METHODS); gpr-nn with key-poses only is always added
     #[arg(long, num_args = 1.., value_parser = parse_method, default_values = ["gpr-nn", "gpr-se", "gpr-linear", "keypose-affine", "whole-body"])]
@@ -63,12 +64,13 @@ pub struct TransferOptions {
 }
 
 /// `make variation`'s options (pipelines/variation.mk).
-#[derive(Args, Clone, Debug, PartialEq)]
+#[derive(Args, Clone, Debug, PartialEq, Serialize)]
 pub struct VariationOptions {
     /// prealign --subject-name (VARIATION_SUBJECT) [default: the set's source subject]
     #[arg(long)]
     pub variation_subject: Option<String>,
     /// A movement group and its motions, `NAME=M1,M2` (VARIATION_GROUPS, VARIATION_MOTIONS_<g>); repeat
+    #[serde(rename = "variation_group")]
     #[arg(long = "variation-group", value_name = "NAME=MOTIONS", value_parser = parse_group)]
     pub groups: Vec<(String, String)>,
     /// Extra prealign flags of a group, `NAME=FLAGS` (VARIATION_PREALIGN_FLAGS_<g>); repeat
@@ -129,12 +131,15 @@ pub fn words(s: &str) -> Vec<String> {
 }
 
 /// Every option of both pipelines.
-#[derive(Args, Clone, Debug, PartialEq)]
+#[derive(Args, Clone, Debug, PartialEq, Serialize)]
 pub struct PipelineOptions {
     #[command(flatten)]
+    #[serde(flatten)]
     pub paths: Paths,
     #[command(flatten)]
+    #[serde(flatten)]
     pub transfer: TransferOptions,
     #[command(flatten)]
+    #[serde(flatten)]
     pub variation: VariationOptions,
 }

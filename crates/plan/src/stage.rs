@@ -1,4 +1,6 @@
-//! The `plan` stage: its arguments and what each subcommand does.
+//! The `plan` stage: its [`Params`] (the command line, one subcommand each) and what each
+//! subcommand does ([`run`]). The record of `Params` names the subcommand as `"subcommand"`
+//! (and `collect`'s as `"table"`) beside its options.
 
 use std::path::{Path, PathBuf};
 
@@ -6,12 +8,13 @@ use anyhow::{Context, Result};
 use clap::{Args as ClapArgs, Parser, Subcommand};
 use mesh_core::capture_set::CaptureSet;
 use mesh_core::cli::CommonArgs;
+use serde::Serialize;
 
 use crate::options::PipelineOptions;
 use crate::task::Graph;
 
 /// Write the pipelines' task graph (every stage invocation with its inputs and outputs) as a make fragment or Slurm job arrays
-#[derive(Parser, Debug)]
+#[derive(Parser, Debug, Serialize)]
 #[command(
     name = "plan",
     version,
@@ -20,12 +23,14 @@ use crate::task::Graph;
                   plan run-task --table out/slurm/slurm/align.tasks --task 0\n      \
                   plan step --label 'align A/walk' --of 3/120 -- target/release/align ..."
 )]
-pub struct Args {
+pub struct Params {
     #[command(subcommand)]
+    #[serde(flatten)]
     pub command: Command,
 }
 
-#[derive(Subcommand, Debug)]
+#[derive(Subcommand, Debug, Serialize)]
+#[serde(tag = "subcommand", rename_all = "kebab-case")]
 pub enum Command {
     /// The make fragment both pipelines include (pipelines/plan.mk)
     Make(MakeArgs),
@@ -40,9 +45,10 @@ pub enum Command {
     Step(StepArgs),
 }
 
-#[derive(ClapArgs, Debug)]
+#[derive(ClapArgs, Debug, Serialize)]
 pub struct StepArgs {
     #[command(flatten)]
+    #[serde(skip)]
     pub common: CommonArgs,
     /// What the line calls the step (e.g. `gpr-predict A-to-B/punch/gpr-nn`)
     #[arg(long)]
@@ -55,22 +61,26 @@ pub struct StepArgs {
     pub command: Vec<String>,
 }
 
-#[derive(ClapArgs, Debug)]
+#[derive(ClapArgs, Debug, Serialize)]
 pub struct MakeArgs {
     #[command(flatten)]
+    #[serde(skip)]
     pub common: CommonArgs,
     #[command(flatten)]
+    #[serde(flatten)]
     pub options: PipelineOptions,
     /// Output make fragment
     #[arg(short, long)]
     pub out: PathBuf,
 }
 
-#[derive(ClapArgs, Debug)]
+#[derive(ClapArgs, Debug, Serialize)]
 pub struct SlurmArgs {
     #[command(flatten)]
+    #[serde(skip)]
     pub common: CommonArgs,
     #[command(flatten)]
+    #[serde(flatten)]
     pub options: PipelineOptions,
     /// Stage binaries the jobs run
     #[arg(long, value_name = "DIR", default_value = "target/release")]
@@ -87,9 +97,10 @@ pub struct SlurmArgs {
     pub out: PathBuf,
 }
 
-#[derive(ClapArgs, Debug)]
+#[derive(ClapArgs, Debug, Serialize)]
 pub struct RunTaskArgs {
     #[command(flatten)]
+    #[serde(skip)]
     pub common: CommonArgs,
     /// Stage binaries
     #[arg(long, value_name = "DIR", default_value = "target/release")]
@@ -102,11 +113,13 @@ pub struct RunTaskArgs {
     pub task: usize,
 }
 
-#[derive(Subcommand, Debug)]
+#[derive(Subcommand, Debug, Serialize)]
+#[serde(tag = "table", rename_all = "kebab-case")]
 pub enum Collect {
     /// Transfer evaluation records into one list sorted by direction, motion, method
     Transfer {
         #[command(flatten)]
+        #[serde(skip)]
         common: CommonArgs,
         /// Output table (results.json)
         #[arg(short, long)]
@@ -118,6 +131,7 @@ pub enum Collect {
     /// Every group's <g>-train.json, <g>-eval.json and <g>-samples.json into one object
     Variation {
         #[command(flatten)]
+        #[serde(skip)]
         common: CommonArgs,
         /// Folder of the group records (OUT/work/variation)
         #[arg(long, value_name = "DIR")]
@@ -145,7 +159,8 @@ fn absolute(p: &Path) -> Result<PathBuf> {
     std::path::absolute(p).with_context(|| format!("{}: cannot make the path absolute", p.display()))
 }
 
-pub fn run(args: &Args) -> Result<()> {
+/// Runs the subcommand (each initialises its `CommonArgs` first).
+pub fn run(args: &Params) -> Result<()> {
     match &args.command {
         Command::Make(a) => {
             a.common.init()?;
@@ -203,4 +218,37 @@ pub fn run(args: &Args) -> Result<()> {
         }
     }
     Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use mesh_core::cli::unrecorded_options as missing;
+
+    #[test]
+    fn every_option_is_recorded_under_its_flag_name() {
+        let cases: [&[&str]; 5] = [
+            &["plan", "make", "--set", "s", "--pipeline-out", "o", "--out", "o/work/plan.mk"],
+            &["plan", "slurm", "--set", "s", "--pipeline-out", "o", "--out", "o/slurm", "--workdir", "w"],
+            &["plan", "run-task", "--table", "t.tasks", "--task", "3"],
+            &["plan", "step", "--label", "align A/walk", "--of", "3/120", "--", "align", "-q"],
+            &["plan", "collect", "transfer", "--out", "r.json", "a.json"],
+        ];
+        for argv in cases {
+            assert_eq!(missing::<Params>(argv).unwrap(), Vec::<String>::new(), "{argv:?}");
+        }
+    }
+
+    #[test]
+    fn the_record_names_the_subcommand_beside_its_options() {
+        let p = Params::try_parse_from(["plan", "make", "--set", "s", "--pipeline-out", "o", "--out", "f", "--variation-group", "g=walk"]).unwrap();
+        let r = serde_json::to_value(&p).unwrap();
+        assert_eq!(r["subcommand"], "make");
+        assert_eq!(r["set"], "s");
+        assert_eq!(r["variation_group"], serde_json::json!([["g", "walk"]]));
+        assert_eq!(r["placement"], "scaled-source", "a default, by its command-line name");
+        let p = Params::try_parse_from(["plan", "collect", "variation", "--work", "w", "--out", "v.json", "g"]).unwrap();
+        let r = serde_json::to_value(&p).unwrap();
+        assert_eq!((&r["subcommand"], &r["table"], &r["groups"]), (&"collect".into(), &"variation".into(), &serde_json::json!(["g"])));
+    }
 }

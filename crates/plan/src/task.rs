@@ -79,6 +79,11 @@ impl Task {
     }
 }
 
+/// A command-line word: the tasks' arguments are `String`s, most of them literals.
+pub(crate) fn s(x: impl Into<String>) -> String {
+    x.into()
+}
+
 /// The directory part of a path string (`"."` for a bare file name), as make's `$(@D)`.
 pub fn parent(path: &str) -> String {
     match path.rfind('/') {

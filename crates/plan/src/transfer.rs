@@ -1,6 +1,7 @@
 //! The transfer pipeline's tasks (CVPR sections 4 to 7), from a capture set:
 //! per subject `segment`, `align` of every motion, `pca-fit` (per part and whole body); per
-//! training pair `dtw-densify`; per direction and method `gpr-train`; per test motion
+//! training pair `dtw-densify`; per direction and method `gpr-train` (the part models and the
+//! regressors part by part, joined by `merge-parts`: [`per_part`]); per test motion
 //! `gpr-predict` (every placement for gpr-nn, plus correction and stitching, CVPR §6),
 //! `transfer-eval` where truth exists, contact sheets; the learning curves (CVPR figs. 7-9) and the
 //! paper figures 3, 5 and 10; and the merge of every evaluation record into `results.json`.
@@ -12,7 +13,8 @@ use anyhow::{Context, Result};
 use mesh_core::capture_set::{CaptureSet, SubjectSpec};
 
 use crate::options::{value_name, Method, Placement, TransferOptions};
-use crate::task::{Graph, Step, Task};
+use crate::per_part;
+use crate::task::{s, Graph, Step, Task};
 
 /// Path strings joined as the command line shows them.
 pub(crate) fn join(base: &Path, parts: &[&str]) -> String {
@@ -21,10 +23,6 @@ pub(crate) fn join(base: &Path, parts: &[&str]) -> String {
         p.push(s);
     }
     p.to_string_lossy().into_owned()
-}
-
-fn s(x: impl Into<String>) -> String {
-    x.into()
 }
 
 /// A frame rate as printf's `%g` writes it (6 significant digits, no trailing zeros).
@@ -115,8 +113,11 @@ pub fn plan(set: &CaptureSet, out: &str, opt: &TransferOptions, graph: &mut Grap
             value_name(opt.part_alignment), s("--template"), tpl[x].clone(), s("--segmentation"), seg(x),
         ];
         args.extend(training.iter().cloned());
-        args.extend([s("--out"), pca(x, "pca"), s("--report"), format!("{w}/{x}/pca.json")]);
-        graph.push(Task::run("pca-fit", pca(x, "pca"), inputs, args));
+        let parts: Vec<String> = spec[x].parts.keys().cloned().collect();
+        let report = format!("{w}/{x}/pca.json");
+        for t in per_part::fit("pca-fit", &pca(x, "pca"), Some(&report), inputs, args, &parts) {
+            graph.push(t);
+        }
         // The whole-body comparison at the parts' total dimension (CVPR fig. 9: "equivalent
         // total number of input and output dimensions").
         let whole = opt.pca_components as usize * spec[x].parts.len();
@@ -192,8 +193,16 @@ pub fn plan(set: &CaptureSet, out: &str, opt: &TransferOptions, graph: &mut Grap
                 s("--source-pca"), pca(src, kind), s("--target-pca"), pca(tgt, kind),
             ]);
             args.extend(pair_args.iter().cloned());
-            args.extend([s("--out"), model.clone()]);
-            stamps.push(graph.push(Task::run("gpr-train", model.clone(), inputs, args).mkdir_target()));
+            // One regressor per part of the PCA models, and the displacement's.
+            let mut units: Vec<String> = match method {
+                Method::WholeBody => vec![s("body")],
+                _ => spec[src].parts.keys().cloned().collect(),
+            };
+            units.push(s("displacement"));
+            for t in per_part::fit("gpr-train", &model, None, inputs, args, &units) {
+                graph.push(t);
+            }
+            stamps.push(model.clone());
             for m in tests {
                 if !set.motion_dir(src, m).is_dir() {
                     continue;

@@ -1,16 +1,14 @@
 //! The variation pipeline's tasks (3DV): per movement group `prealign` (time-aligned motions and
-//! pre-blends), `gpdm-train` (one GPDM per part), `hmc-sample` (variations, then their contact
-//! sheets), `variation-eval`; and the merge of every group's records into `variation.json`.
+//! pre-blends), `gpdm-train` (one GPDM per part, one task per part joined by `merge-parts`:
+//! [`per_part`]), `hmc-sample` (variations, then their contact sheets), `variation-eval`; and
+//! the merge of every group's records into `variation.json`.
 
 use anyhow::Result;
 use mesh_core::capture_set::{CaptureSet, SubjectSpec};
 
 use crate::options::{words, VariationOptions};
-use crate::task::{Graph, Step, Task};
-
-fn s(x: impl Into<String>) -> String {
-    x.into()
-}
+use crate::per_part;
+use crate::task::{s, Graph, Step, Task};
 
 /// Adds the variation pipeline's tasks and its `VARIATION_RECORDS` variable to `graph`.
 pub fn plan(set: &CaptureSet, out: &str, opt: &VariationOptions, graph: &mut Graph) -> Result<()> {
@@ -29,7 +27,14 @@ pub fn plan(set: &CaptureSet, out: &str, opt: &VariationOptions, graph: &mut Gra
         // prealign reads the set, the subject's description and template, and the frames of
         // the group's motions that exist (missing ones are skipped).
         let mut inputs = vec![set.set_json().to_string_lossy().into_owned()];
+        // The group's parts are the subject's, unless prealign models the whole body (then one
+        // task fits it); a subject prealign cannot read fails in prealign, naming its file.
+        let whole_body = opt.prealign_words(g).iter().any(|w| w == "--whole-body" || w == "--fallback-whole-body");
+        let mut parts: Vec<String> = Vec::new();
         if let Ok(spec) = SubjectSpec::load(set.subject_json(&subject)) {
+            if !whole_body {
+                parts = spec.parts.keys().cloned().collect();
+            }
             inputs.push(set.subject_json(&subject).to_string_lossy().into_owned());
             if let Ok(t) = set.template_path(&subject, &spec) {
                 inputs.push(t.to_string_lossy().into_owned());
@@ -56,8 +61,11 @@ pub fn plan(set: &CaptureSet, out: &str, opt: &VariationOptions, graph: &mut Gra
         let model = format!("{work}/{g}.model");
         let mut args = vec![s("-q")];
         args.extend(words(&opt.variation_train_flags));
-        args.extend([s("--group"), group.clone(), s("--out"), model.clone(), s("--report"), format!("{work}/{g}-train.json")]);
-        graph.push(Task::run("gpdm-train", model.clone(), vec![group.clone()], args));
+        args.extend([s("--group"), group.clone()]);
+        let report = format!("{work}/{g}-train.json");
+        for t in per_part::fit("gpdm-train", &model, Some(&report), vec![group.clone()], args, &parts) {
+            graph.push(t);
+        }
 
         // hmc-sample writes its report under a temporary name, the sheets follow, and the
         // report's rename marks the whole task complete.

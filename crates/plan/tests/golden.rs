@@ -81,14 +81,8 @@ fn slurm_arrays_of_the_tiny_set() {
 /// and no two tasks write the same target: the graph is closed and make/Slurm can order it.
 #[test]
 fn graph_is_closed_and_targets_unique() {
-    let root = repo();
-    let set = root.join("fixtures/tiny-set");
-    let opts = plan::options::PipelineOptions {
-        paths: plan::options::Paths { set: set.clone(), pipeline_out: "out".into() },
-        transfer: parse_default_transfer(),
-        variation: parse_default_variation(),
-    };
-    let g = plan::stage::graph(&opts).unwrap();
+    let set = repo().join("fixtures/tiny-set");
+    let g = tiny_graph();
     let mut targets: Vec<&str> = g.tasks.iter().map(|t| t.target.as_str()).collect();
     targets.sort();
     let n = targets.len();
@@ -109,6 +103,20 @@ fn graph_is_closed_and_targets_unique() {
     }
 }
 
+/// Every stage binary the plan runs has a request in the built-in table (from measured peaks),
+/// the merges of per-part pieces included: none falls back to the 500 MB guess.
+#[test]
+fn every_stage_the_plan_runs_has_a_measured_request() {
+    let g = tiny_graph();
+    let table = plan::resources::Table::default();
+    for t in &g.tasks {
+        for b in t.bins() {
+            assert!(table.get(b).is_some(), "{} ({}): no request for {b}", t.target, t.kind);
+        }
+    }
+    assert!(g.tasks.iter().any(|t| t.bins() == ["merge-parts"]), "no merge task in the plan");
+}
+
 #[derive(clap::Parser)]
 struct T {
     #[command(flatten)]
@@ -117,9 +125,72 @@ struct T {
     v: plan::options::VariationOptions,
 }
 
+/// The plan of the tiny preset's description with the default options, into `out`.
+fn tiny_graph() -> plan::task::Graph {
+    let opts = plan::options::PipelineOptions {
+        paths: plan::options::Paths { set: repo().join("fixtures/tiny-set"), pipeline_out: "out".into() },
+        transfer: parse_default_transfer(),
+        variation: parse_default_variation(),
+    };
+    plan::stage::graph(&opts).unwrap()
+}
+
 fn parse_default_transfer() -> plan::options::TransferOptions {
     <T as clap::Parser>::parse_from(["t"]).t
 }
 fn parse_default_variation() -> plan::options::VariationOptions {
     <T as clap::Parser>::parse_from(["t"]).v
+}
+
+/// The models of several parts are fitted part by part: every part model (`pca.model`), every
+/// regression (`gpr-train`: the parts and the displacement) and every group's GPDMs (`gpdm-train`)
+/// is the target of a `merge-parts` task whose pieces are `--part` tasks of that stage, one
+/// per name of the subject's parts; the whole-body PCA (one part) stays one task.
+#[test]
+fn multi_part_models_are_fitted_part_by_part() {
+    let set = repo().join("fixtures/tiny-set");
+    let g = tiny_graph();
+    let spec = mesh_core::capture_set::SubjectSpec::load(set.join("A/subject.json")).unwrap();
+    let mut parts: Vec<String> = spec.parts.keys().cloned().collect();
+    parts.sort();
+    let args = |t: &plan::task::Task| match &t.steps[..] {
+        [plan::task::Step::Run { args, .. }] => args.clone(),
+        _ => panic!("{}: not one stage run", t.target),
+    };
+    let mut merged = std::collections::BTreeMap::<String, usize>::new();
+    for t in g.tasks.iter().filter(|t| t.kind.starts_with("merge-")) {
+        let stage = t.kind.trim_start_matches("merge-");
+        let mut names: Vec<String> = t
+            .inputs
+            .iter()
+            .map(|piece| {
+                let p = g.producer(piece).unwrap_or_else(|| panic!("{piece}: no producer"));
+                assert_eq!(p.kind, stage, "{piece}");
+                let a = args(p);
+                let k = a.iter().position(|x| x == "--part").unwrap_or_else(|| panic!("{piece}: no --part"));
+                a[k + 1].clone()
+            })
+            .collect();
+        names.sort();
+        let mut want = if t.target.contains("whole-body") { vec!["body".to_string()] } else { parts.clone() };
+        if stage == "gpr-train" {
+            want.push("displacement".into());
+            want.sort();
+        }
+        assert_eq!(names, want, "{}", t.target);
+        *merged.entry(stage.to_string()).or_default() += 1;
+    }
+    // Two subjects' part models; 2 directions x 6 methods; 2 groups.
+    assert_eq!(merged.get("pca-fit"), Some(&2));
+    assert_eq!(merged.get("gpr-train"), Some(&12));
+    assert_eq!(merged.get("gpdm-train"), Some(&2));
+    // Nothing reads a piece but its merge, and no whole-model task of these stages is left.
+    for t in &g.tasks {
+        for i in t.inputs.iter().filter(|i| i.ends_with(".piece")) {
+            assert!(t.kind.starts_with("merge-"), "{} reads the piece {i}", t.target);
+        }
+        if ["gpr-train", "gpdm-train"].contains(&t.kind.as_str()) {
+            assert!(args(t).contains(&"--part".to_string()), "{}: a whole-model task", t.target);
+        }
+    }
 }

@@ -57,7 +57,7 @@ impl Aabb {
 }
 
 /// A signed coordinate axis, e.g. `+y` or `-z`.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize)]
 pub struct Axis {
     pub index: usize,
     pub positive: bool,
@@ -101,7 +101,7 @@ impl Axis {
 }
 
 /// Where the eye is, relative to the subject.
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize)]
 pub struct View {
     /// Degrees about the up axis, 0 = in front, 90 = the subject's left side.
     pub azimuth_deg: f64,

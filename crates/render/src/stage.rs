@@ -1,5 +1,5 @@
 //! The `render` stage: sequence folders in, PNG frames, a contact sheet and
-//! an animated GIF out. `main` only parses [`Args`] and calls [`run`].
+//! an animated GIF out. `main` only parses [`Params`] and calls [`run`].
 
 use std::path::PathBuf;
 
@@ -7,6 +7,7 @@ use anyhow::{bail, Context};
 use clap::Parser;
 use mesh_core::cli::CommonArgs;
 use rayon::prelude::*;
+use serde::Serialize;
 
 use crate::anim::{GifBuilder, GifPalette};
 use crate::camera::{Axis, ProjectionKind, View};
@@ -19,14 +20,15 @@ use crate::sequence::{bounding_box, SeqView};
 use mesh_core::sequence::{FrameRange, MeshSequence};
 
 /// Draw mesh sequences, overlaid in distinct colours, to PNG frames, a contact sheet and a GIF
-#[derive(Parser, Debug)]
+#[derive(Parser, Debug, Serialize)]
 #[command(
     name = "render",
     version,
     after_help = "e.g.: render data/set/A/walk work/transfer/walk --labels source,transfer --camera three-quarter --out work/render/walk"
 )]
-pub struct Args {
+pub struct Params {
     #[command(flatten)]
+    #[serde(skip)]
     pub common: CommonArgs,
     /// Sequence folders of NNNNNN.ply / NNNNNN.obj frames, drawn overlaid, one colour each
     #[arg(required = true, value_name = "SEQ_DIR")]
@@ -143,7 +145,7 @@ pub fn follow_first(seqs: &mut [MeshSequence], up: &nalgebra::Vector3<f64>) {
 }
 
 /// Runs the stage (after `args.common.init()`).
-pub fn run(args: &Args) -> anyhow::Result<()> {
+pub fn run(args: &Params) -> anyhow::Result<()> {
     let n_seq = args.seq_dirs.len();
     if let Some(l) = &args.labels {
         if l.len() != n_seq {
@@ -406,5 +408,19 @@ mod follow_tests {
         assert!((c(&seqs[0].frames[0]).x - c(&seqs[0].frames[1]).x).abs() < 1e-12);
         assert!((c(&seqs[0].frames[1]).y - (2.0 + 1.0 / 3.0)).abs() < 1e-12, "height kept");
         assert!((c(&seqs[1].frames[1]).x - c(&seqs[0].frames[1]).x - 1.0).abs() < 1e-12, "relative offset kept");
+    }
+}
+
+#[cfg(test)]
+mod params_tests {
+    use super::*;
+
+    #[test]
+    fn every_option_is_recorded_under_its_flag_name() {
+        let argv = ["render", "a", "b", "--out", "r", "--camera", "30,10", "--size", "64x48", "--colours", "red,#00ff00"];
+        assert_eq!(mesh_core::cli::unrecorded_options::<Params>(&argv).unwrap(), Vec::<String>::new());
+        let r = serde_json::to_value(Params::try_parse_from(argv).unwrap()).unwrap();
+        assert_eq!(r["size"], serde_json::json!([64, 48]));
+        assert_eq!(r["camera"], serde_json::json!({"azimuth_deg": 30.0, "elevation_deg": 10.0}));
     }
 }

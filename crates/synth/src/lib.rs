@@ -16,6 +16,7 @@ pub mod preset;
 pub mod retarget;
 pub mod skeleton;
 pub mod skinning;
+pub mod stage;
 pub mod style;
 pub mod subject;
 pub mod truth;

@@ -199,7 +199,8 @@ pub fn default_noise() -> NoiseLevel {
 pub const PRESETS: [&str; 3] = ["default", "tiny", "holdout"];
 
 /// A preset, as the command line names it (one of [`PRESETS`]).
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, clap::ValueEnum)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, clap::ValueEnum, serde::Serialize)]
+#[serde(rename_all = "kebab-case")]
 pub enum Preset {
     /// The demo set: full body at 25 fps and the notoes body at 50 fps.
     #[default]

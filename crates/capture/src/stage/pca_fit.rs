@@ -63,7 +63,7 @@ pub struct Params {
     pub report: Option<PathBuf>,
 }
 
-/// Writes the PCA model (and the `--report`); the header records `p`, the template, the
+/// Writes the `--report` (if asked) and the PCA model; the header records `p`, the template, the
 /// segmentation (unless `--whole-body`) and the motions. With `--part` the model holds that
 /// part only, written as a piece (`mesh_core::part_merge`).
 pub fn run(p: &Params) -> anyhow::Result<()> {
@@ -113,13 +113,14 @@ pub fn run(p: &Params) -> anyhow::Result<()> {
     for m in &p.motions {
         header = header.with_input(m)?;
     }
-    match only {
-        Some(k) => part_merge::save_piece::<PcaModel>(&p.out, &header, &names, k, model)?,
-        None => model.save(&p.out, &header)?,
-    }
+    // The report first: the model's presence says both are complete.
     if let Some(r) = &p.report {
         let text = PcaModel::report_text(&report)?;
         mesh_core::atomic::write_bytes_atomic(r, text.as_bytes())?;
+    }
+    match only {
+        Some(k) => part_merge::save_piece::<PcaModel>(&p.out, &header, &names, k, model)?,
+        None => model.save(&p.out, &header)?,
     }
     Ok(())
 }

@@ -1,11 +1,11 @@
-//! `render`: mesh sequences to PNG frames, a contact sheet and an animated GIF.
+//! `render`: see [`render::stage`].
 
 use std::process::ExitCode;
 
 fn main() -> ExitCode {
-    let args = mesh_core::cli::parse::<render::stage::Args>();
+    let p = mesh_core::cli::parse::<render::stage::Params>();
     mesh_core::cli::run_stage("render", || {
-        args.common.init()?;
-        render::stage::run(&args)
+        p.common.init()?;
+        render::stage::run(&p)
     })
 }

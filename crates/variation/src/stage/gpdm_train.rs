@@ -71,7 +71,7 @@ pub struct Params {
     pub report: Option<PathBuf>,
 }
 
-/// Writes the model (and the `--report`); the header records `p`, the training configuration
+/// Writes the `--report` (if asked) and the model; the header records `p`, the training configuration
 /// derived from it (`config`) and the group. With `--part` only that part is trained, written
 /// as a piece (`mesh_core::part_merge`).
 pub fn run(p: &Params) -> anyhow::Result<()> {
@@ -142,13 +142,14 @@ pub fn run(p: &Params) -> anyhow::Result<()> {
         .with_input(&p.group)?
         .with_params(&params)?;
     let (scale, stride) = (model.scale, model.stride);
-    match only {
-        Some(k) => part_merge::save_piece::<VariationModel>(&p.out, &header, &names, k, model)?,
-        None => model.save(&p.out, &header)?,
-    }
+    // The report first: the model's presence says both are complete.
     if let Some(report) = &p.report {
         let json = training_report(&group.name, &cfg, &scale, stride, &reports)?;
         mesh_core::atomic::write_bytes_atomic(report, VariationModel::report_text(&json)?.as_bytes())?;
+    }
+    match only {
+        Some(k) => part_merge::save_piece::<VariationModel>(&p.out, &header, &names, k, model)?,
+        None => model.save(&p.out, &header)?,
     }
     Ok(())
 }
