@@ -20,3 +20,5 @@ pub mod evaluate;
 pub mod learning_curves;
 pub mod figures;
 pub mod stage;
+#[cfg(test)]
+mod test_fixtures;

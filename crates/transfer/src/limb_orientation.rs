@@ -267,50 +267,18 @@ pub fn reference(pca: &PcaModel, k: usize) -> Vec<Vector3<f64>> {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::test_fixtures::bending_capsule;
     use capture::align::AlignedMotion;
     use capture::part_pca::{fit as pca_fit, PartAlignment};
     use gp::pca::Components;
-    use mesh_core::rigid::RigidMotion;
-    use mesh_core::segmentation::{Part, Segmentation};
     use rand::{RngExt, SeedableRng};
 
-    /// A capsule whose "limb" (rings 4 and up; rings 4-7 shared with the "torso") turns about
-    /// the z axis through (0, 1, 0) by a different angle in each of 8 frames, and its PCA.
-    fn turning_limb() -> (PcaModel, AlignedMotion, Vec<f64>) {
-        let (mesh, l) = mesh_core::shapes::capsule_body(12, 8, 0.2, 2.0);
-        let n = mesh.n_vertices();
-        let ring = |r: usize| l.ring(l.body_ring(r))[0] as usize;
-        let part = |name: &str, parent: Option<&str>, keep: &dyn Fn(usize) -> bool| Part {
-            name: name.into(),
-            parent: parent.map(Into::into),
-            vertices: (0..n as u32).filter(|&v| keep(v as usize)).collect(),
-            faces: Vec::new(),
-            overlap: Vec::new(),
-            loops: Vec::new(),
-        };
-        let seg = Segmentation {
-            n_vertices: n,
-            parts: vec![part("torso", None, &|v| v < ring(8)), part("limb", Some("torso"), &|v| v >= ring(4))],
-        };
-        let angles: Vec<f64> = (0..8).map(|i| 0.15 * i as f64 - 0.5).collect();
-        let c = Vector3::new(0.0, 1.0, 0.0);
-        let frames: Vec<Vec<Vector3<f64>>> = angles
-            .iter()
-            .map(|&a| {
-                let r = so3_exp(&Vector3::new(0.0, 0.0, a));
-                mesh.vertices.iter().map(|v| if v.y > 1.0 { r * (v - c) + c } else { *v }).collect()
-            })
-            .collect();
-        let motion = AlignedMotion {
-            faces: mesh.faces.clone(),
-            poses: vec![RigidMotion::identity(); frames.len()],
-            displacements: vec![[0.0; 6]; frames.len()],
-            anchor: Vec::new(),
-            frames,
-            capture: Default::default(),
-        };
+    /// The capsule of [`bending_capsule`], whose limb turns about the z axis by a different
+    /// angle in each frame, and its PCA.
+    fn turning_limb() -> (PcaModel, AlignedMotion) {
+        let (mesh, seg, motion) = bending_capsule();
         let (pca, _) = pca_fit(&mesh.vertices, &seg, &[&motion], Components::Count(20), PartAlignment::Body).unwrap();
-        (pca, motion, angles)
+        (pca, motion)
     }
 
     /// Distance of two rotations (Frobenius norm of the difference: precise near zero).
@@ -355,7 +323,7 @@ mod tests {
     /// proximal half the half of its vertices nearest that band.
     #[test]
     fn limbs_are_the_parts_after_the_root_with_joint_and_proximal_half() {
-        let (pca, _, _) = turning_limb();
+        let (pca, _) = turning_limb();
         let limbs = limbs(&pca).unwrap();
         assert_eq!(limbs.len(), 1);
         let limb = &limbs[0];
@@ -376,7 +344,7 @@ mod tests {
     /// half way (the geodesic midpoint), and the joint stays where it was.
     #[test]
     fn apply_turns_limbs_about_the_joint_toward_the_mapped_orientation() {
-        let (pca, motion, _) = turning_limb();
+        let (pca, motion) = turning_limb();
         let xs = pca.encode(&motion).unwrap();
         let source = pca.decode(&xs).unwrap();
         let limb = limbs(&pca).unwrap().remove(0);
