@@ -193,20 +193,6 @@ pub fn fit_part(source: &PcaModel, target: &PcaModel, k: usize, x: &DMatrix<f64>
     LimbMap::fit(&xs, &ys, RIDGE).map(Some)
 }
 
-/// Every part's map ([`fit_part`]) from the training rows `x_parts` and `y_parts`.
-pub fn fit(
-    source: &PcaModel,
-    target: &PcaModel,
-    x_parts: &[DMatrix<f64>],
-    y_parts: &[DMatrix<f64>],
-    weight: f64,
-) -> Result<LimbOrientation> {
-    let maps = (0..source.parts.len().min(x_parts.len()).min(y_parts.len()))
-        .map(|k| fit_part(source, target, k, &x_parts[k], &y_parts[k]))
-        .collect::<Result<_>>()?;
-    Ok(LimbOrientation { weight, maps })
-}
-
 /// Turns every limb of the decoded target parts (`decoded[part][frame]`, predicted from the
 /// source coefficients `source_coeffs`) about its joint, as the module documentation says.
 pub fn apply(
