@@ -39,7 +39,8 @@ fn main() -> anyhow::Result<()> {
     for limb in limbs(&tpca)? {
         let mean = reference(&tpca, limb.part);
         for (frame, truth) in oracle[limb.part].iter_mut().zip(&truth_parts[limb.part]) {
-            turn_to(frame, &limb, &mean, &orientation(&mean, truth, &limb.proximal));
+            let now = orientation(&mean, frame, &limb.proximal);
+            turn_to(frame, &limb, &now, &orientation(&mean, truth, &limb.proximal));
         }
     }
     let plan = plan(&tpca)?;

@@ -229,16 +229,16 @@ pub fn apply(
             let now = orientation(&mean, frame, &t.proximal);
             let mapped = so3_exp(&map.apply(x));
             let want = now * so3_exp(&(model.weight * so3_log(&(now.inverse() * mapped))));
-            turn_to(frame, t, &mean, &want);
+            turn_to(frame, t, &now, &want);
         });
     }
     Ok(())
 }
 
-/// Turns the limb `frame` of `limb` about its joint (the centroid of its joint band) so that
-/// its orientation relative to `mean` (the part's PCA mean shape) becomes `want`.
-pub fn turn_to(frame: &mut [Vector3<f64>], limb: &Limb, mean: &[Vector3<f64>], want: &Rotation3<f64>) {
-    let turn = want * orientation(mean, frame, &limb.proximal).inverse();
+/// Turns the limb `frame` of `limb` about its joint (the centroid of its joint band) from its
+/// orientation `now` ([`orientation`] against the part's PCA mean shape) to `want`.
+pub fn turn_to(frame: &mut [Vector3<f64>], limb: &Limb, now: &Rotation3<f64>, want: &Rotation3<f64>) {
+    let turn = want * now.inverse();
     let pivot = centroid(limb.joint.iter().map(|&i| &frame[i]));
     for p in frame.iter_mut() {
         *p = pivot + turn * (*p - pivot);
