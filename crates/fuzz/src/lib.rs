@@ -30,6 +30,7 @@ use mesh_core::shapes::capsule_body;
 use mesh_core::topology::Topology;
 use mesh_core::TriMesh;
 use nalgebra::Vector3;
+use rayon::prelude::*;
 use rand::{RngExt, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use sha2::{Digest, Sha256};
@@ -459,11 +460,61 @@ pub fn fuzz(
     duration: Duration,
     keep: Option<&Path>,
 ) -> Report {
+    let previous = std::panic::take_hook();
+    std::panic::set_hook(Box::new(|_| {}));
+    let report = fuzz_worker(seed, corpus, inputs, duration, keep);
+    std::panic::set_hook(previous);
+    report
+}
+
+/// [`fuzz`] on `workers` threads (the rayon pool's), each with its own random stream
+/// (`seed`, worker) and share of `inputs`; the reports summed.
+pub fn fuzz_parallel(
+    seed: u64,
+    corpus: &[(Target, Vec<u8>)],
+    inputs: u64,
+    duration: Duration,
+    keep: Option<&Path>,
+) -> Report {
+    let workers = rayon::current_num_threads().max(1) as u64;
+    let previous = std::panic::take_hook();
+    std::panic::set_hook(Box::new(|_| {}));
+    let reports: Vec<Report> = (0..workers)
+        .into_par_iter()
+        .map(|w| {
+            let share = inputs / workers + u64::from(w < inputs % workers);
+            let stream = seed.wrapping_add(w.wrapping_mul(0x9E37_79B9_7F4A_7C15));
+            fuzz_worker(if w == 0 { seed } else { stream }, corpus, share, duration, keep)
+        })
+        .collect();
+    std::panic::set_hook(previous);
+    let mut total = Report::default();
+    for r in reports {
+        total.inputs += r.inputs;
+        for (t, n) in r.per_target {
+            *total.per_target.entry(t).or_default() += n;
+        }
+        total.panics += r.panics;
+        total.hangs += r.hangs;
+        total.slowest_seconds = total.slowest_seconds.max(r.slowest_seconds);
+        total.kept.extend(r.kept);
+        total.seconds = total.seconds.max(r.seconds);
+    }
+    total.peak_rss_kb = peak_rss_kb();
+    total
+}
+
+/// One fuzzing loop; the caller silences the panic hook.
+fn fuzz_worker(
+    seed: u64,
+    corpus: &[(Target, Vec<u8>)],
+    inputs: u64,
+    duration: Duration,
+    keep: Option<&Path>,
+) -> Report {
     let mut rng = ChaCha8Rng::seed_from_u64(seed);
     let mut report = Report::default();
     let start = Instant::now();
-    let previous = std::panic::take_hook();
-    std::panic::set_hook(Box::new(|_| {}));
     // The first inputs are the seeds themselves, unmutated.
     let mut pool: Vec<(Target, Vec<u8>)> = corpus.to_vec();
     while report.inputs < inputs && start.elapsed() < duration {
@@ -505,7 +556,6 @@ pub fn fuzz(
             pool.push((target, bytes));
         }
     }
-    std::panic::set_hook(previous);
     report.seconds = start.elapsed().as_secs_f64();
     report.peak_rss_kb = peak_rss_kb();
     report
@@ -535,9 +585,10 @@ pub fn run_to_json(
     for dir in corpus {
         seeds.extend(load_corpus(dir));
     }
-    let r = fuzz(seed, &seeds, inputs, duration, keep);
+    let r = fuzz_parallel(seed, &seeds, inputs, duration, keep);
     serde_json::json!({
         "seed": seed,
+        "threads": rayon::current_num_threads(),
         "seed_inputs": seeds.len(),
         "inputs": r.inputs,
         "per_target": r.per_target,
