@@ -164,3 +164,51 @@ fn peak_memory_of_a_payload_of_empty_lists_is_within_the_documented_bound() {
     // And the bound is not loose by more than a small factor: 24 bytes per list.
     assert!(decode_peak >= 24 * n as usize, "{decode_peak}");
 }
+
+/// A valid binary PLY of `faces` 255-gons over `vertices` vertices: the densest triangle count a
+/// PLY byte can carry (1,021 bytes per polygon, 253 fan triangles).
+fn polygon_ply(vertices: u32, faces: u32) -> Vec<u8> {
+    let mut b = format!(
+        "ply\nformat binary_little_endian 1.0\nelement vertex {vertices}\nproperty float x\nproperty float y\n\
+         property float z\nelement face {faces}\nproperty list uchar int vertex_indices\nend_header\n"
+    )
+    .into_bytes();
+    for v in 0..vertices {
+        for c in [v as f32, (v % 7) as f32, (v % 13) as f32] {
+            b.extend_from_slice(&c.to_le_bytes());
+        }
+    }
+    for f in 0..faces {
+        b.push(255);
+        for k in 0..255u32 {
+            // Distinct corners, spread so that the fans share few edges (the most edges per byte).
+            let v = (f.wrapping_mul(7919) + k * (1 + f % 97)) % vertices;
+            b.extend_from_slice(&(v as i32).to_le_bytes());
+        }
+    }
+    b
+}
+
+#[test]
+fn peak_memory_of_a_polygon_ply_and_its_topology_is_within_the_documented_bound() {
+    use mesh_core::io::ply::parse_ply;
+    use mesh_core::topology::Topology;
+    let _g = SERIAL.lock().unwrap();
+    let bytes = polygon_ply(30_000, 2_000);
+    let base = CURRENT.load(Ordering::Relaxed);
+    PEAK.store(base, Ordering::Relaxed);
+    let mesh = parse_ply(&bytes).unwrap();
+    let topology = Topology::new(mesh.vertices.len(), &mesh.faces);
+    let peak = PEAK.load(Ordering::Relaxed) - base;
+    assert_eq!(topology.n_faces(), 2_000 * 253);
+    eprintln!(
+        "{}-byte PLY of 255-gons: {} triangles, {} edges, peak {peak} bytes ({:.1} x the file)",
+        bytes.len(),
+        topology.n_faces(),
+        topology.n_edges(),
+        peak as f64 / bytes.len() as f64
+    );
+    // docs/FORMATS.md, "Memory": reading a mesh and building its adjacency peaks below 32 x the
+    // file's size (about 120 bytes per triangle; a 255-gon packs 253 triangles in 1,021 bytes).
+    assert!(peak <= 32 * bytes.len(), "peak {peak} bytes for a {}-byte file", bytes.len());
+}
