@@ -243,6 +243,7 @@ mod tests {
             ],
             alignment: PartAlignment::Part,
             anchor: Vec::new(),
+            template_sha256: String::new(),
         };
         let plan = plan(&pca).unwrap();
         assert_eq!(
@@ -315,6 +316,7 @@ mod tests {
             parts: vec![p("a", vec![0, 1, 2]), p("b", vec![3, 4, 5])],
             alignment: PartAlignment::Part,
             anchor: Vec::new(),
+            template_sha256: String::new(),
         };
         assert!(plan(&pca)
             .unwrap_err()

@@ -63,11 +63,15 @@ pub struct PcaModel {
     /// Template vertices the training frames were aligned on (`align`'s anchor; empty: all):
     /// assembled meshes are brought back to the template on the same vertices.
     pub anchor: Vec<u32>,
+    /// SHA-256 (hex) of the template file the model was fitted on (`pca-fit --template`), the
+    /// identity consumers compare with a motion's ([`PcaModel::check_motion`]) and a transfer
+    /// model's; empty when fitted in memory.
+    pub template_sha256: String,
 }
 
 impl Artifact for PcaModel {
     const KIND: &'static str = "pca-model";
-    const VERSION: u32 = 3;
+    const VERSION: u32 = 4;
 
     /// Every part's vertices below `n_vertices` (and every template vertex in
     /// some part), one reference point per vertex, a PCA of dimension
@@ -97,7 +101,9 @@ impl Partitioned for PcaModel {
         let mut bodies = bodies.into_iter();
         let mut whole = bodies.next().ok_or("no parts")?;
         for (b, name) in bodies.zip(&parts[1..]) {
-            if (b.n_vertices, b.alignment, &b.anchor) != (whole.n_vertices, whole.alignment, &whole.anchor) {
+            if (b.n_vertices, b.alignment, &b.anchor, &b.template_sha256)
+                != (whole.n_vertices, whole.alignment, &whole.anchor, &whole.template_sha256)
+            {
                 return Err(format!("part '{name}' was fitted on another template, alignment or anchor"));
             }
             whole.parts.extend(b.parts);
@@ -330,9 +336,28 @@ pub fn fit_selected(
             parts: parts_pca,
             alignment,
             anchor,
+            template_sha256: String::new(),
         },
         reports,
     ))
+}
+
+/// Fails when two recorded template hashes differ (an empty one is unknown and passes): `a`
+/// and `b` describe where each came from, e.g. "the motion was aligned to".
+pub fn check_same_template(hash_a: &str, hash_b: &str, a: &str, b: &str) -> Result<()> {
+    if hash_a.is_empty() || hash_b.is_empty() || hash_a == hash_b {
+        return Ok(());
+    }
+    Err(Error::invalid(format!(
+        "{a} template {} but {b} template {}: they belong to different subjects or templates",
+        short_hash(hash_a),
+        short_hash(hash_b)
+    )))
+}
+
+/// The first 12 hex digits of a SHA-256, enough to tell templates apart in a message.
+fn short_hash(h: &str) -> &str {
+    h.get(..12).unwrap_or(h)
 }
 
 impl PcaModel {
@@ -350,18 +375,18 @@ impl PcaModel {
         template
     }
 
-    /// Fails unless every frame of `motion` has this model's vertex count (a
-    /// motion of another subject or template).
+    /// Fails unless `motion` was aligned to this model's template (when both record it) and
+    /// every frame has this model's vertex count (a motion of another subject or template).
     pub fn check_motion(&self, motion: &AlignedMotion) -> Result<()> {
-        match motion.frames.iter().position(|f| f.len() != self.n_vertices) {
-            Some(i) => Err(Error::invalid(format!(
+        if let Some(i) = motion.frames.iter().position(|f| f.len() != self.n_vertices) {
+            return Err(Error::invalid(format!(
                 "the motion's frame {i} has {} vertices but the PCA model was fitted on {}: \
                  the motion and the model belong to different subjects or templates",
                 motion.frames[i].len(),
                 self.n_vertices
-            ))),
-            None => Ok(()),
+            )));
         }
+        check_same_template(&motion.capture.template_sha256, &self.template_sha256, "the motion was aligned to", "the PCA model was fitted on")
     }
 
     /// The part vertices of every frame of `motion` in the frame PCA works in

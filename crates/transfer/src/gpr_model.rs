@@ -250,11 +250,45 @@ pub struct GprModel {
     pub reports: Vec<RegressorReport>,
     /// Limb orientation maps applied after the pose GPs (`None`: the paper's model).
     pub orientation: Option<LimbOrientation>,
+    /// The source and target PCA models' template hashes (`PcaModel::template_sha256`):
+    /// `gpr-predict` refuses PCA models of other templates. Empty when trained in memory.
+    pub templates: Templates,
+}
+
+/// SHA-256 (hex) of the source and target templates a transfer model was trained with.
+#[derive(Clone, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+pub struct Templates {
+    pub source: String,
+    pub target: String,
+}
+
+impl Templates {
+    /// The template hashes of the two PCA models.
+    pub fn of(source_pca: &PcaModel, target_pca: &PcaModel) -> Templates {
+        Templates { source: source_pca.template_sha256.clone(), target: target_pca.template_sha256.clone() }
+    }
+
+    /// Fails unless the PCA models were fitted on the templates the model was trained with
+    /// (an unrecorded hash passes).
+    pub fn check(&self, source_pca: &PcaModel, target_pca: &PcaModel) -> Result<()> {
+        capture::part_pca::check_same_template(
+            &source_pca.template_sha256,
+            &self.source,
+            "the source PCA model was fitted on",
+            "the transfer model was trained with",
+        )?;
+        capture::part_pca::check_same_template(
+            &target_pca.template_sha256,
+            &self.target,
+            "the target PCA model was fitted on",
+            "the transfer model was trained with",
+        )
+    }
 }
 
 impl Artifact for GprModel {
     const KIND: &'static str = "gpr-model";
-    const VERSION: u32 = 4;
+    const VERSION: u32 = 5;
 
     /// One regressor per part name, each internally consistent (GP weights, inducing inputs,
     /// affine mean and key-poses agree in dimensions; finite positive kernel parameters), a
@@ -627,6 +661,7 @@ pub fn train(
         mean: mean_fn,
         reports,
         orientation: None,
+        templates: Templates::default(),
     })
 }
 
@@ -712,11 +747,12 @@ pub struct GprPiece {
     /// root and the displacement).
     pub orientation_weight: f64,
     pub orientation: Option<LimbMap>,
+    pub templates: Templates,
 }
 
 impl GprPiece {
     /// The fields every regressor of one model shares.
-    fn shared(&self) -> (Method, usize, u64, bool, bool, MeanFunction, u64) {
+    fn shared(&self) -> (Method, usize, u64, bool, bool, MeanFunction, u64, &Templates) {
         (
             self.method,
             self.n_train,
@@ -725,6 +761,7 @@ impl GprPiece {
             self.nn_bias,
             self.mean,
             self.orientation_weight.to_bits(),
+            &self.templates,
         )
     }
 }
@@ -779,6 +816,7 @@ impl Partitioned for GprModel {
             mean: disp.mean,
             reports,
             orientation,
+            templates: disp.templates,
         })
     }
 }
@@ -850,6 +888,7 @@ pub fn train_piece(
         mean: mean_fn,
         orientation_weight: 0.0,
         orientation: None,
+        templates: Templates::default(),
     })
 }
 

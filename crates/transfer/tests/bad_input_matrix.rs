@@ -56,6 +56,30 @@ fn base() -> &'static Base {
                   &b.p(&format!("{s}.pca")), &b.p(&format!("{s}-walk.aligned")), &b.p(&format!("{s}-run.aligned"))],
             );
         }
+        // Same topology, another template: A's motions aligned to A's second walk frame (as a
+        // second subject of one body model would be), and B's walk likewise.
+        for (x, m) in [("A", "walk"), ("B", "walk")] {
+            let tpl1 = b.p(&format!("set/{x}/walk/000001.ply"));
+            common::run(
+                "align",
+                &["-q", "--segmentation", &b.p(&format!("{x}.seg")), "--subject", &b.p(&format!("set/{x}/subject.json")), "--template", &tpl1,
+                  &b.p(&format!("set/{x}/{m}")), "--out", &b.p(&format!("{x}1-{m}.aligned"))],
+            );
+        }
+        common::run(
+            "pca-fit",
+            &["-q", "--template", &b.p("set/A/walk/000001.ply"), "--segmentation", &b.p("A.seg"), "--out", &b.p("A1.pca"), &b.p("A1-walk.aligned")],
+        );
+        common::run(
+            "dtw-densify",
+            &["-q", "--set", &b.p("set"), "--motion", "walk", "--source-pca", &b.p("A.pca"), "--target-pca", &b.p("B.pca"),
+              "--out", &b.p("walk.corr"), &b.p("A-walk.aligned"), &b.p("B-walk.aligned")],
+        );
+        common::run(
+            "gpr-train",
+            &["-q", "--source-pca", &b.p("A.pca"), "--target-pca", &b.p("B.pca"), "--max-iter", "5", "--pair", &b.p("A-walk.aligned"),
+              &b.p("B-walk.aligned"), &b.p("walk.corr"), "--out", &b.p("A-B.model")],
+        );
         b
     })
 }
@@ -119,6 +143,22 @@ fn dtw_args(b: &Base, dir: &Path, source: String, source_pca: String) -> Vec<Str
         "-q".into(), "--set".into(), b.p("set"), "--motion".into(), "walk".into(),
         "--source-pca".into(), source_pca, "--target-pca".into(), b.p("B.pca"),
         "--out".into(), s(&dir.join("out.corr")), source, b.p("B-walk.aligned"),
+    ]
+}
+
+/// `gpr-train` A -> B on the walk pair with the given source PCA, output `dir/out.model`.
+fn train_args(b: &Base, dir: &Path, source_pca: String) -> Vec<String> {
+    vec![
+        "-q".into(), "--source-pca".into(), source_pca, "--target-pca".into(), b.p("B.pca"), "--max-iter".into(), "5".into(),
+        "--pair".into(), b.p("A-walk.aligned"), b.p("B-walk.aligned"), b.p("walk.corr"), "--out".into(), s(&dir.join("out.model")),
+    ]
+}
+
+/// `gpr-predict` of A's run with the A -> B model, the given PCAs and target template, output `dir/out`.
+fn predict_args(b: &Base, dir: &Path, source_pca: String, target_template: String) -> Vec<String> {
+    vec![
+        "-q".into(), "--model".into(), b.p("A-B.model"), "--source-pca".into(), source_pca, "--target-pca".into(), b.p("B.pca"),
+        "--target-template".into(), target_template, b.p("A-run.aligned"), "--out".into(), s(&dir.join("out")),
     ]
 }
 
@@ -193,8 +233,27 @@ fn cases() -> Vec<Case> {
             build: |b, d| dtw_args(b, d, b.p("A-walk.aligned"), b.p("B.pca")) },
         Case { name: "motion with more vertices than the PCA", stage: "dtw-densify", code: 1, pattern: &["B-walk.aligned", "vertices", "PCA model"],
             build: |b, d| dtw_args(b, d, b.p("B-walk.aligned"), b.p("A.pca")) },
-        Case { name: "pca-fit on another subject's motions", stage: "pca-fit", code: 1, pattern: &["vertices"],
+        Case { name: "pca-fit on another subject's motions", stage: "pca-fit", code: 1, pattern: &["B-walk.aligned", "aligned to template"],
             build: |b, d| pca_args(b, d, b.p("A.seg"), b.p("B-walk.aligned")) },
+        Case { name: "pca-fit on motions aligned to another template of the same topology", stage: "pca-fit", code: 1,
+            pattern: &["A1-walk.aligned", "the motion was aligned to template", "--template is template"],
+            build: |b, d| pca_args(b, d, b.p("A.seg"), b.p("A1-walk.aligned")) },
+        Case { name: "PCA of another template of the same topology (dtw-densify)", stage: "dtw-densify", code: 1,
+            pattern: &["A-walk.aligned", "the PCA model was fitted on template"],
+            build: |b, d| dtw_args(b, d, b.p("A-walk.aligned"), b.p("A1.pca")) },
+        Case { name: "PCA of another template of the same topology (gpr-train)", stage: "gpr-train", code: 1,
+            pattern: &["A-walk.aligned", "the PCA model was fitted on template"],
+            build: |b, d| train_args(b, d, b.p("A1.pca")) },
+        Case { name: "PCA of another template than the transfer model's (gpr-predict)", stage: "gpr-predict", code: 1,
+            pattern: &["A-B.model", "A1.pca", "the transfer model was trained with template"],
+            build: |b, d| predict_args(b, d, b.p("A1.pca"), b.p("set/B/walk/000000.ply")) },
+        Case { name: "target template other than the target PCA's (gpr-predict)", stage: "gpr-predict", code: 1,
+            pattern: &["000001.ply", "the target PCA model was fitted on template"],
+            build: |b, d| predict_args(b, d, b.p("A.pca"), b.p("set/B/walk/000001.ply")) },
+        Case { name: "surface training motions of another template (gpr-predict --surface)", stage: "gpr-predict", code: 1,
+            pattern: &["B1-walk.aligned", "the PCA model was fitted on template"],
+            build: |b, d| { let mut a = predict_args(b, d, b.p("A.pca"), b.p("set/B/walk/000000.ply"));
+                a.extend(["--surface".into(), "correct".into(), "--segmentation".into(), b.p("B.seg"), "--target-training".into(), b.p("B1-walk.aligned")]); a } },
         Case { name: "pca-fit with another subject's parts", stage: "pca-fit", code: 1, pattern: &["segmentation"],
             build: |b, d| pca_args(b, d, b.p("B.seg"), b.p("A-walk.aligned")) },
         // ---- outputs
@@ -217,7 +276,7 @@ fn cases() -> Vec<Case> {
 }
 
 /// Output names a row's stage may write: none of them may exist afterwards.
-const OUTPUTS: [&str; 4] = ["out.aligned", "out.seg", "out.pca", "out.corr"];
+const OUTPUTS: [&str; 6] = ["out.aligned", "out.seg", "out.pca", "out.corr", "out.model", "out"];
 
 /// Runs one row; returns a description of what broke the promise, if anything.
 fn check(b: &Base, case: &Case) -> Option<String> {

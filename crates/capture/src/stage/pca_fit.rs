@@ -5,7 +5,8 @@ use std::path::PathBuf;
 
 use clap::Parser;
 use gp::pca::Components;
-use mesh_core::artifact::Artifact;
+use anyhow::Context;
+use mesh_core::artifact::{sha256_file, Artifact};
 use mesh_core::cli::CommonArgs;
 use mesh_core::io::read_mesh;
 use mesh_core::part_merge::{self, PartReports};
@@ -81,6 +82,11 @@ pub fn run(p: &Params) -> anyhow::Result<()> {
         Some(r) => Components::ExplainedVariance(r),
         None => Components::Count(p.components),
     };
+    let template_sha256 = sha256_file(&p.template)?;
+    for (m, path) in motions.iter().zip(&p.motions) {
+        part_pca::check_same_template(&m.capture.template_sha256, &template_sha256, "the motion was aligned to", "--template is")
+            .with_context(|| path.display().to_string())?;
+    }
     let refs: Vec<&AlignedMotion> = motions.iter().collect();
     let names: Vec<String> = parts.parts.iter().map(|q| q.name.clone()).collect();
     let only = match &p.part {
@@ -93,7 +99,7 @@ pub fn run(p: &Params) -> anyhow::Result<()> {
         }
         None => None,
     };
-    let (model, report) = part_pca::fit_selected(
+    let (mut model, report) = part_pca::fit_selected(
         &template.vertices,
         &parts,
         &refs,
@@ -102,6 +108,7 @@ pub fn run(p: &Params) -> anyhow::Result<()> {
         only,
         &mesh_core::cli::stage_progress(0, "parts fitted"),
     )?;
+    model.template_sha256 = template_sha256;
     let mut header = p
         .common
         .header("pca-fit", env!("CARGO_PKG_VERSION"))

@@ -108,8 +108,19 @@ pub fn run(p: &Params) -> anyhow::Result<()> {
             );
         }
     }
+    model
+        .templates
+        .check(&src_pca, &tgt_pca)
+        .with_context(|| format!("{} with {} and {}", p.model.display(), p.source_pca.display(), p.target_pca.display()))?;
     let motion = AlignedMotion::load(&p.motion)?;
     let template = mesh_core::io::read_mesh(&p.target_template)?;
+    capture::part_pca::check_same_template(
+        &mesh_core::artifact::sha256_file(&p.target_template)?,
+        &tgt_pca.template_sha256,
+        "this file is",
+        "the target PCA model was fitted on",
+    )
+    .with_context(|| p.target_template.display().to_string())?;
     if template.n_vertices() != tgt_pca.n_vertices {
         bail!(
             "{}: {} vertices but the target PCA model was fitted on {}",
@@ -128,6 +139,9 @@ pub fn run(p: &Params) -> anyhow::Result<()> {
                 .iter()
                 .map(AlignedMotion::load)
                 .collect::<Result<Vec<_>, _>>()?;
+            for (m, path) in training.iter().zip(&p.target_training) {
+                tgt_pca.check_motion(m).with_context(|| path.display().to_string())?;
+            }
             let refs: Vec<&AlignedMotion> = training.iter().collect();
             Some(
                 Reconstructor::new(

@@ -14,7 +14,7 @@ use serde::Serialize;
 
 use crate::limb_orientation;
 use crate::gpr_model::{
-    train, train_orientation, train_piece, GprModel, MeanFunction, MeanPrior, MeanPriors, Method, PairFiles, RegressorReport, DISPLACEMENT,
+    train, train_orientation, train_piece, GprModel, MeanFunction, MeanPrior, MeanPriors, Method, PairFiles, RegressorReport, Templates, DISPLACEMENT,
     MEAN_RIDGE, PRIOR_WEIGHT,
 };
 use capture::part_pca::PcaModel;
@@ -233,6 +233,7 @@ pub fn run(p: &Params) -> anyhow::Result<()> {
             piece.orientation = o.and_then(|mut o| o.maps.swap_remove(unit));
         }
         piece.orientation_weight = p.orientation_weight;
+        piece.templates = Templates::of(&src_pca, &tgt_pca);
         spin.finish_and_clear();
         log_report(&piece.report);
         part_merge::save_piece::<GprModel>(&p.out, &header, &units, unit, piece)?;
@@ -256,6 +257,7 @@ pub fn run(p: &Params) -> anyhow::Result<()> {
     )?;
     model.orientation =
         train_orientation(method, &names, &pairs, ratio, p.keyposes_only, &src_pca, &tgt_pca, p.orientation_weight, None)?;
+    model.templates = Templates::of(&src_pca, &tgt_pca);
     spin.finish_and_clear();
     mesh_core::info!(
         "trained {} on {} pairs in {:.3} s",
