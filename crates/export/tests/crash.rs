@@ -55,3 +55,42 @@ fn killed_export_leaves_absent_or_complete_outputs_and_no_temporary_after_the_ne
         assert_eq!(temporaries(dir.path()), Vec::<String>::new(), "trial {k} (killed: {killed})");
     }
 }
+
+/// `html-report` killed at random moments: `index.html` and `report-assets/view-data.js` are each
+/// absent or complete (the bytes a whole run writes), and the next run leaves no temporary.
+#[test]
+fn killed_html_report_leaves_absent_or_complete_pages_and_no_temporary_after_the_next_run() {
+    let dir = tempfile::tempdir().unwrap();
+    let src = dir.path().join("src");
+    common::bending_capsule(120, 0.6, 0.0).write_dir(&src).unwrap();
+    let out = dir.path().join("out");
+    std::fs::create_dir(&out).unwrap();
+    std::fs::write(out.join("results.json"), r#"{"rows": [{"motion": "walk", "rms_cm": 1.5}]}"#).unwrap();
+    let report = env!("CARGO_BIN_EXE_html-report");
+    let run = || {
+        let mut c = Command::new(report);
+        c.arg("-q").arg("--view").arg(format!("source={}", src.display())).arg("--out").arg(&out);
+        c
+    };
+    assert!(run().status().unwrap().success());
+    let (page, data) = (out.join("index.html"), out.join("report-assets/view-data.js"));
+    let (whole_page, whole_data) = (std::fs::read(&page).unwrap(), std::fs::read(&data).unwrap());
+    let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(5);
+    for k in 0..12 {
+        std::fs::remove_file(&page).unwrap();
+        std::fs::remove_file(&data).unwrap();
+        let mut child = run().stderr(Stdio::null()).spawn().unwrap();
+        std::thread::sleep(Duration::from_millis(rng.random_range(1..40)));
+        let _ = child.kill();
+        let killed = !child.wait().unwrap().success();
+        for (path, whole) in [(&page, &whole_page), (&data, &whole_data)] {
+            if path.exists() {
+                assert!(std::fs::read(path).unwrap() == *whole, "trial {k}: {} is partial (killed: {killed})", path.display());
+            }
+        }
+        assert!(run().status().unwrap().success());
+        let mut left = temporaries(&out);
+        left.extend(temporaries(&out.join("report-assets")));
+        assert_eq!(left, Vec::<String>::new(), "trial {k} (killed: {killed})");
+    }
+}

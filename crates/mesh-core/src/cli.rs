@@ -98,7 +98,7 @@ pub struct CommonArgs {
     /// Only errors on stderr: no progress bars, no messages
     #[arg(short, long, conflicts_with = "verbose")]
     pub quiet: bool,
-    /// Worker threads [default: one per core]; BLAS always uses one thread
+    /// Worker threads [default: one per core, or RAYON_NUM_THREADS]; BLAS always uses one thread
     #[arg(long, value_name = "N", value_parser = clap::value_parser!(u32).range(1..))]
     pub threads: Option<u32>,
     /// Random seed: the same inputs and seed give byte-identical outputs
@@ -112,6 +112,13 @@ static QUIET: AtomicBool = AtomicBool::new(false);
 static IN_STAGE: AtomicBool = AtomicBool::new(false);
 static STAGE: OnceLock<String> = OnceLock::new();
 
+/// `SURFCAP_VERBOSE=N` (0-255): the verbosity of `-v` repeated N times, over the command line's
+/// `-v`/`-q`, so that a pipeline's jobs (whose command lines say `-q`) log in detail without
+/// editing them; `None` when unset or not a number.
+fn env_verbosity() -> Option<u8> {
+    std::env::var("SURFCAP_VERBOSE").ok().and_then(|v| v.trim().parse().ok())
+}
+
 impl CommonArgs {
     /// Applies the flags to the process; call once, first thing in the stage
     /// (before any BLAS call or rayon use): records verbosity, sets up rayon's
@@ -120,8 +127,12 @@ impl CommonArgs {
     /// `openblas_set_num_threads(1)` if OpenBLAS is linked in, because OpenBLAS
     /// reads the variable when it is loaded, before `main`) and faer sequential.
     pub fn init(&self) -> anyhow::Result<()> {
-        VERBOSITY.store(if self.quiet { 0 } else { self.verbose }, Ordering::Relaxed);
-        QUIET.store(self.quiet, Ordering::Relaxed);
+        let (verbosity, quiet) = match env_verbosity() {
+            Some(v) => (v, false),
+            None => (if self.quiet { 0 } else { self.verbose }, self.quiet),
+        };
+        VERBOSITY.store(verbosity, Ordering::Relaxed);
+        QUIET.store(quiet, Ordering::Relaxed);
         IN_STAGE.store(true, Ordering::Relaxed);
         std::env::set_var("OPENBLAS_NUM_THREADS", "1");
         blas_single_thread();

@@ -398,3 +398,23 @@ fn pca_fit_is_independent_of_threads_and_verbosity() {
     assert!(one == two, "pca-fit depends on the thread count");
     assert!(one == verbose, "pca-fit depends on the verbosity");
 }
+
+/// `SURFCAP_VERBOSE` gives a `-q` command line the messages of `-v`, and the model's bytes do not
+/// change with it or with the thread count (`RAYON_NUM_THREADS`, the default of `--threads`).
+#[test]
+fn surfcap_verbose_overrides_quiet_and_changes_no_output() {
+    let b = base();
+    let dir = tempfile::tempdir().unwrap();
+    // One output path for both runs: the header records it.
+    let train = |env: &[(&str, &str)]| -> (Vec<u8>, String) {
+        let args = train_args(b, dir.path(), b.p("A.pca"));
+        let out = Command::new(common::bin("gpr-train")).args(&args).envs(env.iter().copied()).output().unwrap();
+        assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+        (std::fs::read(dir.path().join("out.model")).unwrap(), String::from_utf8_lossy(&out.stderr).into_owned())
+    };
+    let (quiet, quiet_err) = train(&[("RAYON_NUM_THREADS", "2")]);
+    let (verbose, verbose_err) = train(&[("RAYON_NUM_THREADS", "1"), ("SURFCAP_VERBOSE", "1")]);
+    assert_eq!(quiet_err, "", "-q prints nothing on success");
+    assert!(verbose_err.lines().any(|l| l.starts_with("gpr-train: trained")), "{verbose_err}");
+    assert!(quiet == verbose, "gpr-train's model depends on the verbosity or thread count");
+}

@@ -29,3 +29,4 @@ pub mod sample;
 pub mod stage;
 pub mod synthesize;
 pub mod train;
+pub mod trained_on;

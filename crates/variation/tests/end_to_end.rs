@@ -86,6 +86,19 @@ fn tiny_set_end_to_end() {
         .iter()
         .all(|r| r.report.final_value < r.report.initial_value));
 
+    // The model accepts the group it was trained on and refuses any other.
+    variation::trained_on::check(&model, &group).unwrap();
+    let mut renamed = group.clone();
+    renamed.name = "jumps".into();
+    let mut moved = group.clone();
+    moved.template[7].x += 1e-3;
+    let mut fewer = group.clone();
+    fewer.sequences.pop();
+    for (other, fragment) in [(renamed, "group 'locomotion'"), (moved, "another template"), (fewer, "sequences")] {
+        let e = variation::trained_on::check(&model, &other).unwrap_err().to_string();
+        assert!(e.contains(fragment), "{e}");
+    }
+
     let sc = SynthConfig {
         n: 2,
         blends: vec![0.25],

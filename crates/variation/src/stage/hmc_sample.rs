@@ -3,6 +3,7 @@
 
 use std::path::PathBuf;
 
+use anyhow::Context;
 use clap::Parser;
 use mesh_core::artifact::Artifact;
 use mesh_core::cli::CommonArgs;
@@ -146,6 +147,8 @@ fn parse_weights(s: &str) -> Result<Weights, String> {
 pub fn run(p: &Params) -> anyhow::Result<()> {
     let model = VariationModel::load(&p.model)?;
     let group = Group::load(&p.group)?;
+    crate::trained_on::check(&model, &group)
+        .with_context(|| format!("{} with {}", p.model.display(), p.group.display()))?;
     let cfg = SynthConfig {
         n: p.n,
         blends: p.blends.0.clone(),

@@ -3,6 +3,7 @@
 
 use std::path::PathBuf;
 
+use anyhow::Context;
 use clap::Parser;
 use mesh_core::artifact::Artifact;
 use mesh_core::cli::CommonArgs;
@@ -41,6 +42,8 @@ pub struct Params {
 pub fn run(p: &Params) -> anyhow::Result<()> {
     let model = VariationModel::load(&p.model)?;
     let group = Group::load(&p.group)?;
+    crate::trained_on::check(&model, &group)
+        .with_context(|| format!("{} with {}", p.model.display(), p.group.display()))?;
     let spin = mesh_core::cli::spinner(
         &format!("variation-eval: {} sequences x {} parts", model.sequences.len(), model.parts.len()),
         &p.common,
