@@ -34,6 +34,7 @@ use mesh_core::segmentation::Segmentation;
 
 /// How a part is aligned before PCA (see the module documentation).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize, clap::ValueEnum)]
+#[serde(rename_all = "kebab-case")]
 pub enum PartAlignment {
     /// Parts cut from the whole-body-aligned frames, no per-part alignment.
     #[default]

@@ -451,25 +451,10 @@ pub fn peak_rss_kb() -> u64 {
         .unwrap_or(0)
 }
 
-/// Fuzzes until `inputs` inputs or `duration` have been spent, whichever
-/// comes first; keeps panicking / hanging inputs in `keep` (if given).
+/// Fuzzes until `inputs` inputs or `duration` have been spent, whichever comes first, on the
+/// rayon pool's threads, each worker with its own random stream (worker 0: `seed`) and share of
+/// `inputs`; keeps panicking / hanging inputs in `keep` (if given). The reports are summed.
 pub fn fuzz(
-    seed: u64,
-    corpus: &[(Target, Vec<u8>)],
-    inputs: u64,
-    duration: Duration,
-    keep: Option<&Path>,
-) -> Report {
-    let previous = std::panic::take_hook();
-    std::panic::set_hook(Box::new(|_| {}));
-    let report = fuzz_worker(seed, corpus, inputs, duration, keep);
-    std::panic::set_hook(previous);
-    report
-}
-
-/// [`fuzz`] on `workers` threads (the rayon pool's), each with its own random stream
-/// (`seed`, worker) and share of `inputs`; the reports summed.
-pub fn fuzz_parallel(
     seed: u64,
     corpus: &[(Target, Vec<u8>)],
     inputs: u64,
@@ -585,7 +570,7 @@ pub fn run_to_json(
     for dir in corpus {
         seeds.extend(load_corpus(dir));
     }
-    let r = fuzz_parallel(seed, &seeds, inputs, duration, keep);
+    let r = fuzz(seed, &seeds, inputs, duration, keep);
     serde_json::json!({
         "seed": seed,
         "threads": rayon::current_num_threads(),

@@ -37,6 +37,14 @@ fn base() -> &'static Base {
         let root = dir.path().to_path_buf();
         common::write_set(&root.join("set"));
         let b = Base { _dir: dir, root };
+        // Subject x's motion m aligned to the template `x/walk/<frame>.ply`, as `<out>.aligned`.
+        let align = |x: &str, m: &str, frame: &str, out: &str| {
+            common::run(
+                "align",
+                &["-q", "--segmentation", &b.p(&format!("{x}.seg")), "--subject", &b.p(&format!("set/{x}/subject.json")), "--template",
+                  &b.p(&format!("set/{x}/walk/{frame}.ply")), &b.p(&format!("set/{x}/{m}")), "--out", &b.p(&format!("{out}.aligned"))],
+            );
+        };
         for s in ["A", "B"] {
             let tpl = b.p(&format!("set/{s}/walk/000000.ply"));
             common::run(
@@ -44,11 +52,7 @@ fn base() -> &'static Base {
                 &["-q", &b.p(&format!("set/{s}/subject.json")), "--template", &tpl, "--out", &b.p(&format!("{s}.seg"))],
             );
             for m in ["walk", "run"] {
-                common::run(
-                    "align",
-                    &["-q", "--segmentation", &b.p(&format!("{s}.seg")), "--subject", &b.p(&format!("set/{s}/subject.json")), "--template", &tpl,
-                      &b.p(&format!("set/{s}/{m}")), "--out", &b.p(&format!("{s}-{m}.aligned"))],
-                );
+                align(s, m, "000000", &format!("{s}-{m}"));
             }
             common::run(
                 "pca-fit",
@@ -56,15 +60,10 @@ fn base() -> &'static Base {
                   &b.p(&format!("{s}.pca")), &b.p(&format!("{s}-walk.aligned")), &b.p(&format!("{s}-run.aligned"))],
             );
         }
-        // Same topology, another template: A's motions aligned to A's second walk frame (as a
-        // second subject of one body model would be), and B's walk likewise.
-        for (x, m) in [("A", "walk"), ("B", "walk")] {
-            let tpl1 = b.p(&format!("set/{x}/walk/000001.ply"));
-            common::run(
-                "align",
-                &["-q", "--segmentation", &b.p(&format!("{x}.seg")), "--subject", &b.p(&format!("set/{x}/subject.json")), "--template", &tpl1,
-                  &b.p(&format!("set/{x}/{m}")), "--out", &b.p(&format!("{x}1-{m}.aligned"))],
-            );
+        // Same topology, another template: A's and B's walks aligned to their second walk frame
+        // (as a second subject of one body model would be).
+        for x in ["A", "B"] {
+            align(x, "walk", "000001", &format!("{x}1-walk"));
         }
         common::run(
             "pca-fit",

@@ -95,6 +95,7 @@ fn every_artifact_header_lists_every_input_file_and_its_hash() {
         given.extend(aligned.iter().cloned());
         let header = assert_inputs(&whole, &given);
         assert_eq!(header.params["whole_body"], true);
+        assert_eq!(header.params["part_alignment"], "body", "the command-line spelling (docs/FORMATS.md)");
     }
 
     let set_json = set.join("set.json");
