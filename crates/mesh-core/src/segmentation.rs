@@ -179,6 +179,26 @@ pub fn segment(template: &TriMesh, subject: &SubjectSpec) -> Result<Segmentation
                 "part '{name}': curve 1 does not cut the mesh (everything is on the limb side)"
             )));
         }
+        // Nor may it reach another part's curves, unless that part hangs below this one: a loop
+        // that goes round a patch of skin instead of the limb leaves the rest of the body,
+        // other limbs included, on the limb side.
+        let below = |q: &str| {
+            let mut at = Some(q.to_string());
+            while let Some(p) = at {
+                if p == *name {
+                    return true;
+                }
+                at = subject.parts.get(&p).cloned().flatten();
+            }
+            false
+        };
+        if let Some((other, _)) = loops.iter().find(|(q, [a, b])| {
+            !below(q.as_str()) && a.iter().chain(b).any(|&v| limb[v as usize] && !near_mask[v as usize])
+        }) {
+            return Err(Error::invalid(format!(
+                "part '{name}': curve 1 does not cut the limb off the body (part '{other}''s curves lie on its limb side)"
+            )));
+        }
         let parent_count = parent_side.iter().filter(|b| **b).count();
         if parent_count + far.len() >= n {
             return Err(Error::invalid(format!(
@@ -287,6 +307,39 @@ mod tests {
         let ys: Vec<f64> = limb.overlap.iter().map(|&l| mesh.vertices[limb.vertices[l as usize] as usize].y).collect();
         let (lo, hi) = (2.0 * 4.0 / 9.0, 2.0 * 6.0 / 9.0);
         assert!(ys.iter().all(|&y| y > lo - 1e-9 && y < hi + 1e-9));
+    }
+
+    #[test]
+    fn loop_round_a_patch_instead_of_the_limb_is_rejected() {
+        // Two "limbs" on the capsule: the top above rings 6-8, the bottom below rings 3-1.
+        let (mesh, layout) = capsule_body(10, 12, 0.2, 2.0);
+        let ring = |r: usize| layout.ring(layout.body_ring(r));
+        let spec = |top_near: Vec<u32>| -> SubjectSpec {
+            serde_json::from_value(serde_json::json!({
+                "fps": 25, "parts": {"torso": null, "top": "torso", "bottom": "torso"},
+                "curves": {"top": [top_near, ring(8)], "bottom": [ring(3), ring(1)]}
+            }))
+            .unwrap()
+        };
+        let s = segment(&mesh, &spec(ring(6))).unwrap();
+        assert!(s.part("top").unwrap().vertices.len() < mesh.n_vertices() / 2);
+        // The top's near curve replaced by the 1-ring of a torso vertex (ring 5): it cuts off
+        // that one vertex, so the "limb" side is everything else, the bottom's curves included.
+        let v = ring(5)[0];
+        let topology = Topology::new(mesh.n_vertices(), &mesh.faces);
+        let mut next = std::collections::HashMap::new();
+        for &f in topology.vertex_faces(v) {
+            let face = mesh.faces[f as usize];
+            let k = face.iter().position(|&x| x == v).unwrap();
+            next.insert(face[(k + 1) % 3], face[(k + 2) % 3]);
+        }
+        let start = *next.keys().min().unwrap();
+        let mut one_ring = vec![start];
+        while next[one_ring.last().unwrap()] != start {
+            one_ring.push(next[one_ring.last().unwrap()]);
+        }
+        let err = segment(&mesh, &spec(one_ring)).unwrap_err().to_string();
+        assert!(err.contains("part 'top': curve 1 does not cut the limb off the body (part 'bottom'"), "{err}");
     }
 
     #[test]
