@@ -161,35 +161,36 @@ impl Kernel {
 }
 
 impl Kernel {
-    /// Cross covariance `K(xs, x)` (`N x F`, as [`Kernel::cross`]) and, for kernels with a
-    /// length scale, its derivative `∂K/∂log l` (the sparse GP's `K_uf` and its gradient).
-    pub(crate) fn cross_with_dlog_l(
-        &self,
-        xs: &DMatrix<f64>,
-        x: &DMatrix<f64>,
-    ) -> (DMatrix<f64>, Option<DMatrix<f64>>) {
-        let mut k = xs * x.transpose();
-        let mut dl = (self.param_names().len() == 2).then(|| DMatrix::zeros(k.nrows(), k.ncols()));
-        let (rs, rt) = (self.rows(xs), self.rows(x));
-        let n = k.nrows().max(1);
-        for (j, col) in k.as_mut_slice().chunks_exact_mut(n).enumerate() {
-            match dl.as_mut() {
-                Some(dl) => {
-                    let dcol = &mut dl.as_mut_slice()[j * n..(j + 1) * n];
-                    for (i, v) in col.iter_mut().enumerate() {
-                        let (e, d) = self.entry(*v, &rs, i, &rt, j, true);
-                        *v = e;
-                        dcol[i] = d;
-                    }
-                }
-                None => {
-                    for (i, v) in col.iter_mut().enumerate() {
-                        *v = self.entry(*v, &rs, i, &rt, j, false).0;
-                    }
-                }
-            }
+    /// `Σ_ij W_ij ∂K(xs, x)_ij/∂log l` for `W` shaped as [`Kernel::cross`] (`N x F`): the
+    /// contraction the sparse GP's gradient needs, without forming `∂K_uf` (one `N x F`
+    /// block less) and without the kernel's arcsines (NN: only `u / sqrt(1 - u²)`). 0 for
+    /// kernels without a length scale.
+    pub(crate) fn cross_dlog_l_contract(&self, xs: &DMatrix<f64>, x: &DMatrix<f64>, w: &DMatrix<f64>) -> f64 {
+        assert_eq!((w.nrows(), w.ncols()), (xs.nrows(), x.nrows()), "cross_dlog_l_contract: W's shape");
+        if self.param_names().len() != 2 {
+            return 0.0;
         }
-        (k, dl)
+        let s = xs * x.transpose();
+        let (rs, rt) = (self.rows(xs), self.rows(x));
+        let n = s.nrows().max(1);
+        let mut total = 0.0;
+        for (j, (scol, wcol)) in s.as_slice().chunks_exact(n).zip(w.as_slice().chunks_exact(n)).enumerate() {
+            total += match *self {
+                Kernel::NeuralNetwork { l, sigma_f, bias } => {
+                    let a = 0.5 / (l * l);
+                    let (dj, gj) = (rt.d[j], rt.g[j]);
+                    let mut acc = 0.0;
+                    for i in 0..scol.len() {
+                        let sv = if bias { scol[i] + 1.0 } else { scol[i] };
+                        let u = (a * sv * rs.d[i] * dj).clamp(-1.0, 1.0);
+                        acc += wcol[i] * u / (1.0 - u * u).sqrt() * (-2.0 + rs.g[i] + gj);
+                    }
+                    sigma_f * sigma_f * acc
+                }
+                _ => (0..scol.len()).map(|i| wcol[i] * self.entry(scol[i], &rs, i, &rt, j, true).1).sum(),
+            };
+        }
+        total
     }
 
     /// Prior variances `k(x_i, x_i)` and their derivatives `∂/∂log l` (zeros for kernels
