@@ -223,7 +223,7 @@ impl SparseFactored {
         add_relative_jitter(&mut kuu, kuu_jitter);
         let chol = Cholesky::new(&kuu, "K_uu", notes)?;
         let (l_uu, jitter) = (chol.lower(), chol.jitter);
-        let mut a = kernel.cross(z, x);
+        let mut a = kernel.cross_fast(z, x);
         lower_solve_in_place(&l_uu, &mut a);
         let s_mat = mul_tr(&a, &a, true);
         let a_y = mul(&a, y);
@@ -408,10 +408,24 @@ pub fn train_sparse_with_inducing(
     z: &DMatrix<f64>,
     opts: &GprOptions,
 ) -> Result<(Gpr, TrainReport)> {
+    train_sparse_observed(start, x, y, z, opts, &mut |_| {})
+}
+
+/// [`train_sparse_with_inducing`], calling `observe` with the bound of every evaluation in
+/// order (the benchmark's record of when a bound was first reached).
+pub fn train_sparse_observed(
+    start: Kernel,
+    x: &DMatrix<f64>,
+    y: &DMatrix<f64>,
+    z: &DMatrix<f64>,
+    opts: &GprOptions,
+    observe: &mut dyn FnMut(f64),
+) -> Result<(Gpr, TrainReport)> {
     check_xy(x, y)?;
     check_inducing(z, x)?;
     let mut notes = Vec::new();
     let first = SparseFactored::new(&start, opts.noise_var, z, x, y, KUU_JITTER, &mut notes)?;
+    observe(first.value);
     let initial_lml = first.value;
     let (fitted, exit, iterations, evaluations, gradient_evaluations) = if opts.optimise {
         let seed = if opts.learn_noise { None } else { Some(first) };
@@ -419,7 +433,13 @@ pub fn train_sparse_with_inducing(
             start,
             opts,
             seed,
-            |kern, noise| SparseFactored::new(kern, noise, z, x, y, KUU_JITTER, &mut notes),
+            |kern, noise| {
+                let f = SparseFactored::new(kern, noise, z, x, y, KUU_JITTER, &mut notes);
+                if let Ok(f) = &f {
+                    observe(f.value);
+                }
+                f
+            },
             |f| f.value,
             |f| f.gradient(z, x, y, opts.learn_noise),
         );
