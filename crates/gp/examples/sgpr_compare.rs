@@ -8,7 +8,7 @@
 //! start with the dumped inducing inputs (the problem GPy is given), `--repeat R` times
 //! (default 3): the fastest wall and thread-CPU time are recorded.
 //!
-//! Usage: `sgpr_compare [--pairs N] [--inducing M] [--exact] [--dump DIR] [--models K] [--grad-tol X] [--repeat R]`
+//! Usage: `sgpr_compare [--pairs N] [--inducing M] [--exact] [--dump DIR] [--models K] [--grad-tol X] [--c2 X] [--repeat R]`
 //! e.g.: `OPENBLAS_NUM_THREADS=1 cargo run --release -p gp --example sgpr_compare -- --pairs 10000 --inducing 256`
 #[path = "../benches/synthetic_pairs.rs"]
 mod synthetic_pairs;
@@ -34,6 +34,9 @@ fn main() {
     let repeat: usize = get("--repeat").map_or(3, |s| s.parse().expect("--repeat R")).max(1);
     let kernel = Kernel::neural_network(1.0, 1.0);
     let mut opts = GprOptions { sparse: Sparsity::Inducing(m), ..Default::default() };
+    if let Some(v) = get("--c2") {
+        opts.cg.c2 = v.parse().expect("--c2 X");
+    }
     if let Some(v) = get("--grad-tol") {
         opts.cg.grad_tol = v.parse().expect("--grad-tol X");
     }
