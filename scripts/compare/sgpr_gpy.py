@@ -139,7 +139,7 @@ def main():
     summary["cpu_ratio_to_target"] = summary["gpy_cpu_to_target_s"] / summary["ours_cpu_to_target_s"]
     summary["cpu_ratio_full"] = summary["gpy_cpu_s"] / summary["ours_cpu_s"]
     print(f"worst relative bound difference at our optimum: {worst:.2e}")
-    print(f"one thread each, {len(rows)} models: ours to the equal bound {summary['ours_cpu_to_target_s']:.3f} s CPU,"
+    print(f"ours on one thread, GPy on OPENBLAS_NUM_THREADS={threads['OPENBLAS_NUM_THREADS']}, {len(rows)} models: ours to the equal bound {summary['ours_cpu_to_target_s']:.3f} s CPU,"
           f" to its stop {summary['ours_cpu_s']:.3f} s CPU ({summary['ours_wall_s']:.3f} s wall); GPy to the equal bound {summary['gpy_cpu_to_target_s']:.3f} s CPU ({summary['gpy_wall_to_target_s']:.3f} s wall),"
           f" to its own stop {summary['gpy_cpu_s']:.3f} s CPU ({summary['gpy_wall_s']:.3f} s wall)")
     print(f"CPU ratio GPy / ours, to the equal bound: {summary['cpu_ratio_to_target']:.1f}x;"
