@@ -161,35 +161,57 @@ impl Kernel {
 }
 
 impl Kernel {
-    /// Cross covariance `K(xs, x)` (`N x F`, as [`Kernel::cross`]) and, for kernels with a
-    /// length scale, its derivative `∂K/∂log l` (the sparse GP's `K_uf` and its gradient).
-    pub(crate) fn cross_with_dlog_l(
-        &self,
-        xs: &DMatrix<f64>,
-        x: &DMatrix<f64>,
-    ) -> (DMatrix<f64>, Option<DMatrix<f64>>) {
+    /// [`Kernel::cross`] with the NN kernel's arcsine by [`asin_cephes`] (within 1 ulp of
+    /// the C library's, measured over `[-1, 1]`; about 4x faster here): the sparse GP's
+    /// `K_uf`, `F x M` arcsines per evaluation (with glibc's they took a quarter of its time).
+    pub(crate) fn cross_fast(&self, xs: &DMatrix<f64>, x: &DMatrix<f64>) -> DMatrix<f64> {
+        let Kernel::NeuralNetwork { l, sigma_f, bias } = *self else {
+            return self.cross(xs, x);
+        };
         let mut k = xs * x.transpose();
-        let mut dl = (self.param_names().len() == 2).then(|| DMatrix::zeros(k.nrows(), k.ncols()));
         let (rs, rt) = (self.rows(xs), self.rows(x));
+        let (a, sf2) = (0.5 / (l * l), sigma_f * sigma_f);
         let n = k.nrows().max(1);
         for (j, col) in k.as_mut_slice().chunks_exact_mut(n).enumerate() {
-            match dl.as_mut() {
-                Some(dl) => {
-                    let dcol = &mut dl.as_mut_slice()[j * n..(j + 1) * n];
-                    for (i, v) in col.iter_mut().enumerate() {
-                        let (e, d) = self.entry(*v, &rs, i, &rt, j, true);
-                        *v = e;
-                        dcol[i] = d;
-                    }
-                }
-                None => {
-                    for (i, v) in col.iter_mut().enumerate() {
-                        *v = self.entry(*v, &rs, i, &rt, j, false).0;
-                    }
-                }
+            let adj = a * rt.d[j];
+            for (i, v) in col.iter_mut().enumerate() {
+                let s = if bias { *v + 1.0 } else { *v };
+                *v = sf2 * asin_cephes((adj * s * rs.d[i]).clamp(-1.0, 1.0));
             }
         }
-        (k, dl)
+        k
+    }
+
+    /// `Σ_ij W_ij ∂K(xs, x)_ij/∂log l` for `W` shaped as [`Kernel::cross`] (`N x F`): the
+    /// contraction the sparse GP's gradient needs, without forming `∂K_uf` (one `N x F`
+    /// block less) and without the kernel's arcsines (NN: only `u / sqrt(1 - u²)`). 0 for
+    /// kernels without a length scale.
+    pub(crate) fn cross_dlog_l_contract(&self, xs: &DMatrix<f64>, x: &DMatrix<f64>, w: &DMatrix<f64>) -> f64 {
+        assert_eq!((w.nrows(), w.ncols()), (xs.nrows(), x.nrows()), "cross_dlog_l_contract: W's shape");
+        if self.param_names().len() != 2 {
+            return 0.0;
+        }
+        let s = xs * x.transpose();
+        let (rs, rt) = (self.rows(xs), self.rows(x));
+        let n = s.nrows().max(1);
+        let mut total = 0.0;
+        for (j, (scol, wcol)) in s.as_slice().chunks_exact(n).zip(w.as_slice().chunks_exact(n)).enumerate() {
+            total += match *self {
+                Kernel::NeuralNetwork { l, sigma_f, bias } => {
+                    let a = 0.5 / (l * l);
+                    let (dj, gj) = (rt.d[j], rt.g[j]);
+                    let mut acc = 0.0;
+                    for i in 0..scol.len() {
+                        let sv = if bias { scol[i] + 1.0 } else { scol[i] };
+                        let u = (a * sv * rs.d[i] * dj).clamp(-1.0, 1.0);
+                        acc += wcol[i] * u / (1.0 - u * u).sqrt() * (-2.0 + rs.g[i] + gj);
+                    }
+                    sigma_f * sigma_f * acc
+                }
+                _ => (0..scol.len()).map(|i| wcol[i] * self.entry(scol[i], &rs, i, &rt, j, true).1).sum(),
+            };
+        }
+        total
     }
 
     /// Prior variances `k(x_i, x_i)` and their derivatives `∂/∂log l` (zeros for kernels
@@ -207,6 +229,59 @@ impl Kernel {
         }
         (k, d)
     }
+}
+
+/// `asin(x)` for `|x| <= 1` by Cephes' rational approximations (S. L. Moshier, `asin.c`):
+/// `x + x³ P(x²)/Q(x²)` for `|x| <= 0.625`, `π/2 - 2 asin(sqrt((1 - |x|)/2))` in the form
+/// `π/4 - (sqrt(2z) - (sqrt(2z) z R(z)/S(z) - ε)) + π/4`, `z = 1 - |x|`, above. Straight-line
+/// code with one division, no table lookups or multi-precision fallback.
+#[inline(always)]
+pub(crate) fn asin_cephes(x: f64) -> f64 {
+    const P: [f64; 6] = [
+        4.253011369004428248960e-3,
+        -6.019598008014123785661e-1,
+        5.444622390564711410273e0,
+        -1.626247967210700244449e1,
+        1.956261983317594739197e1,
+        -8.198089802484824371615e0,
+    ];
+    const Q: [f64; 5] = [
+        -1.474091372988853791896e1,
+        7.049610280856842141659e1,
+        -1.471791292232726029859e2,
+        1.395105614657485689735e2,
+        -4.918853881490881290097e1,
+    ];
+    const R: [f64; 5] = [
+        2.967721961301243206100e-3,
+        -5.634242780008963776856e-1,
+        6.968710824104713396794e0,
+        -2.556901049652824852289e1,
+        2.853665548261061424989e1,
+    ];
+    const S: [f64; 4] = [
+        -2.194779531642920639778e1,
+        1.470656354026814941758e2,
+        -3.838770957603691357202e2,
+        3.424398657913078477438e2,
+    ];
+    const PIO4: f64 = 7.853981633974483096160e-1;
+    const MOREBITS: f64 = 6.123233995736765886130e-17;
+    let poly = |z: f64, c: &[f64]| c.iter().skip(1).fold(c[0], |r, &v| r * z + v);
+    let poly1 = |z: f64, c: &[f64]| c.iter().skip(1).fold(z + c[0], |r, &v| r * z + v);
+    let a = x.abs();
+    let r = if a > 0.625 {
+        let z = 1.0 - a;
+        let p = z * poly(z, &R) / poly1(z, &S);
+        let w = (z + z).sqrt();
+        ((PIO4 - w) - (w * p - MOREBITS)) + PIO4
+    } else if a < 1e-8 {
+        a
+    } else {
+        let z = a * a;
+        a * (z * poly(z, &P) / poly1(z, &Q)) + a
+    };
+    r.copysign(x)
 }
 
 fn mirror_lower(m: &mut DMatrix<f64>) {
@@ -334,6 +409,39 @@ impl Kernel {
                 (k, vec![dl, ds])
             }
             None => (k, vec![ds]),
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Within 1 ulp (relative) of the C library's arcsine over `[-1, 1]`: a uniform grid, the
+    /// approach to ±1 and tiny arguments.
+    #[test]
+    fn asin_cephes_matches_the_library() {
+        let grid = (0..=200_000).map(|i| -1.0 + i as f64 * 1e-5);
+        let near_one = (0..320).flat_map(|k| {
+            let e = 10f64.powf(-(k as f64) / 20.0);
+            [1.0 - e, -(1.0 - e), e * 1e-3, -e * 1e-3]
+        });
+        let mut worst: f64 = 0.0;
+        for x in grid.chain(near_one).chain([1.0, -1.0, 0.0, 0.625, -0.625, 0.6250000000000001]) {
+            let (got, want) = (asin_cephes(x), x.asin());
+            let ulps = (got - want).abs() / (want.abs().max(f64::MIN_POSITIVE) * f64::EPSILON);
+            worst = worst.max(ulps);
+        }
+        assert!(worst <= 1.0 + 1e-9, "worst error {worst} ulp");
+    }
+
+    #[test]
+    fn fast_cross_equals_cross() {
+        let xs = DMatrix::from_fn(7, 4, |i, j| ((i * 5 + j * 3) % 11) as f64 * 0.3 - 1.4);
+        let x = DMatrix::from_fn(9, 4, |i, j| ((i * 7 + j) % 13) as f64 * 0.25 - 1.5);
+        for k in [Kernel::neural_network(0.4, 1.3), Kernel::NeuralNetwork { l: 2.0, sigma_f: 0.7, bias: true }, Kernel::Linear { sigma_f: 2.0 }] {
+            let (a, b) = (k.cross_fast(&xs, &x), k.cross(&xs, &x));
+            assert!((&a - &b).amax() <= 4.0 * f64::EPSILON * b.amax(), "{k:?}");
         }
     }
 }

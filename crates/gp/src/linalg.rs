@@ -191,3 +191,18 @@ pub fn mul_tr(a: &DMatrix<f64>, b: &DMatrix<f64>, symmetric: bool) -> DMatrix<f6
     }
     out
 }
+
+/// `A B` by faer's blocked matrix product (the sparse GP's `M x M` by `M x F` products).
+pub fn mul(a: &DMatrix<f64>, b: &DMatrix<f64>) -> DMatrix<f64> {
+    assert_eq!(a.ncols(), b.nrows(), "mul: inner dimensions differ");
+    let mut out = DMatrix::zeros(a.nrows(), b.ncols());
+    faer::linalg::matmul::matmul(
+        view_mut(&mut out),
+        faer::Accum::Replace,
+        view(a),
+        view(b),
+        1.0,
+        faer::get_global_parallelism(),
+    );
+    out
+}

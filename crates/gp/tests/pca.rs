@@ -114,3 +114,29 @@ fn bad_shapes_are_errors() {
     let e = Pca::fit(&data, Components::Count(0)).unwrap_err().to_string();
     assert!(e.contains("at least 1 component"), "{e}");
 }
+
+/// More frames than dimensions (the `long` preset's parts) takes the `D x D` route; padding the
+/// same data with zero columns until `D > F` takes the `F x F` route: same variances, same
+/// axes up to sign, zero weight on the padding, and the same reconstruction.
+#[test]
+fn frame_and_dimension_routes_agree() {
+    let mut rng = Rng::new(21);
+    let (f, d) = (60, 9);
+    let data = &rng.matrix(f, d, 1.0) * DMatrix::from_fn(d, d, |i, j| if i == j { 1.0 + i as f64 } else { 0.1 });
+    let tall = Pca::fit(&data, Components::Count(6)).unwrap();
+    let wide_data = DMatrix::from_fn(f, f + 5, |i, j| if j < d { data[(i, j)] } else { 0.0 });
+    let wide = Pca::fit(&wide_data, Components::Count(6)).unwrap();
+    assert_eq!((tall.rank, wide.rank), (d, d));
+    for k in 0..6 {
+        assert!((tall.variances[k] - wide.variances[k]).abs() < 1e-10 * wide.variances[0], "variance {k}");
+        let (a, b) = (tall.components.row(k), wide.components.row(k).columns(0, d).into_owned());
+        let dot = a.dot(&b);
+        assert!((dot.abs() - 1.0).abs() < 1e-10, "axis {k}: |cos| = {}", dot.abs());
+        assert!(wide.components.row(k).columns(d, f + 5 - d).amax() < 1e-12);
+    }
+    assert!((tall.total_variance - wide.total_variance).abs() < 1e-10 * wide.total_variance);
+    let (rt, rw) = (tall.reconstruction_rms(&data).unwrap(), wide.reconstruction_rms(&wide_data).unwrap());
+    // RMS over every coordinate: the padding's zeros count in the wide one.
+    let (st, sw) = (rt * rt * d as f64, rw * rw * (f + 5) as f64);
+    assert!((st - sw).abs() < 1e-10 * sw && st > 0.1, "{st} vs {sw}");
+}

@@ -3,7 +3,9 @@
 //! tests), `default` (full body and `notoes` topologies, 25 and 50 fps: the demo set) and
 //! `holdout` (two other bodies, styles, topologies and frame rates, the demo's training
 //! motions and test motions from clips the demo never uses: the second benchmark, on which
-//! nothing is tuned).
+//! nothing is tuned) and `long` (the tiny preset's bodies and frame rates with every training
+//! motion looped to two minutes: ~15,000 dense training pairs, the size of a lab's five minutes
+//! at 50 fps, for the sparse GP's benchmark on real pairs; docs/PERFORMANCE.md).
 
 use crate::noise::NoiseLevel;
 use crate::style::{Style, TimeWarp};
@@ -196,7 +198,7 @@ pub fn default_noise() -> NoiseLevel {
 }
 
 /// The preset names [`preset`] knows.
-pub const PRESETS: [&str; 3] = ["default", "tiny", "holdout"];
+pub const PRESETS: [&str; 4] = ["default", "tiny", "holdout", "long"];
 
 /// A preset, as the command line names it (one of [`PRESETS`]).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, clap::ValueEnum, serde::Serialize)]
@@ -209,6 +211,8 @@ pub enum Preset {
     Tiny,
     /// Other bodies, styles, rates and test clips: the second benchmark.
     Holdout,
+    /// The tiny bodies with two-minute training motions (~15,000 pairs): the sparse GP's benchmark.
+    Long,
 }
 
 impl Preset {
@@ -218,6 +222,7 @@ impl Preset {
             Preset::Default => "default",
             Preset::Tiny => "tiny",
             Preset::Holdout => "holdout",
+            Preset::Long => "long",
         }
     }
 }
@@ -269,6 +274,41 @@ pub fn preset(name: &str, seed: u64, noise: bool) -> Option<Config> {
                 keyposes: 5,
             })
         }
+        "long" => Some(Config {
+            preset: name.into(),
+            seed,
+            noise,
+            source: subject_a(Topology::Obj("notoes_collapse10pc.obj".into()), 20.0),
+            target: subject_b(
+                Topology::ObjSubdivided("notoes_collapse5pc.obj".into()),
+                25.0,
+            ),
+            train: long_motions(&train),
+            test,
+            target_test: vec![dm("dance_b", "dance_b", 1)],
+            max_duration: LONG_SECONDS,
+            keyposes: 5,
+        }),
         _ => None,
     }
+}
+
+/// Length of each training motion of the `long` preset, in mocap seconds.
+pub const LONG_SECONDS: f64 = 120.0;
+
+/// The training motions looped until they last [`LONG_SECONDS`] (then cut there). The
+/// non-cyclic clips (jump, kick, dance) restart from their first pose each cycle, as a
+/// performer repeating a move would.
+fn long_motions(train: &[MotionDef]) -> Vec<MotionDef> {
+    train
+        .iter()
+        .map(|m| match &m.source {
+            MotionSource::DeepMimic { file, .. } => MotionDef {
+                name: m.name.clone(),
+                // The shortest clip (run) lasts ~0.7 s: 200 cycles always reach LONG_SECONDS.
+                source: MotionSource::DeepMimic { file: file.clone(), cycles: 200 },
+            },
+            MotionSource::Cmu { .. } => m.clone(),
+        })
+        .collect()
 }

@@ -213,3 +213,28 @@ fn the_set_opens_with_mesh_core_and_its_curves_resolve() {
         assert_eq!(truth, nb, "{m}");
     }
 }
+
+/// The `long` preset: every training motion lasts two minutes of mocap time (looped, then cut),
+/// B (slower cadence) gets more frames than A, the test motions are the demo's uncut clips, and
+/// the bodies are the tiny preset's. No frames are written (2.8 GB).
+#[test]
+fn long_preset_has_two_minute_training_motions() {
+    use synth::capture_set_writer::{count_frames, load_motion};
+    let long = preset("long", 0, true).unwrap();
+    let (tiny, default) = (preset("tiny", 0, true).unwrap(), preset("default", 0, true).unwrap());
+    let dir = synth::assets::asset_dir().expect("assets (run scripts/fetch-assets)");
+    for def in &long.train {
+        let clip = load_motion(&dir, def, long.max_duration).unwrap().clip;
+        let d = clip.duration();
+        assert!(d > synth::preset::LONG_SECONDS - 1.0 && d <= synth::preset::LONG_SECONDS, "{}: {d} s", def.name);
+    }
+    let names = |v: &[synth::preset::MotionDef]| v.iter().map(|m| m.name.clone()).collect::<Vec<_>>();
+    assert_eq!(names(&long.test), names(&default.test));
+    assert_eq!(names(&long.train), names(&tiny.train));
+    assert_eq!((long.source.fps, long.target.fps), (tiny.source.fps, tiny.target.fps));
+    let motions: Vec<_> = long.train.iter().map(|d| load_motion(&dir, d, long.max_duration).unwrap()).collect();
+    let train_only = synth::preset::Config { test: vec![], target_test: vec![], ..long.clone() };
+    let frames = count_frames(&train_only, &motions);
+    // 5 motions x 120 s x (20 fps for A + ~25/0.85 fps for B).
+    assert!((25_000..35_000).contains(&frames), "{frames} training frames");
+}
