@@ -113,17 +113,35 @@ pub fn measure(
     template: &[Vector3<f64>],
     fps: f64,
 ) -> Diversity {
+    let aligned: Vec<Vec<Vec<Vector3<f64>>>> =
+        variations.iter().map(|v| normalise(v, template)).collect();
+    let refs: Vec<&Vec<Vec<Vector3<f64>>>> = aligned.iter().collect();
+    measure_aligned(&refs, &normalise(source, template), fps)
+}
+
+/// [`measure`] of variations and source already aligned to the template
+/// ([`crate::metrics::normalise`]); the variations' cost matrices in parallel.
+pub fn measure_aligned(
+    variations: &[&Vec<Vec<Vector3<f64>>>],
+    src: &[Vec<Vector3<f64>>],
+    fps: f64,
+) -> Diversity {
+    use rayon::prelude::*;
     let frames = |s: f64| ((s * fps).round() as usize).max(1);
     let (tl, tg) = (frames(LOCAL_WINDOW_S), frames(GLOBAL_WINDOW_S));
-    let src = normalise(source, template);
     let mut covered = vec![false; src.len().saturating_sub(tg.min(src.len())) + 1];
     let (mut gsum, mut lsum) = (0.0, 0.0);
-    for v in variations {
-        let v = normalise(v, template);
-        let c = pose_cost(&v, &src, 400);
-        gsum += global(&c, tg);
-        lsum += local(&c, tl);
-        for (flag, d) in covered.iter_mut().zip(nearest_windows(&c.transpose(), tg)) {
+    let each: Vec<(f64, f64, Vec<f64>)> = variations
+        .par_iter()
+        .map(|v| {
+            let c = pose_cost(v, src, 400);
+            (global(&c, tg), local(&c, tl), nearest_windows(&c.transpose(), tg))
+        })
+        .collect();
+    for (g, l, near) in each {
+        gsum += g;
+        lsum += l;
+        for (flag, d) in covered.iter_mut().zip(near) {
             *flag |= d < COVERAGE_THRESHOLD_M;
         }
     }

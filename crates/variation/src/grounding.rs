@@ -14,7 +14,6 @@
 use gp::dtw::{dtw_path, DtwOptions};
 use nalgebra::Vector3;
 
-use crate::metrics::normalise;
 
 /// Default smoothing width of the offsets (frames).
 pub const SIGMA_FRAMES: f64 = 1.5;
@@ -75,34 +74,84 @@ pub fn correspondence(
     source: &[Vec<Vector3<f64>>],
     template: &[Vector3<f64>],
 ) -> Vec<f64> {
-    let identity = || {
-        (0..var.len())
-            .map(|t| t.min(source.len().saturating_sub(1)) as f64)
-            .collect()
-    };
-    if var.is_empty() || source.is_empty() {
-        return identity();
-    }
-    let (a, b) = (normalise(var, template), normalise(source, template));
-    let cost = crate::prealign::pose_cost(&a, &b, 400);
-    let Ok(path) = dtw_path(&cost, &[], &DtwOptions::default()) else {
-        return identity();
-    };
-    let mut sum = vec![0.0; var.len()];
-    let mut count = vec![0usize; var.len()];
-    for (i, j) in path {
-        if i < var.len() {
-            sum[i] += j as f64;
-            count[i] += 1;
+    MatchSource::new(source, template).matches(var)
+}
+
+/// Vertices of the pose cost of [`correspondence`] (evenly subsampled, as
+/// `prealign::pose_cost` subsamples them).
+const MATCH_VERTICES: usize = 400;
+
+/// The source side of [`correspondence`], prepared once for any number of variations: the
+/// subsampled vertices of every source frame rigidly aligned to the template (the alignment
+/// fitted on all vertices, [`crate::metrics::normalise`]). The same costs and matches as aligning whole frames.
+pub struct MatchSource<'a> {
+    template: &'a [Vector3<f64>],
+    len: usize,
+    idx: Vec<usize>,
+    poses: Vec<Vec<Vector3<f64>>>,
+}
+
+impl<'a> MatchSource<'a> {
+    pub fn new(source: &[Vec<Vector3<f64>>], template: &'a [Vector3<f64>]) -> MatchSource<'a> {
+        let n = source.first().map_or(0, |f| f.len());
+        let step = n.div_ceil(MATCH_VERTICES).max(1);
+        let idx: Vec<usize> = (0..n).step_by(step).collect();
+        MatchSource {
+            template,
+            len: source.len(),
+            poses: aligned_rows(source, template, &idx),
+            idx,
         }
     }
-    (0..var.len())
-        .map(|i| {
-            if count[i] > 0 {
-                sum[i] / count[i] as f64
-            } else {
-                i.min(source.len() - 1) as f64
+
+    /// [`correspondence`] of `var` to this source.
+    pub fn matches(&self, var: &[Vec<Vector3<f64>>]) -> Vec<f64> {
+        let identity = || {
+            (0..var.len())
+                .map(|t| t.min(self.len.saturating_sub(1)) as f64)
+                .collect()
+        };
+        if var.is_empty() || self.len == 0 {
+            return identity();
+        }
+        let a = aligned_rows(var, self.template, &self.idx);
+        // The rows are already subsampled: every one of them is used.
+        let cost = crate::prealign::pose_cost(&a, &self.poses, usize::MAX);
+        let Ok(path) = dtw_path(&cost, &[], &DtwOptions::default()) else {
+            return identity();
+        };
+        let mut sum = vec![0.0; var.len()];
+        let mut count = vec![0usize; var.len()];
+        for (i, j) in path {
+            if i < var.len() {
+                sum[i] += j as f64;
+                count[i] += 1;
             }
+        }
+        (0..var.len())
+            .map(|i| {
+                if count[i] > 0 {
+                    sum[i] / count[i] as f64
+                } else {
+                    i.min(self.len - 1) as f64
+                }
+            })
+            .collect()
+    }
+}
+
+/// Vertices `idx` of every frame after the frame's rigid alignment to `template` (fitted on
+/// all its vertices).
+fn aligned_rows(
+    frames: &[Vec<Vector3<f64>>],
+    template: &[Vector3<f64>],
+    idx: &[usize],
+) -> Vec<Vec<Vector3<f64>>> {
+    frames
+        .iter()
+        .map(|f| {
+            let r = mesh_core::rigid::procrustes(f, template, None);
+            idx.iter().map(|&v| r.apply(&f[v])).collect()
         })
         .collect()
 }
@@ -153,12 +202,20 @@ pub fn ground_matched(
     up: &Vector3<f64>,
     sigma: f64,
 ) -> Vec<f64> {
-    let o = offsets(
-        &lowest(var, soles, up),
-        &lowest(source, soles, up),
-        matches,
-        sigma,
-    );
+    ground_on(var, &lowest(source, soles, up), matches, soles, up, sigma)
+}
+
+/// [`ground_matched`] with the source's lowest heights `source_low` (of the same `soles`,
+/// [`lowest`]) already known.
+pub fn ground_on(
+    var: &mut [Vec<Vector3<f64>>],
+    source_low: &[f64],
+    matches: &[f64],
+    soles: &[u32],
+    up: &Vector3<f64>,
+    sigma: f64,
+) -> Vec<f64> {
+    let o = offsets(&lowest(var, soles, up), source_low, matches, sigma);
     for (f, &d) in var.iter_mut().zip(&o) {
         let shift = up * d;
         f.iter_mut().for_each(|p| *p += shift);

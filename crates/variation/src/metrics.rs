@@ -87,8 +87,12 @@ pub fn timing_offset(
     b: &[Vec<Vector3<f64>>],
     template: &[Vector3<f64>],
 ) -> f64 {
-    let (a, b) = (normalise(a, template), normalise(b, template));
-    let cost = crate::prealign::pose_cost(&a, &b, 400);
+    timing_offset_aligned(&normalise(a, template), &normalise(b, template))
+}
+
+/// [`timing_offset`] of sequences already aligned to the template ([`normalise`]).
+pub fn timing_offset_aligned(a: &[Vec<Vector3<f64>>], b: &[Vec<Vector3<f64>>]) -> f64 {
+    let cost = crate::prealign::pose_cost(a, b, 400);
     match dtw_path(&cost, &[], &DtwOptions::default()) {
         Ok(p) => {
             p.iter()
