@@ -12,7 +12,8 @@
 //! whole frame is shifted by `o(t) · up`.
 
 use gp::dtw::{dtw_path, DtwOptions};
-use nalgebra::Vector3;
+use mesh_core::rigid::RigidMotion;
+use nalgebra::{Matrix3, Vector3};
 
 
 /// Default smoothing width of the offsets (frames).
@@ -83,23 +84,24 @@ const MATCH_VERTICES: usize = 400;
 
 /// The source side of [`correspondence`], prepared once for any number of variations: the
 /// subsampled vertices of every source frame rigidly aligned to the template (the alignment
-/// fitted on all vertices, [`crate::metrics::normalise`]). The same costs and matches as aligning whole frames.
-pub struct MatchSource<'a> {
-    template: &'a [Vector3<f64>],
+/// fitted on all vertices, as [`crate::metrics::normalise`] fits it; [`TemplateFit`]).
+pub struct MatchSource {
+    fit: TemplateFit,
     len: usize,
     idx: Vec<usize>,
     poses: Vec<Vec<Vector3<f64>>>,
 }
 
-impl<'a> MatchSource<'a> {
-    pub fn new(source: &[Vec<Vector3<f64>>], template: &'a [Vector3<f64>]) -> MatchSource<'a> {
+impl MatchSource {
+    pub fn new(source: &[Vec<Vector3<f64>>], template: &[Vector3<f64>]) -> MatchSource {
         let n = source.first().map_or(0, |f| f.len());
         let step = n.div_ceil(MATCH_VERTICES).max(1);
         let idx: Vec<usize> = (0..n).step_by(step).collect();
+        let fit = TemplateFit::new(template);
         MatchSource {
-            template,
             len: source.len(),
-            poses: aligned_rows(source, template, &idx),
+            poses: fit.aligned_rows(source, &idx),
+            fit,
             idx,
         }
     }
@@ -114,7 +116,7 @@ impl<'a> MatchSource<'a> {
         if var.is_empty() || self.len == 0 {
             return identity();
         }
-        let a = aligned_rows(var, self.template, &self.idx);
+        let a = self.fit.aligned_rows(var, &self.idx);
         // The rows are already subsampled: every one of them is used.
         let cost = crate::prealign::pose_cost(&a, &self.poses, usize::MAX);
         let Ok(path) = dtw_path(&cost, &[], &DtwOptions::default()) else {
@@ -140,20 +142,56 @@ impl<'a> MatchSource<'a> {
     }
 }
 
-/// Vertices `idx` of every frame after the frame's rigid alignment to `template` (fitted on
-/// all its vertices).
-fn aligned_rows(
-    frames: &[Vec<Vector3<f64>>],
-    template: &[Vector3<f64>],
-    idx: &[usize],
-) -> Vec<Vec<Vector3<f64>>> {
-    frames
-        .iter()
-        .map(|f| {
-            let r = mesh_core::rigid::procrustes(f, template, None);
-            idx.iter().map(|&v| r.apply(&f[v])).collect()
-        })
-        .collect()
+/// Rigid alignment of frames to one template (`mesh_core::rigid::procrustes(frame, template)`,
+/// unweighted) with the template's side precomputed: its centroid `c_t` and centred points
+/// `e_i = t_i − c_t`, so that a frame's cross-covariance is `H = Σ (s_i − c_s) e_iᵀ`, nine
+/// products per vertex. The same motion as `procrustes` up to rounding.
+pub struct TemplateFit {
+    centroid: Vector3<f64>,
+    /// Centred template, one array per coordinate.
+    e: [Vec<f64>; 3],
+}
+
+impl TemplateFit {
+    pub fn new(template: &[Vector3<f64>]) -> TemplateFit {
+        let n = template.len().max(1) as f64;
+        let centroid = template.iter().sum::<Vector3<f64>>() / n;
+        let e = [0, 1, 2].map(|a| template.iter().map(|p| p[a] - centroid[a]).collect());
+        TemplateFit { centroid, e }
+    }
+
+    /// The rigid motion taking `frame` (one point per template vertex) onto the template; the
+    /// identity for an empty frame or one of another vertex count.
+    pub fn fit(&self, frame: &[Vector3<f64>]) -> RigidMotion {
+        let n = frame.len();
+        if n == 0 || n != self.e[0].len() {
+            return RigidMotion::identity();
+        }
+        let cs = frame.iter().sum::<Vector3<f64>>() / n as f64;
+        let mut h = [0.0f64; 9];
+        for (i, p) in frame.iter().enumerate() {
+            let s = [p.x - cs.x, p.y - cs.y, p.z - cs.z];
+            let e = [self.e[0][i], self.e[1][i], self.e[2][i]];
+            for a in 0..3 {
+                for b in 0..3 {
+                    h[3 * a + b] += s[a] * e[b];
+                }
+            }
+        }
+        let h = Matrix3::from_row_slice(&h);
+        mesh_core::rigid::rigid_from_moments(&cs, &self.centroid, &h)
+    }
+
+    /// Vertices `idx` of every frame after the frame's alignment ([`TemplateFit::fit`]).
+    pub fn aligned_rows(&self, frames: &[Vec<Vector3<f64>>], idx: &[usize]) -> Vec<Vec<Vector3<f64>>> {
+        frames
+            .iter()
+            .map(|f| {
+                let r = self.fit(f);
+                idx.iter().map(|&v| r.apply(&f[v])).collect()
+            })
+            .collect()
+    }
 }
 
 /// Linear interpolation of `values` at fractional index `x` (clamped to the ends).
@@ -202,20 +240,21 @@ pub fn ground_matched(
     up: &Vector3<f64>,
     sigma: f64,
 ) -> Vec<f64> {
-    ground_on(var, &lowest(source, soles, up), matches, soles, up, sigma)
+    let var_low = lowest(var, soles, up);
+    ground_on(var, &var_low, &lowest(source, soles, up), matches, up, sigma)
 }
 
-/// [`ground_matched`] with the source's lowest heights `source_low` (of the same `soles`,
-/// [`lowest`]) already known.
+/// [`ground_matched`] with the lowest heights ([`lowest`], of the same vertices) of the
+/// variation, `var_low`, and of the source, `source_low`, already known.
 pub fn ground_on(
     var: &mut [Vec<Vector3<f64>>],
+    var_low: &[f64],
     source_low: &[f64],
     matches: &[f64],
-    soles: &[u32],
     up: &Vector3<f64>,
     sigma: f64,
 ) -> Vec<f64> {
-    let o = offsets(&lowest(var, soles, up), source_low, matches, sigma);
+    let o = offsets(var_low, source_low, matches, sigma);
     for (f, &d) in var.iter_mut().zip(&o) {
         let shift = up * d;
         f.iter_mut().for_each(|p| *p += shift);

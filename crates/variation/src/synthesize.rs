@@ -184,12 +184,17 @@ pub struct SynthReport {
     pub seconds_sampling: f64,
     /// Decoding, grounding, clean-ups, writing and statistics together (wall, s).
     pub seconds_decoding: f64,
-    /// The parts of `seconds_decoding` spent writing the PLY files and computing the
-    /// statistics ([`measure`]) (wall, s).
+    /// Writing the PLY files, summed over the parallel per-variation tasks (s; wall time of
+    /// each task's writes), and computing the statistics ([`measure`], wall, s).
     #[serde(default)]
     pub seconds_writing: f64,
     #[serde(default)]
     pub seconds_statistics: f64,
+    /// With the fast decoding (`--average`, mean poses): the largest certified bound on any
+    /// pose coordinate's error against exact decoding over the sampled latent points (m);
+    /// None with exact decoding.
+    #[serde(default)]
+    pub decoding_bound_m: Option<f64>,
 }
 
 /// Sole vertices of the model's template (both feet, [`metrics::soles`]).
@@ -226,6 +231,11 @@ fn model_leg_weights(
     }
 }
 
+/// Certified bound (m) on every pose coordinate of the kernel-basis decoding at the training
+/// latent points (`Decoder::with_pose_basis`); at the sampled points the bound is evaluated
+/// and reported (`SynthReport::decoding_bound_m`).
+pub const BASIS_TOLERANCE_M: f64 = 2e-7;
+
 /// Contact height (m) for foot sliding and floating: a foot within it of the ground touches.
 const CONTACT_HEIGHT: f64 = 0.02;
 
@@ -256,6 +266,8 @@ struct Decoded {
     /// Contacts transferred from the source (None without annotations).
     contacts: Option<Contacts>,
     footskate_max: f64,
+    /// Certified bound on the basis decoding's error at this variation's latent points (m).
+    bound: Option<f64>,
 }
 
 /// A sequence to synthesise: label, blend weight, latent variations, source frames, start
@@ -319,15 +331,17 @@ impl Post<'_> {
         let (model, cfg) = (self.model, self.cfg);
         // Rigid shifts of the variation leave the (pose-normalised) DTW unchanged.
         let matches = matcher.matches(&m);
-        let ungrounded = floor_contact(&m, job, &matches, model);
+        let low = grounding::lowest(&m, &[], &model.up);
+        let ungrounded =
+            grounding::floor_contact(&low, &job.source_low, &matches, CONTACT_HEIGHT);
         if cfg.grounding {
             // Ground on the lowest point of the whole body: sampled feet often point their toes
             // through the floor while the template soles sit at the right height.
             grounding::ground_on(
                 &mut m,
+                &low,
                 &job.source_low,
                 &matches,
-                &[],
                 &model.up,
                 grounding::SIGMA_FRAMES,
             );
@@ -388,6 +402,7 @@ impl Post<'_> {
                 raw_sliding,
                 contacts,
                 footskate_max,
+                bound: None,
             },
             notes,
         ))
@@ -495,7 +510,14 @@ pub fn run_with_progress(
         )));
     }
     let mut notes = Vec::new();
-    let dec = Decoder::new(model, &mut notes)?;
+    // Mean poses merged by averaging decode through kernel bases, fused with the assembly
+    // (`reconstruct::FusedDecoder`); eq. 11 draws and stitching decode exactly.
+    let fast = cfg.assembly == Assembly::Average && !cfg.sample_poses;
+    let dec = if fast {
+        Decoder::with_pose_basis(model, BASIS_TOLERANCE_M, &mut notes)?.0
+    } else {
+        Decoder::new(model, &mut notes)?
+    };
     let clock = std::time::Instant::now();
     let mut hmc = default_hmc(cfg.n.max(1), cfg.seed);
     hmc.burn_in = cfg.burn_in;
@@ -620,9 +642,7 @@ pub fn run_with_progress(
     if cfg.footskate && feet.is_none() {
         notes.push("foot-skating clean-up skipped: no left and right soles found".into());
     }
-    let fused = (cfg.assembly == Assembly::Average && !cfg.sample_poses)
-        .then(|| dec.fused())
-        .transpose()?;
+    let fused = fast.then(|| dec.fused()).transpose()?;
     let writer = PlyFrames::new(model.template.len(), &model.faces);
     let post = Post {
         model,
@@ -632,6 +652,7 @@ pub fn run_with_progress(
         soles: &all_soles,
     };
     let (mut seconds_writing, mut seconds_statistics) = (0.0, 0.0);
+    let mut decoding_bound: Option<f64> = None;
     for (j, job) in jobs.iter().enumerate() {
         if cfg.footskate && job.contacts.is_none() {
             notes.push(format!(
@@ -648,18 +669,26 @@ pub fn run_with_progress(
             .par_iter()
             .enumerate()
             .map_init(
-                || (crate::reconstruct::FusedScratch::default(), Vec::new()),
-                |(scratch, flat), (k, latents)| {
+                || (crate::reconstruct::FusedScratch::default(), Vec::new(), Vec::new()),
+                |(scratch, flat, spare), (k, latents)| {
                     let mut rng =
                         ChaCha8Rng::seed_from_u64(mix(cfg.seed, 0xDEC0DE + j as u64, k as u64));
                     let m = match &fused {
-                        // Mean poses merged by averaging: the fused decoder (same result, one pass).
+                        // Mean poses merged by averaging: the fused decoder (same result, one
+                        // pass), its frames copied into the buffers of this thread's last
+                        // variation when it kept none.
                         Some(f) => {
                             let nv = model.template.len();
                             let t_len = latents.first().map_or(0, |x| x.nrows());
                             flat.resize(t_len * nv, Vector3::zeros());
                             f.decode_average_into(latents, &job.start, scratch, flat)?;
-                            flat.chunks_exact(nv.max(1)).map(|c| c.to_vec()).collect()
+                            let mut m: Vec<Vec<Vector3<f64>>> = std::mem::take(spare);
+                            m.resize_with(t_len, Vec::new);
+                            for (frame, c) in m.iter_mut().zip(flat.chunks_exact(nv.max(1))) {
+                                frame.clear();
+                                frame.extend_from_slice(c);
+                            }
+                            m
                         }
                         None => dec.decode(
                             latents,
@@ -669,11 +698,19 @@ pub fn run_with_progress(
                         )?,
                     };
                     let (mut d, notes) = post.run(m, job, &matcher)?;
+                    if fused.is_some() && cfg.statistics {
+                        d.bound = dec
+                            .predictors
+                            .iter()
+                            .zip(latents)
+                            .filter_map(|(pr, x)| pr.basis_error_bound(x))
+                            .reduce(f64::max);
+                    }
                     let clock = std::time::Instant::now();
                     writer.write_dir(&dir.join(format!("var{k}")), &d.meshes, Some(model.fps))?;
                     let written = clock.elapsed().as_secs_f64();
                     if !cfg.statistics {
-                        d.meshes = Vec::new();
+                        *spare = std::mem::take(&mut d.meshes);
                     }
                     Ok((d, notes, written))
                 },
@@ -681,6 +718,10 @@ pub fn run_with_progress(
             .collect::<Result<_>>()?;
         let mut decoded = Vec::with_capacity(done.len());
         for (k, (d, n, written)) in done.into_iter().enumerate() {
+            decoding_bound = match (decoding_bound, d.bound) {
+                (Some(a), Some(b)) => Some(f64::max(a, b)),
+                (a, b) => a.or(b),
+            };
             notes.extend(n.into_iter().map(|n| format!("{} var{k}: {n}", job.label)));
             seconds_writing += written;
             decoded.push(d);
@@ -704,5 +745,6 @@ pub fn run_with_progress(
         seconds_decoding: clock.elapsed().as_secs_f64(),
         seconds_writing,
         seconds_statistics,
+        decoding_bound_m: decoding_bound,
     })
 }

@@ -144,8 +144,9 @@ fn parse_weights(s: &str) -> Result<Weights, String> {
 
 /// Writes the variations as PLY frames (and the `--report` statistics when asked).
 pub fn run(p: &Params) -> anyhow::Result<()> {
-    let model = VariationModel::load(&p.model)?;
-    let group = Group::load(&p.group)?;
+    // The two inputs are read and checked side by side.
+    let (model, group) = rayon::join(|| VariationModel::load(&p.model), || Group::load(&p.group));
+    let (model, group) = (model?, group?);
     let cfg = SynthConfig {
         n: p.n,
         blends: p.blends.0.clone(),
