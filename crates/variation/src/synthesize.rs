@@ -96,8 +96,9 @@ pub struct SynthConfig {
 pub enum Query {
     /// Variations of one training sequence, by name (a motion or a pre-blend `blend-<w>`).
     Motion(String),
-    /// Variations of the blend at weight `w` ∈ [0, 1] of motions `a` (w = 0) and `b` (w = 1):
-    /// guided by the learned pre-blends when (a, b) is the model's blend pair, else the
+    /// Variations of the blend at weight `w` ∈ [0, 1] of any two captured motions `a` (w = 0)
+    /// and `b` (w = 1) of the group: guided by the learned pre-blends of that pair where the
+    /// group has them (the nearest pre-blended weight on each side of `w`), else the
     /// endpoints' variants interpolated ([`crate::sample::blend_entries`]).
     Blend { a: String, b: String, w: f64 },
 }
@@ -170,6 +171,11 @@ pub struct SequenceReport {
     /// ([`crate::diversity`]).
     #[serde(default)]
     pub diversity: Option<Diversity>,
+    /// For a blend: the two learned weights whose variants were blended, the nearest on each
+    /// side of `blend` among the pair's pre-blends and its captured motions (0 and 1); equal
+    /// when `blend` is a learned weight.
+    #[serde(default)]
+    pub guided_from: Option<(f64, f64)>,
 }
 
 /// Everything `hmc-sample` reports.
@@ -282,6 +288,8 @@ struct Job {
     /// Height of the source's lowest point in every frame, and over all frames (its floor).
     source_low: Vec<f64>,
     floor: f64,
+    /// For a blend, the learned weights that guide it ([`SequenceReport::guided_from`]).
+    guided_from: Option<(f64, f64)>,
 }
 
 impl Job {
@@ -305,8 +313,16 @@ impl Job {
             contacts,
             source_low,
             floor,
+            guided_from: None,
         }
     }
+}
+
+/// The learned weights of `entries` ([`blend_entries`], sorted) nearest to `w` on each side.
+fn bounding(entries: &[(f64, usize)], w: f64) -> Option<(f64, f64)> {
+    let lo = entries.iter().rev().find(|e| e.0 <= w)?.0;
+    let hi = entries.iter().find(|e| e.0 >= w)?.0;
+    Some((lo, hi))
 }
 
 /// The post-processes of one decoded variation, in order: DTW correspondence to the source,
@@ -476,6 +492,7 @@ fn measure(job: &Job, decoded: &[Decoded], model: &VariationModel) -> SequenceRe
         source_contact_sliding_m: contact_sliding(source, &job.contacts),
         footskate_max_m: decoded.iter().map(|d| d.footskate_max).collect(),
         diversity: Some(diversity::measure_aligned(&pose_refs, &source_pose, model.fps)),
+        guided_from: job.guided_from,
     }
 }
 
@@ -608,7 +625,7 @@ pub fn run_with_progress(
                     model.sequences[a].name, model.sequences[b].name
                 ),
             };
-            jobs.push(Job::new(
+            let mut job = Job::new(
                 label,
                 Some(w),
                 vars,
@@ -616,7 +633,12 @@ pub fn run_with_progress(
                 model.sequences[a].start_pose,
                 truth.contacts,
                 &model.up,
-            ));
+            );
+            job.guided_from = bounding(&blend_entries(model, a, b), w);
+            if let Some((lo, hi)) = job.guided_from {
+                mesh_core::info!("{}: variants of the learned weights {lo} and {hi} blended", job.label);
+            }
+            jobs.push(job);
         }
     }
     for job in &mut jobs {

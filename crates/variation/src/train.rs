@@ -38,7 +38,10 @@ pub struct PartModel {
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct SequenceInfo {
     pub name: String,
+    /// For a pre-blended sequence, its weight between the motions of `blend_of`.
     pub blend: Option<f64>,
+    /// For a pre-blended sequence, the indices of the two motions it blends (w = 0, w = 1).
+    pub blend_of: Option<(usize, usize)>,
     /// World pose of the first frame: decoded motions start here.
     pub start_pose: RigidMotion,
     pub contacts: Option<Contacts>,
@@ -67,7 +70,7 @@ pub struct VariationModel {
 
 impl Artifact for VariationModel {
     const KIND: &'static str = "variation-model";
-    const VERSION: u32 = 2;
+    const VERSION: u32 = 3;
 
     /// A valid body (`group::check_body`); per part a reference of its vertex count and a
     /// valid GPDM with one latent trajectory per training sequence, each of the
@@ -201,6 +204,9 @@ impl VariationModel {
         if let Some(s) = self.sequences.iter().find(|s| s.contacts.as_ref().is_some_and(|c| c.len() != self.frames)) {
             return Err(format!("sequence '{}': contacts of other than {} frames", s.name, self.frames));
         }
+        let blends: Vec<(Option<f64>, Option<(usize, usize)>)> =
+            self.sequences.iter().map(|s| (s.blend, s.blend_of)).collect();
+        crate::group::check_blends(&blends)?;
         crate::group::check_pair(self.pair, self.sequences.len())
     }
 }
@@ -481,6 +487,7 @@ pub fn train_selected(
         .map(|s| SequenceInfo {
             name: s.name.clone(),
             blend: s.blend,
+            blend_of: s.blend_of,
             start_pose: s.motion.poses[0],
             contacts: s.contacts.clone(),
         })

@@ -40,7 +40,7 @@ pub struct Params {
     pub motion: Option<String>,
     /// Only variations of the blend of two motions of the group, `A:B` at --weight (guided by
     /// the learned pre-blends for the group's blend pair, the motions' own variants otherwise)
-    #[arg(long, value_name = "A:B", requires = "weight", value_parser = parse_pair)]
+    #[arg(long, value_name = "A:B", requires = "weight", value_parser = super::parse_pair)]
     #[serde(serialize_with = "pair_as_text")]
     pub blend: Option<(String, String)>,
     /// Weight w* in [0, 1] of the --blend (0: A, 1: B)
@@ -108,13 +108,6 @@ pub struct Params {
     /// Statistics against the sources (JSON); without it they are not computed
     #[arg(long)]
     pub report: Option<PathBuf>,
-}
-
-fn parse_pair(s: &str) -> Result<(String, String), String> {
-    match s.split_once(':') {
-        Some((a, b)) if !a.is_empty() && !b.is_empty() => Ok((a.into(), b.into())),
-        _ => Err(format!("'{s}' is not two motion names A:B")),
-    }
 }
 
 /// `--blend` as written on the command line (`A:B`), or `null`.
