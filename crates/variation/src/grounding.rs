@@ -303,6 +303,60 @@ pub fn floor_contact(
 #[cfg(test)]
 mod tests {
     use super::*;
+    use nalgebra::{Rotation3, Unit};
+
+    /// A rigidly moved, slightly deformed copy of `t`.
+    fn moved(t: &[Vector3<f64>], angle: f64, shift: Vector3<f64>, wobble: f64) -> Vec<Vector3<f64>> {
+        let r = Rotation3::from_axis_angle(&Unit::new_normalize(Vector3::new(0.3, 1.0, -0.2)), angle);
+        t.iter()
+            .enumerate()
+            .map(|(i, p)| r * (p + Vector3::new(wobble * (i as f64 * 0.7).sin(), 0.0, 0.0)) + shift)
+            .collect()
+    }
+
+    #[test]
+    fn template_fit_is_procrustes_onto_the_template() {
+        let t = mesh_core::shapes::icosphere(2).vertices;
+        let fit = TemplateFit::new(&t);
+        for (angle, wobble) in [(0.0, 0.0), (0.4, 0.0), (2.9, 0.01), (-1.3, 0.05)] {
+            let f = moved(&t, angle, Vector3::new(3.0, -0.5, 12.0), wobble);
+            let (a, b) = (fit.fit(&f), mesh_core::rigid::procrustes(&f, &t, None));
+            for p in &f {
+                assert!((a.apply(p) - b.apply(p)).norm() < 1e-12, "angle {angle}");
+            }
+            if wobble == 0.0 {
+                // An exact rigid copy goes back onto the template.
+                for (p, q) in f.iter().zip(&t) {
+                    assert!((a.apply(p) - q).norm() < 1e-12);
+                }
+            }
+        }
+        assert_eq!(fit.fit(&t[..5]), RigidMotion::identity(), "another vertex count");
+    }
+
+    #[test]
+    fn a_delayed_copy_matches_its_source_frames() {
+        // Source: a sphere whose x-scale oscillates, travelling and turning; the variation is
+        // its frames 4.. placed elsewhere: frame i matches source frame i + 4.
+        let t = mesh_core::shapes::icosphere(2).vertices;
+        let source: Vec<Vec<Vector3<f64>>> = (0..40)
+            .map(|k| {
+                let s = 1.0 + 0.3 * (0.25 * k as f64).sin() + 0.01 * k as f64;
+                let f: Vec<_> = t.iter().map(|p| Vector3::new(p.x * s, p.y, p.z)).collect();
+                moved(&f, 0.05 * k as f64, Vector3::new(0.1 * k as f64, 0.0, 0.0), 0.0)
+            })
+            .collect();
+        let var: Vec<_> = source[4..]
+            .iter()
+            .map(|f| moved(f, 1.0, Vector3::new(-2.0, 0.0, 5.0), 0.0))
+            .collect();
+        let m = MatchSource::new(&source, &t).matches(&var);
+        assert_eq!(m, correspondence(&var, &source, &t));
+        // The path starts at the corner (0, 0), then catches up within a few frames.
+        for (i, &j) in m.iter().enumerate().skip(6) {
+            assert!((j - (i + 4) as f64).abs() < 1e-9, "frame {i}: {m:?}");
+        }
+    }
 
     #[test]
     fn smooth_keeps_lines_and_damps_spikes() {
