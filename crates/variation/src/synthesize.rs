@@ -432,25 +432,24 @@ fn measure(job: &Job, decoded: &[Decoded], model: &VariationModel) -> SequenceRe
     let soles = model_soles(model);
     let slide =
         |f: &[Vec<Vector3<f64>>]| metrics::foot_sliding(f, &soles, &model.up, CONTACT_HEIGHT);
-    // Every frame aligned to the template once (pose only), reused by each pose figure.
+    // Each variation's frames aligned to the template (pose only) once, for every pose figure
+    // and its diversity cost matrix, then dropped.
     let source_pose = metrics::normalise(source, &model.template);
-    let poses: Vec<Vec<Vec<Vector3<f64>>>> = decoded
+    type PerVariation = (f64, f64, f64, Option<f64>, f64, f64, FloorContact, nalgebra::DMatrix<f64>);
+    let per: Vec<PerVariation> = decoded
         .par_iter()
-        .map(|d| metrics::normalise(&d.meshes, &model.template))
-        .collect();
-    let per: Vec<(f64, f64, f64, Option<f64>, f64, f64, FloorContact)> = decoded
-        .par_iter()
-        .zip(&poses)
-        .map(|(d, pose)| {
+        .map(|d| {
             let v = &d.meshes;
+            let pose = metrics::normalise(v, &model.template);
             (
                 metrics::mean_vertex_distance(v, source),
-                metrics::timing_offset_aligned(pose, &source_pose),
+                metrics::timing_offset_aligned(&pose, &source_pose),
                 metrics::edge_distortion(v, &model.template, &edges),
                 slide(v),
-                metrics::mean_vertex_distance(pose, &source_pose),
-                metrics::nearest_frame_distance(pose, &source_pose, 2000),
+                metrics::mean_vertex_distance(&pose, &source_pose),
+                metrics::nearest_frame_distance(&pose, &source_pose, 2000),
                 floor_contact(v, job, &d.matches, model),
+                crate::prealign::pose_cost(&pose, &source_pose, 400),
             )
         })
         .collect();
@@ -465,7 +464,7 @@ fn measure(job: &Job, decoded: &[Decoded], model: &VariationModel) -> SequenceRe
         c.as_ref()
             .and_then(|c| metrics::contact_sliding(f, &soles, c, &model.up))
     };
-    let pose_refs: Vec<&Vec<Vec<Vector3<f64>>>> = poses.iter().collect();
+    let costs: Vec<nalgebra::DMatrix<f64>> = per.iter().map(|p| p.7.clone()).collect();
     SequenceReport {
         label: label.to_string(),
         blend,
@@ -491,7 +490,7 @@ fn measure(job: &Job, decoded: &[Decoded], model: &VariationModel) -> SequenceRe
         raw_contact_sliding_m: decoded.iter().map(|d| d.raw_sliding.1).collect(),
         source_contact_sliding_m: contact_sliding(source, &job.contacts),
         footskate_max_m: decoded.iter().map(|d| d.footskate_max).collect(),
-        diversity: Some(diversity::measure_aligned(&pose_refs, &source_pose, model.fps)),
+        diversity: Some(diversity::from_costs(&costs, source.len(), model.fps)),
         guided_from: job.guided_from,
     }
 }
