@@ -7,7 +7,7 @@
 //! fit has no minimum), a dynamics-noise floor [`DYN_NOISE_FLOOR`], a weak log-normal factor on
 //! β1..β3 and the latent scale fixed at unit mean square (`gpdm::model` module doc). The fit is
 //! one joint L-BFGS run (memory [`LBFGS_MEMORY`]) that stops by convergence: relative decrease
-//! below 1e-10 per iteration over a 10-iteration window, or ‖∇‖∞ ≤ 1e-3. Parts are trained in
+//! below [`VALUE_TOLERANCE`] per iteration over a 10-iteration window, or ‖∇‖∞ ≤ 1e-3. Parts are trained in
 //! parallel.
 
 use gpdm::optim::{train as fit, Schedule, TrainOptions, TrainReport};
@@ -288,6 +288,13 @@ pub struct TrainConfig {
 /// recursion costs O(memory · N d), negligible next to the O(N³) objective.
 pub const LBFGS_MEMORY: usize = 100;
 
+/// Relative decrease of the objective per iteration (over a 10-iteration window) below which
+/// the fit stops. Demo B locomotion (50 fps, strided N = 222 per part): 1e-10 took 4016
+/// evaluations on the torso, 1e-8 takes 1809 (320-1248 → 161-762 on the limbs) for the same
+/// fig. 4 reconstruction (1.578 mm) and fig. 7b blend errors (1.724 / 1.972 mm) to 1 µm; 1e-7
+/// (905) moves fig. 7b by 0.08-0.13 mm (docs/PERFORMANCE.md, `examples/fit_tolerance`).
+pub const VALUE_TOLERANCE: f64 = 1e-8;
+
 impl Default for TrainConfig {
     fn default() -> Self {
         let mut options = TrainOptions {
@@ -295,7 +302,7 @@ impl Default for TrainConfig {
             ..Default::default()
         };
         options.lbfgs.memory = LBFGS_MEMORY;
-        options.lbfgs.value_tol = 1e-10;
+        options.lbfgs.value_tol = VALUE_TOLERANCE;
         options.lbfgs.value_window = 10;
         options.lbfgs.grad_tol = 1e-3;
         options.lbfgs.max_iter = 10000;
