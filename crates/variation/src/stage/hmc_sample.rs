@@ -39,7 +39,8 @@ pub struct Params {
     #[arg(long, conflicts_with = "blend")]
     pub motion: Option<String>,
     /// Only variations of the blend of two motions of the group, `A:B` at --weight (guided by
-    /// the learned pre-blends for the group's blend pair, the motions' own variants otherwise)
+    /// that pair's nearest pre-blended weights on each side, by the two motions' own variants
+    /// for a pair without pre-blends)
     #[arg(long, value_name = "A:B", requires = "weight", value_parser = super::parse_pair)]
     #[serde(serialize_with = "pair_as_text")]
     pub blend: Option<(String, String)>,
