@@ -267,7 +267,7 @@ struct Decoded {
     /// DTW-matched source frame of every frame.
     matches: Vec<f64>,
     ungrounded: FloorContact,
-    /// Foot sliding before the clean-up (geometric, annotated).
+    /// Foot sliding before the clean-up (geometric, annotated), measured for the statistics.
     raw_sliding: (Option<f64>, Option<f64>),
     /// Contacts transferred from the source (None without annotations).
     contacts: Option<Contacts>,
@@ -695,7 +695,7 @@ pub fn run_with_progress(
                     let mut rng =
                         ChaCha8Rng::seed_from_u64(mix(cfg.seed, 0xDEC0DE + j as u64, k as u64));
                     let m = match &fused {
-                        // Mean poses merged by averaging: the fused decoder (same result, one
+                        // Mean poses merged by averaging: the fused kernel-basis decoder (one
                         // pass), its frames copied into the buffers of this thread's last
                         // variation when it kept none.
                         Some(f) => {
