@@ -194,3 +194,40 @@ fn multi_part_models_are_fitted_part_by_part() {
         }
     }
 }
+
+/// A group of three motions pre-blended on two pairs at three weights: `prealign` gets every
+/// motion (in the frames it reads too), the weights and the pairs as given, and the group's
+/// GPDMs, samples and evaluation follow as for any group.
+#[test]
+fn a_group_of_three_motions_blends_the_pairs_asked() {
+    let t = <T as clap::Parser>::parse_from([
+        "t",
+        "--variation-group",
+        "moves=walk,run,kick",
+        "--prealign-flags",
+        "moves=--blend-pairs walk:run,run:kick",
+        "--variation-w",
+        "0.25,0.5,0.75",
+    ]);
+    let opts = plan::options::PipelineOptions {
+        paths: plan::options::Paths { set: repo().join("fixtures/tiny-set"), pipeline_out: "out".into() },
+        transfer: t.t,
+        variation: t.v,
+    };
+    let g = plan::stage::graph(&opts).unwrap();
+    let pre = g.producer("out/work/variation/moves.group").expect("a prealign task");
+    let args = match &pre.steps[..] {
+        [plan::task::Step::Run { args, .. }] => args.clone(),
+        _ => panic!("prealign: not one stage run"),
+    };
+    let after = |flag: &str| args[args.iter().position(|a| a == flag).unwrap_or_else(|| panic!("{flag} missing: {args:?}")) + 1].clone();
+    assert_eq!(after("--motions"), "walk,run,kick");
+    assert_eq!(after("--blend-pairs"), "walk:run,run:kick");
+    assert_eq!(after("--blend-weights"), "0.25,0.5,0.75");
+    for m in ["walk", "run", "kick"] {
+        assert!(pre.inputs.iter().any(|i| i.contains(&format!("/A/{m}/"))), "{m}: frames not among the inputs");
+    }
+    for target in ["out/work/variation/moves.model", "out/work/variation/moves-samples.json", "out/work/variation/moves-eval.json"] {
+        assert!(g.producer(target).is_some(), "{target}: no task");
+    }
+}

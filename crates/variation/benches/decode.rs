@@ -43,6 +43,7 @@ fn model(level: usize) -> VariationModel {
     let info = |name: &str| SequenceInfo {
         name: name.into(),
         blend: None,
+        blend_of: None,
         start_pose: RigidMotion::identity(),
         contacts: None,
     };

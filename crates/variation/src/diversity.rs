@@ -113,23 +113,42 @@ pub fn measure(
     template: &[Vector3<f64>],
     fps: f64,
 ) -> Diversity {
+    let aligned: Vec<Vec<Vec<Vector3<f64>>>> =
+        variations.iter().map(|v| normalise(v, template)).collect();
+    let refs: Vec<&Vec<Vec<Vector3<f64>>>> = aligned.iter().collect();
+    measure_aligned(&refs, &normalise(source, template), fps)
+}
+
+/// [`measure`] of variations and source already aligned to the template
+/// ([`crate::metrics::normalise`]); the variations' cost matrices in parallel.
+pub fn measure_aligned(
+    variations: &[&Vec<Vec<Vector3<f64>>>],
+    src: &[Vec<Vector3<f64>>],
+    fps: f64,
+) -> Diversity {
+    use rayon::prelude::*;
+    let costs: Vec<DMatrix<f64>> = variations.par_iter().map(|v| pose_cost(v, src, 400)).collect();
+    from_costs(&costs, src.len(), fps)
+}
+
+/// The three figures from each variation's cost matrix against the source (`c(i, k)` of the
+/// module doc: `prealign::pose_cost` of the aligned frames, 400 vertices), the source having
+/// `source_frames` frames.
+pub fn from_costs(costs: &[DMatrix<f64>], source_frames: usize, fps: f64) -> Diversity {
     let frames = |s: f64| ((s * fps).round() as usize).max(1);
     let (tl, tg) = (frames(LOCAL_WINDOW_S), frames(GLOBAL_WINDOW_S));
-    let src = normalise(source, template);
-    let mut covered = vec![false; src.len().saturating_sub(tg.min(src.len())) + 1];
+    let mut covered = vec![false; source_frames.saturating_sub(tg.min(source_frames)) + 1];
     let (mut gsum, mut lsum) = (0.0, 0.0);
-    for v in variations {
-        let v = normalise(v, template);
-        let c = pose_cost(&v, &src, 400);
-        gsum += global(&c, tg);
-        lsum += local(&c, tl);
+    for c in costs {
+        gsum += global(c, tg);
+        lsum += local(c, tl);
         for (flag, d) in covered.iter_mut().zip(nearest_windows(&c.transpose(), tg)) {
             *flag |= d < COVERAGE_THRESHOLD_M;
         }
     }
-    let n = variations.len().max(1) as f64;
+    let n = costs.len().max(1) as f64;
     Diversity {
-        coverage: if src.is_empty() {
+        coverage: if source_frames == 0 {
             0.0
         } else {
             covered.iter().filter(|&&c| c).count() as f64 / covered.len() as f64

@@ -173,7 +173,8 @@ pub fn evaluate(
                 (model.sequences[b].name.clone(), xb.clone()),
             ];
             for (i, info) in model.sequences.iter().enumerate() {
-                if let Some(w) = info.blend {
+                // The pre-blends of the pair (a group may pre-blend other pairs too).
+                if let (Some(w), true) = (info.blend, info.blend_of == Some((a, b))) {
                     series.push((format!("linear w = {w}"), xa * (1.0 - w) + xb * w));
                     series.push((format!("learned pre-blend w = {w}"), model.latents(i)[k].clone()));
                 }
@@ -186,18 +187,7 @@ pub fn evaluate(
                 ));
             }
         }
-        let learned: Vec<(f64, usize)> = {
-            let mut v = vec![(0.0, a), (1.0, b)];
-            v.extend(
-                model
-                    .sequences
-                    .iter()
-                    .enumerate()
-                    .filter_map(|(i, s)| s.blend.map(|w| (w, i))),
-            );
-            v.sort_by(|x, y| x.0.total_cmp(&y.0));
-            v
-        };
+        let learned = crate::sample::blend_entries(model, a, b);
         let blender = surface::blend::Blender::new(group.template.clone(), group.faces.clone())?;
         for w in [0.25, 0.75] {
             let i2 = learned

@@ -12,9 +12,9 @@
 //! whole frame is shifted by `o(t) · up`.
 
 use gp::dtw::{dtw_path, DtwOptions};
-use nalgebra::Vector3;
+use mesh_core::rigid::RigidMotion;
+use nalgebra::{Matrix3, Vector3};
 
-use crate::metrics::normalise;
 
 /// Default smoothing width of the offsets (frames).
 pub const SIGMA_FRAMES: f64 = 1.5;
@@ -75,36 +75,123 @@ pub fn correspondence(
     source: &[Vec<Vector3<f64>>],
     template: &[Vector3<f64>],
 ) -> Vec<f64> {
-    let identity = || {
-        (0..var.len())
-            .map(|t| t.min(source.len().saturating_sub(1)) as f64)
-            .collect()
-    };
-    if var.is_empty() || source.is_empty() {
-        return identity();
-    }
-    let (a, b) = (normalise(var, template), normalise(source, template));
-    let cost = crate::prealign::pose_cost(&a, &b, 400);
-    let Ok(path) = dtw_path(&cost, &[], &DtwOptions::default()) else {
-        return identity();
-    };
-    let mut sum = vec![0.0; var.len()];
-    let mut count = vec![0usize; var.len()];
-    for (i, j) in path {
-        if i < var.len() {
-            sum[i] += j as f64;
-            count[i] += 1;
+    MatchSource::new(source, template).matches(var)
+}
+
+/// Vertices of the pose cost of [`correspondence`] (evenly subsampled, as
+/// `prealign::pose_cost` subsamples them).
+const MATCH_VERTICES: usize = 400;
+
+/// The source side of [`correspondence`], prepared once for any number of variations: the
+/// subsampled vertices of every source frame rigidly aligned to the template (the alignment
+/// fitted on all vertices, as [`crate::metrics::normalise`] fits it; [`TemplateFit`]).
+pub struct MatchSource {
+    fit: TemplateFit,
+    len: usize,
+    idx: Vec<usize>,
+    poses: Vec<Vec<Vector3<f64>>>,
+}
+
+impl MatchSource {
+    pub fn new(source: &[Vec<Vector3<f64>>], template: &[Vector3<f64>]) -> MatchSource {
+        let n = source.first().map_or(0, |f| f.len());
+        let step = n.div_ceil(MATCH_VERTICES).max(1);
+        let idx: Vec<usize> = (0..n).step_by(step).collect();
+        let fit = TemplateFit::new(template);
+        MatchSource {
+            len: source.len(),
+            poses: fit.aligned_rows(source, &idx),
+            fit,
+            idx,
         }
     }
-    (0..var.len())
-        .map(|i| {
-            if count[i] > 0 {
-                sum[i] / count[i] as f64
-            } else {
-                i.min(source.len() - 1) as f64
+
+    /// [`correspondence`] of `var` to this source.
+    pub fn matches(&self, var: &[Vec<Vector3<f64>>]) -> Vec<f64> {
+        let identity = || {
+            (0..var.len())
+                .map(|t| t.min(self.len.saturating_sub(1)) as f64)
+                .collect()
+        };
+        if var.is_empty() || self.len == 0 {
+            return identity();
+        }
+        let a = self.fit.aligned_rows(var, &self.idx);
+        // The rows are already subsampled: every one of them is used.
+        let cost = crate::prealign::pose_cost(&a, &self.poses, usize::MAX);
+        let Ok(path) = dtw_path(&cost, &[], &DtwOptions::default()) else {
+            return identity();
+        };
+        let mut sum = vec![0.0; var.len()];
+        let mut count = vec![0usize; var.len()];
+        for (i, j) in path {
+            if i < var.len() {
+                sum[i] += j as f64;
+                count[i] += 1;
             }
-        })
-        .collect()
+        }
+        (0..var.len())
+            .map(|i| {
+                if count[i] > 0 {
+                    sum[i] / count[i] as f64
+                } else {
+                    i.min(self.len - 1) as f64
+                }
+            })
+            .collect()
+    }
+}
+
+/// Rigid alignment of frames to one template (`mesh_core::rigid::procrustes(frame, template)`,
+/// unweighted) with the template's side precomputed: its centroid `c_t` and centred points
+/// `e_i = t_i − c_t`, so that a frame's cross-covariance is `H = Σ (s_i − c_s) e_iᵀ`, nine
+/// products per vertex. The same motion as `procrustes` up to rounding.
+pub struct TemplateFit {
+    centroid: Vector3<f64>,
+    /// Centred template, one array per coordinate.
+    e: [Vec<f64>; 3],
+}
+
+impl TemplateFit {
+    pub fn new(template: &[Vector3<f64>]) -> TemplateFit {
+        let n = template.len().max(1) as f64;
+        let centroid = template.iter().sum::<Vector3<f64>>() / n;
+        let e = [0, 1, 2].map(|a| template.iter().map(|p| p[a] - centroid[a]).collect());
+        TemplateFit { centroid, e }
+    }
+
+    /// The rigid motion taking `frame` (one point per template vertex) onto the template; the
+    /// identity for an empty frame or one of another vertex count.
+    pub fn fit(&self, frame: &[Vector3<f64>]) -> RigidMotion {
+        let n = frame.len();
+        if n == 0 || n != self.e[0].len() {
+            return RigidMotion::identity();
+        }
+        let cs = frame.iter().sum::<Vector3<f64>>() / n as f64;
+        let mut h = [0.0f64; 9];
+        for (i, p) in frame.iter().enumerate() {
+            let s = [p.x - cs.x, p.y - cs.y, p.z - cs.z];
+            let e = [self.e[0][i], self.e[1][i], self.e[2][i]];
+            for a in 0..3 {
+                for b in 0..3 {
+                    h[3 * a + b] += s[a] * e[b];
+                }
+            }
+        }
+        let h = Matrix3::from_row_slice(&h);
+        mesh_core::rigid::rigid_from_moments(&cs, &self.centroid, &h)
+    }
+
+    /// Vertices `idx` of every frame after the frame's alignment ([`TemplateFit::fit`]).
+    pub fn aligned_rows(&self, frames: &[Vec<Vector3<f64>>], idx: &[usize]) -> Vec<Vec<Vector3<f64>>> {
+        frames
+            .iter()
+            .map(|f| {
+                let r = self.fit(f);
+                idx.iter().map(|&v| r.apply(&f[v])).collect()
+            })
+            .collect()
+    }
 }
 
 /// Linear interpolation of `values` at fractional index `x` (clamped to the ends).
@@ -153,12 +240,21 @@ pub fn ground_matched(
     up: &Vector3<f64>,
     sigma: f64,
 ) -> Vec<f64> {
-    let o = offsets(
-        &lowest(var, soles, up),
-        &lowest(source, soles, up),
-        matches,
-        sigma,
-    );
+    let var_low = lowest(var, soles, up);
+    ground_on(var, &var_low, &lowest(source, soles, up), matches, up, sigma)
+}
+
+/// [`ground_matched`] with the lowest heights ([`lowest`], of the same vertices) of the
+/// variation, `var_low`, and of the source, `source_low`, already known.
+pub fn ground_on(
+    var: &mut [Vec<Vector3<f64>>],
+    var_low: &[f64],
+    source_low: &[f64],
+    matches: &[f64],
+    up: &Vector3<f64>,
+    sigma: f64,
+) -> Vec<f64> {
+    let o = offsets(var_low, source_low, matches, sigma);
     for (f, &d) in var.iter_mut().zip(&o) {
         let shift = up * d;
         f.iter_mut().for_each(|p| *p += shift);
@@ -207,6 +303,60 @@ pub fn floor_contact(
 #[cfg(test)]
 mod tests {
     use super::*;
+    use nalgebra::{Rotation3, Unit};
+
+    /// A rigidly moved, slightly deformed copy of `t`.
+    fn moved(t: &[Vector3<f64>], angle: f64, shift: Vector3<f64>, wobble: f64) -> Vec<Vector3<f64>> {
+        let r = Rotation3::from_axis_angle(&Unit::new_normalize(Vector3::new(0.3, 1.0, -0.2)), angle);
+        t.iter()
+            .enumerate()
+            .map(|(i, p)| r * (p + Vector3::new(wobble * (i as f64 * 0.7).sin(), 0.0, 0.0)) + shift)
+            .collect()
+    }
+
+    #[test]
+    fn template_fit_is_procrustes_onto_the_template() {
+        let t = mesh_core::shapes::icosphere(2).vertices;
+        let fit = TemplateFit::new(&t);
+        for (angle, wobble) in [(0.0, 0.0), (0.4, 0.0), (2.9, 0.01), (-1.3, 0.05)] {
+            let f = moved(&t, angle, Vector3::new(3.0, -0.5, 12.0), wobble);
+            let (a, b) = (fit.fit(&f), mesh_core::rigid::procrustes(&f, &t, None));
+            for p in &f {
+                assert!((a.apply(p) - b.apply(p)).norm() < 1e-12, "angle {angle}");
+            }
+            if wobble == 0.0 {
+                // An exact rigid copy goes back onto the template.
+                for (p, q) in f.iter().zip(&t) {
+                    assert!((a.apply(p) - q).norm() < 1e-12);
+                }
+            }
+        }
+        assert_eq!(fit.fit(&t[..5]), RigidMotion::identity(), "another vertex count");
+    }
+
+    #[test]
+    fn a_delayed_copy_matches_its_source_frames() {
+        // Source: a sphere whose x-scale oscillates, travelling and turning; the variation is
+        // its frames 4.. placed elsewhere: frame i matches source frame i + 4.
+        let t = mesh_core::shapes::icosphere(2).vertices;
+        let source: Vec<Vec<Vector3<f64>>> = (0..40)
+            .map(|k| {
+                let s = 1.0 + 0.3 * (0.25 * k as f64).sin() + 0.01 * k as f64;
+                let f: Vec<_> = t.iter().map(|p| Vector3::new(p.x * s, p.y, p.z)).collect();
+                moved(&f, 0.05 * k as f64, Vector3::new(0.1 * k as f64, 0.0, 0.0), 0.0)
+            })
+            .collect();
+        let var: Vec<_> = source[4..]
+            .iter()
+            .map(|f| moved(f, 1.0, Vector3::new(-2.0, 0.0, 5.0), 0.0))
+            .collect();
+        let m = MatchSource::new(&source, &t).matches(&var);
+        assert_eq!(m, correspondence(&var, &source, &t));
+        // The path starts at the corner (0, 0), then catches up within a few frames.
+        for (i, &j) in m.iter().enumerate().skip(6) {
+            assert!((j - (i + 4) as f64).abs() < 1e-9, "frame {i}: {m:?}");
+        }
+    }
 
     #[test]
     fn smooth_keeps_lines_and_damps_spikes() {

@@ -1,7 +1,10 @@
 //! A movement group ready for modelling: the subject's template and body parts, its motions
 //! rigidly aligned and time-warped onto a reference motion ([`crate::prealign`]), plus the
 //! pre-blended sequences `Y_w = blend(Y_1, Y_2, w)` for `w ∈ W` (paper §7), made with the
-//! non-linear mesh interpolation `surface::blend::Blender` on the aligned frames.
+//! non-linear mesh interpolation `surface::blend::Blender` on the aligned frames. A group may
+//! hold any number of motions and pre-blend any pairs of them (by default the first two); the
+//! first pair is the group's blend pair (its pre-blends are named `blend-<w>`, those of the
+//! other pairs `blend-<A>-<B>-<w>`).
 //!
 //! A blend's world poses ([`blend_poses`]) interpolate the two motions' poses expressed in
 //! their own ground frame (start position on the ground, start heading about the up axis):
@@ -39,8 +42,10 @@ pub struct PartDef {
 pub struct GroupSequence {
     /// Motion name, or `blend-<w>` for a pre-blended sequence.
     pub name: String,
-    /// For a pre-blended sequence, its weight `w` between the group's blend pair.
+    /// For a pre-blended sequence, its weight `w` between the two motions of `blend_of`.
     pub blend: Option<f64>,
+    /// For a pre-blended sequence, the indices of the motions it blends (w = 0, w = 1).
+    pub blend_of: Option<(usize, usize)>,
     pub motion: AlignedMotion,
     pub contacts: Option<Contacts>,
     /// Motion frame used for each reference frame (for the reference: its kept frames; for
@@ -62,17 +67,19 @@ pub struct Group {
     /// Name of the reference motion.
     pub reference: String,
     pub sequences: Vec<GroupSequence>,
-    /// Indices of the blend pair `(Y_1, Y_2)` (w = 0 and w = 1), if the group has two motions.
+    /// Indices of the blend pair `(Y_1, Y_2)` (w = 0 and w = 1): the first pair pre-blended,
+    /// by default the first two motions; None with a single motion.
     pub pair: Option<(usize, usize)>,
 }
 
 impl Artifact for Group {
     const KIND: &'static str = "variation-group";
-    const VERSION: u32 = 2;
+    const VERSION: u32 = 3;
 
     /// A valid body ([`check_body`]); at least one sequence, each a valid aligned motion of
     /// the template's vertex count, all of one frame count, with contacts and a frame map of
-    /// that length and a blend weight in [0, 1]; the reference and the blend pair among them.
+    /// that length and a blend weight in [0, 1] between two captured motions; the reference and
+    /// the blend pair among them.
     fn validate(&self) -> std::result::Result<(), String> {
         check_body(&self.template, &self.faces, &self.up, self.fps, &self.parts)?;
         let n = self.n_frames();
@@ -96,6 +103,9 @@ impl Artifact for Group {
         if self.index(&self.reference).is_none() {
             return Err(format!("reference '{}' is not one of the sequences", self.reference));
         }
+        let blends: Vec<(Option<f64>, Option<(usize, usize)>)> =
+            self.sequences.iter().map(|s| (s.blend, s.blend_of)).collect();
+        check_blends(&blends)?;
         check_pair(self.pair, self.sequences.len())
     }
 }
@@ -138,6 +148,20 @@ pub fn check_body(
     Ok(())
 }
 
+/// Per sequence `(blend weight, blended pair)`: both set (a pre-blend, of two distinct
+/// sequences that are not pre-blends) or neither. The error names the first offender.
+pub fn check_blends(seqs: &[(Option<f64>, Option<(usize, usize)>)]) -> std::result::Result<(), String> {
+    for (i, &(w, of)) in seqs.iter().enumerate() {
+        match (w, of) {
+            (None, None) => {}
+            (Some(_), Some((a, b)))
+                if a != b && seqs.get(a).is_some_and(|s| s.0.is_none()) && seqs.get(b).is_some_and(|s| s.0.is_none()) => {}
+            _ => return Err(format!("sequence {i}: blend weight {w:?} of sequences {of:?} (a pre-blend needs both, of two captured motions)")),
+        }
+    }
+    Ok(())
+}
+
 /// A blend pair of two distinct sequence indices below `n`, or none.
 pub fn check_pair(pair: Option<(usize, usize)>, n: usize) -> std::result::Result<(), String> {
     match pair {
@@ -157,9 +181,15 @@ impl Group {
     }
 }
 
-/// Name of the pre-blended sequence at weight `w`.
+/// Name of the pre-blended sequence at weight `w` of the group's blend pair.
 pub fn blend_name(w: f64) -> String {
     format!("blend-{w}")
+}
+
+/// Name of the pre-blended sequence at weight `w` of motions `a` and `b` (not the group's
+/// blend pair).
+pub fn pair_blend_name(a: &str, b: &str, w: f64) -> String {
+    format!("blend-{a}-{b}-{w}")
 }
 
 /// What [`build`] needs.
@@ -171,8 +201,11 @@ pub struct GroupSpec {
     pub motions: Vec<String>,
     /// Reference motion (default: the first present).
     pub reference: Option<String>,
-    /// Blend weights `W` (each in (0, 1)) between the first two present motions.
+    /// Blend weights `W` (each in (0, 1)) of every pre-blended pair.
     pub blend_weights: Vec<f64>,
+    /// Pairs of motions to pre-blend at every weight, the first being the group's blend pair;
+    /// empty: the first two present motions. A pair naming a missing motion is skipped (noted).
+    pub blend_pairs: Vec<(String, String)>,
     pub prealign: PrealignOptions,
     /// Model the whole body as one part instead of the subject's segmentation.
     pub whole_body: bool,
@@ -218,6 +251,7 @@ pub fn build(set: &CaptureSet, spec: &GroupSpec) -> Result<(Group, Vec<String>)>
         .iter()
         .map(|m| format!("motion '{m}' is not in the set: skipped"))
         .collect();
+    let pairs = blend_pairs(spec, &present, &mut notes)?;
     let seg = if spec.whole_body {
         capture::part_pca::whole_body(template.n_vertices())
     } else {
@@ -251,7 +285,7 @@ pub fn build(set: &CaptureSet, spec: &GroupSpec) -> Result<(Group, Vec<String>)>
     let has_legs = parts.iter().filter(|p| p.name.starts_with("leg")).count() == 2;
     // Steps: reading and aligning each motion, warping each, then each blend.
     let bar = mesh_core::cli::stage_progress(
-        (2 * present.len() + spec.blend_weights.len()) as u64,
+        (2 * present.len() + pairs.len() * spec.blend_weights.len()) as u64,
         "motions read, warped; blends",
     );
     let mut loaded = Vec::new();
@@ -355,12 +389,13 @@ pub fn build(set: &CaptureSet, spec: &GroupSpec) -> Result<(Group, Vec<String>)>
         sequences.push(GroupSequence {
             name,
             blend: None,
+            blend_of: None,
             motion: apply(&motion, &map),
             contacts,
             map,
         });
     }
-    let pair = (sequences.len() >= 2).then_some((0, 1));
+    let pair = pairs.first().copied();
     let mut group = Group {
         name: spec.name.clone(),
         subject: spec.subject.clone(),
@@ -374,25 +409,64 @@ pub fn build(set: &CaptureSet, spec: &GroupSpec) -> Result<(Group, Vec<String>)>
         pair,
     };
     // A group with one motion gets no blends (the caller warns).
-    if let (false, Some((a, b))) = (spec.blend_weights.is_empty(), pair) {
+    if !(spec.blend_weights.is_empty() || pairs.is_empty()) {
         let blender = surface::blend::Blender::new(group.template.clone(), group.faces.clone())?;
-        for &w in &spec.blend_weights {
-            bar.inc(1);
-            let s = blend_sequences(
-                &blender,
-                &group.sequences[a],
-                &group.sequences[b],
-                w,
-                &group.up,
-            )?;
-            group.sequences.push(s);
+        for (i, &(a, b)) in pairs.iter().enumerate() {
+            for &w in &spec.blend_weights {
+                bar.inc(1);
+                let mut s = blend_sequences(
+                    &blender,
+                    &group.sequences[a],
+                    &group.sequences[b],
+                    w,
+                    &group.up,
+                )?;
+                s.blend_of = Some((a, b));
+                if i > 0 {
+                    s.name = pair_blend_name(&group.sequences[a].name, &group.sequences[b].name, w);
+                }
+                group.sequences.push(s);
+            }
         }
     }
     bar.finish_and_clear();
     Ok((group, notes))
 }
 
-/// The pre-blended sequence `Y_w` of two time-aligned sequences (module doc).
+/// The pairs of [`GroupSpec::blend_pairs`] as indices into `present` (the motions found, in
+/// group order): pairs naming a motion of the group that is missing are skipped with a note;
+/// a name outside the group, a motion paired with itself or a pair given twice is an error.
+fn blend_pairs(
+    spec: &GroupSpec,
+    present: &[String],
+    notes: &mut Vec<String>,
+) -> Result<Vec<(usize, usize)>> {
+    if spec.blend_pairs.is_empty() {
+        return Ok(if present.len() >= 2 { vec![(0, 1)] } else { Vec::new() });
+    }
+    let mut pairs: Vec<(usize, usize)> = Vec::new();
+    for (a, b) in &spec.blend_pairs {
+        let what = format!("group '{}': blend pair '{a}:{b}'", spec.name);
+        if let Some(m) = [a, b].into_iter().find(|m| !spec.motions.contains(m)) {
+            return Err(Error::invalid(format!("{what}: '{m}' is not one of the group's motions")));
+        }
+        if a == b {
+            return Err(Error::invalid(format!("{what}: a motion blended with itself")));
+        }
+        let (Some(i), Some(j)) = (present.iter().position(|m| m == a), present.iter().position(|m| m == b)) else {
+            notes.push(format!("{what} skipped: a motion is missing"));
+            continue;
+        };
+        if pairs.iter().any(|&(p, q)| (p, q) == (i, j) || (p, q) == (j, i)) {
+            return Err(Error::invalid(format!("{what} is listed twice")));
+        }
+        pairs.push((i, j));
+    }
+    Ok(pairs)
+}
+
+/// The pre-blended sequence `Y_w` of two time-aligned sequences (module doc); its `blend_of`
+/// is left to the caller, which knows their indices.
 pub fn blend_sequences(
     blender: &surface::blend::Blender,
     a: &GroupSequence,
@@ -426,6 +500,7 @@ pub fn blend_sequences(
     Ok(GroupSequence {
         name: blend_name(w),
         blend: Some(w),
+        blend_of: None,
         motion: AlignedMotion {
             faces: a.motion.faces.clone(),
             frames,

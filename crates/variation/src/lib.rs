@@ -16,6 +16,7 @@ pub mod foot_height;
 pub mod foot_lock;
 pub mod footskate;
 pub mod frame_stride;
+pub mod frame_writer;
 pub mod gait;
 pub mod grounding;
 pub mod group;

@@ -41,12 +41,27 @@ pub fn nearest_frame_distance(
     }
     let step = n.div_ceil(max_vertices.max(1)).max(1);
     let idx: Vec<usize> = (0..n).step_by(step).collect();
-    a.iter()
+    // The subsampled vertices gathered once, contiguous per frame.
+    let gather = |s: &[Vec<Vector3<f64>>]| -> Vec<Vec<Vector3<f64>>> {
+        s.iter().map(|f| idx.iter().map(|&v| f[v]).collect()).collect()
+    };
+    let (ga, gb) = (gather(a), gather(b));
+    ga.iter()
         .map(|fa| {
-            b.iter()
-                .map(|fb| idx.iter().map(|&v| (fa[v] - fb[v]).norm()).sum::<f64>())
-                .fold(f64::INFINITY, f64::min)
-                / idx.len() as f64
+            let mut best = f64::INFINITY;
+            for fb in &gb {
+                // Summed in vertex order; a frame whose partial sum already reaches the best
+                // cannot be nearer (the terms are >= 0), so it is left early.
+                let mut sum = 0.0;
+                for (i, (p, q)) in fa.iter().zip(fb).enumerate() {
+                    sum += (p - q).norm();
+                    if i % 64 == 63 && sum >= best {
+                        break;
+                    }
+                }
+                best = best.min(sum);
+            }
+            best / idx.len() as f64
         })
         .sum::<f64>()
         / a.len() as f64
@@ -87,8 +102,12 @@ pub fn timing_offset(
     b: &[Vec<Vector3<f64>>],
     template: &[Vector3<f64>],
 ) -> f64 {
-    let (a, b) = (normalise(a, template), normalise(b, template));
-    let cost = crate::prealign::pose_cost(&a, &b, 400);
+    timing_offset_aligned(&normalise(a, template), &normalise(b, template))
+}
+
+/// [`timing_offset`] of sequences already aligned to the template ([`normalise`]).
+pub fn timing_offset_aligned(a: &[Vec<Vector3<f64>>], b: &[Vec<Vector3<f64>>]) -> f64 {
+    let cost = crate::prealign::pose_cost(a, b, 400);
     match dtw_path(&cost, &[], &DtwOptions::default()) {
         Ok(p) => {
             p.iter()

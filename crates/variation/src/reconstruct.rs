@@ -14,6 +14,7 @@ use mesh_core::rigid::{procrustes, rigid_from_moments, RigidMotion};
 use mesh_core::{Error, Result};
 use nalgebra::{DMatrix, Vector3, Vector6};
 use rand::Rng;
+use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 
 use crate::group::PartDef;
@@ -538,7 +539,7 @@ impl<'a> Decoder<'a> {
         let nv = model.template.len();
         let maps: Vec<PartMap> = model
             .parts
-            .iter()
+            .par_iter()
             .zip(&self.predictors)
             .enumerate()
             .map(|(k, (p, pr))| {
@@ -570,6 +571,38 @@ impl<'a> Decoder<'a> {
         let (mut vlist, mut singles) = (Vec::new(), Vec::new());
         let (mut moments, mut wsum, mut esum) = (Vec::new(), Vec::new(), Vec::new());
         let (mut band_child, mut band_parent) = (Vec::new(), Vec::new());
+        // The band-moment sums of every part (module doc), in parallel.
+        let sums: Vec<(faer::Mat<f64>, f64, Vector3<f64>)> = model
+            .parts
+            .par_iter()
+            .zip(&maps)
+            .map(|(p, m)| {
+                let b = &m.basis;
+                let mut mom = faer::Mat::<f64>::zeros(12, b.ncols());
+                let (mut ws, mut es) = (0.0, Vector3::zeros());
+                for (i, &v) in p.part.vertices.iter().enumerate() {
+                    let wi = 1.0 / self.coverage[v as usize] as f64;
+                    let e = tpl[v as usize] - cd;
+                    ws += wi;
+                    es += wi * e;
+                    for c in 0..b.ncols() {
+                        for a in 0..3 {
+                            let x = wi * b[(3 * i + a, c)];
+                            mom[(a, c)] += x;
+                            for (bb, eb) in e.iter().enumerate() {
+                                mom[(3 + 3 * a + bb, c)] += x * eb;
+                            }
+                        }
+                    }
+                }
+                (mom, ws, es)
+            })
+            .collect();
+        for (mom, ws, es) in sums {
+            moments.push(mom);
+            wsum.push(ws);
+            esum.push(es);
+        }
         for (k, p) in model.parts.iter().enumerate() {
             let verts = &p.part.vertices;
             let w: Vec<f64> = verts
@@ -583,25 +616,6 @@ impl<'a> Decoder<'a> {
                     .collect::<Vec<bool>>(),
             );
             let b = &maps[k].basis;
-            let mut mom = faer::Mat::<f64>::zeros(12, b.ncols());
-            let (mut ws, mut es) = (0.0, Vector3::zeros());
-            for (i, (&v, &wi)) in verts.iter().zip(&w).enumerate() {
-                let e = tpl[v as usize] - cd;
-                ws += wi;
-                es += wi * e;
-                for c in 0..b.ncols() {
-                    for a in 0..3 {
-                        let x = wi * b[(3 * i + a, c)];
-                        mom[(a, c)] += x;
-                        for (bb, eb) in e.iter().enumerate() {
-                            mom[(3 + 3 * a + bb, c)] += x * eb;
-                        }
-                    }
-                }
-            }
-            moments.push(mom);
-            wsum.push(ws);
-            esum.push(es);
             // Vertices in this part only first (stable), then the shared ones.
             let single = |i: usize| self.coverage[verts[i] as usize] == 1;
             let mut o: Vec<usize> = (0..verts.len()).filter(|&i| single(i)).collect();
@@ -651,7 +665,7 @@ impl FusedDecoder<'_, '_> {
         self.block = n.max(1);
         self.vbasis = self
             .maps
-            .iter()
+            .par_iter()
             .zip(&self.order)
             .map(|(m, o)| {
                 let b = &m.basis;

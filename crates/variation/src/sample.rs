@@ -219,21 +219,18 @@ pub fn sequence_variations_len(
 }
 
 /// The learned trajectories that guide a blend of training sequences `a` (w = 0) and `b`
-/// (w = 1), as `(w, sequence index)` sorted by `w`: the endpoints, plus the pre-blended
-/// sequences of §7 when `(a, b)` is the model's blend pair (in either order). A pair without
-/// pre-blends blends the endpoints' variants directly (the paper's unguided interpolation).
+/// (w = 1), as `(w, sequence index)` sorted by `w`: the endpoints, plus every pre-blended
+/// sequence of §7 between `a` and `b` (made in either order; weights flipped to `a`'s side).
+/// A weight between two of them blends the variants of the nearest learned weight on each side
+/// (`gpdm::blend::BlendSet`); a pair without pre-blends blends the endpoints' variants directly
+/// (the paper's unguided interpolation).
 pub fn blend_entries(model: &VariationModel, a: usize, b: usize) -> Vec<(f64, usize)> {
     let mut entries = vec![(0.0, a), (1.0, b)];
-    let flip = match model.pair {
-        Some(p) if p == (a, b) => Some(false),
-        Some(p) if p == (b, a) => Some(true),
-        _ => None,
-    };
-    if let Some(flip) = flip {
-        for (i, s) in model.sequences.iter().enumerate() {
-            if let Some(v) = s.blend {
-                entries.push((if flip { 1.0 - v } else { v }, i));
-            }
+    for (i, s) in model.sequences.iter().enumerate() {
+        match (s.blend, s.blend_of) {
+            (Some(v), Some(of)) if of == (a, b) => entries.push((v, i)),
+            (Some(v), Some(of)) if of == (b, a) => entries.push((1.0 - v, i)),
+            _ => {}
         }
     }
     entries.sort_by(|x, y| x.0.total_cmp(&y.0));

@@ -9,7 +9,6 @@
 
 use std::path::Path;
 
-use mesh_core::sequence::MeshSequence;
 use mesh_core::{Error, Result};
 use nalgebra::Vector3;
 use rand::SeedableRng;
@@ -22,6 +21,7 @@ use crate::diversity::{self, Diversity};
 use crate::foot_height;
 use crate::foot_lock;
 use crate::footskate;
+use crate::frame_writer::PlyFrames;
 use crate::grounding::{self, FloorContact};
 use crate::group::{blend_name, blend_sequences, Group};
 use crate::latent_smoothing;
@@ -96,8 +96,9 @@ pub struct SynthConfig {
 pub enum Query {
     /// Variations of one training sequence, by name (a motion or a pre-blend `blend-<w>`).
     Motion(String),
-    /// Variations of the blend at weight `w` ∈ [0, 1] of motions `a` (w = 0) and `b` (w = 1):
-    /// guided by the learned pre-blends when (a, b) is the model's blend pair, else the
+    /// Variations of the blend at weight `w` ∈ [0, 1] of any two captured motions `a` (w = 0)
+    /// and `b` (w = 1) of the group: guided by the learned pre-blends of that pair where the
+    /// group has them (the nearest pre-blended weight on each side of `w`), else the
     /// endpoints' variants interpolated ([`crate::sample::blend_entries`]).
     Blend { a: String, b: String, w: f64 },
 }
@@ -170,6 +171,11 @@ pub struct SequenceReport {
     /// ([`crate::diversity`]).
     #[serde(default)]
     pub diversity: Option<Diversity>,
+    /// For a blend: the two learned weights whose variants were blended, the nearest on each
+    /// side of `blend` among the pair's pre-blends and its captured motions (0 and 1); equal
+    /// when `blend` is a learned weight.
+    #[serde(default)]
+    pub guided_from: Option<(f64, f64)>,
 }
 
 /// Everything `hmc-sample` reports.
@@ -184,12 +190,17 @@ pub struct SynthReport {
     pub seconds_sampling: f64,
     /// Decoding, grounding, clean-ups, writing and statistics together (wall, s).
     pub seconds_decoding: f64,
-    /// The parts of `seconds_decoding` spent writing the PLY files and computing the
-    /// statistics ([`measure`]) (wall, s).
+    /// Writing the PLY files, summed over the parallel per-variation tasks (s; wall time of
+    /// each task's writes), and computing the statistics ([`measure`], wall, s).
     #[serde(default)]
     pub seconds_writing: f64,
     #[serde(default)]
     pub seconds_statistics: f64,
+    /// With the fast decoding (`--average`, mean poses): the largest certified bound on any
+    /// pose coordinate's error against exact decoding over the sampled latent points (m);
+    /// None with exact decoding.
+    #[serde(default)]
+    pub decoding_bound_m: Option<f64>,
 }
 
 /// Sole vertices of the model's template (both feet, [`metrics::soles`]).
@@ -226,20 +237,25 @@ fn model_leg_weights(
     }
 }
 
+/// Certified bound (m) on every pose coordinate of the kernel-basis decoding at the training
+/// latent points (`Decoder::with_pose_basis`); at the sampled points the bound is evaluated
+/// and reported (`SynthReport::decoding_bound_m`).
+pub const BASIS_TOLERANCE_M: f64 = 2e-7;
+
 /// Contact height (m) for foot sliding and floating: a foot within it of the ground touches.
 const CONTACT_HEIGHT: f64 = 0.02;
 
-/// [`grounding::floor_contact`] of a variation against its source (lowest points of all
+/// [`grounding::floor_contact`] of a variation against its job's source (lowest points of all
 /// vertices, DTW-matched frames `matches`).
 fn floor_contact(
     v: &[Vec<Vector3<f64>>],
-    source: &[Vec<Vector3<f64>>],
+    job: &Job,
     matches: &[f64],
     model: &VariationModel,
 ) -> FloorContact {
     grounding::floor_contact(
         &grounding::lowest(v, &[], &model.up),
-        &grounding::lowest(source, &[], &model.up),
+        &job.source_low,
         matches,
         CONTACT_HEIGHT,
     )
@@ -251,11 +267,13 @@ struct Decoded {
     /// DTW-matched source frame of every frame.
     matches: Vec<f64>,
     ungrounded: FloorContact,
-    /// Foot sliding before the clean-up (geometric, annotated).
+    /// Foot sliding before the clean-up (geometric, annotated), measured for the statistics.
     raw_sliding: (Option<f64>, Option<f64>),
     /// Contacts transferred from the source (None without annotations).
     contacts: Option<Contacts>,
     footskate_max: f64,
+    /// Certified bound on the basis decoding's error at this variation's latent points (m).
+    bound: Option<f64>,
 }
 
 /// A sequence to synthesise: label, blend weight, latent variations, source frames, start
@@ -267,6 +285,144 @@ struct Job {
     source: Vec<Vec<Vector3<f64>>>,
     start: mesh_core::rigid::RigidMotion,
     contacts: Option<Contacts>,
+    /// Height of the source's lowest point in every frame, and over all frames (its floor).
+    source_low: Vec<f64>,
+    floor: f64,
+    /// For a blend, the learned weights that guide it ([`SequenceReport::guided_from`]).
+    guided_from: Option<(f64, f64)>,
+}
+
+impl Job {
+    fn new(
+        label: String,
+        blend: Option<f64>,
+        vars: Variations,
+        source: Vec<Vec<Vector3<f64>>>,
+        start: mesh_core::rigid::RigidMotion,
+        contacts: Option<Contacts>,
+        up: &Vector3<f64>,
+    ) -> Job {
+        let source_low = grounding::lowest(&source, &[], up);
+        let floor = source_low.iter().copied().fold(f64::INFINITY, f64::min);
+        Job {
+            label,
+            blend,
+            vars,
+            source,
+            start,
+            contacts,
+            source_low,
+            floor,
+            guided_from: None,
+        }
+    }
+}
+
+/// The learned weights of `entries` ([`blend_entries`], sorted) nearest to `w` on each side.
+fn bounding(entries: &[(f64, usize)], w: f64) -> Option<(f64, f64)> {
+    let lo = entries.iter().rev().find(|e| e.0 <= w)?.0;
+    let hi = entries.iter().find(|e| e.0 >= w)?.0;
+    Some((lo, hi))
+}
+
+/// The post-processes of one decoded variation, in order: DTW correspondence to the source,
+/// grounding, root clean-up, foot heights, foot lock (module doc).
+struct Post<'a> {
+    model: &'a VariationModel,
+    cfg: &'a SynthConfig,
+    feet: Option<&'a [Vec<u32>; 2]>,
+    leg_weights: Option<&'a [Vec<(u32, f64)>; 2]>,
+    /// Sole vertices of the geometric foot-sliding rule.
+    soles: &'a [Vec<u32>],
+}
+
+impl Post<'_> {
+    /// The variation `m` of `job` post-processed, and its notes.
+    fn run(
+        &self,
+        mut m: Vec<Vec<Vector3<f64>>>,
+        job: &Job,
+        matcher: &grounding::MatchSource,
+    ) -> Result<(Decoded, Vec<String>)> {
+        let (model, cfg) = (self.model, self.cfg);
+        // Rigid shifts of the variation leave the (pose-normalised) DTW unchanged.
+        let matches = matcher.matches(&m);
+        let low = grounding::lowest(&m, &[], &model.up);
+        let ungrounded =
+            grounding::floor_contact(&low, &job.source_low, &matches, CONTACT_HEIGHT);
+        if cfg.grounding {
+            // Ground on the lowest point of the whole body: sampled feet often point their toes
+            // through the floor while the template soles sit at the right height.
+            grounding::ground_on(
+                &mut m,
+                &low,
+                &job.source_low,
+                &matches,
+                &model.up,
+                grounding::SIGMA_FRAMES,
+            );
+        }
+        let contacts = job
+            .contacts
+            .as_ref()
+            .map(|c| footskate::transfer_contacts(c, &matches));
+        let raw_sliding = (
+            cfg.statistics
+                .then(|| metrics::foot_sliding(&m, self.soles, &model.up, CONTACT_HEIGHT))
+                .flatten(),
+            match (cfg.statistics, &contacts, self.feet) {
+                (true, Some(c), Some(f)) => metrics::contact_sliding(&m, f, c, &model.up),
+                _ => None,
+            },
+        );
+        let mut notes = Vec::new();
+        let mut footskate_max = 0.0;
+        if let (true, Some(c), Some(f)) = (cfg.footskate, &contacts, self.feet) {
+            let d = footskate::clean(
+                &mut m,
+                f,
+                c,
+                &model.up,
+                cfg.footskate_smoothness,
+                &mut notes,
+            )?;
+            footskate_max = d.iter().map(|v| v.norm()).fold(0.0, f64::max);
+            if let (true, Some(legs)) = (cfg.foot_height, self.leg_weights) {
+                foot_height::lift(&mut m, &job.source, &matches, legs, c, &model.up);
+            }
+            if let (true, Some(legs)) = (cfg.foot_lock, self.leg_weights) {
+                let c = match cfg.foot_height {
+                    // The legs now follow the source's heights: extend each contact while
+                    // the variation's foot is still on the source's floor.
+                    true => {
+                        let lows: [Vec<f64>; 2] = [0, 1].map(|f| {
+                            let leg: Vec<u32> = legs[f].iter().map(|p| p.0).collect();
+                            grounding::lowest(&m, &leg, &model.up)
+                        });
+                        let floor = job.floor;
+                        let low: Vec<[f64; 2]> = (0..m.len())
+                            .map(|t| [lows[0][t] - floor, lows[1][t] - floor])
+                            .collect();
+                        foot_lock::grow_while_down(c, &low, CONTACT_HEIGHT, foot_lock::EASE_FRAMES)
+                    }
+                    false => c.clone(),
+                };
+                foot_lock::lock(&mut m, legs, f, &c, &model.up);
+            }
+        }
+        Ok((
+            Decoded {
+                meshes: m,
+                matches,
+                ungrounded,
+                raw_sliding,
+                contacts,
+                footskate_max,
+                bound: None,
+            },
+            notes,
+        ))
+    }
 }
 
 fn measure(job: &Job, decoded: &[Decoded], model: &VariationModel) -> SequenceReport {
@@ -276,33 +432,39 @@ fn measure(job: &Job, decoded: &[Decoded], model: &VariationModel) -> SequenceRe
     let soles = model_soles(model);
     let slide =
         |f: &[Vec<Vector3<f64>>]| metrics::foot_sliding(f, &soles, &model.up, CONTACT_HEIGHT);
+    // Each variation's frames aligned to the template (pose only) once, for every pose figure
+    // and its diversity cost matrix, then dropped.
     let source_pose = metrics::normalise(source, &model.template);
-    let per: Vec<(f64, f64, f64, Option<f64>, f64, f64, FloorContact)> = decoded
+    type PerVariation = (f64, f64, f64, Option<f64>, f64, f64, FloorContact, nalgebra::DMatrix<f64>);
+    let per: Vec<PerVariation> = decoded
         .par_iter()
         .map(|d| {
             let v = &d.meshes;
             let pose = metrics::normalise(v, &model.template);
             (
                 metrics::mean_vertex_distance(v, source),
-                metrics::timing_offset(v, source, &model.template),
+                metrics::timing_offset_aligned(&pose, &source_pose),
                 metrics::edge_distortion(v, &model.template, &edges),
                 slide(v),
                 metrics::mean_vertex_distance(&pose, &source_pose),
                 metrics::nearest_frame_distance(&pose, &source_pose, 2000),
-                floor_contact(v, source, &d.matches, model),
+                floor_contact(v, job, &d.matches, model),
+                crate::prealign::pose_cost(&pose, &source_pose, 400),
             )
         })
         .collect();
-    let mut pair = Vec::new();
-    for i in 0..vars.len() {
-        for j in i + 1..vars.len() {
-            pair.push(metrics::mean_vertex_distance(&vars[i], &vars[j]));
-        }
-    }
+    let pairs: Vec<(usize, usize)> = (0..vars.len())
+        .flat_map(|i| (i + 1..vars.len()).map(move |j| (i, j)))
+        .collect();
+    let pair: Vec<f64> = pairs
+        .par_iter()
+        .map(|&(i, j)| metrics::mean_vertex_distance(vars[i], vars[j]))
+        .collect();
     let contact_sliding = |f: &[Vec<Vector3<f64>>], c: &Option<Contacts>| {
         c.as_ref()
             .and_then(|c| metrics::contact_sliding(f, &soles, c, &model.up))
     };
+    let costs: Vec<nalgebra::DMatrix<f64>> = per.iter().map(|p| p.7.clone()).collect();
     SequenceReport {
         label: label.to_string(),
         blend,
@@ -328,7 +490,8 @@ fn measure(job: &Job, decoded: &[Decoded], model: &VariationModel) -> SequenceRe
         raw_contact_sliding_m: decoded.iter().map(|d| d.raw_sliding.1).collect(),
         source_contact_sliding_m: contact_sliding(source, &job.contacts),
         footskate_max_m: decoded.iter().map(|d| d.footskate_max).collect(),
-        diversity: Some(diversity::measure(&vars, source, &model.template, model.fps)),
+        diversity: Some(diversity::from_costs(&costs, source.len(), model.fps)),
+        guided_from: job.guided_from,
     }
 }
 
@@ -363,7 +526,14 @@ pub fn run_with_progress(
         )));
     }
     let mut notes = Vec::new();
-    let dec = Decoder::new(model, &mut notes)?;
+    // Mean poses merged by averaging decode through kernel bases, fused with the assembly
+    // (`reconstruct::FusedDecoder`); eq. 11 draws and stitching decode exactly.
+    let fast = cfg.assembly == Assembly::Average && !cfg.sample_poses;
+    let dec = if fast {
+        Decoder::with_pose_basis(model, BASIS_TOLERANCE_M, &mut notes)?.0
+    } else {
+        Decoder::new(model, &mut notes)?
+    };
     let clock = std::time::Instant::now();
     let mut hmc = default_hmc(cfg.n.max(1), cfg.seed);
     hmc.burn_in = cfg.burn_in;
@@ -425,14 +595,15 @@ pub fn run_with_progress(
     if cfg.query.is_none() || matches!(cfg.query, Some(Query::Motion(_))) {
         for &s in &wanted {
             let info = &model.sequences[s];
-            jobs.push(Job {
-                label: info.name.clone(),
-                blend: info.blend,
-                vars: pools[s].clone(),
-                source: group.sequences[s].motion.world_frames(),
-                start: info.start_pose,
-                contacts: group.sequences[s].contacts.clone(),
-            });
+            jobs.push(Job::new(
+                info.name.clone(),
+                info.blend,
+                pools[s].clone(),
+                group.sequences[s].motion.world_frames(),
+                info.start_pose,
+                group.sequences[s].contacts.clone(),
+                &model.up,
+            ));
         }
     }
     if !blends.is_empty() {
@@ -453,14 +624,20 @@ pub fn run_with_progress(
                     model.sequences[a].name, model.sequences[b].name
                 ),
             };
-            jobs.push(Job {
+            let mut job = Job::new(
                 label,
-                blend: Some(w),
+                Some(w),
                 vars,
-                source: truth.motion.world_frames(),
-                start: model.sequences[a].start_pose,
-                contacts: truth.contacts,
-            });
+                truth.motion.world_frames(),
+                model.sequences[a].start_pose,
+                truth.contacts,
+                &model.up,
+            );
+            job.guided_from = bounding(&blend_entries(model, a, b), w);
+            if let Some((lo, hi)) = job.guided_from {
+                mesh_core::info!("{}: variants of the learned weights {lo} and {hi} blended", job.label);
+            }
+            jobs.push(job);
         }
     }
     for job in &mut jobs {
@@ -474,9 +651,6 @@ pub fn run_with_progress(
     progress(0, jobs.len());
     let clock = std::time::Instant::now();
     let mut sequences = Vec::new();
-    // Ground on the lowest point of the whole body: sampled feet often point their toes through
-    // the floor while the template soles sit at the right height (seen in the renders).
-    let ground_soles: Vec<u32> = Vec::new();
     let all_soles = model_soles(model);
     let feet: Option<[Vec<u32>; 2]> = match all_soles.as_slice() {
         [l, r] if !l.is_empty() && !r.is_empty() => Some([l.clone(), r.clone()]),
@@ -489,10 +663,17 @@ pub fn run_with_progress(
     if cfg.footskate && feet.is_none() {
         notes.push("foot-skating clean-up skipped: no left and right soles found".into());
     }
-    let fused = (cfg.assembly == Assembly::Average && !cfg.sample_poses)
-        .then(|| dec.fused())
-        .transpose()?;
+    let fused = fast.then(|| dec.fused()).transpose()?;
+    let writer = PlyFrames::new(model.template.len(), &model.faces);
+    let post = Post {
+        model,
+        cfg,
+        feet: feet.as_ref(),
+        leg_weights: leg_weights.as_ref(),
+        soles: &all_soles,
+    };
     let (mut seconds_writing, mut seconds_statistics) = (0.0, 0.0);
+    let mut decoding_bound: Option<f64> = None;
     for (j, job) in jobs.iter().enumerate() {
         if cfg.footskate && job.contacts.is_none() {
             notes.push(format!(
@@ -500,126 +681,72 @@ pub fn run_with_progress(
                 job.label
             ));
         }
-        let slide = |f: &[Vec<Vector3<f64>>]| {
-            metrics::foot_sliding(f, &all_soles, &model.up, CONTACT_HEIGHT)
-        };
-        let decoded: Vec<(Decoded, Vec<String>)> = job
+        let matcher = grounding::MatchSource::new(&job.source, &model.template);
+        let dir = out.join(&job.label);
+        // One task per variation: decode, clean up, write its folder; the meshes are kept
+        // only for the statistics.
+        let done: Vec<(Decoded, Vec<String>, f64)> = job
             .vars
             .par_iter()
             .enumerate()
-            .map(|(k, latents)| {
-                let mut rng =
-                    ChaCha8Rng::seed_from_u64(mix(cfg.seed, 0xDEC0DE + j as u64, k as u64));
-                let mut m = match &fused {
-                    // Mean poses merged by averaging: the fused decoder (same result, one pass).
-                    Some(f) => {
-                        let nv = model.template.len();
-                        let t_len = latents.first().map_or(0, |x| x.nrows());
-                        let mut flat = vec![Vector3::zeros(); t_len * nv];
-                        f.decode_average_into(
+            .map_init(
+                || (crate::reconstruct::FusedScratch::default(), Vec::new(), Vec::new()),
+                |(scratch, flat, spare), (k, latents)| {
+                    let mut rng =
+                        ChaCha8Rng::seed_from_u64(mix(cfg.seed, 0xDEC0DE + j as u64, k as u64));
+                    let m = match &fused {
+                        // Mean poses merged by averaging: the fused kernel-basis decoder (one
+                        // pass), its frames copied into the buffers of this thread's last
+                        // variation when it kept none.
+                        Some(f) => {
+                            let nv = model.template.len();
+                            let t_len = latents.first().map_or(0, |x| x.nrows());
+                            flat.resize(t_len * nv, Vector3::zeros());
+                            f.decode_average_into(latents, &job.start, scratch, flat)?;
+                            let mut m: Vec<Vec<Vector3<f64>>> = std::mem::take(spare);
+                            m.resize_with(t_len, Vec::new);
+                            for (frame, c) in m.iter_mut().zip(flat.chunks_exact(nv.max(1))) {
+                                frame.clear();
+                                frame.extend_from_slice(c);
+                            }
+                            m
+                        }
+                        None => dec.decode(
                             latents,
                             &job.start,
-                            &mut crate::reconstruct::FusedScratch::default(),
-                            &mut flat,
-                        )?;
-                        flat.chunks_exact(nv.max(1)).map(|c| c.to_vec()).collect()
+                            cfg.assembly,
+                            cfg.sample_poses.then_some(&mut rng),
+                        )?,
+                    };
+                    let (mut d, notes) = post.run(m, job, &matcher)?;
+                    if fused.is_some() && cfg.statistics {
+                        d.bound = dec
+                            .predictors
+                            .iter()
+                            .zip(latents)
+                            .filter_map(|(pr, x)| pr.basis_error_bound(x))
+                            .reduce(f64::max);
                     }
-                    None => dec.decode(
-                        latents,
-                        &job.start,
-                        cfg.assembly,
-                        cfg.sample_poses.then_some(&mut rng),
-                    )?,
-                };
-                // Rigid shifts of the variation leave the (pose-normalised) DTW unchanged.
-                let matches = grounding::correspondence(&m, &job.source, &model.template);
-                let ungrounded = floor_contact(&m, &job.source, &matches, model);
-                if cfg.grounding {
-                    grounding::ground_matched(
-                        &mut m,
-                        &job.source,
-                        &matches,
-                        &ground_soles,
-                        &model.up,
-                        grounding::SIGMA_FRAMES,
-                    );
-                }
-                let contacts = job
-                    .contacts
-                    .as_ref()
-                    .map(|c| footskate::transfer_contacts(c, &matches));
-                let raw_sliding = (
-                    slide(&m),
-                    match (&contacts, &feet) {
-                        (Some(c), Some(f)) => metrics::contact_sliding(&m, f, c, &model.up),
-                        _ => None,
-                    },
-                );
-                let mut notes = Vec::new();
-                let mut footskate_max = 0.0;
-                if let (true, Some(c), Some(f)) = (cfg.footskate, &contacts, &feet) {
-                    let d = footskate::clean(
-                        &mut m,
-                        f,
-                        c,
-                        &model.up,
-                        cfg.footskate_smoothness,
-                        &mut notes,
-                    )?;
-                    footskate_max = d.iter().map(|v| v.norm()).fold(0.0, f64::max);
-                    if let (true, Some(legs)) = (cfg.foot_height, &leg_weights) {
-                        foot_height::lift(&mut m, &job.source, &matches, legs, c, &model.up);
+                    let clock = std::time::Instant::now();
+                    writer.write_dir(&dir.join(format!("var{k}")), &d.meshes, Some(model.fps))?;
+                    let written = clock.elapsed().as_secs_f64();
+                    if !cfg.statistics {
+                        *spare = std::mem::take(&mut d.meshes);
                     }
-                    if let (true, Some(legs)) = (cfg.foot_lock, &leg_weights) {
-                        let c = match cfg.foot_height {
-                            // The legs now follow the source's heights: extend each contact while
-                            // the variation's foot is still on the source's floor.
-                            true => {
-                                let lows: [Vec<f64>; 2] = [0, 1].map(|f| {
-                                    let leg: Vec<u32> = legs[f].iter().map(|p| p.0).collect();
-                                    grounding::lowest(&m, &leg, &model.up)
-                                });
-                                let floor = grounding::lowest(&job.source, &[], &model.up)
-                                    .into_iter()
-                                    .fold(f64::INFINITY, f64::min);
-                                let low: Vec<[f64; 2]> = (0..m.len())
-                                    .map(|t| [lows[0][t] - floor, lows[1][t] - floor])
-                                    .collect();
-                                foot_lock::grow_while_down(
-                                    c,
-                                    &low,
-                                    CONTACT_HEIGHT,
-                                    foot_lock::EASE_FRAMES,
-                                )
-                            }
-                            false => c.clone(),
-                        };
-                        foot_lock::lock(&mut m, legs, f, &c, &model.up);
-                    }
-                }
-                Ok((
-                    Decoded {
-                        meshes: m,
-                        matches,
-                        ungrounded,
-                        raw_sliding,
-                        contacts,
-                        footskate_max,
-                    },
-                    notes,
-                ))
-            })
+                    Ok((d, notes, written))
+                },
+            )
             .collect::<Result<_>>()?;
-        let (decoded, var_notes): (Vec<Decoded>, Vec<Vec<String>>) = decoded.into_iter().unzip();
-        for (k, n) in var_notes.into_iter().enumerate() {
+        let mut decoded = Vec::with_capacity(done.len());
+        for (k, (d, n, written)) in done.into_iter().enumerate() {
+            decoding_bound = match (decoding_bound, d.bound) {
+                (Some(a), Some(b)) => Some(f64::max(a, b)),
+                (a, b) => a.or(b),
+            };
             notes.extend(n.into_iter().map(|n| format!("{} var{k}: {n}", job.label)));
+            seconds_writing += written;
+            decoded.push(d);
         }
-        let write_clock = std::time::Instant::now();
-        for (k, d) in decoded.iter().enumerate() {
-            MeshSequence::new(model.faces.clone(), d.meshes.clone())
-                .write_dir_at(out.join(&job.label).join(format!("var{k}")), Some(model.fps))?;
-        }
-        seconds_writing += write_clock.elapsed().as_secs_f64();
         let stats_clock = std::time::Instant::now();
         if cfg.statistics {
             sequences.push(measure(job, &decoded, model));
@@ -639,5 +766,6 @@ pub fn run_with_progress(
         seconds_decoding: clock.elapsed().as_secs_f64(),
         seconds_writing,
         seconds_statistics,
+        decoding_bound_m: decoding_bound,
     })
 }

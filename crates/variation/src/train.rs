@@ -7,7 +7,7 @@
 //! fit has no minimum), a dynamics-noise floor [`DYN_NOISE_FLOOR`], a weak log-normal factor on
 //! β1..β3 and the latent scale fixed at unit mean square (`gpdm::model` module doc). The fit is
 //! one joint L-BFGS run (memory [`LBFGS_MEMORY`]) that stops by convergence: relative decrease
-//! below 1e-10 per iteration over a 10-iteration window, or ‖∇‖∞ ≤ 1e-3. Parts are trained in
+//! below [`VALUE_TOLERANCE`] per iteration over a 10-iteration window, or ‖∇‖∞ ≤ 1e-3. Parts are trained in
 //! parallel.
 
 use gpdm::optim::{train as fit, Schedule, TrainOptions, TrainReport};
@@ -38,7 +38,10 @@ pub struct PartModel {
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct SequenceInfo {
     pub name: String,
+    /// For a pre-blended sequence, its weight between the motions of `blend_of`.
     pub blend: Option<f64>,
+    /// For a pre-blended sequence, the indices of the two motions it blends (w = 0, w = 1).
+    pub blend_of: Option<(usize, usize)>,
     /// World pose of the first frame: decoded motions start here.
     pub start_pose: RigidMotion,
     pub contacts: Option<Contacts>,
@@ -67,7 +70,7 @@ pub struct VariationModel {
 
 impl Artifact for VariationModel {
     const KIND: &'static str = "variation-model";
-    const VERSION: u32 = 2;
+    const VERSION: u32 = 3;
 
     /// A valid body (`group::check_body`); per part a reference of its vertex count and a
     /// valid GPDM with one latent trajectory per training sequence, each of the
@@ -201,6 +204,9 @@ impl VariationModel {
         if let Some(s) = self.sequences.iter().find(|s| s.contacts.as_ref().is_some_and(|c| c.len() != self.frames)) {
             return Err(format!("sequence '{}': contacts of other than {} frames", s.name, self.frames));
         }
+        let blends: Vec<(Option<f64>, Option<(usize, usize)>)> =
+            self.sequences.iter().map(|s| (s.blend, s.blend_of)).collect();
+        crate::group::check_blends(&blends)?;
         crate::group::check_pair(self.pair, self.sequences.len())
     }
 }
@@ -282,6 +288,13 @@ pub struct TrainConfig {
 /// recursion costs O(memory · N d), negligible next to the O(N³) objective.
 pub const LBFGS_MEMORY: usize = 100;
 
+/// Relative decrease of the objective per iteration (over a 10-iteration window) below which
+/// the fit stops. Demo B locomotion (50 fps, strided N = 222 per part): 1e-10 took 4016
+/// evaluations on the torso, 1e-8 takes 1809 (320-1248 → 161-762 on the limbs) for the same
+/// fig. 4 reconstruction (1.578 mm) and fig. 7b blend errors (1.724 / 1.972 mm) to 1 µm; 1e-7
+/// (905) moves fig. 7b by 0.08-0.13 mm (docs/PERFORMANCE.md, `examples/fit_tolerance`).
+pub const VALUE_TOLERANCE: f64 = 1e-8;
+
 impl Default for TrainConfig {
     fn default() -> Self {
         let mut options = TrainOptions {
@@ -289,7 +302,7 @@ impl Default for TrainConfig {
             ..Default::default()
         };
         options.lbfgs.memory = LBFGS_MEMORY;
-        options.lbfgs.value_tol = 1e-10;
+        options.lbfgs.value_tol = VALUE_TOLERANCE;
         options.lbfgs.value_window = 10;
         options.lbfgs.grad_tol = 1e-3;
         options.lbfgs.max_iter = 10000;
@@ -481,6 +494,7 @@ pub fn train_selected(
         .map(|s| SequenceInfo {
             name: s.name.clone(),
             blend: s.blend,
+            blend_of: s.blend_of,
             start_pose: s.motion.poses[0],
             contacts: s.contacts.clone(),
         })

@@ -31,6 +31,7 @@ fn group() -> Group {
     let seq = |name: &str| GroupSequence {
         name: name.into(),
         blend: None,
+        blend_of: None,
         motion: motion.clone(),
         contacts: Some(vec![[true, false]; FRAMES]),
         map: (0..FRAMES).collect(),
@@ -72,7 +73,7 @@ fn model() -> VariationModel {
         scale: DisplacementScale { translation: 1.0, rotation: 1.0 },
         sequences: ["walk", "run"]
             .iter()
-            .map(|n| SequenceInfo { name: (*n).into(), blend: None, start_pose: RigidMotion::identity(), contacts: None })
+            .map(|n| SequenceInfo { name: (*n).into(), blend: None, blend_of: None, start_pose: RigidMotion::identity(), contacts: None })
             .collect(),
         pair: Some((0, 1)),
         stride: 1,
@@ -114,6 +115,21 @@ fn a_group_is_validated_after_decoding() {
     let mut bad = good.clone();
     bad.pair = Some((0, 2));
     refused(&bad, "blend pair (0, 2)");
+    // A pre-blend names the two captured motions it blends.
+    let mut blended = good.clone();
+    let mut pre = blended.sequences[0].clone();
+    (pre.name, pre.blend, pre.blend_of) = ("blend-0.5".into(), Some(0.5), Some((0, 1)));
+    blended.sequences.push(pre);
+    assert_eq!(blended.validate(), Ok(()));
+    let mut bad = blended.clone();
+    bad.sequences[2].blend_of = None;
+    refused(&bad, "sequence 2: blend weight Some(0.5)");
+    let mut bad = blended.clone();
+    bad.sequences[2].blend_of = Some((0, 2));
+    refused(&bad, "sequence 2");
+    let mut bad = blended.clone();
+    bad.sequences[1].blend_of = Some((0, 2));
+    refused(&bad, "sequence 1");
 }
 
 #[test]
@@ -139,4 +155,7 @@ fn a_variation_model_is_validated_after_decoding() {
     let mut bad = good.clone();
     bad.up = Vector3::new(0.0, 2.0, 0.0);
     refused(&bad, "up axis");
+    let mut bad = good.clone();
+    bad.sequences[1].blend = Some(0.5);
+    refused(&bad, "sequence 1: blend weight Some(0.5) of sequences None");
 }

@@ -25,6 +25,7 @@ fn tiny_set_end_to_end() {
         motions: vec!["walk".into(), "run".into(), "no_such_motion".into()],
         reference: None,
         blend_weights: vec![0.5],
+        blend_pairs: Vec::new(),
         prealign: PrealignOptions::default(),
         whole_body: false,
         fallback_whole_body: false,

@@ -65,6 +65,7 @@ fn model() -> VariationModel {
     let info = |name: &str| SequenceInfo {
         name: name.into(),
         blend: None,
+        blend_of: None,
         start_pose: RigidMotion::new(
             Rotation3::from_euler_angles(0.0, 0.3, 0.0),
             Vector3::new(0.5, 1.0, -0.2),

@@ -161,6 +161,7 @@ fn blends_at_zero_and_one_reproduce_the_endpoints() {
         GroupSequence {
             name: name.into(),
             blend: None,
+            blend_of: None,
             motion: AlignedMotion {
                 faces: mesh.faces.clone(),
                 frames,

@@ -45,6 +45,10 @@ pub struct Params {
     /// L-BFGS iteration limit of the joint fit (it normally stops by convergence first)
     #[arg(long, default_value_t = 10000)]
     pub max_iter: usize,
+    /// Convergence: the fit stops when the objective decreased by less than this fraction of
+    /// its value per iteration over the last 10 (or ‖∇‖∞ ≤ 1e-3)
+    #[arg(long, value_name = "TOL", default_value_t = crate::train::VALUE_TOLERANCE)]
+    pub value_tolerance: f64,
     /// Training frames: exact (every frame, the paper's fit; cost grows as N³) or strided (every
     /// s-th frame, s from --fit-rate and --max-fit-frames; sampling interpolates back to the
     /// capture's rate)
@@ -87,6 +91,10 @@ pub fn run(p: &Params) -> anyhow::Result<()> {
         };
     }
     cfg.options.lbfgs.max_iter = p.max_iter;
+    if !(p.value_tolerance >= 0.0 && p.value_tolerance.is_finite()) {
+        anyhow::bail!("--value-tolerance {}: must be a finite number >= 0", p.value_tolerance);
+    }
+    cfg.options.lbfgs.value_tol = p.value_tolerance;
     cfg.fit(p.fit, p.fit_rate, p.max_fit_frames)?;
     let names: Vec<String> = group.parts.iter().map(|q| q.name.clone()).collect();
     let only = match &p.part {

@@ -40,8 +40,9 @@ pub struct Params {
     #[arg(long, conflicts_with = "blend")]
     pub motion: Option<String>,
     /// Only variations of the blend of two motions of the group, `A:B` at --weight (guided by
-    /// the learned pre-blends for the group's blend pair, the motions' own variants otherwise)
-    #[arg(long, value_name = "A:B", requires = "weight", value_parser = parse_pair)]
+    /// that pair's nearest pre-blended weights on each side, by the two motions' own variants
+    /// for a pair without pre-blends)
+    #[arg(long, value_name = "A:B", requires = "weight", value_parser = super::parse_pair)]
     #[serde(serialize_with = "pair_as_text")]
     pub blend: Option<(String, String)>,
     /// Weight w* in [0, 1] of the --blend (0: A, 1: B)
@@ -111,13 +112,6 @@ pub struct Params {
     pub report: Option<PathBuf>,
 }
 
-fn parse_pair(s: &str) -> Result<(String, String), String> {
-    match s.split_once(':') {
-        Some((a, b)) if !a.is_empty() && !b.is_empty() => Ok((a.into(), b.into())),
-        _ => Err(format!("'{s}' is not two motion names A:B")),
-    }
-}
-
 /// `--blend` as written on the command line (`A:B`), or `null`.
 fn pair_as_text<S: serde::Serializer>(pair: &Option<(String, String)>, ser: S) -> Result<S::Ok, S::Error> {
     match pair {
@@ -145,8 +139,9 @@ fn parse_weights(s: &str) -> Result<Weights, String> {
 
 /// Writes the variations as PLY frames (and the `--report` statistics when asked).
 pub fn run(p: &Params) -> anyhow::Result<()> {
-    let model = VariationModel::load(&p.model)?;
-    let group = Group::load(&p.group)?;
+    // The two inputs are read side by side, then checked against each other.
+    let (model, group) = rayon::join(|| VariationModel::load(&p.model), || Group::load(&p.group));
+    let (model, group) = (model?, group?);
     crate::trained_on::check(&model, &group)
         .with_context(|| format!("{} with {}", p.model.display(), p.group.display()))?;
     let cfg = SynthConfig {

@@ -6,3 +6,11 @@ pub mod gpdm_train;
 pub mod hmc_sample;
 pub mod prealign;
 pub mod variation_eval;
+
+/// Two motion names written `A:B` (`hmc-sample --blend`, `prealign --blend-pairs`).
+fn parse_pair(s: &str) -> Result<(String, String), String> {
+    match s.split_once(':') {
+        Some((a, b)) if !a.is_empty() && !b.is_empty() => Ok((a.into(), b.into())),
+        _ => Err(format!("'{s}' is not two motion names A:B")),
+    }
+}

@@ -1,5 +1,6 @@
 //! The `prealign` stage: the motions of one movement group time-aligned to a reference by
-//! contact-guided DTW, with pre-blended sequences between the first two (3DV §4).
+//! contact-guided DTW, with pre-blended sequences between pairs of them (by default the first
+//! two; 3DV §4 and §7).
 
 use std::path::PathBuf;
 
@@ -17,7 +18,7 @@ use crate::prealign::PrealignOptions;
 #[command(
     name = "prealign",
     version,
-    after_help = "e.g.: prealign --set out/demo/set --subject-name A --group-name locomotion --motions walk,run --gait-cycles --blend-weights 0.5 --out out/work/variation/locomotion.group"
+    after_help = "e.g.: prealign --set out/demo/set --subject-name A --group-name locomotion --motions walk,run --gait-cycles --blend-weights 0.5 --out out/work/variation/locomotion.group\n      prealign --set out/demo/set --group-name moves --motions walk,run,kick --blend-weights 0.25,0.5,0.75 --blend-pairs walk:run,walk:kick --out out/work/variation/moves.group"
 )]
 pub struct Params {
     #[command(flatten)]
@@ -38,9 +39,14 @@ pub struct Params {
     /// Reference motion [default: the first present]
     #[arg(long)]
     pub reference: Option<String>,
-    /// Blend weights W between the first two motions (non-linear mesh blends), comma-separated
+    /// Blend weights W of every pre-blended pair (non-linear mesh blends), comma-separated
     #[arg(long, value_delimiter = ',', default_value = "0.5")]
     pub blend_weights: Vec<f64>,
+    /// Pairs of motions to pre-blend at every weight, `A:B` comma-separated; the first is the
+    /// group's blend pair [default: the first two motions]
+    #[arg(long, value_name = "A:B", value_delimiter = ',', value_parser = super::parse_pair)]
+    #[serde(serialize_with = "pairs_as_text")]
+    pub blend_pairs: Vec<(String, String)>,
     /// Cost of one foot-contact disagreement in the DTW (metres) [default: median pose cost]
     #[arg(long)]
     pub contact_weight: Option<f64>,
@@ -64,6 +70,11 @@ pub struct Params {
     pub out: PathBuf,
 }
 
+/// `--blend-pairs` as written on the command line (`["A:B", ...]`).
+fn pairs_as_text<S: serde::Serializer>(pairs: &[(String, String)], ser: S) -> Result<S::Ok, S::Error> {
+    ser.collect_seq(pairs.iter().map(|(a, b)| format!("{a}:{b}")))
+}
+
 /// Writes the group; the header records `p` plus the subject it resolved to (`subject`), set.json,
 /// the subject's subject.json and template and every frame of the grouped motions.
 pub fn run(p: &Params) -> anyhow::Result<()> {
@@ -78,6 +89,7 @@ pub fn run(p: &Params) -> anyhow::Result<()> {
         motions: p.motions.clone(),
         reference: p.reference.clone(),
         blend_weights: p.blend_weights.clone(),
+        blend_pairs: p.blend_pairs.clone(),
         prealign: PrealignOptions {
             contact_weight: p.contact_weight,
             ..Default::default()
