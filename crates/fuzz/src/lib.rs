@@ -128,27 +128,64 @@ pub fn exercise(target: Target, bytes: &[u8]) {
 }
 
 fn exercise_artifact(bytes: &[u8]) {
-    use mesh_core::segmentation::Segmentation;
     use capture::part_pca::PcaModel;
-    if let Ok((_, s)) = Segmentation::decode(bytes) {
-        let _ = s.tree_order();
-        let _ = s.vertex_labels();
-    }
-    if let Ok((_, m)) = <PcaModel as Artifact>::decode(bytes) {
-        let _ = m.template_vertices();
-        let _ = capture::assemble::plan(&m);
-    }
-    if let Ok((_, m)) = capture::align::AlignedMotion::decode(bytes) {
-        let _ = m.frames.len();
-    }
-    let _ = transfer::densify::Correspondences::decode(bytes);
-    let _ = transfer::gpr_model::GprModel::decode(bytes);
-    let _ = variation::group::Group::decode(bytes);
-    let _ = variation::train::VariationModel::decode(bytes);
-    exercise_piece::<PcaModel>(bytes);
-    exercise_piece::<transfer::gpr_model::GprModel>(bytes);
-    exercise_piece::<variation::train::VariationModel>(bytes);
+    use mesh_core::part_merge::Partitioned;
+    use mesh_core::segmentation::Segmentation;
+    use transfer::gpr_model::GprModel;
+    use variation::train::VariationModel;
+    // Every decoder verifies the checksum over the whole file before it compares the kind, so a
+    // decoder of another kind only repeats that hash: the generic decode covers the container
+    // (lengths, checksum, header) of every input, and only the decoders of the kind the file
+    // names run after it.
     let _ = mesh_core::artifact::decode_artifact::<serde_json::Value>(bytes, "any", 1);
+    let Some(kind) = stored_kind(bytes) else { return };
+    match kind {
+        k if k == Segmentation::KIND => {
+            if let Ok((_, s)) = Segmentation::decode(bytes) {
+                let _ = s.tree_order();
+                let _ = s.vertex_labels();
+            }
+        }
+        k if k == PcaModel::KIND => {
+            if let Ok((_, m)) = <PcaModel as Artifact>::decode(bytes) {
+                let _ = m.template_vertices();
+                let _ = capture::assemble::plan(&m);
+            }
+        }
+        k if k == capture::align::AlignedMotion::KIND => {
+            if let Ok((_, m)) = capture::align::AlignedMotion::decode(bytes) {
+                let _ = m.frames.len();
+            }
+        }
+        k if k == transfer::densify::Correspondences::KIND => {
+            let _ = transfer::densify::Correspondences::decode(bytes);
+        }
+        k if k == GprModel::KIND => {
+            let _ = GprModel::decode(bytes);
+        }
+        k if k == variation::group::Group::KIND => {
+            let _ = variation::group::Group::decode(bytes);
+        }
+        k if k == VariationModel::KIND => {
+            let _ = VariationModel::decode(bytes);
+        }
+        k if k == PcaModel::PIECE_KIND => exercise_piece::<PcaModel>(bytes),
+        k if k == GprModel::PIECE_KIND => exercise_piece::<GprModel>(bytes),
+        k if k == VariationModel::PIECE_KIND => exercise_piece::<VariationModel>(bytes),
+        // Another kind: one decoder still runs, for its kind-mismatch path.
+        _ => {
+            let _ = Segmentation::decode(bytes);
+        }
+    }
+}
+
+/// The kind an artifact's bytes name, read without any check (the decoders do those).
+fn stored_kind(b: &[u8]) -> Option<&str> {
+    if b.len() < 16 || b[..8] != MAGIC {
+        return None;
+    }
+    let k = u32::from_le_bytes(b[12..16].try_into().ok()?) as usize;
+    std::str::from_utf8(b.get(16..16usize.checked_add(k)?)?).ok()
 }
 
 /// A piece of a per-part model, and the join `merge-parts` makes of its body as a one-part model.
@@ -363,11 +400,14 @@ pub fn mutate(rng: &mut ChaCha8Rng, input: &[u8], target: Target, corpus: &[(Tar
             }
             7 | 8 if target != Target::Artifact && target != Target::Pc2 => {
                 // Token swap or replacement in text.
-                let spans = token_spans(&b);
-                if spans.len() >= 2 {
-                    let (s1, e1) = spans[rng.random_range(0..spans.len())];
+                // The tokens at two random positions (a scan of the whole text per mutation
+                // cost more than the parse on large files).
+                let spans: Vec<(usize, usize)> =
+                    (0..2).filter_map(|_| token_at(&b, rng.random_range(0..len.max(1)))).collect();
+                if spans.len() == 2 {
+                    let (s1, e1) = spans[0];
                     if rng.random_bool(0.5) {
-                        let (s2, e2) = spans[rng.random_range(0..spans.len())];
+                        let (s2, e2) = spans[1];
                         let (a, c) = if s1 <= s2 { ((s1, e1), (s2, e2)) } else { ((s2, e2), (s1, e1)) };
                         if a.1 <= c.0 {
                             let (ta, tc) = (b[a.0..a.1].to_vec(), b[c.0..c.1].to_vec());
@@ -403,25 +443,17 @@ pub fn mutate(rng: &mut ChaCha8Rng, input: &[u8], target: Target, corpus: &[(Tar
     b
 }
 
-/// Byte ranges of whitespace- or punctuation-separated tokens.
-fn token_spans(b: &[u8]) -> Vec<(usize, usize)> {
-    let sep = |c: u8| c.is_ascii_whitespace() || b",:[]{}\"/".contains(&c);
-    let mut out = Vec::new();
-    let mut start = None;
-    for (i, &c) in b.iter().enumerate() {
-        match (sep(c), start) {
-            (false, None) => start = Some(i),
-            (true, Some(s)) => {
-                out.push((s, i));
-                start = None;
-            }
-            _ => {}
-        }
-    }
-    if let Some(s) = start {
-        out.push((s, b.len()));
-    }
-    out
+fn is_token_separator(c: u8) -> bool {
+    c.is_ascii_whitespace() || b",:[]{}\"/".contains(&c)
+}
+
+/// The whitespace- or punctuation-separated token at or after byte `at` (within 64 bytes), as
+/// a byte range.
+fn token_at(b: &[u8], at: usize) -> Option<(usize, usize)> {
+    let start = (at..b.len().min(at + 64)).find(|&i| !is_token_separator(b[i]))?;
+    let start = (0..start).rev().take_while(|&i| !is_token_separator(b[i])).last().unwrap_or(start);
+    let end = (start..b.len()).find(|&i| is_token_separator(b[i])).unwrap_or(b.len());
+    Some((start, end))
 }
 
 /// What a run found.
@@ -586,4 +618,29 @@ pub fn run_to_json(
         "inputs_per_second": r.inputs as f64 / r.seconds.max(1e-9),
         "kept": r.kept.iter().map(|p| p.display().to_string()).collect::<Vec<_>>(),
     })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn token_at_finds_the_token_at_or_after_a_position() {
+        let b = b"ply\nelement vertex 12\n";
+        let text = |r: Option<(usize, usize)>| r.map(|(s, e)| &b[s..e]);
+        assert_eq!(text(token_at(b, 0)), Some(&b"ply"[..]));
+        assert_eq!(text(token_at(b, 2)), Some(&b"ply"[..]));
+        assert_eq!(text(token_at(b, 3)), Some(&b"element"[..]));
+        assert_eq!(text(token_at(b, 20)), Some(&b"12"[..]));
+        assert_eq!(token_at(b, 22), None);
+    }
+
+    #[test]
+    fn stored_kind_reads_each_seed_artifacts_kind() {
+        let seeds = seed_corpus();
+        let kinds: Vec<&str> =
+            seeds.iter().filter(|(t, _)| *t == Target::Artifact).filter_map(|(_, b)| stored_kind(b)).collect();
+        assert_eq!(kinds, ["segmentation", "aligned-motion", "pca-model", "pca-model-part", "correspondences"]);
+        assert_eq!(stored_kind(b"SURFCAP"), None);
+    }
 }
