@@ -120,7 +120,7 @@ where
     }
     let tmp = builder
         .tempfile_in(dir)
-        .map_err(|e| Error::io(dir, e))?;
+        .map_err(|e| Error::io(path, without_path(e)))?;
     {
         let mut w = BufWriter::new(tmp.as_file());
         fill(&mut w).map_err(|e| Error::io(path, e))?;
@@ -129,6 +129,14 @@ where
     tmp.as_file().sync_all().map_err(|e| Error::io(path, e))?;
     tmp.persist(path).map_err(|e| Error::io(path, e.error))?;
     Ok(())
+}
+
+/// `e` without the temporary file's path `tempfile` adds to it: the message names the output.
+fn without_path(e: std::io::Error) -> std::io::Error {
+    match e.raw_os_error() {
+        Some(code) => std::io::Error::from_raw_os_error(code),
+        None => e,
+    }
 }
 
 /// Writes a byte buffer atomically.
@@ -188,12 +196,13 @@ where
     }
     remove_stale_temporaries(parent);
     let tmp = sibling(parent, &name, "tmpdir");
-    std::fs::create_dir(&tmp).map_err(|e| Error::io(&tmp, e))?;
+    // Errors name the output folder, not its temporary sibling.
+    std::fs::create_dir(&tmp).map_err(|e| Error::io(dir, e))?;
     let filled = fill(&tmp).and_then(|()| {
         if dir.is_dir() {
             carry_over(dir, &tmp, keep).map_err(|e| Error::io(dir, e))?;
         }
-        sync_dir(&tmp).map_err(|e| Error::io(&tmp, e))
+        sync_dir(&tmp).map_err(|e| Error::io(dir, e))
     });
     if let Err(e) = filled {
         let _ = std::fs::remove_dir_all(&tmp);

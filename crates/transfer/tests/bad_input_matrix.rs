@@ -342,16 +342,49 @@ fn every_bad_input_row_is_one_line_and_a_clean_exit() {
 /// artifact write fails with one line and leaves nothing.
 #[test]
 fn full_disk_leaves_no_output() {
+    on_a_small_tmpfs("size=64k", "out.pca", "No space left", pca_fit);
+}
+
+/// A read-only file system, for an artifact and for a frame folder: one line naming the output,
+/// nothing written (root ignores a read-only directory's permissions; a read-only mount refuses
+/// root too).
+#[test]
+fn read_only_file_system_leaves_no_output() {
+    on_a_small_tmpfs("ro,size=64k", "out.pca", "Read-only file system", pca_fit);
+    on_a_small_tmpfs("ro,size=64k", "run", "Read-only file system", |b, out| {
+        let mut c = Command::new(common::bin("gpr-predict"));
+        c.args(["-q", "--model", &b.p("A-B.model"), "--source-pca", &b.p("A.pca"), "--target-pca", &b.p("B.pca")])
+            .args(["--target-template", &b.p("set/B/walk/000000.ply"), &b.p("A-run.aligned"), "--out"])
+            .arg(out)
+            .env("OPENBLAS_NUM_THREADS", "1");
+        c
+    });
+}
+
+/// `pca-fit` of two of the base's motions into `out`.
+fn pca_fit(b: &Base, out: &Path) -> Command {
+    let mut c = Command::new(common::bin("pca-fit"));
+    c.args(["-q", "--template", &b.p("set/A/walk/000000.ply"), "--segmentation", &b.p("A.seg"), "--out"])
+        .arg(out)
+        .args([b.p("A-walk.aligned"), b.p("A-run.aligned")])
+        .env("OPENBLAS_NUM_THREADS", "1");
+    c
+}
+
+/// Runs `stage(base, mount/output)` with a tmpfs mounted with `options`: exit 1, one line naming
+/// the output and containing `problem`, nothing left on the mount. Skipped where mounting is not
+/// allowed.
+fn on_a_small_tmpfs(options: &str, output: &str, problem: &str, stage: impl Fn(&Base, &Path) -> Command) {
     let b = base();
     let mnt = tempfile::tempdir().unwrap();
     let mounted = Command::new("mount")
-        .args(["-t", "tmpfs", "-o", "size=64k", "tmpfs"])
+        .args(["-t", "tmpfs", "-o", options, "tmpfs"])
         .arg(mnt.path())
         .stderr(std::process::Stdio::null())
         .status()
         .is_ok_and(|s| s.success());
     if !mounted {
-        eprintln!("full_disk_leaves_no_output: cannot mount a tmpfs here, skipped");
+        eprintln!("a tmpfs with {options}: cannot mount one here, skipped");
         return;
     }
     struct Unmount<'a>(&'a Path);
@@ -361,19 +394,14 @@ fn full_disk_leaves_no_output() {
         }
     }
     let _guard = Unmount(mnt.path());
-    let out_file = mnt.path().join("out.pca");
-    let out = Command::new(common::bin("pca-fit"))
-        .args(["-q", "--template", &b.p("set/A/walk/000000.ply"), "--segmentation", &b.p("A.seg"), "--out"])
-        .arg(&out_file)
-        .args([b.p("A-walk.aligned"), b.p("A-run.aligned")])
-        .env("OPENBLAS_NUM_THREADS", "1")
-        .output()
-        .unwrap();
+    let out_path = mnt.path().join(output);
+    let out = stage(b, &out_path).output().unwrap();
     let err = String::from_utf8_lossy(&out.stderr);
     assert_eq!(out.status.code(), Some(1), "{err}");
     assert_eq!(err.lines().count(), 1, "{err}");
-    assert!(err.contains("out.pca") && err.contains("No space left"), "{err}");
-    assert_eq!(std::fs::read_dir(mnt.path()).unwrap().count(), 0, "something left on the full disk");
+    let named = format!("{}: {problem}", out_path.display());
+    assert!(err.contains(&named), "expected '{named}' in: {err}");
+    assert_eq!(std::fs::read_dir(mnt.path()).unwrap().count(), 0, "something left on the tmpfs");
 }
 
 /// `pca-fit` of two motions gives the same model for `--threads 1` and `2`,
