@@ -295,6 +295,14 @@ pub const LBFGS_MEMORY: usize = 100;
 /// (905) moves fig. 7b by 0.08-0.13 mm (docs/PERFORMANCE.md, `examples/fit_tolerance`).
 pub const VALUE_TOLERANCE: f64 = 1e-8;
 
+/// Iteration limit of the joint fit: with at most `max_fit_frames` frames per part the cost of one
+/// evaluation is bounded, so this bounds a part's training whatever the capture's length (about
+/// 2,000 × 1.6-2 ms on one core). The demo groups converge before it (the most, A's jump torso,
+/// in 1,995 evaluations); on demo B's walk, run, dance_b group (612 frames, 204 per part) the torso
+/// was still creeping at 10,000 (19.7 s), and stopping at 2,000 (3.3 s) gave fig. 4 2.70 mm
+/// instead of 2.64, fig. 7b guided 10.12 / 8.15 mm instead of 9.46 / 9.22 (docs/PERFORMANCE.md).
+pub const MAX_ITERATIONS: usize = 2000;
+
 impl Default for TrainConfig {
     fn default() -> Self {
         let mut options = TrainOptions {
@@ -305,7 +313,7 @@ impl Default for TrainConfig {
         options.lbfgs.value_tol = VALUE_TOLERANCE;
         options.lbfgs.value_window = 10;
         options.lbfgs.grad_tol = 1e-3;
-        options.lbfgs.max_iter = 10000;
+        options.lbfgs.max_iter = MAX_ITERATIONS;
         options.lbfgs.max_evals = 20000;
         TrainConfig {
             gpdm: GpdmConfig {

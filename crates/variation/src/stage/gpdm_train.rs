@@ -42,8 +42,9 @@ pub struct Params {
     /// L-BFGS iterations per phase (with --rounds > 0)
     #[arg(long, default_value_t = 200)]
     pub iters: usize,
-    /// L-BFGS iteration limit of the joint fit (it normally stops by convergence first)
-    #[arg(long, default_value_t = 10000)]
+    /// L-BFGS iteration limit of the joint fit: it bounds a part's training time (most fits stop
+    /// by convergence first)
+    #[arg(long, default_value_t = crate::train::MAX_ITERATIONS)]
     pub max_iter: usize,
     /// Convergence: the fit stops when the objective decreased by less than this fraction of
     /// its value per iteration over the last 10 (or ‖∇‖∞ ≤ 1e-3)
