@@ -15,7 +15,8 @@
 //! varints with the checksum recomputed (so mutated payloads reach the
 //! decoder instead of stopping at the checksum). A panic is caught
 //! (`catch_unwind`), counted and its input kept; an input slower than
-//! [`HANG_SECONDS`] counts as a hang.
+//! [`HANG_SECONDS`] counts as a hang if it is as slow again in thread CPU time (a worker
+//! starved by a loaded machine is not a hang).
 
 pub mod stage;
 
@@ -483,6 +484,26 @@ pub fn peak_rss_kb() -> u64 {
         .unwrap_or(0)
 }
 
+/// CPU time of the calling thread in seconds, from `/proc/thread-self/schedstat` (Linux; NaN
+/// elsewhere).
+fn thread_cpu_seconds() -> f64 {
+    std::fs::read_to_string("/proc/thread-self/schedstat")
+        .ok()
+        .and_then(|s| s.split_whitespace().next().and_then(|v| v.parse::<f64>().ok()))
+        .map_or(f64::NAN, |ns| ns * 1e-9)
+}
+
+/// Whether an input whose wall time passed [`HANG_SECONDS`] really takes that long: it runs
+/// again and its thread CPU time is what counts (its wall time where that is unknown), so an
+/// input that only waited for a core on a loaded machine is not a hang.
+fn still_slow(target: Target, bytes: &[u8]) -> bool {
+    let (cpu0, t0) = (thread_cpu_seconds(), Instant::now());
+    let _ = catch_unwind(AssertUnwindSafe(|| exercise(target, bytes)));
+    let cpu = thread_cpu_seconds() - cpu0;
+    let spent = if cpu.is_finite() { cpu } else { t0.elapsed().as_secs_f64() };
+    spent > HANG_SECONDS
+}
+
 /// Fuzzes until `inputs` inputs or `duration` have been spent, whichever comes first, on the
 /// rayon pool's threads, each worker with its own random stream (worker 0: `seed`) and share of
 /// `inputs`; keeps panicking / hanging inputs in `keep` (if given). The reports are summed.
@@ -549,7 +570,7 @@ fn fuzz_worker(
         report.inputs += 1;
         *report.per_target.entry(target.name()).or_default() += 1;
         report.slowest_seconds = report.slowest_seconds.max(dt);
-        let hang = dt > HANG_SECONDS;
+        let hang = dt > HANG_SECONDS && ok && still_slow(target, &bytes);
         report.panics += (!ok) as u64;
         report.hangs += hang as u64;
         if !ok || hang {
@@ -623,6 +644,20 @@ pub fn run_to_json(
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn thread_cpu_time_counts_work_not_sleep() {
+        let t0 = thread_cpu_seconds();
+        std::thread::sleep(Duration::from_millis(200));
+        let slept = thread_cpu_seconds() - t0;
+        let t1 = thread_cpu_seconds();
+        let mut x = 0u64;
+        while thread_cpu_seconds() - t1 < 0.05 {
+            x = x.wrapping_add(std::hint::black_box(1));
+        }
+        assert!(x > 0);
+        assert!(slept < 0.05, "sleeping 0.2 s counted {slept} s of CPU");
+    }
 
     #[test]
     fn token_at_finds_the_token_at_or_after_a_position() {
