@@ -188,8 +188,24 @@ impl Stitcher {
     }
 
     /// `parts[k]` holds part `k`'s vertex positions in the order of `Part::vertices`.
+    /// Loop vertices are fixed at the mean of their parent's and child's instantiations.
     pub fn stitch(&mut self, parts: &[Vec<Vector3<f64>>]) -> Result<Stitched> {
+        let half = vec![0.5; parts.len()];
+        self.stitch_weighted(parts, &half)
+    }
+
+    /// [`Stitcher::stitch`] with the loop of part `k` fixed at `parent_weight[k]` times its
+    /// parent's instantiation plus `1 - parent_weight[k]` times its own (the root's entry is
+    /// not used).
+    pub fn stitch_weighted(&mut self, parts: &[Vec<Vector3<f64>>], parent_weight: &[f64]) -> Result<Stitched> {
         let lay = &self.layout;
+        if parent_weight.len() != parts.len() || parent_weight.iter().any(|w| !(0.0..=1.0).contains(w)) {
+            return Err(Error::invalid(format!(
+                "stitch: {} parent weights in [0, 1] needed for {} parts",
+                parent_weight.len(),
+                parts.len()
+            )));
+        }
         if parts.len() != lay.parts.len() {
             return Err(Error::invalid(format!(
                 "stitch: {} part meshes for {} parts",
@@ -238,7 +254,7 @@ impl Stitcher {
             for &i in &bl.vertices {
                 let v = band.vertices[i] as usize;
                 on_loop[v] = true;
-                loop_value[v] = 0.5 * (in_parent[i] + in_child[i]);
+                loop_value[v] = parent_weight[k] * in_parent[i] + (1.0 - parent_weight[k]) * in_child[i];
             }
             // Child side: flood from the child-only vertices without crossing the loop.
             let mut stack: Vec<usize> = lay.parts[k]

@@ -345,3 +345,27 @@ fn stitch_of_non_rigidly_different_parts_has_no_seam() {
         (out.vertices[tip] - want).norm()
     );
 }
+
+/// A child that is its parent's shape shifted by `t` (no band alignment): the loop at the
+/// parent's instantiation (weight 1) gives back the parent's mesh everywhere, at the child's
+/// (weight 0) the mesh shifted by `t`, since a constant on the loop extends harmonically as
+/// that constant; weight 0.5 is `stitch`.
+#[test]
+fn stitch_weighted_fixes_the_loop_between_parent_and_child() {
+    let (v, f, parts) = halves(16, 20, 8, 12);
+    let t = Vector3::new(0.03, -0.02, 0.01);
+    let pos: Vec<Vec<Vector3<f64>>> = vec![
+        parts[0].vertices.iter().map(|&i| v[i as usize]).collect(),
+        parts[1].vertices.iter().map(|&i| v[i as usize] + t).collect(),
+    ];
+    let mut st = Stitcher::new(PartLayout::new(v.len(), f, parts).unwrap()).with_band_alignment(false);
+    let at_parent = st.stitch_weighted(&pos, &[0.5, 1.0]).unwrap().vertices;
+    assert!(max_dist(&at_parent, &v) < 1e-9, "{}", max_dist(&at_parent, &v));
+    let at_child = st.stitch_weighted(&pos, &[0.5, 0.0]).unwrap().vertices;
+    let shifted: Vec<Vector3<f64>> = v.iter().map(|p| p + t).collect();
+    assert!(max_dist(&at_child, &shifted) < 1e-9, "{}", max_dist(&at_child, &shifted));
+    let half = st.stitch_weighted(&pos, &[0.5, 0.5]).unwrap().vertices;
+    assert_eq!(half, st.stitch(&pos).unwrap().vertices);
+    assert!(st.stitch_weighted(&pos, &[0.5, 1.5]).is_err());
+    assert!(st.stitch_weighted(&pos, &[0.5]).is_err());
+}

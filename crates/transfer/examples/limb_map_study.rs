@@ -1,0 +1,227 @@
+//! Variants of the limb orientation map, scored on the raw transfer (parts assembled, no §6)
+//! of every test motion of a run (docs/RESULTS.md, study 6). `LogRotation Count(0.5) w0.5` is
+//! the default (`transfer::limb_orientation`).
+//!
+//! cargo run --release --example limb_map_study -- WORK SET SOURCE TARGET MOTION... -- TRAIN...
+//! e.g. `limb_map_study out/demo-run/work out/demo/set A B punch spinkick cmu_jump -- walk run jump kick dance`
+//! (after `make transfer`; the pairs are read in the set's order, reversed when SOURCE is the set's target).
+
+use capture::align::{align_motion_on, AlignedMotion};
+use capture::assemble::{assemble, plan};
+use capture::part_pca::PcaModel;
+use mesh_core::artifact::Artifact;
+use mesh_core::rigid::{so3_exp, so3_log};
+use mesh_core::sequence::MeshSequence;
+use nalgebra::{DMatrix, Rotation3, Unit, Vector3};
+use std::path::PathBuf;
+use transfer::gpr_model::{training_set, GprModel, PairFiles};
+use transfer::limb_orientation::{limbs, orientation, reference, turn_to, Limb, LimbMap};
+
+#[derive(Clone, Copy, Debug)]
+enum Space {
+    /// Affine map of log-rotations (the default).
+    LogRotation,
+    /// Affine map of the limb's axis direction; the GP's twist is kept.
+    Axis,
+    /// The affine map of log-rotations plus a squared-exponential GP on its residuals.
+    LogRotationGp,
+}
+
+#[derive(Clone, Copy, Debug)]
+enum Proximal {
+    /// The share of vertices nearest the joint.
+    Count(f64),
+    /// The vertices within this share of the largest joint distance.
+    Length(f64),
+}
+
+#[derive(Clone, Copy, Debug)]
+struct Variant {
+    space: Space,
+    proximal: Proximal,
+    ridge: f64,
+    weight: f64,
+}
+
+fn points(flat: &[f64]) -> Vec<Vector3<f64>> {
+    flat.chunks_exact(3).map(|c| Vector3::new(c[0], c[1], c[2])).collect()
+}
+
+fn centroid(p: impl Iterator<Item = Vector3<f64>>) -> Vector3<f64> {
+    let (s, n) = p.fold((Vector3::zeros(), 0), |(s, n), q| (s + q, n + 1));
+    s / n.max(1) as f64
+}
+
+fn with_proximal(limb: &Limb, mean: &[Vector3<f64>], proximal: Proximal) -> Limb {
+    let pivot = centroid(limb.joint.iter().map(|&i| mean[i]));
+    let mut d: Vec<(f64, usize)> = mean.iter().enumerate().map(|(i, p)| ((p - pivot).norm(), i)).collect();
+    d.sort_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
+    let keep: Vec<usize> = match proximal {
+        Proximal::Count(s) => d.iter().take(((mean.len() as f64) * s).ceil() as usize).map(|x| x.1).collect(),
+        Proximal::Length(s) => {
+            let max = d.last().unwrap().0;
+            d.iter().filter(|x| x.0 <= s * max).map(|x| x.1).collect()
+        }
+    };
+    let mut keep = keep;
+    keep.sort_unstable();
+    Limb { part: limb.part, joint: limb.joint.clone(), proximal: keep }
+}
+
+/// The limb's axis in its mean shape: joint centroid to proximal centroid.
+fn axis(limb: &Limb, mean: &[Vector3<f64>]) -> Vector3<f64> {
+    let j = centroid(limb.joint.iter().map(|&i| mean[i]));
+    let p = centroid(limb.proximal.iter().map(|&i| mean[i]));
+    (p - j).normalize()
+}
+
+/// The feature of one frame's limb in `space`.
+fn feature(space: Space, r: &Rotation3<f64>, a: &Vector3<f64>) -> Vector3<f64> {
+    match space {
+        Space::LogRotation | Space::LogRotationGp => so3_log(r),
+        Space::Axis => r * a,
+    }
+}
+
+fn features(pca: &PcaModel, limb: &Limb, coeffs: &DMatrix<f64>, space: Space) -> Vec<Vector3<f64>> {
+    let part = &pca.parts[limb.part];
+    let rows = part.pca.decode(coeffs).unwrap();
+    let mean = reference(pca, limb.part);
+    let a = axis(limb, &mean);
+    (0..rows.nrows())
+        .map(|r| {
+            let row: Vec<f64> = rows.row(r).iter().copied().collect();
+            feature(space, &orientation(&mean, &points(&row), &limb.proximal), &a)
+        })
+        .collect()
+}
+
+/// The rotation taking unit `from` to unit `to` by the shortest arc.
+fn arc(from: &Vector3<f64>, to: &Vector3<f64>) -> Rotation3<f64> {
+    Rotation3::rotation_between(from, to).unwrap_or_else(|| {
+        let perp = from.cross(&Vector3::x()).try_normalize(1e-9).unwrap_or_else(|| from.cross(&Vector3::y()).normalize());
+        Rotation3::from_axis_angle(&Unit::new_normalize(perp), std::f64::consts::PI)
+    })
+}
+
+fn slerp(a: &Vector3<f64>, b: &Vector3<f64>, w: f64) -> Vector3<f64> {
+    let r = arc(a, b);
+    so3_exp(&(w * so3_log(&r))) * a
+}
+
+fn main() -> anyhow::Result<()> {
+    let args: Vec<String> = std::env::args().collect();
+    let split = args.iter().position(|a| a == "--").ok_or_else(|| anyhow::anyhow!("usage: see the file"))?;
+    let [work, set, s, t] = [&args[1], &args[2], &args[3], &args[4]];
+    let tests = &args[5..split];
+    let train = &args[split + 1..];
+    let (spca, tpca) = (PcaModel::load(format!("{work}/{s}/pca.model"))?, PcaModel::load(format!("{work}/{t}/pca.model"))?);
+    let model = GprModel::load(format!("{work}/models/{s}-to-{t}/gpr-nn.model"))?;
+    let set_json: serde_json::Value = serde_json::from_slice(&std::fs::read(format!("{set}/set.json"))?)?;
+    let set_source = set_json["source"].as_str().unwrap_or("").to_string();
+    let reversed = set_source != *s;
+    let (first, second) = if reversed { (t, s) } else { (s, t) };
+    let mut pairs = Vec::new();
+    for m in train {
+        let files: Vec<PathBuf> =
+            vec![format!("{work}/{first}/{m}.aligned").into(), format!("{work}/{second}/{m}.aligned").into(), format!("{work}/pairs/{m}.corr").into()];
+        let pf = PairFiles::load(&files)?;
+        let (p1, p2) = if reversed { (&tpca, &spca) } else { (&spca, &tpca) };
+        let d = pf.encode(p1, p2)?;
+        pairs.push(if reversed { d.reversed() } else { d });
+    }
+    let rows = training_set(&pairs, 1.0, false)?;
+    let template = mesh_core::io::read_mesh(format!("{set}/{t}/walk/000000.ply"))?;
+    let plan = plan(&tpca)?;
+
+    let mut variants = vec![];
+    for space in [Space::LogRotation, Space::Axis] {
+        for proximal in [Proximal::Count(0.5), Proximal::Length(0.5), Proximal::Length(0.35)] {
+            for weight in [0.5, 1.0] {
+                variants.push(Variant { space, proximal, ridge: 0.1, weight });
+            }
+        }
+    }
+    for weight in [0.5, 1.0] {
+        variants.push(Variant { space: Space::LogRotationGp, proximal: Proximal::Count(0.5), ridge: 0.1, weight });
+    }
+    let (ls, lt) = (limbs(&spca)?, limbs(&tpca)?);
+    let mut totals = vec![(0.0f64, 0usize); variants.len() + 1];
+    for m in tests {
+        let motion = AlignedMotion::load(format!("{work}/{s}/{m}.aligned"))?;
+        let truth = align_motion_on(&template, &MeshSequence::load_dir(format!("{set}/truth/{t}/{m}"))?, &tpca.anchor)?;
+        let truth_seq = MeshSequence::new(template.faces.clone(), truth.frames.clone());
+        let xs = spca.encode(&motion)?;
+        let xd = transfer::predict::displacement_matrix(&motion.displacements);
+        let gp = tpca.decode(&transfer::predict::predict(&model, &xs, &xd, false)?.coeffs)?;
+        let score = |parts: &Vec<Vec<Vec<Vector3<f64>>>>| -> f64 {
+            let pred = MeshSequence::new(template.faces.clone(), assemble(&plan, &tpca, parts));
+            transfer::evaluate::rms_errors(&pred, &truth_seq).unwrap().0
+        };
+        let base = score(&gp);
+        let f = gp[0].len() as f64;
+        totals[0].0 += base * base * f;
+        totals[0].1 += gp[0].len();
+        print!("{s}->{t} {m}: GP {:.2}", 100.0 * base);
+        for (vi, v) in variants.iter().enumerate() {
+            let mut turned = gp.clone();
+            for (sl, tl) in ls.iter().zip(&lt) {
+                let k = sl.part;
+                let (smean, tmean) = (reference(&spca, k), reference(&tpca, k));
+                let (sl, tl) = (with_proximal(sl, &smean, v.proximal), with_proximal(tl, &tmean, v.proximal));
+                let xf = features(&spca, &sl, &rows.x_parts[k], v.space);
+                let yf = features(&tpca, &tl, &rows.y_parts[k], v.space);
+                let map = LimbMap::fit(&xf, &yf, v.ridge)?;
+                let to_matrix = |f: &[Vector3<f64>]| DMatrix::from_fn(f.len(), 3, |r, c| f[r][c]);
+                let residual_gp = match v.space {
+                    Space::LogRotationGp => {
+                        let resid: Vec<Vector3<f64>> = xf.iter().zip(&yf).map(|(x, y)| y - map.apply(x)).collect();
+                        let opts = gp::gpr::GprOptions { learn_noise: true, noise_var: 1e-3, ..Default::default() };
+                        let (g, _) = gp::gpr::Gpr::train(
+                            gp::kernel::Kernel::SquaredExponential { l: 0.3, sigma_f: 0.1 },
+                            &to_matrix(&xf),
+                            &to_matrix(&resid),
+                            &opts,
+                        )?;
+                        Some(g)
+                    }
+                    _ => None,
+                };
+                let src = features(&spca, &sl, &xs[k], v.space);
+                let src_resid = match &residual_gp {
+                    Some(g) => Some(g.predict_mean(&to_matrix(&src))?),
+                    None => None,
+                };
+                let ta = axis(&tl, &tmean);
+                for (fi, (frame, x)) in turned[k].iter_mut().zip(&src).enumerate() {
+                    let now = orientation(&tmean, frame, &tl.proximal);
+                    let want = match v.space {
+                        Space::LogRotation | Space::LogRotationGp => {
+                            let extra = src_resid.as_ref().map_or(Vector3::zeros(), |r| Vector3::new(r[(fi, 0)], r[(fi, 1)], r[(fi, 2)]));
+                            let mapped = so3_exp(&(map.apply(x) + extra));
+                            now * so3_exp(&(v.weight * so3_log(&(now.inverse() * mapped))))
+                        }
+                        Space::Axis => {
+                            let d_gp = now * ta;
+                            let d_map = map.apply(x).normalize();
+                            let d_want = slerp(&d_gp, &d_map, v.weight);
+                            arc(&d_gp, &d_want) * now
+                        }
+                    };
+                    turn_to(frame, &tl, &now, &want);
+                }
+            }
+            let e = score(&turned);
+            totals[vi + 1].0 += e * e * f;
+            totals[vi + 1].1 += gp[0].len();
+            print!(" | {:?} {:?} w{} {:.2}", v.space, v.proximal, v.weight, 100.0 * e);
+        }
+        println!();
+    }
+    print!("pooled: GP {:.3}", 100.0 * (totals[0].0 / totals[0].1 as f64).sqrt());
+    for (vi, v) in variants.iter().enumerate() {
+        print!(" | {:?} {:?} w{} {:.3}", v.space, v.proximal, v.weight, 100.0 * (totals[vi + 1].0 / totals[vi + 1].1 as f64).sqrt());
+    }
+    println!();
+    Ok(())
+}

@@ -1,0 +1,133 @@
+//! Where the surface stage gains or loses: a test motion's corrected parts merged by averaging
+//! (`+correct`) and by stitching (`+correct+stitch`), with the pose error per part of each
+//! against the truth (docs/RESULTS.md, study 3).
+//!
+//! cargo run --release --example stitch_study -- WORK SET SOURCE TARGET MOTION -- TRAIN...
+
+use capture::align::{align_motion_on, AlignedMotion};
+use capture::assemble::{assemble, plan};
+use capture::part_pca::PcaModel;
+use mesh_core::artifact::Artifact;
+use mesh_core::rigid::procrustes;
+use mesh_core::segmentation::Segmentation;
+use mesh_core::sequence::MeshSequence;
+use nalgebra::Vector3;
+use transfer::gpr_model::GprModel;
+use transfer::limb_orientation::apply;
+use transfer::reconstruct::{Reconstructor, Surface};
+
+/// Per frame: the prediction rigidly fitted to the truth (whole body), then the RMS error
+/// over every vertex and over each part's vertices.
+fn errors(pred: &[Vec<Vector3<f64>>], truth: &[Vec<Vector3<f64>>], parts: &[Vec<u32>]) -> (f64, Vec<f64>) {
+    let mut all = 0.0;
+    let mut per = vec![0.0; parts.len()];
+    let mut count = 0usize;
+    for (p, t) in pred.iter().zip(truth) {
+        let m = procrustes(p, t, None);
+        let q = m.apply_all(p);
+        all += q.iter().zip(t).map(|(a, b)| (a - b).norm_squared()).sum::<f64>() / q.len() as f64;
+        for (k, vs) in parts.iter().enumerate() {
+            per[k] += vs.iter().map(|&v| (q[v as usize] - t[v as usize]).norm_squared()).sum::<f64>() / vs.len() as f64;
+        }
+        count += 1;
+    }
+    let n = count.max(1) as f64;
+    ((all / n).sqrt(), per.iter().map(|s| (s / n).sqrt()).collect())
+}
+
+fn main() -> anyhow::Result<()> {
+    let args: Vec<String> = std::env::args().collect();
+    let split = args.iter().position(|a| a == "--").ok_or_else(|| anyhow::anyhow!("usage: see the file"))?;
+    let [work, set, s, t, m] = [&args[1], &args[2], &args[3], &args[4], &args[5]];
+    let train = &args[split + 1..];
+    let (spca, tpca) = (PcaModel::load(format!("{work}/{s}/pca.model"))?, PcaModel::load(format!("{work}/{t}/pca.model"))?);
+    let model = GprModel::load(format!("{work}/models/{s}-to-{t}/gpr-nn.model"))?;
+    let seg = Segmentation::load(format!("{work}/{t}/parts.seg"))?;
+    let template = mesh_core::io::read_mesh(format!("{set}/{t}/walk/000000.ply"))?;
+    let training: Vec<AlignedMotion> =
+        train.iter().map(|n| AlignedMotion::load(format!("{work}/{t}/{n}.aligned"))).collect::<Result<_, _>>()?;
+    let refs: Vec<&AlignedMotion> = training.iter().collect();
+    let motion = AlignedMotion::load(format!("{work}/{s}/{m}.aligned"))?;
+    let truth = align_motion_on(&template, &MeshSequence::load_dir(format!("{set}/truth/{t}/{m}"))?, &tpca.anchor)?;
+
+    let xs = spca.encode(&motion)?;
+    let xd = transfer::predict::displacement_matrix(&motion.displacements);
+    let mut decoded = tpca.decode(&transfer::predict::predict(&model, &xs, &xd, false)?.coeffs)?;
+    if let Some(o) = &model.orientation {
+        apply(o, &spca, &tpca, &xs, &mut decoded)?;
+    }
+    let mut recon = Reconstructor::new(&tpca, &seg, &template.faces, &refs, Surface::CorrectStitch, 3, 1)?;
+    let corrected = recon.correct(&decoded)?;
+    let plan = plan(&tpca)?;
+    let parts: Vec<Vec<u32>> = seg.parts.iter().map(|p| p.vertices.clone()).collect();
+    let names: Vec<&str> = seg.parts.iter().map(|p| p.name.as_str()).collect();
+    let report = |label: &str, frames: &[Vec<Vector3<f64>>]| {
+        let (all, per) = errors(frames, &truth.frames, &parts);
+        let per: Vec<String> = names.iter().zip(&per).map(|(n, e)| format!("{n} {:.2}", 100.0 * e)).collect();
+        println!("{s}->{t} {m} {label}: {:.2} cm | {}", 100.0 * all, per.join(", "));
+    };
+    report("gpr-nn", &assemble(&plan, &tpca, &decoded));
+    report("+correct", &assemble(&plan, &tpca, &corrected));
+    let full = recon.merge(&tpca, &corrected)?;
+    report("+correct+stitch", &full);
+    for (label, taps) in [("smoothed 1-2-1", vec![0.25, 0.5, 0.25]), ("smoothed 5-tap", vec![0.0625, 0.25, 0.375, 0.25, 0.0625])] {
+        let h = taps.len() as i64 / 2;
+        let n = full.len() as i64;
+        let smoothed: Vec<Vec<Vector3<f64>>> = (0..n)
+            .map(|f| {
+                // Each neighbour frame rigidly fitted onto frame f first, so that only the pose is filtered.
+                let mut acc = vec![Vector3::zeros(); full[0].len()];
+                let mut wsum = 0.0;
+                for (i, w) in taps.iter().enumerate() {
+                    let g = f + i as i64 - h;
+                    if g < 0 || g >= n {
+                        continue;
+                    }
+                    let q = procrustes(&full[g as usize], &full[f as usize], None).apply_all(&full[g as usize]);
+                    acc.iter_mut().zip(&q).for_each(|(a, b)| *a += *w * b);
+                    wsum += w;
+                }
+                acc.iter().map(|a| a / wsum).collect()
+            })
+            .collect();
+        report(label, &smoothed);
+    }
+    report("+stitch", &recon.merge(&tpca, &decoded)?);
+
+    // Loops weighted by how near each part's source pose is to the training inputs.
+    let order = seg.tree_order()?;
+    let mut stitcher = surface::stitch::Stitcher::new(surface::segmentation::part_layout(&seg, template.faces.clone())?)
+        .with_band_alignment(false);
+    let dist: Vec<Vec<f64>> = model
+        .parts
+        .iter()
+        .zip(&xs)
+        .map(|(r, x)| match r {
+            transfer::gpr_model::Regressor::Gp { gpr, .. } => transfer::confidence::nearest_distances(gpr.inputs(), x),
+            _ => vec![1.0; x.nrows()],
+        })
+        .collect();
+    let n = corrected[0].len();
+    for (label, rule) in [("distance", 0), ("distance squared", 1), ("fixed 0.5", 2)] {
+        let frames: Vec<Vec<Vector3<f64>>> = (0..n)
+            .map(|f| {
+                let frame: Vec<Vec<Vector3<f64>>> = order.iter().map(|&k| corrected[k][f].clone()).collect();
+                let w: Vec<f64> = order
+                    .iter()
+                    .map(|&k| {
+                        let parent = seg.parts[k].parent.as_ref().and_then(|p| seg.parts.iter().position(|q| &q.name == p)).unwrap_or(k);
+                        let (dp, dc) = (dist[parent][f], dist[k][f]);
+                        match rule {
+                            0 => dc / (dp + dc).max(1e-12),
+                            1 => dc * dc / (dp * dp + dc * dc).max(1e-12),
+                            _ => 0.5,
+                        }
+                    })
+                    .collect();
+                plan.to_template_frame(&stitcher.stitch_weighted(&frame, &w).unwrap().vertices)
+            })
+            .collect();
+        report(&format!("+correct+stitch {label}"), &frames);
+    }
+    Ok(())
+}
