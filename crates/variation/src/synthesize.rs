@@ -21,7 +21,7 @@ use crate::diversity::{self, Diversity};
 use crate::foot_height;
 use crate::foot_lock;
 use crate::footskate;
-use crate::frame_writer::PlyFrames;
+use crate::frame_writer::{VariationFormat, VariationWriter};
 use crate::grounding::{self, FloorContact};
 use crate::group::{blend_name, blend_sequences, Group};
 use crate::latent_smoothing;
@@ -88,6 +88,9 @@ pub struct SynthConfig {
     /// learned dynamics past its end; shorter cuts.
     #[serde(default)]
     pub frames: Option<usize>,
+    /// How each variation is written (a folder of PLY frames by default).
+    #[serde(default)]
+    pub frame_format: VariationFormat,
 }
 
 /// One request against a trained model.
@@ -664,7 +667,7 @@ pub fn run_with_progress(
         notes.push("foot-skating clean-up skipped: no left and right soles found".into());
     }
     let fused = fast.then(|| dec.fused()).transpose()?;
-    let writer = PlyFrames::new(model.template.len(), &model.faces);
+    let writer = VariationWriter::new(cfg.frame_format, model.template.len(), &model.faces);
     let post = Post {
         model,
         cfg,
@@ -728,7 +731,7 @@ pub fn run_with_progress(
                             .reduce(f64::max);
                     }
                     let clock = std::time::Instant::now();
-                    writer.write_dir(&dir.join(format!("var{k}")), &d.meshes, Some(model.fps))?;
+                    writer.write(&dir, k, &d.meshes, Some(model.fps))?;
                     let written = clock.elapsed().as_secs_f64();
                     if !cfg.statistics {
                         *spare = std::mem::take(&mut d.meshes);

@@ -120,6 +120,7 @@ fn tiny_set_end_to_end() {
         latent_smoothing: 0.0,
         query: None,
         frames: None,
+        frame_format: Default::default(),
     };
     let out1 = dir.path().join("o1");
     let out2 = dir.path().join("o2");

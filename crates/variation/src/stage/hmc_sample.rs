@@ -9,6 +9,7 @@ use mesh_core::artifact::Artifact;
 use mesh_core::cli::CommonArgs;
 use serde::Serialize;
 
+use crate::frame_writer::VariationFormat;
 use crate::group::Group;
 use crate::reconstruct::Assembly;
 use crate::sample::Sampler;
@@ -104,9 +105,14 @@ pub struct Params {
     /// decoding (first point kept; 0 = off: the trajectories as sampled)
     #[arg(long, value_name = "SIGMA", default_value_t = 0.0)]
     pub latent_smoothing: f64,
-    /// Output folder: <out>/<sequence>/var<k>/NNNNNN.ply
+    /// Output folder: <out>/<sequence>/var<k>/NNNNNN.ply, or with --frame-format pc2
+    /// <out>/<sequence>/var<k>.obj + var<k>.pc2
     #[arg(short, long)]
     pub out: PathBuf,
+    /// How each variation is written: ply (a folder of binary PLY frames) or pc2 (its first
+    /// frame as OBJ plus a float32 point cache, a quarter of the bytes)
+    #[arg(long, value_enum, default_value_t = VariationFormat::Ply)]
+    pub frame_format: VariationFormat,
     /// Statistics against the sources (JSON); without it they are not computed
     #[arg(long)]
     pub report: Option<PathBuf>,
@@ -177,6 +183,7 @@ pub fn run(p: &Params) -> anyhow::Result<()> {
             _ => None,
         },
         frames: p.frame_count,
+        frame_format: p.frame_format,
     };
     // Sampling first (a spinner), then one step per synthesised sequence.
     let bar = mesh_core::cli::progress_bar(0, "hmc-sample: sampling", &p.common);
