@@ -514,10 +514,20 @@ pub fn train_sparse(
     if !(opts.noise_var > 0.0 && opts.noise_var.is_finite()) {
         return invalid(format!("sparse GP: noise variance must be > 0, got {}", opts.noise_var));
     }
-    let start = if opts.data_init { initial_kernel(&kernel, x, y) } else { kernel };
-    let start = warm_start(start, x, y, opts);
+    let data_start = if opts.data_init { initial_kernel(&kernel, x, y) } else { kernel };
+    let start = warm_start(data_start, x, y, opts);
     let z = x.select_rows(greedy_variance(&start, x, m).iter());
-    train_sparse_with_inducing(start, x, y, &z, opts)
+    let trained = train_sparse_with_inducing(start, x, y, &z, opts)?;
+    if trained.1.exit != Some(ExitState::NonFiniteStart) || start == data_start {
+        return Ok(trained);
+    }
+    // The warm start (the exact GP on a subset) can end where the bound on all pairs has no
+    // finite gradient (the `long` preset's A->B displacement: l = 7e-9, every arcsine argument
+    // at ±1): select and train again from the data-driven start.
+    let z = x.select_rows(greedy_variance(&data_start, x, m).iter());
+    let (model, mut report) = train_sparse_with_inducing(data_start, x, y, &z, opts)?;
+    report.notes.push(format!("the warm start ({:?}) gave a non-finite bound or gradient: trained from the data-driven start", start));
+    Ok((model, report))
 }
 
 /// Maximises the bound with the inducing inputs `z` fixed, starting from `start` as given
