@@ -24,8 +24,11 @@
 //! (`<·,·>` the Frobenius product); computed whitened (`SparseFactored::gradient`), it adds
 //! one `M x M` by `M x F` product (`2 F M²`) contracted with the kernel derivative, and the
 //! elements of `B⁻¹` (`M x M`, needed for the trace terms, as in the exact GP's gradient). The inducing inputs are fixed during optimisation
-//! ([`crate::inducing::greedy_variance`] at the starting hyperparameters); the kernel
-//! hyperparameters (and optionally `σn²`) are optimised, as for the exact GP.
+//! ([`crate::inducing::greedy_variance`] at the starting hyperparameters). The kernel
+//! hyperparameters are optimised with `σf²` profiled out (the bound is concave in it and its
+//! pieces scale with it: `Parts::profile_signal_variance`), leaving a search over `log l`
+//! alone ([`crate::optim::minimize_scalar`]); with a learned `σn²`, all three by the exact GP's
+//! conjugate gradients.
 //!
 //! Prediction (Titsias eq. 6, the optimal `q(u)`): mean `K_*u β / s`, latent variance
 //! `k_** - |L⁻¹ k_u*|² + |L_P⁻¹ k_u*|²` with `L_P = L L_B` (the factor of `P`). At `Z = X` the
@@ -499,7 +502,9 @@ pub fn fit_sparse(
 /// Trains the sparse GP with at most `m` inducing inputs: starting hyperparameters as the
 /// exact GP's ([`initial_kernel`], then the warm start on a subset), inducing inputs by
 /// [`greedy_variance`] at those hyperparameters, then the bound maximised over the kernel's
-/// hyperparameters (and `σn²` if asked) with the same optimiser and search coordinates.
+/// hyperparameters (and `σn²` if asked; see the module documentation). When the warm start's
+/// point has no finite bound or gradient, selection and training start again from the
+/// data-driven start.
 pub fn train_sparse(
     kernel: Kernel,
     x: &DMatrix<f64>,
