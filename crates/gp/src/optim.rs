@@ -414,3 +414,119 @@ where
     };
     finish(s, cur, o.max_iter, exit)
 }
+
+/// Minimises a function of one variable from `x0`, given its value and derivative at every
+/// point (`fg(x) = (f, f')`): the sparse GP's bound after its signal variance has been profiled
+/// out (`crate::sparse_gpr`), where only `log l` is left.
+///
+/// Safeguarded secant on the derivative: the next point is the root of the secant through the
+/// two best points' derivatives when that model is convex; without a bracket the step is
+/// kept between one and four times the previous one (a first step of `max_step`), so that a
+/// minimum far away (the NN kernel's linear limit, approached exponentially) is reached in a
+/// few growing steps; once a
+/// minimiser is bracketed (a derivative sign change, or a higher value beyond the best point)
+/// steps stay inside the bracket, falling back to bisection when the secant leaves it or the
+/// best point's derivative did not halve over two steps. Stops as [`minimize`] does, when
+/// `|f'| <= grad_tol · max(1, |f|)` at the best point ([`ExitState::Converged`]); after
+/// `max_iter` evaluations ([`ExitState::MaxIterations`]); or when the bracket has shrunk to
+/// rounding without meeting the tolerance ([`ExitState::LineSearchFailed`]). A non-finite value
+/// counts as higher than any finite one. The report's `iterations` and `evaluations` are both
+/// the number of points evaluated (each with its derivative).
+pub fn minimize_scalar<F>(mut fg: F, x0: f64, o: &CgOptions) -> CgReport
+where
+    F: FnMut(f64) -> (f64, f64),
+{
+    #[derive(Clone, Copy)]
+    struct Pt {
+        x: f64,
+        f: f64,
+        g: f64,
+    }
+    let mut evals = 0;
+    let mut eval = |x: f64, evals: &mut usize| {
+        let (f, g) = fg(x);
+        *evals += 1;
+        if f.is_finite() && g.is_finite() {
+            Pt { x, f, g }
+        } else {
+            Pt { x, f: f64::INFINITY, g: f64::NAN }
+        }
+    };
+    let report = |b: Pt, evals: usize, exit: ExitState| CgReport {
+        x: vec![b.x],
+        f: b.f,
+        grad: if b.g.is_finite() { vec![b.g] } else { Vec::new() },
+        iterations: evals,
+        evaluations: evals,
+        gradient_evaluations: evals,
+        exit,
+    };
+    let mut best = eval(x0, &mut evals);
+    if !best.f.is_finite() {
+        return report(best, evals, ExitState::NonFiniteStart);
+    }
+    let converged = |p: &Pt| p.g.abs() <= o.grad_tol * p.f.abs().max(1.0);
+    // The minimiser lies in (lo, hi) (unimodality assumed; infinite while unknown).
+    let (mut lo, mut hi) = (f64::NEG_INFINITY, f64::INFINITY);
+    // The previous point whose derivative, with the best one's, makes the secant.
+    let mut other: Option<Pt> = None;
+    let mut step = o.max_step;
+    let mut slopes = [f64::INFINITY; 2];
+    while evals < o.max_iter {
+        if converged(&best) {
+            return report(best, evals, ExitState::Converged);
+        }
+        if best.g > 0.0 {
+            hi = hi.min(best.x);
+        } else {
+            lo = lo.max(best.x);
+        }
+        let dir = -best.g.signum();
+        // Secant root: x - f'(x) / c with c the secant slope of f' (the model's curvature).
+        let secant = other.and_then(|p| {
+            let c = (best.g - p.g) / (best.x - p.x);
+            let x = best.x - best.g / c;
+            (c > 0.0 && x.is_finite()).then_some(x)
+        });
+        let x = if lo.is_finite() && hi.is_finite() {
+            // Bracketed: the best point is an end of (lo, hi) and the descent side is inside.
+            let width = hi - lo;
+            if width <= 1e-12 * lo.abs().max(hi.abs()).max(1.0) {
+                return report(best, evals, ExitState::LineSearchFailed);
+            }
+            // Secant steps must halve the best derivative every two steps, or bisect.
+            let progress = best.g.abs() <= 0.5 * slopes[0];
+            slopes = [slopes[1], best.g.abs()];
+            match secant {
+                Some(x) if x > lo && x < hi && progress => x,
+                _ => 0.5 * (lo + hi),
+            }
+        } else {
+            // Unbounded on the descent side (the known bound is the best point or behind it).
+            let len = secant.map_or(step, |x| ((x - best.x) * dir).clamp(2.0 * step, 8.0 * step));
+            best.x + dir * len
+        };
+        let p = eval(x, &mut evals);
+        step = (p.x - best.x).abs().max(f64::MIN_POSITIVE);
+        if p.f < best.f {
+            // The old best bounds the minimiser on its side.
+            if best.x < p.x {
+                lo = lo.max(best.x);
+            } else {
+                hi = hi.min(best.x);
+            }
+            other = Some(best);
+            best = p;
+        } else {
+            // Higher (or not finite): the minimiser lies between the best point and this one.
+            if p.x > best.x {
+                hi = hi.min(p.x);
+            } else {
+                lo = lo.max(p.x);
+            }
+            other = p.g.is_finite().then_some(p).or(other);
+        }
+    }
+    let exit = if converged(&best) { ExitState::Converged } else { ExitState::MaxIterations };
+    report(best, evals, exit)
+}

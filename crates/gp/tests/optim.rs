@@ -1,5 +1,5 @@
 //! The conjugate-gradient optimiser on functions with known minima, and its exit states.
-use gp::optim::{minimize, minimize_lazy, CgOptions, ExitState};
+use gp::optim::{minimize, minimize_lazy, minimize_scalar, CgOptions, ExitState};
 
 fn rosenbrock(x: &[f64]) -> (f64, Vec<f64>) {
     let (a, b) = (x[0], x[1]);
@@ -167,4 +167,48 @@ fn lazy_objective_failing_its_gradient_is_treated_as_too_far() {
     );
     assert_eq!(r.exit, ExitState::Converged, "{r:?}");
     assert!((r.x[0] - 2.0).abs() < 1e-8, "{r:?}");
+}
+
+/// The scalar search reaches the minimiser of smooth functions on either side of the start,
+/// near or far, to the gradient tolerance, in few evaluations (secant steps converge
+/// superlinearly once bracketed).
+#[test]
+fn scalar_search_finds_minimisers_near_and_far() {
+    let opts = CgOptions { max_step: 0.5, grad_tol: 1e-10, ..Default::default() };
+    // f = cosh(x - t) - 1 + 3 (x - t)²: minimum 0 at t, curvature 7.
+    for t in [-30.0, -1.7, -0.2, 0.0, 0.05, 0.4, 2.5, 40.0] {
+        let f = |x: f64| ((x - t).cosh() - 1.0 + 3.0 * (x - t).powi(2), (x - t).sinh() + 6.0 * (x - t));
+        let r = minimize_scalar(f, 0.0, &opts);
+        assert_eq!(r.exit, ExitState::Converged, "t = {t}: {r:?}");
+        assert!((r.x[0] - t).abs() < 1e-9, "t = {t}: {r:?}");
+        assert!(r.evaluations <= 30, "t = {t}: {} evaluations", r.evaluations);
+    }
+}
+
+/// A function decreasing toward an infimum at +∞ (as the NN kernel's bound toward its linear
+/// limit): steps grow geometrically, and the search stops by the tolerance close to the
+/// infimum instead of creeping.
+#[test]
+fn scalar_search_follows_an_asymptote() {
+    let f = |x: f64| (100.0 * (-2.0 * x).exp() - 1000.0, -200.0 * (-2.0 * x).exp());
+    let opts = CgOptions { max_step: 0.5, grad_tol: 1e-5, ..Default::default() };
+    let r = minimize_scalar(f, 0.0, &opts);
+    assert_eq!(r.exit, ExitState::Converged, "{r:?}");
+    // |f'| <= 1e-5 |f| = 0.01 means f within 0.005 of the infimum.
+    assert!(r.f + 1000.0 <= 0.005, "{r:?}");
+    assert!(r.evaluations <= 12, "{r:?}");
+}
+
+/// Non-finite values (a failed factorisation) bound the search like higher values; a
+/// non-finite start is reported as such.
+#[test]
+fn scalar_search_treats_non_finite_values_as_too_far() {
+    // Minimum at 0.8; undefined beyond 1.
+    let f = |x: f64| if x < 1.0 { ((x - 0.8).powi(2) - (1.0 - x).ln() * 1e-3, 2.0 * (x - 0.8) + 1e-3 / (1.0 - x)) } else { (f64::NAN, f64::NAN) };
+    let opts = CgOptions { max_step: 4.0, grad_tol: 1e-9, ..Default::default() };
+    let r = minimize_scalar(f, -3.0, &opts);
+    assert_eq!(r.exit, ExitState::Converged, "{r:?}");
+    assert!(r.x[0] < 1.0 && f(r.x[0]).1.abs() <= 1e-9 * r.f.abs().max(1.0), "{r:?}");
+    let r = minimize_scalar(f, 2.0, &opts);
+    assert_eq!(r.exit, ExitState::NonFiniteStart);
 }

@@ -184,3 +184,36 @@ fn bad_inducing_inputs_are_rejected() {
     assert!(sparse_bound(&k, 0.1, &nan, &x, &y, 0.0, &mut Vec::new()).is_err());
     assert!(sparse_bound(&k, 0.0, &x.rows(0, 2).into_owned(), &x, &y, 0.0, &mut Vec::new()).is_err());
 }
+
+/// Training maximises the bound over `(log l, log σf)` although it searches over `log l` alone
+/// (`σf` profiled out in closed form): at the returned hyperparameters both partial
+/// derivatives of the bound vanish to the optimiser's tolerance, and no nearby point of a
+/// grid in both coordinates has a higher bound.
+#[test]
+fn profiled_training_reaches_a_stationary_maximum_in_both_hyperparameters() {
+    let (x, y) = data(300, 10);
+    for k in [Kernel::neural_network(1.0, 1.0), Kernel::SquaredExponential { l: 1.0, sigma_f: 1.0 }, Kernel::Linear { sigma_f: 1.0 }] {
+        let opts = GprOptions { sparse: Sparsity::Inducing(40), warm_start_pairs: 0, ..Default::default() };
+        let (model, rep) = Gpr::train(k, &x, &y, &opts).unwrap();
+        assert_eq!(rep.exit, Some(gp::optim::ExitState::Converged), "{k:?}: {rep:?}");
+        let z = model.sparse().unwrap().inducing().clone();
+        let jitter = gp::sparse_gpr::KUU_JITTER;
+        let (b, g) = sparse_bound_grad(&model.kernel, 0.1, false, &z, &x, &y, jitter, &mut Vec::new()).unwrap();
+        assert!((b - rep.lml).abs() < 1e-9 * b.abs(), "{k:?}: {b} vs {}", rep.lml);
+        for gi in &g {
+            assert!(gi.abs() <= 1e-5 * b.abs(), "{k:?}: gradient {g:?} at bound {b}");
+        }
+        let theta = model.kernel.log_params();
+        for d0 in [-0.05, 0.0, 0.05] {
+            for d1 in [-0.05, 0.0, 0.05] {
+                let mut t = theta.clone();
+                t[0] += d0;
+                if t.len() == 2 {
+                    t[1] += d1;
+                }
+                let near = sparse_bound(&model.kernel.with_log_params(&t), 0.1, &z, &x, &y, jitter, &mut Vec::new()).unwrap();
+                assert!(near <= b + 1e-9 * b.abs(), "{k:?}: {near} at {t:?} above {b}");
+            }
+        }
+    }
+}

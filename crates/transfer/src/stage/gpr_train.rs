@@ -148,12 +148,26 @@ pub fn run(p: &Params) -> anyhow::Result<()> {
     };
     // Frame rates of the set's source and target subjects, from the aligned motions.
     let mut set_fps: Option<(f64, f64)> = None;
-    for files in p.pair.chunks(3) {
-        let loaded = PairFiles::load(files)?;
-        let fps = (
-            loaded.source.capture.require_fps().with_context(|| files[0].display().to_string())?,
-            loaded.target.capture.require_fps().with_context(|| files[1].display().to_string())?,
-        );
+    // Every pair read, hashed and encoded in parallel (one file per thread), then checked in
+    // the command line's order, so that the first bad pair is the one reported.
+    let loaded: Vec<anyhow::Result<_>> = {
+        use rayon::prelude::*;
+        p.pair
+            .par_chunks(3)
+            .map(|files| {
+                let (loaded, hashes) = PairFiles::load_hashed(files)?;
+                let fps = (
+                    loaded.source.capture.require_fps().with_context(|| files[0].display().to_string())?,
+                    loaded.target.capture.require_fps().with_context(|| files[1].display().to_string())?,
+                );
+                let data = loaded.encode(set_source_pca, set_target_pca)?;
+                Ok((data, fps, hashes))
+            })
+            .collect()
+    };
+    let mut pair_hashes = Vec::new();
+    for (files, item) in p.pair.chunks(3).zip(loaded) {
+        let (data, fps, hashes) = item?;
         if let Some(first) = set_fps.filter(|f| *f != fps) {
             bail!(
                 "{}: frame rates {} and {} differ from the first pair's {} and {}",
@@ -165,8 +179,8 @@ pub fn run(p: &Params) -> anyhow::Result<()> {
             );
         }
         set_fps = Some(fps);
-        let data = loaded.encode(set_source_pca, set_target_pca)?;
         pairs.push(if p.reverse { data.reversed() } else { data });
+        pair_hashes.extend(files.iter().zip(hashes));
     }
     let Some((set_source_fps, set_target_fps)) = set_fps else {
         bail!("no --pair given");
@@ -207,8 +221,8 @@ pub fn run(p: &Params) -> anyhow::Result<()> {
         .with_params(&params)?
         .with_input(&p.source_pca)?
         .with_input(&p.target_pca)?;
-    for f in &p.pair {
-        header = header.with_input(f)?;
+    for (f, sha256) in pair_hashes {
+        header.inputs.push(mesh_core::artifact::InputRecord { path: f.display().to_string(), sha256 });
     }
     if let Some(unit) = unit {
         let spin = mesh_core::cli::spinner(
