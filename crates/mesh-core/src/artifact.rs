@@ -178,6 +178,19 @@ pub trait Artifact: Serialize + DeserializeOwned {
         Ok((header, payload))
     }
 
+    /// [`Artifact::load`], and the SHA-256 of the file for an input record (the value of
+    /// [`sha256_file`], from the read and the hash that verify the checksum: one pass).
+    fn load_hashed(path: impl AsRef<Path>) -> Result<(Self, String)> {
+        let path = path.as_ref();
+        let bytes = crate::input::read_regular_file(path)?;
+        let (_, payload, sha256): (Header, Self, String) =
+            decode_artifact_hashed(&bytes, Self::KIND, Self::VERSION).map_err(|msg| Error::file(path, msg))?;
+        payload
+            .validate()
+            .map_err(|msg| Error::file(path, format!("invalid '{}' payload: {msg}", Self::KIND)))?;
+        Ok((payload, sha256))
+    }
+
     /// Decodes and validates an artifact held in memory (the error without the file name).
     fn decode(bytes: &[u8]) -> std::result::Result<(Header, Self), String> {
         let (header, payload): (Header, Self) = decode_artifact(bytes, Self::KIND, Self::VERSION)?;
@@ -337,6 +350,16 @@ pub fn decode_artifact<T: DeserializeOwned>(
     kind: &str,
     kind_version: u32,
 ) -> std::result::Result<(Header, T), String> {
+    decode_artifact_hashed(bytes, kind, kind_version).map(|(h, t, _)| (h, t))
+}
+
+/// [`decode_artifact`], and the SHA-256 of `bytes` (lowercase hex) from the same pass of the
+/// hash that verifies the checksum.
+pub fn decode_artifact_hashed<T: DeserializeOwned>(
+    bytes: &[u8],
+    kind: &str,
+    kind_version: u32,
+) -> std::result::Result<(Header, T, String), String> {
     let raw = split(bytes)?;
     if raw.kind != kind {
         return Err(format!(
@@ -353,7 +376,7 @@ pub fn decode_artifact<T: DeserializeOwned>(
     let header = parse_header(raw.header_json)?;
     let payload = decode_payload::<T>(raw.payload)
         .map_err(|e| format!("'{kind}' payload does not decode: {e}"))?;
-    Ok((header, payload))
+    Ok((header, payload, raw.file_sha256))
 }
 
 /// SHA-256 of a file's bytes as lowercase hex (streamed, for input records).
@@ -389,6 +412,8 @@ struct RawArtifact<'a> {
     kind_version: u32,
     header_json: &'a [u8],
     payload: &'a [u8],
+    /// SHA-256 of the whole file, lowercase hex ([`sha256_file`]'s value).
+    file_sha256: String,
 }
 
 /// Bounds-checked reader over the file bytes.
@@ -470,9 +495,14 @@ fn split(bytes: &[u8]) -> std::result::Result<RawArtifact<'_>, String> {
             c.remaining()
         ));
     }
-    if Sha256::digest(&bytes[..body_end]).as_slice() != stored {
+    let mut hasher = Sha256::new();
+    hasher.update(&bytes[..body_end]);
+    if hasher.clone().finalize().as_slice() != stored {
         return Err("checksum mismatch (file corrupt)".to_string());
     }
+    // The whole file's SHA-256 (what input records hold) continues the checksum's hash.
+    hasher.update(stored);
+    let file_sha256 = hex(&hasher.finalize());
     let kind = std::str::from_utf8(kind).map_err(|_| "corrupt: kind is not UTF-8".to_string())?;
     Ok(RawArtifact {
         container_version,
@@ -480,6 +510,7 @@ fn split(bytes: &[u8]) -> std::result::Result<RawArtifact<'_>, String> {
         kind_version,
         header_json,
         payload,
+        file_sha256,
     })
 }
 

@@ -316,3 +316,18 @@ fn compact_integer_payloads_decode() {
     let (_, back): (Header, (Vec<u32>, Vec<usize>, Vec<Vec<u32>>, Vec<[u32; 3]>)) = read_artifact(&path, "ints", 1).unwrap();
     assert_eq!(back, payload);
 }
+
+/// `load_hashed` gives the payload `load` gives and the file's SHA-256 as `sha256_file`
+/// computes it, and fails as `load` does on a corrupt file.
+#[test]
+fn load_hashed_gives_the_file_hash_of_sha256_file() {
+    let dir = tempfile::tempdir().unwrap();
+    let (path, mut bytes) = good_file(dir.path());
+    let (payload, sha) = Model::load_hashed(&path).unwrap();
+    assert_eq!(payload, Model::load(&path).unwrap());
+    assert_eq!(sha, sha256_file(&path).unwrap());
+    let last = bytes.len() - 40;
+    bytes[last] ^= 1;
+    std::fs::write(&path, &bytes).unwrap();
+    assert!(err_of(Model::load_hashed(&path)).contains("checksum mismatch"));
+}

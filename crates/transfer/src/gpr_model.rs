@@ -346,12 +346,6 @@ impl PairData {
     }
 }
 
-/// An artifact loaded (decoded and validated, [`Artifact::load`]) and the SHA-256 of its file
-/// for the output header's input record (`mesh_core::artifact::sha256_file`), in one task.
-fn load_hashed<T: Artifact>(path: &std::path::Path) -> Result<(T, String)> {
-    Ok((T::load(path)?, mesh_core::artifact::sha256_file(path)?))
-}
-
 /// One training pair as the stages name it on the command line (`--pair SOURCE TARGET CORR`):
 /// the aligned motions of the set's source and target subjects and their correspondences.
 pub struct PairFiles {
@@ -384,8 +378,8 @@ impl PairFiles {
             return Err(Error::invalid("--pair takes three files"));
         };
         let ((source, target), corr) = rayon::join(
-            || rayon::join(|| load_hashed::<AlignedMotion>(s), || load_hashed::<AlignedMotion>(t)),
-            || load_hashed::<Correspondences>(c),
+            || rayon::join(|| AlignedMotion::load_hashed(s), || AlignedMotion::load_hashed(t)),
+            || Correspondences::load_hashed(c),
         );
         let ((source, hs), (target, ht), (corr, hc)) = (source?, target?, corr?);
         Ok((PairFiles { source, target, corr, paths: [s.clone(), t.clone()] }, [hs, ht, hc]))
