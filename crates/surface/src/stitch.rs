@@ -19,7 +19,7 @@
 
 use crate::deformation_gradient::{GradientOperator, StiffnessPattern};
 use crate::optimal_boundary::{discrepancy, optimal_loop_in, BoundaryLoop};
-use crate::poisson::PoissonSolver;
+use crate::poisson::{Factorisation, PoissonSolver};
 use crate::{check_faces, check_vertices, Error, Result};
 use mesh_core::rigid::{procrustes, RigidMotion};
 use mesh_core::topology::Topology;
@@ -163,6 +163,7 @@ pub struct Stitcher {
     layout: PartLayout,
     pattern: StiffnessPattern,
     solver: Option<PoissonSolver>,
+    factorisation: Factorisation,
     align_children: bool,
 }
 
@@ -173,8 +174,18 @@ impl Stitcher {
             layout,
             pattern,
             solver: None,
+            factorisation: Factorisation::Auto,
             align_children: true,
         }
+    }
+
+    /// The sparse Cholesky factorisation of the merge's Poisson system (default
+    /// [`Factorisation::Auto`]; [`Factorisation::Supernodal`] is faster on body meshes and
+    /// agrees to rounding).
+    pub fn with_factorisation(mut self, how: Factorisation) -> Self {
+        self.factorisation = how;
+        self.solver = None;
+        self
     }
 
     /// With `false`, children are taken as given (already in the root part's frame, e.g. parts
@@ -182,6 +193,10 @@ impl Stitcher {
     pub fn with_band_alignment(mut self, align: bool) -> Self {
         self.align_children = align;
         self
+    }
+    /// The factorisation of the merge's Poisson system.
+    pub fn factorisation(&self) -> Factorisation {
+        self.factorisation
     }
     pub fn layout(&self) -> &PartLayout {
         &self.layout
@@ -340,7 +355,13 @@ impl Stitcher {
         let l = self.pattern.fill(&op);
         match self.solver.as_mut() {
             Some(s) => s.refactor(l, &fixed)?,
-            None => self.solver = Some(PoissonSolver::new(l, &fixed)?),
+            None => {
+                self.solver = Some(PoissonSolver::with_factorisation(
+                    l,
+                    &fixed,
+                    self.factorisation,
+                )?)
+            }
         }
         let vertices = self
             .solver

@@ -272,3 +272,30 @@ fn closed_form_triangle_rotation_equals_svd_polar() {
     let flat = [Vector3::zeros(), Vector3::x(), 2.0 * Vector3::x()];
     assert!(triangle_rotation(&flat, &tri(1)).is_none());
 }
+
+#[test]
+fn supernodal_poisson_equals_the_default_factorisation() {
+    use surface::poisson::Factorisation;
+    let (v, f) = tube(24, 20, 1.0, 0.25, true);
+    let op = GradientOperator::new(&v, &f);
+    let target = bend(&v, 1.5, 1.0, 1.2);
+    let rhs = op.divergence(&op.gradient(&target));
+    let mut auto = PoissonSolver::new(&op.stiffness(), &[0]).unwrap();
+    let mut sn =
+        PoissonSolver::with_factorisation(&op.stiffness(), &[0], Factorisation::Supernodal)
+            .unwrap();
+    assert_eq!(sn.factorisation(), Factorisation::Supernodal);
+    for fixed in [vec![0usize], vec![3, 100, 200], vec![7, 8, 9, 300]] {
+        auto.refactor(&op.stiffness(), &fixed).unwrap();
+        sn.refactor(&op.stiffness(), &fixed).unwrap();
+        // Dirichlet values off the target, so that the solution is not the target itself.
+        let values: Vec<Vector3<f64>> =
+            fixed.iter().map(|&i| target[i] + Vector3::new(0.0, 0.1, 0.0)).collect();
+        let a = auto.solve(&rhs, &values).unwrap();
+        let b = sn.solve(&rhs, &values).unwrap();
+        let d = max_dist(&a, &b);
+        assert!(d < 1e-12, "fixed {fixed:?}: {d}");
+        assert!((b[fixed[0]] - values[0]).norm() < 1e-12);
+    }
+    assert_eq!(sn.factorisation(), Factorisation::Supernodal);
+}
