@@ -331,8 +331,32 @@ impl Energy for TrajectoryEnergy<'_> {
     /// Kernel columns `k_X(x_t, X_in)` for the T−1 inputs, then one batched pair of
     /// triangular solves (`L⁻¹ K*` for the variances, `K_X⁻¹ K*` for their gradients); the
     /// loops over the M training transitions run on per-coordinate arrays (see
-    /// [`TrajectoryEnergy`]) and vectorise.
+    /// [`TrajectoryEnergy`]) and vectorise. Compiled a second time for AVX2 and picked at run
+    /// time (no FMA contraction: both copies give the same bits).
     fn energy_grad(&self, q: &[f64], grad: &mut [f64]) -> Option<f64> {
+        #[cfg(target_arch = "x86_64")]
+        if std::arch::is_x86_feature_detected!("avx2") {
+            // SAFETY: the CPU supports AVX2 (checked just above).
+            return unsafe { self.energy_grad_avx2(q, grad) };
+        }
+        self.energy_grad_impl(q, grad)
+    }
+}
+
+/// Steps whose sums over the M training transitions are accumulated side by side: each step
+/// keeps its own accumulator, added in the same order as one step alone (same bits), and the
+/// independent chains of additions overlap instead of waiting on one another.
+const STEP_BATCH: usize = 4;
+
+impl TrajectoryEnergy<'_> {
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx2")]
+    fn energy_grad_avx2(&self, q: &[f64], grad: &mut [f64]) -> Option<f64> {
+        self.energy_grad_impl(q, grad)
+    }
+
+    #[inline(always)]
+    fn energy_grad_impl(&self, q: &[f64], grad: &mut [f64]) -> Option<f64> {
         let d = self.x1.len();
         let steps = self.len - 1;
         let k = self.pred.dynamics_kernel();
@@ -354,7 +378,6 @@ impl Energy for TrajectoryEnergy<'_> {
         let mut kst = Mat::<f64>::zeros(m, steps);
         let mut dist = vec![0.0; m];
         let mut dot = vec![0.0; m];
-        let mut mu = vec![0.0; steps * d];
         for t in 0..steps {
             let xt = &p[t * d..(t + 1) * d];
             dist.fill(0.0);
@@ -377,9 +400,30 @@ impl Energy for TrajectoryEnergy<'_> {
                 *r = exp_fast(half_gamma * s + ln_var);
                 *kv = *r + k.lin * dp;
             }
-            // Mean (3DV eq. 9): μ_t = (K_X⁻¹ X_out)ᵀ k_t.
+        }
+        // Mean (3DV eq. 9): μ_t = (K_X⁻¹ X_out)ᵀ k_t, each sum over i in order from -0.0 (as
+        // `Iterator::sum`).
+        let mut mu = vec![0.0; steps * d];
+        let col = |t: usize| {
+            kst.col(t)
+                .try_as_col_major()
+                .expect("contiguous")
+                .as_slice()
+        };
+        for t0 in (0..steps).step_by(STEP_BATCH) {
+            let nb = STEP_BATCH.min(steps - t0);
+            let cols: [&[f64]; STEP_BATCH] = std::array::from_fn(|j| col(t0 + j.min(nb - 1)));
             for c in 0..d {
-                mu[t * d + c] = kcol.iter().zip(&self.a[c]).map(|(kv, a)| kv * a).sum();
+                let a = &self.a[c];
+                let mut acc = [-0.0f64; STEP_BATCH];
+                for i in 0..m {
+                    for j in 0..STEP_BATCH {
+                        acc[j] += cols[j][i] * a[i];
+                    }
+                }
+                for j in 0..nb {
+                    mu[(t0 + j) * d + c] = acc[j];
+                }
             }
         }
         // U = L⁻¹ K* gives k*ᵀ K_X⁻¹ k* (3DV eq. 10); V = L⁻ᵀ U = K_X⁻¹ K* its gradient.
@@ -389,11 +433,12 @@ impl Energy for TrajectoryEnergy<'_> {
         let kvk: Vec<f64> = (0..steps).map(|t| v.col(t).squared_norm_l2()).collect();
         chol.half_solve_t_in_place(v.as_mut());
 
+        // Energy and ∂/∂x_{t+1} of every step, in step order.
         grad.iter_mut().for_each(|g| *g = 0.0);
         let mut energy = 0.0;
-        let mut e = vec![0.0; d];
-        let mut w = vec![0.0; m];
-        let mut wr = vec![0.0; m];
+        let mut err = vec![0.0; steps * d];
+        let mut var = vec![0.0; steps];
+        let mut dvar = vec![0.0; steps];
         for t in 0..steps {
             let xt = &p[t * d..(t + 1) * d];
             let s = self.variance_scale * (k.self_cov(xt) - kvk[t]);
@@ -401,46 +446,67 @@ impl Energy for TrajectoryEnergy<'_> {
                 return None;
             }
             let next = &q[t * d..(t + 1) * d];
+            let e = &mut err[t * d..(t + 1) * d];
             for c in 0..d {
                 e[c] = next[c] - mu[t * d + c];
             }
             let e2: f64 = e.iter().map(|v| v * v).sum();
             energy += 0.5 * e2 / s + 0.5 * d as f64 * s.ln();
-            // ∂/∂x_{t+1}
             for c in 0..d {
                 grad[t * d + c] += e[c] / s;
             }
-            if t == 0 {
-                continue; // x_1 is fixed
-            }
-            // ∂/∂x_t through μ_t and s_t: Σ_i w_i ∂k_i/∂x_t with
-            // w_i = −(A e)_i / s − 2 c_s (K_X⁻¹ k_t)_i and ∂k_i/∂x_t = −γ r_i (x_t − x_i) + lin x_i.
+            var[t] = s;
             // ∂E/∂s times ∂s/∂s_raw = κ (s = κ s_raw; the terms below differentiate s_raw).
-            let cs = (-0.5 * e2 / (s * s) + 0.5 * d as f64 / s) * self.variance_scale;
-            let vcol = v.col(t).try_as_col_major().expect("contiguous").as_slice();
-            let rcol = &rbf[t * m..(t + 1) * m];
-            for (wi, &vi) in w.iter_mut().zip(vcol) {
-                *wi = -2.0 * cs * vi;
-            }
-            for c in 0..d {
-                let f = -e[c] / s;
-                for (wi, &ai) in w.iter_mut().zip(&self.a[c]) {
-                    *wi += f * ai;
+            dvar[t] = (-0.5 * e2 / (s * s) + 0.5 * d as f64 / s) * self.variance_scale;
+        }
+        // ∂/∂x_t through μ_t and s_t (t ≥ 1: x_1 is fixed): Σ_i w_i ∂k_i/∂x_t with
+        // w_i = −(A e)_i / s − 2 c_s (K_X⁻¹ k_t)_i and ∂k_i/∂x_t = −γ r_i (x_t − x_i) + lin x_i.
+        // Batches of steps: w and w_i r_i interleaved by step (`w[i·B + j]` for step t0 + j).
+        let mut w = vec![0.0; m * STEP_BATCH];
+        let mut wr = vec![0.0; m * STEP_BATCH];
+        for t0 in (1..steps).step_by(STEP_BATCH) {
+            let nb = STEP_BATCH.min(steps - t0);
+            for j in 0..STEP_BATCH {
+                // Lanes past the last step repeat it (computed, not used).
+                let t = t0 + j.min(nb - 1);
+                let (s, cs) = (var[t], dvar[t]);
+                let vcol = v.col(t).try_as_col_major().expect("contiguous").as_slice();
+                let rcol = &rbf[t * m..(t + 1) * m];
+                for (i, &vi) in vcol.iter().enumerate() {
+                    w[i * STEP_BATCH + j] = -2.0 * cs * vi;
+                }
+                for c in 0..d {
+                    let f = -err[t * d + c] / s;
+                    for (i, &ai) in self.a[c].iter().enumerate() {
+                        w[i * STEP_BATCH + j] += f * ai;
+                    }
+                }
+                for (i, &ri) in rcol.iter().enumerate() {
+                    wr[i * STEP_BATCH + j] = -k.gamma * w[i * STEP_BATCH + j] * ri;
                 }
             }
-            let mut sum_wr = 0.0;
-            for ((o, &wi), &ri) in wr.iter_mut().zip(&w).zip(rcol) {
-                *o = -k.gamma * wi * ri;
-                sum_wr += *o;
-            }
-            let g = &mut grad[(t - 1) * d..t * d];
-            for c in 0..d {
-                let (mut wr_x, mut w_x) = (0.0, 0.0);
-                for ((&o, &wi), &xi) in wr.iter().zip(&w).zip(&self.xin[c]) {
-                    wr_x += o * xi;
-                    w_x += wi * xi;
+            let mut sum_wr = [0.0f64; STEP_BATCH];
+            for i in 0..m {
+                for j in 0..STEP_BATCH {
+                    sum_wr[j] += wr[i * STEP_BATCH + j];
                 }
-                g[c] += sum_wr * xt[c] - wr_x + k.lin * w_x + 2.0 * cs * k.lin * xt[c];
+            }
+            for c in 0..d {
+                let xin = &self.xin[c];
+                let (mut wr_x, mut w_x) = ([0.0f64; STEP_BATCH], [0.0f64; STEP_BATCH]);
+                for (i, &xi) in xin.iter().enumerate() {
+                    for j in 0..STEP_BATCH {
+                        wr_x[j] += wr[i * STEP_BATCH + j] * xi;
+                        w_x[j] += w[i * STEP_BATCH + j] * xi;
+                    }
+                }
+                for j in 0..nb {
+                    let t = t0 + j;
+                    let xt = p[t * d + c];
+                    grad[(t - 1) * d + c] += sum_wr[j] * xt - wr_x[j]
+                        + k.lin * w_x[j]
+                        + 2.0 * dvar[t] * k.lin * xt;
+                }
             }
         }
         Some(energy)
