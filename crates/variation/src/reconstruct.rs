@@ -10,6 +10,10 @@
 //! (as `capture::assemble`), about 100 times cheaper, used for bulk decoding and statistics.
 
 use gpdm::predict::Predictor;
+use std::sync::Mutex;
+
+use surface::poisson::Factorisation;
+use surface::stitch::Stitcher;
 use mesh_core::rigid::{procrustes, rigid_from_moments, RigidMotion};
 use mesh_core::{Error, Result};
 use nalgebra::{DMatrix, Vector3, Vector6};
@@ -46,6 +50,23 @@ pub struct Decoder<'a> {
     /// Per child part: (its local index, parent's local index) of every band vertex.
     bands: Vec<Vec<(usize, usize)>>,
     coverage: Vec<u32>,
+    /// Stitchers (each with its symbolic factorisation) lent to the threads that stitch
+    /// frames, and returned after.
+    stitchers: Mutex<Vec<Stitcher>>,
+}
+
+/// A stitcher borrowed from [`Decoder`]'s pool; goes back to it when dropped.
+struct Lease<'d> {
+    pool: &'d Mutex<Vec<Stitcher>>,
+    stitcher: Option<Stitcher>,
+}
+
+impl Drop for Lease<'_> {
+    fn drop(&mut self) {
+        if let Some(s) = self.stitcher.take() {
+            self.pool.lock().unwrap_or_else(|e| e.into_inner()).push(s);
+        }
+    }
 }
 
 impl<'a> Decoder<'a> {
@@ -159,6 +180,7 @@ impl<'a> Decoder<'a> {
             torso_extra: None,
             bands,
             coverage,
+            stitchers: Mutex::new(Vec::new()),
         })
     }
 
@@ -234,16 +256,66 @@ impl<'a> Decoder<'a> {
             .collect()
     }
 
-    /// Merged body frames (template-aligned) of decoded parts.
+    /// Merged body frames (template-aligned) of decoded parts. Stitching factorises each
+    /// frame's Poisson system supernodally ([`Decoder::assemble_with`]).
     pub fn assemble(
         &self,
         decoded: &DecodedParts,
         how: Assembly,
     ) -> Result<Vec<Vec<Vector3<f64>>>> {
+        self.assemble_with(decoded, how, Factorisation::Supernodal)
+    }
+
+    /// [`Decoder::assemble`] with a chosen factorisation of the stitch systems (the results
+    /// agree to rounding).
+    pub fn assemble_with(
+        &self,
+        decoded: &DecodedParts,
+        how: Assembly,
+        factorisation: Factorisation,
+    ) -> Result<Vec<Vec<Vector3<f64>>>> {
         let n_frames = decoded.displacements.len();
-        let mut stitcher = match how {
+        if how == Assembly::Average || self.model.parts.len() < 2 {
             // A single part needs no merging.
-            Assembly::Stitch if self.model.parts.len() > 1 => {
+            return Ok((0..n_frames)
+                .map(|t| {
+                    let parts: Vec<&[Vector3<f64>]> =
+                        decoded.parts.iter().map(|p| p[t].as_slice()).collect();
+                    let body = self.assemble_average(&parts);
+                    procrustes(&body, &self.model.template, None).apply_all(&body)
+                })
+                .collect());
+        }
+        // Frames are stitched independently (each refactorises its own system), in parallel,
+        // with stitchers lent from the pool.
+        (0..n_frames)
+            .into_par_iter()
+            .map_init(
+                || self.lend_stitcher(factorisation),
+                |lease, t| {
+                    let s = match lease {
+                        Ok(l) => l.stitcher.as_mut().expect("held until dropped"),
+                        Err(e) => return Err(Error::invalid(e.to_string())),
+                    };
+                    let parts: Vec<Vec<Vector3<f64>>> =
+                        decoded.parts.iter().map(|p| p[t].clone()).collect();
+                    let body = s.stitch(&parts)?.vertices;
+                    Ok(procrustes(&body, &self.model.template, None).apply_all(&body))
+                },
+            )
+            .collect()
+    }
+
+    /// A stitcher of this model's parts with `factorisation`, from the pool or new.
+    fn lend_stitcher(&self, factorisation: Factorisation) -> Result<Lease<'_>> {
+        let pooled = {
+            let mut pool = self.stitchers.lock().unwrap_or_else(|e| e.into_inner());
+            let i = pool.iter().position(|s| s.factorisation() == factorisation);
+            i.map(|i| pool.swap_remove(i))
+        };
+        let stitcher = match pooled {
+            Some(s) => s,
+            None => {
                 let parts = self
                     .model
                     .parts
@@ -258,27 +330,13 @@ impl<'a> Decoder<'a> {
                     self.model.faces.clone(),
                     parts,
                 )?;
-                Some(surface::stitch::Stitcher::new(layout))
+                Stitcher::new(layout).with_factorisation(factorisation)
             }
-            _ => None,
         };
-        (0..n_frames)
-            .map(|t| {
-                let body = match stitcher.as_mut() {
-                    Some(s) => {
-                        let parts: Vec<Vec<Vector3<f64>>> =
-                            decoded.parts.iter().map(|p| p[t].clone()).collect();
-                        s.stitch(&parts)?.vertices
-                    }
-                    None => {
-                        let parts: Vec<&[Vector3<f64>]> =
-                            decoded.parts.iter().map(|p| p[t].as_slice()).collect();
-                        self.assemble_average(&parts)
-                    }
-                };
-                Ok(procrustes(&body, &self.model.template, None).apply_all(&body))
-            })
-            .collect()
+        Ok(Lease {
+            pool: &self.stitchers,
+            stitcher: Some(stitcher),
+        })
     }
 
     /// Full decoding: part poses, assembly, displacement integration from `start`.

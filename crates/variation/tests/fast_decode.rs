@@ -14,13 +14,17 @@ use variation::train::{PartModel, SequenceInfo, VariationModel};
 /// A 162-vertex sphere in two overlapping parts (upper = torso, lower = child), two 30-frame
 /// sequences in which the child also rotates, so that the band alignment is not trivial.
 fn model() -> VariationModel {
-    let mesh = mesh_core::shapes::icosphere(2);
+    model_on(mesh_core::shapes::icosphere(2), -0.3, 0.1)
+}
+
+/// The same motions on another mesh: upper part `y > upper_min`, lower part `y < lower_max`.
+fn model_on(mesh: mesh_core::mesh::TriMesh, upper_min: f64, lower_max: f64) -> VariationModel {
     let n = mesh.vertices.len() as u32;
     let upper: Vec<u32> = (0..n)
-        .filter(|&v| mesh.vertices[v as usize].y > -0.3)
+        .filter(|&v| mesh.vertices[v as usize].y > upper_min)
         .collect();
     let lower: Vec<u32> = (0..n)
-        .filter(|&v| mesh.vertices[v as usize].y < 0.1)
+        .filter(|&v| mesh.vertices[v as usize].y < lower_max)
         .collect();
     let pose = |t: usize, s: usize, p: &Vector3<f64>, child: bool| {
         let ph = 0.25 * t as f64 * (1.0 + 0.3 * s as f64);
@@ -317,4 +321,39 @@ fn fused_decoding_matches_bulk_decoding() {
     assert!(fused
         .decode_average_into(&wide, &start, &mut fscratch, &mut got)
         .is_err());
+}
+
+#[test]
+fn stitched_assembly_matches_the_default_factorisation_on_any_thread_count() {
+    use surface::poisson::Factorisation;
+    // A tube from y = 0 to 2 in 12 rings; the parts overlap on rings 4 to 7 (a cylinder
+    // band, as the stitch needs).
+    let m = model_on(mesh_core::shapes::cylinder(12, 12, 0.5, 2.0), 0.7, 1.3);
+    let dec = Decoder::new(&m, &mut Vec::new()).unwrap();
+    let lat: Vec<DMatrix<f64>> = m.latents(1).iter().map(|x| x * 1.05).collect();
+    let parts = dec
+        .part_poses::<rand_chacha::ChaCha8Rng>(&lat, None)
+        .unwrap();
+    let on = |threads: usize, how: Factorisation| {
+        rayon::ThreadPoolBuilder::new()
+            .num_threads(threads)
+            .build()
+            .unwrap()
+            .install(|| dec.assemble_with(&parts, Assembly::Stitch, how).unwrap())
+    };
+    let reference = on(1, Factorisation::Auto);
+    assert_eq!(reference.len(), 30);
+    // The frames differ (the stitch is not handed one frame 30 times).
+    assert!(max_diff(&reference[0], &reference[29]) > 1e-3);
+    // Frames stitched in parallel by pooled stitchers: the same bodies on 1 and 2 threads.
+    let one = on(1, Factorisation::Supernodal);
+    let two = on(2, Factorisation::Supernodal);
+    assert_eq!(one, two, "1 vs 2 threads");
+    // `assemble` (the stage's path) is the supernodal one.
+    assert_eq!(dec.assemble(&parts, Assembly::Stitch).unwrap(), one);
+    // Supernodal vs faer's default elimination: equal to rounding (a 2-unit tube).
+    for (a, b) in reference.iter().zip(&one) {
+        let d = max_diff(a, b);
+        assert!(d < 1e-12, "{d}");
+    }
 }
