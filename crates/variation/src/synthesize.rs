@@ -23,7 +23,7 @@ use crate::foot_lock;
 use crate::footskate;
 use crate::frame_writer::{VariationFormat, VariationWriter};
 use crate::grounding::{self, FloorContact};
-use crate::group::{blend_name, blend_sequences, Group};
+use crate::group::{blend_name, blend_sequences_at, Group, GroupSequence};
 use crate::latent_smoothing;
 use crate::metrics::{self, Stats};
 use crate::reconstruct::{Assembly, Decoder};
@@ -586,11 +586,17 @@ pub fn run_with_progress(
             (used, vec![(ia, ib, *w)])
         }
     };
+    // Every (sequence, part) chain is a task of one pool (each seeded by its own indices, so
+    // the samples do not depend on the scheduling).
+    let sampled: Vec<(Variations, Vec<ChainStats>)> = wanted
+        .par_iter()
+        .map(|&s| {
+            sequence_variations_len(&dec, s, frames, cfg.sampler, cfg.variance_scale, &hmc, 1)
+        })
+        .collect::<Result<_>>()?;
     let mut pools: Vec<Variations> = vec![Vec::new(); model.sequences.len()];
     let mut chains = Vec::new();
-    for &s in &wanted {
-        let (v, st) =
-            sequence_variations_len(&dec, s, frames, cfg.sampler, cfg.variance_scale, &hmc, 1)?;
+    for (&s, (v, st)) in wanted.iter().zip(sampled) {
         pools[s] = v;
         chains.extend(st);
     }
@@ -611,15 +617,30 @@ pub fn run_with_progress(
     }
     if !blends.is_empty() {
         let blender = surface::blend::Blender::new(group.template.clone(), group.faces.clone())?;
-        for &(a, b, w) in &blends {
-            let vars = blend_variations(&dec, &pools, (a, b), w, cfg.n, cfg.seed)?;
-            let truth = blend_sequences(
+        // The blended sources, every weight of a pair from one decomposition of its frames.
+        let mut truths: Vec<Option<GroupSequence>> = vec![None; blends.len()];
+        for (i, &(a, b, _)) in blends.iter().enumerate() {
+            if truths[i].is_some() {
+                continue;
+            }
+            let same: Vec<usize> = (i..blends.len())
+                .filter(|&j| (blends[j].0, blends[j].1) == (a, b))
+                .collect();
+            let weights: Vec<f64> = same.iter().map(|&j| blends[j].2).collect();
+            let made = blend_sequences_at(
                 &blender,
                 &group.sequences[a],
                 &group.sequences[b],
-                w,
+                &weights,
                 &group.up,
             )?;
+            for (j, t) in same.into_iter().zip(made) {
+                truths[j] = Some(t);
+            }
+        }
+        for (&(a, b, w), truth) in blends.iter().zip(truths) {
+            let truth = truth.expect("every blend made above");
+            let vars = blend_variations(&dec, &pools, (a, b), w, cfg.n, cfg.seed)?;
             let label = match cfg.query {
                 None => blend_name(w),
                 Some(_) => format!(

@@ -191,6 +191,15 @@ fn blends_at_zero_and_one_reproduce_the_endpoints() {
     }
     let mid = blend_sequences(&blender, &a, &b, 0.5, &nalgebra::Vector3::y()).unwrap();
     assert!(metrics::mean_vertex_distance(&mid.motion.frames, &a.motion.frames) > 1e-3);
+    // Several weights from one decomposition per frame: the same sequences as one by one.
+    let weights = [0.25, 0.5, 0.75];
+    let many =
+        variation::group::blend_sequences_at(&blender, &a, &b, &weights, &nalgebra::Vector3::y())
+            .unwrap();
+    assert_eq!(many.len(), 3);
+    for (s, &w) in many.iter().zip(&weights) {
+        assert_eq!(s, &blend_sequences(&blender, &a, &b, w, &nalgebra::Vector3::y()).unwrap());
+    }
     // Latent blending (§7) at the bounding weights gives the bounding trajectories.
     let xa = DMatrix::from_fn(5, 3, |i, j| (i + j) as f64);
     let xb = DMatrix::from_fn(5, 3, |i, j| (i * j) as f64 - 1.0);
