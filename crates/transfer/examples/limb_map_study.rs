@@ -6,6 +6,9 @@
 //! e.g. `limb_map_study out/demo-run/work out/demo/set A B punch spinkick cmu_jump -- walk run jump kick dance`
 //! (after `make transfer`; the pairs are read in the set's order, reversed when SOURCE is the set's target).
 
+#[path = "common/study_pairs.rs"]
+mod study_pairs;
+
 use capture::align::{align_motion_on, AlignedMotion};
 use capture::assemble::{assemble, plan};
 use capture::part_pca::PcaModel;
@@ -13,8 +16,7 @@ use mesh_core::artifact::Artifact;
 use mesh_core::rigid::{so3_exp, so3_log};
 use mesh_core::sequence::MeshSequence;
 use nalgebra::{DMatrix, Rotation3, Unit, Vector3};
-use std::path::PathBuf;
-use transfer::gpr_model::{training_set, GprModel, PairFiles};
+use transfer::gpr_model::{training_set, GprModel};
 use transfer::limb_orientation::{limbs, orientation, reference, turn_to, Limb, LimbMap};
 
 #[derive(Clone, Copy, Debug)]
@@ -117,19 +119,7 @@ fn main() -> anyhow::Result<()> {
     let train = &args[split + 1..];
     let (spca, tpca) = (PcaModel::load(format!("{work}/{s}/pca.model"))?, PcaModel::load(format!("{work}/{t}/pca.model"))?);
     let model = GprModel::load(format!("{work}/models/{s}-to-{t}/gpr-nn.model"))?;
-    let set_json: serde_json::Value = serde_json::from_slice(&std::fs::read(format!("{set}/set.json"))?)?;
-    let set_source = set_json["source"].as_str().unwrap_or("").to_string();
-    let reversed = set_source != *s;
-    let (first, second) = if reversed { (t, s) } else { (s, t) };
-    let mut pairs = Vec::new();
-    for m in train {
-        let files: Vec<PathBuf> =
-            vec![format!("{work}/{first}/{m}.aligned").into(), format!("{work}/{second}/{m}.aligned").into(), format!("{work}/pairs/{m}.corr").into()];
-        let pf = PairFiles::load(&files)?;
-        let (p1, p2) = if reversed { (&tpca, &spca) } else { (&spca, &tpca) };
-        let d = pf.encode(p1, p2)?;
-        pairs.push(if reversed { d.reversed() } else { d });
-    }
+    let (pairs, _) = study_pairs::load(work, set, s, t, &spca, &tpca, train)?;
     let rows = training_set(&pairs, 1.0, false)?;
     let template = mesh_core::io::read_mesh(format!("{set}/{t}/walk/000000.ply"))?;
     let plan = plan(&tpca)?;
