@@ -218,8 +218,15 @@ fn frame_rows(
         .par_iter()
         .map(|f| aligned_part_row(f, vertices, reference, alignment))
         .collect();
-    let d = 3 * vertices.len();
-    DMatrix::from_row_iterator(rows.len(), d, rows.into_iter().flatten())
+    // Filled a column at a time (contiguous writes; `from_row_iterator` scatters every value
+    // with an index division, a fifth of gpr-train's reading time).
+    let mut m = DMatrix::zeros(rows.len(), 3 * vertices.len());
+    for (c, mut col) in m.column_iter_mut().enumerate() {
+        for (x, row) in col.iter_mut().zip(&rows) {
+            *x = row[c];
+        }
+    }
+    m
 }
 
 /// The whole body as a single part (the paper's "whole body" comparison).
