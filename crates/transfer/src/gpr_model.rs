@@ -684,10 +684,11 @@ pub fn train(
             return Err(Error::invalid(format!("prior weight must be in [0, 1], got {}", p.weight)));
         }
     }
-    let (data, keys) = training_sets(method, part_names, pairs, frame_ratio, keyposes_only)?;
+    let rows = training_sets(method, part_names, pairs, frame_ratio, keyposes_only)?;
+    let (data, keys) = (&rows.data, rows.keys());
     let (parts, disp) = rayon::join(
-        || train_parts(method, nn_bias, mean_fn, mean_ridge, mean_priors, part_names, &data, &keys, opts),
-        || train_displacement(&data, nn_bias, mean_fn, mean_ridge, opts),
+        || train_parts(method, nn_bias, mean_fn, mean_ridge, mean_priors, part_names, data, keys, opts),
+        || train_displacement(data, nn_bias, mean_fn, mean_ridge, opts),
     );
     let (parts, mut reports) = parts?;
     let (displacement, disp_report) = disp?;
@@ -733,8 +734,8 @@ pub fn train_orientation(
     if weight == 0.0 {
         return Ok(None);
     }
-    let (data, keys) = training_sets(method, part_names, pairs, frame_ratio, keyposes_only)?;
-    let rows = if method == Method::KeyposeAffine { &keys } else { &data };
+    let sets = training_sets(method, part_names, pairs, frame_ratio, keyposes_only)?;
+    let rows = if method == Method::KeyposeAffine { sets.keys() } else { &sets.data };
     let maps = (0..part_names.len())
         .map(|k| match only {
             Some(u) if u != k => Ok(None),
@@ -744,15 +745,16 @@ pub fn train_orientation(
     Ok(Some(LimbOrientation { weight, maps }))
 }
 
-/// The training rows of `method` (the dense or key-pose pairs) and the key-pose rows of the
-/// affine baseline, checked against `part_names`.
+/// The training rows of `method` (the dense or key-pose pairs), checked against `part_names`,
+/// and the key-pose rows of the affine baseline when they are other rows (`None`: the same;
+/// [`TrainingRows::keys`]).
 fn training_sets(
     method: Method,
     part_names: &[String],
     pairs: &[PairData],
     frame_ratio: f64,
     keyposes_only: bool,
-) -> Result<(TrainingSet, TrainingSet)> {
+) -> Result<TrainingRows> {
     if !(frame_ratio > 0.0 && frame_ratio.is_finite()) {
         return Err(Error::invalid(format!(
             "frame-rate ratio must be positive, got {frame_ratio}"
@@ -767,11 +769,25 @@ fn training_sets(
         )));
     }
     let keys = if method == Method::KeyposeAffine && !keyposes_only {
-        training_set(pairs, frame_ratio, true)?
+        Some(training_set(pairs, frame_ratio, true)?)
     } else {
-        data.clone()
+        None
     };
-    Ok((data, keys))
+    Ok(TrainingRows { data, keys })
+}
+
+/// What [`training_sets`] returns: the rows of `method`, and the affine baseline's key-pose rows
+/// when they differ from them (not a copy: at 10^5 pairs the rows are hundreds of MB).
+struct TrainingRows {
+    data: TrainingSet,
+    keys: Option<TrainingSet>,
+}
+
+impl TrainingRows {
+    /// The key-pose rows of the affine baseline.
+    fn keys(&self) -> &TrainingSet {
+        self.keys.as_ref().unwrap_or(&self.data)
+    }
 }
 
 /// The name of the displacement regressor among a model's pieces: `gpr-train --part
@@ -904,7 +920,8 @@ pub fn train_piece(
             return Err(Error::invalid(format!("prior weight must be in [0, 1], got {}", p.weight)));
         }
     }
-    let (data, keys) = training_sets(method, part_names, pairs, frame_ratio, keyposes_only)?;
+    let rows = training_sets(method, part_names, pairs, frame_ratio, keyposes_only)?;
+    let (data, keys) = (&rows.data, rows.keys());
     let (regressor, report) = if unit < part_names.len() {
         let priors = mean_priors.map(|p| MeanPriors { maps: &p.maps[unit..=unit], ..p });
         let (mut regs, mut reports) = train_parts(
@@ -920,7 +937,7 @@ pub fn train_piece(
         )?;
         (regs.remove(0), reports.remove(0))
     } else if unit == part_names.len() {
-        train_displacement(&data, nn_bias, mean_fn, mean_ridge, opts)?
+        train_displacement(data, nn_bias, mean_fn, mean_ridge, opts)?
     } else {
         return Err(Error::invalid(format!("regressor {unit} of {} parts and the displacement", part_names.len())));
     };
