@@ -186,26 +186,34 @@ impl Artifact for AlignedMotion {
         if let Some(i) = self.frames.iter().position(|f| f.iter().any(|v| !v.iter().all(|c| c.is_finite()))) {
             return Err(format!("frame {i} has a non-finite coordinate"));
         }
-        mesh_core::artifact::check_indices(self.faces.iter().flatten().copied(), n, || "the face list".into())?;
-        mesh_core::artifact::check_indices(self.anchor.iter().copied(), n, || "the anchor".into())?;
-        if self.poses.len() != self.frames.len() || self.displacements.len() != self.frames.len() {
-            return Err(format!(
-                "{} frames but {} poses and {} displacements",
-                self.frames.len(),
-                self.poses.len(),
-                self.displacements.len()
-            ));
-        }
-        let c = &self.capture;
-        if !(c.fps.is_finite() && c.fps >= 0.0) {
-            return Err(format!("frame rate {} is not a non-negative number", c.fps));
-        }
-        let up = Vector3::from(c.up);
-        if !up.iter().all(|x| x.is_finite()) || (up.norm() - 1.0).abs() > 1e-9 {
-            return Err(format!("up axis {:?} is not a unit vector", c.up));
-        }
-        Ok(())
+        check_besides_frames(n, self.frames.len(), &self.faces, &self.anchor, self.poses.len(), self.displacements.len(), &self.capture)
     }
+}
+
+/// The checks of [`AlignedMotion::validate`] on everything but the frames' vertices, for a
+/// motion of `n_frames` frames of `n` vertices each.
+pub(crate) fn check_besides_frames(
+    n: usize,
+    n_frames: usize,
+    faces: &[[u32; 3]],
+    anchor: &[u32],
+    n_poses: usize,
+    n_displacements: usize,
+    c: &CaptureInfo,
+) -> std::result::Result<(), String> {
+    mesh_core::artifact::check_indices(faces.iter().flatten().copied(), n, || "the face list".into())?;
+    mesh_core::artifact::check_indices(anchor.iter().copied(), n, || "the anchor".into())?;
+    if n_poses != n_frames || n_displacements != n_frames {
+        return Err(format!("{n_frames} frames but {n_poses} poses and {n_displacements} displacements"));
+    }
+    if !(c.fps.is_finite() && c.fps >= 0.0) {
+        return Err(format!("frame rate {} is not a non-negative number", c.fps));
+    }
+    let up = Vector3::from(c.up);
+    if !up.iter().all(|x| x.is_finite()) || (up.norm() - 1.0).abs() > 1e-9 {
+        return Err(format!("up axis {:?} is not a unit vector", c.up));
+    }
+    Ok(())
 }
 
 impl AlignedMotion {

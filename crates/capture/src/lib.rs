@@ -8,6 +8,7 @@
 //! calls the library.
 
 pub mod align;
+pub mod motion_stream;
 pub mod part_pca;
 pub mod assemble;
 pub mod choices;

@@ -331,3 +331,58 @@ fn load_hashed_gives_the_file_hash_of_sha256_file() {
     std::fs::write(&path, &bytes).unwrap();
     assert!(err_of(Model::load_hashed(&path)).contains("checksum mismatch"));
 }
+
+/// `read_artifact` and the hash of `sha256_file`, as `read_artifact_seeded` returns them.
+fn read_whole(path: &Path, kind: &str, version: u32) -> Result<(Header, Model, String), String> {
+    let (h, m) = read_artifact::<Model>(path, kind, version).map_err(|e| e.to_string())?;
+    Ok((h, m, sha256_file(path).unwrap()))
+}
+
+/// The one-pass reader gives what the whole-file reader gives, value, header and hash, or the
+/// same error, on the good file, every truncation, a flipped byte anywhere, a payload of
+/// another type, wrong kind and version, and trailing bytes in the payload or after the
+/// checksum.
+#[test]
+fn seeded_reading_in_one_pass_agrees_with_whole_file_reading() {
+    use mesh_core::artifact::read_artifact_seeded;
+    use std::marker::PhantomData;
+    let dir = tempfile::tempdir().unwrap();
+    let (path, bytes) = good_file(dir.path());
+    let streamed = |kind: &str, version: u32| {
+        read_artifact_seeded(&path, kind, version, PhantomData::<Model>).map_err(|e| {
+            let msg = e.to_string();
+            assert!(!msg.contains('\n'), "{msg}");
+            msg
+        })
+    };
+    let good = streamed("test-model", 3).unwrap();
+    assert_eq!(good.1, model());
+    assert_eq!(Ok(good), read_whole(&path, "test-model", 3));
+    assert!(streamed("other-kind", 3).unwrap_err().contains("expected artifact kind 'other-kind'"));
+    assert_eq!(streamed("test-model", 4), read_whole(&path, "test-model", 4));
+    let mut cases: Vec<Vec<u8>> = (0..bytes.len()).map(|cut| bytes[..cut].to_vec()).collect();
+    for at in 0..bytes.len() {
+        let mut bad = bytes.clone();
+        bad[at] ^= 0x10;
+        cases.push(bad);
+    }
+    let mut long = bytes.clone();
+    long.extend_from_slice(b"xx");
+    cases.push(long);
+    for (i, case) in cases.iter().enumerate() {
+        std::fs::write(&path, case).unwrap();
+        assert_eq!(streamed("test-model", 3), read_whole(&path, "test-model", 3), "case {i}");
+    }
+    let other = dir.path().join("other.art");
+    let payloads: [&dyn Fn(&Path); 2] = [
+        &|p| write_artifact(p, "test-model", 3, &Header::new("s", "0"), &(1u8, 2u8)).unwrap(),
+        // A `Model` followed by more bytes in the payload.
+        &|p| write_artifact(p, "test-model", 3, &Header::new("s", "0"), &(model(), 7u64)).unwrap(),
+    ];
+    for write in payloads {
+        write(&other);
+        let got = read_artifact_seeded(&other, "test-model", 3, PhantomData::<Model>).map_err(|e| e.to_string());
+        assert!(got.as_ref().unwrap_err().contains("payload does not decode"), "{got:?}");
+        assert_eq!(got, read_whole(&other, "test-model", 3));
+    }
+}

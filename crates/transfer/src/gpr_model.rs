@@ -36,7 +36,9 @@ use mesh_core::{Error, Result};
 use std::path::PathBuf;
 
 pub use capture::choices::{MeanFunction, Method};
-use capture::align::AlignedMotion;
+use capture::align::{AlignedMotion, CaptureInfo};
+use capture::motion_stream::read_frames;
+use capture::part_pca::FrameEncoder;
 use crate::densify::Correspondences;
 use crate::limb_orientation::{self, LimbMap, LimbOrientation};
 use capture::part_pca::PcaModel;
@@ -346,6 +348,16 @@ impl PairData {
     }
 }
 
+/// A `--pair` as [`PairFiles::read_encoded`] reads it.
+pub struct EncodedPair {
+    /// The pair in the set's order.
+    pub data: PairData,
+    /// Capture records of the set's source and target motions.
+    pub captures: [CaptureInfo; 2],
+    /// SHA-256 of the three files, in the command line's order.
+    pub sha256: [String; 3],
+}
+
 /// One training pair as the stages name it on the command line (`--pair SOURCE TARGET CORR`):
 /// the aligned motions of the set's source and target subjects and their correspondences.
 pub struct PairFiles {
@@ -369,20 +381,39 @@ impl PairFiles {
         })
     }
 
-    /// [`PairFiles::load`] with the three files loaded in parallel, and each file's SHA-256 (in
-    /// the files' order) for the output's input records, computed in the same parallel task
-    /// rather than one file after the other by `Header::with_input` (on the `long` preset's
-    /// 12,000-frame motions, hashing took a tenth of gpr-train's time).
-    pub fn load_hashed(files: &[PathBuf]) -> Result<(PairFiles, [String; 3])> {
+    /// One `--pair` read and encoded in one pass per file, without holding its motions: the
+    /// set's source motion encoded with `source_pca` and its target motion with `target_pca`
+    /// frame block by frame block as they are decoded (`capture::part_pca::FrameEncoder`, the
+    /// coefficients of [`PairFiles::encode`] to the bit), the three files in parallel. Returns
+    /// the pair in set order, the two motions' capture records and each file's SHA-256 (in the
+    /// files' order) for the output's input records, computed in the same pass.
+    pub fn read_encoded(files: &[PathBuf], source_pca: &PcaModel, target_pca: &PcaModel) -> Result<EncodedPair> {
         let [s, t, c] = files else {
             return Err(Error::invalid("--pair takes three files"));
         };
+        let encoded = |path: &PathBuf, pca: &PcaModel| {
+            let mut enc = FrameEncoder::new(pca);
+            let (info, sha) = read_frames(path, |f| enc.push(f))?;
+            let coeffs = enc.finish(&info.capture.template_sha256).map_err(|e| Error::file(path, e.to_string()))?;
+            Ok::<_, Error>((coeffs, info, sha))
+        };
         let ((source, target), corr) = rayon::join(
-            || rayon::join(|| AlignedMotion::load_hashed(s), || AlignedMotion::load_hashed(t)),
+            || rayon::join(|| encoded(s, source_pca), || encoded(t, target_pca)),
             || Correspondences::load_hashed(c),
         );
-        let ((source, hs), (target, ht), (corr, hc)) = (source?, target?, corr?);
-        Ok((PairFiles { source, target, corr, paths: [s.clone(), t.clone()] }, [hs, ht, hc]))
+        let ((source_coeffs, source, hs), (target_coeffs, target, ht), (corr, hc)) = (source?, target?, corr?);
+        Ok(EncodedPair {
+            data: PairData {
+                source_coeffs,
+                target_coeffs,
+                source_disp: source.displacements,
+                target_disp: target.displacements,
+                pairs: corr.pairs,
+                keyposes: corr.keyposes,
+            },
+            captures: [source.capture, target.capture],
+            sha256: [hs, ht, hc],
+        })
     }
 
     /// The pair in coefficients: the set's source motion encoded with `source_pca`, its
@@ -653,10 +684,11 @@ pub fn train(
             return Err(Error::invalid(format!("prior weight must be in [0, 1], got {}", p.weight)));
         }
     }
-    let (data, keys) = training_sets(method, part_names, pairs, frame_ratio, keyposes_only)?;
+    let rows = training_sets(method, part_names, pairs, frame_ratio, keyposes_only)?;
+    let (data, keys) = (&rows.data, rows.keys());
     let (parts, disp) = rayon::join(
-        || train_parts(method, nn_bias, mean_fn, mean_ridge, mean_priors, part_names, &data, &keys, opts),
-        || train_displacement(&data, nn_bias, mean_fn, mean_ridge, opts),
+        || train_parts(method, nn_bias, mean_fn, mean_ridge, mean_priors, part_names, data, keys, opts),
+        || train_displacement(data, nn_bias, mean_fn, mean_ridge, opts),
     );
     let (parts, mut reports) = parts?;
     let (displacement, disp_report) = disp?;
@@ -702,8 +734,8 @@ pub fn train_orientation(
     if weight == 0.0 {
         return Ok(None);
     }
-    let (data, keys) = training_sets(method, part_names, pairs, frame_ratio, keyposes_only)?;
-    let rows = if method == Method::KeyposeAffine { &keys } else { &data };
+    let sets = training_sets(method, part_names, pairs, frame_ratio, keyposes_only)?;
+    let rows = if method == Method::KeyposeAffine { sets.keys() } else { &sets.data };
     let maps = (0..part_names.len())
         .map(|k| match only {
             Some(u) if u != k => Ok(None),
@@ -713,15 +745,16 @@ pub fn train_orientation(
     Ok(Some(LimbOrientation { weight, maps }))
 }
 
-/// The training rows of `method` (the dense or key-pose pairs) and the key-pose rows of the
-/// affine baseline, checked against `part_names`.
+/// The training rows of `method` (the dense or key-pose pairs), checked against `part_names`,
+/// and the key-pose rows of the affine baseline when they are other rows (`None`: the same;
+/// [`TrainingRows::keys`]).
 fn training_sets(
     method: Method,
     part_names: &[String],
     pairs: &[PairData],
     frame_ratio: f64,
     keyposes_only: bool,
-) -> Result<(TrainingSet, TrainingSet)> {
+) -> Result<TrainingRows> {
     if !(frame_ratio > 0.0 && frame_ratio.is_finite()) {
         return Err(Error::invalid(format!(
             "frame-rate ratio must be positive, got {frame_ratio}"
@@ -736,11 +769,25 @@ fn training_sets(
         )));
     }
     let keys = if method == Method::KeyposeAffine && !keyposes_only {
-        training_set(pairs, frame_ratio, true)?
+        Some(training_set(pairs, frame_ratio, true)?)
     } else {
-        data.clone()
+        None
     };
-    Ok((data, keys))
+    Ok(TrainingRows { data, keys })
+}
+
+/// What [`training_sets`] returns: the rows of `method`, and the affine baseline's key-pose rows
+/// when they differ from them (not a copy: at 10^5 pairs the rows are hundreds of MB).
+struct TrainingRows {
+    data: TrainingSet,
+    keys: Option<TrainingSet>,
+}
+
+impl TrainingRows {
+    /// The key-pose rows of the affine baseline.
+    fn keys(&self) -> &TrainingSet {
+        self.keys.as_ref().unwrap_or(&self.data)
+    }
 }
 
 /// The name of the displacement regressor among a model's pieces: `gpr-train --part
@@ -873,7 +920,8 @@ pub fn train_piece(
             return Err(Error::invalid(format!("prior weight must be in [0, 1], got {}", p.weight)));
         }
     }
-    let (data, keys) = training_sets(method, part_names, pairs, frame_ratio, keyposes_only)?;
+    let rows = training_sets(method, part_names, pairs, frame_ratio, keyposes_only)?;
+    let (data, keys) = (&rows.data, rows.keys());
     let (regressor, report) = if unit < part_names.len() {
         let priors = mean_priors.map(|p| MeanPriors { maps: &p.maps[unit..=unit], ..p });
         let (mut regs, mut reports) = train_parts(
@@ -889,7 +937,7 @@ pub fn train_piece(
         )?;
         (regs.remove(0), reports.remove(0))
     } else if unit == part_names.len() {
-        train_displacement(&data, nn_bias, mean_fn, mean_ridge, opts)?
+        train_displacement(data, nn_bias, mean_fn, mean_ridge, opts)?
     } else {
         return Err(Error::invalid(format!("regressor {unit} of {} parts and the displacement", part_names.len())));
     };

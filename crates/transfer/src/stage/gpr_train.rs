@@ -148,20 +148,20 @@ pub fn run(p: &Params) -> anyhow::Result<()> {
     };
     // Frame rates of the set's source and target subjects, from the aligned motions.
     let mut set_fps: Option<(f64, f64)> = None;
-    // Every pair read, hashed and encoded in parallel (one file per thread), then checked in
-    // the command line's order, so that the first bad pair is the one reported.
+    // Every pair read, hashed and encoded in one pass per file, frames encoded as they are
+    // decoded (no motion is ever held whole), in parallel (one file per thread), then checked
+    // in the command line's order, so that the first bad pair is the one reported.
     let loaded: Vec<anyhow::Result<_>> = {
         use rayon::prelude::*;
         p.pair
             .par_chunks(3)
             .map(|files| {
-                let (loaded, hashes) = PairFiles::load_hashed(files)?;
+                let pair = PairFiles::read_encoded(files, set_source_pca, set_target_pca)?;
                 let fps = (
-                    loaded.source.capture.require_fps().with_context(|| files[0].display().to_string())?,
-                    loaded.target.capture.require_fps().with_context(|| files[1].display().to_string())?,
+                    pair.captures[0].require_fps().with_context(|| files[0].display().to_string())?,
+                    pair.captures[1].require_fps().with_context(|| files[1].display().to_string())?,
                 );
-                let data = loaded.encode(set_source_pca, set_target_pca)?;
-                Ok((data, fps, hashes))
+                Ok((pair.data, fps, pair.sha256))
             })
             .collect()
     };

@@ -1,0 +1,271 @@
+//! Reading an aligned motion frame by frame: each frame goes to a sink as it is decoded, so a
+//! motion of any length is read holding one frame (plus whatever the sink keeps), in one pass
+//! that also hashes the file. `gpr-train` encodes the frames into PCA coefficients this way
+//! ([`crate::part_pca::FrameEncoder`]) instead of holding whole motions.
+//!
+//! The frames are checked as [`AlignedMotion::validate`] checks them, and the sink gets only
+//! frames that passed: every frame has frame 0's vertex count and finite coordinates. The
+//! errors are those of [`AlignedMotion::load`], in its order: the file's (a corrupt file is a
+//! checksum mismatch), then the payload's checks, then the sink's.
+
+use std::fmt;
+use std::path::Path;
+
+use mesh_core::artifact::{read_artifact_seeded, Artifact};
+use mesh_core::rigid::RigidMotion;
+use mesh_core::{Error, Result};
+use nalgebra::Vector3;
+use serde::de::{DeserializeSeed, Deserializer, Error as _, SeqAccess, Visitor};
+
+use crate::align::{check_besides_frames, AlignedMotion, CaptureInfo};
+
+/// An aligned motion without its frames' vertices, as [`read_frames`] returns it.
+#[derive(Clone, Debug, PartialEq)]
+pub struct MotionInfo {
+    pub faces: Vec<[u32; 3]>,
+    /// Number of frames (each handed to the sink).
+    pub n_frames: usize,
+    /// Vertices per frame.
+    pub n_vertices: usize,
+    pub poses: Vec<RigidMotion>,
+    pub displacements: Vec<[f64; 6]>,
+    pub anchor: Vec<u32>,
+    pub capture: CaptureInfo,
+}
+
+/// Reads the aligned motion at `path` in one pass, handing each frame in order to `sink` once
+/// it passed the checks of [`AlignedMotion::validate`]; returns the rest of the motion and the
+/// file's SHA-256 (for an input record). After a frame fails a check or the sink returns an
+/// error, the sink gets no more frames; the first such problem is the error, naming the file,
+/// once the whole file was read and its checksum matched.
+pub fn read_frames(
+    path: impl AsRef<Path>,
+    mut sink: impl FnMut(Vec<Vector3<f64>>) -> Result<()>,
+) -> Result<(MotionInfo, String)> {
+    let path = path.as_ref();
+    let mut frames = FrameChecks::default();
+    let seed = MotionSeed { frames: &mut frames, sink: &mut sink };
+    let (_, rest, sha256) = read_artifact_seeded(path, AlignedMotion::KIND, AlignedMotion::VERSION, seed)?;
+    let invalid = |msg: String| Error::file(path, format!("invalid '{}' payload: {msg}", AlignedMotion::KIND));
+    let (faces, poses, displacements, anchor, capture) = rest;
+    let Some(n) = frames.n_vertices else {
+        return Err(invalid("no frames".into()));
+    };
+    if let Some((i, len)) = frames.wrong_count {
+        return Err(invalid(format!("frame {i} has {len} vertices, frame 0 has {n}")));
+    }
+    if let Some(i) = frames.non_finite {
+        return Err(invalid(format!("frame {i} has a non-finite coordinate")));
+    }
+    check_besides_frames(n, frames.n_frames, &faces, &anchor, poses.len(), displacements.len(), &capture)
+        .map_err(invalid)?;
+    if let Some(e) = frames.sink_error {
+        return Err(Error::file(path, e.to_string()));
+    }
+    Ok((MotionInfo { faces, n_frames: frames.n_frames, n_vertices: n, poses, displacements, anchor, capture }, sha256))
+}
+
+/// What the frames read so far were found to be.
+#[derive(Default)]
+struct FrameChecks {
+    n_frames: usize,
+    /// Frame 0's vertex count.
+    n_vertices: Option<usize>,
+    /// The first frame with another vertex count than frame 0, and its count.
+    wrong_count: Option<(usize, usize)>,
+    /// The first frame with a non-finite coordinate.
+    non_finite: Option<usize>,
+    sink_error: Option<Error>,
+}
+
+impl FrameChecks {
+    /// Checks frame `n_frames` and hands it to `sink` while every frame so far passed.
+    fn take(&mut self, frame: Vec<Vector3<f64>>, sink: &mut dyn FnMut(Vec<Vector3<f64>>) -> Result<()>) {
+        let i = self.n_frames;
+        self.n_frames += 1;
+        let n = *self.n_vertices.get_or_insert(frame.len());
+        if frame.len() != n {
+            self.wrong_count.get_or_insert((i, frame.len()));
+        }
+        if !frame.iter().all(|v| v.iter().all(|c| c.is_finite())) {
+            self.non_finite.get_or_insert(i);
+        }
+        if self.wrong_count.is_none() && self.non_finite.is_none() && self.sink_error.is_none() {
+            if let Err(e) = sink(frame) {
+                self.sink_error = Some(e);
+            }
+        }
+    }
+}
+
+/// Everything of an [`AlignedMotion`] but its frames, in the order of its fields.
+type Rest = (Vec<[u32; 3]>, Vec<RigidMotion>, Vec<[f64; 6]>, Vec<u32>, CaptureInfo);
+
+/// Decodes an [`AlignedMotion`] as its derived `Deserialize` does, field by field, with the
+/// frames going through [`FrameChecks::take`] instead of into a vector.
+struct MotionSeed<'a> {
+    frames: &'a mut FrameChecks,
+    sink: &'a mut dyn FnMut(Vec<Vector3<f64>>) -> Result<()>,
+}
+
+/// The fields of [`AlignedMotion`] in declaration order (the order bincode stores them in).
+const FIELDS: &[&str] = &["faces", "frames", "poses", "displacements", "anchor", "capture"];
+
+impl<'de> DeserializeSeed<'de> for MotionSeed<'_> {
+    type Value = Rest;
+
+    fn deserialize<D: Deserializer<'de>>(self, d: D) -> std::result::Result<Rest, D::Error> {
+        d.deserialize_struct("AlignedMotion", FIELDS, self)
+    }
+}
+
+impl<'de> Visitor<'de> for MotionSeed<'_> {
+    type Value = Rest;
+
+    fn expecting(&self, f: &mut fmt::Formatter) -> fmt::Result {
+        f.write_str("struct AlignedMotion")
+    }
+
+    fn visit_seq<A: SeqAccess<'de>>(self, mut seq: A) -> std::result::Result<Rest, A::Error> {
+        let missing = |i: usize| A::Error::invalid_length(i, &"struct AlignedMotion with 6 elements");
+        let faces = seq.next_element()?.ok_or_else(|| missing(0))?;
+        seq.next_element_seed(FramesSeed { frames: self.frames, sink: self.sink })?.ok_or_else(|| missing(1))?;
+        let poses = seq.next_element()?.ok_or_else(|| missing(2))?;
+        let displacements = seq.next_element()?.ok_or_else(|| missing(3))?;
+        let anchor = seq.next_element()?.ok_or_else(|| missing(4))?;
+        let capture = seq.next_element()?.ok_or_else(|| missing(5))?;
+        Ok((faces, poses, displacements, anchor, capture))
+    }
+}
+
+/// The `frames` field: a sequence of frames, each decoded as a `Vec<Vector3<f64>>` (which
+/// grows with the bytes actually read, whatever length the file claims) and handed on.
+struct FramesSeed<'a> {
+    frames: &'a mut FrameChecks,
+    sink: &'a mut dyn FnMut(Vec<Vector3<f64>>) -> Result<()>,
+}
+
+impl<'de> DeserializeSeed<'de> for FramesSeed<'_> {
+    type Value = ();
+
+    fn deserialize<D: Deserializer<'de>>(self, d: D) -> std::result::Result<(), D::Error> {
+        d.deserialize_seq(self)
+    }
+}
+
+impl<'de> Visitor<'de> for FramesSeed<'_> {
+    type Value = ();
+
+    fn expecting(&self, f: &mut fmt::Formatter) -> fmt::Result {
+        f.write_str("a sequence of frames")
+    }
+
+    fn visit_seq<A: SeqAccess<'de>>(self, mut seq: A) -> std::result::Result<(), A::Error> {
+        while let Some(frame) = seq.next_element::<Vec<Vector3<f64>>>()? {
+            self.frames.take(frame, self.sink);
+        }
+        Ok(())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use mesh_core::artifact::{Header, InputRecord};
+
+    fn motion(n_frames: usize, n: usize) -> AlignedMotion {
+        let frames: Vec<Vec<Vector3<f64>>> = (0..n_frames)
+            .map(|f| (0..n).map(|v| Vector3::new(v as f64, f as f64 * 0.5, (v * f) as f64 / 7.0)).collect())
+            .collect();
+        AlignedMotion {
+            faces: vec![[0, 1, 2], [1, 2, 3]],
+            poses: (0..n_frames).map(|_| RigidMotion::identity()).collect(),
+            displacements: (0..n_frames).map(|f| [f as f64, 0.0, 0.0, 0.0, 0.1, 0.0]).collect(),
+            anchor: vec![0, 3],
+            capture: CaptureInfo { fps: 50.0, up: [0.0, 1.0, 0.0], template_sha256: "ab".repeat(32) },
+            frames,
+        }
+    }
+
+    fn save(dir: &Path, name: &str, m: &AlignedMotion) -> std::path::PathBuf {
+        let path = dir.join(name);
+        let header = Header { inputs: vec![InputRecord { path: "x".into(), sha256: "y".into() }], ..Header::new("align", "0") };
+        m.save(&path, &header).unwrap();
+        path
+    }
+
+    fn read_all(path: &Path) -> Result<(AlignedMotion, String)> {
+        let mut frames = Vec::new();
+        let (info, sha) = read_frames(path, |f| {
+            frames.push(f);
+            Ok(())
+        })?;
+        // Every field of the motion, so that a field added to it fails to compile here.
+        let MotionInfo { faces, n_frames, n_vertices, poses, displacements, anchor, capture } = info;
+        assert_eq!((n_frames, n_vertices), (frames.len(), frames[0].len()));
+        Ok((AlignedMotion { faces, frames, poses, displacements, anchor, capture }, sha))
+    }
+
+    /// The frames and the rest read in one pass are the motion `load` reads, with the hash of
+    /// the whole file.
+    #[test]
+    fn frames_and_rest_are_the_loaded_motion() {
+        let dir = tempfile::tempdir().unwrap();
+        let m = motion(9, 5);
+        let path = save(dir.path(), "m.aligned", &m);
+        let (back, sha) = read_all(&path).unwrap();
+        assert_eq!(back, m);
+        assert_eq!((back, sha), AlignedMotion::load_hashed(&path).unwrap());
+    }
+
+    /// A motion `validate` refuses is refused with the same message, and its bad frames never
+    /// reach the sink; a corrupt file is a checksum mismatch, a sink's error names the file.
+    #[test]
+    fn invalid_motions_fail_as_load_fails() {
+        let dir = tempfile::tempdir().unwrap();
+        let mut short = motion(6, 5);
+        short.frames[3].pop();
+        let mut nan = motion(6, 5);
+        nan.frames[2][1].y = f64::NAN;
+        let mut both = motion(6, 5);
+        both.frames[1][0].x = f64::INFINITY;
+        both.frames[4].push(Vector3::zeros());
+        let mut poses = motion(6, 5);
+        poses.poses.pop();
+        let mut up = motion(6, 5);
+        up.capture.up = [0.0, 2.0, 0.0];
+        let mut face = motion(6, 5);
+        face.faces.push([0, 1, 5]);
+        let mut empty = motion(0, 5);
+        empty.frames.clear();
+        for (name, m) in [("short", short), ("nan", nan), ("both", both), ("poses", poses), ("up", up), ("face", face), ("empty", empty)] {
+            let path = save(dir.path(), name, &m);
+            let mut seen = 0;
+            let err = read_frames(&path, |f| {
+                assert!(f.len() == 5 && f.iter().all(|v| v.iter().all(|c| c.is_finite())), "{name}: a bad frame reached the sink");
+                seen += 1;
+                Ok(())
+            })
+            .unwrap_err()
+            .to_string();
+            assert_eq!(err, AlignedMotion::load(&path).unwrap_err().to_string(), "{name}");
+        }
+        let path = save(dir.path(), "good", &motion(6, 5));
+        let mut bytes = std::fs::read(&path).unwrap();
+        let mid = bytes.len() / 2;
+        bytes[mid] ^= 1;
+        std::fs::write(&path, &bytes).unwrap();
+        let err = read_frames(&path, |_| Ok(())).unwrap_err().to_string();
+        assert!(err.ends_with("checksum mismatch (file corrupt)"), "{err}");
+        let path = save(dir.path(), "good", &motion(6, 5));
+        let mut calls = 0;
+        let err = read_frames(&path, |_| {
+            calls += 1;
+            Err(Error::invalid(format!("refused frame {}", calls - 1)))
+        })
+        .unwrap_err()
+        .to_string();
+        assert_eq!(err, format!("{}: refused frame 0", path.display()));
+        assert_eq!(calls, 1, "no frame after the sink's error");
+    }
+}
