@@ -11,7 +11,7 @@
 
 use gpdm::ancestral::sample_trajectories_ancestral;
 use gpdm::blend::BlendSet;
-use gpdm::hmc::{sample_trajectories_scaled, HmcOptions};
+use gpdm::hmc::{sample_trajectories_scaled, ChainStart, HmcOptions};
 use mesh_core::{Error, Result};
 use nalgebra::DMatrix;
 use rand::SeedableRng;
@@ -69,6 +69,7 @@ pub fn default_hmc(n: usize, seed: u64) -> HmcOptions {
         initial_step: 0.01,
         target_accept: 0.7,
         seed,
+        start: ChainStart::MeanPrediction,
     }
 }
 
