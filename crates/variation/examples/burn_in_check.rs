@@ -8,13 +8,14 @@
 //! the mean prediction, the centre of the density). Per setting the table gives, over all
 //! chains, the mean of `z = (mean kept energy − mean exact energy) / sd of exact energy`, and
 //! the mean latent RMS distance of the kept samples from the mean prediction relative to that
-//! of the exact draws (the spread of the variations, 1 when it matches).
+//! of the exact draws (the spread of the variations, 1 when it matches). Starts: `mean` (the
+//! paper's), `ancestral` (an exact draw), `training` (the sequence's learned latent trajectory).
 //!
 //! Usage: burn_in_check [model] [--seeds N] [--settings start:burn,...]
 //! e.g.: OPENBLAS_NUM_THREADS=1 target/release/examples/burn_in_check out/work/variation/locomotion.model --seeds 8 --settings mean:200,mean:1000,ancestral:50
 
 use gpdm::ancestral::sample_trajectories_ancestral;
-use gpdm::hmc::{sample_trajectories_scaled, ChainStart, Energy, TrajectoryEnergy};
+use gpdm::hmc::{sample, sample_trajectories_scaled, ChainStart, Energy, TrajectoryEnergy};
 use mesh_core::artifact::Artifact;
 use nalgebra::DMatrix;
 use rayon::prelude::*;
@@ -44,15 +45,17 @@ fn main() {
         .unwrap_or_else(|| "out/work/variation/locomotion.model".into());
     let opt = |name: &str| args.iter().position(|a| a == name).map(|i| args[i + 1].clone());
     let seeds: u64 = opt("--seeds").map_or(8, |s| s.parse().expect("--seeds N"));
-    let settings: Vec<(ChainStart, usize)> = opt("--settings")
+    // None: the training trajectory.
+    let settings: Vec<(Option<ChainStart>, usize)> = opt("--settings")
         .unwrap_or_else(|| "mean:200,mean:1000,ancestral:20,ancestral:50".into())
         .split(',')
         .map(|s| {
             let (a, b) = s.split_once(':').expect("start:burn");
             let start = match a {
-                "mean" => ChainStart::MeanPrediction,
-                "ancestral" => ChainStart::Ancestral,
-                _ => panic!("start is mean or ancestral"),
+                "mean" => Some(ChainStart::MeanPrediction),
+                "ancestral" => Some(ChainStart::Ancestral),
+                "training" => None,
+                _ => panic!("start is mean, ancestral or training"),
             };
             (start, b.parse().expect("burn-in"))
         })
@@ -115,9 +118,17 @@ fn main() {
                 for seed in 0..seeds {
                     let mut o = default_hmc(5, mix(seed, s as u64 + 1, k as u64 + 1));
                     o.burn_in = burn_in;
-                    o.start = start;
-                    let (trajs, res) =
-                        sample_trajectories_scaled(pr, &template, &o, KAPPA).expect("chain");
+                    let (trajs, res) = match start {
+                        Some(start) => {
+                            o.start = start;
+                            sample_trajectories_scaled(pr, &template, &o, KAPPA).expect("chain")
+                        }
+                        None => {
+                            let res = sample(&energy, &energy.free_coords(&template), &o)
+                                .expect("chain");
+                            (res.samples.iter().map(|q| energy.trajectory(q)).collect(), res)
+                        }
+                    };
                     for t in &trajs {
                         es.push(energy.energy_grad(&energy.free_coords(t), &mut g).expect("e"));
                         dists.push(rms(t, &mean));
@@ -139,8 +150,9 @@ fn main() {
         let acc = runs.iter().map(|r| r.2).sum::<f64>() / runs.len() as f64;
         let evals: usize = runs.iter().map(|r| r.3).sum();
         let name = match start {
-            ChainStart::MeanPrediction => "mean",
-            ChainStart::Ancestral => "ancestral",
+            Some(ChainStart::MeanPrediction) => "mean",
+            Some(ChainStart::Ancestral) => "ancestral",
+            None => "training",
         };
         println!(
             "{name}:{burn_in} | {zm:+.2} ({zsd:.2}) | {zmax:.2} | {over}/{} | {spread:.3} | {acc:.2} | {evals}",
