@@ -28,6 +28,22 @@ pub trait Energy {
     fn energy_grad(&self, q: &[f64], grad: &mut [f64]) -> Option<f64>;
 }
 
+/// Where a trajectory chain starts.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum ChainStart {
+    /// The mean prediction from the first point (3DV eq. 8; the paper's initialisation, §6).
+    /// It is the mode-like centre of the density, not a typical draw: the energy of the chain
+    /// has to rise to the stationary level during burn-in.
+    #[default]
+    #[serde(rename = "mean")]
+    MeanPrediction,
+    /// One exact draw of the sampled density itself (`crate::ancestral`, seeded from the
+    /// chain's seed). HMC leaves its target invariant, so a chain started at a draw of it is
+    /// stationary from the first iteration; burn-in then only has to adapt the step size.
+    Ancestral,
+}
+
 /// Sampler options.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct HmcOptions {
@@ -45,6 +61,10 @@ pub struct HmcOptions {
     pub target_accept: f64,
     /// RNG seed: same seed, same samples.
     pub seed: u64,
+    /// Where [`sample_trajectories`] starts its chains (the paper's mean prediction by
+    /// default; [`sample`] itself starts at the point it is given).
+    #[serde(default)]
+    pub start: ChainStart,
 }
 
 impl Default for HmcOptions {
@@ -57,6 +77,7 @@ impl Default for HmcOptions {
             initial_step: 0.01,
             target_accept: 0.7,
             seed: 0,
+            start: ChainStart::MeanPrediction,
         }
     }
 }
@@ -513,8 +534,8 @@ impl TrajectoryEnergy<'_> {
     }
 }
 
-/// Variations of a latent trajectory: mean prediction (3DV eq. 8) from the first row of
-/// `template` over its length, then an HMC chain started there (first point fixed).
+/// Variations of a latent trajectory: an HMC chain over `template`'s length with its first row
+/// fixed, started at `opts.start` (the mean prediction, 3DV eq. 8, or an exact draw).
 /// Returns the sampled trajectories (each T × d) and the chain statistics.
 pub fn sample_trajectories(
     pred: &Predictor,
@@ -533,13 +554,28 @@ pub fn sample_trajectories_scaled(
     variance_scale: f64,
 ) -> Result<(Vec<DMatrix<f64>>, HmcResult)> {
     let x1: Vec<f64> = template.row(0).iter().copied().collect();
-    let start = pred.mean_trajectory(&x1, template.nrows())?;
+    let start = match opts.start {
+        ChainStart::MeanPrediction => pred.mean_trajectory(&x1, template.nrows())?,
+        ChainStart::Ancestral => crate::ancestral::sample_trajectories_ancestral(
+            pred,
+            &x1,
+            template.nrows(),
+            1,
+            opts.seed ^ START_SEED,
+            variance_scale,
+        )?
+        .remove(0),
+    };
     let energy =
         TrajectoryEnergy::new(pred, &x1, template.nrows())?.with_variance_scale(variance_scale)?;
     let res = sample(&energy, &energy.free_coords(&start), opts)?;
     let trajs = res.samples.iter().map(|q| energy.trajectory(q)).collect();
     Ok((trajs, res))
 }
+
+/// Mixed into the chain's seed to draw an [`ChainStart::Ancestral`] start (a stream apart
+/// from the momenta's).
+const START_SEED: u64 = 0x5747_A47;
 
 /// [`sample_trajectories`] with `chains` independent chains run in parallel (rayon), chain
 /// `c` seeded with `opts.seed + c` and contributing `ceil(n_samples / chains)` samples, each

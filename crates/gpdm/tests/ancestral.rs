@@ -118,3 +118,39 @@ fn same_seed_same_trajectories_on_any_number_of_threads() {
     assert!(sample_trajectories_ancestral(&pred, &x1[..1], 30, 8, 3, 1.0).is_err());
     assert!(sample_trajectories_ancestral(&pred, &x1, 30, 8, 3, -1.0).is_err());
 }
+
+/// A chain started at an exact draw (`ChainStart::Ancestral`) is stationary from its first
+/// iteration: after a burn-in of only 10 iterations, one sample from each of 400 chains has
+/// the moments of the exact draws. The same seed gives the same chain.
+#[test]
+fn chains_started_at_an_exact_draw_need_no_burn_in() {
+    use gpdm::hmc::ChainStart;
+    let (m, _, _) = common::rotation_model();
+    let pred = Predictor::new(&m).unwrap();
+    let template = m.sequence_latent(0).unwrap().rows(0, 6).into_owned();
+    let x1: Vec<f64> = template.row(0).iter().copied().collect();
+    let kappa = 0.3;
+    let exact = sample_trajectories_ancestral(&pred, &x1, 6, 4000, 5, kappa).unwrap();
+    let chain = |seed: u64| {
+        let opts = HmcOptions {
+            n_samples: 1,
+            burn_in: 10,
+            thin: 1,
+            leapfrog_steps: 10,
+            seed,
+            start: ChainStart::Ancestral,
+            ..Default::default()
+        };
+        sample_trajectories_scaled(&pred, &template, &opts, kappa).unwrap().0.remove(0)
+    };
+    let draws: Vec<DMatrix<f64>> = (0..400).map(chain).collect();
+    assert_eq!(draws[7], chain(7));
+    assert_ne!(draws[7], draws[8]);
+    let (a, b) = (moments(&exact, 5), moments(&draws, 5));
+    for ((ma, va), (mb, vb)) in a.iter().zip(&b) {
+        let sd = va.sqrt();
+        // 400 draws: standard error of the mean 0.05 sd, relative sd of the variance 7 %.
+        assert!((ma - mb).abs() < 0.2 * sd, "means {ma} vs {mb} (sd {sd})");
+        assert!((vb / va - 1.0).abs() < 0.25, "variances {va} vs {vb}");
+    }
+}

@@ -44,6 +44,7 @@ fn gauss_opts(seed: u64) -> HmcOptions {
         initial_step: 0.1,
         target_accept: 0.7,
         seed,
+        ..Default::default()
     }
 }
 

@@ -174,8 +174,10 @@ impl StiffnessPattern {
         StiffnessPattern { matrix, slots }
     }
 
-    /// Fills the pattern with `op`'s `Gᵀ A G` (same faces as at construction).
-    pub fn fill(&mut self, op: &GradientOperator) -> &SparseColMat<usize, f64> {
+    /// Fills the pattern with `op`'s `Gᵀ A G` (same faces as at construction). Every value is
+    /// rewritten, so the caller may modify the returned matrix's values in place (e.g.
+    /// [`crate::poisson::PoissonSolver::refactor_in_place`]).
+    pub fn fill(&mut self, op: &GradientOperator) -> &mut SparseColMat<usize, f64> {
         assert_eq!(
             op.faces.len(),
             self.slots.len(),
@@ -189,7 +191,45 @@ impl StiffnessPattern {
                 vals[sl[k]] += a * g[k / 3].dot(&g[k % 3]);
             }
         }
-        &self.matrix
+        &mut self.matrix
+    }
+}
+
+impl StiffnessPattern {
+    /// Stitching's system in one pass over the faces: fills the pattern with the
+    /// mixed-geometry `Gᵀ A G` where face `f` takes its reference triangle `t = triangle(f)`
+    /// (the values of [`StiffnessPattern::fill`] on [`GradientOperator::from_triangles`], bit
+    /// for bit) and writes into `rhs` the divergence `Gᵀ A J` of the field of each face's own
+    /// gradient, `J_f = Σ_j t_j g_jᵀ`. Then `A_f J_f g_i = Σ_j A_f (g_i·g_j) t_j`: the face's
+    /// stiffness entries applied to its corners, so no per-face matrix is formed (the same sum
+    /// as [`GradientOperator::divergence`] in another order: equal to rounding).
+    pub fn fill_with_own_field(
+        &mut self,
+        triangle: impl Fn(usize) -> [Vector3<f64>; 3],
+        rhs: &mut Vec<Vector3<f64>>,
+    ) -> &mut SparseColMat<usize, f64> {
+        let n = self.matrix.nrows();
+        rhs.clear();
+        rhs.resize(n, Vector3::zeros());
+        let (symbolic, vals) = self.matrix.parts_mut();
+        let rows = symbolic.row_idx();
+        vals.iter_mut().for_each(|v| *v = 0.0);
+        for (f, sl) in self.slots.iter().enumerate() {
+            let t = triangle(f);
+            let (g, a) = hat_gradients(&t);
+            for i in 0..3 {
+                let mut b = Vector3::zeros();
+                for j in 0..3 {
+                    let k = 3 * i + j;
+                    let l = a * g[i].dot(&g[j]);
+                    vals[sl[k]] += l;
+                    b += l * t[j];
+                }
+                // Slot k = 3i + j lies in column j's vertex and row i's: the row is face corner i.
+                rhs[rows[sl[3 * i]]] += b;
+            }
+        }
+        &mut self.matrix
     }
 }
 

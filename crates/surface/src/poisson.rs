@@ -63,6 +63,9 @@ pub struct PoissonSolver {
     coupling: Vec<(usize, usize, f64)>,
     fixed_diag: Vec<f64>,
     jitter: f64,
+    /// Connected component of every vertex in the matrix graph (a representative vertex): a
+    /// property of the sparsity pattern, computed once, checked against each fixed set.
+    component: Vec<usize>,
 }
 
 impl PoissonSolver {
@@ -117,16 +120,19 @@ impl PoissonSolver {
                 }
             }
         };
-        let parts = factor(&mut numeric, laplacian, fixed)?;
+        let (cp, ri) = (laplacian.symbolic().col_ptr(), laplacian.symbolic().row_idx());
+        let component = components(n, cp, ri);
+        let parts = factor(&mut numeric, &mut laplacian.clone(), fixed, &component)?;
         Ok(PoissonSolver {
             n,
-            col_ptr: laplacian.symbolic().col_ptr().to_vec(),
-            row_idx: laplacian.symbolic().row_idx().to_vec(),
+            col_ptr: cp.to_vec(),
+            row_idx: ri.to_vec(),
             numeric,
             fixed: fixed.to_vec(),
             coupling: parts.coupling,
             fixed_diag: parts.fixed_diag,
             jitter: parts.jitter,
+            component,
         })
     }
 
@@ -145,20 +151,38 @@ impl PoissonSolver {
         laplacian: &SparseColMat<usize, f64>,
         fixed: &[usize],
     ) -> Result<()> {
-        let same = laplacian.nrows() == self.n
-            && laplacian.ncols() == self.n
-            && laplacian.symbolic().col_ptr() == self.col_ptr.as_slice()
-            && laplacian.symbolic().row_idx() == self.row_idx.as_slice();
-        if !same {
+        if !self.same_pattern(laplacian) {
             *self = PoissonSolver::with_factorisation(laplacian, fixed, self.factorisation())?;
             return Ok(());
         }
-        let parts = factor(&mut self.numeric, laplacian, fixed)?;
+        self.refactor_in_place(&mut laplacian.clone(), fixed)
+    }
+
+    /// [`PoissonSolver::refactor`] that applies the Dirichlet rows and columns to `laplacian`'s
+    /// values in place instead of to a copy (the caller refills it before the next use): the
+    /// same factorisation without copying the matrix.
+    pub fn refactor_in_place(
+        &mut self,
+        laplacian: &mut SparseColMat<usize, f64>,
+        fixed: &[usize],
+    ) -> Result<()> {
+        if !self.same_pattern(laplacian) {
+            *self = PoissonSolver::with_factorisation(laplacian, fixed, self.factorisation())?;
+            return Ok(());
+        }
+        let parts = factor(&mut self.numeric, laplacian, fixed, &self.component)?;
         self.fixed = fixed.to_vec();
         self.coupling = parts.coupling;
         self.fixed_diag = parts.fixed_diag;
         self.jitter = parts.jitter;
         Ok(())
+    }
+
+    fn same_pattern(&self, laplacian: &SparseColMat<usize, f64>) -> bool {
+        laplacian.nrows() == self.n
+            && laplacian.ncols() == self.n
+            && laplacian.symbolic().col_ptr() == self.col_ptr.as_slice()
+            && laplacian.symbolic().row_idx() == self.row_idx.as_slice()
     }
 
     /// Number of unknowns (vertices).
@@ -241,14 +265,16 @@ struct Parts {
     jitter: f64,
 }
 
-/// Builds the Dirichlet-modified matrix and factorises it, retrying with a growing diagonal
-/// jitter (logged on stderr) if it is not numerically positive definite.
+/// Turns `a` (the Laplacian) into the Dirichlet-modified matrix in place and factorises it,
+/// retrying with a growing diagonal jitter (logged on stderr) if it is not numerically
+/// positive definite. `component` is [`components`] of `a`'s pattern.
 fn factor(
     numeric: &mut Numeric,
-    l: &SparseColMat<usize, f64>,
+    a: &mut SparseColMat<usize, f64>,
     fixed: &[usize],
+    component: &[usize],
 ) -> Result<Parts> {
-    let n = l.nrows();
+    let n = a.nrows();
     let mut slot = vec![usize::MAX; n];
     for (k, &v) in fixed.iter().enumerate() {
         if v >= n {
@@ -261,10 +287,8 @@ fn factor(
         }
         slot[v] = k;
     }
-    let mut a = l.clone();
-    let cp = l.symbolic().col_ptr().to_vec();
-    let ri = l.symbolic().row_idx().to_vec();
-    let vals = a.val_mut();
+    let (symbolic, vals) = a.parts_mut();
+    let (cp, ri) = (symbolic.col_ptr(), symbolic.row_idx());
     let mut diag_pos = vec![usize::MAX; n];
     let mut coupling = Vec::new();
     let mut fixed_diag = vec![1.0; fixed.len()];
@@ -291,7 +315,7 @@ fn factor(
             }
         }
     }
-    check_anchored(n, &cp, &ri, &slot)?;
+    check_anchored(component, &slot)?;
     if let Some(j) = diag_pos.iter().position(|&p| p == usize::MAX) {
         return Err(Error::invalid(format!(
             "poisson: diagonal entry {j} missing from the sparsity pattern"
@@ -358,9 +382,9 @@ fn factor(
     )))
 }
 
-/// Every connected component of the matrix graph needs a fixed vertex: the Laplacian is
-/// singular (constants) on a component without one.
-fn check_anchored(n: usize, cp: &[usize], ri: &[usize], slot: &[usize]) -> Result<()> {
+/// The connected components of the matrix graph given by its pattern: a representative
+/// vertex of every vertex's component.
+fn components(n: usize, cp: &[usize], ri: &[usize]) -> Vec<usize> {
     let mut parent: Vec<usize> = (0..n).collect();
     fn find(p: &mut [usize], mut x: usize) -> usize {
         while p[x] != x {
@@ -377,15 +401,21 @@ fn check_anchored(n: usize, cp: &[usize], ri: &[usize], slot: &[usize]) -> Resul
             }
         }
     }
+    (0..n).map(|v| find(&mut parent, v)).collect()
+}
+
+/// Every connected component of the matrix graph needs a fixed vertex: the Laplacian is
+/// singular (constants) on a component without one.
+fn check_anchored(component: &[usize], slot: &[usize]) -> Result<()> {
+    let n = component.len();
     let mut anchored = vec![false; n];
     for v in 0..n {
         if slot[v] != usize::MAX {
-            let r = find(&mut parent, v);
-            anchored[r] = true;
+            anchored[component[v]] = true;
         }
     }
     for v in 0..n {
-        if !anchored[find(&mut parent, v)] {
+        if !anchored[component[v]] {
             return Err(Error::invalid(format!(
                 "poisson: no fixed vertex in the connected part containing vertex {v} (the system would be singular)"
             )));

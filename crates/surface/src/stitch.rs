@@ -17,7 +17,7 @@
 //! The sparsity pattern depends only on the template, so the symbolic factorisation is
 //! computed once and reused for every frame.
 
-use crate::deformation_gradient::{GradientOperator, StiffnessPattern};
+use crate::deformation_gradient::StiffnessPattern;
 use crate::optimal_boundary::{discrepancy, optimal_loop_in, BoundaryLoop};
 use crate::poisson::{Factorisation, PoissonSolver};
 use crate::{check_faces, check_vertices, Error, Result};
@@ -322,10 +322,9 @@ impl Stitcher {
         let tri = |f: usize| {
             lay.faces[f].map(|v| aligned[src[f]][lay.local[src[f]][v as usize] as usize])
         };
-        let op = GradientOperator::from_triangles(n, &lay.faces, tri);
-        let field: Vec<_> = (0..lay.faces.len())
-            .map(|f| op.face_gradient(f, &tri(f)))
-            .collect();
+        // Mixed-geometry Laplacian and the divergence of every face's own gradient.
+        let mut rhs = Vec::new();
+        let l = self.pattern.fill_with_own_field(tri, &mut rhs);
 
         let mut fixed = Vec::new();
         let mut values = Vec::new();
@@ -352,9 +351,8 @@ impl Stitcher {
                 values.push(aligned[0][lay.local[0][v] as usize]);
             }
         }
-        let l = self.pattern.fill(&op);
         match self.solver.as_mut() {
-            Some(s) => s.refactor(l, &fixed)?,
+            Some(s) => s.refactor_in_place(l, &fixed)?,
             None => {
                 self.solver = Some(PoissonSolver::with_factorisation(
                     l,
@@ -367,7 +365,7 @@ impl Stitcher {
             .solver
             .as_ref()
             .expect("set above")
-            .solve(&op.divergence(&field), &values)?;
+            .solve(&rhs, &values)?;
         Ok(Stitched {
             vertices,
             loops,

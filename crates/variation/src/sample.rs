@@ -11,7 +11,7 @@
 
 use gpdm::ancestral::sample_trajectories_ancestral;
 use gpdm::blend::BlendSet;
-use gpdm::hmc::{sample_trajectories_scaled, HmcOptions};
+use gpdm::hmc::{sample_trajectories_scaled, ChainStart, HmcOptions};
 use mesh_core::{Error, Result};
 use nalgebra::DMatrix;
 use rand::SeedableRng;
@@ -56,6 +56,38 @@ impl Sampler {
     }
 }
 
+/// Where every HMC chain starts (`hmc-sample --hmc-start`).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize, clap::ValueEnum)]
+#[serde(rename_all = "lowercase")]
+pub enum HmcStart {
+    /// The mean prediction from the first point (3DV eq. 8, the paper's), burn-in 200.
+    #[default]
+    Mean,
+    /// An exact draw of the sampled density (`gpdm::ancestral`): the chain is stationary from
+    /// its first iteration, and a burn-in of 50 only adapts the step size.
+    Ancestral,
+}
+
+impl HmcStart {
+    /// The chain start of `gpdm::hmc`.
+    pub fn chain_start(self) -> ChainStart {
+        match self {
+            HmcStart::Mean => ChainStart::MeanPrediction,
+            HmcStart::Ancestral => ChainStart::Ancestral,
+        }
+    }
+
+    /// Burn-in iterations by default: 200 from the mean prediction (the chain has to move away
+    /// from the centre of the density; `examples/burn_in_check` measures how far it gets), 50
+    /// from an exact draw (step-size adaptation only).
+    pub fn default_burn_in(self) -> usize {
+        match self {
+            HmcStart::Mean => 200,
+            HmcStart::Ancestral => 50,
+        }
+    }
+}
+
 /// `variations[k][part]`: latent trajectory (T × d) of part `part` in variation `k`.
 pub type Variations = Vec<Vec<DMatrix<f64>>>;
 
@@ -69,6 +101,7 @@ pub fn default_hmc(n: usize, seed: u64) -> HmcOptions {
         initial_step: 0.01,
         target_accept: 0.7,
         seed,
+        start: ChainStart::MeanPrediction,
     }
 }
 

@@ -29,7 +29,7 @@ use crate::metrics::{self, Stats};
 use crate::reconstruct::{Assembly, Decoder};
 use crate::sample::{
     blend_entries, blend_variations, default_hmc, mix, sequence_variations_len, ChainStats,
-    Sampler, Variations,
+    HmcStart, Sampler, Variations,
 };
 use crate::train::VariationModel;
 
@@ -51,6 +51,9 @@ pub struct SynthConfig {
     #[serde(default = "one")]
     pub variance_scale: f64,
     pub burn_in: usize,
+    /// Where every HMC chain starts (the paper's mean prediction by default).
+    #[serde(default)]
+    pub hmc_start: HmcStart,
     pub thin: usize,
     pub target_accept: f64,
     /// Ground every variation on its source ([`crate::grounding`]); on by default.
@@ -540,6 +543,7 @@ pub fn run_with_progress(
     let clock = std::time::Instant::now();
     let mut hmc = default_hmc(cfg.n.max(1), cfg.seed);
     hmc.burn_in = cfg.burn_in;
+    hmc.start = cfg.hmc_start.chain_start();
     hmc.thin = cfg.thin.max(1);
     hmc.target_accept = cfg.target_accept;
     let frames = cfg.frames.unwrap_or(model.n_frames());

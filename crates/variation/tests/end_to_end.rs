@@ -109,6 +109,7 @@ fn tiny_set_end_to_end() {
         sampler: Sampler::Hmc,
         variance_scale: 1.0,
         burn_in: 30,
+        hmc_start: Default::default(),
         thin: 3,
         target_accept: 0.7,
         grounding: true,

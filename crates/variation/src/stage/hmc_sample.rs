@@ -12,7 +12,7 @@ use serde::Serialize;
 use crate::frame_writer::VariationFormat;
 use crate::group::Group;
 use crate::reconstruct::Assembly;
-use crate::sample::Sampler;
+use crate::sample::{HmcStart, Sampler};
 use crate::synthesize::{run_with_progress, Query, SynthConfig};
 use crate::train::VariationModel;
 
@@ -70,9 +70,15 @@ pub struct Params {
     /// the paper; below 1: trajectories closer to the learned dynamics, less frame-to-frame jitter)
     #[arg(long, default_value_t = 1.0)]
     pub variance_scale: f64,
-    /// HMC burn-in iterations (step size adapted)
-    #[arg(long, default_value_t = 200)]
-    pub burn_in: usize,
+    /// Where every HMC chain starts: mean (the mean prediction, 3DV eq. 8, as in the paper)
+    /// or ancestral (an exact draw of the sampled density: stationary from the start, so a
+    /// short burn-in suffices; docs/DEVIATIONS.md)
+    #[arg(long, value_enum, default_value_t = HmcStart::Mean)]
+    pub hmc_start: HmcStart,
+    /// HMC burn-in iterations (step size adapted) [default: 200 with --hmc-start mean, 50 with
+    /// ancestral]
+    #[arg(long)]
+    pub burn_in: Option<usize>,
     /// Keep one HMC iteration in THIN
     #[arg(long, default_value_t = 10)]
     pub thin: usize,
@@ -162,7 +168,8 @@ pub fn run(p: &Params) -> anyhow::Result<()> {
         },
         sampler: p.sampler,
         variance_scale: p.variance_scale,
-        burn_in: p.burn_in,
+        burn_in: p.burn_in.unwrap_or(p.hmc_start.default_burn_in()),
+        hmc_start: p.hmc_start,
         thin: p.thin,
         target_accept: p.target_accept,
         grounding: !p.no_grounding,
