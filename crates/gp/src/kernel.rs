@@ -164,39 +164,59 @@ impl Kernel {
     /// [`Kernel::cross`] with the NN kernel's arcsine by [`asin_cephes`] (within 1 ulp of
     /// the C library's, measured over `[-1, 1]`; about 4x faster here): the sparse GP's
     /// `K_uf`, `F x M` arcsines per evaluation (with glibc's they took a quarter of its time).
-    pub(crate) fn cross_fast(&self, xs: &DMatrix<f64>, x: &DMatrix<f64>) -> DMatrix<f64> {
+    /// Written into `out` (reallocated only when its shape differs), a block of
+    /// [`column_blocks`] at a time, so that a training loop reuses one `N x F` buffer and no
+    /// transposed copy of `x` is made.
+    pub(crate) fn cross_fast_into(&self, xs: &DMatrix<f64>, x: &DMatrix<f64>, out: &mut DMatrix<f64>) {
         let Kernel::NeuralNetwork { l, sigma_f, bias } = *self else {
-            return self.cross(xs, x);
+            *out = self.cross(xs, x);
+            return;
         };
-        let mut k = xs * x.transpose();
+        if out.shape() != (xs.nrows(), x.nrows()) {
+            *out = DMatrix::zeros(xs.nrows(), x.nrows());
+        }
+        let n = out.nrows();
+        if n == 0 {
+            return;
+        }
         let (rs, rt) = (self.rows(xs), self.rows(x));
         let (a, sf2) = (0.5 / (l * l), sigma_f * sigma_f);
-        let n = k.nrows().max(1);
-        for (j, col) in k.as_mut_slice().chunks_exact_mut(n).enumerate() {
-            let adj = a * rt.d[j];
-            for (i, v) in col.iter_mut().enumerate() {
-                let s = if bias { *v + 1.0 } else { *v };
-                *v = sf2 * asin_cephes((adj * s * rs.d[i]).clamp(-1.0, 1.0));
+        for cols in crate::linalg::column_blocks(x.nrows()) {
+            out.columns_mut(cols.start, cols.len()).gemm(1.0, xs, &x.rows(cols.start, cols.len()).transpose(), 0.0);
+            let block = &mut out.as_mut_slice()[cols.start * n..cols.end * n];
+            for (j, col) in block.chunks_exact_mut(n).enumerate() {
+                let adj = a * rt.d[cols.start + j];
+                for (i, v) in col.iter_mut().enumerate() {
+                    let s = if bias { *v + 1.0 } else { *v };
+                    *v = sf2 * asin_cephes((adj * s * rs.d[i]).clamp(-1.0, 1.0));
+                }
             }
         }
-        k
     }
 
-    /// `Σ_ij W_ij ∂K(xs, x)_ij/∂log l` for `W` shaped as [`Kernel::cross`] (`N x F`): the
-    /// contraction the sparse GP's gradient needs, without forming `∂K_uf` (one `N x F`
-    /// block less) and without the kernel's arcsines (NN: only `u / sqrt(1 - u²)`). 0 for
-    /// kernels without a length scale.
-    pub(crate) fn cross_dlog_l_contract(&self, xs: &DMatrix<f64>, x: &DMatrix<f64>, w: &DMatrix<f64>) -> f64 {
-        assert_eq!((w.nrows(), w.ncols()), (xs.nrows(), x.nrows()), "cross_dlog_l_contract: W's shape");
+    /// Adds `Σ_ij W_ij ∂K(xs, x)_ij/∂log l` over the columns `cols` of the cross-covariance
+    /// (the rows `cols` of `x`) to `total`, column by column in order, with `W` the `N x |cols|`
+    /// block of weights: the contraction the sparse GP's gradient needs, a block at a time,
+    /// without forming `∂K_uf` and without the kernel's arcsines (NN: only `u / sqrt(1 - u²)`).
+    /// Adds nothing for kernels without a length scale.
+    pub(crate) fn cross_dlog_l_contract(
+        &self,
+        xs: &DMatrix<f64>,
+        x: &DMatrix<f64>,
+        cols: std::ops::Range<usize>,
+        w: &DMatrix<f64>,
+        total: &mut f64,
+    ) {
+        assert_eq!((w.nrows(), w.ncols()), (xs.nrows(), cols.len()), "cross_dlog_l_contract: W's shape");
         if self.param_names().len() != 2 {
-            return 0.0;
+            return;
         }
-        let s = xs * x.transpose();
-        let (rs, rt) = (self.rows(xs), self.rows(x));
+        let xb = x.rows(cols.start, cols.len()).into_owned();
+        let s = xs * xb.transpose();
+        let (rs, rt) = (self.rows(xs), self.rows(&xb));
         let n = s.nrows().max(1);
-        let mut total = 0.0;
         for (j, (scol, wcol)) in s.as_slice().chunks_exact(n).zip(w.as_slice().chunks_exact(n)).enumerate() {
-            total += match *self {
+            *total += match *self {
                 Kernel::NeuralNetwork { l, sigma_f, bias } => {
                     let a = 0.5 / (l * l);
                     let (dj, gj) = (rt.d[j], rt.g[j]);
@@ -211,7 +231,6 @@ impl Kernel {
                 _ => (0..scol.len()).map(|i| wcol[i] * self.entry(scol[i], &rs, i, &rt, j, true).1).sum(),
             };
         }
-        total
     }
 
     /// Prior variances `k(x_i, x_i)` and their derivatives `∂/∂log l` (zeros for kernels
@@ -435,12 +454,66 @@ mod tests {
         assert!(worst <= 1.0 + 1e-9, "worst error {worst} ulp");
     }
 
+    /// Inputs spanning several column blocks: `F x D` and `M x D`.
+    fn blocked_inputs() -> (DMatrix<f64>, DMatrix<f64>) {
+        let xs = DMatrix::from_fn(9, 7, |i, j| ((i * 5 + j * 3) % 11) as f64 * 0.3 - 1.4);
+        let x = DMatrix::from_fn(5000, 7, |i, j| ((i * 7 + j * 13) % 29) as f64 * 0.1 - 1.5);
+        (xs, x)
+    }
+
+    /// Blocked `K_uf` is the whole-matrix computation to the bit: one product `xs xᵀ`, then
+    /// the arcsines.
+    #[test]
+    fn blocked_cross_equals_the_whole_product() {
+        let (xs, x) = blocked_inputs();
+        assert!(crate::linalg::column_blocks(x.nrows()).count() > 1);
+        for k in [Kernel::neural_network(0.4, 1.3), Kernel::NeuralNetwork { l: 2.0, sigma_f: 0.7, bias: true }] {
+            let Kernel::NeuralNetwork { l, sigma_f, bias } = k else { unreachable!() };
+            let (rs, rt) = (k.rows(&xs), k.rows(&x));
+            let whole = &xs * x.transpose();
+            let want = DMatrix::from_fn(xs.nrows(), x.nrows(), |i, j| {
+                let s = if bias { whole[(i, j)] + 1.0 } else { whole[(i, j)] };
+                sigma_f * sigma_f * asin_cephes((0.5 / (l * l) * rt.d[j] * s * rs.d[i]).clamp(-1.0, 1.0))
+            });
+            let mut got = DMatrix::from_element(3, 3, f64::NAN);
+            k.cross_fast_into(&xs, &x, &mut got);
+            assert!(got.iter().zip(want.iter()).all(|(a, b)| a.to_bits() == b.to_bits()), "{k:?}");
+        }
+    }
+
+    /// The contraction block by block equals one pass over all columns to the bit, and the
+    /// finite-difference derivative of `Σ W K` in `log l`.
+    #[test]
+    fn blocked_contraction_equals_one_pass_and_differences() {
+        let (xs, x) = blocked_inputs();
+        let w = DMatrix::from_fn(xs.nrows(), x.nrows(), |i, j| ((i * 3 + j) % 17) as f64 / 17.0 - 0.4);
+        for k in [Kernel::neural_network(0.8, 1.3), Kernel::SquaredExponential { l: 1.5, sigma_f: 0.9 }] {
+            let mut blocked = 0.0;
+            for cols in crate::linalg::column_blocks(x.nrows()) {
+                let wb = w.columns(cols.start, cols.len()).into_owned();
+                k.cross_dlog_l_contract(&xs, &x, cols, &wb, &mut blocked);
+            }
+            let mut one_pass = 0.0;
+            k.cross_dlog_l_contract(&xs, &x, 0..x.nrows(), &w, &mut one_pass);
+            assert_eq!(blocked.to_bits(), one_pass.to_bits(), "{k:?}");
+            let h = 1e-6;
+            let mut theta = k.log_params();
+            theta[0] += h;
+            let up = w.dot(&k.with_log_params(&theta).cross(&xs, &x));
+            theta[0] -= 2.0 * h;
+            let down = w.dot(&k.with_log_params(&theta).cross(&xs, &x));
+            let fd = (up - down) / (2.0 * h);
+            assert!((blocked - fd).abs() <= 1e-6 * fd.abs().max(1.0), "{k:?}: {blocked} vs {fd}");
+        }
+    }
+
     #[test]
     fn fast_cross_equals_cross() {
         let xs = DMatrix::from_fn(7, 4, |i, j| ((i * 5 + j * 3) % 11) as f64 * 0.3 - 1.4);
         let x = DMatrix::from_fn(9, 4, |i, j| ((i * 7 + j) % 13) as f64 * 0.25 - 1.5);
         for k in [Kernel::neural_network(0.4, 1.3), Kernel::NeuralNetwork { l: 2.0, sigma_f: 0.7, bias: true }, Kernel::Linear { sigma_f: 2.0 }] {
-            let (a, b) = (k.cross_fast(&xs, &x), k.cross(&xs, &x));
+            let (mut a, b) = (DMatrix::zeros(0, 0), k.cross(&xs, &x));
+            k.cross_fast_into(&xs, &x, &mut a);
             assert!((&a - &b).amax() <= 4.0 * f64::EPSILON * b.amax(), "{k:?}");
         }
     }

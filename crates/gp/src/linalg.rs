@@ -207,6 +207,50 @@ pub fn mul(a: &DMatrix<f64>, b: &DMatrix<f64>) -> DMatrix<f64> {
     out
 }
 
+/// Columns per block of the sparse GP's `M x F` products (see [`column_blocks`]).
+const COLUMN_BLOCK: usize = 2048;
+
+/// `0..n` cut into consecutive ranges of about [`COLUMN_BLOCK`] columns, equal to within one
+/// (one range when `n <= COLUMN_BLOCK`): the sparse GP works through its `M x F` matrices a
+/// block at a time. No range is shorter than `COLUMN_BLOCK / 2` unless `n` is, so each block's
+/// product takes the same blocked path as the whole matrix's would (nalgebra multiplies
+/// matrices with at most 5 columns by another loop), and every entry is the same to the bit.
+pub(crate) fn column_blocks(n: usize) -> impl Iterator<Item = std::ops::Range<usize>> {
+    let blocks = n.div_ceil(COLUMN_BLOCK).max(1);
+    (0..blocks).map(move |b| b * n / blocks..(b + 1) * n / blocks)
+}
+
+/// `out = A B[:, cols]`, the column block read in place (`out` reallocated only when its
+/// shape differs).
+pub(crate) fn mul_columns_into(out: &mut DMatrix<f64>, a: &DMatrix<f64>, b: &DMatrix<f64>, cols: std::ops::Range<usize>) {
+    assert_eq!(a.ncols(), b.nrows(), "mul_columns_into: inner dimensions differ");
+    if out.shape() != (a.nrows(), cols.len()) {
+        *out = DMatrix::zeros(a.nrows(), cols.len());
+    }
+    faer::linalg::matmul::matmul(
+        view_mut(out),
+        faer::Accum::Replace,
+        view(a),
+        view(b).subcols(cols.start, cols.len()),
+        1.0,
+        faer::get_global_parallelism(),
+    );
+}
+
+/// `out += A C[rows, :]ᵀ`, the row block read in place.
+pub(crate) fn add_mul_tr_rows(out: &mut DMatrix<f64>, a: &DMatrix<f64>, c: &DMatrix<f64>, rows: std::ops::Range<usize>) {
+    assert_eq!(a.ncols(), c.ncols(), "add_mul_tr_rows: column counts differ");
+    assert_eq!(out.shape(), (a.nrows(), rows.len()), "add_mul_tr_rows: output shape");
+    faer::linalg::matmul::matmul(
+        view_mut(out),
+        faer::Accum::Add,
+        view(a),
+        view(c).subrows(rows.start, rows.len()).transpose(),
+        1.0,
+        faer::get_global_parallelism(),
+    );
+}
+
 /// Eigenvalues `λ` of the symmetric `a` (lower triangle read; `n x n`) and `Uᵀ R` for its
 /// eigenvectors `U` (in the order of `λ`, unsorted), without forming `U`: the sparse GP's
 /// signal-variance profile needs only the spectrum and the projections of `R = A Y`
@@ -325,6 +369,22 @@ pub fn symmetric_eigen_projected(a: &DMatrix<f64>, r: &DMatrix<f64>) -> Result<(
 
 #[cfg(test)]
 mod tests {
+    /// The blocks tile `0..n` in order, at most `COLUMN_BLOCK` + 1 and, past one block, at
+    /// least `COLUMN_BLOCK / 2` columns each.
+    #[test]
+    fn column_blocks_tile_the_range() {
+        for n in [0, 1, 5, 2047, 2048, 2049, 4097, 10_000, 105_900] {
+            let blocks: Vec<_> = column_blocks(n).collect();
+            assert_eq!(blocks.first().map(|b| b.start), Some(0), "{n}");
+            assert_eq!(blocks.last().map(|b| b.end), Some(n), "{n}");
+            assert!(blocks.windows(2).all(|w| w[0].end == w[1].start), "{n}");
+            assert!(blocks.iter().all(|b| b.len() <= COLUMN_BLOCK + 1), "{n}");
+            if blocks.len() > 1 {
+                assert!(blocks.iter().all(|b| b.len() >= COLUMN_BLOCK / 2), "{n}");
+            }
+        }
+    }
+
     use super::*;
 
     /// The eigenvalues and the projections' squared norms per eigenvalue equal those of the

@@ -41,7 +41,9 @@ use crate::gpr::{check_xy, initial_kernel, maximise, summarise_notes, warm_start
 use crate::inducing::greedy_variance;
 use crate::kernel::Kernel;
 use crate::optim::{minimize_scalar, CgOptions, ExitState};
-use crate::linalg::{lower_solve_in_place, lower_tr_solve_in_place, mul, mul_tr, Cholesky};
+use crate::linalg::{
+    add_mul_tr_rows, column_blocks, lower_solve_in_place, lower_tr_solve_in_place, mul, mul_columns_into, mul_tr, Cholesky,
+};
 use crate::{check_finite, invalid, Result};
 use nalgebra::{DMatrix, DVector};
 use serde::{Deserialize, Serialize};
@@ -232,19 +234,23 @@ struct Parts {
 }
 
 impl Parts {
+    /// The pieces of `kernel`, with `A` written into `a_buffer`'s storage when its shape is
+    /// `M x F` (the previous evaluation's `A`, so that a training loop allocates it once).
     fn new(
         kernel: &Kernel,
         z: &DMatrix<f64>,
         x: &DMatrix<f64>,
         y: &DMatrix<f64>,
         kuu_jitter: f64,
+        a_buffer: DMatrix<f64>,
         notes: &mut Vec<String>,
     ) -> Result<Self> {
         let mut kuu = kernel.gram(z);
         add_relative_jitter(&mut kuu, kuu_jitter);
         let chol = Cholesky::new(&kuu, "K_uu", notes)?;
         let (l_uu, jitter) = (chol.lower(), chol.jitter);
-        let mut a = kernel.cross_fast(z, x);
+        let mut a = a_buffer;
+        kernel.cross_fast_into(z, x, &mut a);
         lower_solve_in_place(&l_uu, &mut a);
         let s_mat = mul_tr(&a, &a, true);
         let a_y = mul(&a, y);
@@ -337,7 +343,7 @@ impl SparseFactored {
         check_xy(x, y)?;
         check_inducing(z, x)?;
         check_noise(noise_var)?;
-        let parts = Parts::new(kernel, z, x, y, kuu_jitter, notes)?;
+        let parts = Parts::new(kernel, z, x, y, kuu_jitter, DMatrix::zeros(0, 0), notes)?;
         Self::assemble(kernel, noise_var, parts, x.nrows(), kuu_jitter, notes)
     }
 
@@ -398,7 +404,8 @@ impl SparseFactored {
     /// ∂F/∂θ = <H_K, L⁻¹ ∂K L⁻ᵀ> + 2 <H_T, A ∂Aᵀ> + <γ, ∂A Y>/s² - m/(2s) tr ∂K_ff,  ∂A = L⁻¹ ∂K_uf
     /// ```
     /// The middle terms are evaluated as `<2 (L⁻ᵀ H_T) A + L⁻ᵀγ Yᵀ/s², ∂K_uf>` (`2 F M² + M³`
-    /// flops instead of the `3 F M²` of forming `∂A` and `A ∂Aᵀ`).
+    /// flops instead of the `3 F M²` of forming `∂A` and `A ∂Aᵀ`), a block of columns at a
+    /// time ([`column_blocks`]): no `M x F` matrix besides `A` is formed.
     fn gradient(&self, z: &DMatrix<f64>, x: &DMatrix<f64>, y: &DMatrix<f64>, with_noise: bool) -> Vec<f64> {
         let (f, m, s) = (x.nrows() as f64, y.ncols() as f64, self.noise_var);
         let mm = self.kuu.nrows();
@@ -416,14 +423,18 @@ impl SparseFactored {
             // kernel derivative contracted entry by entry (never stored, no arcsines).
             let lt_ht = upper_solve(&self.l_uu, &h_t) * 2.0;
             let beta = upper_solve(&self.l_uu, &self.gamma) / (s * s);
-            let mut g = mul(&lt_ht, &self.a);
-            g += mul_tr(&beta, y, false);
+            let mut contraction = 0.0;
+            let mut g = DMatrix::zeros(0, 0);
+            for cols in column_blocks(x.nrows()) {
+                mul_columns_into(&mut g, &lt_ht, &self.a, cols.clone());
+                add_mul_tr_rows(&mut g, &beta, y, cols.clone());
+                self.kernel.cross_dlog_l_contract(z, x, cols, &g, &mut contraction);
+            }
             let mut dkuu = self.kernel.gram_with_grads(z).1.swap_remove(0);
             add_relative_jitter(&mut dkuu, self.kuu_jitter);
             let (_, dkff) = self.kernel.diag_with_dlog_l(x);
             grad.push(
-                h_k.dot(&self.whiten(&dkuu)) + self.kernel.cross_dlog_l_contract(z, x, &g)
-                    - 0.5 * m / s * dkff.sum(),
+                h_k.dot(&self.whiten(&dkuu)) + contraction - 0.5 * m / s * dkff.sum(),
             );
         }
         // L⁻¹ K_uu L⁻ᵀ = I unless the factorisation needed a jitter retry.
@@ -651,15 +662,16 @@ fn maximise_profiled(
     let nk = theta0.len();
     let mut v_prev = (2.0 * theta0[nk - 1]).exp();
     let mut initial_lml = None;
-    // The factorisation at `log l` (ignored without a length scale) with `σf²` profiled.
-    let mut at = |log_l: f64, notes: &mut Vec<String>| -> Result<SparseFactored> {
+    // The factorisation at `log l` (ignored without a length scale) with `σf²` profiled, its
+    // `A` written into `a_buffer` (see `Parts::new`).
+    let mut at = |log_l: f64, a_buffer: DMatrix<f64>, notes: &mut Vec<String>| -> Result<SparseFactored> {
         let mut theta = theta0.clone();
         if nk == 2 {
             theta[0] = log_l;
         }
         theta[nk - 1] = 0.0;
         let unit = start.with_log_params(&theta);
-        let mut parts = Parts::new(&unit, z, x, y, KUU_JITTER, notes)?;
+        let mut parts = Parts::new(&unit, z, x, y, KUU_JITTER, a_buffer, notes)?;
         let (v, _, at_v0) = parts.profile_signal_variance(s, f, m, v_prev)?;
         if initial_lml.is_none() {
             initial_lml = Some(at_v0);
@@ -673,13 +685,19 @@ fn maximise_profiled(
         Ok(fac)
     };
     if nk == 1 {
-        let fitted = at(0.0, notes)?;
+        let fitted = at(0.0, DMatrix::zeros(0, 0), notes)?;
         let initial_lml = initial_lml.unwrap_or(fitted.value);
         return Ok(Profiled { fitted, initial_lml, exit: ExitState::Converged, evaluations: 1 });
     }
+    // The last point's factorisation; its `A`, no longer needed once the gradient is taken,
+    // is the next point's buffer.
     let mut last: Option<(f64, SparseFactored)> = None;
+    let take_a = |last: &mut Option<(f64, SparseFactored)>| match last {
+        Some((_, fac)) => std::mem::replace(&mut fac.a, DMatrix::zeros(0, 0)),
+        None => DMatrix::zeros(0, 0),
+    };
     let r = minimize_scalar(
-        |log_l| match at(log_l, notes) {
+        |log_l| match at(log_l, take_a(&mut last), notes) {
             Ok(fac) => {
                 let g = fac.gradient(z, x, y, false)[0];
                 let v = fac.value;
@@ -693,7 +711,7 @@ fn maximise_profiled(
     );
     let fitted = match last {
         Some((p, fac)) if p == r.x[0] => fac,
-        _ => at(r.x[0], notes)?,
+        _ => at(r.x[0], take_a(&mut last), notes)?,
     };
     let initial_lml = initial_lml.unwrap_or(fitted.value);
     Ok(Profiled { fitted, initial_lml, exit: r.exit, evaluations: r.evaluations })
