@@ -165,7 +165,7 @@ impl Kernel {
     /// the C library's, measured over `[-1, 1]`; about 4x faster here): the sparse GP's
     /// `K_uf`, `F x M` arcsines per evaluation (with glibc's they took a quarter of its time).
     /// Written into `out` (reallocated only when its shape differs), a block of
-    /// [`column_blocks`] at a time, so that a training loop reuses one `N x F` buffer and no
+    /// [`crate::linalg::blocks`] at a time, so that a training loop reuses one `N x F` buffer and no
     /// transposed copy of `x` is made.
     pub(crate) fn cross_fast_into(&self, xs: &DMatrix<f64>, x: &DMatrix<f64>, out: &mut DMatrix<f64>) {
         let Kernel::NeuralNetwork { l, sigma_f, bias } = *self else {
@@ -181,7 +181,7 @@ impl Kernel {
         }
         let (rs, rt) = (self.rows(xs), self.rows(x));
         let (a, sf2) = (0.5 / (l * l), sigma_f * sigma_f);
-        for cols in crate::linalg::column_blocks(x.nrows()) {
+        for cols in crate::linalg::blocks(x.nrows()) {
             out.columns_mut(cols.start, cols.len()).gemm(1.0, xs, &x.rows(cols.start, cols.len()).transpose(), 0.0);
             let block = &mut out.as_mut_slice()[cols.start * n..cols.end * n];
             for (j, col) in block.chunks_exact_mut(n).enumerate() {
@@ -466,7 +466,7 @@ mod tests {
     #[test]
     fn blocked_cross_equals_the_whole_product() {
         let (xs, x) = blocked_inputs();
-        assert!(crate::linalg::column_blocks(x.nrows()).count() > 1);
+        assert!(crate::linalg::blocks(x.nrows()).count() > 1);
         for k in [Kernel::neural_network(0.4, 1.3), Kernel::NeuralNetwork { l: 2.0, sigma_f: 0.7, bias: true }] {
             let Kernel::NeuralNetwork { l, sigma_f, bias } = k else { unreachable!() };
             let (rs, rt) = (k.rows(&xs), k.rows(&x));
@@ -489,7 +489,7 @@ mod tests {
         let w = DMatrix::from_fn(xs.nrows(), x.nrows(), |i, j| ((i * 3 + j) % 17) as f64 / 17.0 - 0.4);
         for k in [Kernel::neural_network(0.8, 1.3), Kernel::SquaredExponential { l: 1.5, sigma_f: 0.9 }] {
             let mut blocked = 0.0;
-            for cols in crate::linalg::column_blocks(x.nrows()) {
+            for cols in crate::linalg::blocks(x.nrows()) {
                 let wb = w.columns(cols.start, cols.len()).into_owned();
                 k.cross_dlog_l_contract(&xs, &x, cols, &wb, &mut blocked);
             }

@@ -207,17 +207,18 @@ pub fn mul(a: &DMatrix<f64>, b: &DMatrix<f64>) -> DMatrix<f64> {
     out
 }
 
-/// Columns per block of the sparse GP's `M x F` products (see [`column_blocks`]).
-const COLUMN_BLOCK: usize = 2048;
+/// Items per block of [`blocks`].
+pub const BLOCK: usize = 2048;
 
-/// `0..n` cut into consecutive ranges of about [`COLUMN_BLOCK`] columns, equal to within one
-/// (one range when `n <= COLUMN_BLOCK`): the sparse GP works through its `M x F` matrices a
-/// block at a time. No range is shorter than `COLUMN_BLOCK / 2` unless `n` is, so each block's
-/// product takes the same blocked path as the whole matrix's would (nalgebra multiplies
-/// matrices with at most 5 columns by another loop), and every entry is the same to the bit.
-pub(crate) fn column_blocks(n: usize) -> impl Iterator<Item = std::ops::Range<usize>> {
-    let blocks = n.div_ceil(COLUMN_BLOCK).max(1);
-    (0..blocks).map(move |b| b * n / blocks..(b + 1) * n / blocks)
+/// `0..n` cut into consecutive ranges of about [`BLOCK`] items, equal to within one (one range
+/// when `n <= BLOCK`): the sparse GP works through its `M x F` matrices a block of columns at
+/// a time, the limb orientation through its training rows a block of rows at a time. No range
+/// is shorter than `BLOCK / 2` unless `n` is, so each block's product takes the same path as
+/// the whole matrix's would (nalgebra multiplies matrices of at most 5 rows or columns by
+/// another loop), and every entry is the same to the bit.
+pub fn blocks(n: usize) -> impl Iterator<Item = std::ops::Range<usize>> {
+    let count = n.div_ceil(BLOCK).max(1);
+    (0..count).map(move |b| b * n / count..(b + 1) * n / count)
 }
 
 /// `out = A B[:, cols]`, the column block read in place (`out` reallocated only when its
@@ -369,18 +370,18 @@ pub fn symmetric_eigen_projected(a: &DMatrix<f64>, r: &DMatrix<f64>) -> Result<(
 
 #[cfg(test)]
 mod tests {
-    /// The blocks tile `0..n` in order, at most `COLUMN_BLOCK` + 1 and, past one block, at
-    /// least `COLUMN_BLOCK / 2` columns each.
+    /// The blocks tile `0..n` in order, at most `BLOCK` + 1 and, past one block, at least
+    /// `BLOCK / 2` items each.
     #[test]
-    fn column_blocks_tile_the_range() {
+    fn blocks_tile_the_range() {
         for n in [0, 1, 5, 2047, 2048, 2049, 4097, 10_000, 105_900] {
-            let blocks: Vec<_> = column_blocks(n).collect();
+            let blocks: Vec<_> = blocks(n).collect();
             assert_eq!(blocks.first().map(|b| b.start), Some(0), "{n}");
             assert_eq!(blocks.last().map(|b| b.end), Some(n), "{n}");
             assert!(blocks.windows(2).all(|w| w[0].end == w[1].start), "{n}");
-            assert!(blocks.iter().all(|b| b.len() <= COLUMN_BLOCK + 1), "{n}");
+            assert!(blocks.iter().all(|b| b.len() <= BLOCK + 1), "{n}");
             if blocks.len() > 1 {
-                assert!(blocks.iter().all(|b| b.len() >= COLUMN_BLOCK / 2), "{n}");
+                assert!(blocks.iter().all(|b| b.len() >= BLOCK / 2), "{n}");
             }
         }
     }

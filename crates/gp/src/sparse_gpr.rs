@@ -42,7 +42,7 @@ use crate::inducing::greedy_variance;
 use crate::kernel::Kernel;
 use crate::optim::{minimize_scalar, CgOptions, ExitState};
 use crate::linalg::{
-    add_mul_tr_rows, column_blocks, lower_solve_in_place, lower_tr_solve_in_place, mul, mul_columns_into, mul_tr, Cholesky,
+    add_mul_tr_rows, blocks, lower_solve_in_place, lower_tr_solve_in_place, mul, mul_columns_into, mul_tr, Cholesky,
 };
 use crate::{check_finite, invalid, Result};
 use nalgebra::{DMatrix, DVector};
@@ -405,7 +405,7 @@ impl SparseFactored {
     /// ```
     /// The middle terms are evaluated as `<2 (L⁻ᵀ H_T) A + L⁻ᵀγ Yᵀ/s², ∂K_uf>` (`2 F M² + M³`
     /// flops instead of the `3 F M²` of forming `∂A` and `A ∂Aᵀ`), a block of columns at a
-    /// time ([`column_blocks`]): no `M x F` matrix besides `A` is formed.
+    /// time ([`crate::linalg::blocks`]): no `M x F` matrix besides `A` is formed.
     fn gradient(&self, z: &DMatrix<f64>, x: &DMatrix<f64>, y: &DMatrix<f64>, with_noise: bool) -> Vec<f64> {
         let (f, m, s) = (x.nrows() as f64, y.ncols() as f64, self.noise_var);
         let mm = self.kuu.nrows();
@@ -425,7 +425,7 @@ impl SparseFactored {
             let beta = upper_solve(&self.l_uu, &self.gamma) / (s * s);
             let mut contraction = 0.0;
             let mut g = DMatrix::zeros(0, 0);
-            for cols in column_blocks(x.nrows()) {
+            for cols in blocks(x.nrows()) {
                 mul_columns_into(&mut g, &lt_ht, &self.a, cols.clone());
                 add_mul_tr_rows(&mut g, &beta, y, cols.clone());
                 self.kernel.cross_dlog_l_contract(z, x, cols, &g, &mut contraction);

@@ -264,10 +264,13 @@ pub fn encode_artifact<T: Serialize + ?Sized>(
     }
     let header_json = serde_json::to_vec(header)
         .map_err(|e| Error::invalid(format!("cannot encode artifact header: {e}")))?;
-    let payload_bytes = bincode::serde::encode_to_vec(payload, bincode::config::standard())
-        .map_err(|e| Error::invalid(format!("cannot encode '{kind}' payload: {e}")))?;
+    // The payload is sized first, then encoded in place: a model can be hundreds of MB, and
+    // neither a second copy of it nor a reallocation of the buffer is made.
+    let encoding_error = |e: bincode::error::EncodeError| Error::invalid(format!("cannot encode '{kind}' payload: {e}"));
+    let mut size = bincode::enc::write::SizeWriter::default();
+    bincode::serde::encode_into_writer(payload, &mut size, bincode::config::standard()).map_err(encoding_error)?;
     let mut out = Vec::with_capacity(
-        8 + 4 + 4 + kind.len() + 4 + 8 + header_json.len() + 8 + payload_bytes.len() + CHECKSUM_LEN,
+        8 + 4 + 4 + kind.len() + 4 + 8 + header_json.len() + 8 + size.bytes_written + CHECKSUM_LEN,
     );
     out.extend_from_slice(&MAGIC);
     out.extend_from_slice(&CONTAINER_VERSION.to_le_bytes());
@@ -276,8 +279,9 @@ pub fn encode_artifact<T: Serialize + ?Sized>(
     out.extend_from_slice(&kind_version.to_le_bytes());
     out.extend_from_slice(&(header_json.len() as u64).to_le_bytes());
     out.extend_from_slice(&header_json);
-    out.extend_from_slice(&(payload_bytes.len() as u64).to_le_bytes());
-    out.extend_from_slice(&payload_bytes);
+    out.extend_from_slice(&(size.bytes_written as u64).to_le_bytes());
+    let written = bincode::serde::encode_into_std_write(payload, &mut out, bincode::config::standard()).map_err(encoding_error)?;
+    debug_assert_eq!(written, size.bytes_written);
     let digest = Sha256::digest(&out);
     out.extend_from_slice(&digest);
     Ok(out)

@@ -676,6 +676,23 @@ pub fn train(
     keyposes_only: bool,
     opts: &GprOptions,
 ) -> Result<GprModel> {
+    let rows = TrainingRows::new(method, part_names, pairs, frame_ratio, keyposes_only)?;
+    train_rows(method, nn_bias, mean_fn, mean_ridge, mean_priors, part_names, &rows, opts)
+}
+
+/// [`train`] on rows already gathered (so that the limb orientation, [`train_orientation`],
+/// fits on the same rows without gathering them again).
+#[allow(clippy::too_many_arguments)]
+pub fn train_rows(
+    method: Method,
+    nn_bias: bool,
+    mean_fn: MeanFunction,
+    mean_ridge: f64,
+    mean_priors: Option<MeanPriors>,
+    part_names: &[String],
+    rows: &TrainingRows,
+    opts: &GprOptions,
+) -> Result<GprModel> {
     if let Some(p) = mean_priors {
         if p.maps.len() != part_names.len() {
             return Err(Error::invalid(format!("{} mean priors for {} parts", p.maps.len(), part_names.len())));
@@ -684,7 +701,7 @@ pub fn train(
             return Err(Error::invalid(format!("prior weight must be in [0, 1], got {}", p.weight)));
         }
     }
-    let rows = training_sets(method, part_names, pairs, frame_ratio, keyposes_only)?;
+    rows.check_parts(part_names)?;
     let (data, keys) = (&rows.data, rows.keys());
     let (parts, disp) = rayon::join(
         || train_parts(method, nn_bias, mean_fn, mean_ridge, mean_priors, part_names, data, keys, opts),
@@ -698,13 +715,9 @@ pub fn train(
         part_names: part_names.to_vec(),
         parts,
         displacement,
-        n_train: if method == Method::KeyposeAffine {
-            keys.len()
-        } else {
-            data.len()
-        },
-        frame_ratio,
-        keyposes_only,
+        n_train: rows.len(method),
+        frame_ratio: rows.frame_ratio,
+        keyposes_only: rows.keyposes_only,
         nn_bias,
         mean: mean_fn,
         reports,
@@ -713,16 +726,13 @@ pub fn train(
     })
 }
 
-/// The limb orientation of a model trained by [`train`] with the same arguments, fitted on the
-/// rows its pose regressions learn from (`crate::limb_orientation`); `None` when `weight` is 0.
-/// With `only`, the map of that part alone (the others `None`: [`train_piece`]'s).
-#[allow(clippy::too_many_arguments)]
+/// The limb orientation of a model of `method` trained on `rows`, fitted on the rows its pose
+/// regressions learn from (`crate::limb_orientation`); `None` when `weight` is 0. With `only`,
+/// the map of that part alone (the others `None`: [`train_piece`]'s).
 pub fn train_orientation(
     method: Method,
     part_names: &[String],
-    pairs: &[PairData],
-    frame_ratio: f64,
-    keyposes_only: bool,
+    sets: &TrainingRows,
     source: &PcaModel,
     target: &PcaModel,
     weight: f64,
@@ -734,7 +744,7 @@ pub fn train_orientation(
     if weight == 0.0 {
         return Ok(None);
     }
-    let sets = training_sets(method, part_names, pairs, frame_ratio, keyposes_only)?;
+    sets.check_parts(part_names)?;
     let rows = if method == Method::KeyposeAffine { sets.keys() } else { &sets.data };
     let maps = (0..part_names.len())
         .map(|k| match only {
@@ -745,45 +755,58 @@ pub fn train_orientation(
     Ok(Some(LimbOrientation { weight, maps }))
 }
 
-/// The training rows of `method` (the dense or key-pose pairs), checked against `part_names`,
-/// and the key-pose rows of the affine baseline when they are other rows (`None`: the same;
-/// [`TrainingRows::keys`]).
-fn training_sets(
-    method: Method,
-    part_names: &[String],
-    pairs: &[PairData],
-    frame_ratio: f64,
-    keyposes_only: bool,
-) -> Result<TrainingRows> {
-    if !(frame_ratio > 0.0 && frame_ratio.is_finite()) {
-        return Err(Error::invalid(format!(
-            "frame-rate ratio must be positive, got {frame_ratio}"
-        )));
-    }
-    let data = training_set(pairs, frame_ratio, keyposes_only)?;
-    if data.x_parts.len() != part_names.len() {
-        return Err(Error::invalid(format!(
-            "{} part names for {} parts of coefficients",
-            part_names.len(),
-            data.x_parts.len()
-        )));
-    }
-    let keys = if method == Method::KeyposeAffine && !keyposes_only {
-        Some(training_set(pairs, frame_ratio, true)?)
-    } else {
-        None
-    };
-    Ok(TrainingRows { data, keys })
-}
-
-/// What [`training_sets`] returns: the rows of `method`, and the affine baseline's key-pose rows
-/// when they differ from them (not a copy: at 10^5 pairs the rows are hundreds of MB).
-struct TrainingRows {
+/// The rows a model of `method` trains on, gathered once from the pairs: the dense or key-pose
+/// rows, and the affine baseline's key-pose rows when they are other rows (not a copy: at 10^5
+/// pairs the rows are hundreds of MB).
+pub struct TrainingRows {
     data: TrainingSet,
     keys: Option<TrainingSet>,
+    frame_ratio: f64,
+    keyposes_only: bool,
 }
 
 impl TrainingRows {
+    /// The rows of `method` from `pairs` (target frame rate over source, `frame_ratio`), checked
+    /// against `part_names`.
+    pub fn new(
+        method: Method,
+        part_names: &[String],
+        pairs: &[PairData],
+        frame_ratio: f64,
+        keyposes_only: bool,
+    ) -> Result<Self> {
+        if !(frame_ratio > 0.0 && frame_ratio.is_finite()) {
+            return Err(Error::invalid(format!(
+                "frame-rate ratio must be positive, got {frame_ratio}"
+            )));
+        }
+        let data = training_set(pairs, frame_ratio, keyposes_only)?;
+        let keys = if method == Method::KeyposeAffine && !keyposes_only {
+            Some(training_set(pairs, frame_ratio, true)?)
+        } else {
+            None
+        };
+        let rows = TrainingRows { data, keys, frame_ratio, keyposes_only };
+        rows.check_parts(part_names)?;
+        Ok(rows)
+    }
+
+    /// The number of training rows (of the key-pose rows for the affine baseline).
+    pub fn len(&self, method: Method) -> usize {
+        if method == Method::KeyposeAffine { self.keys().len() } else { self.data.len() }
+    }
+
+    fn check_parts(&self, part_names: &[String]) -> Result<()> {
+        if self.data.x_parts.len() != part_names.len() {
+            return Err(Error::invalid(format!(
+                "{} part names for {} parts of coefficients",
+                part_names.len(),
+                self.data.x_parts.len()
+            )));
+        }
+        Ok(())
+    }
+
     /// The key-pose rows of the affine baseline.
     fn keys(&self) -> &TrainingSet {
         self.keys.as_ref().unwrap_or(&self.data)
@@ -906,9 +929,7 @@ pub fn train_piece(
     mean_ridge: f64,
     mean_priors: Option<MeanPriors>,
     part_names: &[String],
-    pairs: &[PairData],
-    frame_ratio: f64,
-    keyposes_only: bool,
+    rows: &TrainingRows,
     opts: &GprOptions,
     unit: usize,
 ) -> Result<GprPiece> {
@@ -920,7 +941,7 @@ pub fn train_piece(
             return Err(Error::invalid(format!("prior weight must be in [0, 1], got {}", p.weight)));
         }
     }
-    let rows = training_sets(method, part_names, pairs, frame_ratio, keyposes_only)?;
+    rows.check_parts(part_names)?;
     let (data, keys) = (&rows.data, rows.keys());
     let (regressor, report) = if unit < part_names.len() {
         let priors = mean_priors.map(|p| MeanPriors { maps: &p.maps[unit..=unit], ..p });
@@ -945,9 +966,9 @@ pub fn train_piece(
         method,
         regressor,
         report,
-        n_train: if method == Method::KeyposeAffine { keys.len() } else { data.len() },
-        frame_ratio,
-        keyposes_only,
+        n_train: rows.len(method),
+        frame_ratio: rows.frame_ratio,
+        keyposes_only: rows.keyposes_only,
         nn_bias,
         mean: mean_fn,
         orientation_weight: 0.0,

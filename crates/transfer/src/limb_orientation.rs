@@ -165,15 +165,21 @@ impl LimbOrientation {
 
 /// The log-orientations of limb `limb` in the decoded coefficient rows `coeffs` of `part`.
 fn log_orientations(part: &PartPca, limb: &Limb, coeffs: &DMatrix<f64>) -> Result<Vec<Vector3<f64>>> {
-    let rows = part.pca.decode(coeffs).map_err(|e| Error::invalid(format!("part '{}': {e}", part.name)))?;
     let mean = mean_shape(part);
-    Ok((0..rows.nrows())
-        .into_par_iter()
-        .map(|r| {
+    let mut out = Vec::with_capacity(coeffs.nrows());
+    // Decoded a block of rows at a time: a training set's rows decoded whole would be the
+    // part's vertices for every pair (GBs at 10^5 pairs).
+    for block in gp::linalg::blocks(coeffs.nrows()) {
+        let rows = part
+            .pca
+            .decode(&coeffs.rows(block.start, block.len()).into_owned())
+            .map_err(|e| Error::invalid(format!("part '{}': {e}", part.name)))?;
+        out.par_extend((0..rows.nrows()).into_par_iter().map(|r| {
             let row: Vec<f64> = rows.row(r).iter().copied().collect();
             so3_log(&orientation(&mean, &points(&row), &limb.proximal))
-        })
-        .collect())
+        }));
+    }
+    Ok(out)
 }
 
 /// The limb of part `k` in both models, or `None` when `k` is the root.

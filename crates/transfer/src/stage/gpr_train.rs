@@ -14,7 +14,7 @@ use serde::Serialize;
 
 use crate::limb_orientation;
 use crate::gpr_model::{
-    train, train_orientation, train_piece, GprModel, MeanFunction, MeanPrior, MeanPriors, Method, PairFiles, RegressorReport, Templates, DISPLACEMENT,
+    train_orientation, train_piece, train_rows, GprModel, TrainingRows, MeanFunction, MeanPrior, MeanPriors, Method, PairFiles, RegressorReport, Templates, DISPLACEMENT,
     MEAN_RIDGE, PRIOR_WEIGHT,
 };
 use capture::part_pca::PcaModel;
@@ -224,9 +224,14 @@ pub fn run(p: &Params) -> anyhow::Result<()> {
     for (f, sha256) in pair_hashes {
         header.inputs.push(mesh_core::artifact::InputRecord { path: f.display().to_string(), sha256 });
     }
+    // The rows are gathered once for the regressions and the limb orientation; the pairs'
+    // coefficients are not needed after that (at 10^5 pairs each is hundreds of MB).
+    let n_pairs = pairs.len();
+    let rows = TrainingRows::new(method, &names, &pairs, ratio, p.keyposes_only)?;
+    drop(pairs);
     if let Some(unit) = unit {
         let spin = mesh_core::cli::spinner(
-            &format!("gpr-train: {}, {} pairs", units[unit], pairs.len()),
+            &format!("gpr-train: {}, {} pairs", units[unit], n_pairs),
             &p.common,
         );
         let mut piece = train_piece(
@@ -236,14 +241,12 @@ pub fn run(p: &Params) -> anyhow::Result<()> {
             p.mean_ridge,
             priors,
             &names,
-            &pairs,
-            ratio,
-            p.keyposes_only,
+            &rows,
             &opts,
             unit,
         )?;
         if unit < names.len() {
-            let o = train_orientation(method, &names, &pairs, ratio, p.keyposes_only, &src_pca, &tgt_pca, p.orientation_weight, Some(unit))?;
+            let o = train_orientation(method, &names, &rows, &src_pca, &tgt_pca, p.orientation_weight, Some(unit))?;
             piece.orientation = o.and_then(|mut o| o.maps.swap_remove(unit));
         }
         piece.orientation_weight = p.orientation_weight;
@@ -254,23 +257,12 @@ pub fn run(p: &Params) -> anyhow::Result<()> {
         return Ok(());
     }
     let spin = mesh_core::cli::spinner(
-        &format!("gpr-train: {} parts + displacement, {} pairs", names.len(), pairs.len()),
+        &format!("gpr-train: {} parts + displacement, {} pairs", names.len(), n_pairs),
         &p.common,
     );
-    let mut model: GprModel = train(
-        method,
-        p.nn_bias,
-        p.mean,
-        p.mean_ridge,
-        priors,
-        &names,
-        &pairs,
-        ratio,
-        p.keyposes_only,
-        &opts,
-    )?;
-    model.orientation =
-        train_orientation(method, &names, &pairs, ratio, p.keyposes_only, &src_pca, &tgt_pca, p.orientation_weight, None)?;
+    let mut model: GprModel = train_rows(method, p.nn_bias, p.mean, p.mean_ridge, priors, &names, &rows, &opts)?;
+    model.orientation = train_orientation(method, &names, &rows, &src_pca, &tgt_pca, p.orientation_weight, None)?;
+    drop(rows);
     model.templates = Templates::of(&src_pca, &tgt_pca);
     spin.finish_and_clear();
     mesh_core::info!(
