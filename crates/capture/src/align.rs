@@ -177,16 +177,57 @@ impl Artifact for AlignedMotion {
     /// coordinates, faces and anchor below it, one pose and one displacement
     /// per frame, a finite non-negative frame rate and a unit up axis.
     fn validate(&self) -> std::result::Result<(), String> {
-        let Some(n) = self.frames.first().map(Vec::len) else {
+        let mut checks = FrameChecks::default();
+        for frame in &self.frames {
+            checks.check(frame);
+        }
+        let n = checks.verdict()?;
+        check_besides_frames(n, self.frames.len(), &self.faces, &self.anchor, self.poses.len(), self.displacements.len(), &self.capture)
+    }
+}
+
+/// The checks of [`AlignedMotion::validate`] on the frames' vertices, a frame at a time (so that
+/// [`crate::motion_stream`] checks frames as it decodes them): every frame has frame 0's vertex
+/// count and finite coordinates.
+#[derive(Default)]
+pub(crate) struct FrameChecks {
+    pub(crate) n_frames: usize,
+    /// Frame 0's vertex count.
+    n_vertices: Option<usize>,
+    /// The first frame with another vertex count than frame 0, and its count.
+    wrong_count: Option<(usize, usize)>,
+    /// The first frame with a non-finite coordinate.
+    non_finite: Option<usize>,
+}
+
+impl FrameChecks {
+    /// Checks the next frame; true while every frame so far passed.
+    pub(crate) fn check(&mut self, frame: &[Vector3<f64>]) -> bool {
+        let i = self.n_frames;
+        self.n_frames += 1;
+        let n = *self.n_vertices.get_or_insert(frame.len());
+        if frame.len() != n {
+            self.wrong_count.get_or_insert((i, frame.len()));
+        }
+        if !frame.iter().all(|v| v.iter().all(|c| c.is_finite())) {
+            self.non_finite.get_or_insert(i);
+        }
+        self.wrong_count.is_none() && self.non_finite.is_none()
+    }
+
+    /// The vertex count of the frames checked, or their first problem (no frames; a vertex
+    /// count other than frame 0's, before a non-finite coordinate).
+    pub(crate) fn verdict(&self) -> std::result::Result<usize, String> {
+        let Some(n) = self.n_vertices else {
             return Err("no frames".into());
         };
-        if let Some(i) = self.frames.iter().position(|f| f.len() != n) {
-            return Err(format!("frame {i} has {} vertices, frame 0 has {n}", self.frames[i].len()));
+        if let Some((i, len)) = self.wrong_count {
+            return Err(format!("frame {i} has {len} vertices, frame 0 has {n}"));
         }
-        if let Some(i) = self.frames.iter().position(|f| f.iter().any(|v| !v.iter().all(|c| c.is_finite()))) {
+        if let Some(i) = self.non_finite {
             return Err(format!("frame {i} has a non-finite coordinate"));
         }
-        check_besides_frames(n, self.frames.len(), &self.faces, &self.anchor, self.poses.len(), self.displacements.len(), &self.capture)
+        Ok(n)
     }
 }
 

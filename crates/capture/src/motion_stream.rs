@@ -17,7 +17,7 @@ use mesh_core::{Error, Result};
 use nalgebra::Vector3;
 use serde::de::{DeserializeSeed, Deserializer, Error as _, SeqAccess, Visitor};
 
-use crate::align::{check_besides_frames, AlignedMotion, CaptureInfo};
+use crate::align::{check_besides_frames, AlignedMotion, CaptureInfo, FrameChecks};
 
 /// An aligned motion without its frames' vertices, as [`read_frames`] returns it.
 #[derive(Clone, Debug, PartialEq)]
@@ -43,54 +43,32 @@ pub fn read_frames(
     mut sink: impl FnMut(Vec<Vector3<f64>>) -> Result<()>,
 ) -> Result<(MotionInfo, String)> {
     let path = path.as_ref();
-    let mut frames = FrameChecks::default();
+    let mut frames = StreamChecks::default();
     let seed = MotionSeed { frames: &mut frames, sink: &mut sink };
     let (_, rest, sha256) = read_artifact_seeded(path, AlignedMotion::KIND, AlignedMotion::VERSION, seed)?;
     let invalid = |msg: String| Error::file(path, format!("invalid '{}' payload: {msg}", AlignedMotion::KIND));
     let (faces, poses, displacements, anchor, capture) = rest;
-    let Some(n) = frames.n_vertices else {
-        return Err(invalid("no frames".into()));
-    };
-    if let Some((i, len)) = frames.wrong_count {
-        return Err(invalid(format!("frame {i} has {len} vertices, frame 0 has {n}")));
-    }
-    if let Some(i) = frames.non_finite {
-        return Err(invalid(format!("frame {i} has a non-finite coordinate")));
-    }
-    check_besides_frames(n, frames.n_frames, &faces, &anchor, poses.len(), displacements.len(), &capture)
+    let n = frames.checks.verdict().map_err(invalid)?;
+    let n_frames = frames.checks.n_frames;
+    check_besides_frames(n, n_frames, &faces, &anchor, poses.len(), displacements.len(), &capture)
         .map_err(invalid)?;
     if let Some(e) = frames.sink_error {
         return Err(Error::file(path, e.to_string()));
     }
-    Ok((MotionInfo { faces, n_frames: frames.n_frames, n_vertices: n, poses, displacements, anchor, capture }, sha256))
+    Ok((MotionInfo { faces, n_frames, n_vertices: n, poses, displacements, anchor, capture }, sha256))
 }
 
-/// What the frames read so far were found to be.
+/// The frames read so far: [`FrameChecks`], and the sink's first error.
 #[derive(Default)]
-struct FrameChecks {
-    n_frames: usize,
-    /// Frame 0's vertex count.
-    n_vertices: Option<usize>,
-    /// The first frame with another vertex count than frame 0, and its count.
-    wrong_count: Option<(usize, usize)>,
-    /// The first frame with a non-finite coordinate.
-    non_finite: Option<usize>,
+struct StreamChecks {
+    checks: FrameChecks,
     sink_error: Option<Error>,
 }
 
-impl FrameChecks {
-    /// Checks frame `n_frames` and hands it to `sink` while every frame so far passed.
+impl StreamChecks {
+    /// Checks the next frame and hands it to `sink` while every frame so far passed.
     fn take(&mut self, frame: Vec<Vector3<f64>>, sink: &mut dyn FnMut(Vec<Vector3<f64>>) -> Result<()>) {
-        let i = self.n_frames;
-        self.n_frames += 1;
-        let n = *self.n_vertices.get_or_insert(frame.len());
-        if frame.len() != n {
-            self.wrong_count.get_or_insert((i, frame.len()));
-        }
-        if !frame.iter().all(|v| v.iter().all(|c| c.is_finite())) {
-            self.non_finite.get_or_insert(i);
-        }
-        if self.wrong_count.is_none() && self.non_finite.is_none() && self.sink_error.is_none() {
+        if self.checks.check(&frame) && self.sink_error.is_none() {
             if let Err(e) = sink(frame) {
                 self.sink_error = Some(e);
             }
@@ -102,9 +80,9 @@ impl FrameChecks {
 type Rest = (Vec<[u32; 3]>, Vec<RigidMotion>, Vec<[f64; 6]>, Vec<u32>, CaptureInfo);
 
 /// Decodes an [`AlignedMotion`] as its derived `Deserialize` does, field by field, with the
-/// frames going through [`FrameChecks::take`] instead of into a vector.
+/// frames going through [`StreamChecks::take`] instead of into a vector.
 struct MotionSeed<'a> {
-    frames: &'a mut FrameChecks,
+    frames: &'a mut StreamChecks,
     sink: &'a mut dyn FnMut(Vec<Vector3<f64>>) -> Result<()>,
 }
 
@@ -141,7 +119,7 @@ impl<'de> Visitor<'de> for MotionSeed<'_> {
 /// The `frames` field: a sequence of frames, each decoded as a `Vec<Vector3<f64>>` (which
 /// grows with the bytes actually read, whatever length the file claims) and handed on.
 struct FramesSeed<'a> {
-    frames: &'a mut FrameChecks,
+    frames: &'a mut StreamChecks,
     sink: &'a mut dyn FnMut(Vec<Vector3<f64>>) -> Result<()>,
 }
 
