@@ -680,6 +680,19 @@ pub fn train(
     train_rows(method, nn_bias, mean_fn, mean_ridge, mean_priors, part_names, &rows, opts)
 }
 
+/// The mean priors, if any, are one per part with a weight in `[0, 1]`.
+fn check_priors(mean_priors: Option<MeanPriors>, part_names: &[String]) -> Result<()> {
+    if let Some(p) = mean_priors {
+        if p.maps.len() != part_names.len() {
+            return Err(Error::invalid(format!("{} mean priors for {} parts", p.maps.len(), part_names.len())));
+        }
+        if !(0.0..=1.0).contains(&p.weight) {
+            return Err(Error::invalid(format!("prior weight must be in [0, 1], got {}", p.weight)));
+        }
+    }
+    Ok(())
+}
+
 /// [`train`] on rows already gathered (so that the limb orientation, [`train_orientation`],
 /// fits on the same rows without gathering them again).
 #[allow(clippy::too_many_arguments)]
@@ -693,14 +706,7 @@ pub fn train_rows(
     rows: &TrainingRows,
     opts: &GprOptions,
 ) -> Result<GprModel> {
-    if let Some(p) = mean_priors {
-        if p.maps.len() != part_names.len() {
-            return Err(Error::invalid(format!("{} mean priors for {} parts", p.maps.len(), part_names.len())));
-        }
-        if !(0.0..=1.0).contains(&p.weight) {
-            return Err(Error::invalid(format!("prior weight must be in [0, 1], got {}", p.weight)));
-        }
-    }
+    check_priors(mean_priors, part_names)?;
     rows.check_parts(part_names)?;
     let (data, keys) = (&rows.data, rows.keys());
     let (parts, disp) = rayon::join(
@@ -933,14 +939,7 @@ pub fn train_piece(
     opts: &GprOptions,
     unit: usize,
 ) -> Result<GprPiece> {
-    if let Some(p) = mean_priors {
-        if p.maps.len() != part_names.len() {
-            return Err(Error::invalid(format!("{} mean priors for {} parts", p.maps.len(), part_names.len())));
-        }
-        if !(0.0..=1.0).contains(&p.weight) {
-            return Err(Error::invalid(format!("prior weight must be in [0, 1], got {}", p.weight)));
-        }
-    }
+    check_priors(mean_priors, part_names)?;
     rows.check_parts(part_names)?;
     let (data, keys) = (&rows.data, rows.keys());
     let (regressor, report) = if unit < part_names.len() {
