@@ -34,7 +34,9 @@ pub trait Energy {
 pub enum ChainStart {
     /// The mean prediction from the first point (3DV eq. 8; the paper's initialisation, §6).
     /// It is the mode-like centre of the density, not a typical draw: the energy of the chain
-    /// has to rise to the stationary level during burn-in.
+    /// has to rise to the stationary level during burn-in. Where the mean prediction leaves the
+    /// learned data ([`leaves_the_data`]) the chain starts at the given trajectory instead (the
+    /// sequence's learned one: §1's "initialized with a latent motion trajectory").
     #[default]
     #[serde(rename = "mean")]
     MeanPrediction,
@@ -95,6 +97,22 @@ pub struct HmcResult {
     pub step_size: f64,
     /// Energy/gradient evaluations.
     pub evaluations: usize,
+    /// The chain started at the given trajectory because the mean prediction left the learned
+    /// data ([`leaves_the_data`]).
+    pub started_at_template: bool,
+}
+
+/// Share of the pose prior's variance ([`Predictor::pose_variance_ratio`]) above which a latent
+/// point is off the learned data. On the demo and holdout models a mean prediction reaches at
+/// most 0.02 where its poses are sound and 0.88-0.99 where it has run away from the data (a
+/// torso or an arm decoded to a crumpled mean pose; docs/RESULTS.md, "Mean predictions that
+/// leave the data").
+pub const OFF_DATA_VARIANCE: f64 = 0.5;
+
+/// Whether any point of the latent trajectory `x` is off the learned data
+/// ([`OFF_DATA_VARIANCE`]).
+pub fn leaves_the_data(pred: &Predictor, x: &DMatrix<f64>) -> Result<bool> {
+    Ok(pred.pose_variance_ratio(x)?.into_iter().any(|r| r > OFF_DATA_VARIANCE))
 }
 
 struct State {
@@ -273,6 +291,7 @@ pub fn sample<E: Energy + ?Sized>(energy: &E, q0: &[f64], opts: &HmcOptions) -> 
         burn_in_accept_rate: burn_acc / opts.burn_in.max(1) as f64,
         step_size: log_eps_bar.exp(),
         evaluations: evals,
+        started_at_template: false,
     })
 }
 
@@ -554,8 +573,17 @@ pub fn sample_trajectories_scaled(
     variance_scale: f64,
 ) -> Result<(Vec<DMatrix<f64>>, HmcResult)> {
     let x1: Vec<f64> = template.row(0).iter().copied().collect();
+    let mut started_at_template = false;
     let start = match opts.start {
-        ChainStart::MeanPrediction => pred.mean_trajectory(&x1, template.nrows())?,
+        ChainStart::MeanPrediction => {
+            let mean = pred.mean_trajectory(&x1, template.nrows())?;
+            started_at_template = leaves_the_data(pred, &mean)?;
+            if started_at_template {
+                template.clone()
+            } else {
+                mean
+            }
+        }
         ChainStart::Ancestral => crate::ancestral::sample_trajectories_ancestral(
             pred,
             &x1,
@@ -568,7 +596,7 @@ pub fn sample_trajectories_scaled(
     };
     let energy =
         TrajectoryEnergy::new(pred, &x1, template.nrows())?.with_variance_scale(variance_scale)?;
-    let res = sample(&energy, &energy.free_coords(&start), opts)?;
+    let res = HmcResult { started_at_template, ..sample(&energy, &energy.free_coords(&start), opts)? };
     let trajs = res.samples.iter().map(|q| energy.trajectory(q)).collect();
     Ok((trajs, res))
 }

@@ -453,6 +453,18 @@ impl Predictor {
             .collect())
     }
 
+    /// [`Predictor::pose_variance`] over the prior's `k_Y(x, x)` for each row of `xs`: near 0
+    /// on the learned latent points, 1 where the training poses say nothing about the pose (the
+    /// mean of eq. 12 there falls back to the data mean, whatever the motion).
+    pub fn pose_variance_ratio(&self, xs: &DMatrix<f64>) -> Result<Vec<f64>> {
+        Ok(self
+            .pose_variance(xs)?
+            .into_iter()
+            .zip(xs.row_iter())
+            .map(|(v, x)| v / self.ky.self_cov(&x.iter().copied().collect::<Vec<_>>()))
+            .collect())
+    }
+
     /// Eq. 11: poses for the latent rows of `xs`; the mean (3DV eq. 12) when `rng` is `None`,
     /// otherwise a draw `ỹ ~ N(μ_Y(x), σ²_Y(x) I)`.
     pub fn reconstruct<R: rand::Rng + ?Sized>(

@@ -31,6 +31,10 @@ pub struct ChainStats {
     pub accept_rate: f64,
     pub burn_in_accept_rate: f64,
     pub step_size: f64,
+    /// The chain started at the sequence's learned latent trajectory because the mean
+    /// prediction left the learned data (`gpdm::hmc::leaves_the_data`).
+    #[serde(default)]
+    pub started_at_learned: bool,
 }
 
 /// How trajectories are drawn from the density of a part's GPDM dynamics given the first point.
@@ -197,16 +201,25 @@ pub fn sequence_variations_len(
             let fail = |e: gpdm::GpdmError| {
                 Error::invalid(format!("{} part '{}': {e}", info.name, pm.part.name))
             };
-            let (trajs, accept_rate, burn_in_accept_rate, step_size) = match sampler {
+            let (trajs, accept_rate, burn_in_accept_rate, step_size, started_at_learned) = match sampler {
                 Sampler::Hmc => {
                     let (trajs, res) =
                         sample_trajectories_scaled(pr, &template, &o, variance_scale)
                             .map_err(fail)?;
+                    if res.started_at_template && c == 0 {
+                        mesh_core::warn!(
+                            "{} part '{}': the mean prediction leaves the learned data (3DV eq. 13's variance above {} of the prior's); its chains start at the learned trajectory",
+                            info.name,
+                            pm.part.name,
+                            gpdm::hmc::OFF_DATA_VARIANCE
+                        );
+                    }
                     (
                         trajs,
                         res.accept_rate,
                         res.burn_in_accept_rate,
                         res.step_size,
+                        res.started_at_template,
                     )
                 }
                 Sampler::Ancestral => {
@@ -214,7 +227,7 @@ pub fn sequence_variations_len(
                     let trajs =
                         sample_trajectories_ancestral(pr, &x1, len, per, o.seed, variance_scale)
                             .map_err(fail)?;
-                    (trajs, 1.0, 1.0, 0.0)
+                    (trajs, 1.0, 1.0, 0.0, false)
                 }
             };
             let stats = ChainStats {
@@ -223,6 +236,7 @@ pub fn sequence_variations_len(
                 accept_rate,
                 burn_in_accept_rate,
                 step_size,
+                started_at_learned,
             };
             Ok((trajs, stats))
         })
