@@ -677,7 +677,20 @@ pub fn train(
     opts: &GprOptions,
 ) -> Result<GprModel> {
     let rows = TrainingRows::new(method, part_names, pairs, frame_ratio, keyposes_only)?;
-    train_rows(method, nn_bias, mean_fn, mean_ridge, mean_priors, part_names, &rows, opts)
+    let regression = Regression { method, nn_bias, mean: mean_fn, mean_ridge, mean_priors, opts };
+    train_rows(&regression, part_names, &rows)
+}
+
+/// How every regressor of a model is trained ([`train_rows`], [`train_piece`]): the method, the
+/// NN kernel's bias input, the mean function with its ridge and priors, the GP options.
+#[derive(Clone, Copy)]
+pub struct Regression<'a> {
+    pub method: Method,
+    pub nn_bias: bool,
+    pub mean: MeanFunction,
+    pub mean_ridge: f64,
+    pub mean_priors: Option<MeanPriors<'a>>,
+    pub opts: &'a GprOptions,
 }
 
 /// The mean priors, if any, are one per part with a weight in `[0, 1]`.
@@ -695,17 +708,8 @@ fn check_priors(mean_priors: Option<MeanPriors>, part_names: &[String]) -> Resul
 
 /// [`train`] on rows already gathered (so that the limb orientation, [`train_orientation`],
 /// fits on the same rows without gathering them again).
-#[allow(clippy::too_many_arguments)]
-pub fn train_rows(
-    method: Method,
-    nn_bias: bool,
-    mean_fn: MeanFunction,
-    mean_ridge: f64,
-    mean_priors: Option<MeanPriors>,
-    part_names: &[String],
-    rows: &TrainingRows,
-    opts: &GprOptions,
-) -> Result<GprModel> {
+pub fn train_rows(regression: &Regression, part_names: &[String], rows: &TrainingRows) -> Result<GprModel> {
+    let Regression { method, nn_bias, mean: mean_fn, mean_ridge, mean_priors, opts } = *regression;
     check_priors(mean_priors, part_names)?;
     rows.check_parts(part_names)?;
     let (data, keys) = (&rows.data, rows.keys());
@@ -927,18 +931,8 @@ impl TrainingSet {
 
 /// [`train`] of one regressor: part `unit` (an index into `part_names`), or the displacement
 /// when `unit == part_names.len()`; the regressor is trained exactly as in the whole model.
-#[allow(clippy::too_many_arguments)]
-pub fn train_piece(
-    method: Method,
-    nn_bias: bool,
-    mean_fn: MeanFunction,
-    mean_ridge: f64,
-    mean_priors: Option<MeanPriors>,
-    part_names: &[String],
-    rows: &TrainingRows,
-    opts: &GprOptions,
-    unit: usize,
-) -> Result<GprPiece> {
+pub fn train_piece(regression: &Regression, part_names: &[String], rows: &TrainingRows, unit: usize) -> Result<GprPiece> {
+    let Regression { method, nn_bias, mean: mean_fn, mean_ridge, mean_priors, opts } = *regression;
     check_priors(mean_priors, part_names)?;
     rows.check_parts(part_names)?;
     let (data, keys) = (&rows.data, rows.keys());

@@ -14,7 +14,7 @@ use serde::Serialize;
 
 use crate::limb_orientation;
 use crate::gpr_model::{
-    train_orientation, train_piece, train_rows, GprModel, TrainingRows, MeanFunction, MeanPrior, MeanPriors, Method, PairFiles, RegressorReport, Templates, DISPLACEMENT,
+    train_orientation, train_piece, train_rows, GprModel, Regression, TrainingRows, MeanFunction, MeanPrior, MeanPriors, Method, PairFiles, RegressorReport, Templates, DISPLACEMENT,
     MEAN_RIDGE, PRIOR_WEIGHT,
 };
 use capture::part_pca::PcaModel;
@@ -229,22 +229,13 @@ pub fn run(p: &Params) -> anyhow::Result<()> {
     let n_pairs = pairs.len();
     let rows = TrainingRows::new(method, &names, &pairs, ratio, p.keyposes_only)?;
     drop(pairs);
+    let regression = Regression { method, nn_bias: p.nn_bias, mean: p.mean, mean_ridge: p.mean_ridge, mean_priors: priors, opts: &opts };
     if let Some(unit) = unit {
         let spin = mesh_core::cli::spinner(
             &format!("gpr-train: {}, {} pairs", units[unit], n_pairs),
             &p.common,
         );
-        let mut piece = train_piece(
-            method,
-            p.nn_bias,
-            p.mean,
-            p.mean_ridge,
-            priors,
-            &names,
-            &rows,
-            &opts,
-            unit,
-        )?;
+        let mut piece = train_piece(&regression, &names, &rows, unit)?;
         if unit < names.len() {
             let o = train_orientation(method, &names, &rows, &src_pca, &tgt_pca, p.orientation_weight, Some(unit))?;
             piece.orientation = o.and_then(|mut o| o.maps.swap_remove(unit));
@@ -260,7 +251,7 @@ pub fn run(p: &Params) -> anyhow::Result<()> {
         &format!("gpr-train: {} parts + displacement, {} pairs", names.len(), n_pairs),
         &p.common,
     );
-    let mut model: GprModel = train_rows(method, p.nn_bias, p.mean, p.mean_ridge, priors, &names, &rows, &opts)?;
+    let mut model: GprModel = train_rows(&regression, &names, &rows)?;
     model.orientation = train_orientation(method, &names, &rows, &src_pca, &tgt_pca, p.orientation_weight, None)?;
     drop(rows);
     model.templates = Templates::of(&src_pca, &tgt_pca);
