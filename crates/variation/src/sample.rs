@@ -190,8 +190,9 @@ pub fn sequence_variations_len(
                     info.name
                 )));
             }
-            // Only the first point and the length are used (the chain starts from the mean
-            // prediction, 3DV eq. 8), so a longer motion than the training sequence is fine.
+            // The learned trajectory, its last point repeated past its end: its first point and
+            // length set the chain, which starts from the mean prediction (3DV eq. 8), or from
+            // this trajectory where the mean prediction leaves the learned data.
             let template = DMatrix::from_fn(len, x.ncols(), |t, c| x[(t.min(x.nrows() - 1), c)]);
             let o = HmcOptions {
                 n_samples: per,
