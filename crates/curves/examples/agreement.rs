@@ -16,7 +16,7 @@ fn main() -> anyhow::Result<()> {
         let secs = t.elapsed().as_secs_f64();
         let topo = mesh_core::topology::Topology::new(mesh.vertices.len(), &mesh.faces);
         for l in &limbs {
-            let d = curves::geodesic::distances(&topo, &mesh.vertices, &[l.extremity]);
+            let d = topo.edge_distances(&mesh.vertices, &[l.extremity]);
             let mean = |lp: &[u32]| lp.iter().map(|&v| d[v as usize]).sum::<f64>() / lp.len() as f64;
             if let Some(c) = spec.curves.get(&l.part) {
                 eprintln!("{x} {}: hand-built loops at {:.3} {:.3} m", l.part, mean(&c[0]), mean(&c[1]));

@@ -4,6 +4,5 @@
 
 pub mod agreement;
 pub mod check_image;
-pub mod geodesic;
 pub mod limb_loops;
 pub mod stage;

@@ -27,7 +27,6 @@ use mesh_core::topology::Topology;
 use mesh_core::TriMesh;
 use nalgebra::Vector3;
 
-use crate::geodesic::distances;
 
 /// The sweep's settings (defaults tuned on the demo bodies, docs/RESULTS.md).
 #[derive(Clone, Debug)]
@@ -69,14 +68,14 @@ pub struct Limb {
 fn extremities(topo: &Topology, pos: &[Vector3<f64>]) -> Vec<u32> {
     let centroid = pos.iter().sum::<Vector3<f64>>() / pos.len() as f64;
     let centre = (0..pos.len()).min_by(|&a, &b| (pos[a] - centroid).norm().total_cmp(&(pos[b] - centroid).norm())).unwrap_or(0) as u32;
-    let d0 = distances(topo, pos, &[centre]);
+    let d0 = topo.edge_distances(pos, &[centre]);
     let far = argmax(&d0);
     let mut chosen = vec![far];
-    let mut dmin = distances(topo, pos, &[far]);
+    let mut dmin = topo.edge_distances(pos, &[far]);
     while chosen.len() < 5 {
         let next = argmax(&dmin);
         chosen.push(next);
-        let d = distances(topo, pos, &[next]);
+        let d = topo.edge_distances(pos, &[next]);
         for (m, x) in dmin.iter_mut().zip(d) {
             *m = m.min(x);
         }
@@ -116,7 +115,7 @@ fn simple(lp: &[u32]) -> bool {
 
 /// The near and far loops of the limb ending at `extremity` (step 3 of the module doc).
 fn limb_loops(mesh: &TriMesh, topo: &Topology, extremity: u32, skip: f64, s: &Settings) -> Result<([Vec<u32>; 2], [f64; 2])> {
-    let d = distances(topo, &mesh.vertices, &[extremity]);
+    let d = topo.edge_distances(&mesh.vertices, &[extremity]);
     let dmax = d.iter().copied().filter(|x| x.is_finite()).fold(0.0, f64::max);
     let mut lengths: Vec<(f64, f64)> = Vec::new();
     let mut t = s.step;
@@ -176,7 +175,7 @@ pub fn propose(mesh: &TriMesh, up: &Vector3<f64>, s: &Settings) -> Result<Vec<Li
     // Forward: from the lower shin (level set at 15% of the height) to the toe tip.
     let mut forward = Vector3::zeros();
     for &f in &feet {
-        let d = distances(&topo, pos, &[f]);
+        let d = topo.edge_distances(pos, &[f]);
         let band: Vec<usize> = (0..pos.len()).filter(|&v| (d[v] - 0.15 * height).abs() < 0.02 * height).collect();
         if band.is_empty() {
             continue;

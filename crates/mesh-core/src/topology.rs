@@ -303,6 +303,31 @@ impl Topology {
         comps
     }
 
+    /// Edge-path distance (Dijkstra, Euclidean edge lengths from `positions`) from the nearest
+    /// of `sources` to every vertex; `f64::INFINITY` where unreachable. Ties are broken by
+    /// vertex id.
+    pub fn edge_distances(&self, positions: &[Vector3<f64>], sources: &[u32]) -> Vec<f64> {
+        let mut dist = vec![f64::INFINITY; self.n_vertices];
+        let mut heap = BinaryHeap::new();
+        for &s in sources.iter().filter(|&&s| (s as usize) < self.n_vertices) {
+            dist[s as usize] = 0.0;
+            heap.push(Node { cost: 0.0, v: s });
+        }
+        while let Some(Node { cost, v }) = heap.pop() {
+            if cost > dist[v as usize] {
+                continue;
+            }
+            for &w in self.vertex_neighbors.row(v as usize) {
+                let c = cost + (positions[v as usize] - positions[w as usize]).norm();
+                if c < dist[w as usize] {
+                    dist[w as usize] = c;
+                    heap.push(Node { cost: c, v: w });
+                }
+            }
+        }
+        dist
+    }
+
     /// Shortest edge path from `from` to `to` with Euclidean edge lengths from
     /// `positions`. Returns the vertex path (both ends included) and its
     /// length, or `None` if `to` is unreachable.

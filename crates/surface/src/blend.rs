@@ -9,9 +9,9 @@
 //! translation is anchored so the centroid is `(1-w) c^0 + w c^1`. `w = 0` and `w = 1`
 //! reproduce the poses up to round-off.
 
-use crate::deformation_gradient::{face_deformations, GradientOperator};
+use crate::deformation_gradient::{triangle_deformation, GradientOperator};
 use crate::poisson::PoissonSolver;
-use crate::polar::polar;
+use crate::polar::{polar, triangle_rotation};
 use crate::{centroid, check_faces, check_vertices, Error, Result};
 use nalgebra::{Matrix3, Rotation3, UnitQuaternion, Vector3};
 
@@ -59,13 +59,26 @@ impl Blender {
         })
     }
 
-    /// Per-face polar decomposition of the deformation from the rest mesh to `pose`.
+    /// Per-face polar decomposition of the deformation from the rest mesh to `pose`: the
+    /// rotation in closed form ([`triangle_rotation`], the exact polar rotation of Sumner's
+    /// gradient `D`), the stretch `S = Rᵀ D` symmetrised against round-off; the SVD
+    /// ([`polar`]) only where the closed form has no triangle frame.
     pub fn decompose(&self, pose: &[Vector3<f64>]) -> Result<PoseGradients> {
         check_vertices(pose, self.rest.len(), "blend: pose")?;
-        let (rotations, stretches) = face_deformations(&self.rest, pose, &self.faces)
+        let (rotations, stretches) = self
+            .faces
             .iter()
-            .map(|d| {
-                let (r, s) = polar(d);
+            .map(|f| {
+                let rest = f.map(|i| self.rest[i as usize]);
+                let posed = f.map(|i| pose[i as usize]);
+                let d = triangle_deformation(&rest, &posed).unwrap_or_else(Matrix3::identity);
+                let (r, s) = match triangle_rotation(&rest, &posed) {
+                    Some(r) => {
+                        let s = r.transpose() * d;
+                        (r, (s + s.transpose()) * 0.5)
+                    }
+                    None => polar(&d),
+                };
                 (
                     UnitQuaternion::from_rotation_matrix(&Rotation3::from_matrix_unchecked(r)),
                     s,

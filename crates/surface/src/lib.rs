@@ -11,12 +11,15 @@
 //! * [`correct`]: body part correction (§6.1).
 //! * [`optimal_boundary`]: cheapest closed loop in an overlap band (§6.2, Huang et al. 2007).
 //! * [`stitch`]: Poisson merging of the parts along the optimal loops (§6.2).
+//! * [`feather`]: part weights ramping smoothly across the overlap bands, for merging by a
+//!   weighted average instead.
 //! * [`blend`]: non-linear interpolation of two poses (rotation by log/exp, stretch linearly).
 //! * [`frames`], [`segmentation`]: file plumbing for the `correct`, `stitch` and `blend` binaries.
 
 pub mod blend;
 pub mod correct;
 pub mod deformation_gradient;
+pub mod feather;
 pub mod frames;
 pub mod laplacian;
 pub mod optimal_boundary;

@@ -274,6 +274,31 @@ fn closed_form_triangle_rotation_equals_svd_polar() {
 }
 
 #[test]
+fn blend_decomposition_equals_the_svd_polar_of_every_face() {
+    // A tube bent and stretched non-uniformly: every face has its own rotation and stretch.
+    let (rest, faces) = tube(12, 10, 1.0, 0.25, true);
+    let pose: Vec<Vector3<f64>> = rest
+        .iter()
+        .map(|p| {
+            let a = 0.8 * p.y;
+            Vector3::new(p.x * a.cos() * (1.0 + 0.3 * p.z), p.x * a.sin() + 0.2 * p.y, 1.4 * p.z)
+        })
+        .collect();
+    let blender = surface::blend::Blender::new(rest.clone(), faces.clone()).unwrap();
+    let g = blender.decompose(&pose).unwrap();
+    for (f, face) in faces.iter().enumerate() {
+        let (a, b) = (face.map(|i| rest[i as usize]), face.map(|i| pose[i as usize]));
+        let d = triangle_deformation(&a, &b).unwrap();
+        let (r, s) = polar(&d);
+        let got_r = g.rotations[f].to_rotation_matrix().into_inner();
+        assert!((got_r - r).norm() < 1e-9, "face {f}: rotation off by {}", (got_r - r).norm());
+        assert!((g.stretches[f] - s).norm() < 1e-9, "face {f}: stretch off by {}", (g.stretches[f] - s).norm());
+        assert_eq!(g.stretches[f], g.stretches[f].transpose());
+        assert!((got_r * g.stretches[f] - d).norm() < 1e-9 * d.norm());
+    }
+}
+
+#[test]
 fn supernodal_poisson_equals_the_default_factorisation() {
     use surface::poisson::Factorisation;
     let (v, f) = tube(24, 20, 1.0, 0.25, true);

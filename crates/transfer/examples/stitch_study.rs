@@ -1,6 +1,6 @@
 //! Where the surface stage gains or loses: a test motion's corrected parts merged by averaging
-//! (`+correct`) and by stitching (`+correct+stitch`), with the pose error per part of each
-//! against the truth (docs/RESULTS.md, study 3).
+//! (`+correct`), by stitching (`+correct+stitch`) and by a feathered mean (`+correct+feather`),
+//! with the pose error per part of each against the truth (docs/RESULTS.md, study 3).
 //!
 //! cargo run --release --example stitch_study -- WORK SET SOURCE TARGET MOTION -- TRAIN...
 
@@ -108,6 +108,23 @@ fn main() -> anyhow::Result<()> {
         })
         .collect();
     let n = corrected[0].len();
+    // Overlaps merged with weights ramping across each band (`surface::feather`).
+    let parts_in_order = stitcher.layout().parts().to_vec();
+    let weights = surface::feather::band_weights(&template.vertices, &template.faces, &parts_in_order);
+    for (label, source) in [("+correct+feather", &corrected), ("+feather", &decoded)] {
+        let frames: Vec<Vec<Vector3<f64>>> = (0..n)
+            .map(|f| {
+                let mut merged = vec![Vector3::zeros(); template.vertices.len()];
+                for ((&k, part), w) in order.iter().zip(&parts_in_order).zip(&weights) {
+                    for ((&v, x), wi) in part.vertices.iter().zip(&source[k][f]).zip(w) {
+                        merged[v as usize] += *wi * x;
+                    }
+                }
+                plan.to_template_frame(&merged)
+            })
+            .collect();
+        report(label, &frames);
+    }
     for (label, rule) in [("distance", 0), ("distance squared", 1), ("fixed 0.5", 2)] {
         let frames: Vec<Vec<Vector3<f64>>> = (0..n)
             .map(|f| {

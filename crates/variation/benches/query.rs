@@ -43,7 +43,7 @@ fn query(c: &mut Criterion) {
         let mut args: Vec<String> = [
             "hmc-sample", "-q", "--model", &model.to_string_lossy(), "--group",
             &group.to_string_lossy(), "--motion", &motion, "-n", "10", "--frame-count", "100",
-            "--sampler", "ancestral", "--average", "--seed", "0", "--out",
+            "--sampler", "ancestral", "--seed", "0", "--out",
             &tmp.path().join("q").to_string_lossy(),
         ]
         .iter()

@@ -227,7 +227,7 @@ fn main() {
             // Profiling aid (perf): only the fused decoding, repeated.
             let reps: usize = args[i + 1].parse().expect("--fused-only N");
             let fused = pool
-                .install(|| dec.fused())
+                .install(|| dec.fused(Assembly::Average))
                 .unwrap()
                 .with_block_vertices(block);
             let t = Instant::now();
@@ -262,7 +262,7 @@ fn main() {
         // Fused, vertex-blocked decoding (no D × T intermediate), same variations.
         let t = Instant::now();
         let fused = pool
-            .install(|| dec.fused())
+            .install(|| dec.fused(Assembly::Average))
             .unwrap()
             .with_block_vertices(block);
         let fsetup = t.elapsed().as_secs_f64();

@@ -5,9 +5,13 @@
 //! the predicted displacements from the source sequence's starting pose.
 //!
 //! Merging: [`Assembly::Stitch`] is the paper's (child aligned to parent on the overlap band,
-//! optimal boundary loop, Poisson merge: `surface::stitch::Stitcher`); [`Assembly::Average`]
-//! aligns each child to its parent on the band and averages vertices shared by several parts
-//! (as `capture::assemble`), about 100 times cheaper, used for bulk decoding and statistics.
+//! optimal boundary loop, Poisson merge: `surface::stitch::Stitcher`, one sparse factorisation
+//! per frame). [`Assembly::Feather`] (the default) and [`Assembly::Average`] align each child
+//! to its parent on the band the same way, then take a weighted mean of the vertices shared by
+//! several parts: weights ramping smoothly across the band (`surface::feather`), or uniform
+//! (as `capture::assemble`, which leaves a step where the band meets a single part). Both are
+//! about 100 times cheaper per frame than stitching and fuse with the bulk decoder
+//! ([`FusedDecoder`]).
 
 use gpdm::predict::Predictor;
 use std::sync::Mutex;
@@ -26,10 +30,18 @@ use crate::part_data::{extra_scale, split_torso, unflatten, TORSO_EXTRA};
 use crate::train::VariationModel;
 
 /// How parts are merged into one mesh.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize, clap::ValueEnum)]
+#[serde(rename_all = "lowercase")]
 pub enum Assembly {
+    /// Optimal-boundary Poisson stitching per frame (3DV §6, CVPR §6.2).
     Stitch,
+    /// Children aligned on their bands, then every shared vertex the mean of its parts.
     Average,
+    /// As `Average`, with each band's weights ramping smoothly from the parent to the child
+    /// ([`surface::feather`]). The default: the seams of `Stitch` at a quarter of its decoding
+    /// time (docs/DEVIATIONS.md).
+    #[default]
+    Feather,
 }
 
 /// Decoded parts of one trajectory: `parts[k][t]` part `k`'s vertices at frame `t` (template
@@ -50,6 +62,10 @@ pub struct Decoder<'a> {
     /// Per child part: (its local index, parent's local index) of every band vertex.
     bands: Vec<Vec<(usize, usize)>>,
     coverage: Vec<u32>,
+    /// Per part and vertex of the part: its weight in the merged vertex, for `Average` (1 /
+    /// coverage) and for `Feather` ([`surface::feather::band_weights`]).
+    uniform: Vec<Vec<f64>>,
+    feathered: Vec<Vec<f64>>,
     /// Stitchers (each with its symbolic factorisation) lent to the threads that stitch
     /// frames, and returned after.
     stitchers: Mutex<Vec<Stitcher>>,
@@ -174,12 +190,23 @@ impl<'a> Decoder<'a> {
             }
             bands.push(band);
         }
+        let uniform = parts
+            .iter()
+            .map(|p| p.vertices.iter().map(|&v| 1.0 / coverage[v as usize] as f64).collect())
+            .collect();
+        let layout: Vec<surface::stitch::Part> = parts
+            .iter()
+            .map(|p| surface::stitch::Part { vertices: p.vertices.clone(), parent: p.parent })
+            .collect();
+        let feathered = surface::feather::band_weights(&model.template, &model.faces, &layout);
         Ok(Decoder {
             model,
             predictors,
             torso_extra: None,
             bands,
             coverage,
+            uniform,
+            feathered,
             stitchers: Mutex::new(Vec::new()),
         })
     }
@@ -229,8 +256,19 @@ impl<'a> Decoder<'a> {
         })
     }
 
-    /// Aligns children to parents on the bands and averages shared vertices (one frame).
-    pub fn assemble_average(&self, parts: &[&[Vector3<f64>]]) -> Vec<Vector3<f64>> {
+    /// Per part and vertex of the part, its weight in the merged vertex under `how` (an
+    /// averaging assembly; `Stitch` gets the uniform weights).
+    fn merge_weights(&self, how: Assembly) -> &[Vec<f64>] {
+        match how {
+            Assembly::Feather => &self.feathered,
+            Assembly::Average | Assembly::Stitch => &self.uniform,
+        }
+    }
+
+    /// Aligns children to parents on the bands and merges shared vertices by the weights of
+    /// `how` (one frame).
+    pub fn assemble_average(&self, parts: &[&[Vector3<f64>]], how: Assembly) -> Vec<Vector3<f64>> {
+        let weights = self.merge_weights(how);
         let n = self.model.template.len();
         let mut sum = vec![Vector3::zeros(); n];
         let mut placed: Vec<Vec<Vector3<f64>>> = Vec::with_capacity(parts.len());
@@ -245,15 +283,12 @@ impl<'a> Decoder<'a> {
                     self.bands[k].iter().map(|&(_, j)| placed[q][j]).collect();
                 procrustes(&src, &dst, None).apply_all(parts[k])
             };
-            for (x, &v) in pts.iter().zip(&p.part.vertices) {
-                sum[v as usize] += x;
+            for ((x, &v), &w) in pts.iter().zip(&p.part.vertices).zip(&weights[k]) {
+                sum[v as usize] += w * x;
             }
             placed.push(pts);
         }
-        sum.iter()
-            .zip(&self.coverage)
-            .map(|(s, &c)| s / c as f64)
-            .collect()
+        sum
     }
 
     /// Merged body frames (template-aligned) of decoded parts. Stitching factorises each
@@ -275,13 +310,13 @@ impl<'a> Decoder<'a> {
         factorisation: Factorisation,
     ) -> Result<Vec<Vec<Vector3<f64>>>> {
         let n_frames = decoded.displacements.len();
-        if how == Assembly::Average || self.model.parts.len() < 2 {
+        if how != Assembly::Stitch || self.model.parts.len() < 2 {
             // A single part needs no merging.
             return Ok((0..n_frames)
                 .map(|t| {
                     let parts: Vec<&[Vector3<f64>]> =
                         decoded.parts.iter().map(|p| p[t].as_slice()).collect();
-                    let body = self.assemble_average(&parts);
+                    let body = self.assemble_average(&parts, how);
                     procrustes(&body, &self.model.template, None).apply_all(&body)
                 })
                 .collect());
@@ -591,8 +626,12 @@ pub struct FusedScratch {
 
 impl<'a> Decoder<'a> {
     /// The fused bulk decoder of this decoder's predictors (exact, or kernel bases from
-    /// [`Decoder::with_pose_basis`]).
-    pub fn fused(&self) -> Result<FusedDecoder<'_, 'a>> {
+    /// [`Decoder::with_pose_basis`]), merging parts by `how` (`Average` or `Feather`).
+    pub fn fused(&self, how: Assembly) -> Result<FusedDecoder<'_, 'a>> {
+        if how == Assembly::Stitch {
+            return Err(Error::invalid("the fused decoder merges parts by a weighted average, not by stitching"));
+        }
+        let part_weights = self.merge_weights(how);
         let model = self.model;
         let nv = model.template.len();
         let maps: Vec<PartMap> = model
@@ -634,12 +673,13 @@ impl<'a> Decoder<'a> {
             .parts
             .par_iter()
             .zip(&maps)
-            .map(|(p, m)| {
+            .zip(part_weights)
+            .map(|((p, m), pw)| {
                 let b = &m.basis;
                 let mut mom = faer::Mat::<f64>::zeros(12, b.ncols());
                 let (mut ws, mut es) = (0.0, Vector3::zeros());
                 for (i, &v) in p.part.vertices.iter().enumerate() {
-                    let wi = 1.0 / self.coverage[v as usize] as f64;
+                    let wi = pw[i];
                     let e = tpl[v as usize] - cd;
                     ws += wi;
                     es += wi * e;
@@ -663,10 +703,7 @@ impl<'a> Decoder<'a> {
         }
         for (k, p) in model.parts.iter().enumerate() {
             let verts = &p.part.vertices;
-            let w: Vec<f64> = verts
-                .iter()
-                .map(|&v| 1.0 / self.coverage[v as usize] as f64)
-                .collect();
+            let w = &part_weights[k];
             first.push(
                 verts
                     .iter()

@@ -534,7 +534,7 @@ pub fn run_with_progress(
     let mut notes = Vec::new();
     // Mean poses merged by averaging decode through kernel bases, fused with the assembly
     // (`reconstruct::FusedDecoder`); eq. 11 draws and stitching decode exactly.
-    let fast = cfg.assembly == Assembly::Average && !cfg.sample_poses;
+    let fast = cfg.assembly != Assembly::Stitch && !cfg.sample_poses;
     let dec = if fast {
         Decoder::with_pose_basis(model, BASIS_TOLERANCE_M, &mut notes)?.0
     } else {
@@ -691,7 +691,7 @@ pub fn run_with_progress(
     if cfg.footskate && feet.is_none() {
         notes.push("foot-skating clean-up skipped: no left and right soles found".into());
     }
-    let fused = fast.then(|| dec.fused()).transpose()?;
+    let fused = fast.then(|| dec.fused(cfg.assembly)).transpose()?;
     let writer = VariationWriter::new(cfg.frame_format, model.template.len(), &model.faces);
     let post = Post {
         model,

@@ -249,11 +249,11 @@ fn fused_decoding_matches_bulk_decoding() {
         vec![Vector3::zeros(); 30 * nv],
     );
     for dec in [&exact, &basis] {
-        let fused = dec.fused().unwrap();
+        let fused = dec.fused(Assembly::Average).unwrap();
         // One block per part, and blocks of 7 vertices (several blocks, a short last one).
         for f in [
             fused.with_block_vertices(1000),
-            dec.fused().unwrap().with_block_vertices(7),
+            dec.fused(Assembly::Average).unwrap().with_block_vertices(7),
         ] {
             for x in &lat {
                 dec.decode_average_into(x, &start, &mut scratch, &mut want)
@@ -267,7 +267,7 @@ fn fused_decoding_matches_bulk_decoding() {
         }
     }
     // Many variations: the same bodies on 1 and 2 threads, and as one by one.
-    let fused = basis.fused().unwrap().with_block_vertices(16);
+    let fused = basis.fused(Assembly::Average).unwrap().with_block_vertices(16);
     let run = |threads: usize| {
         let got = std::sync::Mutex::new(vec![Vec::new(); lat.len()]);
         rayon::ThreadPoolBuilder::new()
@@ -356,4 +356,52 @@ fn stitched_assembly_matches_the_default_factorisation_on_any_thread_count() {
         let d = max_diff(a, b);
         assert!(d < 1e-12, "{d}");
     }
+}
+
+#[test]
+fn feathered_assembly_fused_matches_exact_and_differs_from_averaging_only_inside_bands() {
+    let m = model();
+    let nv = m.template.len();
+    let start = m.sequences[1].start_pose;
+    let x: Vec<DMatrix<f64>> = m.latents(1).iter().map(|x| x * 1.1).collect();
+    let exact = Decoder::new(&m, &mut Vec::new()).unwrap();
+    let feathered = exact
+        .decode::<rand_chacha::ChaCha8Rng>(&x, &start, Assembly::Feather, None)
+        .unwrap();
+    let averaged = exact
+        .decode::<rand_chacha::ChaCha8Rng>(&x, &start, Assembly::Average, None)
+        .unwrap();
+    // Fused (exact predictors, then kernel bases) against the exact decoding.
+    let (basis, _) = Decoder::with_pose_basis(&m, 1e-9, &mut Vec::new()).unwrap();
+    let mut fscratch = FusedScratch::default();
+    let mut got = vec![Vector3::zeros(); 30 * nv];
+    for (dec, tol) in [(&exact, 1e-10), (&basis, 1e-6)] {
+        let f = dec.fused(Assembly::Feather).unwrap().with_block_vertices(7);
+        f.decode_average_into(&x, &start, &mut fscratch, &mut got).unwrap();
+        let dev = max_dev(&got, &feathered);
+        assert!(dev < tol, "fused feathered vs exact: {dev}");
+    }
+    assert!(exact.fused(Assembly::Stitch).is_err());
+    // Outside the band both merges are the part's own vertices (up to the body's alignment to
+    // the template, which the band moves slightly): equal distances between them; inside the
+    // band they differ (the child rotates against the torso, so the parts disagree there).
+    let in_both: Vec<bool> = (0..nv as u32)
+        .map(|v| m.parts.iter().all(|p| p.part.vertices.contains(&v)))
+        .collect();
+    let (mut outside, mut inside) = (0.0f64, 0.0f64);
+    for (f, a) in feathered.iter().zip(&averaged) {
+        for face in &m.faces {
+            for (i, j) in [(0, 1), (1, 2), (2, 0)] {
+                let (u, v) = (face[i] as usize, face[j] as usize);
+                let d = ((f[u] - f[v]).norm() - (a[u] - a[v]).norm()).abs();
+                if in_both[u] || in_both[v] {
+                    inside = inside.max(d);
+                } else {
+                    outside = outside.max(d);
+                }
+            }
+        }
+    }
+    assert!(outside < 1e-9, "outside the band: {outside}");
+    assert!(inside > 1e-4, "inside the band: {inside}");
 }

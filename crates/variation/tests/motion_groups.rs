@@ -101,7 +101,7 @@ fn three_motion_group_blends_every_pair() {
                 env!("CARGO_BIN_EXE_hmc-sample"),
                 &[
                     "-q", "--group", &p("moves.group"), "--model", &p("moves.model"), "--blend", &format!("{a}:{b}"),
-                    "--weight", &w.to_string(), "-n", "2", "--sampler", "ancestral", "--average", "--seed", "3",
+                    "--weight", &w.to_string(), "-n", "2", "--sampler", "ancestral", "--assembly", "average", "--seed", "3",
                     "--out", out, "--report", report,
                 ],
             );
@@ -125,7 +125,7 @@ fn three_motion_group_blends_every_pair() {
         env!("CARGO_BIN_EXE_hmc-sample"),
         &[
             "-q", "--threads", "1", "--group", &p("moves.group"), "--model", &p("moves.model"), "--blend", "run:kick",
-            "--weight", "0.9", "-n", "2", "--sampler", "ancestral", "--average", "--seed", "3", "--out", &again,
+            "--weight", "0.9", "-n", "2", "--sampler", "ancestral", "--assembly", "average", "--seed", "3", "--out", &again,
         ],
     );
     for k in 0..2 {

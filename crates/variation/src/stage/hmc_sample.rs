@@ -59,9 +59,13 @@ pub struct Params {
     /// Draw poses from the predictive distribution (3DV eq. 11) instead of its mean (eq. 12)
     #[arg(long)]
     pub sample_poses: bool,
-    /// Merge parts by averaging on the overlap bands instead of optimal-boundary Poisson stitching
-    #[arg(long)]
-    pub average: bool,
+    /// How parts are merged: feather (children aligned on their bands, then weights ramping
+    /// smoothly from parent to child across each band: the seams of stitch at a quarter of its
+    /// time, docs/DEVIATIONS.md), stitch (the paper's optimal-boundary Poisson stitching, per
+    /// frame) or average (shared vertices averaged uniformly). With feather or average and mean
+    /// poses the poses decode through kernel bases, fused with the merge
+    #[arg(long, value_enum, default_value_t = Assembly::Feather)]
+    pub assembly: Assembly,
     /// Trajectory sampler: hmc (the paper's Hybrid Monte Carlo) or ancestral (exact independent
     /// draws of the same density, one forward pass each; burn-in and thinning do not apply)
     #[arg(long, value_enum, default_value_t = Sampler::Hmc)]
@@ -161,11 +165,7 @@ pub fn run(p: &Params) -> anyhow::Result<()> {
         blends: p.blends.0.clone(),
         seed: p.common.seed,
         sample_poses: p.sample_poses,
-        assembly: if p.average {
-            Assembly::Average
-        } else {
-            Assembly::Stitch
-        },
+        assembly: p.assembly,
         sampler: p.sampler,
         variance_scale: p.variance_scale,
         burn_in: p.burn_in.unwrap_or(p.hmc_start.default_burn_in()),
