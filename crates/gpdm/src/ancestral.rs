@@ -26,7 +26,8 @@ use crate::predict::Predictor;
 /// the product of one-step predictives. The trajectories advance in lockstep, so each step is
 /// one kernel evaluation and one triangular solve with `n` right-hand sides (3DV eqs. 9-10 for all
 /// of them at once). Trajectory `k` draws its noise from its own ChaCha8 stream `k` of `seed`,
-/// so the result does not depend on `n`'s batching or on threads. `variance_scale` κ scales
+/// so the result does not depend on threads, nor on `n`'s batching beyond the rounding of the
+/// batched products. `variance_scale` κ scales
 /// every one-step variance as in [`crate::hmc::TrajectoryEnergy::with_variance_scale`] (1: the
 /// model's density).
 pub fn sample_trajectories_ancestral(
@@ -37,6 +38,49 @@ pub fn sample_trajectories_ancestral(
     seed: u64,
     variance_scale: f64,
 ) -> Result<Vec<DMatrix<f64>>> {
+    Ok(draw(pred, x1, len, n, seed, variance_scale, None)?.0)
+}
+
+/// Redraws allowed per point of [`sample_trajectories_on_data`] before it keeps the candidate
+/// nearest the data.
+pub const MAX_REDRAWS: usize = 20;
+
+/// [`sample_trajectories_ancestral`] restricted to the learned data: a drawn point whose pose
+/// variance (3DV eq. 13) passes `off_data` of the prior's (`Predictor::pose_variance_ratio`;
+/// the samplers use [`crate::hmc::OFF_DATA_VARIANCE`]) is redrawn from the same one-step
+/// predictive, up to [`MAX_REDRAWS`] times, after which the candidate with the smallest ratio
+/// is kept. Each accepted point is a draw of the one-step predictive truncated to the points
+/// on the data, so a trajectory cannot run away from the data into the prior's mean pose.
+/// Returns the trajectories and, per trajectory, the points kept off the data. Redraws come
+/// from the trajectory's own stream, so batching and threads change the result no more than
+/// they change [`sample_trajectories_ancestral`]'s, and with a threshold no point reaches the
+/// trajectories are [`sample_trajectories_ancestral`]'s.
+pub fn sample_trajectories_on_data(
+    pred: &Predictor,
+    x1: &[f64],
+    len: usize,
+    n: usize,
+    seed: u64,
+    variance_scale: f64,
+    off_data: f64,
+) -> Result<(Vec<DMatrix<f64>>, Vec<usize>)> {
+    if !(off_data > 0.0 && off_data.is_finite()) {
+        return invalid(format!("off-data threshold {off_data} must be positive"));
+    }
+    draw(pred, x1, len, n, seed, variance_scale, Some(off_data))
+}
+
+/// The forward pass of both samplers; with `off_data`, the redraw rule of
+/// [`sample_trajectories_on_data`].
+fn draw(
+    pred: &Predictor,
+    x1: &[f64],
+    len: usize,
+    n: usize,
+    seed: u64,
+    variance_scale: f64,
+    off_data: Option<f64>,
+) -> Result<(Vec<DMatrix<f64>>, Vec<usize>)> {
     if !(variance_scale > 0.0 && variance_scale.is_finite()) {
         return invalid(format!("variance scale {variance_scale} must be positive"));
     }
@@ -58,6 +102,7 @@ pub fn sample_trajectories_ancestral(
         })
         .collect();
     let mut trajs = vec![DMatrix::zeros(len, d); n];
+    let mut off = vec![0usize; n];
     // Current points, one row per trajectory.
     let mut x = Mat::from_fn(n, d, |_, c| x1[c]);
     for traj in trajs.iter_mut() {
@@ -80,13 +125,32 @@ pub fn sample_trajectories_ancestral(
                 ));
             }
             let sd = var.sqrt();
+            let mut next = DMatrix::<f64>::zeros(1, d);
+            let mut best: Option<(f64, DMatrix<f64>)> = None;
+            for _ in 0..=MAX_REDRAWS {
+                for c in 0..d {
+                    let z: f64 = rng.sample(rand_distr::StandardNormal);
+                    next[(0, c)] = mu[(c, k)] + sd * z;
+                }
+                let Some(limit) = off_data else { break };
+                let ratio = pred.pose_variance_ratio(&next)?[0];
+                if ratio <= limit {
+                    best = None;
+                    break;
+                }
+                if best.as_ref().is_none_or(|b| ratio < b.0) {
+                    best = Some((ratio, next.clone()));
+                }
+            }
+            if let Some((_, kept)) = best {
+                next = kept;
+                off[k] += 1;
+            }
             for c in 0..d {
-                let z: f64 = rng.sample(rand_distr::StandardNormal);
-                let next = mu[(c, k)] + sd * z;
-                x[(k, c)] = next;
-                traj[(t, c)] = next;
+                x[(k, c)] = next[(0, c)];
+                traj[(t, c)] = next[(0, c)];
             }
         }
     }
-    Ok(trajs)
+    Ok((trajs, off))
 }

@@ -154,3 +154,46 @@ fn chains_started_at_an_exact_draw_need_no_burn_in() {
         assert!((vb / va - 1.0).abs() < 0.25, "variances {va} vs {vb}");
     }
 }
+
+#[test]
+fn on_data_draws_redraw_exactly_the_points_off_the_data() {
+    use gpdm::ancestral::sample_trajectories_on_data;
+    let (m, _, _) = common::rotation_model();
+    let pred = Predictor::new(&m).unwrap();
+    let x1: Vec<f64> = m.sequence_latent(0).unwrap().row(0).iter().copied().collect();
+    // A wide density (κ = 4) and a threshold at the free draws' 90th percentile ratio (this
+    // noise-free model's ratios are all small), so that free draws leave "the data".
+    let (len, n, kappa) = (60, 12, 4.0);
+    let free = sample_trajectories_ancestral(&pred, &x1, len, n, 5, kappa).unwrap();
+    let mut ratios: Vec<f64> =
+        free.iter().flat_map(|x| pred.pose_variance_ratio(x).unwrap()).collect();
+    ratios.sort_by(f64::total_cmp);
+    let limit = ratios[ratios.len() * 9 / 10];
+    assert!(pred.pose_variance_ratio(&DMatrix::from_row_slice(1, x1.len(), &x1)).unwrap()[0] <= limit);
+    // Drawn points (the first is given) off the data.
+    let off = |x: &DMatrix<f64>| {
+        pred.pose_variance_ratio(x).unwrap().into_iter().skip(1).filter(|&r| r > limit).count()
+    };
+    let free_off: usize = free.iter().map(off).sum();
+    assert!(free_off > 0, "the free draws must leave the data for this test to mean anything");
+    let (kept, counts) = sample_trajectories_on_data(&pred, &x1, len, n, 5, kappa, limit).unwrap();
+    for (x, &c) in kept.iter().zip(&counts) {
+        assert_eq!(x.row(0).iter().copied().collect::<Vec<_>>(), x1);
+        // Every point off the data is one the redraws could not avoid, and is counted.
+        assert_eq!(off(x), c);
+    }
+    let kept_off: usize = counts.iter().sum();
+    // Redraws avoid the excursions of the noise; where the mean itself drifts off (this model,
+    // far from its data at κ = 4) they cannot avoid every point.
+    assert!(kept_off < free_off, "{kept_off} points kept off the data, {free_off} free");
+    // A threshold no ratio reaches (the posterior variance never exceeds the prior's) redraws
+    // nothing: the free draws, bit for bit.
+    let (same, none) = sample_trajectories_on_data(&pred, &x1, len, n, 5, kappa, 1.5).unwrap();
+    assert_eq!(same, free);
+    assert!(none.iter().all(|&c| c == 0));
+    // Each trajectory has its own stream: batching changes it only by the rounding of the
+    // batched products.
+    let (one, _) = sample_trajectories_on_data(&pred, &x1, len, 1, 5, kappa, limit).unwrap();
+    assert!((&one[0] - &kept[0]).abs().max() < 1e-9);
+    assert!(sample_trajectories_on_data(&pred, &x1, len, n, 5, kappa, 0.0).is_err());
+}

@@ -249,3 +249,31 @@ fn grid_boundary_is_one_counter_clockwise_loop() {
     assert!((area - 16.0).abs() < 1e-12);
     assert_eq!(t.euler_characteristic(), 1);
 }
+
+#[test]
+fn edge_distances_from_several_sources_are_the_nearest_known_path_length() {
+    let m = grid(10);
+    let t = topo(&m);
+    let v = |i: usize, j: usize| (j * 11 + i) as u32;
+    let s2 = 2f64.sqrt();
+    let path = |(i0, j0): (usize, usize), (i, j): (usize, usize)| {
+        // From the lower-left source, diagonals run up-right; from the upper-right one,
+        // down-left: the same min(a, b) diagonal + |a - b| axis steps.
+        let (a, b) = (i.abs_diff(i0), j.abs_diff(j0));
+        a.min(b) as f64 * s2 + a.abs_diff(b) as f64
+    };
+    let d = t.edge_distances(&m.vertices, &[v(0, 0), v(10, 10)]);
+    for j in 0..=10 {
+        for i in 0..=10 {
+            let want = path((0, 0), (i, j)).min(path((10, 10), (i, j)));
+            assert!((d[v(i, j) as usize] - want).abs() < 1e-12, "({i},{j})");
+        }
+    }
+    // No source in reach: infinite; out-of-range sources are ignored.
+    let mut split = m.clone();
+    split.vertices.push(Vector3::new(50.0, 0.0, 0.0));
+    let t2 = Topology::new(split.vertices.len(), &split.faces);
+    let d2 = t2.edge_distances(&split.vertices, &[v(3, 4), 9999]);
+    assert_eq!(d2[v(3, 4) as usize], 0.0);
+    assert!(d2[split.vertices.len() - 1].is_infinite());
+}

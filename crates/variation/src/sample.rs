@@ -9,7 +9,7 @@
 //! `W ∪ {0, 1}` gives `X̃_{w*}` from random variants of the bounding trajectories.
 //! Every chain has its own seed derived from `(seed, sequence, part)`: same seed, same samples.
 
-use gpdm::ancestral::sample_trajectories_ancestral;
+use gpdm::ancestral::sample_trajectories_on_data;
 use gpdm::blend::BlendSet;
 use gpdm::hmc::{sample_trajectories_scaled, ChainStart, HmcOptions};
 use mesh_core::{Error, Result};
@@ -35,6 +35,15 @@ pub struct ChainStats {
     /// prediction left the learned data (`gpdm::hmc::leaves_the_data`).
     #[serde(default)]
     pub started_at_learned: bool,
+    /// Points of the chain's kept trajectories off the learned data (3DV eq. 13's variance
+    /// above `gpdm::hmc::OFF_DATA_VARIANCE` of the prior's): with `Sampler::Ancestral` those
+    /// left after `gpdm::ancestral::MAX_REDRAWS` redraws.
+    #[serde(default)]
+    pub off_data_points: usize,
+    /// With `Sampler::Ancestral`: the draws left the learned data, so this part's variants are
+    /// the paper's HMC chains.
+    #[serde(default)]
+    pub hmc_instead: bool,
 }
 
 /// How trajectories are drawn from the density of a part's GPDM dynamics given the first point.
@@ -44,8 +53,10 @@ pub enum Sampler {
     /// Hybrid Monte Carlo (the paper's sampler): burn-in with step-size adaptation, thinning.
     #[default]
     Hmc,
-    /// Exact independent draws of the same density, one forward pass each
-    /// (`gpdm::ancestral`); burn-in, thinning and chains do not apply.
+    /// Independent draws of the same density restricted to the learned data, one forward pass
+    /// each (`gpdm::ancestral::sample_trajectories_on_data`: a point off the data is redrawn);
+    /// burn-in, thinning and chains do not apply. A part whose draws still leave the data
+    /// (where the dynamics lead them off) takes the paper's chains instead, as with `Hmc`.
     Ancestral,
 }
 
@@ -202,7 +213,7 @@ pub fn sequence_variations_len(
             let fail = |e: gpdm::GpdmError| {
                 Error::invalid(format!("{} part '{}': {e}", info.name, pm.part.name))
             };
-            let (trajs, accept_rate, burn_in_accept_rate, step_size, started_at_learned) = match sampler {
+            let (trajs, accept_rate, burn_in_accept_rate, step_size, started_at_learned, hmc_instead) = match sampler {
                 Sampler::Hmc => {
                     let (trajs, res) =
                         sample_trajectories_scaled(pr, &template, &o, variance_scale)
@@ -221,16 +232,55 @@ pub fn sequence_variations_len(
                         res.burn_in_accept_rate,
                         res.step_size,
                         res.started_at_template,
+                        false,
                     )
                 }
                 Sampler::Ancestral => {
                     let x1: Vec<f64> = template.row(0).iter().copied().collect();
-                    let trajs =
-                        sample_trajectories_ancestral(pr, &x1, len, per, o.seed, variance_scale)
-                            .map_err(fail)?;
-                    (trajs, 1.0, 1.0, 0.0, false)
+                    let (drawn, off) = sample_trajectories_on_data(
+                        pr,
+                        &x1,
+                        len,
+                        per,
+                        o.seed,
+                        variance_scale,
+                        gpdm::hmc::OFF_DATA_VARIANCE,
+                    )
+                    .map_err(fail)?;
+                    if off.iter().all(|&n| n == 0) {
+                        (drawn, 1.0, 1.0, 0.0, false, false)
+                    } else {
+                        // Where the dynamics lead every draw off the data (their mean, or the
+                        // noise accumulated along them), this part's variants are the paper's
+                        // chains instead: from the mean prediction, or from the learned
+                        // trajectory where the mean prediction leaves the data.
+                        let o = HmcOptions { start: ChainStart::MeanPrediction, ..o.clone() };
+                        let (trajs, res) =
+                            sample_trajectories_scaled(pr, &template, &o, variance_scale)
+                                .map_err(fail)?;
+                        if c == 0 {
+                            mesh_core::info!(
+                                "{} part '{}': ancestral draws leave the learned data; its variants are HMC chains",
+                                info.name,
+                                pm.part.name
+                            );
+                        }
+                        (
+                            trajs,
+                            res.accept_rate,
+                            res.burn_in_accept_rate,
+                            res.step_size,
+                            res.started_at_template,
+                            true,
+                        )
+                    }
                 }
             };
+            let mut off_data_points = 0;
+            for x in &trajs {
+                let ratios = pr.pose_variance_ratio(x).map_err(fail)?;
+                off_data_points += ratios.iter().filter(|&&r| r > gpdm::hmc::OFF_DATA_VARIANCE).count();
+            }
             let stats = ChainStats {
                 sequence: info.name.clone(),
                 part: pm.part.name.clone(),
@@ -238,6 +288,8 @@ pub fn sequence_variations_len(
                 burn_in_accept_rate,
                 step_size,
                 started_at_learned,
+                off_data_points,
+                hmc_instead,
             };
             Ok((trajs, stats))
         })

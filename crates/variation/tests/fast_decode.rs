@@ -405,3 +405,42 @@ fn feathered_assembly_fused_matches_exact_and_differs_from_averaging_only_inside
     assert!(outside < 1e-9, "outside the band: {outside}");
     assert!(inside > 1e-4, "inside the band: {inside}");
 }
+
+#[test]
+fn ancestral_parts_whose_draws_leave_the_data_take_hmc_chains() {
+    let m = model();
+    let dec = Decoder::new(&m, &mut Vec::new()).unwrap();
+    let opts = HmcOptions { n_samples: 4, burn_in: 20, thin: 1, leapfrog_steps: 5, seed: 3, ..Default::default() };
+    let off_points = |vars: &[Vec<DMatrix<f64>>], k: usize| -> usize {
+        vars.iter()
+            .map(|v| {
+                dec.predictors[k]
+                    .pose_variance_ratio(&v[k])
+                    .unwrap()
+                    .into_iter()
+                    .filter(|&r| r > gpdm::hmc::OFF_DATA_VARIANCE)
+                    .count()
+            })
+            .sum()
+    };
+    for kappa in [1.0, 400.0] {
+        let (vars, stats) =
+            sequence_variations_len(&dec, 0, 40, Sampler::Ancestral, kappa, &opts, 1).unwrap();
+        for (k, st) in stats.iter().enumerate() {
+            // The report counts the points off the data of what it returns, and ancestral
+            // draws are kept only where none is.
+            assert_eq!(st.off_data_points, off_points(&vars, k));
+            if !st.hmc_instead {
+                assert_eq!(st.off_data_points, 0, "κ {kappa}, part {k}");
+                assert_eq!(st.step_size, 0.0);
+            } else {
+                assert!(st.step_size > 0.0, "HMC statistics for the chains");
+            }
+        }
+        if kappa == 1.0 {
+            assert!(stats.iter().all(|s| !s.hmc_instead), "the model's density stays on its data");
+        } else {
+            assert!(stats.iter().any(|s| s.hmc_instead), "a 400x wider density leaves it");
+        }
+    }
+}

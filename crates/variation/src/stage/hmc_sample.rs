@@ -66,8 +66,9 @@ pub struct Params {
     /// poses the poses decode through kernel bases, fused with the merge
     #[arg(long, value_enum, default_value_t = Assembly::Feather)]
     pub assembly: Assembly,
-    /// Trajectory sampler: hmc (the paper's Hybrid Monte Carlo) or ancestral (exact independent
-    /// draws of the same density, one forward pass each; burn-in and thinning do not apply)
+    /// Trajectory sampler: hmc (the paper's Hybrid Monte Carlo) or ancestral (independent draws
+    /// of the same density kept on the learned data, one forward pass each; burn-in and thinning
+    /// do not apply)
     #[arg(long, value_enum, default_value_t = Sampler::Hmc)]
     pub sampler: Sampler,
     /// Scale κ of every one-step variance of the sampled dynamics (1: the model's density, as in
