@@ -120,6 +120,38 @@ pub fn default_hmc(n: usize, seed: u64) -> HmcOptions {
     }
 }
 
+/// The learned latent trajectory `x` (T × d) cut or extended to `len` points. Past its end it
+/// is replayed: from the learned point nearest the end's next step extrapolated
+/// (`2 x_T − x_{T−1}`), among those at least a quarter of the trajectory (and 2 points) before
+/// the end, then on to the end again. A learned gait cycle thus continues into its next cycle,
+/// and every point stays a learned one (a chain started here where the mean prediction leaves
+/// the data stays on the data past the capture's length, instead of holding the last pose).
+pub fn learned_template(x: &DMatrix<f64>, len: usize) -> DMatrix<f64> {
+    let t_len = x.nrows();
+    if t_len == 0 {
+        return DMatrix::zeros(len, x.ncols());
+    }
+    let gap = (t_len / 4).max(2);
+    let mut rows = Vec::with_capacity(len);
+    let mut cur = 0usize;
+    while rows.len() < len {
+        rows.push(cur);
+        cur = if cur + 1 < t_len {
+            cur + 1
+        } else if t_len > gap {
+            let next = x.row(cur) * 2.0 - x.row(cur - 1);
+            (0..t_len - gap)
+                .min_by(|&a, &b| {
+                    (x.row(a) - &next).norm_squared().total_cmp(&(x.row(b) - &next).norm_squared())
+                })
+                .expect("t_len > gap")
+        } else {
+            cur
+        };
+    }
+    DMatrix::from_fn(len, x.ncols(), |t, c| x[(rows[t], c)])
+}
+
 /// A seed for stream `(a, b)` of run `seed` (SplitMix64 finaliser).
 pub fn mix(seed: u64, a: u64, b: u64) -> u64 {
     let mut z =
@@ -201,10 +233,10 @@ pub fn sequence_variations_len(
                     info.name
                 )));
             }
-            // The learned trajectory, its last point repeated past its end: its first point and
-            // length set the chain, which starts from the mean prediction (3DV eq. 8), or from
-            // this trajectory where the mean prediction leaves the learned data.
-            let template = DMatrix::from_fn(len, x.ncols(), |t, c| x[(t.min(x.nrows() - 1), c)]);
+            // The learned trajectory, replayed past its end ([`learned_template`]): its first
+            // point and length set the chain, which starts from the mean prediction (3DV eq. 8),
+            // or from this trajectory where the mean prediction leaves the learned data.
+            let template = learned_template(&x, len);
             let o = HmcOptions {
                 n_samples: per,
                 seed: mix(opts.seed, s as u64 + 1, k as u64 + 1 + ((c as u64) << 32)),
@@ -370,4 +402,42 @@ pub fn blend_variations(
                 .collect()
         })
         .collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// `n` points of one turn of a circle, the last one step before the first.
+    fn circle(n: usize) -> DMatrix<f64> {
+        DMatrix::from_fn(n, 2, |t, c| {
+            let a = std::f64::consts::TAU * t as f64 / n as f64;
+            if c == 0 { a.cos() } else { a.sin() }
+        })
+    }
+
+    #[test]
+    fn a_learned_cycle_continues_into_its_next_cycle() {
+        let x = circle(40);
+        let t = learned_template(&x, 100);
+        // Every point a learned one, in order: 0..40, then 0..40 again, then 0..20.
+        for r in 0..100 {
+            assert_eq!(t.row(r), x.row(r % 40), "row {r}");
+        }
+        assert_eq!(learned_template(&x, 25), x.rows(0, 25).into_owned());
+    }
+
+    #[test]
+    fn a_learned_stroke_replays_from_a_quarter_back_at_the_latest() {
+        // A straight stroke along x: the extrapolated next step is past the end; the nearest
+        // allowed point is the last one a quarter (3 of 12) before the end.
+        let x = DMatrix::from_fn(12, 1, |t, _| t as f64);
+        let t = learned_template(&x, 20);
+        let got: Vec<f64> = t.iter().copied().collect();
+        let want: Vec<f64> = (0..12).chain(8..12).chain(8..12).map(|v| v as f64).collect();
+        assert_eq!(got, want);
+        // Too short to replay: the last point is held.
+        let two = DMatrix::from_fn(2, 1, |t, _| t as f64);
+        assert_eq!(learned_template(&two, 4).iter().copied().collect::<Vec<_>>(), vec![0.0, 1.0, 1.0, 1.0]);
+    }
 }
