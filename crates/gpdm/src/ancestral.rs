@@ -27,9 +27,8 @@ use crate::predict::Predictor;
 /// one kernel evaluation and one triangular solve with `n` right-hand sides (3DV eqs. 9-10 for all
 /// of them at once). Trajectory `k` draws its noise from its own ChaCha8 stream `k` of `seed`,
 /// so the result does not depend on threads, nor on `n`'s batching beyond the rounding of the
-/// batched products. `variance_scale` κ scales
-/// every one-step variance as in [`crate::hmc::TrajectoryEnergy::with_variance_scale`] (1: the
-/// model's density).
+/// batched products. `variance_scale` κ scales every one-step variance as in
+/// [`crate::hmc::TrajectoryEnergy::with_variance_scale`] (1: the model's density).
 pub fn sample_trajectories_ancestral(
     pred: &Predictor,
     x1: &[f64],
@@ -38,7 +37,7 @@ pub fn sample_trajectories_ancestral(
     seed: u64,
     variance_scale: f64,
 ) -> Result<Vec<DMatrix<f64>>> {
-    Ok(draw(pred, x1, len, n, seed, variance_scale, None)?.0)
+    Ok(sample_trajectories_on_data(pred, x1, len, n, seed, variance_scale, f64::INFINITY)?.0)
 }
 
 /// Redraws allowed per point of [`sample_trajectories_on_data`] before it keeps the candidate
@@ -54,7 +53,8 @@ pub const MAX_REDRAWS: usize = 20;
 /// Returns the trajectories and, per trajectory, the points kept off the data. Redraws come
 /// from the trajectory's own stream, so batching and threads change the result no more than
 /// they change [`sample_trajectories_ancestral`]'s, and with a threshold no point reaches the
-/// trajectories are [`sample_trajectories_ancestral`]'s.
+/// trajectories are [`sample_trajectories_ancestral`]'s (`f64::INFINITY`: no ratio is
+/// computed).
 pub fn sample_trajectories_on_data(
     pred: &Predictor,
     x1: &[f64],
@@ -64,23 +64,9 @@ pub fn sample_trajectories_on_data(
     variance_scale: f64,
     off_data: f64,
 ) -> Result<(Vec<DMatrix<f64>>, Vec<usize>)> {
-    if !(off_data > 0.0 && off_data.is_finite()) {
+    if !(off_data > 0.0) {
         return invalid(format!("off-data threshold {off_data} must be positive"));
     }
-    draw(pred, x1, len, n, seed, variance_scale, Some(off_data))
-}
-
-/// The forward pass of both samplers; with `off_data`, the redraw rule of
-/// [`sample_trajectories_on_data`].
-fn draw(
-    pred: &Predictor,
-    x1: &[f64],
-    len: usize,
-    n: usize,
-    seed: u64,
-    variance_scale: f64,
-    off_data: Option<f64>,
-) -> Result<(Vec<DMatrix<f64>>, Vec<usize>)> {
     if !(variance_scale > 0.0 && variance_scale.is_finite()) {
         return invalid(format!("variance scale {variance_scale} must be positive"));
     }
@@ -132,9 +118,11 @@ fn draw(
                     let z: f64 = rng.sample(rand_distr::StandardNormal);
                     next[(0, c)] = mu[(c, k)] + sd * z;
                 }
-                let Some(limit) = off_data else { break };
+                if off_data == f64::INFINITY {
+                    break;
+                }
                 let ratio = pred.pose_variance_ratio(&next)?[0];
-                if ratio <= limit {
+                if ratio <= off_data {
                     best = None;
                     break;
                 }
