@@ -267,7 +267,7 @@ impl<'a> Decoder<'a> {
 
     /// Aligns children to parents on the bands and merges shared vertices by the weights of
     /// `how` (one frame).
-    pub fn assemble_average(&self, parts: &[&[Vector3<f64>]], how: Assembly) -> Vec<Vector3<f64>> {
+    pub fn assemble_weighted(&self, parts: &[&[Vector3<f64>]], how: Assembly) -> Vec<Vector3<f64>> {
         let weights = self.merge_weights(how);
         let n = self.model.template.len();
         let mut sum = vec![Vector3::zeros(); n];
@@ -316,7 +316,7 @@ impl<'a> Decoder<'a> {
                 .map(|t| {
                     let parts: Vec<&[Vector3<f64>]> =
                         decoded.parts.iter().map(|p| p[t].as_slice()).collect();
-                    let body = self.assemble_average(&parts, how);
+                    let body = self.assemble_weighted(&parts, how);
                     procrustes(&body, &self.model.template, None).apply_all(&body)
                 })
                 .collect());
