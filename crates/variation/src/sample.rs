@@ -40,6 +40,10 @@ pub struct ChainStats {
     /// left after `gpdm::ancestral::MAX_REDRAWS` redraws.
     #[serde(default)]
     pub off_data_points: usize,
+    /// The largest share of the pose prior's variance (3DV eq. 13) at any point of the kept
+    /// trajectories: near 0 on the learned data, 1 where the training poses say nothing.
+    #[serde(default)]
+    pub max_pose_variance_ratio: f64,
     /// With `Sampler::Ancestral`: the draws left the learned data, so this part's variants are
     /// the paper's HMC chains.
     #[serde(default)]
@@ -308,10 +312,11 @@ pub fn sequence_variations_len(
                     }
                 }
             };
-            let mut off_data_points = 0;
+            let (mut off_data_points, mut max_pose_variance_ratio) = (0, 0.0f64);
             for x in &trajs {
                 let ratios = pr.pose_variance_ratio(x).map_err(fail)?;
                 off_data_points += ratios.iter().filter(|&&r| r > gpdm::hmc::OFF_DATA_VARIANCE).count();
+                max_pose_variance_ratio = ratios.iter().copied().fold(max_pose_variance_ratio, f64::max);
             }
             let stats = ChainStats {
                 sequence: info.name.clone(),
@@ -321,6 +326,7 @@ pub fn sequence_variations_len(
                 step_size,
                 started_at_learned,
                 off_data_points,
+                max_pose_variance_ratio,
                 hmc_instead,
             };
             Ok((trajs, stats))

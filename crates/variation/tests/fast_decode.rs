@@ -430,6 +430,11 @@ fn ancestral_parts_whose_draws_leave_the_data_take_hmc_chains() {
             // The report counts the points off the data of what it returns, and ancestral
             // draws are kept only where none is.
             assert_eq!(st.off_data_points, off_points(&vars, k));
+            assert_eq!(
+                st.off_data_points > 0,
+                st.max_pose_variance_ratio > gpdm::hmc::OFF_DATA_VARIANCE
+            );
+            assert!(st.max_pose_variance_ratio > 0.0 && st.max_pose_variance_ratio <= 1.0 + 1e-12);
             if !st.hmc_instead {
                 assert_eq!(st.off_data_points, 0, "κ {kappa}, part {k}");
                 assert_eq!(st.step_size, 0.0);
