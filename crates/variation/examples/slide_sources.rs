@@ -3,7 +3,8 @@
 //! contacts the clean-ups used (the source's, transferred along the DTW): both frames planted,
 //! one (a contact's start or end), or none (a swing foot passing low over the floor).
 //!
-//! Also prints the lowest vertex of each variation, and with BASE (another hmc-sample --out of
+//! Every swing pair faster than 2 cm/frame is listed with its frames and the nearest transferred
+//! contact of that foot. Also prints the lowest vertex of each variation, and with BASE (another hmc-sample --out of
 //! the same model and seed) how far the clean-ups moved it.
 //!
 //! Usage: slide_sources GROUP MODEL DIR [BASE] (DIR = hmc-sample --out; training sequences only)
@@ -55,6 +56,19 @@ fn main() -> mesh_core::Result<()> {
                         };
                         sum[cls] += d;
                         cnt[cls] += 1;
+                        if cls == 2 && d > 0.02 {
+                            let near = (0..tc.len())
+                                .filter(|&u| tc[u][foot])
+                                .map(|u| u as i64 - t as i64)
+                                .min_by_key(|k| k.abs());
+                            println!(
+                                "  swing pair: foot {foot}, frames {t}-{}, {d:.3} m/frame, soles {:.3} / {:.3} m above the floor; nearest contact of that foot: {}",
+                                t + 1,
+                                low(&v[t]) - ground,
+                                low(&v[t + 1]) - ground,
+                                near.map_or("none".to_string(), |k| format!("{k:+} frames"))
+                            );
+                        }
                     }
                 }
             }

@@ -13,9 +13,15 @@
 //! smoothstep of the template height along the leg: `w = 1` on the sole vertices (so the sole
 //! centroid lands exactly on `a_I`), `w = 0` at and above the lowest vertex of the leg part's
 //! boundary loop (the hip seam with the torso, so the seam never opens). Between contacts the
-//! displacement is eased out over [`EASE_FRAMES`] `= R` frames with the smoothstep `S`, or
-//! interpolated across gaps too short for that ([`displacements`]): no popping when a contact
-//! starts or ends.
+//! displacement is eased in and out over [`EASE_FRAMES`] `= R` frames with the smoothstep `S`
+//! ([`displacements`]), so nothing pops when a contact starts or ends. Two easings ([`Ease`]):
+//! `position` (the default) blends the sole's horizontal *position* from its free path to the
+//! anchor, `q(t) = a_I + S(u) (p_f(t) − a_I)` with `u` the distance to the contact in units of
+//! `R + 1` frames, so the foot slows to rest as it touches down and starts from rest as it lifts
+//! off (the constraint blending of Kovar et al. 2002, "Footskate cleanup for motion capture
+//! editing"), at the price of a faster sole early in the ramp, where it is usually in the air
+//! (up to about 1.5x a steady approach speed); `offset` fades the contact's *offset* `δ` instead, which keeps the free path's
+//! velocity: a foot that lands at swing speed stops dead on the contact's first frame.
 
 use crate::footskate::intervals;
 use mesh_core::feet::feet_tracks;
@@ -25,6 +31,20 @@ use std::collections::HashSet;
 
 /// Frames `R` over which the displacement is eased in before and out after each contact.
 pub const EASE_FRAMES: usize = 4;
+
+/// How the lock's displacement is eased in before and out after each contact (module doc).
+#[derive(
+    Clone, Copy, Debug, PartialEq, Eq, Default, clap::ValueEnum, serde::Serialize, serde::Deserialize,
+)]
+#[serde(rename_all = "kebab-case")]
+pub enum Ease {
+    /// Blend the sole's position from its free path to the contact's anchor: the foot comes
+    /// to rest as it lands and leaves from rest.
+    #[default]
+    Position,
+    /// Fade the contact's offset: the free path's velocity is kept up to the contact.
+    Offset,
+}
 
 /// Smoothstep `3x² − 2x³` of `x` clamped to `[0, 1]`.
 fn smoothstep(x: f64) -> f64 {
@@ -79,15 +99,21 @@ pub fn leg_parts(parts: &[PartDef]) -> Vec<&PartDef> {
     legs
 }
 
-/// Per-frame horizontal displacement `D_f(t)` of foot `f` (module doc): `δ(t)` inside contacts;
-/// in a gap `(p, s)` between the last contact frame `p` and the next contact start `s`,
-/// `δ(p) (1 − S((t − p) / (R + 1))) + δ(s) (1 − S((s − t) / (R + 1)))` (a missing side counts
-/// as 0), or, when the gap is too short for both ramps (`s − p ≤ 2 (R + 1)`), the smoothstep
-/// interpolation `δ(p) + (δ(s) − δ(p)) S((t − p) / (s − p))`. Continuous at every contact end.
+/// Per-frame horizontal displacement `D_f(t)` of foot `f` (module doc): `a_I − p_f(t)` inside
+/// contacts. In a gap `(p, s)` between the last contact frame `p` and the next contact start `s`
+/// (a missing side counts as 0), with the fade `F(k) = 1 − S(k / (R + 1))`:
+/// - [`Ease::Position`]: `F(t − p) (a_p − p_f(t)) + F(s − t) (a_s − p_f(t))`, or, when the gap is
+///   too short for both ramps (`s − p ≤ 2 (R + 1)`), the sole carried from anchor to anchor,
+///   `a_p + (a_s − a_p) S((t − p) / (s − p)) − p_f(t)`;
+/// - [`Ease::Offset`]: `F(t − p) δ(p) + F(s − t) δ(s)`, or in a short gap the smoothstep
+///   interpolation `δ(p) + (δ(s) − δ(p)) S((t − p) / (s − p))`.
+///
+/// Continuous at every contact end; all horizontal.
 pub fn displacements(
     track: &[Vector3<f64>],
     contact: &[bool],
     up: &Vector3<f64>,
+    ease: Ease,
 ) -> Vec<Vector3<f64>> {
     let n = track.len().min(contact.len());
     let horizontal = |p: Vector3<f64>| p - up * up.dot(&p);
@@ -100,19 +126,26 @@ pub fn displacements(
     }
     let free: Vec<bool> = inside.iter().map(Option::is_none).collect();
     let ramp = (EASE_FRAMES + 1) as f64;
+    let fade = |k: usize| 1.0 - smoothstep(k as f64 / ramp);
     let mut d: Vec<Vector3<f64>> = inside.iter().map(|x| x.unwrap_or_default()).collect();
     for (a, b) in intervals(&free) {
+        // The neighbouring contact frames and their offsets `δ`; `track + δ` is the anchor.
         let before = a.checked_sub(1).map(|p| (p, d[p]));
         let after = (b < n).then(|| (b, d[b]));
-        for (t, dt) in d.iter_mut().enumerate().take(b).skip(a) {
-            *dt = match (before, after) {
-                (Some((p, da)), Some((s, ds))) if (s - p) as f64 <= 2.0 * ramp => {
-                    da + (ds - da) * smoothstep((t - p) as f64 / (s - p) as f64)
+        for t in a..b {
+            // The offset of frame t from the anchor reached at contact frame c with offset δ.
+            let to_anchor = |c: usize, delta: Vector3<f64>| match ease {
+                Ease::Position => delta + horizontal(track[c] - track[t]),
+                Ease::Offset => delta,
+            };
+            d[t] = match (before, after) {
+                (Some((p, dp)), Some((s, ds))) if (s - p) as f64 <= 2.0 * ramp => {
+                    let x = smoothstep((t - p) as f64 / (s - p) as f64);
+                    to_anchor(p, dp) * (1.0 - x) + to_anchor(s, ds) * x
                 }
                 _ => {
-                    let fade = |k: usize| 1.0 - smoothstep(k as f64 / ramp);
-                    before.map_or(Vector3::zeros(), |(p, da)| da * fade(t - p))
-                        + after.map_or(Vector3::zeros(), |(s, ds)| ds * fade(s - t))
+                    before.map_or(Vector3::zeros(), |(p, dp)| to_anchor(p, dp) * fade(t - p))
+                        + after.map_or(Vector3::zeros(), |(s, ds)| to_anchor(s, ds) * fade(s - t))
                 }
             };
         }
@@ -161,12 +194,13 @@ pub fn lock(
     soles: &[Vec<u32>; 2],
     contacts: &[[bool; 2]],
     up: &Vector3<f64>,
+    ease: Ease,
 ) -> f64 {
     let tracks = feet_tracks(frames, soles);
     let mut max: f64 = 0.0;
     for f in 0..2 {
         let flags: Vec<bool> = contacts.iter().map(|c| c[f]).collect();
-        let d = displacements(&tracks[f], &flags, up);
+        let d = displacements(&tracks[f], &flags, up, ease);
         for (frame, dt) in frames.iter_mut().zip(&d) {
             max = max.max(dt.norm());
             for &(v, w) in &legs[f] {
@@ -230,7 +264,7 @@ mod tests {
         let contacts: Vec<[bool; 2]> = (0..20).map(|k| [(5..15).contains(&k), false]).collect();
         let legs = [leg_weights(&legv, &sole, &t, &faces, &up), Vec::new()];
         let mut frames = orig.clone();
-        lock(&mut frames, &legs, &[sole.clone(), vec![]], &contacts, &up);
+        lock(&mut frames, &legs, &[sole.clone(), vec![]], &contacts, &up, Ease::Offset);
         // Known answer: the anchor is the mean drift over the interval (4.5 cm, 2.25 cm).
         let anchor = Vector3::new(0.045, 0.0, 0.0225);
         for k in 5..15 {
@@ -283,7 +317,7 @@ mod tests {
             .map(|t| Vector3::new(0.01 * t as f64, 0.0, 0.0))
             .collect();
         let contact: Vec<bool> = (0..12).map(|t| !(5..7).contains(&t)).collect();
-        let d = displacements(&track, &contact, &up);
+        let d = displacements(&track, &contact, &up, Ease::Offset);
         let pinned: Vec<f64> = (0..12).map(|t| track[t].x + d[t].x).collect();
         for t in 0..5 {
             assert!((pinned[t] - 0.02).abs() < 1e-12, "frame {t}: {}", pinned[t]);
@@ -295,8 +329,67 @@ mod tests {
         assert!((d[5].x - (-0.02 + 0.04 * smoothstep(1.0 / 3.0))).abs() < 1e-12);
         assert!((d[6].x - (-0.02 + 0.04 * smoothstep(2.0 / 3.0))).abs() < 1e-12);
         // No contact at all: nothing moves.
-        assert!(displacements(&track, &[false; 12], &up)
+        assert!(displacements(&track, &[false; 12], &up, Ease::Position)
             .iter()
             .all(|v| v.norm() == 0.0));
+    }
+
+    #[test]
+    fn a_landing_foot_comes_to_rest_with_the_position_ease() {
+        // The sole arrives at 10 cm/frame along x and is planted at x = 0 from frame 10 on.
+        // Known answer, position ease: q(10 − k) = −S(k / 5) · 0.1 k, so the last step into the
+        // contact is S(0.2) · 0.1 = 0.0104 and the steps shrink towards it; the offset ease keeps
+        // the landing speed (0.1) on that step.
+        let up = Vector3::y();
+        let track: Vec<_> = (0..16)
+            .map(|t| Vector3::new(0.1 * (t.min(10) as f64 - 10.0), 0.0, 0.0))
+            .collect();
+        let contact: Vec<bool> = (0..16).map(|t| t >= 10).collect();
+        let placed = |ease| -> Vec<f64> {
+            let d = displacements(&track, &contact, &up, ease);
+            (0..16).map(|t| track[t].x + d[t].x).collect()
+        };
+        let q = placed(Ease::Position);
+        for k in 1..=EASE_FRAMES {
+            let want = -smoothstep(k as f64 / 5.0) * 0.1 * k as f64;
+            assert!((q[10 - k] - want).abs() < 1e-12, "frame {}: {}", 10 - k, q[10 - k]);
+        }
+        assert!((q[10] - q[9] - 0.1 * smoothstep(0.2)).abs() < 1e-12);
+        // Slowing down over the last three steps; the ramp's first steps are faster than the
+        // free path (at most 1.64x here: the sole catches up the distance it will not cover).
+        for t in 7..10 {
+            assert!(q[t + 1] - q[t] < q[t] - q[t - 1], "slowing down at frame {t}");
+        }
+        assert!((1..16).all(|t| q[t] - q[t - 1] <= 0.165));
+        // Outside the ramp the free path is kept; inside the contact the sole is pinned.
+        for t in 0..=10 - EASE_FRAMES - 1 {
+            assert_eq!(q[t], track[t].x);
+        }
+        assert!(q[10..].iter().all(|x| x.abs() < 1e-12));
+        let o = placed(Ease::Offset);
+        assert!((o[10] - o[9] - 0.1).abs() < 1e-12);
+    }
+
+    #[test]
+    fn a_short_step_is_carried_from_anchor_to_anchor() {
+        // Planted at x = 0 in frames 0-3 and at x = 0.3 in frames 7-11; between, the free sole
+        // wanders (not toward the next anchor). With the position ease it moves from anchor to
+        // anchor along the smoothstep, whatever the free path did; heights are never touched.
+        let up = Vector3::y();
+        let track: Vec<_> = (0..12)
+            .map(|t| match t {
+                0..=3 => Vector3::new(0.0, 0.0, 0.0),
+                4..=6 => Vector3::new(-0.05 * t as f64, 0.1, 0.02 * t as f64),
+                _ => Vector3::new(0.3, 0.0, 0.0),
+            })
+            .collect();
+        let contact: Vec<bool> = (0..12).map(|t| !(4..7).contains(&t)).collect();
+        let d = displacements(&track, &contact, &up, Ease::Position);
+        for t in 4..7 {
+            let x = smoothstep((t - 3) as f64 / 4.0);
+            let q = track[t] + d[t];
+            assert!((q.x - 0.3 * x).abs() < 1e-12 && q.z.abs() < 1e-12, "frame {t}: {q}");
+            assert_eq!(d[t].y, 0.0);
+        }
     }
 }

@@ -70,6 +70,9 @@ pub struct SynthConfig {
     /// ([`crate::foot_lock`]); on by default.
     #[serde(default = "yes")]
     pub foot_lock: bool,
+    /// How the foot lock eases in and out of each contact ([`foot_lock::Ease`]).
+    #[serde(default)]
+    pub foot_ease: foot_lock::Ease,
     /// After the root clean-up, bring each sole to the source's height at the matched frame
     /// (planted) or at least to its clearance (swing) by deforming its leg
     /// ([`crate::foot_height`]); on by default.
@@ -413,7 +416,7 @@ impl Post<'_> {
                     }
                     false => c.clone(),
                 };
-                foot_lock::lock(&mut m, legs, f, &c, &model.up);
+                foot_lock::lock(&mut m, legs, f, &c, &model.up, cfg.foot_ease);
             }
         }
         Ok((

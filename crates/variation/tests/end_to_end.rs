@@ -116,6 +116,7 @@ fn tiny_set_end_to_end() {
         footskate: true,
         footskate_smoothness: variation::footskate::SMOOTHNESS,
         foot_lock: true,
+        foot_ease: Default::default(),
         foot_height: true,
         statistics: true,
         latent_smoothing: 0.0,

@@ -107,6 +107,11 @@ pub struct Params {
     /// sole up to the hip)
     #[arg(long)]
     pub no_foot_lock: bool,
+    /// How the foot lock eases in before and out after each contact: position (the sole's
+    /// position blended from its free path to the planted spot, so it lands and lifts off from
+    /// rest) or offset (the planted offset faded, the free path's speed kept up to the contact)
+    #[arg(long, value_enum, default_value_t = crate::foot_lock::Ease::Position)]
+    pub foot_ease: crate::foot_lock::Ease,
     /// Do not set the feet's heights by deforming the legs (by default, after the root
     /// clean-up, each planted sole is brought to the source's height at the matched frame and
     /// each swing foot raised to at least the source's clearance)
@@ -177,6 +182,7 @@ pub fn run(p: &Params) -> anyhow::Result<()> {
         footskate: !p.no_footskate,
         footskate_smoothness: p.footskate_smoothness,
         foot_lock: !p.no_foot_lock,
+        foot_ease: p.foot_ease,
         foot_height: !p.no_foot_height,
         // The statistics against the sources are the report's content: skipped without one.
         statistics: p.report.is_some(),
