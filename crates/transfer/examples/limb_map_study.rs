@@ -5,6 +5,7 @@
 //! cargo run --release --example limb_map_study -- WORK SET SOURCE TARGET MOTION... -- TRAIN...
 //! e.g. `limb_map_study out/demo-run/work out/demo/set A B punch spinkick cmu_jump -- walk run jump kick dance`
 //! (after `make transfer`; the pairs are read in the set's order, reversed when SOURCE is the set's target).
+//! With `ONLY_ALL=1` in the environment only the default and the all-limbs rows run.
 
 #[path = "common/study_pairs.rs"]
 mod study_pairs;
@@ -27,6 +28,9 @@ enum Space {
     Axis,
     /// The affine map of log-rotations plus a squared-exponential GP on its residuals.
     LogRotationGp,
+    /// An affine map from every source limb's log-rotation (the limb's own shrunk toward the
+    /// identity, the others toward zero) to the target limb's.
+    AllLimbs,
 }
 
 #[derive(Clone, Copy, Debug)]
@@ -80,7 +84,7 @@ fn axis(limb: &Limb, mean: &[Vector3<f64>]) -> Vector3<f64> {
 /// The feature of one frame's limb in `space`.
 fn feature(space: Space, r: &Rotation3<f64>, a: &Vector3<f64>) -> Vector3<f64> {
     match space {
-        Space::LogRotation | Space::LogRotationGp => so3_log(r),
+        Space::LogRotation | Space::LogRotationGp | Space::AllLimbs => so3_log(r),
         Space::Axis => r * a,
     }
 }
@@ -111,6 +115,18 @@ fn slerp(a: &Vector3<f64>, b: &Vector3<f64>, w: f64) -> Vector3<f64> {
     so3_exp(&(w * so3_log(&r))) * a
 }
 
+/// Ridge least squares `[x, 1] W = y` over the rows of `x` (`d` inputs), shrunk toward `w0`
+/// with `λ = ridge ×` the mean diagonal of the normal equations.
+fn fit_wide(x: &DMatrix<f64>, y: &DMatrix<f64>, w0: &DMatrix<f64>, ridge: f64) -> DMatrix<f64> {
+    let n = x.nrows();
+    let x1 = DMatrix::from_fn(n, x.ncols() + 1, |r, c| if c < x.ncols() { x[(r, c)] } else { 1.0 });
+    let xtx = x1.transpose() * &x1;
+    let lambda = ridge * xtx.trace() / xtx.nrows() as f64;
+    let lhs = &xtx + DMatrix::identity(xtx.nrows(), xtx.nrows()) * lambda;
+    let rhs = x1.transpose() * y + w0 * lambda;
+    lhs.cholesky().expect("positive definite").solve(&rhs)
+}
+
 fn main() -> anyhow::Result<()> {
     let args: Vec<String> = std::env::args().collect();
     let split = args.iter().position(|a| a == "--").ok_or_else(|| anyhow::anyhow!("usage: see the file"))?;
@@ -134,6 +150,14 @@ fn main() -> anyhow::Result<()> {
     }
     for weight in [0.5, 1.0] {
         variants.push(Variant { space: Space::LogRotationGp, proximal: Proximal::Count(0.5), ridge: 0.1, weight });
+    }
+    for ridge in [0.1, 0.01] {
+        for weight in [0.5, 1.0] {
+            variants.push(Variant { space: Space::AllLimbs, proximal: Proximal::Count(0.5), ridge, weight });
+        }
+    }
+    if std::env::var("ONLY_ALL").is_ok() {
+        variants.retain(|v| matches!(v.space, Space::AllLimbs) || (matches!(v.space, Space::LogRotation) && matches!(v.proximal, Proximal::Count(_)) && v.weight == 0.5));
     }
     let (ls, lt) = (limbs(&spca)?, limbs(&tpca)?);
     let mut totals = vec![(0.0f64, 0usize); variants.len() + 1];
@@ -162,6 +186,37 @@ fn main() -> anyhow::Result<()> {
                 let xf = features(&spca, &sl, &rows.x_parts[k], v.space);
                 let yf = features(&tpca, &tl, &rows.y_parts[k], v.space);
                 let map = LimbMap::fit(&xf, &yf, v.ridge)?;
+                if let Space::AllLimbs = v.space {
+                    // Inputs: every source limb's log-rotation, training rows and this motion's.
+                    let wide = |coeffs: &dyn Fn(usize) -> DMatrix<f64>| -> DMatrix<f64> {
+                        let cols: Vec<Vec<Vector3<f64>>> = ls
+                            .iter()
+                            .map(|l| {
+                                let m = reference(&spca, l.part);
+                                features(&spca, &with_proximal(l, &m, v.proximal), &coeffs(l.part), v.space)
+                            })
+                            .collect();
+                        DMatrix::from_fn(cols[0].len(), 3 * cols.len(), |r, c| cols[c / 3][r][c % 3])
+                    };
+                    let xw = wide(&|p| rows.x_parts[p].clone());
+                    let yw = DMatrix::from_fn(yf.len(), 3, |r, c| yf[r][c]);
+                    let own = ls.iter().position(|l| l.part == k).unwrap();
+                    let mut w0 = DMatrix::zeros(xw.ncols() + 1, 3);
+                    for i in 0..3 {
+                        w0[(3 * own + i, i)] = 1.0;
+                    }
+                    let w = fit_wide(&xw, &yw, &w0, v.ridge);
+                    let xt = wide(&|p| xs[p].clone());
+                    let xt1 = DMatrix::from_fn(xt.nrows(), xt.ncols() + 1, |r, c| if c < xt.ncols() { xt[(r, c)] } else { 1.0 });
+                    let pred = xt1 * w;
+                    for (fi, frame) in turned[k].iter_mut().enumerate() {
+                        let now = orientation(&tmean, frame, &tl.proximal);
+                        let mapped = so3_exp(&Vector3::new(pred[(fi, 0)], pred[(fi, 1)], pred[(fi, 2)]));
+                        let want = now * so3_exp(&(v.weight * so3_log(&(now.inverse() * mapped))));
+                        turn_to(frame, &tl, &now, &want);
+                    }
+                    continue;
+                }
                 let to_matrix = |f: &[Vector3<f64>]| DMatrix::from_fn(f.len(), 3, |r, c| f[r][c]);
                 let residual_gp = match v.space {
                     Space::LogRotationGp => {
@@ -186,7 +241,7 @@ fn main() -> anyhow::Result<()> {
                 for (fi, (frame, x)) in turned[k].iter_mut().zip(&src).enumerate() {
                     let now = orientation(&tmean, frame, &tl.proximal);
                     let want = match v.space {
-                        Space::LogRotation | Space::LogRotationGp => {
+                        Space::LogRotation | Space::LogRotationGp | Space::AllLimbs => {
                             let extra = src_resid.as_ref().map_or(Vector3::zeros(), |r| Vector3::new(r[(fi, 0)], r[(fi, 1)], r[(fi, 2)]));
                             let mapped = so3_exp(&(map.apply(x) + extra));
                             now * so3_exp(&(v.weight * so3_log(&(now.inverse() * mapped))))
