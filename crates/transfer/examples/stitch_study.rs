@@ -3,6 +3,14 @@
 //! with the pose error per part of each against the truth (docs/RESULTS.md, study 3).
 //!
 //! cargo run --release --example stitch_study -- WORK SET SOURCE TARGET MOTION -- TRAIN...
+//!
+//! With `BEND_WEIGHT=w` in the environment the limbs' distal halves are also turned toward the
+//! bend map of `common/limb_bend.rs` before the surface stage (study 6).
+
+#[path = "common/study_pairs.rs"]
+mod study_pairs;
+#[path = "common/limb_bend.rs"]
+mod limb_bend;
 
 use capture::align::{align_motion_on, AlignedMotion};
 use capture::assemble::{assemble, plan};
@@ -55,6 +63,11 @@ fn main() -> anyhow::Result<()> {
     let mut decoded = tpca.decode(&transfer::predict::predict(&model, &xs, &xd, false)?.coeffs)?;
     if let Some(o) = &model.orientation {
         apply(o, &spca, &tpca, &xs, &mut decoded)?;
+    }
+    if let Ok(w) = std::env::var("BEND_WEIGHT") {
+        let (pairs, _) = study_pairs::load(work, set, s, t, &spca, &tpca, train)?;
+        let bends = limb_bend::BendMaps::fit(&spca, &tpca, &transfer::gpr_model::training_set(&pairs, 1.0, false)?)?;
+        bends.turn(&spca, &tpca, &xs, &mut decoded, w.parse()?);
     }
     let mut recon = Reconstructor::new(&tpca, &seg, &template.faces, &refs, Surface::CorrectStitch, 3, 1)?;
     let corrected = recon.correct(&decoded)?;
