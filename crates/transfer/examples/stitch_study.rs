@@ -83,6 +83,15 @@ fn main() -> anyhow::Result<()> {
     report("+correct", &assemble(&plan, &tpca, &corrected));
     let full = recon.merge(&tpca, &corrected)?;
     report("+correct+stitch", &full);
+    let averaged = assemble(&plan, &tpca, &corrected);
+    for share in [0.25, 0.5] {
+        let mixed: Vec<Vec<Vector3<f64>>> = full
+            .iter()
+            .zip(&averaged)
+            .map(|(a, b)| a.iter().zip(b).map(|(p, q)| p * (1.0 - share) + q * share).collect())
+            .collect();
+        report(&format!("+correct+stitch mixed with +correct at {share}"), &mixed);
+    }
     for (label, taps) in [("smoothed 1-2-1", vec![0.25, 0.5, 0.25]), ("smoothed 5-tap", vec![0.0625, 0.25, 0.375, 0.25, 0.0625])] {
         let h = taps.len() as i64 / 2;
         let n = full.len() as i64;
