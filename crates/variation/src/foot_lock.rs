@@ -153,12 +153,14 @@ pub fn displacements(
     d
 }
 
-/// Contacts for the lock: each interval of `contacts[t][f]` grown, one frame at a time on either
-/// side and by at most `max_frames`, while that foot's lowest point `low[t][f]` stays within
-/// `height` of the floor. A contact carried over from the source by the DTW can end a frame or two
-/// before the variation's own foot leaves the floor; easing the lock out while the foot is still
-/// down drags it along the floor.
-pub fn grow_while_down(
+/// Contacts for the lock: each interval of `contacts[t][f]` grown on either side, by at most
+/// `max_frames`, to the farthest frame where that foot's lowest point `low[t][f]` is within
+/// `height` of the floor, the frames between included. A contact carried over from the source by
+/// the DTW can start or end a few frames away from where the variation's own foot touches the
+/// floor; a foot that touches down just before its contact (or leaves just after) would
+/// otherwise skate along the floor there, and one that taps the floor, lifts a little and
+/// lands is held in place through the tap (its heights are kept).
+pub fn grow_over_touches(
     contacts: &[[bool; 2]],
     low: &[[f64; 2]],
     height: f64,
@@ -168,18 +170,13 @@ pub fn grow_while_down(
     let mut out = contacts[..n].to_vec();
     for f in 0..2 {
         let flags: Vec<bool> = contacts[..n].iter().map(|c| c[f]).collect();
+        let down = |t: &usize| low[*t][f] <= height;
         for (s, e) in intervals(&flags) {
-            for k in 1..=max_frames {
-                match s.checked_sub(k) {
-                    Some(t) if low[t][f] <= height => out[t][f] = true,
-                    _ => break,
-                }
+            if let Some(first) = (s.saturating_sub(max_frames)..s).find(down) {
+                out[first..s].iter_mut().for_each(|c| c[f] = true);
             }
-            for t in e..(e + max_frames).min(n) {
-                if low[t][f] > height {
-                    break;
-                }
-                out[t][f] = true;
+            if let Some(last) = (e..(e + max_frames).min(n)).rev().find(down) {
+                out[e..=last].iter_mut().for_each(|c| c[f] = true);
             }
         }
     }
@@ -290,22 +287,31 @@ mod tests {
     }
 
     #[test]
-    fn contacts_grow_only_while_the_foot_is_down() {
+    fn contacts_grow_to_the_farthest_touch_within_reach() {
         // Left planted in frames 3-5; its foot stays within 2 cm in frames 1-7, then lifts.
         // Right never planted: never grown. At most 3 frames each side.
         let contacts: Vec<[bool; 2]> = (0..12).map(|t| [(3..6).contains(&t), false]).collect();
         let low: Vec<[f64; 2]> = (0..12)
             .map(|t| [if (1..8).contains(&t) { 0.01 } else { 0.2 }, 0.0])
             .collect();
-        let g = grow_while_down(&contacts, &low, 0.02, 3);
+        let g = grow_over_touches(&contacts, &low, 0.02, 3);
         let left: Vec<bool> = g.iter().map(|c| c[0]).collect();
         let want: Vec<bool> = (0..12).map(|t| (1..8).contains(&t)).collect();
         assert_eq!(left, want);
         assert!(g.iter().all(|c| !c[1]));
         // A cap of one frame.
-        let g = grow_while_down(&contacts, &low, 0.02, 1);
+        let g = grow_over_touches(&contacts, &low, 0.02, 1);
         let left: Vec<bool> = g.iter().map(|c| c[0]).collect();
         assert_eq!(left, (0..12).map(|t| (2..7).contains(&t)).collect::<Vec<_>>());
+        // A tap: the foot touches at frame 1, lifts in frame 2 and lands with its contact at 3;
+        // after the contact it lifts at 6 and skims the floor again at 8. Grown over both
+        // within 3 frames, not over a touch 4 frames away (frame 9 is up, 10 down).
+        let low: Vec<[f64; 2]> = (0..12)
+            .map(|t| [if [1, 3, 4, 5, 8, 10].contains(&t) { 0.01 } else { 0.05 }, 0.0])
+            .collect();
+        let g = grow_over_touches(&contacts, &low, 0.02, 3);
+        let left: Vec<bool> = g.iter().map(|c| c[0]).collect();
+        assert_eq!(left, (0..12).map(|t| (1..9).contains(&t)).collect::<Vec<_>>());
     }
 
     #[test]

@@ -401,8 +401,8 @@ impl Post<'_> {
             }
             if let (true, Some(legs)) = (cfg.foot_lock, self.leg_weights) {
                 let c = match cfg.foot_height {
-                    // The legs now follow the source's heights: extend each contact while
-                    // the variation's foot is still on the source's floor.
+                    // The legs now follow the source's heights: extend each contact over the
+                    // variation's own touches of the source's floor next to it.
                     true => {
                         let lows: [Vec<f64>; 2] = [0, 1].map(|f| {
                             let leg: Vec<u32> = legs[f].iter().map(|p| p.0).collect();
@@ -412,7 +412,7 @@ impl Post<'_> {
                         let low: Vec<[f64; 2]> = (0..m.len())
                             .map(|t| [lows[0][t] - floor, lows[1][t] - floor])
                             .collect();
-                        foot_lock::grow_while_down(c, &low, CONTACT_HEIGHT, foot_lock::EASE_FRAMES)
+                        foot_lock::grow_over_touches(c, &low, CONTACT_HEIGHT, foot_lock::EASE_FRAMES)
                     }
                     false => c.clone(),
                 };
