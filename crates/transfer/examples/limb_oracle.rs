@@ -2,7 +2,9 @@
 //! Transfers a test motion with a trained model (parts assembled, no §6) three ways: the limbs
 //! as the pose GPs predict them, as the model's limb orientation turns them (what gpr-predict
 //! does), and turned to the orientation of the truth's limbs (an oracle), and prints the pose
-//! error of each against the truth.
+//! error of each against the truth. Then where the rest of the error is: the limbs' distal
+//! halves (past the elbow or knee) also turned to the truth's, and, from the transfer with the
+//! model's limb orientation, one part at a time replaced by the truth's part.
 //!
 //! cargo run --release --example limb_oracle -- WORK SET SOURCE TARGET MOTION
 //! e.g. `limb_oracle out/demo-run/work out/demo/set A B punch` (after `make transfer`)
@@ -12,6 +14,7 @@ use capture::assemble::{assemble, plan};
 use capture::part_pca::PcaModel;
 use mesh_core::artifact::Artifact;
 use mesh_core::sequence::MeshSequence;
+use nalgebra::Vector3;
 use transfer::gpr_model::GprModel;
 use transfer::limb_orientation::{apply, limbs, orientation, reference, turn_to};
 use transfer::reconstruct::rows_to_meshes;
@@ -43,12 +46,42 @@ fn main() -> anyhow::Result<()> {
             turn_to(frame, &limb, &now, &orientation(&mean, truth, &limb.proximal));
         }
     }
+    // The distal halves too, each turned about its elbow (the proximal vertices farthest from
+    // the joint, the last fifth) to the truth's orientation.
+    let mut distal_oracle = oracle.clone();
+    for limb in limbs(&tpca)? {
+        let mean = reference(&tpca, limb.part);
+        let distal: Vec<usize> = (0..mean.len()).filter(|i| limb.proximal.binary_search(i).is_err()).collect();
+        let joint = limb.joint.iter().map(|&i| mean[i]).sum::<Vector3<f64>>() / limb.joint.len() as f64;
+        let mut far: Vec<(f64, usize)> = limb.proximal.iter().map(|&i| ((mean[i] - joint).norm(), i)).collect();
+        far.sort_by(|a, b| b.0.total_cmp(&a.0));
+        let elbow: Vec<usize> = far.iter().take((far.len() / 5).max(1)).map(|x| x.1).collect();
+        for (frame, truth) in distal_oracle[limb.part].iter_mut().zip(&truth_parts[limb.part]) {
+            let turn = orientation(&mean, truth, &distal) * orientation(&mean, frame, &distal).inverse();
+            let pivot = elbow.iter().map(|&i| frame[i]).sum::<Vector3<f64>>() / elbow.len() as f64;
+            for &i in &distal {
+                frame[i] = pivot + turn * (frame[i] - pivot);
+            }
+        }
+    }
     let plan = plan(&tpca)?;
     let truth_seq = MeshSequence::new(template.faces.clone(), truth.frames.clone());
-    for (name, parts) in [("pose GPs", &gp), ("limb orientation", &turned), ("truth's limb orientation", &oracle)] {
+    let score = |parts: &Vec<Vec<Vec<Vector3<f64>>>>| -> anyhow::Result<f64> {
         let pred = MeshSequence::new(template.faces.clone(), assemble(&plan, &tpca, parts));
-        let (pose, _) = transfer::evaluate::rms_errors(&pred, &truth_seq)?;
-        println!("{s}->{t} {m} {name}: {:.2} cm", 100.0 * pose);
+        Ok(100.0 * transfer::evaluate::rms_errors(&pred, &truth_seq)?.0)
+    };
+    for (name, parts) in [
+        ("pose GPs", &gp),
+        ("limb orientation", &turned),
+        ("truth's limb orientation", &oracle),
+        ("truth's limb orientation, distal halves too", &distal_oracle),
+    ] {
+        println!("{s}->{t} {m} {name}: {:.2} cm", score(parts)?);
+    }
+    for (k, part) in tpca.parts.iter().enumerate() {
+        let mut one = turned.clone();
+        one[k] = truth_parts[k].clone();
+        println!("{s}->{t} {m} limb orientation, truth's {}: {:.2} cm", part.name, score(&one)?);
     }
     Ok(())
 }
