@@ -12,20 +12,16 @@ mod limb_bend;
 
 use capture::align::{align_motion_on, AlignedMotion};
 use capture::assemble::{assemble, plan};
-use capture::part_pca::PcaModel;
 use mesh_core::artifact::Artifact;
 use mesh_core::sequence::MeshSequence;
-use transfer::gpr_model::{training_set, GprModel};
+use transfer::gpr_model::training_set;
 use transfer::limb_orientation::apply;
 
 fn main() -> anyhow::Result<()> {
-    let args: Vec<String> = std::env::args().collect();
-    let split = args.iter().position(|a| a == "--").ok_or_else(|| anyhow::anyhow!("usage: see the file"))?;
-    let [work, set, s, t] = [&args[1], &args[2], &args[3], &args[4]];
-    let tests = &args[5..split];
-    let train = &args[split + 1..];
-    let (spca, tpca) = (PcaModel::load(format!("{work}/{s}/pca.model"))?, PcaModel::load(format!("{work}/{t}/pca.model"))?);
-    let model = GprModel::load(format!("{work}/models/{s}-to-{t}/gpr-nn.model"))?;
+    let study = study_pairs::Study::from_args()?;
+    let (work, set, s, t) = (&study.work, &study.set, &study.s, &study.t);
+    let (tests, train) = (&study.tests, &study.train);
+    let (spca, tpca, model) = (&study.spca, &study.tpca, &study.model);
     let (pairs, _) = study_pairs::load(work, set, s, t, &spca, &tpca, train)?;
     let bends = limb_bend::BendMaps::fit(&spca, &tpca, &training_set(&pairs, 1.0, false)?)?;
     let template = mesh_core::io::read_mesh(format!("{set}/{t}/walk/000000.ply"))?;

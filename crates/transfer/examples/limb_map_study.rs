@@ -17,7 +17,7 @@ use mesh_core::artifact::Artifact;
 use mesh_core::rigid::{so3_exp, so3_log};
 use mesh_core::sequence::MeshSequence;
 use nalgebra::{DMatrix, Rotation3, Unit, Vector3};
-use transfer::gpr_model::{training_set, GprModel};
+use transfer::gpr_model::training_set;
 use transfer::limb_orientation::{limbs, orientation, reference, turn_to, Limb, LimbMap};
 
 #[derive(Clone, Copy, Debug)]
@@ -128,13 +128,10 @@ fn fit_wide(x: &DMatrix<f64>, y: &DMatrix<f64>, w0: &DMatrix<f64>, ridge: f64) -
 }
 
 fn main() -> anyhow::Result<()> {
-    let args: Vec<String> = std::env::args().collect();
-    let split = args.iter().position(|a| a == "--").ok_or_else(|| anyhow::anyhow!("usage: see the file"))?;
-    let [work, set, s, t] = [&args[1], &args[2], &args[3], &args[4]];
-    let tests = &args[5..split];
-    let train = &args[split + 1..];
-    let (spca, tpca) = (PcaModel::load(format!("{work}/{s}/pca.model"))?, PcaModel::load(format!("{work}/{t}/pca.model"))?);
-    let model = GprModel::load(format!("{work}/models/{s}-to-{t}/gpr-nn.model"))?;
+    let study = study_pairs::Study::from_args()?;
+    let (work, set, s, t) = (&study.work, &study.set, &study.s, &study.t);
+    let (tests, train) = (&study.tests, &study.train);
+    let (spca, tpca, model) = (&study.spca, &study.tpca, &study.model);
     let (pairs, _) = study_pairs::load(work, set, s, t, &spca, &tpca, train)?;
     let rows = training_set(&pairs, 1.0, false)?;
     let template = mesh_core::io::read_mesh(format!("{set}/{t}/walk/000000.ply"))?;

@@ -19,7 +19,7 @@ use mesh_core::artifact::Artifact;
 use mesh_core::rigid::{so3_exp, so3_log};
 use mesh_core::sequence::MeshSequence;
 use nalgebra::{DMatrix, Rotation3, Vector3};
-use transfer::gpr_model::{train, training_set, GprModel, MeanFunction, MeanPriors, Method, MEAN_RIDGE, PRIOR_WEIGHT};
+use transfer::gpr_model::{train, training_set, MeanFunction, MeanPriors, Method, MEAN_RIDGE, PRIOR_WEIGHT};
 use transfer::limb_orientation::{limbs, orientation, reference, turn_to, Limb, LimbMap, RIDGE, WEIGHT};
 
 /// The weights tried: 0, 0.05, ..., 1.
@@ -48,13 +48,10 @@ fn angle(a: &Rotation3<f64>, b: &Rotation3<f64>) -> f64 {
 }
 
 fn main() -> anyhow::Result<()> {
-    let args: Vec<String> = std::env::args().collect();
-    let split = args.iter().position(|a| a == "--").ok_or_else(|| anyhow::anyhow!("usage: see the file"))?;
-    let [work, set, s, t] = [&args[1], &args[2], &args[3], &args[4]];
-    let tests = &args[5..split];
-    let train_motions = &args[split + 1..];
-    let (spca, tpca) = (PcaModel::load(format!("{work}/{s}/pca.model"))?, PcaModel::load(format!("{work}/{t}/pca.model"))?);
-    let model = GprModel::load(format!("{work}/models/{s}-to-{t}/gpr-nn.model"))?;
+    let study = study_pairs::Study::from_args()?;
+    let (work, set, s, t) = (&study.work, &study.set, &study.s, &study.t);
+    let (tests, train_motions) = (&study.tests, &study.train);
+    let (spca, tpca, model) = (&study.spca, &study.tpca, &study.model);
     let (pairs, ratio) = study_pairs::load(work, set, s, t, &spca, &tpca, train_motions)?;
     let names = model.part_names.clone();
     let maps = transfer::geometric_prior::part_priors(&spca, &tpca);

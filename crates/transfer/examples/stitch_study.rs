@@ -14,13 +14,11 @@ mod limb_bend;
 
 use capture::align::{align_motion_on, AlignedMotion};
 use capture::assemble::{assemble, plan};
-use capture::part_pca::PcaModel;
 use mesh_core::artifact::Artifact;
 use mesh_core::rigid::procrustes;
 use mesh_core::segmentation::Segmentation;
 use mesh_core::sequence::MeshSequence;
 use nalgebra::Vector3;
-use transfer::gpr_model::GprModel;
 use transfer::limb_orientation::apply;
 use transfer::reconstruct::{Reconstructor, Surface};
 
@@ -44,12 +42,10 @@ fn errors(pred: &[Vec<Vector3<f64>>], truth: &[Vec<Vector3<f64>>], parts: &[Vec<
 }
 
 fn main() -> anyhow::Result<()> {
-    let args: Vec<String> = std::env::args().collect();
-    let split = args.iter().position(|a| a == "--").ok_or_else(|| anyhow::anyhow!("usage: see the file"))?;
-    let [work, set, s, t, m] = [&args[1], &args[2], &args[3], &args[4], &args[5]];
-    let train = &args[split + 1..];
-    let (spca, tpca) = (PcaModel::load(format!("{work}/{s}/pca.model"))?, PcaModel::load(format!("{work}/{t}/pca.model"))?);
-    let model = GprModel::load(format!("{work}/models/{s}-to-{t}/gpr-nn.model"))?;
+    let study = study_pairs::Study::from_args()?;
+    let (work, set, s, t, m) = (&study.work, &study.set, &study.s, &study.t, &study.tests[0]);
+    let train = &study.train;
+    let (spca, tpca, model) = (&study.spca, &study.tpca, &study.model);
     let seg = Segmentation::load(format!("{work}/{t}/parts.seg"))?;
     let template = mesh_core::io::read_mesh(format!("{set}/{t}/walk/000000.ply"))?;
     let training: Vec<AlignedMotion> =

@@ -2,8 +2,47 @@
 //! direction SOURCE -> TARGET (reversed when SOURCE is the set's target).
 
 use capture::part_pca::PcaModel;
+use mesh_core::artifact::Artifact;
 use std::path::PathBuf;
-use transfer::gpr_model::{PairData, PairFiles};
+use transfer::gpr_model::{GprModel, PairData, PairFiles};
+
+/// A study's command line, `WORK SET SOURCE TARGET MOTION... -- TRAIN...`, and the PCA models
+/// and default gpr-nn model of that direction in WORK.
+#[allow(dead_code)]
+pub struct Study {
+    pub work: String,
+    pub set: String,
+    pub s: String,
+    pub t: String,
+    pub tests: Vec<String>,
+    pub train: Vec<String>,
+    pub spca: PcaModel,
+    pub tpca: PcaModel,
+    pub model: GprModel,
+}
+
+impl Study {
+    #[allow(dead_code)]
+    pub fn from_args() -> anyhow::Result<Study> {
+        let args: Vec<String> = std::env::args().collect();
+        let split = args.iter().position(|a| a == "--").filter(|&i| i >= 6);
+        let Some(split) = split else {
+            anyhow::bail!("usage: WORK SET SOURCE TARGET MOTION... -- TRAIN... (see the example's file)");
+        };
+        let [work, set, s, t] = [1, 2, 3, 4].map(|i| args[i].clone());
+        Ok(Study {
+            spca: PcaModel::load(format!("{work}/{s}/pca.model"))?,
+            tpca: PcaModel::load(format!("{work}/{t}/pca.model"))?,
+            model: GprModel::load(format!("{work}/models/{s}-to-{t}/gpr-nn.model"))?,
+            tests: args[5..split].to_vec(),
+            train: args[split + 1..].to_vec(),
+            work,
+            set,
+            s,
+            t,
+        })
+    }
+}
 
 /// The pairs of the training motions `train` from `WORK` (`{work}/{subject}/{m}.aligned`,
 /// `{work}/pairs/{m}.corr`), and the target-over-source frame-rate ratio of the first pair.
