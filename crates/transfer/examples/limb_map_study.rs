@@ -128,10 +128,7 @@ fn fit_wide(x: &DMatrix<f64>, y: &DMatrix<f64>, w0: &DMatrix<f64>, ridge: f64) -
 }
 
 fn main() -> anyhow::Result<()> {
-    let study = study_pairs::Study::from_args()?;
-    let (work, set, s, t) = (&study.work, &study.set, &study.s, &study.t);
-    let (tests, train) = (&study.tests, &study.train);
-    let (spca, tpca, model) = (&study.spca, &study.tpca, &study.model);
+    let study_pairs::Study { work, set, s, t, tests, train, spca, tpca, model } = &study_pairs::Study::from_args()?;
     let (pairs, _) = study_pairs::load(work, set, s, t, &spca, &tpca, train)?;
     let rows = training_set(&pairs, 1.0, false)?;
     let template = mesh_core::io::read_mesh(format!("{set}/{t}/walk/000000.ply"))?;

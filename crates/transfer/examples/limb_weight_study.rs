@@ -48,10 +48,7 @@ fn angle(a: &Rotation3<f64>, b: &Rotation3<f64>) -> f64 {
 }
 
 fn main() -> anyhow::Result<()> {
-    let study = study_pairs::Study::from_args()?;
-    let (work, set, s, t) = (&study.work, &study.set, &study.s, &study.t);
-    let (tests, train_motions) = (&study.tests, &study.train);
-    let (spca, tpca, model) = (&study.spca, &study.tpca, &study.model);
+    let study_pairs::Study { work, set, s, t, tests, train: train_motions, spca, tpca, model } = &study_pairs::Study::from_args()?;
     let (pairs, ratio) = study_pairs::load(work, set, s, t, &spca, &tpca, train_motions)?;
     let names = model.part_names.clone();
     let maps = transfer::geometric_prior::part_priors(&spca, &tpca);

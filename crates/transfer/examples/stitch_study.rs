@@ -42,10 +42,8 @@ fn errors(pred: &[Vec<Vector3<f64>>], truth: &[Vec<Vector3<f64>>], parts: &[Vec<
 }
 
 fn main() -> anyhow::Result<()> {
-    let study = study_pairs::Study::from_args()?;
-    let (work, set, s, t, m) = (&study.work, &study.set, &study.s, &study.t, &study.tests[0]);
-    let train = &study.train;
-    let (spca, tpca, model) = (&study.spca, &study.tpca, &study.model);
+    let study_pairs::Study { work, set, s, t, tests, train, spca, tpca, model } = &study_pairs::Study::from_args()?;
+    let m = &tests[0];
     let seg = Segmentation::load(format!("{work}/{t}/parts.seg"))?;
     let template = mesh_core::io::read_mesh(format!("{set}/{t}/walk/000000.ply"))?;
     let training: Vec<AlignedMotion> =
