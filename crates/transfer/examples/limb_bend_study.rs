@@ -10,27 +10,21 @@ mod study_pairs;
 #[path = "common/limb_bend.rs"]
 mod limb_bend;
 
-use capture::align::{align_motion_on, AlignedMotion};
 use capture::assemble::{assemble, plan};
-use mesh_core::artifact::Artifact;
 use mesh_core::sequence::MeshSequence;
 use transfer::gpr_model::training_set;
 use transfer::limb_orientation::apply;
 
 fn main() -> anyhow::Result<()> {
-    let study_pairs::Study { work, set, s, t, tests, train, spca, tpca, model } = &study_pairs::Study::from_args()?;
+    let study = study_pairs::Study::from_args()?;
+    let study_pairs::Study { work, set, s, t, tests, train, spca, tpca, model, template } = &study;
     let (pairs, _) = study_pairs::load(work, set, s, t, &spca, &tpca, train)?;
     let bends = limb_bend::BendMaps::fit(&spca, &tpca, &training_set(&pairs, 1.0, false)?)?;
-    let template = mesh_core::io::read_mesh(format!("{set}/{t}/walk/000000.ply"))?;
     let plan = plan(&tpca)?;
     let weights = [0.0, 0.25, 0.5, 0.75, 1.0];
     let mut totals = vec![(0.0f64, 0usize); weights.len()];
     for m in tests {
-        let motion = AlignedMotion::load(format!("{work}/{s}/{m}.aligned"))?;
-        let truth = align_motion_on(&template, &MeshSequence::load_dir(format!("{set}/truth/{t}/{m}"))?, &tpca.anchor)?;
-        let truth_seq = MeshSequence::new(template.faces.clone(), truth.frames.clone());
-        let xs = spca.encode(&motion)?;
-        let xd = transfer::predict::displacement_matrix(&motion.displacements);
+        let study_pairs::TestMotion { xs, xd, truth: truth_seq } = study.test_motion(m)?;
         let mut base = tpca.decode(&transfer::predict::predict(&model, &xs, &xd, false)?.coeffs)?;
         if let Some(o) = &model.orientation {
             apply(o, &spca, &tpca, &xs, &mut base)?;

@@ -10,10 +10,8 @@
 #[path = "common/study_pairs.rs"]
 mod study_pairs;
 
-use capture::align::{align_motion_on, AlignedMotion};
 use capture::assemble::{assemble, plan};
 use capture::part_pca::PcaModel;
-use mesh_core::artifact::Artifact;
 use mesh_core::rigid::{so3_exp, so3_log};
 use mesh_core::sequence::MeshSequence;
 use nalgebra::{DMatrix, Rotation3, Unit, Vector3};
@@ -128,10 +126,10 @@ fn fit_wide(x: &DMatrix<f64>, y: &DMatrix<f64>, w0: &DMatrix<f64>, ridge: f64) -
 }
 
 fn main() -> anyhow::Result<()> {
-    let study_pairs::Study { work, set, s, t, tests, train, spca, tpca, model } = &study_pairs::Study::from_args()?;
+    let study = study_pairs::Study::from_args()?;
+    let study_pairs::Study { work, set, s, t, tests, train, spca, tpca, model, template } = &study;
     let (pairs, _) = study_pairs::load(work, set, s, t, &spca, &tpca, train)?;
     let rows = training_set(&pairs, 1.0, false)?;
-    let template = mesh_core::io::read_mesh(format!("{set}/{t}/walk/000000.ply"))?;
     let plan = plan(&tpca)?;
 
     let mut variants = vec![];
@@ -156,11 +154,7 @@ fn main() -> anyhow::Result<()> {
     let (ls, lt) = (limbs(&spca)?, limbs(&tpca)?);
     let mut totals = vec![(0.0f64, 0usize); variants.len() + 1];
     for m in tests {
-        let motion = AlignedMotion::load(format!("{work}/{s}/{m}.aligned"))?;
-        let truth = align_motion_on(&template, &MeshSequence::load_dir(format!("{set}/truth/{t}/{m}"))?, &tpca.anchor)?;
-        let truth_seq = MeshSequence::new(template.faces.clone(), truth.frames.clone());
-        let xs = spca.encode(&motion)?;
-        let xd = transfer::predict::displacement_matrix(&motion.displacements);
+        let study_pairs::TestMotion { xs, xd, truth: truth_seq } = study.test_motion(m)?;
         let gp = tpca.decode(&transfer::predict::predict(&model, &xs, &xd, false)?.coeffs)?;
         let score = |parts: &Vec<Vec<Vec<Vector3<f64>>>>| -> f64 {
             let pred = MeshSequence::new(template.faces.clone(), assemble(&plan, &tpca, parts));

@@ -11,11 +11,9 @@
 #[path = "common/study_pairs.rs"]
 mod study_pairs;
 
-use capture::align::{align_motion_on, AlignedMotion};
 use capture::assemble::{assemble, plan};
 use capture::part_pca::PcaModel;
 use gp::gpr::GprOptions;
-use mesh_core::artifact::Artifact;
 use mesh_core::rigid::{so3_exp, so3_log};
 use mesh_core::sequence::MeshSequence;
 use nalgebra::{DMatrix, Rotation3, Vector3};
@@ -48,7 +46,8 @@ fn angle(a: &Rotation3<f64>, b: &Rotation3<f64>) -> f64 {
 }
 
 fn main() -> anyhow::Result<()> {
-    let study_pairs::Study { work, set, s, t, tests, train: train_motions, spca, tpca, model } = &study_pairs::Study::from_args()?;
+    let study = study_pairs::Study::from_args()?;
+    let study_pairs::Study { work, set, s, t, tests, train: train_motions, spca, tpca, model, template } = &study;
     let (pairs, ratio) = study_pairs::load(work, set, s, t, &spca, &tpca, train_motions)?;
     let names = model.part_names.clone();
     let maps = transfer::geometric_prior::part_priors(&spca, &tpca);
@@ -104,15 +103,10 @@ fn main() -> anyhow::Result<()> {
 
     // The test motions: the run's model, limbs turned at the default weight and at the chosen ones.
     let rows = training_set(&pairs, ratio, false)?;
-    let template = mesh_core::io::read_mesh(format!("{set}/{t}/walk/000000.ply"))?;
     let plan = plan(&tpca)?;
     let mut totals = [(0.0f64, 0usize); 3];
     for mname in tests {
-        let motion = AlignedMotion::load(format!("{work}/{s}/{mname}.aligned"))?;
-        let truth = align_motion_on(&template, &MeshSequence::load_dir(format!("{set}/truth/{t}/{mname}"))?, &tpca.anchor)?;
-        let truth_seq = MeshSequence::new(template.faces.clone(), truth.frames.clone());
-        let xs = spca.encode(&motion)?;
-        let xd = transfer::predict::displacement_matrix(&motion.displacements);
+        let study_pairs::TestMotion { xs, xd, truth: truth_seq } = study.test_motion(mname)?;
         let gp = tpca.decode(&transfer::predict::predict(&model, &xs, &xd, false)?.coeffs)?;
         let score = |parts: &Vec<Vec<Vec<Vector3<f64>>>>| {
             let pred = MeshSequence::new(template.faces.clone(), assemble(&plan, &tpca, parts));

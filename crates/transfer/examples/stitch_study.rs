@@ -42,10 +42,9 @@ fn errors(pred: &[Vec<Vector3<f64>>], truth: &[Vec<Vector3<f64>>], parts: &[Vec<
 }
 
 fn main() -> anyhow::Result<()> {
-    let study_pairs::Study { work, set, s, t, tests, train, spca, tpca, model } = &study_pairs::Study::from_args()?;
+    let study_pairs::Study { work, set, s, t, tests, train, spca, tpca, model, template } = &study_pairs::Study::from_args()?;
     let m = &tests[0];
     let seg = Segmentation::load(format!("{work}/{t}/parts.seg"))?;
-    let template = mesh_core::io::read_mesh(format!("{set}/{t}/walk/000000.ply"))?;
     let training: Vec<AlignedMotion> =
         train.iter().map(|n| AlignedMotion::load(format!("{work}/{t}/{n}.aligned"))).collect::<Result<_, _>>()?;
     let refs: Vec<&AlignedMotion> = training.iter().collect();

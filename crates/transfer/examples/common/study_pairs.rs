@@ -1,8 +1,12 @@
 //! The training pairs of a `make transfer` run for the study examples, encoded in the
 //! direction SOURCE -> TARGET (reversed when SOURCE is the set's target).
 
+use capture::align::{align_motion_on, AlignedMotion};
 use capture::part_pca::PcaModel;
 use mesh_core::artifact::Artifact;
+use mesh_core::mesh::TriMesh;
+use mesh_core::sequence::MeshSequence;
+use nalgebra::DMatrix;
 use std::path::PathBuf;
 use transfer::gpr_model::{GprModel, PairData, PairFiles};
 
@@ -19,6 +23,17 @@ pub struct Study {
     pub spca: PcaModel,
     pub tpca: PcaModel,
     pub model: GprModel,
+    /// The target's template mesh (its walk's first frame).
+    pub template: TriMesh,
+}
+
+/// A test motion of a study: the source's PCA coefficients per part and root displacements,
+/// and the target's truth aligned as the target's training motions are.
+#[allow(dead_code)]
+pub struct TestMotion {
+    pub xs: Vec<DMatrix<f64>>,
+    pub xd: DMatrix<f64>,
+    pub truth: MeshSequence,
 }
 
 impl Study {
@@ -34,12 +49,26 @@ impl Study {
             spca: PcaModel::load(format!("{work}/{s}/pca.model"))?,
             tpca: PcaModel::load(format!("{work}/{t}/pca.model"))?,
             model: GprModel::load(format!("{work}/models/{s}-to-{t}/gpr-nn.model"))?,
+            template: mesh_core::io::read_mesh(format!("{set}/{t}/walk/000000.ply"))?,
             tests: args[5..split].to_vec(),
             train: args[split + 1..].to_vec(),
             work,
             set,
             s,
             t,
+        })
+    }
+
+    /// Test motion `m`, read from WORK and SET.
+    #[allow(dead_code)]
+    pub fn test_motion(&self, m: &str) -> anyhow::Result<TestMotion> {
+        let (work, set, s, t) = (&self.work, &self.set, &self.s, &self.t);
+        let motion = AlignedMotion::load(format!("{work}/{s}/{m}.aligned"))?;
+        let truth = align_motion_on(&self.template, &MeshSequence::load_dir(format!("{set}/truth/{t}/{m}"))?, &self.tpca.anchor)?;
+        Ok(TestMotion {
+            xs: self.spca.encode(&motion)?,
+            xd: transfer::predict::displacement_matrix(&motion.displacements),
+            truth: MeshSequence::new(self.template.faces.clone(), truth.frames),
         })
     }
 }
