@@ -20,8 +20,9 @@
 //! `R + 1` frames, so the foot slows to rest as it touches down and starts from rest as it lifts
 //! off (the constraint blending of Kovar et al. 2002, "Footskate cleanup for motion capture
 //! editing"), at the price of a faster sole early in the ramp, where it is usually in the air
-//! (up to about 1.5x a steady approach speed); `offset` fades the contact's *offset* `δ` instead, which keeps the free path's
-//! velocity: a foot that lands at swing speed stops dead on the contact's first frame.
+//! (up to about 1.6x a steady approach speed with `R = 4`); `offset` fades the contact's
+//! *offset* `δ` instead, which keeps the free path's velocity: a foot that lands at swing speed
+//! stops dead on the contact's first frame.
 
 use crate::footskate::intervals;
 use mesh_core::feet::feet_tracks;
