@@ -176,6 +176,8 @@ fn carry_over(from: &Path, to: &Path, keep: &dyn Fn(&Path) -> bool) -> std::io::
 /// temporary sibling folder, which then replaces `dir` by rename. Entries of
 /// an existing `dir` that `keep` accepts (and `fill` did not write) are
 /// carried over into the new folder; the rest of the old folder is removed.
+/// If a racing writer replaces `dir` during the carry-over, the entries not yet
+/// carried are left to it.
 ///
 /// Readers see the old folder, no folder (for the instant between two
 /// renames), or the complete new one; never a mix. Two writers racing on one
@@ -199,8 +201,11 @@ where
     // Errors name the output folder, not its temporary sibling.
     std::fs::create_dir(&tmp).map_err(|e| Error::io(dir, e))?;
     let filled = fill(&tmp).and_then(|()| {
-        if dir.is_dir() {
-            carry_over(dir, &tmp, keep).map_err(|e| Error::io(dir, e))?;
+        match carry_over(dir, &tmp, keep) {
+            // No old folder, or another writer moved it away meanwhile (its own complete
+            // folder replaces it): nothing more to carry over.
+            Err(e) if e.kind() == std::io::ErrorKind::NotFound => {}
+            r => r.map_err(|e| Error::io(dir, e))?,
         }
         sync_dir(&tmp).map_err(|e| Error::io(dir, e))
     });
@@ -259,6 +264,29 @@ mod tests {
         assert!(r.is_err());
         assert!(!out.exists());
         assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 0, "temporary file left behind");
+    }
+
+    #[test]
+    fn an_old_folder_moved_away_during_the_carry_over_is_not_an_error() {
+        // Another writer moves the old folder away while this one carries over its kept
+        // entries (simulated in `keep`): the write still installs its complete folder.
+        let root = tempfile::tempdir().unwrap();
+        let out = root.path().join("seq");
+        std::fs::create_dir(&out).unwrap();
+        std::fs::write(out.join("a.keep"), "old").unwrap();
+        std::fs::write(out.join("b.keep"), "old").unwrap();
+        let away = root.path().join("moved");
+        let keep = |p: &Path| {
+            if out.exists() {
+                std::fs::rename(&out, &away).unwrap();
+            }
+            !p.ends_with("new.txt")
+        };
+        write_dir_atomic(&out, &keep, |tmp| {
+            std::fs::write(tmp.join("new.txt"), "new").map_err(|e| Error::io(tmp, e))
+        })
+        .unwrap();
+        assert_eq!(std::fs::read_to_string(out.join("new.txt")).unwrap(), "new");
     }
 
     #[cfg(unix)]

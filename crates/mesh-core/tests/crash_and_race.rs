@@ -44,9 +44,14 @@ fn writer_child() {
     let kind = std::env::var("SURFCAP_WRITER_KIND").unwrap();
     for tag in std::env::var("SURFCAP_WRITER_TAGS").unwrap().split(',') {
         let tag: u64 = tag.parse().unwrap();
-        match kind.as_str() {
-            "folder" => sequence(tag).write_dir(&out).unwrap(),
-            _ => write_artifact(&out, "test", 1, &Header::new("t", "0"), &payload(tag)).unwrap(),
+        let written = match kind.as_str() {
+            "folder" => sequence(tag).write_dir(&out),
+            _ => write_artifact(&out, "test", 1, &Header::new("t", "0"), &payload(tag)),
+        };
+        // The parent reads this (run with --nocapture) when a write fails.
+        if let Err(e) = written {
+            eprintln!("writer error: {e}");
+            std::process::exit(1);
         }
     }
 }
@@ -54,13 +59,13 @@ fn writer_child() {
 fn spawn_writer(kind: &str, out: &Path, tags: &[u64]) -> Child {
     let tags: Vec<String> = tags.iter().map(u64::to_string).collect();
     Command::new(std::env::current_exe().unwrap())
-        .args(["--exact", "writer_child", "--ignored", "--test-threads", "1"])
+        .args(["--exact", "writer_child", "--ignored", "--test-threads", "1", "--nocapture"])
         .env("SURFCAP_WRITER_OUT", out)
         .env("SURFCAP_WRITER_KIND", kind)
         .env("SURFCAP_WRITER_TAGS", tags.join(","))
         .env("RAYON_NUM_THREADS", "2")
         .stdout(Stdio::null())
-        .stderr(Stdio::null())
+        .stderr(Stdio::piped())
         .spawn()
         .unwrap()
 }
@@ -107,8 +112,8 @@ fn kill_trials(kind: &str, trials: usize) {
         seen[tag.is_some() as usize] += 1;
         // The next write (in this process) installs and cleans up after the dead one.
         if trial % 2 == 0 {
-            let next = spawn_writer(kind, &out, &[9]).wait().unwrap();
-            assert!(next.success());
+            let next = spawn_writer(kind, &out, &[9]).wait_with_output().unwrap();
+            assert!(next.status.success(), "{}", String::from_utf8_lossy(&next.stderr).trim());
             assert_eq!(complete_tag(kind, &out), Some(9));
             assert_eq!(temporaries(dir.path()), Vec::<String>::new(), "trial {trial}");
         }
@@ -132,8 +137,10 @@ fn race(kind: &str, trials: usize) {
     for _ in 0..trials {
         let a = spawn_writer(kind, &out, &[1, 3, 1, 3]);
         let b = spawn_writer(kind, &out, &[2, 4, 2, 4]);
-        for mut c in [a, b] {
-            assert!(c.wait().unwrap().success(), "a racing writer failed");
+        for c in [a, b] {
+            let out = c.wait_with_output().unwrap();
+            let err = String::from_utf8_lossy(&out.stderr);
+            assert!(out.status.success(), "a racing writer failed: {}", err.trim());
         }
         let tag = complete_tag(kind, &out).expect("no output after two successful writers");
         assert!([3, 4].contains(&tag), "the winner is a last write: {tag}");
