@@ -9,6 +9,9 @@
 //! cargo run --release --example limb_oracle -- WORK SET SOURCE TARGET MOTION
 //! e.g. `limb_oracle out/demo-run/work out/demo/set A B punch` (after `make transfer`)
 
+#[path = "common/limb_bend.rs"]
+mod limb_bend;
+
 use capture::align::{align_motion_on, AlignedMotion};
 use capture::assemble::{assemble, plan};
 use capture::part_pca::PcaModel;
@@ -46,20 +49,16 @@ fn main() -> anyhow::Result<()> {
             turn_to(frame, &limb, &now, &orientation(&mean, truth, &limb.proximal));
         }
     }
-    // The distal halves too, each turned about its elbow (the proximal vertices farthest from
-    // the joint, the last fifth) to the truth's orientation.
+    // The distal halves too, each turned about its elbow (as the bend map of `limb_bend` turns
+    // them) to the truth's orientation.
     let mut distal_oracle = oracle.clone();
     for limb in limbs(&tpca)? {
         let mean = reference(&tpca, limb.part);
-        let distal: Vec<usize> = (0..mean.len()).filter(|i| limb.proximal.binary_search(i).is_err()).collect();
-        let joint = limb.joint.iter().map(|&i| mean[i]).sum::<Vector3<f64>>() / limb.joint.len() as f64;
-        let mut far: Vec<(f64, usize)> = limb.proximal.iter().map(|&i| ((mean[i] - joint).norm(), i)).collect();
-        far.sort_by(|a, b| b.0.total_cmp(&a.0));
-        let elbow: Vec<usize> = far.iter().take((far.len() / 5).max(1)).map(|x| x.1).collect();
+        let b = limb_bend::bend(&limb, &mean);
         for (frame, truth) in distal_oracle[limb.part].iter_mut().zip(&truth_parts[limb.part]) {
-            let turn = orientation(&mean, truth, &distal) * orientation(&mean, frame, &distal).inverse();
-            let pivot = elbow.iter().map(|&i| frame[i]).sum::<Vector3<f64>>() / elbow.len() as f64;
-            for &i in &distal {
+            let turn = orientation(&mean, truth, &b.distal) * orientation(&mean, frame, &b.distal).inverse();
+            let pivot = b.elbow.iter().map(|&i| frame[i]).sum::<Vector3<f64>>() / b.elbow.len() as f64;
+            for &i in &b.distal {
                 frame[i] = pivot + turn * (frame[i] - pivot);
             }
         }

@@ -12,10 +12,12 @@ use nalgebra::{DMatrix, Rotation3, Vector3};
 use transfer::gpr_model::TrainingSet;
 use transfer::limb_orientation::{limbs, orientation, reference, Limb, LimbMap};
 
+#[allow(dead_code)]
 fn points(flat: &[f64]) -> Vec<Vector3<f64>> {
     flat.chunks_exact(3).map(|c| Vector3::new(c[0], c[1], c[2])).collect()
 }
 
+#[allow(dead_code)]
 fn smoothstep(x: f64) -> f64 {
     let x = x.clamp(0.0, 1.0);
     x * x * (3.0 - 2.0 * x)
@@ -23,13 +25,13 @@ fn smoothstep(x: f64) -> f64 {
 
 /// A limb's distal half, the rank of every vertex by distance from the joint in the mean shape
 /// (0 nearest, 1 farthest), and its elbow vertices.
-struct Bend {
-    distal: Vec<usize>,
-    rank: Vec<f64>,
-    elbow: Vec<usize>,
+pub struct Bend {
+    pub distal: Vec<usize>,
+    pub rank: Vec<f64>,
+    pub elbow: Vec<usize>,
 }
 
-fn bend(limb: &Limb, mean: &[Vector3<f64>]) -> Bend {
+pub fn bend(limb: &Limb, mean: &[Vector3<f64>]) -> Bend {
     let n = mean.len();
     let jc = limb.joint.iter().map(|&i| mean[i]).sum::<Vector3<f64>>() / limb.joint.len() as f64;
     let mut order: Vec<(f64, usize)> = mean.iter().enumerate().map(|(i, p)| ((p - jc).norm(), i)).collect();
@@ -46,15 +48,18 @@ fn bend(limb: &Limb, mean: &[Vector3<f64>]) -> Bend {
 }
 
 /// The distal half's rotation relative to the proximal half's.
+#[allow(dead_code)]
 fn relative(mean: &[Vector3<f64>], frame: &[Vector3<f64>], limb: &Limb, b: &Bend) -> Rotation3<f64> {
     orientation(mean, frame, &limb.proximal).inverse() * orientation(mean, frame, &b.distal)
 }
 
 /// Per limb of the target, the bend map fitted on the training rows.
+#[allow(dead_code)]
 pub struct BendMaps {
     pairs: Vec<(Limb, Limb, LimbMap)>,
 }
 
+#[allow(dead_code)]
 fn bends(pca: &PcaModel, limb: &Limb, coeffs: &DMatrix<f64>) -> Vec<Vector3<f64>> {
     let mean = reference(pca, limb.part);
     let b = bend(limb, &mean);
@@ -67,6 +72,7 @@ fn bends(pca: &PcaModel, limb: &Limb, coeffs: &DMatrix<f64>) -> Vec<Vector3<f64>
         .collect()
 }
 
+#[allow(dead_code)]
 impl BendMaps {
     pub fn fit(spca: &PcaModel, tpca: &PcaModel, rows: &TrainingSet) -> anyhow::Result<BendMaps> {
         let (ls, lt) = (limbs(spca)?, limbs(tpca)?);
