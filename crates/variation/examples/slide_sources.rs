@@ -4,8 +4,8 @@
 //! one (a contact's start or end), or none (a swing foot passing low over the floor).
 //!
 //! Every swing pair faster than 2 cm/frame is listed with its frames and the nearest transferred
-//! contact of that foot. Also prints the lowest vertex of each variation, and with BASE (another hmc-sample --out of
-//! the same model and seed) how far the clean-ups moved it.
+//! contact of that foot. Also prints the lowest vertex of each variation, and with BASE (another
+//! hmc-sample --out of the same model and seed) how far the clean-ups moved it.
 //!
 //! Usage: slide_sources GROUP MODEL DIR [BASE] (DIR = hmc-sample --out; training sequences only)
 
