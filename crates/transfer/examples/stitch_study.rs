@@ -5,7 +5,9 @@
 //! cargo run --release --example stitch_study -- WORK SET SOURCE TARGET MOTION -- TRAIN...
 //!
 //! With `BEND_WEIGHT=w` in the environment the limbs' distal halves are also turned toward the
-//! bend map of `common/limb_bend.rs` before the surface stage (study 6).
+//! bend map of `common/limb_bend.rs` before the surface stage (study 6). With
+//! `LOOP_WEIGHTS=ARM,LEG` it prints only the stitch with the arms' and the legs' loops at those
+//! weights on the parent (the torso; 0.5 is the default's mean of the two parts), to 0.1 mm.
 
 #[path = "common/study_pairs.rs"]
 mod study_pairs;
@@ -139,6 +141,27 @@ fn main() -> anyhow::Result<()> {
             })
             .collect();
         report(label, &frames);
+    }
+    // With LOOP_WEIGHTS=ARM,LEG: the arms' and the legs' loops at those weights on the parent.
+    if let Ok(v) = std::env::var("LOOP_WEIGHTS") {
+        let ws: Vec<f64> = v.split(',').map(|x| x.parse()).collect::<Result<_, _>>()?;
+        let w: Vec<f64> = order
+            .iter()
+            .map(|&k| match seg.parts[k].name.as_str() {
+                n if n.starts_with("arm") => ws[0],
+                n if n.starts_with("leg") => ws[1],
+                _ => 0.5,
+            })
+            .collect();
+        let frames: Vec<Vec<Vector3<f64>>> = (0..n)
+            .map(|f| {
+                let frame: Vec<Vec<Vector3<f64>>> = order.iter().map(|&k| corrected[k][f].clone()).collect();
+                plan.to_template_frame(&stitcher.stitch_weighted(&frame, &w).unwrap().vertices)
+            })
+            .collect();
+        let (all, _) = errors(&frames, &truth.frames, &parts);
+        println!("{s}->{t} {m} +correct+stitch loops {v}: {:.4} cm", 100.0 * all);
+        return Ok(());
     }
     for (label, rule) in [("distance", 0), ("distance squared", 1), ("fixed 0.5", 2)] {
         let frames: Vec<Vec<Vector3<f64>>> = (0..n)

@@ -7,7 +7,10 @@
 //! contact of that foot. Also prints the lowest vertex of each variation, and with BASE (another
 //! hmc-sample --out of the same model and seed) how far the clean-ups moved it.
 //!
-//! Usage: slide_sources GROUP MODEL DIR [BASE] (DIR = hmc-sample --out; training sequences only)
+//! Usage: slide_sources GROUP MODEL DIR [BASE] (DIR = hmc-sample --out). With `BLENDS=0.25,0.75`
+//! in the environment, also the variations of the group's first two motions blended at those
+//! weights (`blend-W`, as `hmc-sample --blends` writes them), against the same blended sources
+//! and contacts as hmc-sample builds.
 
 use mesh_core::artifact::Artifact;
 use mesh_core::sequence::MeshSequence;
@@ -23,7 +26,22 @@ fn main() -> mesh_core::Result<()> {
     let parts: Vec<_> = model.parts.iter().map(|p| p.part.clone()).collect();
     let soles = variation::metrics::soles(&parts, &model.template, &model.up, mesh_core::feet::SOLE_TOLERANCE);
     let up = model.up;
-    for s in &group.sequences {
+    let weights: Vec<f64> = std::env::var("BLENDS")
+        .unwrap_or_default()
+        .split(',')
+        .filter(|w| !w.is_empty())
+        .map(|w| w.parse().map_err(|_| mesh_core::Error::invalid(format!("BLENDS: '{w}' is not a number"))))
+        .collect::<mesh_core::Result<_>>()?;
+    let mut sequences = group.sequences.clone();
+    if let ([a, b, ..], false) = (&group.sequences[..], weights.is_empty()) {
+        let blender = surface::blend::Blender::new(group.template.clone(), group.faces.clone())?;
+        let blended = variation::group::blend_sequences_at(&blender, a, b, &weights, &group.up)?;
+        for (mut s, w) in blended.into_iter().zip(&weights) {
+            s.name = variation::group::blend_name(*w);
+            sequences.push(s);
+        }
+    }
+    for s in &sequences {
         let source = s.motion.world_frames();
         let Some(c) = &s.contacts else { continue };
         let mut k = 0;
@@ -87,6 +105,33 @@ fn main() -> mesh_core::Result<()> {
                 let d = (v[lt][lv] - base[lt][lv]).dot(&up);
                 let legs: Vec<_> = parts.iter().filter(|p| p.name.starts_with("leg")).map(|p| (p.name.clone(), p.vertices.contains(&(lv as u32)))).collect();
                 println!("  vs base: vertex moved {d:.3} up; template height {:.3}; legs {legs:?}; base lowest {:.3}", model.template[lv].dot(&up), base[lt][lv].dot(&up));
+            }
+            // With TAIL=n: each foot's height above the sole floor, horizontal speed and
+            // transferred contact over the last n frames, and the source's at the matched frame.
+            let tail: usize = std::env::var("TAIL").ok().and_then(|n| n.parse().ok()).unwrap_or(0);
+            for t in v.len().saturating_sub(tail)..v.len() {
+                let per_foot: Vec<String> = soles
+                    .iter()
+                    .enumerate()
+                    .map(|(foot, so)| {
+                        let low = so.iter().map(|&i| v[t][i as usize].dot(&up)).fold(f64::INFINITY, f64::min);
+                        let centre = |f: &Vec<Vector3<f64>>| so.iter().map(|&i| f[i as usize]).sum::<Vector3<f64>>() / so.len() as f64;
+                        let d = if t > 0 { centre(&v[t]) - centre(&v[t - 1]) } else { Vector3::zeros() };
+                        let speed = (d - up * d.dot(&up)).norm();
+                        // The source at the matched frame: its sole's height above its own floor.
+                        let j = (m[t].round() as usize).min(source.len() - 1);
+                        let src_low = |f: &Vec<Vector3<f64>>| so.iter().map(|&i| f[i as usize].dot(&up)).fold(f64::INFINITY, f64::min);
+                        let src_floor = source.iter().map(src_low).fold(f64::INFINITY, f64::min);
+                        format!(
+                            "foot {foot} {:.3} m, {speed:.3} m/frame{} (source frame {j}: {:.3} m{})",
+                            low - ground,
+                            if tc[t][foot] { ", contact" } else { "" },
+                            src_low(&source[j]) - src_floor,
+                            if c[j][foot] { ", contact" } else { "" }
+                        )
+                    })
+                    .collect();
+                println!("  frame {t}: {}", per_foot.join("; "));
             }
             let tot: usize = cnt.iter().sum();
             let all: f64 = sum.iter().sum();
