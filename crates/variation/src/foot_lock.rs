@@ -184,6 +184,26 @@ pub fn grow_over_touches(
     out
 }
 
+/// The source's contacts completed at the clip's ends: per foot, the run of frames reaching the
+/// clip's first or last frame in which the foot's lowest point `low[t][f]` is within `height`
+/// of the floor is a contact. A clip that ends as a foot lands (or starts as one lifts off)
+/// cuts that contact short, and an annotation made from the sole's speed misses it: the foot
+/// still moves at landing speed on the last frame. Without it a variation's foot skates over
+/// the floor in the clip's last frames where the source's foot lands.
+pub fn close_clip_ends(contacts: &[[bool; 2]], low: &[[f64; 2]], height: f64) -> Vec<[bool; 2]> {
+    let n = contacts.len().min(low.len());
+    let mut out = contacts[..n].to_vec();
+    for f in 0..2 {
+        for t in (0..n).take_while(|&t| low[t][f] <= height) {
+            out[t][f] = true;
+        }
+        for t in (0..n).rev().take_while(|&t| low[t][f] <= height) {
+            out[t][f] = true;
+        }
+    }
+    out
+}
+
 /// Locks planted feet in place (module doc), in place; returns the largest displacement.
 /// `legs[f]` are the weights of [`leg_weights`], `soles[f]` the sole vertices, `contacts[t][f]`.
 pub fn lock(
@@ -223,6 +243,31 @@ mod tests {
         let mut faces: Vec<[u32; 3]> = (0..9).map(|i| [i, i + 1, i + 2]).collect();
         faces.push([9, 10, 11]);
         (t, faces, (0..=10).collect(), vec![0])
+    }
+
+    #[test]
+    fn a_landing_the_clip_cuts_short_becomes_a_contact() {
+        // Left foot: down on frames 0-1 (annotated 0-2), up, then landing on frames 7-9, the
+        // last, without annotation. Right foot: down on frame 4 only (not at an end) and
+        // 2.1 cm up on the last frame.
+        let contacts: Vec<[bool; 2]> = (0..10).map(|t| [t <= 2, false]).collect();
+        let low: Vec<[f64; 2]> = (0..10)
+            .map(|t| {
+                let left = if t <= 1 || t >= 7 { 0.01 } else { 0.2 };
+                let right = match t {
+                    4 => 0.0,
+                    9 => 0.021,
+                    _ => 0.3,
+                };
+                [left, right]
+            })
+            .collect();
+        let out = close_clip_ends(&contacts, &low, 0.02);
+        let left: Vec<bool> = out.iter().map(|c| c[0]).collect();
+        let right: Vec<bool> = out.iter().map(|c| c[1]).collect();
+        let expected_left: Vec<bool> = (0..10).map(|t| t <= 2 || t >= 7).collect();
+        assert_eq!(left, expected_left, "annotated start kept, landing at the end added");
+        assert_eq!(right, vec![false; 10], "a touch inside the clip or above the height is not a contact");
     }
 
     #[test]

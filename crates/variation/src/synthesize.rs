@@ -294,6 +294,9 @@ struct Job {
     source: Vec<Vec<Vector3<f64>>>,
     start: mesh_core::rigid::RigidMotion,
     contacts: Option<Contacts>,
+    /// The contacts the clean-ups follow: `contacts` completed at the clip's ends
+    /// ([`foot_lock::close_clip_ends`]) where the legs are known.
+    cleanup_contacts: Option<Contacts>,
     /// Height of the source's lowest point in every frame, and over all frames (its floor).
     source_low: Vec<f64>,
     floor: f64,
@@ -319,6 +322,7 @@ impl Job {
             vars,
             source,
             start,
+            cleanup_contacts: contacts.clone(),
             contacts,
             source_low,
             floor,
@@ -375,6 +379,11 @@ impl Post<'_> {
             .contacts
             .as_ref()
             .map(|c| footskate::transfer_contacts(c, &matches));
+        // The clean-ups' contacts: the source's completed at the clip's ends.
+        let cleanup_contacts = job
+            .cleanup_contacts
+            .as_ref()
+            .map(|c| footskate::transfer_contacts(c, &matches));
         let raw_sliding = (
             cfg.statistics
                 .then(|| metrics::foot_sliding(&m, self.soles, &model.up, CONTACT_HEIGHT))
@@ -386,7 +395,7 @@ impl Post<'_> {
         );
         let mut notes = Vec::new();
         let mut footskate_max = 0.0;
-        if let (true, Some(c), Some(f)) = (cfg.footskate, &contacts, self.feet) {
+        if let (true, Some(c), Some(f)) = (cfg.footskate, &cleanup_contacts, self.feet) {
             let d = footskate::clean(
                 &mut m,
                 f,
@@ -693,6 +702,19 @@ pub fn run_with_progress(
     }
     if cfg.footskate && feet.is_none() {
         notes.push("foot-skating clean-up skipped: no left and right soles found".into());
+    }
+    if let Some(legs) = &leg_weights {
+        for job in &mut jobs {
+            let Some(c) = &job.contacts else { continue };
+            let lows: [Vec<f64>; 2] = [0, 1].map(|f| {
+                let leg: Vec<u32> = legs[f].iter().map(|p| p.0).collect();
+                grounding::lowest(&job.source, &leg, &model.up)
+            });
+            let low: Vec<[f64; 2]> = (0..job.source.len())
+                .map(|t| [lows[0][t] - job.floor, lows[1][t] - job.floor])
+                .collect();
+            job.cleanup_contacts = Some(foot_lock::close_clip_ends(c, &low, CONTACT_HEIGHT));
+        }
     }
     let fused = fast.then(|| dec.fused(cfg.assembly)).transpose()?;
     let writer = VariationWriter::new(cfg.frame_format, model.template.len(), &model.faces);
