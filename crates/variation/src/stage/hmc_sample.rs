@@ -95,7 +95,8 @@ pub struct Params {
     #[arg(long)]
     pub no_grounding: bool,
     /// Do not clean up foot skating (by default each frame is shifted horizontally, smoothly in
-    /// time, so that feet planted in the source at the DTW-matched frame stay put)
+    /// time, so that feet planted in the source at the DTW-matched frame stay put; a foot on
+    /// the source's floor at the clip's first or last frame counts as planted there)
     #[arg(long)]
     pub no_footskate: bool,
     /// Smoothness λ of the foot-skating correction (weight of its second differences against
