@@ -5,7 +5,9 @@
 //! pair at that weight. Post-processes, on by default, follow the decoding: [`grounding`]
 //! (vertical) then [`footskate`] (horizontal root shift), both driven by the DTW correspondence
 //! of each variation to its source, then [`foot_height`] (each sole at the source's height, swing
-//! feet at least at its clearance) and [`foot_lock`] (planted soles pinned by their legs).
+//! feet at least at its clearance) and [`foot_lock`] (planted soles pinned by their legs). The
+//! clean-ups follow the source's contacts completed at the clip's ends
+//! ([`foot_lock::close_clip_ends`]).
 
 use std::path::Path;
 
@@ -331,6 +333,21 @@ impl Job {
     }
 }
 
+/// Per frame, the height of each leg's lowest point (`legs[f]`: the leg weights of
+/// [`foot_lock::leg_weights`], whose vertices are the leg) above `floor`.
+fn legs_above_floor(
+    frames: &[Vec<Vector3<f64>>],
+    legs: &[Vec<(u32, f64)>; 2],
+    up: &Vector3<f64>,
+    floor: f64,
+) -> Vec<[f64; 2]> {
+    let lows: [Vec<f64>; 2] = [0, 1].map(|f| {
+        let leg: Vec<u32> = legs[f].iter().map(|p| p.0).collect();
+        grounding::lowest(frames, &leg, up)
+    });
+    (0..frames.len()).map(|t| [lows[0][t] - floor, lows[1][t] - floor]).collect()
+}
+
 /// The learned weights of `entries` ([`blend_entries`], sorted) nearest to `w` on each side.
 fn bounding(entries: &[(f64, usize)], w: f64) -> Option<(f64, f64)> {
     let lo = entries.iter().rev().find(|e| e.0 <= w)?.0;
@@ -413,14 +430,7 @@ impl Post<'_> {
                     // The legs now follow the source's heights: extend each contact over the
                     // variation's own touches of the source's floor next to it.
                     true => {
-                        let lows: [Vec<f64>; 2] = [0, 1].map(|f| {
-                            let leg: Vec<u32> = legs[f].iter().map(|p| p.0).collect();
-                            grounding::lowest(&m, &leg, &model.up)
-                        });
-                        let floor = job.floor;
-                        let low: Vec<[f64; 2]> = (0..m.len())
-                            .map(|t| [lows[0][t] - floor, lows[1][t] - floor])
-                            .collect();
+                        let low = legs_above_floor(&m, legs, &model.up, job.floor);
                         foot_lock::grow_over_touches(c, &low, CONTACT_HEIGHT, foot_lock::EASE_FRAMES)
                     }
                     false => c.clone(),
@@ -706,13 +716,7 @@ pub fn run_with_progress(
     if let Some(legs) = &leg_weights {
         for job in &mut jobs {
             let Some(c) = &job.contacts else { continue };
-            let lows: [Vec<f64>; 2] = [0, 1].map(|f| {
-                let leg: Vec<u32> = legs[f].iter().map(|p| p.0).collect();
-                grounding::lowest(&job.source, &leg, &model.up)
-            });
-            let low: Vec<[f64; 2]> = (0..job.source.len())
-                .map(|t| [lows[0][t] - job.floor, lows[1][t] - job.floor])
-                .collect();
+            let low = legs_above_floor(&job.source, legs, &model.up, job.floor);
             job.cleanup_contacts = Some(foot_lock::close_clip_ends(c, &low, CONTACT_HEIGHT));
         }
     }
