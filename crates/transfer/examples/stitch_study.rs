@@ -145,6 +145,7 @@ fn main() -> anyhow::Result<()> {
     // With LOOP_WEIGHTS=ARM,LEG: the arms' and the legs' loops at those weights on the parent.
     if let Ok(v) = std::env::var("LOOP_WEIGHTS") {
         let ws: Vec<f64> = v.split(',').map(|x| x.parse()).collect::<Result<_, _>>()?;
+        anyhow::ensure!(ws.len() == 2, "LOOP_WEIGHTS: two weights ARM,LEG expected, got '{v}'");
         let w: Vec<f64> = order
             .iter()
             .map(|&k| match seg.parts[k].name.as_str() {

@@ -19,6 +19,16 @@ use variation::footskate::transfer_contacts;
 use variation::group::Group;
 use variation::train::VariationModel;
 
+/// Height of the lowest vertex of sole `so` in frame `f` along `up`.
+fn sole_low(f: &[Vector3<f64>], so: &[u32], up: &Vector3<f64>) -> f64 {
+    so.iter().map(|&i| f[i as usize].dot(up)).fold(f64::INFINITY, f64::min)
+}
+
+/// Centroid of sole `so` in frame `f`.
+fn sole_centre(f: &[Vector3<f64>], so: &[u32]) -> Vector3<f64> {
+    so.iter().map(|&i| f[i as usize]).sum::<Vector3<f64>>() / so.len() as f64
+}
+
 fn main() -> mesh_core::Result<()> {
     let a: Vec<String> = std::env::args().collect();
     let group = Group::load(&a[1])?;
@@ -61,8 +71,8 @@ fn main() -> mesh_core::Result<()> {
             let mut sum = [0.0f64; 3];
             let mut cnt = [0usize; 3];
             for (foot, so) in soles.iter().enumerate() {
-                let low = |f: &Vec<Vector3<f64>>| so.iter().map(|&i| f[i as usize].dot(&up)).fold(f64::INFINITY, f64::min);
-                let centre = |f: &Vec<Vector3<f64>>| so.iter().map(|&i| f[i as usize]).sum::<Vector3<f64>>() / so.len() as f64;
+                let low = |f: &Vec<Vector3<f64>>| sole_low(f, so, &up);
+                let centre = |f: &Vec<Vector3<f64>>| sole_centre(f, so);
                 for t in 0..v.len() - 1 {
                     if low(&v[t]) - ground <= 0.02 && low(&v[t + 1]) - ground <= 0.02 {
                         let d = centre(&v[t + 1]) - centre(&v[t]);
@@ -109,24 +119,25 @@ fn main() -> mesh_core::Result<()> {
             // With TAIL=n: each foot's height above the sole floor, horizontal speed and
             // transferred contact over the last n frames, and the source's at the matched frame.
             let tail: usize = std::env::var("TAIL").ok().and_then(|n| n.parse().ok()).unwrap_or(0);
+            // Each sole's floor in the source (its lowest height over the source's frames).
+            let source_floor: Vec<f64> = soles
+                .iter()
+                .map(|so| source.iter().map(|f| sole_low(f, so, &up)).fold(f64::INFINITY, f64::min))
+                .collect();
             for t in v.len().saturating_sub(tail)..v.len() {
                 let per_foot: Vec<String> = soles
                     .iter()
                     .enumerate()
                     .map(|(foot, so)| {
-                        let low = so.iter().map(|&i| v[t][i as usize].dot(&up)).fold(f64::INFINITY, f64::min);
-                        let centre = |f: &Vec<Vector3<f64>>| so.iter().map(|&i| f[i as usize]).sum::<Vector3<f64>>() / so.len() as f64;
-                        let d = if t > 0 { centre(&v[t]) - centre(&v[t - 1]) } else { Vector3::zeros() };
+                        let d = if t > 0 { sole_centre(&v[t], so) - sole_centre(&v[t - 1], so) } else { Vector3::zeros() };
                         let speed = (d - up * d.dot(&up)).norm();
                         // The source at the matched frame: its sole's height above its own floor.
                         let j = (m[t].round() as usize).min(source.len() - 1);
-                        let src_low = |f: &Vec<Vector3<f64>>| so.iter().map(|&i| f[i as usize].dot(&up)).fold(f64::INFINITY, f64::min);
-                        let src_floor = source.iter().map(src_low).fold(f64::INFINITY, f64::min);
                         format!(
                             "foot {foot} {:.3} m, {speed:.3} m/frame{} (source frame {j}: {:.3} m{})",
-                            low - ground,
+                            sole_low(&v[t], so, &up) - ground,
                             if tc[t][foot] { ", contact" } else { "" },
-                            src_low(&source[j]) - src_floor,
+                            sole_low(&source[j], so, &up) - source_floor[foot],
                             if c[j][foot] { ", contact" } else { "" }
                         )
                     })
