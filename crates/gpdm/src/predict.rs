@@ -43,6 +43,13 @@ pub struct Predictor {
 impl Predictor {
     /// Factorises the kernel matrices of `model`.
     pub fn new(model: &Gpdm) -> Result<Self> {
+        let mut p = Self::factorised(model)?;
+        solve_cols_par(&p.chol_y, p.a_y.as_mut());
+        Ok(p)
+    }
+
+    /// [`Predictor::new`] with `a_y` still the centred Y (not yet solved with `K_Y`).
+    fn factorised(model: &Gpdm) -> Result<Self> {
         let layout = model.layout();
         let d = model.config.latent_dim;
         let x = view(&model.x).to_owned();
@@ -59,8 +66,7 @@ impl Predictor {
             }
         }
         let a_x = chol_x.solve(x_out.as_ref());
-        let mut a_y = view(&model.y).to_owned();
-        solve_cols_par(&chol_y, a_y.as_mut());
+        let a_y = view(&model.y).to_owned();
         Ok(Predictor {
             kx,
             ky,
@@ -132,7 +138,7 @@ impl Predictor {
         if !(max_abs >= 0.0) {
             return invalid(format!("error bound {max_abs} must be non-negative"));
         }
-        let mut p = Predictor::new(model)?;
+        let mut p = Predictor::factorised(model)?;
         let n = p.x.nrows();
         let g = p.ky.gram(p.x.as_ref()).k; // lower triangle filled
         let full = DMatrix::from_fn(n, n, |i, j| if i >= j { g[(i, j)] } else { g[(j, i)] });
@@ -144,10 +150,22 @@ impl Predictor {
             .iter()
             .map(|&l| (eig.eigenvalues[l] - noise).max(0.0))
             .collect();
-        let amax = (0..p.a_y.ncols())
-            .map(|j| p.a_y.col(j).squared_norm_l2())
-            .fold(0.0f64, f64::max)
-            .sqrt();
+        // The factorised K_Y is `Q diag(λ + jitter) Qᵀ`, so `K_Y⁻¹ Y = Q diag(1 / (λ + jitter)) Cᵀ`
+        // with `C = Yᵀ Q` (D × N, one GEMM, columns in `order`): the columns of K_Y⁻¹ Y have the
+        // norms of C's scaled rows, and the basis `(K_Y⁻¹ Y)ᵀ Q_R` is C's first R scaled columns.
+        let q_all = Mat::from_fn(n, n, |i, c| eig.eigenvectors[(i, order[c])]);
+        let mut c = Mat::<f64>::zeros(p.a_y.ncols(), n);
+        let yt = p.a_y.as_ref().transpose();
+        matmul(c.as_mut(), Accum::Replace, yt, q_all.as_ref(), 1.0, Par::rayon(0));
+        let mut norms = vec![0.0; c.nrows()];
+        for (col, &l) in order.iter().enumerate() {
+            let inv = 1.0 / (eig.eigenvalues[l] + p.chol_y.jitter);
+            for (v, norm) in c.col_mut(col).iter_mut().zip(&mut norms) {
+                *v *= inv;
+                *norm += *v * *v;
+            }
+        }
+        let amax = norms.iter().fold(0.0f64, |m, &v| m.max(v)).sqrt();
         // tail[i] = Σ_{l ≥ R} μ_l² q_{l,i}², from R = N downwards.
         let mut tail = vec![0.0; n];
         let mut r = n;
@@ -166,12 +184,8 @@ impl Predictor {
             r -= 1;
         }
         let r = r.max(1);
-        let q = Mat::from_fn(n, r, |i, c| eig.eigenvectors[(i, order[c])]);
-        p.basis = Some(with_mean_col(
-            mul(p.a_y.as_ref().transpose(), q.as_ref()).as_ref(),
-            &p.y_mean,
-        ));
-        p.a_y = q;
+        p.basis = Some(with_mean_col(c.as_ref().subcols(0, r), &p.y_mean));
+        p.a_y = q_all.as_ref().subcols(0, r).to_owned();
         p.basis_amax = Some(amax);
         Ok((p, r, bound))
     }
