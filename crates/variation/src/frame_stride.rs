@@ -13,18 +13,25 @@
 
 use nalgebra::DMatrix;
 
-/// The stride that brings `fps` to about `fit_rate` frames per second (at least 1), further
-/// raised, when `max_frames` is given, until `frames` capture frames keep at most `max_frames`.
+/// The stride that brings `fps` to about `fit_rate` frames per second (at least 1), lowered,
+/// when `min_frames` is given, until `frames` capture frames keep at least `min_frames` (or the
+/// stride is 1), then raised, when `max_frames` is given, until they keep at most `max_frames`.
 pub fn stride_for(
     fps: f64,
     fit_rate: Option<f64>,
     frames: usize,
+    min_frames: Option<usize>,
     max_frames: Option<usize>,
 ) -> usize {
     let mut s = match fit_rate {
         Some(r) if r > 0.0 && fps > r => (fps / r).round().max(1.0) as usize,
         _ => 1,
     };
+    if let Some(m) = min_frames {
+        while s > 1 && kept_count(frames, s) < m {
+            s -= 1;
+        }
+    }
     if let Some(m) = max_frames.filter(|&m| m >= 2) {
         while kept_count(frames, s) > m {
             s += 1;
@@ -133,13 +140,27 @@ mod tests {
 
     #[test]
     fn strides_reach_the_fit_rate_and_the_frame_cap() {
-        assert_eq!(stride_for(50.0, Some(25.0), 600, None), 2);
-        assert_eq!(stride_for(25.0, Some(25.0), 600, None), 1);
-        assert_eq!(stride_for(20.0, Some(25.0), 600, None), 1);
-        assert_eq!(stride_for(100.0, None, 600, None), 1);
+        assert_eq!(stride_for(50.0, Some(25.0), 600, None, None), 2);
+        assert_eq!(stride_for(25.0, Some(25.0), 600, None, None), 1);
+        assert_eq!(stride_for(20.0, Some(25.0), 600, None, None), 1);
+        assert_eq!(stride_for(100.0, None, 600, None, None), 1);
         // 600 frames at stride 2 keep 300; a cap of 200 needs stride 3.
-        assert_eq!(stride_for(50.0, Some(25.0), 600, Some(200)), 3);
+        assert_eq!(stride_for(50.0, Some(25.0), 600, None, Some(200)), 3);
         assert!(kept_count(600, 3) <= 200 && kept_count(600, 2) > 200);
+    }
+
+    #[test]
+    fn short_clips_keep_the_minimum_of_frames() {
+        // B's 104-frame jump at 50 fps would keep 52 frames at stride 2: below 100, every frame.
+        assert_eq!(stride_for(50.0, Some(25.0), 104, Some(100), Some(240)), 1);
+        // 120 fps: stride 5 keeps 60 of 300 frames, 4 keeps 75, 3 keeps the first at least 100.
+        assert_eq!(stride_for(120.0, Some(25.0), 300, Some(100), Some(240)), 3);
+        assert!(kept_count(300, 3) >= 100 && kept_count(300, 4) < 100);
+        // Long enough at the fit rate: unchanged; the cap still wins over the minimum.
+        assert_eq!(stride_for(50.0, Some(25.0), 444, Some(100), Some(240)), 2);
+        assert_eq!(stride_for(50.0, Some(25.0), 600, Some(100), Some(200)), 3);
+        // A clip shorter than the minimum keeps every frame.
+        assert_eq!(stride_for(50.0, Some(25.0), 60, Some(100), Some(240)), 1);
     }
 
     #[test]

@@ -256,8 +256,9 @@ pub const DYN_NOISE_FLOOR: f64 = 1e-3;
 pub enum Fit {
     /// Every captured frame (the paper's fit; cost N³ per objective evaluation).
     Exact,
-    /// Every s-th frame ([`crate::frame_stride`]): dynamics at about [`FIT_RATE`] fps and at most
-    /// [`MAX_FIT_FRAMES`] training frames per part (the default: docs/DEVIATIONS.md).
+    /// Every s-th frame ([`crate::frame_stride`]): dynamics at about [`FIT_RATE`] fps, with at
+    /// least [`MIN_FIT_FRAMES`] and at most [`MAX_FIT_FRAMES`] training frames per part (the
+    /// default: docs/DEVIATIONS.md).
     #[default]
     Strided,
 }
@@ -268,6 +269,12 @@ pub const FIT_RATE: f64 = 25.0;
 /// Default bound on one part's training frames in the strided fit.
 pub const MAX_FIT_FRAMES: usize = 240;
 
+/// Default least number of one part's training frames in the strided fit: below it the stride
+/// is lowered (down to every frame). Demo B's 104-frame jump at 50 fps kept 52 frames at 25 fps,
+/// and its variations did not jump; with every frame they do (docs/RESULTS.md, "Short clips keep
+/// their frames").
+pub const MIN_FIT_FRAMES: usize = 100;
+
 /// Training settings.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct TrainConfig {
@@ -277,6 +284,10 @@ pub struct TrainConfig {
     /// `round(fps / fit_rate)` (None: every frame, the paper's exact fit).
     #[serde(default)]
     pub fit_rate: Option<f64>,
+    /// Least number of training frames of one part (all sequences): the stride is lowered
+    /// until they are reached or the stride is 1 (None: no minimum).
+    #[serde(default)]
+    pub min_fit_frames: Option<usize>,
     /// Upper bound on the training frames of one part (all sequences): the stride is raised
     /// until they fit (None: no bound).
     #[serde(default)]
@@ -322,6 +333,7 @@ impl Default for TrainConfig {
             },
             options,
             fit_rate: Some(FIT_RATE),
+            min_fit_frames: Some(MIN_FIT_FRAMES),
             max_fit_frames: Some(MAX_FIT_FRAMES),
         }
     }
@@ -329,12 +341,19 @@ impl Default for TrainConfig {
 
 impl TrainConfig {
     /// Selects the training frames: `Fit::Exact` clears the stride settings, `Fit::Strided`
-    /// sets the rate and the frame bound (both must be positive; the bound at least 2 per
-    /// sequence is checked by [`train`]).
-    pub fn fit(&mut self, fit: Fit, fit_rate: f64, max_fit_frames: usize) -> Result<()> {
+    /// sets the rate and the frame bounds (the rate positive, the upper bound at least 2 and
+    /// not below the lower; at least 2 per sequence is checked by [`train`]).
+    pub fn fit(
+        &mut self,
+        fit: Fit,
+        fit_rate: f64,
+        min_fit_frames: usize,
+        max_fit_frames: usize,
+    ) -> Result<()> {
         match fit {
             Fit::Exact => {
                 self.fit_rate = None;
+                self.min_fit_frames = None;
                 self.max_fit_frames = None;
             }
             Fit::Strided => {
@@ -348,7 +367,13 @@ impl TrainConfig {
                         "max fit frames {max_fit_frames}: at least 2 are needed"
                     )));
                 }
+                if min_fit_frames > max_fit_frames {
+                    return Err(Error::invalid(format!(
+                        "min fit frames {min_fit_frames} above max fit frames {max_fit_frames}"
+                    )));
+                }
                 self.fit_rate = Some(fit_rate);
+                self.min_fit_frames = Some(min_fit_frames);
                 self.max_fit_frames = Some(max_fit_frames);
             }
         }
@@ -370,8 +395,10 @@ pub struct PartTrainReport {
 
 /// The stride [`train`] uses for `group` under `cfg` ([`frame_stride::stride_for`]).
 pub fn fit_stride(group: &Group, cfg: &TrainConfig) -> usize {
-    let per_seq = cfg.max_fit_frames.map(|m| m / group.sequences.len().max(1));
-    frame_stride::stride_for(group.fps, cfg.fit_rate, group.n_frames(), per_seq)
+    let sequences = group.sequences.len().max(1);
+    let least = cfg.min_fit_frames.map(|m| m.div_ceil(sequences));
+    let most = cfg.max_fit_frames.map(|m| m / sequences);
+    frame_stride::stride_for(group.fps, cfg.fit_rate, group.n_frames(), least, most)
 }
 
 /// Per-part training matrices: `data[k][s]` is part `k`'s rows of sequence `s` at frames

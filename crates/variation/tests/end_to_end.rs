@@ -271,6 +271,7 @@ fn tiny_set_end_to_end() {
     // frame count, and the learned trajectories reconstruct the captured frames.
     let strided = TrainConfig {
         fit_rate: Some(group.fps / 2.0),
+        min_fit_frames: None,
         max_fit_frames: None,
         ..tc.clone()
     };

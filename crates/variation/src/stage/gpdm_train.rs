@@ -51,13 +51,18 @@ pub struct Params {
     #[arg(long, value_name = "TOL", default_value_t = crate::train::VALUE_TOLERANCE)]
     pub value_tolerance: f64,
     /// Training frames: exact (every frame, the paper's fit; cost grows as N³) or strided (every
-    /// s-th frame, s from --fit-rate and --max-fit-frames; sampling interpolates back to the
-    /// capture's rate)
+    /// s-th frame, s from --fit-rate, --min-fit-frames and --max-fit-frames; sampling
+    /// interpolates back to the capture's rate)
     #[arg(long, value_enum, default_value_t = crate::train::Fit::default())]
     pub fit: crate::train::Fit,
     /// With --fit strided: frame rate the dynamics are learned at (stride round(fps / rate))
     #[arg(long, value_name = "FPS", default_value_t = crate::train::FIT_RATE)]
     pub fit_rate: f64,
+    /// With --fit strided: the stride is lowered (down to every frame) until one part's
+    /// training frames (all sequences) are at least this many, so a short clip keeps enough
+    /// frames to learn its dynamics
+    #[arg(long, value_name = "N", default_value_t = crate::train::MIN_FIT_FRAMES)]
+    pub min_fit_frames: usize,
     /// With --fit strided: the stride is raised until one part's training frames (all
     /// sequences) are at most this many, so the cost stays bounded whatever the capture length
     #[arg(long, value_name = "N", default_value_t = crate::train::MAX_FIT_FRAMES)]
@@ -96,7 +101,7 @@ pub fn run(p: &Params) -> anyhow::Result<()> {
         anyhow::bail!("--value-tolerance {}: must be a finite number >= 0", p.value_tolerance);
     }
     cfg.options.lbfgs.value_tol = p.value_tolerance;
-    cfg.fit(p.fit, p.fit_rate, p.max_fit_frames)?;
+    cfg.fit(p.fit, p.fit_rate, p.min_fit_frames, p.max_fit_frames)?;
     let names: Vec<String> = group.parts.iter().map(|q| q.name.clone()).collect();
     let only = match &p.part {
         Some(name) => Some(part_merge::select(&names, name, &p.group)?),
