@@ -18,7 +18,8 @@ VARIATION_MOTIONS_jump ?= jump,cmu_jump
 # A group may hold more motions and pre-blend several pairs at several weights, e.g.
 #   VARIATION_GROUPS=moves VARIATION_MOTIONS_moves=walk,run,kick VARIATION_W=0.25,0.5,0.75 \
 #   VARIATION_PREALIGN_FLAGS_moves="--blend-pairs walk:run,run:kick"
-# (VARIATION_W is prealign --blend-weights; the first pair is the one --blends and fig. 7b use.)
+# (VARIATION_W is prealign --blend-weights; the first pair is the one --blends and fig. 7b use;
+# a group of one motion is sampled without blends.)
 # Extra prealign flags per group: locomotion is cut to whole gait cycles before the DTW.
 VARIATION_PREALIGN_FLAGS_locomotion ?= --gait-cycles
 VARIATION_PREALIGN_FLAGS_jump ?=

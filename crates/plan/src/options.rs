@@ -79,7 +79,7 @@ pub struct VariationOptions {
     /// prealign --blend-weights (VARIATION_W)
     #[arg(long, default_value = "0.5", value_name = "W")]
     pub variation_w: String,
-    /// hmc-sample --blends (VARIATION_BLENDS)
+    /// hmc-sample --blends (VARIATION_BLENDS); a group of one motion is sampled without blends
     #[arg(long, default_value = "0.25,0.75", value_name = "W,...")]
     pub variation_blends: String,
     /// hmc-sample -n (VARIATION_N)

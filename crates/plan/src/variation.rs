@@ -68,13 +68,17 @@ pub fn plan(set: &CaptureSet, out: &str, opt: &VariationOptions, graph: &mut Gra
         }
 
         // hmc-sample writes its report under a temporary name, the sheets follow, and the
-        // report's rename marks the whole task complete.
+        // report's rename marks the whole task complete. A group of one motion has nothing to
+        // blend, so it is sampled without the blend weights.
         let samples = format!("{work}/{g}-samples.json");
+        let blends = match motions.split(',').filter(|m| !m.is_empty()).count() {
+            0 | 1 => String::new(),
+            _ => opt.variation_blends.clone(),
+        };
         let tmp = format!("{samples}.tmp");
         let mut args = vec![
             s("-q"), s("--seed"), opt.variation_seed.to_string(), s("-n"), opt.variation_n.to_string(),
-            s("--variance-scale"), opt.variation_variance_scale.clone(), s("--blends"),
-            opt.variation_blends.clone(),
+            s("--variance-scale"), opt.variation_variance_scale.clone(), s("--blends"), blends,
         ];
         args.extend(words(&opt.variation_sample_flags));
         args.extend([s("--group"), group.clone(), s("--model"), model.clone(), s("--out"), format!("{vout}/{g}"), s("--report"), tmp.clone()]);

@@ -231,3 +231,38 @@ fn a_group_of_three_motions_blends_the_pairs_asked() {
         assert!(g.producer(target).is_some(), "{target}: no task");
     }
 }
+
+/// A group of one motion is sampled without blends (they need two motions; `hmc-sample` refuses
+/// blend weights for such a group), while a group of two keeps the weights asked.
+#[test]
+fn a_group_of_one_motion_is_sampled_without_blends() {
+    let t = <T as clap::Parser>::parse_from([
+        "t",
+        "--variation-group",
+        "solo=jump",
+        "--variation-group",
+        "pair=walk,run",
+        "--variation-blends",
+        "0.3,0.6",
+    ]);
+    let opts = plan::options::PipelineOptions {
+        paths: plan::options::Paths { set: repo().join("fixtures/tiny-set"), pipeline_out: "out".into() },
+        transfer: t.t,
+        variation: t.v,
+    };
+    let g = plan::stage::graph(&opts).unwrap();
+    let blends = |group: &str| {
+        let task = g.producer(&format!("out/work/variation/{group}-samples.json")).expect("a sampling task");
+        let args = task
+            .steps
+            .iter()
+            .find_map(|st| match st {
+                plan::task::Step::Run { bin, args } if bin == "hmc-sample" => Some(args.clone()),
+                _ => None,
+            })
+            .expect("an hmc-sample run");
+        args[args.iter().position(|a| a == "--blends").expect("--blends") + 1].clone()
+    };
+    assert_eq!(blends("solo"), "");
+    assert_eq!(blends("pair"), "0.3,0.6");
+}
