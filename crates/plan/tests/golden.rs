@@ -127,19 +127,18 @@ struct T {
 
 /// The plan of the tiny preset's description with the default options, into `out`.
 fn tiny_graph() -> plan::task::Graph {
-    let opts = plan::options::PipelineOptions {
-        paths: plan::options::Paths { set: repo().join("fixtures/tiny-set"), pipeline_out: "out".into() },
-        transfer: parse_default_transfer(),
-        variation: parse_default_variation(),
-    };
-    plan::stage::graph(&opts).unwrap()
+    tiny_graph_with(&[])
 }
 
-fn parse_default_transfer() -> plan::options::TransferOptions {
-    <T as clap::Parser>::parse_from(["t"]).t
-}
-fn parse_default_variation() -> plan::options::VariationOptions {
-    <T as clap::Parser>::parse_from(["t"]).v
+/// The tiny set's graph with these pipeline options (the rest at their defaults).
+fn tiny_graph_with(args: &[&str]) -> plan::task::Graph {
+    let t = <T as clap::Parser>::parse_from(std::iter::once("t").chain(args.iter().copied()));
+    let opts = plan::options::PipelineOptions {
+        paths: plan::options::Paths { set: repo().join("fixtures/tiny-set"), pipeline_out: "out".into() },
+        transfer: t.t,
+        variation: t.v,
+    };
+    plan::stage::graph(&opts).unwrap()
 }
 
 /// The models of several parts are fitted part by part: every part model (`pca.model`), every
@@ -200,8 +199,7 @@ fn multi_part_models_are_fitted_part_by_part() {
 /// GPDMs, samples and evaluation follow as for any group.
 #[test]
 fn a_group_of_three_motions_blends_the_pairs_asked() {
-    let t = <T as clap::Parser>::parse_from([
-        "t",
+    let g = tiny_graph_with(&[
         "--variation-group",
         "moves=walk,run,kick",
         "--prealign-flags",
@@ -209,12 +207,6 @@ fn a_group_of_three_motions_blends_the_pairs_asked() {
         "--variation-w",
         "0.25,0.5,0.75",
     ]);
-    let opts = plan::options::PipelineOptions {
-        paths: plan::options::Paths { set: repo().join("fixtures/tiny-set"), pipeline_out: "out".into() },
-        transfer: t.t,
-        variation: t.v,
-    };
-    let g = plan::stage::graph(&opts).unwrap();
     let pre = g.producer("out/work/variation/moves.group").expect("a prealign task");
     let args = match &pre.steps[..] {
         [plan::task::Step::Run { args, .. }] => args.clone(),
@@ -236,8 +228,7 @@ fn a_group_of_three_motions_blends_the_pairs_asked() {
 /// blend weights for such a group), while a group of two keeps the weights asked.
 #[test]
 fn a_group_of_one_motion_is_sampled_without_blends() {
-    let t = <T as clap::Parser>::parse_from([
-        "t",
+    let g = tiny_graph_with(&[
         "--variation-group",
         "solo=jump",
         "--variation-group",
@@ -245,12 +236,6 @@ fn a_group_of_one_motion_is_sampled_without_blends() {
         "--variation-blends",
         "0.3,0.6",
     ]);
-    let opts = plan::options::PipelineOptions {
-        paths: plan::options::Paths { set: repo().join("fixtures/tiny-set"), pipeline_out: "out".into() },
-        transfer: t.t,
-        variation: t.v,
-    };
-    let g = plan::stage::graph(&opts).unwrap();
     let blends = |group: &str| {
         let task = g.producer(&format!("out/work/variation/{group}-samples.json")).expect("a sampling task");
         let args = task
