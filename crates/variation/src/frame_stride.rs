@@ -153,7 +153,7 @@ mod tests {
     fn short_clips_keep_the_minimum_of_frames() {
         // B's 104-frame jump at 50 fps would keep 52 frames at stride 2: below 100, every frame.
         assert_eq!(stride_for(50.0, Some(25.0), 104, Some(100), Some(240)), 1);
-        // 120 fps: stride 5 keeps 60 of 300 frames, 4 keeps 75, 3 keeps the first at least 100.
+        // 120 fps: stride 5 keeps 60 of 300 frames, 4 keeps 75, 3 keeps 100: stride 3.
         assert_eq!(stride_for(120.0, Some(25.0), 300, Some(100), Some(240)), 3);
         assert!(kept_count(300, 3) >= 100 && kept_count(300, 4) < 100);
         // Long enough at the fit rate: unchanged; the cap still wins over the minimum.

@@ -550,3 +550,26 @@ pub fn train_selected(
     };
     Ok((model, reports))
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_fit_sets_or_clears_the_stride_bounds_and_refuses_bad_ones() {
+        let mut cfg = TrainConfig::default();
+        cfg.fit(Fit::Exact, 25.0, 100, 240).unwrap();
+        assert_eq!((cfg.fit_rate, cfg.min_fit_frames, cfg.max_fit_frames), (None, None, None));
+        cfg.fit(Fit::Strided, 30.0, 50, 200).unwrap();
+        assert_eq!((cfg.fit_rate, cfg.min_fit_frames, cfg.max_fit_frames), (Some(30.0), Some(50), Some(200)));
+        for (rate, min, max, says) in [
+            (0.0, 100, 240, "fit rate"),
+            (f64::NAN, 100, 240, "fit rate"),
+            (25.0, 1, 1, "at least 2"),
+            (25.0, 300, 240, "above max fit frames"),
+        ] {
+            let err = cfg.fit(Fit::Strided, rate, min, max).unwrap_err().to_string();
+            assert!(err.contains(says), "{err}");
+        }
+    }
+}
