@@ -83,6 +83,11 @@ fn decode(c: &mut Criterion) {
     group.bench_function(format!("10000 frames D=3000 rank-{r} basis"), |b| {
         b.iter(|| black_box(basis.pose_means(&trajs).unwrap()))
     });
+    // Building the kernel basis (eigenvectors of K_Y, then one GEMM `Yᵀ Q`): part of every
+    // hmc-sample call's fixed cost.
+    group.bench_function("kernel basis build, D=3000", |b| {
+        b.iter(|| black_box(Predictor::with_kernel_basis(&m, 1e-6).unwrap()))
+    });
     // Bulk path of the body decoder: one column-major GEMM per trajectory into a reused
     // buffer, kernel basis with a 1 µm certified bound at the training points.
     let (kb, rk, _) = Predictor::with_kernel_basis(&m, 1e-6).unwrap();
