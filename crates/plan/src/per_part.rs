@@ -1,9 +1,23 @@
-//! Models fitted part by part: a model of several parts becomes one task per part (`<stage>
-//! --part NAME`, writing a piece and, where the stage reports, the piece's report) and one
-//! `merge-parts` task joining them into the model the single-process run writes, byte for
-//! byte (docs/FORMATS.md, "Per-part pieces"). One array task then fits one part.
+//! Models of several parts: under Slurm one task per part (`<stage> --part NAME`, writing a
+//! piece and, where the stage reports, the piece's report) and one `merge-parts` task joining
+//! them into the model the single-process run writes, byte for byte (docs/FORMATS.md,
+//! "Per-part pieces"), so that one array task fits one part; under make one task per model,
+//! whose stage fits the parts in parallel on the machine's cores ([`PartTasks`]).
 
 use crate::task::{s, Task};
+
+/// How the plan splits the fit of a model of several parts into tasks.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum PartTasks {
+    /// One task writes the whole model; the stage fits its parts in parallel (`plan make`: one
+    /// machine, where a process per part would read the inputs once per part and leave cores
+    /// idle while a serial make runs one part at a time).
+    #[default]
+    OnePerModel,
+    /// One task per part writing a piece, and their merge (`plan slurm`, `plan make
+    /// --part-tasks`: one array task fits one part).
+    OnePerPart,
+}
 
 /// The folder of a model's pieces: `work/A/pca.model` -> `work/A/pca.parts`.
 pub fn pieces_dir(model: &str) -> String {
@@ -17,11 +31,20 @@ pub fn merge_kind(stage: &str) -> String {
 }
 
 /// The tasks writing `model` (and `report`) with `stage args --out model [--report report]`:
-/// that one task when `parts` has fewer than two names, otherwise one task per part writing
-/// `<pieces_dir>/<part>.piece` (and `<part>.json`, its report) and the merge of the pieces,
-/// whose target is `model` (merge-parts writes the report before the model). `inputs` are the
-/// stage's. Every task creates its target's folder.
-pub fn fit(stage: &str, model: &str, report: Option<&str>, inputs: Vec<String>, args: Vec<String>, parts: &[String]) -> Vec<Task> {
+/// that one task when `parts` has fewer than two names or `split` is
+/// [`PartTasks::OnePerModel`], otherwise one task per part writing `<pieces_dir>/<part>.piece`
+/// (and `<part>.json`, its report) and the merge of the pieces, whose target is `model`
+/// (merge-parts writes the report before the model). `inputs` are the stage's. Every task
+/// creates its target's folder.
+pub fn fit(
+    split: PartTasks,
+    stage: &str,
+    model: &str,
+    report: Option<&str>,
+    inputs: Vec<String>,
+    args: Vec<String>,
+    parts: &[String],
+) -> Vec<Task> {
     let with_outputs = |out: &str, report: Option<&str>| {
         let mut a = args.clone();
         a.extend([s("--out"), s(out)]);
@@ -30,7 +53,7 @@ pub fn fit(stage: &str, model: &str, report: Option<&str>, inputs: Vec<String>, 
         }
         a
     };
-    if parts.len() < 2 {
+    if parts.len() < 2 || split == PartTasks::OnePerModel {
         return vec![Task::run(stage, model, inputs, with_outputs(model, report)).mkdir_target()];
     }
     let dir = pieces_dir(model);
@@ -72,7 +95,7 @@ mod tests {
 
     #[test]
     fn one_part_is_one_task_of_the_stage() {
-        let t = fit("pca-fit", "w/A/pca-whole.model", Some("w/A/pca-whole.json"), names(&["in"]), names(&["-q"]), &names(&["body"]));
+        let t = fit(PartTasks::OnePerPart, "pca-fit", "w/A/pca-whole.model", Some("w/A/pca-whole.json"), names(&["in"]), names(&["-q"]), &names(&["body"]));
         assert_eq!(t.len(), 1);
         assert_eq!(t[0].kind, "pca-fit");
         assert_eq!(t[0].target, "w/A/pca-whole.model");
@@ -85,7 +108,7 @@ mod tests {
 
     #[test]
     fn parts_are_pieces_joined_by_a_merge_that_writes_the_model_and_report() {
-        let t = fit("gpdm-train", "w/g.model", Some("w/g-train.json"), names(&["w/g.group"]), names(&["--group", "w/g.group"]), &names(&["torso", "arm_l"]));
+        let t = fit(PartTasks::OnePerPart, "gpdm-train", "w/g.model", Some("w/g-train.json"), names(&["w/g.group"]), names(&["--group", "w/g.group"]), &names(&["torso", "arm_l"]));
         assert_eq!(t.len(), 3);
         for (task, part) in t.iter().zip(["torso", "arm_l"]) {
             assert_eq!(task.kind, "gpdm-train");
@@ -107,8 +130,17 @@ mod tests {
     }
 
     #[test]
+    fn one_task_per_model_fits_every_part_in_one_run() {
+        let t = fit(PartTasks::OnePerModel, "gpdm-train", "w/g.model", Some("w/g-train.json"), names(&["w/g.group"]), names(&["--group", "w/g.group"]), &names(&["torso", "arm_l"]));
+        assert_eq!(t.len(), 1);
+        assert_eq!((t[0].kind.as_str(), t[0].target.as_str(), &t[0].inputs), ("gpdm-train", "w/g.model", &names(&["w/g.group"])));
+        let want = "--group w/g.group --out w/g.model --report w/g-train.json";
+        assert_eq!(t[0].steps, vec![Step::Run { bin: s("gpdm-train"), args: want.split(' ').map(s).collect() }]);
+    }
+
+    #[test]
     fn without_a_report_the_merge_joins_the_pieces_alone() {
-        let t = fit("gpr-train", "w/m/nn.model", None, Vec::new(), Vec::new(), &names(&["torso", "displacement"]));
+        let t = fit(PartTasks::OnePerPart, "gpr-train", "w/m/nn.model", None, Vec::new(), Vec::new(), &names(&["torso", "displacement"]));
         assert!(t.iter().all(|x| match &x.steps[..] {
             [Step::Run { args, .. }] => !args.iter().any(|a| a == "--report" || a == "--piece-report"),
             _ => false,

@@ -11,6 +11,7 @@ use mesh_core::cli::CommonArgs;
 use serde::Serialize;
 
 use crate::options::PipelineOptions;
+use crate::per_part::PartTasks;
 use crate::task::Graph;
 
 /// Write the pipelines' task graph (every stage invocation with its inputs and outputs) as a make fragment or Slurm job arrays
@@ -69,6 +70,10 @@ pub struct MakeArgs {
     #[command(flatten)]
     #[serde(flatten)]
     pub options: PipelineOptions,
+    /// One task per part of each model of several parts, joined by merge-parts, as `plan slurm`
+    /// writes [default: one task per model, whose stage fits the parts in parallel]
+    #[arg(long)]
+    pub part_tasks: bool,
     /// Output make fragment
     #[arg(short, long)]
     pub out: PathBuf,
@@ -145,11 +150,11 @@ pub enum Collect {
     },
 }
 
-/// Both pipelines' task graph.
-pub fn graph(options: &PipelineOptions) -> Result<Graph> {
+/// Both pipelines' task graph, models of several parts split into tasks as `part_tasks` says.
+pub fn graph(options: &PipelineOptions, part_tasks: PartTasks) -> Result<Graph> {
     let set = CaptureSet::open(&options.paths.set)?;
     let out = options.paths.pipeline_out.to_string_lossy().into_owned();
-    let mut graph = Graph::default();
+    let mut graph = Graph { part_tasks, ..Graph::default() };
     crate::transfer::plan(&set, &out, &options.transfer, &mut graph)?;
     crate::variation::plan(&set, &out, &options.variation, &mut graph)?;
     Ok(graph)
@@ -165,12 +170,13 @@ pub fn run(args: &Params) -> Result<()> {
         Command::Make(a) => {
             a.common.init()?;
             let out = a.options.paths.pipeline_out.to_string_lossy();
-            let text = crate::make_fragment::fragment(&graph(&a.options)?, &out);
+            let split = if a.part_tasks { PartTasks::OnePerPart } else { PartTasks::OnePerModel };
+            let text = crate::make_fragment::fragment(&graph(&a.options, split)?, &out);
             mesh_core::atomic::write_bytes_atomic(&a.out, text.as_bytes())?;
         }
         Command::Slurm(a) => {
             a.common.init()?;
-            let graph = graph(&a.options)?;
+            let graph = graph(&a.options, PartTasks::OnePerPart)?;
             let workdir = match &a.workdir {
                 Some(w) => absolute(w)?,
                 None => std::env::current_dir().context("cannot read the current directory")?,

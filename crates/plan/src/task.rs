@@ -96,6 +96,9 @@ pub fn parent(path: &str) -> String {
 /// Both pipelines' tasks plus the variables the pipelines' make targets read.
 #[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
 pub struct Graph {
+    /// How models of several parts are split into tasks (set before the pipelines plan).
+    #[serde(skip)]
+    pub part_tasks: crate::per_part::PartTasks,
     pub tasks: Vec<Task>,
     /// `(name, words)`: make variables, e.g. `TRANSFER_RECORDS` (the evaluation records).
     pub variables: Vec<(String, Vec<String>)>,

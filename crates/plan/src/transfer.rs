@@ -115,7 +115,7 @@ pub fn plan(set: &CaptureSet, out: &str, opt: &TransferOptions, graph: &mut Grap
         args.extend(training.iter().cloned());
         let parts: Vec<String> = spec[x].parts.keys().cloned().collect();
         let report = format!("{w}/{x}/pca.json");
-        for t in per_part::fit("pca-fit", &pca(x, "pca"), Some(&report), inputs, args, &parts) {
+        for t in per_part::fit(graph.part_tasks, "pca-fit", &pca(x, "pca"), Some(&report), inputs, args, &parts) {
             graph.push(t);
         }
         // The whole-body comparison at the parts' total dimension (CVPR fig. 9: "equivalent
@@ -199,7 +199,7 @@ pub fn plan(set: &CaptureSet, out: &str, opt: &TransferOptions, graph: &mut Grap
                 _ => spec[src].parts.keys().cloned().collect(),
             };
             units.push(s("displacement"));
-            for t in per_part::fit("gpr-train", &model, None, inputs, args, &units) {
+            for t in per_part::fit(graph.part_tasks, "gpr-train", &model, None, inputs, args, &units) {
                 graph.push(t);
             }
             stamps.push(model.clone());

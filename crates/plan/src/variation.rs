@@ -63,7 +63,7 @@ pub fn plan(set: &CaptureSet, out: &str, opt: &VariationOptions, graph: &mut Gra
         args.extend(words(&opt.variation_train_flags));
         args.extend([s("--group"), group.clone()]);
         let report = format!("{work}/{g}-train.json");
-        for t in per_part::fit("gpdm-train", &model, Some(&report), vec![group.clone()], args, &parts) {
+        for t in per_part::fit(graph.part_tasks, "gpdm-train", &model, Some(&report), vec![group.clone()], args, &parts) {
             graph.push(t);
         }
 

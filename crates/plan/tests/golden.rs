@@ -7,6 +7,8 @@
 use std::path::{Path, PathBuf};
 use std::process::Command;
 
+use plan::per_part::PartTasks;
+
 fn repo() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("../..").canonicalize().unwrap()
 }
@@ -81,8 +83,13 @@ fn slurm_arrays_of_the_tiny_set() {
 /// and no two tasks write the same target: the graph is closed and make/Slurm can order it.
 #[test]
 fn graph_is_closed_and_targets_unique() {
+    for split in [PartTasks::OnePerPart, PartTasks::OnePerModel] {
+        graph_is_closed(&tiny_graph_split(split, &[]));
+    }
+}
+
+fn graph_is_closed(g: &plan::task::Graph) {
     let set = repo().join("fixtures/tiny-set");
-    let g = tiny_graph();
     let mut targets: Vec<&str> = g.tasks.iter().map(|t| t.target.as_str()).collect();
     targets.sort();
     let n = targets.len();
@@ -95,7 +102,7 @@ fn graph_is_closed_and_targets_unique() {
         }
     }
     // Slurm needs the kinds in an order where each array only reads earlier ones.
-    let arrays = plan::slurm::arrays(&g).unwrap();
+    let arrays = plan::slurm::arrays(g).unwrap();
     for (k, (kind, _, deps)) in arrays.iter().enumerate() {
         for d in deps {
             assert!(arrays[..k].iter().any(|(e, _, _)| e == d), "{kind} submitted before {d}");
@@ -125,20 +132,77 @@ struct T {
     v: plan::options::VariationOptions,
 }
 
-/// The plan of the tiny preset's description with the default options, into `out`.
+/// The Slurm plan of the tiny preset's description with the default options, into `out`.
 fn tiny_graph() -> plan::task::Graph {
     tiny_graph_with(&[])
 }
 
-/// The tiny set's graph with these pipeline options (the rest at their defaults).
+/// The tiny set's Slurm graph (one task per part) with these pipeline options (the rest at
+/// their defaults).
 fn tiny_graph_with(args: &[&str]) -> plan::task::Graph {
+    tiny_graph_split(PartTasks::OnePerPart, args)
+}
+
+fn tiny_graph_split(split: PartTasks, args: &[&str]) -> plan::task::Graph {
     let t = <T as clap::Parser>::parse_from(std::iter::once("t").chain(args.iter().copied()));
     let opts = plan::options::PipelineOptions {
         paths: plan::options::Paths { set: repo().join("fixtures/tiny-set"), pipeline_out: "out".into() },
         transfer: t.t,
         variation: t.v,
     };
-    plan::stage::graph(&opts).unwrap()
+    plan::stage::graph(&opts, split).unwrap()
+}
+
+/// make's graph (one task per model) is Slurm's with each model's part tasks and merge folded
+/// into one run of the stage: the same targets but the pieces, each model's task with the part
+/// tasks' arguments but `--part` and the merge's `--out` and `--report`, and nothing else changed.
+#[test]
+fn one_task_per_model_is_the_part_tasks_folded() {
+    let (make, slurm) = (tiny_graph_split(PartTasks::OnePerModel, &[]), tiny_graph());
+    let run_args = |t: &plan::task::Task| match &t.steps[..] {
+        [plan::task::Step::Run { args, .. }] => args.clone(),
+        _ => panic!("{}: not one stage run", t.target),
+    };
+    let piece = |t: &plan::task::Task| t.target.ends_with(".piece");
+    assert!(make.tasks.iter().all(|t| !piece(t) && !t.kind.starts_with("merge-")), "make's graph has part tasks");
+    let folded: Vec<&plan::task::Task> = slurm.tasks.iter().filter(|t| !piece(t)).collect();
+    assert_eq!(make.tasks.len(), folded.len());
+    let mut merges = 0;
+    for (m, s) in make.tasks.iter().zip(folded) {
+        assert_eq!(m.target, s.target);
+        let Some(stage) = s.kind.strip_prefix("merge-") else {
+            assert_eq!(m, s);
+            continue;
+        };
+        merges += 1;
+        assert_eq!(m.kind, stage);
+        // The first piece's task, without `--part NAME` and with the merge's outputs.
+        let first = slurm.producer(&s.inputs[0]).unwrap();
+        let (piece_args, merge_args) = (run_args(first), run_args(s));
+        let after = |a: &[String], flag: &str| a.iter().position(|x| x == flag).map(|k| a[k + 1].clone());
+        let mut want: Vec<String> = Vec::new();
+        let mut k = 0;
+        while k < piece_args.len() {
+            match piece_args[k].as_str() {
+                "--part" => k += 2,
+                "--out" => {
+                    want.extend(["--out".into(), m.target.clone()]);
+                    k += 2;
+                }
+                "--report" => {
+                    want.extend(["--report".into(), after(&merge_args, "--report").unwrap()]);
+                    k += 2;
+                }
+                _ => {
+                    want.push(piece_args[k].clone());
+                    k += 1;
+                }
+            }
+        }
+        assert_eq!(run_args(m), want, "{}", m.target);
+        assert_eq!((&m.inputs, &m.dirs), (&first.inputs, &s.dirs), "{}", m.target);
+    }
+    assert_eq!(merges, 2 + 12 + 2, "pca-fit, gpr-train and gpdm-train models");
 }
 
 /// The models of several parts are fitted part by part: every part model (`pca.model`), every
