@@ -51,6 +51,20 @@ fn make_fragment_of_the_tiny_set() {
     check("tiny-set.plan.mk", &std::fs::read_to_string(&frag).unwrap());
 }
 
+/// `plan make --part-tasks` writes Slurm's split for make: a `--part` task per part and the merges.
+#[test]
+fn make_fragment_with_part_tasks_has_the_pieces_and_merges() {
+    let dir = tempfile::tempdir().unwrap();
+    let frag = dir.path().join("plan.mk");
+    plan(&["make", "--part-tasks", "--set", "fixtures/tiny-set", "--pipeline-out", "out", "--out", frag.to_str().unwrap()]);
+    let text = std::fs::read_to_string(&frag).unwrap();
+    let slurm_tasks = tiny_graph().tasks.len();
+    assert!(text.contains(&format!("--of 1/{slurm_tasks} ")), "not the Slurm graph's {slurm_tasks} tasks");
+    for want in ["out/work/variation/locomotion.parts/torso.piece:", "--part torso", "$(BIN)/merge-parts -q out/work/A/pca.parts/"] {
+        assert!(text.contains(want), "no `{want}` in the fragment");
+    }
+}
+
 #[test]
 fn slurm_arrays_of_the_tiny_set() {
     let dir = tempfile::tempdir().unwrap();
