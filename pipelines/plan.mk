@@ -21,15 +21,20 @@ PLAN_ARGS := --set $(SET) --pipeline-out $(OUT) \
   --variation-seed $(VARIATION_SEED) --variation-variance-scale $(VARIATION_VARIANCE_SCALE) \
   --variation-train-flags '$(VARIATION_TRAIN_FLAGS)' --variation-sample-flags '$(VARIATION_SAMPLE_FLAGS)'
 
+# PART_TASKS=1: make runs Slurm's split (one task per part of each model of several parts and
+# their merges; scripts/slurm-measure) instead of one task per model.
+PART_TASKS ?=
+MAKE_PLAN_ARGS := $(PLAN_ARGS) $(if $(PART_TASKS),--part-tasks)
+
 ifneq ($(filter $(PLAN_GOALS),$(MAKECMDGOALS)),)
-ifneq ($(file <$(PLAN_OPTIONS)),$(strip $(PLAN_ARGS)))
+ifneq ($(file <$(PLAN_OPTIONS)),$(strip $(MAKE_PLAN_ARGS)))
 $(shell mkdir -p $(dir $(PLAN_OPTIONS)))
-$(file >$(PLAN_OPTIONS),$(strip $(PLAN_ARGS)))
+$(file >$(PLAN_OPTIONS),$(strip $(MAKE_PLAN_ARGS)))
 endif
 
 $(PLAN_MK): $(PLAN_OPTIONS) $(BIN)/plan $(BIN)/check-set $(SET)/set.json $(wildcard $(SET)/* $(SET)/*/* $(SET)/truth/*)
 	@$(BIN)/check-set -q $(SET)
-	$(BIN)/plan make -q $(PLAN_ARGS) --out $@
+	$(BIN)/plan make -q $(MAKE_PLAN_ARGS) --out $@
 
 include $(PLAN_MK)
 endif
