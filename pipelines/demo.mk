@@ -4,13 +4,15 @@
 #   pipelines on it; each ends with the HTML report out/index.html (transfer last, so its 3D view
 #   shows source / transfer / truth; the page lists the variation results too).
 # `make demo-data` / `make demo-render` stop earlier. `make holdout-data` builds the second
-# benchmark set (out/holdout/set: other bodies, styles, rates and test clips; nothing is tuned on it).
+# benchmark set (out/holdout/set: other bodies, styles, rates and test clips; nothing is tuned on it);
+# `make outside-data` a third (out/outside/set), measured with the defaults and never tuned on.
 DEMO := $(OUT)/demo
 DEMO_SET := $(DEMO)/set
 SEED ?= 0
 
-.PHONY: demo demo-data demo-render holdout-data
+.PHONY: demo demo-data demo-render holdout-data outside-data
 HOLDOUT_SET := $(OUT)/holdout/set
+OUTSIDE_SET := $(OUT)/outside/set
 
 demo: demo-render
 	@$(MAKE) --no-print-directory variation SET=$(DEMO_SET) OUT=$(OUT)
@@ -30,3 +32,8 @@ holdout-data: $(HOLDOUT_SET)/set.json
 
 $(HOLDOUT_SET)/set.json: | build assets
 	$(BIN)/synth -q --preset holdout --seed $(SEED) --out $(HOLDOUT_SET)
+
+outside-data: $(OUTSIDE_SET)/set.json
+
+$(OUTSIDE_SET)/set.json: | build assets
+	$(BIN)/synth -q --preset outside --seed $(SEED) --out $(OUTSIDE_SET)

@@ -1,11 +1,13 @@
 //! The presets: `tiny` (decimated topologies: A `notoes_collapse10pc`, 1,229 vertices; B
 //! `notoes_collapse5pc` subdivided once, 2,454 vertices; ~1.2 s clips; builds in seconds, for
-//! tests), `default` (full body and `notoes` topologies, 25 and 50 fps: the demo set) and
+//! tests), `default` (full body and `notoes` topologies, 25 and 50 fps: the demo set),
 //! `holdout` (two other bodies, styles, topologies and frame rates, the demo's training
 //! motions and test motions from clips the demo never uses: the second benchmark, on which
-//! nothing is tuned) and `long` (the tiny preset's bodies and frame rates with every training
-//! motion looped to two minutes: ~15,000 dense training pairs, the size of a lab's five minutes
-//! at 50 fps, for the sparse GP's benchmark on real pairs; docs/PERFORMANCE.md).
+//! nothing is tuned), `outside` (a third pair of bodies, styles and frame rates, and test
+//! clips neither of the two uses: measured with the defaults, never tuned on) and `long` (the
+//! tiny preset's bodies and frame rates with every training motion looped to two minutes:
+//! ~15,000 dense training pairs, the size of a lab's five minutes at 50 fps, for the sparse
+//! GP's benchmark on real pairs; docs/PERFORMANCE.md).
 
 use crate::noise::NoiseLevel;
 use crate::style::{Style, TimeWarp};
@@ -156,6 +158,69 @@ pub fn subject_d() -> SubjectDef {
     }
 }
 
+/// Outside subject E: 1.75 m heavy old man, small stiff arm swing, bent knees, slow cadence;
+/// `notoes_collapse5pc` subdivided once (2,454 vertices), 30 fps.
+pub fn subject_e() -> SubjectDef {
+    SubjectDef {
+        name: "E".into(),
+        description: "1.75 m heavy old man (MakeHuman caucasian-male-old + 0.6 averagemuscle-maxweight)".into(),
+        targets: vec![
+            ("macrodetails/caucasian-male-old".into(), 1.0),
+            ("macrodetails/universal-male-old-averagemuscle-maxweight".into(), 0.6),
+        ],
+        topology: Topology::ObjSubdivided("notoes_collapse5pc.obj".into()),
+        fps: 30.0,
+        style: Style {
+            arm_gain: 0.6,
+            arm_max: 1.0,
+            arm_abduction: 6f64.to_radians(),
+            elbow_gain: 1.1,
+            knee_k: 0.3,
+            hip_abduction: 2f64.to_radians(),
+            lean_per_speed: 0.05,
+            warp: TimeWarp { rate: 0.8, amp: 0.04, period: 1.5, phase: 0.4 },
+        },
+    }
+}
+
+/// Outside subject F: 1.7 m athletic young African woman, wide quick arm swing, straight
+/// legs; the `notoes` body (12,272 vertices), 25 fps.
+pub fn subject_f() -> SubjectDef {
+    SubjectDef {
+        name: "F".into(),
+        description: "1.7 m athletic young woman (MakeHuman african-female-young + 0.6 maxmuscle-minweight)".into(),
+        targets: vec![
+            ("macrodetails/african-female-young".into(), 1.0),
+            ("macrodetails/universal-female-young-maxmuscle-minweight".into(), 0.6),
+        ],
+        topology: Topology::Obj("notoes.obj".into()),
+        fps: 25.0,
+        style: Style {
+            arm_gain: 1.2,
+            arm_max: 1.8,
+            arm_abduction: 8f64.to_radians(),
+            elbow_gain: 0.9,
+            knee_k: 0.1,
+            hip_abduction: 0.0,
+            lean_per_speed: 0.03,
+            warp: TimeWarp { rate: 1.05, amp: 0.02, period: 1.3, phase: 1.7 },
+        },
+    }
+}
+
+/// Test motions of the outside set: clips neither the demo nor the holdout set uses.
+fn outside_tests() -> (Vec<MotionDef>, Vec<MotionDef>) {
+    let test = vec![
+        dm("getup_facedown", "getup_facedown", 1),
+        dm("roll", "roll", 1),
+        MotionDef {
+            name: "cmu_playground".into(),
+            source: MotionSource::Cmu { t0: 12.0, t1: 15.0 },
+        },
+    ];
+    (test, vec![dm("crawl", "crawl", 1)])
+}
+
 /// Test motions of the holdout set: clips the demo set never uses.
 fn holdout_tests() -> (Vec<MotionDef>, Vec<MotionDef>) {
     let test = vec![
@@ -198,7 +263,7 @@ pub fn default_noise() -> NoiseLevel {
 }
 
 /// The preset names [`preset`] knows.
-pub const PRESETS: [&str; 4] = ["default", "tiny", "holdout", "long"];
+pub const PRESETS: [&str; 5] = ["default", "tiny", "holdout", "outside", "long"];
 
 /// A preset, as the command line names it (one of [`PRESETS`]).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, clap::ValueEnum, serde::Serialize)]
@@ -211,6 +276,8 @@ pub enum Preset {
     Tiny,
     /// Other bodies, styles, rates and test clips: the second benchmark.
     Holdout,
+    /// Third bodies, styles, rates and test clips, measured and never tuned on.
+    Outside,
     /// The tiny bodies with two-minute training motions (~15,000 pairs): the sparse GP's benchmark.
     Long,
 }
@@ -222,6 +289,7 @@ impl Preset {
             Preset::Default => "default",
             Preset::Tiny => "tiny",
             Preset::Holdout => "holdout",
+            Preset::Outside => "outside",
             Preset::Long => "long",
         }
     }
@@ -274,6 +342,21 @@ pub fn preset(name: &str, seed: u64, noise: bool) -> Option<Config> {
                 keyposes: 5,
             })
         }
+        "outside" => {
+            let (test, target_test) = outside_tests();
+            Some(Config {
+                preset: name.into(),
+                seed,
+                noise,
+                source: subject_e(),
+                target: subject_f(),
+                train,
+                test,
+                target_test,
+                max_duration: 3.0,
+                keyposes: 5,
+            })
+        }
         "long" => Some(Config {
             preset: name.into(),
             seed,
@@ -311,4 +394,52 @@ fn long_motions(train: &[MotionDef]) -> Vec<MotionDef> {
             MotionSource::Cmu { .. } => m.clone(),
         })
         .collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use clap::ValueEnum;
+
+    fn clip(m: &MotionDef) -> String {
+        match &m.source {
+            MotionSource::DeepMimic { file, .. } => file.clone(),
+            MotionSource::Cmu { t0, t1 } => format!("cmu {t0}-{t1}"),
+        }
+    }
+
+    /// Every name of [`PRESETS`] is a preset of the command line and builds a configuration.
+    #[test]
+    fn every_preset_name_is_on_the_command_line_and_builds() {
+        let names: Vec<&str> = Preset::value_variants().iter().map(|p| p.name()).collect();
+        assert_eq!(names.len(), PRESETS.len());
+        for name in PRESETS {
+            assert!(names.contains(&name), "{name}: not a command-line preset");
+            assert_eq!(preset(name, 0, true).map(|c| c.preset), Some(name.to_string()));
+        }
+        assert!(preset("nope", 0, true).is_none());
+    }
+
+    /// The benchmark sets share the training clips and nothing else: no test clip of one is a
+    /// test or training clip of another, and their four bodies are different subjects.
+    #[test]
+    fn benchmark_sets_test_on_clips_no_other_set_uses() {
+        let sets: Vec<Config> = ["default", "holdout", "outside"].iter().map(|n| preset(n, 0, true).unwrap()).collect();
+        let train: Vec<String> = sets[0].train.iter().map(clip).collect();
+        for (i, a) in sets.iter().enumerate() {
+            assert_eq!(a.train.iter().map(clip).collect::<Vec<_>>(), train, "{}: other training clips", a.preset);
+            let tests: Vec<String> = a.test.iter().chain(&a.target_test).map(clip).collect();
+            for t in &tests {
+                assert!(!train.contains(t), "{}: {t} is a training clip", a.preset);
+                for b in sets.iter().skip(i + 1) {
+                    let other: Vec<String> = b.test.iter().chain(&b.target_test).map(clip).collect();
+                    assert!(!other.contains(t), "{t}: a test clip of both {} and {}", a.preset, b.preset);
+                }
+            }
+        }
+        let mut bodies: Vec<String> = sets.iter().flat_map(|c| [c.source.description.clone(), c.target.description.clone()]).collect();
+        bodies.sort();
+        bodies.dedup();
+        assert_eq!(bodies.len(), 6);
+    }
 }

@@ -22,7 +22,8 @@ pub struct Params {
     #[serde(skip)]
     pub common: CommonArgs,
     /// Preset: `default` (demo set: full body 25 fps + notoes body 50 fps), `tiny` (coarse, for
-    /// tests) or `holdout` (other bodies, styles, rates and test clips: the second benchmark)
+    /// tests), `holdout` (other bodies, styles, rates and test clips: the second benchmark),
+    /// `outside` (a third such set, never tuned on) or `long` (two-minute training motions)
     #[arg(long, value_enum, default_value_t = Preset::Default)]
     pub preset: Preset,
     /// No capture-like noise on the input sequences (truth is always clean)

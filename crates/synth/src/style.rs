@@ -195,6 +195,10 @@ mod tests {
         for s in [
             crate::preset::subject_a(crate::subject::Topology::Body, 25.0),
             crate::preset::subject_b(crate::subject::Topology::Body, 50.0),
+            crate::preset::subject_c(),
+            crate::preset::subject_d(),
+            crate::preset::subject_e(),
+            crate::preset::subject_f(),
         ] {
             let w = s.style.warp;
             assert!(w.min_slope() > 0.0);
