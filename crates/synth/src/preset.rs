@@ -158,12 +158,12 @@ pub fn subject_d() -> SubjectDef {
     }
 }
 
-/// Outside subject E: 1.75 m heavy old man, small stiff arm swing, bent knees, slow cadence;
+/// Outside subject E: 1.71 m heavy old man, small stiff arm swing, bent knees, slow cadence;
 /// `notoes_collapse5pc` subdivided once (2,454 vertices), 30 fps.
 pub fn subject_e() -> SubjectDef {
     SubjectDef {
         name: "E".into(),
-        description: "1.75 m heavy old man (MakeHuman caucasian-male-old + 0.6 averagemuscle-maxweight)".into(),
+        description: "1.71 m heavy old man (MakeHuman caucasian-male-old + 0.6 averagemuscle-maxweight)".into(),
         targets: vec![
             ("macrodetails/caucasian-male-old".into(), 1.0),
             ("macrodetails/universal-male-old-averagemuscle-maxweight".into(), 0.6),
@@ -183,12 +183,12 @@ pub fn subject_e() -> SubjectDef {
     }
 }
 
-/// Outside subject F: 1.7 m athletic young African woman, wide quick arm swing, straight
+/// Outside subject F: 1.67 m athletic young African woman, wide quick arm swing, straight
 /// legs; the `notoes` body (12,272 vertices), 25 fps.
 pub fn subject_f() -> SubjectDef {
     SubjectDef {
         name: "F".into(),
-        description: "1.7 m athletic young woman (MakeHuman african-female-young + 0.6 maxmuscle-minweight)".into(),
+        description: "1.67 m athletic young woman (MakeHuman african-female-young + 0.6 maxmuscle-minweight)".into(),
         targets: vec![
             ("macrodetails/african-female-young".into(), 1.0),
             ("macrodetails/universal-female-young-maxmuscle-minweight".into(), 0.6),
