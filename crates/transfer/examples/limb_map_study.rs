@@ -5,7 +5,12 @@
 //! cargo run --release --example limb_map_study -- WORK SET SOURCE TARGET MOTION... -- TRAIN...
 //! e.g. `limb_map_study out/demo-run/work out/demo/set A B punch spinkick cmu_jump -- walk run jump kick dance`
 //! (after `make transfer`; the pairs are read in the set's order, reversed when SOURCE is the set's target).
-//! With `ONLY_ALL=1` in the environment only the default and the all-limbs rows run.
+//! With `ONLY_ALL=1` in the environment only the default and the all-limbs rows run; with
+//! `SWEEP=1` the ridge and weight sweep of the log-rotation map, measured from the PCA mean,
+//! from a canonical pose, with second-order terms and in the attachment's frame (`Chest`, the
+//! share of root vertices `CHEST_SHARE`, default 0.2; only on parts whose name holds
+//! `CHEST_PARTS`; the target's attachment from its pose GP, or with `CHEST_TARGET=source` the
+//! source's, `mid` half way). `TRUE_PAIRS=1` trains on the set's true correspondences.
 
 #[path = "common/study_pairs.rs"]
 mod study_pairs;
@@ -29,6 +34,15 @@ enum Space {
     /// An affine map from every source limb's log-rotation (the limb's own shrunk toward the
     /// identity, the others toward zero) to the target limb's.
     AllLimbs,
+    /// The affine map of log-rotations measured from a canonical pose of each body's limb: its
+    /// mean shape turned by the shortest arc that points its axis straight down (-y).
+    Canonical,
+    /// Log-rotations with their second-order terms as the map's inputs (shrunk toward the
+    /// identity on the linear terms, toward zero on the others).
+    Quadratic,
+    /// The affine map of log-rotations relative to the torso's region next to the limb's joint
+    /// (the chest for an arm, the pelvis for a leg), the target's region as its pose GP predicts it.
+    Chest,
 }
 
 #[derive(Clone, Copy, Debug)]
@@ -82,8 +96,9 @@ fn axis(limb: &Limb, mean: &[Vector3<f64>]) -> Vector3<f64> {
 /// The feature of one frame's limb in `space`.
 fn feature(space: Space, r: &Rotation3<f64>, a: &Vector3<f64>) -> Vector3<f64> {
     match space {
-        Space::LogRotation | Space::LogRotationGp | Space::AllLimbs => so3_log(r),
+        Space::LogRotation | Space::LogRotationGp | Space::AllLimbs | Space::Quadratic | Space::Chest => so3_log(r),
         Space::Axis => r * a,
+        Space::Canonical => so3_log(&(r * canonical(a).inverse())),
     }
 }
 
@@ -98,6 +113,11 @@ fn features(pca: &PcaModel, limb: &Limb, coeffs: &DMatrix<f64>, space: Space) ->
             feature(space, &orientation(&mean, &points(&row), &limb.proximal), &a)
         })
         .collect()
+}
+
+/// The turn of a limb's mean shape, of axis `a`, to its canonical pose (axis straight down).
+fn canonical(a: &Vector3<f64>) -> Rotation3<f64> {
+    arc(a, &-Vector3::y())
 }
 
 /// The rotation taking unit `from` to unit `to` by the shortest arc.
@@ -125,6 +145,28 @@ fn fit_wide(x: &DMatrix<f64>, y: &DMatrix<f64>, w0: &DMatrix<f64>, ridge: f64) -
     lhs.cholesky().expect("positive definite").solve(&rhs)
 }
 
+/// The share of the root part's vertices nearest `joint` (root-frame point) in its mean shape.
+fn near_root(pca: &PcaModel, joint: &Vector3<f64>, share: f64) -> Vec<usize> {
+    let mean = reference(pca, 0);
+    let mut d: Vec<(f64, usize)> = mean.iter().enumerate().map(|(i, p)| ((p - joint).norm(), i)).collect();
+    d.sort_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
+    let mut keep: Vec<usize> = d.iter().take(((mean.len() as f64) * share).ceil() as usize).map(|x| x.1).collect();
+    keep.sort_unstable();
+    keep
+}
+
+/// The orientation of the root part's `near` vertices in each decoded frame of `coeffs`.
+fn root_orientations(pca: &PcaModel, near: &[usize], coeffs: &DMatrix<f64>) -> Vec<Rotation3<f64>> {
+    let rows = pca.parts[0].pca.decode(coeffs).unwrap();
+    let mean = reference(pca, 0);
+    (0..rows.nrows()).map(|r| orientation(&mean, &points(&rows.row(r).iter().copied().collect::<Vec<_>>()), near)).collect()
+}
+
+fn root_orientations_of(pca: &PcaModel, near: &[usize], frames: &[Vec<Vector3<f64>>]) -> Vec<Rotation3<f64>> {
+    let mean = reference(pca, 0);
+    frames.iter().map(|f| orientation(&mean, f, near)).collect()
+}
+
 fn main() -> anyhow::Result<()> {
     let study = study_pairs::Study::from_args()?;
     let study_pairs::Study { work, set, s, t, tests, train, spca, tpca, model, template } = &study;
@@ -146,6 +188,16 @@ fn main() -> anyhow::Result<()> {
     for ridge in [0.1, 0.01] {
         for weight in [0.5, 1.0] {
             variants.push(Variant { space: Space::AllLimbs, proximal: Proximal::Count(0.5), ridge, weight });
+        }
+    }
+    if std::env::var("SWEEP").is_ok() {
+        variants.clear();
+        for space in [Space::LogRotation, Space::Canonical, Space::Quadratic, Space::Chest] {
+            for ridge in [0.1, 0.01, 0.001] {
+                for weight in [0.5, 0.75, 1.0] {
+                    variants.push(Variant { space, proximal: Proximal::Count(0.5), ridge, weight });
+                }
+            }
         }
     }
     if std::env::var("ONLY_ALL").is_ok() {
@@ -174,6 +226,66 @@ fn main() -> anyhow::Result<()> {
                 let xf = features(&spca, &sl, &rows.x_parts[k], v.space);
                 let yf = features(&tpca, &tl, &rows.y_parts[k], v.space);
                 let map = LimbMap::fit(&xf, &yf, v.ridge)?;
+                let chest_here = std::env::var("CHEST_PARTS").map_or(true, |f| tpca.parts[k].name.contains(f.as_str()));
+                if matches!(v.space, Space::Chest) && chest_here {
+                    let share: f64 = std::env::var("CHEST_SHARE").ok().and_then(|x| x.parse().ok()).unwrap_or(0.2);
+                    let joint_s = centroid(sl.joint.iter().map(|&i| smean[i]));
+                    let joint_t = centroid(tl.joint.iter().map(|&i| tmean[i]));
+                    let (ns, nt) = (near_root(&spca, &joint_s, share), near_root(&tpca, &joint_t, share));
+                    let rel = |roots: &[Rotation3<f64>], f: &[Vector3<f64>]| -> Vec<Vector3<f64>> {
+                        roots.iter().zip(f).map(|(c, x)| so3_log(&(c.inverse() * so3_exp(x)))).collect()
+                    };
+                    let xr = rel(&root_orientations(&spca, &ns, &rows.x_parts[0]), &xf);
+                    let yr = rel(&root_orientations(&tpca, &nt, &rows.y_parts[0]), &yf);
+                    let map = LimbMap::fit(&xr, &yr, v.ridge)?;
+                    let src = features(&spca, &sl, &xs[k], v.space);
+                    let chest_s = root_orientations(&spca, &ns, &xs[0]);
+                    let src = rel(&chest_s, &src);
+                    let chest_t = match std::env::var("CHEST_TARGET").as_deref() {
+                        Ok("source") => chest_s.clone(),
+                        Ok("mid") => root_orientations_of(&tpca, &nt, &gp[0]).iter().zip(&chest_s).map(|(g, c)| g * so3_exp(&(0.5 * so3_log(&(g.inverse() * c))))).collect(),
+                        _ => root_orientations_of(&tpca, &nt, &gp[0]),
+                    };
+                    for (fi, frame) in turned[k].iter_mut().enumerate() {
+                        let now = orientation(&tmean, frame, &tl.proximal);
+                        let mapped = chest_t[fi] * so3_exp(&map.apply(&src[fi]));
+                        let want = now * so3_exp(&(v.weight * so3_log(&(now.inverse() * mapped))));
+                        turn_to(frame, &tl, &now, &want);
+                    }
+                    continue;
+                }
+                if let Space::Quadratic = v.space {
+                    let quad = |f: &[Vector3<f64>]| {
+                        DMatrix::from_fn(f.len(), 9, |r, c| {
+                            let x = f[r];
+                            match c {
+                                0..=2 => x[c],
+                                3 => x.x * x.x,
+                                4 => x.y * x.y,
+                                5 => x.z * x.z,
+                                6 => x.x * x.y,
+                                7 => x.x * x.z,
+                                _ => x.y * x.z,
+                            }
+                        })
+                    };
+                    let mut w0 = DMatrix::zeros(10, 3);
+                    for i in 0..3 {
+                        w0[(i, i)] = 1.0;
+                    }
+                    let w = fit_wide(&quad(&xf), &DMatrix::from_fn(yf.len(), 3, |r, c| yf[r][c]), &w0, v.ridge);
+                    let src = features(&spca, &sl, &xs[k], v.space);
+                    let xt = quad(&src);
+                    let xt1 = DMatrix::from_fn(xt.nrows(), 10, |r, c| if c < 9 { xt[(r, c)] } else { 1.0 });
+                    let pred = xt1 * w;
+                    for (fi, frame) in turned[k].iter_mut().enumerate() {
+                        let now = orientation(&tmean, frame, &tl.proximal);
+                        let mapped = so3_exp(&Vector3::new(pred[(fi, 0)], pred[(fi, 1)], pred[(fi, 2)]));
+                        let want = now * so3_exp(&(v.weight * so3_log(&(now.inverse() * mapped))));
+                        turn_to(frame, &tl, &now, &want);
+                    }
+                    continue;
+                }
                 if let Space::AllLimbs = v.space {
                     // Inputs: every source limb's log-rotation, training rows and this motion's.
                     let wide = |coeffs: &dyn Fn(usize) -> DMatrix<f64>| -> DMatrix<f64> {
@@ -229,7 +341,11 @@ fn main() -> anyhow::Result<()> {
                 for (fi, (frame, x)) in turned[k].iter_mut().zip(&src).enumerate() {
                     let now = orientation(&tmean, frame, &tl.proximal);
                     let want = match v.space {
-                        Space::LogRotation | Space::LogRotationGp | Space::AllLimbs => {
+                        Space::Canonical => {
+                            let mapped = so3_exp(&map.apply(x)) * canonical(&ta);
+                            now * so3_exp(&(v.weight * so3_log(&(now.inverse() * mapped))))
+                        }
+                        Space::LogRotation | Space::LogRotationGp | Space::AllLimbs | Space::Quadratic | Space::Chest => {
                             let extra = src_resid.as_ref().map_or(Vector3::zeros(), |r| Vector3::new(r[(fi, 0)], r[(fi, 1)], r[(fi, 2)]));
                             let mapped = so3_exp(&(map.apply(x) + extra));
                             now * so3_exp(&(v.weight * so3_log(&(now.inverse() * mapped))))
@@ -253,7 +369,7 @@ fn main() -> anyhow::Result<()> {
     }
     print!("pooled: GP {:.3}", 100.0 * (totals[0].0 / totals[0].1 as f64).sqrt());
     for (vi, v) in variants.iter().enumerate() {
-        print!(" | {:?} {:?} w{} {:.3}", v.space, v.proximal, v.weight, 100.0 * (totals[vi + 1].0 / totals[vi + 1].1 as f64).sqrt());
+        print!(" | {:?} {:?} r{} w{} {:.3}", v.space, v.proximal, v.ridge, v.weight, 100.0 * (totals[vi + 1].0 / totals[vi + 1].1 as f64).sqrt());
     }
     println!();
     Ok(())

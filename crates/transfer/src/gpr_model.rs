@@ -40,7 +40,7 @@ use capture::align::{AlignedMotion, CaptureInfo};
 use capture::motion_stream::read_frames;
 use capture::part_pca::FrameEncoder;
 use crate::densify::Correspondences;
-use crate::limb_orientation::{self, LimbMap, LimbOrientation};
+use crate::limb_orientation::{self, LimbFrame, LimbMap, LimbOrientation};
 use capture::part_pca::PcaModel;
 use nalgebra::{DMatrix, Vector6};
 use serde::{Deserialize, Serialize};
@@ -290,7 +290,7 @@ impl Templates {
 
 impl Artifact for GprModel {
     const KIND: &'static str = "gpr-model";
-    const VERSION: u32 = 5;
+    const VERSION: u32 = 6;
 
     /// One regressor per part name, each internally consistent (GP weights, inducing inputs,
     /// affine mean and key-poses agree in dimensions; finite positive kernel parameters), a
@@ -736,18 +736,28 @@ pub fn train_rows(regression: &Regression, part_names: &[String], rows: &Trainin
     })
 }
 
+/// How `gpr-train` fits the limb orientation (`crate::limb_orientation`).
+#[derive(Clone, Copy, Debug)]
+pub struct OrientationOptions<'a> {
+    /// The geodesic share of the turn toward the map's orientation (0: none).
+    pub weight: f64,
+    /// The limbs measured in their attachment's frame (names the models lack are ignored).
+    pub attached: &'a [String],
+}
+
 /// The limb orientation of a model of `method` trained on `rows`, fitted on the rows its pose
-/// regressions learn from (`crate::limb_orientation`); `None` when `weight` is 0. With `only`,
-/// the map of that part alone (the others `None`: [`train_piece`]'s).
+/// regressions learn from (`crate::limb_orientation`); `None` when the weight is 0. With
+/// `only`, the map of that part alone (the others `None`: [`train_piece`]'s).
 pub fn train_orientation(
     method: Method,
     part_names: &[String],
     sets: &TrainingRows,
     source: &PcaModel,
     target: &PcaModel,
-    weight: f64,
+    options: &OrientationOptions,
     only: Option<usize>,
 ) -> Result<Option<LimbOrientation>> {
+    let weight = options.weight;
     if !(0.0..=1.0).contains(&weight) {
         return Err(Error::invalid(format!("orientation weight must be in [0, 1], got {weight}")));
     }
@@ -759,7 +769,14 @@ pub fn train_orientation(
     let maps = (0..part_names.len())
         .map(|k| match only {
             Some(u) if u != k => Ok(None),
-            _ => limb_orientation::fit_part(source, target, k, &rows.x_parts[k], &rows.y_parts[k]),
+            _ => {
+                let frame = if options.attached.contains(&part_names[k]) {
+                    LimbFrame::Attachment { share: limb_orientation::ATTACHMENT_SHARE }
+                } else {
+                    LimbFrame::Root
+                };
+                limb_orientation::fit_part(source, target, k, frame, &rows.x_parts, &rows.y_parts)
+            }
         })
         .collect::<Result<_>>()?;
     Ok(Some(LimbOrientation { weight, maps }))
@@ -875,8 +892,8 @@ impl Partitioned for GprModel {
         if !(0.0..=1.0).contains(&body.orientation_weight) {
             return Err(format!("limb orientation weight {} is not in [0, 1]", body.orientation_weight));
         }
-        if body.orientation.iter().any(|m| m.w.iter().flatten().any(|x| !x.is_finite())) {
-            return Err("the limb orientation map holds a non-finite number".into());
+        if let Some(m) = &body.orientation {
+            m.validate()?;
         }
         Ok(())
     }
@@ -1110,7 +1127,7 @@ mod tests {
                 "limb orientation weight 1.5",
             ),
             (
-                GprModel { orientation: Some(LimbOrientation { weight: 0.5, maps: vec![Some(LimbMap { w: [[f64::NAN; 3]; 4] })] }), ..model.clone() },
+                GprModel { orientation: Some(LimbOrientation { weight: 0.5, maps: vec![Some(LimbMap { w: [[f64::NAN; 3]; 4], frame: LimbFrame::Root })] }), ..model.clone() },
                 "non-finite",
             ),
         ];

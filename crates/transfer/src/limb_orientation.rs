@@ -1,6 +1,6 @@
-//! Limb orientation: how each limb is turned relative to the root part, mapped from the source
-//! on its own and fused with the orientation the pose GP predicts (a departure from CVPR §5:
-//! docs/DEVIATIONS.md; measured in docs/RESULTS.md, study 6).
+//! Limb orientation: how each limb is turned relative to the body it hangs from, mapped from
+//! the source on its own and fused with the orientation the pose GP predicts (a departure from
+//! CVPR §5: docs/DEVIATIONS.md; measured in docs/RESULTS.md, study 6).
 //!
 //! The pose GPs map a part's PCA coefficients, which are linear in vertex positions: a limb
 //! turned further than any training pose is extrapolated along straight lines, and its
@@ -10,12 +10,19 @@
 //! * its **orientation** in a frame is the Procrustes rotation of the limb's *proximal half*
 //!   (the half of its vertices nearest the band it shares with the parts placed before it,
 //!   `capture::assemble::plan`, i.e. its joint) from the PCA mean shape onto the frame;
+//! * it is measured in the limb's [`LimbFrame`]: the root part's frame (every part's PCA
+//!   frame), or the frame of its **attachment**, the root part's vertices nearest its joint
+//!   (an arm's shoulder girdle), whose own orientation is measured likewise. An arm hangs from
+//!   the shoulder girdle, which turns against the rest of the torso as the spine bends and the
+//!   shoulders shrug; in the attachment's frame the arm's turn is the shoulder joint's alone;
 //! * an affine map of log-rotations, `log R_t = [log R_s, 1] W` (`3 -> 3`), is fitted on the
 //!   training pairs by ridge least squares shrunk toward the identity map
 //!   (`W = (X₁ᵀX₁ + λI) \ (X₁ᵀY + λ W₀)`, `W₀ = [I; 0]`, `λ` = [`RIDGE`] × the mean diagonal);
-//! * at prediction the limb is turned about its joint from the GP's orientation `R_gp` to
-//!   `R_gp · exp(w · log(R_gpᵀ R_map))`: the geodesic point `w` ([`WEIGHT`]) of the way to the
-//!   map's orientation. `w = 0` is the paper's model (nothing is turned).
+//! * at prediction the map's orientation is `A_t · exp(map(log(A_s⁻¹ R_s)))`, `A` the
+//!   attachment's orientation (the identity in the root frame; the target's is the one its
+//!   predicted root part has), and the limb is turned about its joint from the GP's orientation
+//!   `R_gp` to `R_gp · exp(w · log(R_gpᵀ R_map))`: the geodesic point `w` ([`WEIGHT`]) of the way
+//!   to the map's orientation. `w = 0` is the paper's model (nothing is turned).
 //!
 //! Orientations on both sides are measured on PCA-decoded coefficients, at training and at
 //! prediction alike.
@@ -37,6 +44,18 @@ pub const RIDGE: f64 = 0.1;
 
 /// The share of a limb's vertices, nearest its joint, that its orientation is measured on.
 pub const PROXIMAL_SHARE: f64 = 0.5;
+
+/// The share of the root part's vertices, nearest a limb's joint, that make its attachment.
+pub const ATTACHMENT_SHARE: f64 = 0.2;
+
+/// The frame a limb's orientation is measured and mapped in (module documentation).
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+pub enum LimbFrame {
+    /// The root part's frame.
+    Root,
+    /// The frame of the `share` of the root part's vertices nearest the limb's joint.
+    Attachment { share: f64 },
+}
 
 /// A limb of a PCA model: its part index, the part-local vertices of its joint band and of
 /// its proximal half.
@@ -92,11 +111,13 @@ pub fn orientation(reference: &[Vector3<f64>], frame: &[Vector3<f64>], subset: &
     procrustes(&a, &b, None).rotation
 }
 
-/// One limb's map of log-rotations, `log R_t = W[0..3]ᵀ log R_s + W[3]`.
+/// One limb's map of log-rotations, `log R_t = W[0..3]ᵀ log R_s + W[3]`, both measured in
+/// `frame`.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct LimbMap {
     /// Rows: the coefficients of the source log-rotation's x, y, z, then the constant.
     pub w: [[f64; 3]; 4],
+    pub frame: LimbFrame,
 }
 
 impl LimbMap {
@@ -128,7 +149,20 @@ impl LimbMap {
             .cholesky()
             .ok_or_else(|| Error::invalid("limb orientation: the normal equations are not positive definite"))?
             .solve(&rhs);
-        Ok(LimbMap { w: std::array::from_fn(|r| std::array::from_fn(|c| w[(r, c)])) })
+        Ok(LimbMap { w: std::array::from_fn(|r| std::array::from_fn(|c| w[(r, c)])), frame: LimbFrame::Root })
+    }
+
+    /// Consistency of a map read from a file.
+    pub fn validate(&self) -> std::result::Result<(), String> {
+        if self.w.iter().flatten().any(|x| !x.is_finite()) {
+            return Err("a limb orientation map holds a non-finite number".into());
+        }
+        if let LimbFrame::Attachment { share } = self.frame {
+            if !(share > 0.0 && share <= 1.0) {
+                return Err(format!("limb attachment share {share} is not in (0, 1]"));
+            }
+        }
+        Ok(())
     }
 
     /// The mapped log-rotation of `x`.
@@ -156,15 +190,12 @@ impl LimbOrientation {
         if self.maps.len() != n_parts {
             return Err(format!("{} limb orientation maps for {n_parts} parts", self.maps.len()));
         }
-        if self.maps.iter().flatten().any(|m| m.w.iter().flatten().any(|x| !x.is_finite())) {
-            return Err("a limb orientation map holds a non-finite number".into());
-        }
-        Ok(())
+        self.maps.iter().flatten().try_for_each(LimbMap::validate)
     }
 }
 
-/// The log-orientations of limb `limb` in the decoded coefficient rows `coeffs` of `part`.
-fn log_orientations(part: &PartPca, limb: &Limb, coeffs: &DMatrix<f64>) -> Result<Vec<Vector3<f64>>> {
+/// The orientations of the vertices `subset` of `part` in the decoded coefficient rows `coeffs`.
+fn orientations(part: &PartPca, subset: &[usize], coeffs: &DMatrix<f64>) -> Result<Vec<Rotation3<f64>>> {
     let mean = mean_shape(part);
     let mut out = Vec::with_capacity(coeffs.nrows());
     // Decoded a block of rows at a time: a training set's rows decoded whole would be the
@@ -176,10 +207,38 @@ fn log_orientations(part: &PartPca, limb: &Limb, coeffs: &DMatrix<f64>) -> Resul
             .map_err(|e| Error::invalid(format!("part '{}': {e}", part.name)))?;
         out.par_extend((0..rows.nrows()).into_par_iter().map(|r| {
             let row: Vec<f64> = rows.row(r).iter().copied().collect();
-            so3_log(&orientation(&mean, &points(&row), &limb.proximal))
+            orientation(&mean, &points(&row), subset)
         }));
     }
     Ok(out)
+}
+
+/// The root part's vertices (local indices) that make `limb`'s attachment: the `share` of them
+/// nearest the centroid of the limb's joint band, both in their mean shapes (ties by index).
+pub fn attachment(pca: &PcaModel, root: usize, limb: &Limb, share: f64) -> Vec<usize> {
+    let limb_mean = mean_shape(&pca.parts[limb.part]);
+    let joint = centroid(limb.joint.iter().map(|&i| &limb_mean[i]));
+    let root_mean = mean_shape(&pca.parts[root]);
+    let mut by_distance: Vec<(f64, usize)> = root_mean.iter().enumerate().map(|(i, p)| ((p - joint).norm(), i)).collect();
+    by_distance.sort_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
+    let keep = ((root_mean.len() as f64) * share).ceil().max(3.0) as usize;
+    let mut near: Vec<usize> = by_distance.iter().take(keep).map(|&(_, i)| i).collect();
+    near.sort_unstable();
+    near
+}
+
+/// The log-orientations of `limb` of `pca` in the coefficient rows `coeffs` (one matrix per
+/// part), measured in `frame`.
+fn log_orientations(pca: &PcaModel, limb: &Limb, frame: LimbFrame, coeffs: &[DMatrix<f64>]) -> Result<Vec<Vector3<f64>>> {
+    let turns = orientations(&pca.parts[limb.part], &limb.proximal, &coeffs[limb.part])?;
+    Ok(match frame {
+        LimbFrame::Root => turns.iter().map(so3_log).collect(),
+        LimbFrame::Attachment { share } => {
+            let root = plan(pca)?.steps[0].part;
+            let frames = orientations(&pca.parts[root], &attachment(pca, root, limb, share), &coeffs[root])?;
+            frames.iter().zip(&turns).map(|(a, r)| so3_log(&(a.inverse() * r))).collect()
+        }
+    })
 }
 
 /// The limb of part `k` in both models, or `None` when `k` is the root.
@@ -187,16 +246,17 @@ fn limb_pair<'a>(source: &'a [Limb], target: &'a [Limb], k: usize) -> Option<(&'
     Some((source.iter().find(|l| l.part == k)?, target.iter().find(|l| l.part == k)?))
 }
 
-/// The map of part `k` from the training rows `x` (source coefficients) and `y` (target
-/// coefficients) of that part; `None` for the root. The models' parts correspond by index.
-pub fn fit_part(source: &PcaModel, target: &PcaModel, k: usize, x: &DMatrix<f64>, y: &DMatrix<f64>) -> Result<Option<LimbMap>> {
+/// The map of part `k`, measured in `frame`, from the training rows `x` (source coefficients)
+/// and `y` (target coefficients), one matrix per part; `None` for the root. The models' parts
+/// correspond by index.
+pub fn fit_part(source: &PcaModel, target: &PcaModel, k: usize, frame: LimbFrame, x: &[DMatrix<f64>], y: &[DMatrix<f64>]) -> Result<Option<LimbMap>> {
     let (ls, lt) = (limbs(source)?, limbs(target)?);
     let Some((s, t)) = limb_pair(&ls, &lt, k) else {
         return Ok(None);
     };
-    let xs = log_orientations(&source.parts[k], s, x)?;
-    let ys = log_orientations(&target.parts[k], t, y)?;
-    LimbMap::fit(&xs, &ys, RIDGE).map(Some)
+    let xs = log_orientations(source, s, frame, x)?;
+    let ys = log_orientations(target, t, frame, y)?;
+    Ok(Some(LimbMap { frame, ..LimbMap::fit(&xs, &ys, RIDGE)? }))
 }
 
 /// Turns every limb of the decoded target parts (`decoded[part][frame]`, predicted from the
@@ -217,12 +277,13 @@ pub fn apply(
         )));
     }
     let (ls, lt) = (limbs(source)?, limbs(target)?);
+    let root = plan(target)?.steps[0].part;
     for (k, map) in model.maps.iter().enumerate() {
         let (Some(map), Some((s, t))) = (map, limb_pair(&ls, &lt, k)) else {
             continue;
         };
-        let sources = log_orientations(&source.parts[k], s, &source_coeffs[k])?;
-        if sources.len() != decoded[k].len() {
+        let sources = log_orientations(source, s, map.frame, source_coeffs)?;
+        if sources.len() != decoded[k].len() || decoded[root].len() != decoded[k].len() {
             return Err(Error::invalid(format!(
                 "part '{}': {} source frames for {} predicted",
                 target.parts[k].name,
@@ -230,10 +291,18 @@ pub fn apply(
                 decoded[k].len()
             )));
         }
+        // The target's attachment as its predicted root part has it (the root is never turned).
+        let attached: Vec<Rotation3<f64>> = match map.frame {
+            LimbFrame::Root => vec![Rotation3::identity(); sources.len()],
+            LimbFrame::Attachment { share } => {
+                let (root_mean, near) = (mean_shape(&target.parts[root]), attachment(target, root, t, share));
+                decoded[root].par_iter().map(|f| orientation(&root_mean, f, &near)).collect()
+            }
+        };
         let mean = mean_shape(&target.parts[k]);
-        decoded[k].par_iter_mut().zip(&sources).for_each(|(frame, x)| {
+        decoded[k].par_iter_mut().zip(&sources).zip(&attached).for_each(|((frame, x), a)| {
             let now = orientation(&mean, frame, &t.proximal);
-            let mapped = so3_exp(&map.apply(x));
+            let mapped = a * so3_exp(&map.apply(x));
             let want = now * so3_exp(&(model.weight * so3_log(&(now.inverse() * mapped))));
             turn_to(frame, t, &now, &want);
         });
@@ -331,6 +400,50 @@ mod tests {
         assert!(limb.proximal.iter().all(|&i| (mean[i] - pivot).norm() <= far));
     }
 
+    /// In its attachment's frame a limb is carried with the root region it hangs from: with the
+    /// identity map at weight 1, a target whose root part is the source's turned by `q` gets each
+    /// limb turned to `A_t A_s⁻¹ R_s = q R_s` (`A` the attachment's orientations, `R_s` the
+    /// source limb's), whatever the limb was; the root part is not moved.
+    #[test]
+    fn attachment_frame_carries_the_limb_with_its_attachment() {
+        let (pca, motion) = turning_limb();
+        let xs = pca.encode(&motion).unwrap();
+        let source = pca.decode(&xs).unwrap();
+        let limb = limbs(&pca).unwrap().remove(0);
+        let near = attachment(&pca, 0, &limb, ATTACHMENT_SHARE);
+        assert_eq!(near.len(), (pca.parts[0].vertices.len() as f64 * ATTACHMENT_SHARE).ceil() as usize);
+        let (mean, root_mean) = (mean_shape(&pca.parts[1]), mean_shape(&pca.parts[0]));
+        let q = so3_exp(&Vector3::new(0.1, -0.2, 0.3));
+        let frame = LimbFrame::Attachment { share: ATTACHMENT_SHARE };
+        let identity = LimbMap { w: [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0], [0.0; 3]], frame };
+        let model = LimbOrientation { weight: 1.0, maps: vec![None, Some(identity)] };
+        let mut decoded = source.clone();
+        for f in decoded[0].iter_mut() {
+            f.iter_mut().for_each(|p| *p = q * *p + Vector3::new(0.3, -1.0, 2.0));
+        }
+        decoded[1].iter_mut().for_each(|f| *f = mean.clone());
+        let root_before = decoded[0].clone();
+        apply(&model, &pca, &pca, &xs, &mut decoded).unwrap();
+        assert_eq!(decoded[0], root_before);
+        for (f, frame) in decoded[1].iter().enumerate() {
+            let (a_s, a_t) = (orientation(&root_mean, &source[0][f], &near), orientation(&root_mean, &decoded[0][f], &near));
+            assert!(apart(&a_t, &(q * a_s)) < 1e-9);
+            let want = q * orientation(&mean, &source[1][f], &limb.proximal);
+            let got = orientation(&mean, frame, &limb.proximal);
+            assert!(apart(&got, &want) < 1e-9, "frame {f}: {}", apart(&got, &want));
+        }
+        // In the root frame the same map ignores the root's turn: the limb gets R_s.
+        let root_model = LimbOrientation { weight: 1.0, maps: vec![None, Some(LimbMap { frame: LimbFrame::Root, ..model.maps[1].clone().unwrap() })] };
+        decoded[1].iter_mut().for_each(|f| *f = mean.clone());
+        apply(&root_model, &pca, &pca, &xs, &mut decoded).unwrap();
+        for (f, frame) in decoded[1].iter().enumerate() {
+            assert!(apart(&orientation(&mean, frame, &limb.proximal), &orientation(&mean, &source[1][f], &limb.proximal)) < 1e-9);
+        }
+        // A share outside (0, 1] is refused.
+        let bad = LimbMap { frame: LimbFrame::Attachment { share: 0.0 }, ..model.maps[1].clone().unwrap() };
+        assert!(LimbOrientation { weight: 1.0, maps: vec![None, Some(bad)] }.validate(2).is_err());
+    }
+
     /// A prediction that never turns the limb (its mean shape in every frame), with the
     /// identity map: weight 1 turns each frame's limb to the source's orientation, weight 0.5
     /// half way (the geodesic midpoint), and the joint stays where it was.
@@ -341,7 +454,7 @@ mod tests {
         let source = pca.decode(&xs).unwrap();
         let limb = limbs(&pca).unwrap().remove(0);
         let mean = mean_shape(&pca.parts[1]);
-        let identity = LimbMap { w: [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0], [0.0; 3]] };
+        let identity = LimbMap { w: [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0], [0.0; 3]], frame: LimbFrame::Root };
         for weight in [1.0, 0.5] {
             let model = LimbOrientation { weight, maps: vec![None, Some(identity.clone())] };
             let mut decoded = source.clone();

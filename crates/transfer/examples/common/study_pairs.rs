@@ -88,7 +88,13 @@ pub fn load(work: &str, set: &str, s: &str, t: &str, spca: &PcaModel, tpca: &Pca
         let (fs, ft) = (pf.source.capture.require_fps()?, pf.target.capture.require_fps()?);
         ratio.get_or_insert(if reversed { fs / ft } else { ft / fs });
         let (p1, p2) = if reversed { (tpca, spca) } else { (spca, tpca) };
-        let d = pf.encode(p1, p2)?;
+        let mut d = pf.encode(p1, p2)?;
+        if std::env::var("TRUE_PAIRS").is_ok() {
+            // The set's true frame correspondences in place of the run's DTW pairs.
+            let entry = set_json["train"].as_array().into_iter().flatten().find(|e| e["source"] == m.as_str());
+            let corr = entry.and_then(|e| e["correspondences"].as_array()).ok_or_else(|| anyhow::anyhow!("{m}: no correspondences"))?;
+            d.pairs = corr.iter().map(|p| [p[0].as_u64().unwrap() as usize, p[1].as_u64().unwrap() as usize]).collect();
+        }
         pairs.push(if reversed { d.reversed() } else { d });
     }
     Ok((pairs, ratio.unwrap_or(1.0)))

@@ -14,7 +14,7 @@ use serde::Serialize;
 
 use crate::limb_orientation;
 use crate::gpr_model::{
-    train_orientation, train_piece, train_rows, GprModel, Regression, TrainingRows, MeanFunction, MeanPrior, MeanPriors, Method, PairFiles, RegressorReport, Templates, DISPLACEMENT,
+    train_orientation, train_piece, OrientationOptions, train_rows, GprModel, Regression, TrainingRows, MeanFunction, MeanPrior, MeanPriors, Method, PairFiles, RegressorReport, Templates, DISPLACEMENT,
     MEAN_RIDGE, PRIOR_WEIGHT,
 };
 use capture::part_pca::PcaModel;
@@ -71,6 +71,12 @@ pub struct Params {
     /// paper's model, no turn)
     #[arg(long, default_value_t = limb_orientation::WEIGHT, value_name = "W")]
     pub orientation_weight: f64,
+    /// Limbs whose orientation is measured relative to their attachment, the root part's region
+    /// around their joint (an arm's shoulder girdle), instead of the root part's whole frame
+    /// (comma-separated part names, e.g. `arm_l,arm_r`; names the models lack are ignored;
+    /// default: none, docs/RESULTS.md study 6)
+    #[arg(long, value_delimiter = ',', value_name = "PARTS")]
+    pub attached_limbs: Vec<String>,
     /// Observation-noise variance σn² (the paper's 0.1; the starting value with --learn-noise)
     #[arg(long, default_value_t = PAPER_NOISE_VAR)]
     pub noise_var: f64,
@@ -229,6 +235,7 @@ pub fn run(p: &Params) -> anyhow::Result<()> {
     let n_pairs = pairs.len();
     let rows = TrainingRows::new(method, &names, &pairs, ratio, p.keyposes_only)?;
     drop(pairs);
+    let orientation = OrientationOptions { weight: p.orientation_weight, attached: &p.attached_limbs };
     let regression = Regression { method, nn_bias: p.nn_bias, mean: p.mean, mean_ridge: p.mean_ridge, mean_priors: priors, opts: &opts };
     if let Some(unit) = unit {
         let spin = mesh_core::cli::spinner(
@@ -237,7 +244,7 @@ pub fn run(p: &Params) -> anyhow::Result<()> {
         );
         let mut piece = train_piece(&regression, &names, &rows, unit)?;
         if unit < names.len() {
-            let o = train_orientation(method, &names, &rows, &src_pca, &tgt_pca, p.orientation_weight, Some(unit))?;
+            let o = train_orientation(method, &names, &rows, &src_pca, &tgt_pca, &orientation, Some(unit))?;
             piece.orientation = o.and_then(|mut o| o.maps.swap_remove(unit));
         }
         piece.orientation_weight = p.orientation_weight;
@@ -252,7 +259,7 @@ pub fn run(p: &Params) -> anyhow::Result<()> {
         &p.common,
     );
     let mut model: GprModel = train_rows(&regression, &names, &rows)?;
-    model.orientation = train_orientation(method, &names, &rows, &src_pca, &tgt_pca, p.orientation_weight, None)?;
+    model.orientation = train_orientation(method, &names, &rows, &src_pca, &tgt_pca, &orientation, None)?;
     drop(rows);
     model.templates = Templates::of(&src_pca, &tgt_pca);
     spin.finish_and_clear();
