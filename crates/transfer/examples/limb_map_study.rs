@@ -145,6 +145,16 @@ fn fit_wide(x: &DMatrix<f64>, y: &DMatrix<f64>, w0: &DMatrix<f64>, ridge: f64) -
     lhs.cholesky().expect("positive definite").solve(&rhs)
 }
 
+/// Turns each frame's limb the geodesic share `weight` of the way from its orientation toward
+/// `mapped(frame index)`.
+fn turn_toward(frames: &mut [Vec<Vector3<f64>>], limb: &Limb, mean: &[Vector3<f64>], weight: f64, mapped: impl Fn(usize) -> Rotation3<f64>) {
+    for (fi, frame) in frames.iter_mut().enumerate() {
+        let now = orientation(mean, frame, &limb.proximal);
+        let want = now * so3_exp(&(weight * so3_log(&(now.inverse() * mapped(fi)))));
+        turn_to(frame, limb, &now, &want);
+    }
+}
+
 /// The share of the root part's vertices nearest `joint` (root-frame point) in its mean shape.
 fn near_root(pca: &PcaModel, joint: &Vector3<f64>, share: f64) -> Vec<usize> {
     let mean = reference(pca, 0);
@@ -246,12 +256,7 @@ fn main() -> anyhow::Result<()> {
                         Ok("mid") => root_orientations_of(&tpca, &nt, &gp[0]).iter().zip(&chest_s).map(|(g, c)| g * so3_exp(&(0.5 * so3_log(&(g.inverse() * c))))).collect(),
                         _ => root_orientations_of(&tpca, &nt, &gp[0]),
                     };
-                    for (fi, frame) in turned[k].iter_mut().enumerate() {
-                        let now = orientation(&tmean, frame, &tl.proximal);
-                        let mapped = chest_t[fi] * so3_exp(&map.apply(&src[fi]));
-                        let want = now * so3_exp(&(v.weight * so3_log(&(now.inverse() * mapped))));
-                        turn_to(frame, &tl, &now, &want);
-                    }
+                    turn_toward(&mut turned[k], &tl, &tmean, v.weight, |fi| chest_t[fi] * so3_exp(&map.apply(&src[fi])));
                     continue;
                 }
                 if let Space::Quadratic = v.space {
@@ -278,12 +283,7 @@ fn main() -> anyhow::Result<()> {
                     let xt = quad(&src);
                     let xt1 = DMatrix::from_fn(xt.nrows(), 10, |r, c| if c < 9 { xt[(r, c)] } else { 1.0 });
                     let pred = xt1 * w;
-                    for (fi, frame) in turned[k].iter_mut().enumerate() {
-                        let now = orientation(&tmean, frame, &tl.proximal);
-                        let mapped = so3_exp(&Vector3::new(pred[(fi, 0)], pred[(fi, 1)], pred[(fi, 2)]));
-                        let want = now * so3_exp(&(v.weight * so3_log(&(now.inverse() * mapped))));
-                        turn_to(frame, &tl, &now, &want);
-                    }
+                    turn_toward(&mut turned[k], &tl, &tmean, v.weight, |fi| so3_exp(&Vector3::new(pred[(fi, 0)], pred[(fi, 1)], pred[(fi, 2)])));
                     continue;
                 }
                 if let Space::AllLimbs = v.space {
@@ -309,12 +309,7 @@ fn main() -> anyhow::Result<()> {
                     let xt = wide(&|p| xs[p].clone());
                     let xt1 = DMatrix::from_fn(xt.nrows(), xt.ncols() + 1, |r, c| if c < xt.ncols() { xt[(r, c)] } else { 1.0 });
                     let pred = xt1 * w;
-                    for (fi, frame) in turned[k].iter_mut().enumerate() {
-                        let now = orientation(&tmean, frame, &tl.proximal);
-                        let mapped = so3_exp(&Vector3::new(pred[(fi, 0)], pred[(fi, 1)], pred[(fi, 2)]));
-                        let want = now * so3_exp(&(v.weight * so3_log(&(now.inverse() * mapped))));
-                        turn_to(frame, &tl, &now, &want);
-                    }
+                    turn_toward(&mut turned[k], &tl, &tmean, v.weight, |fi| so3_exp(&Vector3::new(pred[(fi, 0)], pred[(fi, 1)], pred[(fi, 2)])));
                     continue;
                 }
                 let to_matrix = |f: &[Vector3<f64>]| DMatrix::from_fn(f.len(), 3, |r, c| f[r][c]);
