@@ -40,7 +40,7 @@ use capture::align::{AlignedMotion, CaptureInfo};
 use capture::motion_stream::read_frames;
 use capture::part_pca::FrameEncoder;
 use crate::densify::Correspondences;
-use crate::limb_orientation::{self, LimbFrame, LimbMap, LimbOrientation};
+use crate::limb_orientation::{self, LimbMap, LimbOrientation};
 use capture::part_pca::PcaModel;
 use nalgebra::{DMatrix, Vector6};
 use serde::{Deserialize, Serialize};
@@ -741,7 +741,7 @@ pub fn train_rows(regression: &Regression, part_names: &[String], rows: &Trainin
 pub struct OrientationOptions<'a> {
     /// The geodesic share of the turn toward the map's orientation (0: none).
     pub weight: f64,
-    /// The limbs measured in their attachment's frame (names the models lack are ignored).
+    /// The limbs measured in their attachment's frame ([`limb_orientation::frames`]).
     pub attached: &'a [String],
 }
 
@@ -766,17 +766,11 @@ pub fn train_orientation(
     }
     sets.check_parts(part_names)?;
     let rows = if method == Method::KeyposeAffine { sets.keys() } else { &sets.data };
+    let frames = limb_orientation::frames(target, options.attached)?;
     let maps = (0..part_names.len())
         .map(|k| match only {
             Some(u) if u != k => Ok(None),
-            _ => {
-                let frame = if options.attached.contains(&part_names[k]) {
-                    LimbFrame::Attachment { share: limb_orientation::ATTACHMENT_SHARE }
-                } else {
-                    LimbFrame::Root
-                };
-                limb_orientation::fit_part(source, target, k, frame, &rows.x_parts, &rows.y_parts)
-            }
+            _ => limb_orientation::fit_part(source, target, k, frames[k], &rows.x_parts, &rows.y_parts),
         })
         .collect::<Result<_>>()?;
     Ok(Some(LimbOrientation { weight, maps }))
@@ -1127,7 +1121,7 @@ mod tests {
                 "limb orientation weight 1.5",
             ),
             (
-                GprModel { orientation: Some(LimbOrientation { weight: 0.5, maps: vec![Some(LimbMap { w: [[f64::NAN; 3]; 4], frame: LimbFrame::Root })] }), ..model.clone() },
+                GprModel { orientation: Some(LimbOrientation { weight: 0.5, maps: vec![Some(LimbMap { w: [[f64::NAN; 3]; 4], frame: limb_orientation::LimbFrame::Root })] }), ..model.clone() },
                 "non-finite",
             ),
         ];

@@ -241,6 +241,25 @@ fn log_orientations(pca: &PcaModel, limb: &Limb, frame: LimbFrame, coeffs: &[DMa
     })
 }
 
+/// The frame of each part's map in `pca` (by part index): the attachment's
+/// ([`ATTACHMENT_SHARE`]) for the limbs named in `attached`, the root's for the others. A name
+/// that is not a limb of `pca` is an error, unless `pca` has no limbs (a whole-body model).
+pub fn frames(pca: &PcaModel, attached: &[String]) -> Result<Vec<LimbFrame>> {
+    let limbs = limbs(pca)?;
+    let is_limb = |name: &str| limbs.iter().any(|l| pca.parts[l.part].name == name);
+    if !limbs.is_empty() {
+        if let Some(bad) = attached.iter().find(|n| !is_limb(n)) {
+            let names: Vec<&str> = limbs.iter().map(|l| pca.parts[l.part].name.as_str()).collect();
+            return Err(Error::invalid(format!("attached limb '{bad}' is not a limb of the PCA models (limbs: {})", names.join(", "))));
+        }
+    }
+    Ok(pca
+        .parts
+        .iter()
+        .map(|p| if attached.contains(&p.name) && is_limb(&p.name) { LimbFrame::Attachment { share: ATTACHMENT_SHARE } } else { LimbFrame::Root })
+        .collect())
+}
+
 /// The limb of part `k` in both models, or `None` when `k` is the root.
 fn limb_pair<'a>(source: &'a [Limb], target: &'a [Limb], k: usize) -> Option<(&'a Limb, &'a Limb)> {
     Some((source.iter().find(|l| l.part == k)?, target.iter().find(|l| l.part == k)?))
@@ -442,6 +461,20 @@ mod tests {
         // A share outside (0, 1] is refused.
         let bad = LimbMap { frame: LimbFrame::Attachment { share: 0.0 }, ..model.maps[1].clone().unwrap() };
         assert!(LimbOrientation { weight: 1.0, maps: vec![None, Some(bad)] }.validate(2).is_err());
+    }
+
+    /// Named limbs get the attachment's frame, the others the root's; a name that is not a limb
+    /// (the root, a typo) is refused.
+    #[test]
+    fn frames_follow_the_named_limbs() {
+        let (pca, _) = turning_limb();
+        let attached = LimbFrame::Attachment { share: ATTACHMENT_SHARE };
+        assert_eq!(frames(&pca, &[]).unwrap(), vec![LimbFrame::Root, LimbFrame::Root]);
+        assert_eq!(frames(&pca, &["limb".to_string()]).unwrap(), vec![LimbFrame::Root, attached]);
+        for bad in ["torso", "arm_l"] {
+            let e = frames(&pca, &[bad.to_string()]).unwrap_err().to_string();
+            assert!(e.contains(&format!("'{bad}' is not a limb")) && e.contains("limbs: limb"), "{e}");
+        }
     }
 
     /// A prediction that never turns the limb (its mean shape in every frame), with the

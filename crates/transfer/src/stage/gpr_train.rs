@@ -73,7 +73,7 @@ pub struct Params {
     pub orientation_weight: f64,
     /// Limbs whose orientation is measured relative to their attachment, the root part's region
     /// around their joint (an arm's shoulder girdle), instead of the root part's whole frame
-    /// (comma-separated part names, e.g. `arm_l,arm_r`; names the models lack are ignored;
+    /// (comma-separated limb names, e.g. `arm_l,arm_r`; ignored by the whole-body method;
     /// default: none, docs/RESULTS.md study 6)
     #[arg(long, value_delimiter = ',', value_name = "PARTS")]
     pub attached_limbs: Vec<String>,
@@ -214,6 +214,8 @@ pub fn run(p: &Params) -> anyhow::Result<()> {
     if !(0.0..=1.0).contains(&p.orientation_weight) {
         return Err(mesh_core::Error::invalid(format!("--orientation-weight must be in [0, 1], got {}", p.orientation_weight)).into());
     }
+    // A misspelt limb is refused before the GPs are trained.
+    limb_orientation::frames(&tgt_pca, &p.attached_limbs)?;
     let ridge_toward = p.mean_prior == MeanPrior::Geometric;
     let maps = (p.mean == MeanFunction::Affine && (ridge_toward || p.prior_weight > 0.0))
         .then(|| crate::geometric_prior::part_priors(&src_pca, &tgt_pca));
