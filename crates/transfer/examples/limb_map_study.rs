@@ -21,7 +21,7 @@ use mesh_core::rigid::{so3_exp, so3_log};
 use mesh_core::sequence::MeshSequence;
 use nalgebra::{DMatrix, Rotation3, Unit, Vector3};
 use transfer::gpr_model::training_set;
-use transfer::limb_orientation::{limbs, orientation, reference, turn_to, Limb, LimbMap};
+use transfer::limb_orientation::{attachment, limbs, orientation, orientations, reference, turn_to, Limb, LimbMap};
 
 #[derive(Clone, Copy, Debug)]
 enum Space {
@@ -155,21 +155,9 @@ fn turn_toward(frames: &mut [Vec<Vector3<f64>>], limb: &Limb, mean: &[Vector3<f6
     }
 }
 
-/// The share of the root part's vertices nearest `joint` (root-frame point) in its mean shape.
-fn near_root(pca: &PcaModel, joint: &Vector3<f64>, share: f64) -> Vec<usize> {
-    let mean = reference(pca, 0);
-    let mut d: Vec<(f64, usize)> = mean.iter().enumerate().map(|(i, p)| ((p - joint).norm(), i)).collect();
-    d.sort_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
-    let mut keep: Vec<usize> = d.iter().take(((mean.len() as f64) * share).ceil() as usize).map(|x| x.1).collect();
-    keep.sort_unstable();
-    keep
-}
-
 /// The orientation of the root part's `near` vertices in each decoded frame of `coeffs`.
 fn root_orientations(pca: &PcaModel, near: &[usize], coeffs: &DMatrix<f64>) -> Vec<Rotation3<f64>> {
-    let rows = pca.parts[0].pca.decode(coeffs).unwrap();
-    let mean = reference(pca, 0);
-    (0..rows.nrows()).map(|r| orientation(&mean, &points(&rows.row(r).iter().copied().collect::<Vec<_>>()), near)).collect()
+    orientations(&pca.parts[0], near, coeffs).unwrap()
 }
 
 fn root_orientations_of(pca: &PcaModel, near: &[usize], frames: &[Vec<Vector3<f64>>]) -> Vec<Rotation3<f64>> {
@@ -239,9 +227,7 @@ fn main() -> anyhow::Result<()> {
                 let chest_here = std::env::var("CHEST_PARTS").map_or(true, |f| tpca.parts[k].name.contains(f.as_str()));
                 if matches!(v.space, Space::Chest) && chest_here {
                     let share: f64 = std::env::var("CHEST_SHARE").ok().and_then(|x| x.parse().ok()).unwrap_or(0.2);
-                    let joint_s = centroid(sl.joint.iter().map(|&i| smean[i]));
-                    let joint_t = centroid(tl.joint.iter().map(|&i| tmean[i]));
-                    let (ns, nt) = (near_root(&spca, &joint_s, share), near_root(&tpca, &joint_t, share));
+                    let (ns, nt) = (attachment(&spca, 0, &sl, share), attachment(&tpca, 0, &tl, share));
                     let rel = |roots: &[Rotation3<f64>], f: &[Vector3<f64>]| -> Vec<Vector3<f64>> {
                         roots.iter().zip(f).map(|(c, x)| so3_log(&(c.inverse() * so3_exp(x)))).collect()
                     };

@@ -195,7 +195,7 @@ impl LimbOrientation {
 }
 
 /// The orientations of the vertices `subset` of `part` in the decoded coefficient rows `coeffs`.
-fn orientations(part: &PartPca, subset: &[usize], coeffs: &DMatrix<f64>) -> Result<Vec<Rotation3<f64>>> {
+pub fn orientations(part: &PartPca, subset: &[usize], coeffs: &DMatrix<f64>) -> Result<Vec<Rotation3<f64>>> {
     let mean = mean_shape(part);
     let mut out = Vec::with_capacity(coeffs.nrows());
     // Decoded a block of rows at a time: a training set's rows decoded whole would be the
