@@ -305,6 +305,9 @@ fn write_all(
     let mut extra = BTreeMap::new();
     extra.insert("preset".into(), json!(cfg.preset));
     extra.insert("seed".into(), json!(cfg.seed));
+    if cfg.more_training {
+        extra.insert("more_training".into(), json!(true));
+    }
     extra.insert(
         "noise".into(),
         match &cfg.noise {

@@ -45,6 +45,8 @@ pub struct Config {
     pub max_duration: f64,
     /// Key-poses per training pair.
     pub keyposes: usize,
+    /// The other benchmark sets' test clips are training motions too ([`with_more_training`]).
+    pub more_training: bool,
 }
 
 fn dm(name: &str, file: &str, cycles: usize) -> MotionDef {
@@ -314,6 +316,7 @@ pub fn preset(name: &str, seed: u64, noise: bool) -> Option<Config> {
             target_test: vec![dm("dance_b", "dance_b", 1)],
             max_duration: 1.2,
             keyposes: 5,
+            more_training: false,
         }),
         "default" => Some(Config {
             preset: name.into(),
@@ -326,6 +329,7 @@ pub fn preset(name: &str, seed: u64, noise: bool) -> Option<Config> {
             target_test: vec![dm("dance_b", "dance_b", 1)],
             max_duration: 3.0,
             keyposes: 5,
+            more_training: false,
         }),
         "holdout" => {
             let (test, target_test) = holdout_tests();
@@ -340,6 +344,7 @@ pub fn preset(name: &str, seed: u64, noise: bool) -> Option<Config> {
                 target_test,
                 max_duration: 3.0,
                 keyposes: 5,
+                more_training: false,
             })
         }
         "outside" => {
@@ -355,6 +360,7 @@ pub fn preset(name: &str, seed: u64, noise: bool) -> Option<Config> {
                 target_test,
                 max_duration: 3.0,
                 keyposes: 5,
+                more_training: false,
             })
         }
         "long" => Some(Config {
@@ -371,8 +377,36 @@ pub fn preset(name: &str, seed: u64, noise: bool) -> Option<Config> {
             target_test: vec![dm("dance_b", "dance_b", 1)],
             max_duration: LONG_SECONDS,
             keyposes: 5,
+            more_training: false,
         }),
         _ => None,
+    }
+}
+
+/// The test clips of the benchmark sets (`default`, `holdout`, `outside`, in that order) that
+/// `cfg` neither tests nor trains on, added to its training motions: the training-coverage
+/// study (`synth --more-training`; docs/RESULTS.md). The added motions' frames and noise are
+/// made as in their own set, and the preset's own motions are unchanged.
+pub fn with_more_training(mut cfg: Config) -> Config {
+    let own: Vec<MotionDef> = cfg.train.iter().chain(&cfg.test).chain(&cfg.target_test).cloned().collect();
+    for name in ["default", "holdout", "outside"] {
+        let other = preset(name, cfg.seed, false).expect("a benchmark preset");
+        for m in other.test.iter().chain(&other.target_test) {
+            if !own.iter().chain(&cfg.train).any(|o| same_clip(o, m) || o.name == m.name) {
+                cfg.train.push(m.clone());
+            }
+        }
+    }
+    cfg.more_training = true;
+    cfg
+}
+
+/// Whether two motions are made from the same clip (the same file, or overlapping CMU windows).
+fn same_clip(a: &MotionDef, b: &MotionDef) -> bool {
+    match (&a.source, &b.source) {
+        (MotionSource::DeepMimic { file: f, .. }, MotionSource::DeepMimic { file: g, .. }) => f == g,
+        (MotionSource::Cmu { t0: a0, t1: a1 }, MotionSource::Cmu { t0: b0, t1: b1 }) => a0 < b1 && b0 < a1,
+        _ => false,
     }
 }
 
@@ -418,6 +452,37 @@ mod tests {
             assert_eq!(preset(name, 0, true).map(|c| c.preset), Some(name.to_string()));
         }
         assert!(preset("nope", 0, true).is_none());
+    }
+
+    /// `--more-training` adds exactly the other benchmark sets' test clips, after the preset's own
+    /// training motions, and leaves its test motions alone.
+    #[test]
+    fn more_training_adds_the_other_sets_test_clips() {
+        let tests_of = |name: &str| {
+            let c = preset(name, 0, true).unwrap();
+            c.test.iter().chain(&c.target_test).map(clip).collect::<Vec<_>>()
+        };
+        for (name, others) in [("holdout", ["default", "outside"]), ("outside", ["default", "holdout"]), ("default", ["holdout", "outside"])] {
+            let base = preset(name, 0, true).unwrap();
+            let more = with_more_training(base.clone());
+            assert!(more.more_training && !base.more_training);
+            let train: Vec<String> = more.train.iter().map(clip).collect();
+            let (own, added) = train.split_at(base.train.len());
+            assert_eq!(own, base.train.iter().map(clip).collect::<Vec<_>>(), "{name}: own training motions first");
+            let mut expected: Vec<String> = others.iter().flat_map(|o| tests_of(o)).collect();
+            let mut added = added.to_vec();
+            expected.sort();
+            added.sort();
+            assert_eq!(added, expected, "{name}");
+            assert_eq!(more.test.iter().chain(&more.target_test).map(clip).collect::<Vec<_>>(), tests_of(name));
+            let mut names: Vec<&str> = more.train.iter().map(|m| m.name.as_str()).collect();
+            names.sort_unstable();
+            names.dedup();
+            assert_eq!(names.len(), more.train.len(), "{name}: motion names stay unique");
+        }
+        // The tiny preset tests on the demo's clips: they are not added to its training.
+        let tiny = with_more_training(preset("tiny", 0, true).unwrap());
+        assert!(tiny.train.iter().all(|m| !tests_of("default").contains(&clip(m))));
     }
 
     /// The benchmark sets share the training clips and nothing else: no test clip of one is a

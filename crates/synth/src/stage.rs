@@ -1,6 +1,6 @@
 //! The `synth` stage: a capture set from real MakeHuman bodies driven by real mocap.
 //! `src/bin/synth.rs` only parses [`Params`] and calls [`run`]. The set records what made it
-//! (preset, seed, noise) in its `set.json`, not the command line.
+//! (preset, seed, noise, `--more-training`) in its `set.json`, not the command line.
 
 use std::path::PathBuf;
 
@@ -29,6 +29,10 @@ pub struct Params {
     /// No capture-like noise on the input sequences (truth is always clean)
     #[arg(long)]
     pub no_noise: bool,
+    /// Also train on the other benchmark sets' test clips (those this preset neither tests nor
+    /// trains on): the training-coverage study
+    #[arg(long)]
+    pub more_training: bool,
     /// Output capture-set folder (replaced if it holds a capture set)
     #[arg(short, long)]
     pub out: PathBuf,
@@ -39,6 +43,7 @@ pub struct Params {
 pub fn run(p: &Params) -> anyhow::Result<()> {
     let cfg = crate::preset::preset(p.preset.name(), p.common.seed, !p.no_noise)
         .ok_or_else(|| anyhow::anyhow!("unknown preset {}", p.preset.name()))?;
+    let cfg = if p.more_training { crate::preset::with_more_training(cfg) } else { cfg };
     // The frame count is known once the mocap is read: the bar starts then.
     let pb = std::sync::OnceLock::new();
     let start = |n: usize| {
