@@ -29,8 +29,8 @@ pub struct Params {
     /// No capture-like noise on the input sequences (truth is always clean)
     #[arg(long)]
     pub no_noise: bool,
-    /// Also train on the other benchmark sets' test clips (those this preset neither tests nor
-    /// trains on): the training-coverage study
+    /// Also train on the other benchmark sets' test clips from other performances than this
+    /// preset's (not the CMU take it tests on): the training-coverage study
     #[arg(long)]
     pub more_training: bool,
     /// Output capture-set folder (replaced if it holds a capture set)
