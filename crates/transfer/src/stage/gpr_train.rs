@@ -63,7 +63,9 @@ pub struct Params {
     /// subjects' part shapes predict (transfer::geometric_prior)
     #[arg(long, value_enum, default_value_t = MeanPrior::Zero)]
     pub mean_prior: MeanPrior,
-    /// Weight of the geometric prior mixed into each part's affine mean (0: the fitted map alone)
+    /// Weight of the geometric prior mixed into each part's affine mean (0: the fitted map alone).
+    /// The default suits about five training motions; with a dozen, 0 measured better on every
+    /// benchmark set (docs/RESULTS.md, "Training coverage")
     #[arg(long, default_value_t = PRIOR_WEIGHT, value_name = "W")]
     pub prior_weight: f64,
     /// How far each limb is turned from the orientation the pose GP predicts toward the one a
