@@ -238,3 +238,52 @@ fn long_preset_has_two_minute_training_motions() {
     // 5 motions x 120 s x (20 fps for A + ~25/0.85 fps for B).
     assert!((25_000..35_000).contains(&frames), "{frames} training frames");
 }
+
+/// The files under `root/rel` (a folder), as paths relative to `root`, sorted.
+fn files_under(root: &Path, rel: &Path) -> Vec<std::path::PathBuf> {
+    let mut out: Vec<std::path::PathBuf> = std::fs::read_dir(root.join(rel))
+        .unwrap()
+        .map(|e| rel.join(e.unwrap().file_name()))
+        .collect();
+    out.sort();
+    out
+}
+
+/// `synth --more-training` adds training pairs, each with its key-poses, and leaves the
+/// preset's own pairs, frames and truth byte-identical: the two sets differ only in what is
+/// trained on.
+#[test]
+fn more_training_adds_pairs_and_keeps_the_presets_own_motions() {
+    let plain = build(true);
+    let more = tempfile::tempdir().unwrap();
+    let cfg = synth::preset::with_more_training(preset("tiny", 11, true).unwrap());
+    synthesise(&cfg, &more.path().join("set"), true, &|_| {}, &|| {}).unwrap();
+    let (p, m) = (plain.path().join("set"), more.path().join("set"));
+    let (sp, sm): (SetSpec, SetSpec) = (read(&p.join("set.json")), read(&m.join("set.json")));
+    assert_eq!(sm.extra["more_training"], Value::Bool(true));
+    assert!(!sp.extra.contains_key("more_training"));
+    assert_eq!(sm.train[..sp.train.len()], sp.train[..], "the preset's own pairs first, unchanged");
+    assert!(sm.train.len() > sp.train.len());
+    for pair in &sm.train[sp.train.len()..] {
+        assert_eq!(pair.keyposes.len(), cfg.keyposes, "{}", pair.source);
+        assert!(!sp.test.contains(&pair.source), "{} is a test motion", pair.source);
+    }
+    assert_eq!(sm.test, sp.test);
+    let mut own = Vec::new();
+    for subject in ["A", "B"] {
+        for motion in std::fs::read_dir(p.join(subject)).unwrap().map(|e| e.unwrap().file_name()) {
+            let rel = Path::new(subject).join(&motion);
+            if p.join(&rel).is_dir() {
+                own.extend(files_under(&p, &rel));
+            }
+        }
+        for motion in std::fs::read_dir(p.join("truth").join(subject)).unwrap().map(|e| e.unwrap().file_name()) {
+            own.extend(files_under(&p, &Path::new("truth").join(subject).join(motion)));
+        }
+    }
+    assert!(own.len() > 100);
+    for rel in &own {
+        let (a, b) = (std::fs::read(p.join(rel)).unwrap(), std::fs::read(m.join(rel)).unwrap());
+        assert!(a == b, "{} differs", rel.display());
+    }
+}
