@@ -64,7 +64,7 @@ pub struct Params {
     #[arg(long, value_enum, default_value_t = MeanPrior::Zero)]
     pub mean_prior: MeanPrior,
     /// Weight of the geometric prior mixed into each part's affine mean (0: the fitted map alone).
-    /// The default suits about five training motions; with a dozen, 0 measured better on every
+    /// The default suits five training motions; with eight or more, 0 measured better on every
     /// benchmark set (docs/RESULTS.md, "Training coverage")
     #[arg(long, default_value_t = PRIOR_WEIGHT, value_name = "W")]
     pub prior_weight: f64,
