@@ -390,11 +390,12 @@ pub fn preset(name: &str, seed: u64, noise: bool) -> Option<Config> {
 /// gains only from other motions, not from the rest of its own performance. The preset's own
 /// motions are unchanged.
 pub fn with_more_training(mut cfg: Config) -> Config {
-    let own: Vec<MotionDef> = cfg.train.iter().chain(&cfg.test).chain(&cfg.target_test).cloned().collect();
+    let tests: Vec<MotionDef> = cfg.test.iter().chain(&cfg.target_test).cloned().collect();
     for name in ["default", "holdout", "outside"] {
         let other = preset(name, cfg.seed, false).expect("a benchmark preset");
         for m in other.test.iter().chain(&other.target_test) {
-            if !own.iter().chain(&cfg.train).any(|o| same_performance(o, m) || o.name == m.name) {
+            // `cfg.train` grows: a clip two other sets share is added once.
+            if !tests.iter().chain(&cfg.train).any(|o| same_performance(o, m) || o.name == m.name) {
                 cfg.train.push(m.clone());
             }
         }
