@@ -7,7 +7,7 @@ EXPORT_TRANSFERS = $(wildcard $(OUT)/transfer/*/*/gpr-nn+correct+stitch)
 EXPORT_VARIATIONS = $(foreach v,$(VARIATION_REPORT_VIEWS),$(lastword $(subst =, ,$(v))))
 
 .PHONY: export
-export: build
+export: $(STAGE_BINARIES)
 	@for d in $(EXPORT_TRANSFERS) $(EXPORT_VARIATIONS); do \
 	  test -d "$$d" || continue; \
 	  case "$$d" in \

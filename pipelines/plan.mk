@@ -33,7 +33,7 @@ $(file >$(PLAN_OPTIONS),$(strip $(MAKE_PLAN_ARGS)))
 endif
 
 $(PLAN_MK): $(PLAN_OPTIONS) $(BIN)/plan $(BIN)/check-set $(SET)/set.json $(wildcard $(SET)/* $(SET)/*/* $(SET)/truth/*)
-	@$(BIN)/check-set -q $(SET)
+	@$(BIN)/check-set $(SET)
 	$(BIN)/plan make -q $(MAKE_PLAN_ARGS) --out $@
 
 include $(PLAN_MK)
@@ -41,8 +41,7 @@ endif
 
 SLURM_RESOURCES ?=
 .PHONY: slurm
-slurm:
+slurm: $(STAGE_BINARIES)
 	@test -f $(SET)/set.json || { echo "slurm: $(SET)/set.json: no capture set (run 'make demo-data' or pass SET=<dir>)" >&2; exit 1; }
-	$(CARGO) build --release --workspace --quiet
-	@$(BIN)/check-set -q $(SET)
+	@$(BIN)/check-set $(SET)
 	$(BIN)/plan slurm -q $(PLAN_ARGS) --bin $(BIN) $(if $(SLURM_RESOURCES),--resources $(SLURM_RESOURCES)) --out $(OUT)

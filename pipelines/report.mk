@@ -11,5 +11,5 @@ REPORT_TITLE ?= surfcap report: $(OUT)
 setup-web:
 	@scripts/setup-web
 
-report: build setup-web
+report: $(STAGE_BINARIES) setup-web
 	$(BIN)/html-report --out $(OUT) --title "$(REPORT_TITLE)" $(foreach v,$(REPORT_VIEWS),--view $(v))

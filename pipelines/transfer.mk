@@ -22,9 +22,8 @@ GPR_TRAIN_FLAGS ?=
 PCA_COMPONENTS ?= 20
 
 .PHONY: transfer transfer-results transfer-report
-transfer:
+transfer: $(STAGE_BINARIES)
 	@test -f $(SET)/set.json || { echo "transfer: $(SET)/set.json: no capture set (run 'make demo' or pass SET=<dir>)" >&2; exit 1; }
-	$(CARGO) build --release --workspace --quiet
 	@$(MAKE) --no-print-directory transfer-results SET=$(SET) OUT=$(OUT)
 	@$(MAKE) --no-print-directory transfer-report SET=$(SET) OUT=$(OUT)
 	@$(MAKE) --no-print-directory export SET=$(SET) OUT=$(OUT)

@@ -39,9 +39,8 @@ VARIATION_REPORT_VIEWS ?= $(foreach k,0 1 2,var$(k)=$(VARIATION_OUT)/$(VARIATION
 VARIATION_SAMPLE_FLAGS ?=
 
 .PHONY: variation variation-results
-variation:
+variation: $(STAGE_BINARIES)
 	@test -f $(SET)/set.json || { echo "variation: $(SET)/set.json: no capture set (run 'make demo-data' or pass SET=<dir>)" >&2; exit 1; }
-	$(CARGO) build --release --workspace --quiet
 	@$(MAKE) --no-print-directory variation-results SET=$(SET) OUT=$(OUT)
 	@$(MAKE) --no-print-directory report OUT=$(OUT) REPORT_VIEWS="$(VARIATION_REPORT_VIEWS)" REPORT_TITLE="surfcap variation: $(SET)"
 	@$(MAKE) --no-print-directory export SET=$(SET) OUT=$(OUT)

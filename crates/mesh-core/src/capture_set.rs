@@ -49,6 +49,16 @@ pub struct TrainPair {
     pub extra: BTreeMap<String, serde_json::Value>,
 }
 
+/// The part tree `propose-curves` writes into a `subject.json` that has none: part name and
+/// parent (the body's own left and right).
+pub const PROPOSED_PART_TREE: [(&str, Option<&str>); 5] = [
+    ("torso", None),
+    ("arm_l", Some("torso")),
+    ("arm_r", Some("torso")),
+    ("leg_l", Some("torso")),
+    ("leg_r", Some("torso")),
+];
+
 /// `<set>/<subject>/subject.json`.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct SubjectSpec {
@@ -57,11 +67,14 @@ pub struct SubjectSpec {
     pub units: String,
     #[serde(default = "default_up")]
     pub up: String,
-    /// Part tree: part name -> parent part name (`null` for the root).
+    /// Part tree: part name -> parent part name (`null` for the root). May be
+    /// empty when the subject has no curves yet ([`SubjectSpec::needs_curves`]).
+    #[serde(default)]
     pub parts: BTreeMap<String, Option<String>>,
     /// Per non-root part: its curves as vertex loops, first the loop near the
     /// parent, then the loop further down the limb. The band between them is
     /// the part's overlap with its parent.
+    #[serde(default)]
     pub curves: BTreeMap<String, Vec<Vec<u32>>>,
     #[serde(flatten)]
     pub extra: BTreeMap<String, serde_json::Value>,
@@ -136,7 +149,9 @@ impl SetSpec {
 
 impl SubjectSpec {
     /// Loads `subject.json`, checking the frame rate and the part tree (see
-    /// [`SubjectSpec::check_parts`]). Curves are checked against the template
+    /// [`SubjectSpec::check_parts`]) unless it still needs its curves: such a
+    /// subject loads, and the stages that need parts say so
+    /// ([`SubjectSpec::needs_curves`]). Curves are checked against the template
     /// mesh by [`SubjectSpec::validate`].
     pub fn load(path: impl AsRef<Path>) -> Result<Self> {
         let path = path.as_ref();
@@ -153,8 +168,18 @@ impl SubjectSpec {
         if spec.up_vector().is_none() {
             return Err(format!("up must be one of +x -x +y -y +z -z, got '{}'", spec.up));
         }
-        spec.check_parts().map_err(|e| e.to_string())?;
+        if !spec.needs_curves() {
+            spec.check_parts().map_err(|e| e.to_string())?;
+        }
         Ok(spec)
+    }
+
+    /// Whether the description still lacks its part curves: no curves at all, and
+    /// no part tree or one with limbs (a lab's own `subject.json` may have neither
+    /// curves nor a part tree: `propose-curves` finds both). A tree of the root
+    /// alone needs none.
+    pub fn needs_curves(&self) -> bool {
+        self.curves.is_empty() && (self.parts.is_empty() || self.parts.values().any(Option::is_some))
     }
 
     /// The unit "up" axis named by `up` (`"+y"`, `"-z"`, ...), if valid.
@@ -187,6 +212,9 @@ impl SubjectSpec {
     /// no cycles; every non-root part has exactly two curves, and curves are
     /// given only for parts that exist and are not the root.
     pub fn check_parts(&self) -> Result<()> {
+        if self.needs_curves() {
+            return Err(Error::invalid("no part curves ('curves'): `propose-curves` can find them"));
+        }
         let roots: Vec<&String> = self
             .parts
             .iter()

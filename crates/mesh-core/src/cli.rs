@@ -250,6 +250,21 @@ macro_rules! warn {
     };
 }
 
+/// Prints `stage: note: message` on stderr unless `-q` was given: something the
+/// input lacks and what the stage or pipeline does instead.
+#[macro_export]
+macro_rules! note {
+    ($($arg:tt)*) => {
+        if !$crate::cli::is_quiet() {
+            eprintln!(
+                "{}: note: {}",
+                $crate::cli::stage_name(),
+                $crate::input::escape_control(&format!($($arg)*))
+            );
+        }
+    };
+}
+
 /// Error returned by a stage that has already printed its errors with
 /// [`report_error`]: [`run_stage`] exits 1 without printing anything more.
 #[derive(Debug)]

@@ -17,6 +17,11 @@
 //!   of their ground truth (`truth/<subject>/*`): readable, with the
 //!   template's vertex count and faces;
 //! - every key-pose `[source frame, target frame]` within its two motions.
+//!
+//! Beside the problems, the report lists what the set lacks that only
+//! `synth`'s sets or a lab's annotation have, and what the pipelines do
+//! without it ([`Report::notes`]): part curves, true frame correspondences,
+//! foot contacts, ground truth of the test motions.
 
 use std::collections::BTreeMap;
 use std::fmt;
@@ -46,6 +51,8 @@ impl fmt::Display for Problem {
 #[derive(Clone, Debug, Default)]
 pub struct Report {
     pub problems: Vec<Problem>,
+    /// What the set lacks and what the pipelines do without it: not problems.
+    pub notes: Vec<Problem>,
     pub subjects: usize,
     pub motions: usize,
     pub frames: usize,
@@ -54,6 +61,10 @@ pub struct Report {
 impl Report {
     fn add(&mut self, path: impl AsRef<Path>, message: impl Into<String>) {
         self.problems.push(Problem { path: path.as_ref().to_path_buf(), message: message.into() });
+    }
+
+    fn note(&mut self, path: impl AsRef<Path>, message: impl Into<String>) {
+        self.notes.push(Problem { path: path.as_ref().to_path_buf(), message: message.into() });
     }
 }
 
@@ -174,6 +185,7 @@ pub fn check_set(dir: impl AsRef<Path>) -> Report {
             }
         }
     }
+    missing_annotations(&set, &set_json, &mut report);
     // A template that is also a frame is reported once.
     let mut seen = std::collections::BTreeSet::new();
     report.problems.retain(|p| seen.insert(p.to_string()));
@@ -244,27 +256,31 @@ fn check_subject(set: &CaptureSet, subject: &str, report: &mut Report) -> Option
     let spec: SubjectSpec = match serde_json::from_value(value) {
         Ok(s) => s,
         Err(e) => {
-            let text = e.to_string();
-            let hint = if text.contains("`parts`") || text.contains("`curves`") {
-                " (no part curves: `propose-curves` can find them)"
-            } else {
-                ""
-            };
-            report.add(&json, format!("invalid subject description: {text}{hint}"));
+            report.add(&json, format!("invalid subject description: {e}"));
             return None;
         }
     };
     if spec.up_vector().is_none() {
         report.add(&json, format!("'up' must be one of +x -x +y -y +z -z, got '{}'", spec.up));
     }
-    let parts_ok = match spec.check_parts() {
-        Ok(()) => true,
-        Err(e) => {
-            let hint = if spec.curves.is_empty() { " (no curves: `propose-curves` can find them)" } else { "" };
-            report.add(&json, format!("{e}{hint}"));
-            false
+    let parts_ok = if spec.needs_curves() {
+        report.note(
+            &json,
+            "no part curves: the pipelines propose them (propose-curves) and draw them to <out>/work/<subject>/curves.png",
+        );
+        false
+    } else {
+        match spec.check_parts() {
+            Ok(()) => true,
+            Err(e) => {
+                report.add(&json, e.to_string());
+                false
+            }
         }
     };
+    if !spec.extra.contains_key("contacts") {
+        report.note(&json, "no foot contacts ('contacts'): detected from the meshes where needed");
+    }
     let template = template_of(set, subject, &spec, report)?;
     let topology = Topology::new(template.mesh.vertices.len(), &template.mesh.faces);
     let mut curves_ok = parts_ok;
@@ -282,6 +298,39 @@ fn check_subject(set: &CaptureSet, subject: &str, report: &mut Report) -> Option
         }
     }
     Some(template)
+}
+
+/// Notes what the set lacks that a lab may not have: true frame correspondences of
+/// the training pairs, and ground truth of the test motions.
+fn missing_annotations(set: &CaptureSet, set_json: &Path, report: &mut Report) {
+    let without: Vec<&str> = set
+        .spec
+        .train
+        .iter()
+        .filter(|t| !t.extra.contains_key("correspondences"))
+        .map(|t| t.source.as_str())
+        .collect();
+    if !without.is_empty() {
+        report.note(
+            set_json,
+            format!(
+                "no true frame correspondences ('correspondences') for {} of {} training pairs: the learning curves use the DTW pairs (labelled 'dtw')",
+                without.len(),
+                set.spec.train.len()
+            ),
+        );
+    }
+    let target = &set.spec.target;
+    let no_truth: Vec<&str> = set.spec.test.iter().filter(|m| !set.has_truth(target, m)).map(String::as_str).collect();
+    if !no_truth.is_empty() {
+        report.note(
+            set.root.join("truth").join(target),
+            format!(
+                "no ground truth of the test motions {}: their transfers are scored without it (per-frame confidence, foot sliding on the source's contacts, surface quality)",
+                no_truth.join(", ")
+            ),
+        );
+    }
 }
 
 /// Reads the subject's template (its `template` field, else the first frame

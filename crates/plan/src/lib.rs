@@ -11,6 +11,7 @@ pub mod per_part;
 pub mod resources;
 pub mod slurm;
 pub mod stage;
+pub mod subjects;
 pub mod step_line;
 pub mod task;
 pub mod task_table;

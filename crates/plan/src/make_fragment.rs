@@ -104,13 +104,12 @@ pub fn fragment(graph: &Graph, pipeline_out: &str) -> String {
     for (name, words) in &graph.variables {
         out.push_str(&format!("{name} := {}\n", make_escape(&words.join(" "))));
     }
-    let total = graph.tasks.len();
     for (i, task) in graph.tasks.iter().enumerate() {
         out.push('\n');
         let mut prereqs: Vec<String> = task.bins().iter().map(|b| format!("$(BIN)/{b}")).collect();
         prereqs.extend(task.inputs.iter().map(|i| make_escape(i)));
         out.push_str(&format!("{}: {}\n", make_escape(&task.target), prereqs.join(" ")));
-        for line in recipe(task, &label(task, pipeline_out), (i + 1, total)) {
+        for line in recipe(task, &label(task, pipeline_out), graph.place(i)) {
             out.push('\t');
             out.push_str(&line);
             out.push('\n');

@@ -156,6 +156,7 @@ pub fn graph(options: &PipelineOptions, part_tasks: PartTasks) -> Result<Graph> 
     let out = options.paths.pipeline_out.to_string_lossy().into_owned();
     let mut graph = Graph { part_tasks, ..Graph::default() };
     crate::transfer::plan(&set, &out, &options.transfer, &mut graph)?;
+    graph.transfer_tasks = graph.tasks.len();
     crate::variation::plan(&set, &out, &options.variation, &mut graph)?;
     Ok(graph)
 }

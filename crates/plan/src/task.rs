@@ -100,6 +100,10 @@ pub struct Graph {
     #[serde(skip)]
     pub part_tasks: crate::per_part::PartTasks,
     pub tasks: Vec<Task>,
+    /// How many of the first tasks are the transfer pipeline's (the rest are the variation's):
+    /// each pipeline's step lines count its own tasks.
+    #[serde(skip)]
+    pub transfer_tasks: usize,
     /// `(name, words)`: make variables, e.g. `TRANSFER_RECORDS` (the evaluation records).
     pub variables: Vec<(String, Vec<String>)>,
 }
@@ -113,6 +117,16 @@ impl Graph {
 
     pub fn variable(&mut self, name: &str, words: Vec<String>) {
         self.variables.push((name.to_string(), words));
+    }
+
+    /// The place (1-based) of task `i` among its pipeline's tasks, and their number.
+    pub fn place(&self, i: usize) -> (usize, usize) {
+        let t = self.transfer_tasks.min(self.tasks.len());
+        if i < t {
+            (i + 1, t)
+        } else {
+            (i + 1 - t, self.tasks.len() - t)
+        }
     }
 
     /// The task writing `target`, if any.

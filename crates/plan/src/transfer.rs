@@ -1,19 +1,22 @@
 //! The transfer pipeline's tasks (CVPR sections 4 to 7), from a capture set:
-//! per subject `segment`, `align` of every motion, `pca-fit` (per part and whole body); per
-//! training pair `dtw-densify`; per direction and method `gpr-train` (the part models and the
-//! regressors part by part, joined by `merge-parts`: [`per_part`]); per test motion
-//! `gpr-predict` (every placement for gpr-nn, plus correction and stitching, CVPR §6),
-//! `transfer-eval` where truth exists, contact sheets; the learning curves (CVPR figs. 7-9) and the
-//! paper figures 3, 5 and 10; and the merge of every evaluation record into `results.json`.
+//! per subject `propose-curves` when its description has no curves ([`crate::subjects`]),
+//! `segment`, `align` of every motion, `pca-fit` (per part and whole body); per training pair
+//! `dtw-densify`; per direction and method `gpr-train` (the part models and the regressors part
+//! by part, joined by `merge-parts`: [`per_part`]); per test motion `gpr-predict` (every
+//! placement for gpr-nn, plus correction and stitching, CVPR §6), `transfer-eval` (against the
+//! truth where it exists, always on the source's contacts), contact sheets; the learning curves
+//! (CVPR figs. 7-9, on the set's true correspondences or else the DTW pairs) and the paper
+//! figures 3, 5 and 10; and the merge of every evaluation record into `results.json`.
 
 use std::collections::BTreeMap;
 use std::path::Path;
 
 use anyhow::{Context, Result};
-use mesh_core::capture_set::{CaptureSet, SubjectSpec};
+use mesh_core::capture_set::CaptureSet;
 
 use crate::options::{value_name, Method, Placement, TransferOptions};
 use crate::per_part;
+use crate::subjects::{subject, Subject};
 use crate::task::{s, Graph, Step, Task};
 
 /// Path strings joined as the command line shows them.
@@ -47,369 +50,459 @@ pub fn fmt_g(x: f64) -> String {
     trim(&format!("{:.*}", (5 - exp) as usize, x))
 }
 
-/// Adds the transfer pipeline's tasks and its variables (`TRANSFER_RECORDS`, `TRANSFER_STAMPS`,
-/// `TRANSFER_REPORT_VIEWS`) to `graph`. `out` is the pipeline's output folder.
-pub fn plan(set: &CaptureSet, out: &str, opt: &TransferOptions, graph: &mut Graph) -> Result<()> {
-    let root = &set.root;
-    let w = format!("{out}/work");
-    let (src_subj, tgt_subj) = (set.spec.source.clone(), set.spec.target.clone());
-    let subjects = [src_subj.clone(), tgt_subj.clone()];
-    let mut spec: BTreeMap<String, SubjectSpec> = BTreeMap::new();
-    let mut tpl: BTreeMap<String, String> = BTreeMap::new();
-    for x in &subjects {
-        let sp = SubjectSpec::load(set.subject_json(x))?;
-        tpl.insert(x.clone(), set.template_path(x, &sp)?.to_string_lossy().into_owned());
-        spec.insert(x.clone(), sp);
-    }
-    let train: BTreeMap<&str, Vec<String>> = BTreeMap::from([
-        (src_subj.as_str(), set.spec.train.iter().map(|p| p.source.clone()).collect()),
-        (tgt_subj.as_str(), set.spec.train.iter().map(|p| p.target.clone()).collect()),
-    ]);
-    let seg = |x: &str| format!("{w}/{x}/parts.seg");
-    let aligned = |x: &str, m: &str| format!("{w}/{x}/{m}.aligned");
-    let pca = |x: &str, kind: &str| format!("{w}/{x}/{kind}.model");
-    // transfer-eval's foot-sliding inputs: the subject's truth contacts, its parts and its template.
-    let feet = |x: &str| {
-        vec![
-            s("--contacts"),
-            set.subject_json(x).to_string_lossy().into_owned(),
-            s("--segmentation"),
-            seg(x),
-            s("--template"),
-            tpl[x].clone(),
-        ]
-    };
-    let mut records: Vec<String> = Vec::new();
-    let mut stamps: Vec<String> = Vec::new();
+/// What every part of the transfer plan shares: the set, the output folders, the options, the
+/// two subjects as the stages see them, and each subject's training motions.
+struct Plan<'a> {
+    set: &'a CaptureSet,
+    out: &'a str,
+    work: String,
+    opt: &'a TransferOptions,
+    subjects: BTreeMap<String, Subject>,
+    train: BTreeMap<String, Vec<String>>,
+    /// Every evaluation record (results.json's rows) and every other product of the run.
+    records: Vec<String>,
+    stamps: Vec<String>,
+}
 
-    for x in &subjects {
-        for m in set.motions(x)? {
-            let frames = set.frames(x, &m).with_context(|| format!("subject {x}, motion {m}"))?;
-            let subject = set.subject_json(x).to_string_lossy().into_owned();
-            let mut inputs = vec![subject.clone(), tpl[x].clone(), seg(x)];
+/// One direction of the transfer: from `src` onto `tgt`, its test motions, and whether it is the
+/// set's reverse direction (`gpr-train --reverse`).
+struct Direction<'a> {
+    src: &'a str,
+    tgt: &'a str,
+    reverse: bool,
+    tests: Vec<String>,
+}
+
+impl Direction<'_> {
+    fn name(&self) -> String {
+        format!("{}-to-{}", self.src, self.tgt)
+    }
+    fn label(&self) -> String {
+        format!("{}->{}", self.src, self.tgt)
+    }
+}
+
+impl<'a> Plan<'a> {
+    fn seg(&self, x: &str) -> String {
+        format!("{}/{x}/parts.seg", self.work)
+    }
+    fn aligned(&self, x: &str, m: &str) -> String {
+        format!("{}/{x}/{m}.aligned", self.work)
+    }
+    fn pca(&self, x: &str, kind: &str) -> String {
+        format!("{}/{x}/{kind}.model", self.work)
+    }
+    fn template(&self, x: &str) -> String {
+        self.subjects[x].template.clone()
+    }
+    fn truth(&self, x: &str, m: &str) -> Option<String> {
+        self.set.has_truth(x, m).then(|| self.set.truth_dir(x, m).to_string_lossy().into_owned())
+    }
+    /// transfer-eval's foot-sliding inputs against the truth: the target's truth contacts, its
+    /// parts and its template.
+    fn truth_feet(&self, x: &str) -> Vec<String> {
+        vec![
+            s("--contacts"), self.subjects[x].json.clone(), s("--segmentation"), self.seg(x), s("--template"),
+            self.template(x),
+        ]
+    }
+
+    /// `align` of every motion, `segment`, and the per-part and whole-body `pca-fit` of subject `x`.
+    fn front_end(&mut self, x: &str, graph: &mut Graph) -> Result<()> {
+        let subject = self.subjects[x].json.clone();
+        for m in self.set.motions(x)? {
+            let frames = self.set.frames(x, &m).with_context(|| format!("subject {x}, motion {m}"))?;
+            let mut inputs = vec![subject.clone(), self.template(x), self.seg(x)];
             inputs.extend(frames.iter().map(|f| f.to_string_lossy().into_owned()));
             let args = vec![
-                s("-q"), s("--frame"), value_name(opt.align_frame), s("--segmentation"), seg(x),
-                s("--subject"), subject, s("--template"), tpl[x].clone(), join(root, &[x, &m]),
-                s("--out"), aligned(x, &m),
+                s("-q"), s("--frame"), value_name(self.opt.align_frame), s("--segmentation"), self.seg(x),
+                s("--subject"), subject.clone(), s("--template"), self.template(x), join(&self.set.root, &[x, &m]),
+                s("--out"), self.aligned(x, &m),
             ];
-            graph.push(Task::run("align", aligned(x, &m), inputs, args).mkdir_target());
+            graph.push(Task::run("align", self.aligned(x, &m), inputs, args).mkdir_target());
         }
-        let subject_json = set.subject_json(x).to_string_lossy().into_owned();
         graph.push(
             Task::run(
                 "segment",
-                seg(x),
-                vec![subject_json.clone(), tpl[x].clone()],
-                vec![s("-q"), subject_json, s("--template"), tpl[x].clone(), s("--out"), seg(x)],
+                self.seg(x),
+                vec![subject.clone(), self.template(x)],
+                vec![s("-q"), subject, s("--template"), self.template(x), s("--out"), self.seg(x)],
             )
             .mkdir_target(),
         );
-        let training: Vec<String> = train[x.as_str()].iter().map(|m| aligned(x, m)).collect();
-        let mut inputs = vec![seg(x)];
+        let training: Vec<String> = self.train[x].iter().map(|m| self.aligned(x, m)).collect();
+        let mut inputs = vec![self.seg(x)];
         inputs.extend(training.iter().cloned());
         let mut args = vec![
-            s("-q"), s("--components"), opt.pca_components.to_string(), s("--part-alignment"),
-            value_name(opt.part_alignment), s("--template"), tpl[x].clone(), s("--segmentation"), seg(x),
+            s("-q"), s("--components"), self.opt.pca_components.to_string(), s("--part-alignment"),
+            value_name(self.opt.part_alignment), s("--template"), self.template(x), s("--segmentation"),
+            self.seg(x),
         ];
         args.extend(training.iter().cloned());
-        let parts: Vec<String> = spec[x].parts.keys().cloned().collect();
-        let report = format!("{w}/{x}/pca.json");
-        for t in per_part::fit(graph.part_tasks, "pca-fit", &pca(x, "pca"), Some(&report), inputs, args, &parts) {
+        let parts = self.subjects[x].parts.clone();
+        let report = format!("{}/{x}/pca.json", self.work);
+        for t in per_part::fit(graph.part_tasks, "pca-fit", &self.pca(x, "pca"), Some(&report), inputs, args, &parts) {
             graph.push(t);
         }
         // The whole-body comparison at the parts' total dimension (CVPR fig. 9: "equivalent
         // total number of input and output dimensions").
-        let whole = opt.pca_components as usize * spec[x].parts.len();
+        let whole = self.opt.pca_components as usize * parts.len();
         let mut args = vec![
-            s("-q"), s("--whole-body"), s("--components"), whole.to_string(), s("--template"),
-            tpl[x].clone(),
+            s("-q"), s("--whole-body"), s("--components"), whole.to_string(), s("--template"), self.template(x),
         ];
         args.extend(training.iter().cloned());
-        args.extend([s("--out"), pca(x, "pca-whole"), s("--report"), format!("{w}/{x}/pca-whole.json")]);
-        graph.push(Task::run("pca-fit", pca(x, "pca-whole"), training.clone(), args));
+        args.extend([
+            s("--out"), self.pca(x, "pca-whole"), s("--report"), format!("{}/{x}/pca-whole.json", self.work),
+        ]);
+        graph.push(Task::run("pca-fit", self.pca(x, "pca-whole"), training, args));
+        Ok(())
     }
 
-    let set_json = set.set_json().to_string_lossy().into_owned();
-    let (sn, tn) = (src_subj.as_str(), tgt_subj.as_str());
-    let mut pair_args: Vec<String> = Vec::new();
-    let mut corrs: Vec<String> = Vec::new();
-    for p in &set.spec.train {
-        let c = format!("{w}/pairs/{}.corr", p.source);
-        let (sa, ta) = (aligned(sn, &p.source), aligned(tn, &p.target));
-        let args = vec![
-            s("-q"), s("--set"), join(root, &[]), s("--motion"), p.source.clone(), s("--source-pca"),
-            pca(sn, "pca"), s("--target-pca"), pca(tn, "pca"), sa.clone(),
-            ta.clone(), s("--out"), c.clone(), s("--report"), format!("{w}/pairs/{}.json", p.source),
-        ];
-        let inputs = vec![set_json.clone(), sa.clone(), ta.clone(), pca(sn, "pca"), pca(tn, "pca")];
-        graph.push(Task::run("dtw-densify", c.clone(), inputs, args).mkdir_target());
-        pair_args.extend([s("--pair"), sa.clone(), ta.clone(), c.clone()]);
-        corrs.extend([sa, ta, c]);
+    /// `dtw-densify` of every training pair; returns `gpr-train`'s `--pair` arguments and the
+    /// files they name.
+    fn pairs(&self, graph: &mut Graph) -> (Vec<String>, Vec<String>) {
+        let (sn, tn) = (self.set.spec.source.as_str(), self.set.spec.target.as_str());
+        let set_json = self.set.set_json().to_string_lossy().into_owned();
+        let (mut pair_args, mut files) = (Vec::new(), Vec::new());
+        for p in &self.set.spec.train {
+            let c = format!("{}/pairs/{}.corr", self.work, p.source);
+            let (sa, ta) = (self.aligned(sn, &p.source), self.aligned(tn, &p.target));
+            let args = vec![
+                s("-q"), s("--set"), join(&self.set.root, &[]), s("--motion"), p.source.clone(), s("--source-pca"),
+                self.pca(sn, "pca"), s("--target-pca"), self.pca(tn, "pca"), sa.clone(), ta.clone(), s("--out"),
+                c.clone(), s("--report"), format!("{}/pairs/{}.json", self.work, p.source),
+            ];
+            let inputs = vec![set_json.clone(), sa.clone(), ta.clone(), self.pca(sn, "pca"), self.pca(tn, "pca")];
+            graph.push(Task::run("dtw-densify", c.clone(), inputs, args).mkdir_target());
+            pair_args.extend([s("--pair"), sa.clone(), ta.clone(), c.clone()]);
+            files.extend([sa, ta, c]);
+        }
+        (pair_args, files)
     }
 
-    // Directions: forward tests the set's test motions; reverse tests the target's motions that
-    // have truth for the source subject (plus an optional "target_test" list in set.json).
-    let mut rev_tests: Vec<String> = set
-        .motions(tn)?
-        .into_iter()
-        .filter(|m| set.has_truth(sn, m))
-        .collect();
-    if let Some(extra) = set.spec.extra.get("target_test").and_then(|v| v.as_array()) {
-        for m in extra.iter().filter_map(|v| v.as_str()) {
-            if !rev_tests.iter().any(|r| r == m) {
-                rev_tests.push(m.to_string());
+    /// The two directions: forward tests the set's test motions; reverse tests the target's
+    /// motions that have truth for the source subject (plus `target_test` of set.json).
+    fn directions(&self) -> Result<[Direction<'a>; 2]> {
+        let set: &'a CaptureSet = self.set;
+        let (sn, tn) = (set.spec.source.as_str(), set.spec.target.as_str());
+        let mut rev_tests: Vec<String> =
+            self.set.motions(tn)?.into_iter().filter(|m| self.set.has_truth(sn, m)).collect();
+        if let Some(extra) = self.set.spec.extra.get("target_test").and_then(|v| v.as_array()) {
+            for m in extra.iter().filter_map(|v| v.as_str()) {
+                if !rev_tests.iter().any(|r| r == m) {
+                    rev_tests.push(m.to_string());
+                }
             }
         }
+        rev_tests.sort();
+        Ok([
+            Direction { src: sn, tgt: tn, reverse: false, tests: self.set.spec.test.clone() },
+            Direction { src: tn, tgt: sn, reverse: true, tests: rev_tests },
+        ])
     }
-    rev_tests.sort();
-    let directions = [
-        (sn, tn, false, set.spec.test.clone()),
-        (tn, sn, true, rev_tests),
-    ];
-    let mut variants: Vec<(String, Method, bool)> =
-        opt.methods.iter().map(|m| (m.name().to_string(), *m, false)).collect();
-    variants.push(("gpr-nn-keyposes".into(), Method::GprNn, true));
-    let default_pl = opt.placement;
-    for (src, tgt, rev, tests) in &directions {
-        let (src, tgt) = (*src, *tgt);
-        let dn = format!("{src}-to-{tgt}");
-        let label = format!("{src}->{tgt}");
+
+    /// A `transfer-eval` task of the sequence `seq` of test motion `m` made by the model `name`
+    /// (its record's `method`, `placement` and `training` in `label`): against the truth where
+    /// it exists, and always on the source's contacts (sliding, floor offset).
+    fn eval(&mut self, d: &Direction, m: &str, seq: &str, name: &str, label: (&str, Placement, &str), after: String, graph: &mut Graph) -> String {
+        let (method, placement, training) = label;
+        let rec = format!("{}/eval/{}/{m}/{name}-{}.json", self.work, d.name(), placement.name());
+        let mut args = vec![s("-q"), s(seq)];
+        let mut inputs = vec![after, self.aligned(d.src, m), self.pca(d.src, "pca"), self.pca(d.tgt, "pca")];
+        if let Some(truth) = self.truth(d.tgt, m) {
+            args.push(truth);
+            args.extend(self.truth_feet(d.tgt));
+            inputs.push(self.subjects[d.tgt].json.clone());
+        }
+        args.extend([
+            s("--source-motion"), self.aligned(d.src, m), s("--source-pca"), self.pca(d.src, "pca"), s("--target-pca"),
+            self.pca(d.tgt, "pca"), s("--direction"), d.label(), s("--motion"), s(m), s("--method"), s(method),
+            s("--placement"), placement.name().into(), s("--correspondences"), s(training), s("--out"), rec.clone(),
+        ]);
+        let rec = graph.push(Task::run("transfer-eval", rec, inputs, args).mkdir_target());
+        self.records.push(rec.clone());
+        rec
+    }
+
+    /// The models of direction `d` (every method, and gpr-nn on key-poses only), the transfer of
+    /// each test motion with each, and their evaluations and contact sheets.
+    fn direction(&mut self, d: &Direction, pairs: &(Vec<String>, Vec<String>), graph: &mut Graph) {
+        let mut variants: Vec<(String, Method, bool)> =
+            self.opt.methods.iter().map(|m| (m.name().to_string(), *m, false)).collect();
+        variants.push(("gpr-nn-keyposes".into(), Method::GprNn, true));
         for (name, method, keys) in &variants {
             let kind = if *method == Method::WholeBody { "pca-whole" } else { "pca" };
-            let model = format!("{w}/models/{dn}/{name}.model");
-            let mut inputs = vec![pca(src, kind), pca(tgt, kind)];
-            inputs.extend(corrs.iter().cloned());
-            let mut args = vec![s("-q"), s("--mean"), value_name(opt.gpr_mean)];
-            args.extend(crate::options::words(&opt.gpr_train_flags));
+            let model = format!("{}/models/{}/{name}.model", self.work, d.name());
+            let mut inputs = vec![self.pca(d.src, kind), self.pca(d.tgt, kind)];
+            inputs.extend(pairs.1.iter().cloned());
+            let mut args = vec![s("-q"), s("--mean"), value_name(self.opt.gpr_mean)];
+            args.extend(crate::options::words(&self.opt.gpr_train_flags));
             args.extend([s("--method"), method.name().to_string()]);
             if *keys {
                 args.push(s("--keyposes-only"));
             }
-            if *rev {
+            if d.reverse {
                 args.push(s("--reverse"));
             }
-            args.extend([
-                s("--source-pca"), pca(src, kind), s("--target-pca"), pca(tgt, kind),
-            ]);
-            args.extend(pair_args.iter().cloned());
+            args.extend([s("--source-pca"), self.pca(d.src, kind), s("--target-pca"), self.pca(d.tgt, kind)]);
+            args.extend(pairs.0.iter().cloned());
             // One regressor per part of the PCA models, and the displacement's.
             let mut units: Vec<String> = match method {
                 Method::WholeBody => vec![s("body")],
-                _ => spec[src].parts.keys().cloned().collect(),
+                _ => self.subjects[d.src].parts.clone(),
             };
             units.push(s("displacement"));
             for t in per_part::fit(graph.part_tasks, "gpr-train", &model, None, inputs, args, &units) {
                 graph.push(t);
             }
-            stamps.push(model.clone());
-            for m in tests {
-                if !set.motion_dir(src, m).is_dir() {
+            self.stamps.push(model.clone());
+            for m in &d.tests {
+                if !self.set.motion_dir(d.src, m).is_dir() {
                     continue;
                 }
-                let truth = set.truth_dir(tgt, m).to_string_lossy().into_owned();
-                let has_truth = set.has_truth(tgt, m);
-                let mut places = vec![default_pl];
+                self.predictions(d, m, (name, *method, *keys), &model, kind, graph);
                 if name == "gpr-nn" {
-                    let all = [Placement::ScaledSource, Placement::Regressed, Placement::Blended];
-                    places.extend(all.into_iter().filter(|&p| p != default_pl));
+                    self.surface_methods(d, m, &model, graph);
+                    self.transfer_sheet(d, m, graph);
                 }
-                for pl in places {
-                    let seq = if pl == default_pl {
-                        format!("{out}/transfer/{dn}/{m}/{name}")
-                    } else {
-                        format!("{w}/placement/{dn}/{m}/{}", pl.name())
-                    };
-                    let timing = format!("{w}/predict/{dn}/{m}/{name}-{}.json", pl.name());
-                    let args = vec![
-                        s("-q"), s("--model"), model.clone(), s("--source-pca"), pca(src, kind),
-                        s("--target-pca"), pca(tgt, kind), s("--target-template"), tpl[tgt].clone(),
-                        s("--placement"), pl.name().into(), aligned(src, m), s("--out"), seq.clone(),
-                        s("--timing"), timing.clone(),
-                    ];
-                    let inputs = vec![model.clone(), aligned(src, m)];
-                    stamps.push(graph.push(Task::run("gpr-predict", timing.clone(), inputs, args).mkdir_target()));
-                    if has_truth {
-                        let rec = format!("{w}/eval/{dn}/{m}/{name}-{}.json", pl.name());
-                        let mut args = vec![s("-q"), seq.clone(), truth.clone()];
-                        args.extend(feet(tgt));
-                        args.extend([
-                            s("--direction"), label.clone(), s("--motion"), m.clone(), s("--method"),
-                            method.name().into(), s("--placement"), pl.name().into(), s("--correspondences"),
-                            s(if *keys { "keyposes" } else { "dense" }), s("--out"), rec.clone(),
-                        ]);
-                        records.push(graph.push(Task::run("transfer-eval", rec, vec![timing.clone()], args).mkdir_target()));
-                    }
-                }
-                if name != "gpr-nn" {
-                    continue;
-                }
-                // CVPR §6 after the regression: correction (M = 3), then stitching.
-                let training: Vec<String> = train[tgt].iter().map(|t| aligned(tgt, t)).collect();
-                for (surf, meth) in [("correct", "gpr-nn+correct"), ("correct-stitch", "gpr-nn+correct+stitch")] {
-                    let seq = format!("{out}/transfer/{dn}/{m}/{meth}");
-                    let timing = format!("{w}/predict/{dn}/{m}/{meth}-{}.json", default_pl.name());
-                    // Per-frame confidence (docs/FORMATS.md) beside the full pipeline's output.
-                    let conf_dir = format!("{w}/confidence/{dn}");
-                    let conf = format!("{conf_dir}/{m}.json");
-                    let mut inputs = vec![model.clone(), aligned(src, m), seg(tgt)];
-                    inputs.extend(training.iter().cloned());
-                    let mut args = vec![
-                        s("-q"), s("--model"), model.clone(), s("--source-pca"), pca(src, "pca"),
-                        s("--target-pca"), pca(tgt, "pca"), s("--target-template"), tpl[tgt].clone(),
-                        s("--placement"), default_pl.name().into(), s("--surface"), s(surf),
-                        s("--segmentation"), seg(tgt),
-                    ];
-                    for t in &training {
-                        args.extend([s("--target-training"), t.clone()]);
-                    }
-                    args.extend([s("-m"), s("3"), aligned(src, m), s("--out"), seq.clone(), s("--timing"), timing.clone()]);
-                    if surf == "correct-stitch" {
-                        args.extend([s("--confidence"), conf.clone()]);
-                    }
-                    stamps.push(graph.push(
-                        Task::run("gpr-predict", timing.clone(), inputs, args).mkdir_target().mkdir(conf_dir),
-                    ));
-                    let rec = format!("{w}/eval/{dn}/{m}/{meth}-{}.json", default_pl.name());
-                    if has_truth {
-                        let mut args = vec![s("-q"), seq.clone(), truth.clone()];
-                        args.extend(feet(tgt));
-                        args.extend([
-                            s("--direction"), label.clone(), s("--motion"), m.clone(), s("--method"),
-                            s(meth), s("--placement"), default_pl.name().into(), s("--correspondences"),
-                            s("dense"), s("--out"), rec.clone(),
-                        ]);
-                        records.push(graph.push(Task::run("transfer-eval", rec.clone(), vec![timing.clone()], args).mkdir_target()));
-                    }
-                    if surf == "correct-stitch" {
-                        // Per-frame confidence beside the error (where truth exists), for the report.
-                        let plot = format!("{out}/figures/confidence-{dn}-{m}.png");
-                        let mut inputs = vec![timing.clone()];
-                        let mut args = vec![s("confidence"), s("-q"), s("--confidence"), conf.clone()];
-                        if has_truth {
-                            inputs.push(rec.clone());
-                            args.extend([s("--eval"), rec.clone()]);
-                        }
-                        args.extend([
-                            s("--title"), format!("{label} {m}: confidence and error per frame"), s("--out"),
-                            plot.clone(),
-                        ]);
-                        stamps.push(graph.push(Task::run("paper-figure", plot, inputs, args).mkdir_target()));
-                    }
-                    let sheet = format!("{out}/render/{dn}/{m}/{meth}/contact.png");
-                    let mut seqs = vec![join(root, &[src, m]), seq.clone()];
-                    if has_truth {
-                        seqs.push(truth.clone());
-                    }
-                    let labels = format!("source,{meth}{}", if has_truth { ",truth" } else { "" });
-                    stamps.push(graph.push(render_sheet(&sheet, vec![timing.clone()], &labels, false, seqs)));
-                }
-                let sheet = format!("{out}/render/{dn}/{m}/contact.png");
-                let mut seqs = vec![join(root, &[src, m]), format!("{out}/transfer/{dn}/{m}/gpr-nn")];
-                let mut labels = s("source,transfer");
-                if has_truth {
-                    seqs.push(truth.clone());
-                    labels.push_str(",truth");
-                }
-                let timing = format!("{w}/predict/{dn}/{m}/gpr-nn-{}.json", default_pl.name());
-                stamps.push(graph.push(render_sheet(&sheet, vec![timing], &labels, false, seqs)));
             }
         }
     }
 
-    // Learning curves (CVPR figs. 7-9) on the set's true correspondences, errors against the true
-    // parts (PCA truncation included), the paper's zero-mean GPs; the whole body at the parts'
-    // total dimensions (fitted by learning-curves itself).
-    let lc = format!("{out}/learning-curves/learning_curves.csv");
-    let mut inputs = vec![set_json.clone(), pca(sn, "pca"), pca(tn, "pca")];
-    let mut args = vec![
-        s("-q"), s("--seed"), s("0"), s("--mean"), s("zero"), s("--set"), join(root, &[]),
-        s("--source-pca"), pca(sn, "pca"), s("--target-pca"), pca(tn, "pca"),
-        s("--source-name"), s(sn), s("--target-name"), s(tn),
-    ];
-    for p in &set.spec.train {
-        args.extend([s("--true-pair"), p.source.clone(), aligned(sn, &p.source), aligned(tn, &p.target)]);
+    /// `gpr-predict` of test motion `m` with one model (gpr-nn at every placement) and the
+    /// evaluations.
+    fn predictions(&mut self, d: &Direction, m: &str, variant: (&str, Method, bool), model: &str, kind: &str, graph: &mut Graph) {
+        let (name, method, keys) = variant;
+        let default_pl = self.opt.placement;
+        let mut places = vec![default_pl];
+        if name == "gpr-nn" {
+            let all = [Placement::ScaledSource, Placement::Regressed, Placement::Blended];
+            places.extend(all.into_iter().filter(|&p| p != default_pl));
+        }
+        for pl in places {
+            let dn = d.name();
+            let seq = if pl == default_pl {
+                format!("{}/transfer/{dn}/{m}/{name}", self.out)
+            } else {
+                format!("{}/placement/{dn}/{m}/{}", self.work, pl.name())
+            };
+            let timing = format!("{}/predict/{dn}/{m}/{name}-{}.json", self.work, pl.name());
+            let args = vec![
+                s("-q"), s("--model"), s(model), s("--source-pca"), self.pca(d.src, kind), s("--target-pca"),
+                self.pca(d.tgt, kind), s("--target-template"), self.template(d.tgt), s("--placement"),
+                pl.name().into(), self.aligned(d.src, m), s("--out"), seq.clone(), s("--timing"), timing.clone(),
+            ];
+            let inputs = vec![s(model), self.aligned(d.src, m)];
+            self.stamps.push(graph.push(Task::run("gpr-predict", timing.clone(), inputs, args).mkdir_target()));
+            let training = if keys { "keyposes" } else { "dense" };
+            self.eval(d, m, &seq, name, (method.name(), pl, training), timing, graph);
+        }
     }
-    for p in &set.spec.train {
-        inputs.extend([aligned(sn, &p.source), aligned(tn, &p.target)]);
+
+    /// The contact sheet of test motion `m`: source, gpr-nn's transfer and the truth if any.
+    fn transfer_sheet(&mut self, d: &Direction, m: &str, graph: &mut Graph) {
+        let default_pl = self.opt.placement;
+        {
+            let sheet = format!("{}/render/{dn}/{m}/contact.png", self.out, dn = d.name());
+            let mut seqs = vec![join(&self.set.root, &[d.src, m]), format!("{}/transfer/{}/{m}/gpr-nn", self.out, d.name())];
+            let mut labels = s("source,transfer");
+            if let Some(truth) = self.truth(d.tgt, m) {
+                seqs.push(truth);
+                labels.push_str(",truth");
+            }
+            let timing = format!("{}/predict/{}/{m}/gpr-nn-{}.json", self.work, d.name(), default_pl.name());
+            self.stamps.push(graph.push(render_sheet(&sheet, vec![timing], &labels, false, seqs)));
+        }
     }
-    args.extend([s("--out"), crate::task::parent(&lc)]);
-    stamps.push(graph.push(Task::run("learning-curves", lc, inputs, args).mkdir_target()));
 
-    // CVPR fig. 3: the association cost of the first training pair, its DTW path, key-poses and truth.
-    let p0 = &set.spec.train[0];
-    let fig3 = format!("{out}/figures/fig3-{}.png", p0.source);
-    let inputs = vec![pca(sn, "pca"), pca(tn, "pca"), aligned(sn, &p0.source), aligned(tn, &p0.target)];
-    let args = vec![
-        s("cost-matrix"), s("-q"), s("--set"), join(root, &[]), s("--motion"), p0.source.clone(),
-        s("--source-pca"), pca(sn, "pca"), s("--target-pca"), pca(tn, "pca"), aligned(sn, &p0.source),
-        aligned(tn, &p0.target), s("--out"), fig3.clone(),
-    ];
-    stamps.push(graph.push(Task::run("paper-figure", fig3, inputs, args).mkdir_target()));
+    /// CVPR §6 after the regression: correction (M = 3), then stitching, of test motion `m`
+    /// with gpr-nn; their evaluations, the per-frame confidence figure and contact sheets.
+    fn surface_methods(&mut self, d: &Direction, m: &str, model: &str, graph: &mut Graph) {
+        let default_pl = self.opt.placement;
+        let dn = d.name();
+        let training: Vec<String> = self.train[d.tgt].iter().map(|t| self.aligned(d.tgt, t)).collect();
+        let truth = self.truth(d.tgt, m);
+        for (surf, meth) in [("correct", "gpr-nn+correct"), ("correct-stitch", "gpr-nn+correct+stitch")] {
+            let seq = format!("{}/transfer/{dn}/{m}/{meth}", self.out);
+            let timing = format!("{}/predict/{dn}/{m}/{meth}-{}.json", self.work, default_pl.name());
+            // Per-frame confidence (docs/FORMATS.md) beside the full pipeline's output.
+            let conf_dir = format!("{}/confidence/{dn}", self.work);
+            let conf = format!("{conf_dir}/{m}.json");
+            let mut inputs = vec![s(model), self.aligned(d.src, m), self.seg(d.tgt)];
+            inputs.extend(training.iter().cloned());
+            let mut args = vec![
+                s("-q"), s("--model"), s(model), s("--source-pca"), self.pca(d.src, "pca"), s("--target-pca"),
+                self.pca(d.tgt, "pca"), s("--target-template"), self.template(d.tgt), s("--placement"),
+                default_pl.name().into(), s("--surface"), s(surf), s("--segmentation"), self.seg(d.tgt),
+            ];
+            for t in &training {
+                args.extend([s("--target-training"), t.clone()]);
+            }
+            args.extend([s("-m"), s("3"), self.aligned(d.src, m), s("--out"), seq.clone(), s("--timing"), timing.clone()]);
+            if surf == "correct-stitch" {
+                args.extend([s("--confidence"), conf.clone()]);
+            }
+            self.stamps.push(graph.push(
+                Task::run("gpr-predict", timing.clone(), inputs, args).mkdir_target().mkdir(conf_dir),
+            ));
+            let rec = self.eval(d, m, &seq, meth, (meth, default_pl, "dense"), timing.clone(), graph);
+            if surf == "correct-stitch" {
+                // Per-frame confidence beside the error (where truth exists), for the report.
+                let plot = format!("{}/figures/confidence-{dn}-{m}.png", self.out);
+                let mut inputs = vec![timing.clone()];
+                let mut args = vec![s("confidence"), s("-q"), s("--confidence"), conf.clone()];
+                if truth.is_some() {
+                    inputs.push(rec.clone());
+                    args.extend([s("--eval"), rec.clone()]);
+                }
+                args.extend([
+                    s("--title"), format!("{} {m}: confidence and error per frame", d.label()), s("--out"),
+                    plot.clone(),
+                ]);
+                self.stamps.push(graph.push(Task::run("paper-figure", plot, inputs, args).mkdir_target()));
+            }
+            let sheet = format!("{}/render/{dn}/{m}/{meth}/contact.png", self.out);
+            let mut seqs = vec![join(&self.set.root, &[d.src, m]), seq.clone()];
+            seqs.extend(truth.clone());
+            let labels = format!("source,{meth}{}", if truth.is_some() { ",truth" } else { "" });
+            self.stamps.push(graph.push(render_sheet(&sheet, vec![timing.clone()], &labels, false, seqs)));
+        }
+    }
 
-    // CVPR fig. 5 (a correction example) and fig. 10 (every method's raw output on one motion):
-    // the first forward test motion.
-    let mut views = Vec::new();
-    if let Some(m0) = directions[0].3.first() {
+    /// Learning curves (CVPR figs. 7-9), errors against the true parts (PCA truncation
+    /// included), the paper's zero-mean GPs; the whole body at the parts' total dimensions
+    /// (fitted by learning-curves itself). On the set's true correspondences when every training
+    /// pair has them, else on the DTW pairs (labelled `dtw` in the CSV and the figures).
+    fn learning_curves(&mut self, pairs: &(Vec<String>, Vec<String>), graph: &mut Graph) {
+        let (sn, tn) = (self.set.spec.source.as_str(), self.set.spec.target.as_str());
+        let lc = format!("{}/learning-curves/learning_curves.csv", self.out);
+        let mut inputs = vec![self.set.set_json().to_string_lossy().into_owned(), self.pca(sn, "pca"), self.pca(tn, "pca")];
+        let mut args = vec![
+            s("-q"), s("--seed"), s("0"), s("--mean"), s("zero"), s("--set"), join(&self.set.root, &[]),
+            s("--source-pca"), self.pca(sn, "pca"), s("--target-pca"), self.pca(tn, "pca"), s("--source-name"), s(sn),
+            s("--target-name"), s(tn),
+        ];
+        let true_pairs = self.set.spec.train.iter().all(|p| p.extra.contains_key("correspondences"));
+        if true_pairs {
+            for p in &self.set.spec.train {
+                args.extend([s("--true-pair"), p.source.clone(), self.aligned(sn, &p.source), self.aligned(tn, &p.target)]);
+            }
+            for p in &self.set.spec.train {
+                inputs.extend([self.aligned(sn, &p.source), self.aligned(tn, &p.target)]);
+            }
+        } else {
+            args.extend(pairs.0.iter().cloned());
+            inputs.extend(pairs.1.iter().cloned());
+        }
+        args.extend([s("--out"), crate::task::parent(&lc)]);
+        self.stamps.push(graph.push(Task::run("learning-curves", lc, inputs, args).mkdir_target()));
+    }
+
+    /// CVPR fig. 3 (the association cost of the first training pair, its DTW path, key-poses
+    /// and truth), fig. 5 (a correction example) and fig. 10 (every method's raw output) on the
+    /// first forward test motion; returns the report's 3D views.
+    fn figures(&mut self, first_test: Option<&str>, graph: &mut Graph) -> Vec<String> {
+        let (sn, tn) = (self.set.spec.source.clone(), self.set.spec.target.clone());
+        let (sn, tn) = (sn.as_str(), tn.as_str());
+        let set: &'a CaptureSet = self.set;
+        let p0 = &set.spec.train[0];
+        let fig3 = format!("{}/figures/fig3-{}.png", self.out, p0.source);
+        let inputs = vec![
+            self.pca(sn, "pca"), self.pca(tn, "pca"), self.aligned(sn, &p0.source), self.aligned(tn, &p0.target),
+        ];
+        let args = vec![
+            s("cost-matrix"), s("-q"), s("--set"), join(&self.set.root, &[]), s("--motion"), p0.source.clone(),
+            s("--source-pca"), self.pca(sn, "pca"), s("--target-pca"), self.pca(tn, "pca"),
+            self.aligned(sn, &p0.source), self.aligned(tn, &p0.target), s("--out"), fig3.clone(),
+        ];
+        self.stamps.push(graph.push(Task::run("paper-figure", fig3, inputs, args).mkdir_target()));
+
+        let Some(m0) = first_test else { return Vec::new() };
         let dn0 = format!("{sn}-to-{tn}");
-        let model0 = format!("{w}/models/{dn0}/gpr-nn.model");
-        let training: Vec<String> = train[tn].iter().map(|t| aligned(tn, t)).collect();
-        let truth0 = set.truth_dir(tn, m0).to_string_lossy().into_owned();
-        let has_truth0 = set.has_truth(tn, m0);
-        let fig5 = format!("{out}/figures/fig5-{m0}.png");
-        let mut inputs = vec![model0.clone(), seg(tn), aligned(sn, m0)];
+        let model0 = format!("{}/models/{dn0}/gpr-nn.model", self.work);
+        let training: Vec<String> = self.train[tn].iter().map(|t| self.aligned(tn, t)).collect();
+        let truth0 = self.truth(tn, m0);
+        let fig5 = format!("{}/figures/fig5-{m0}.png", self.out);
+        let mut inputs = vec![model0.clone(), self.seg(tn), self.aligned(sn, m0)];
         inputs.extend(training.iter().cloned());
         let mut args = vec![
-            s("correction"), s("-q"), s("--model"), model0, s("--source-pca"), pca(sn, "pca"),
-            s("--target-pca"), pca(tn, "pca"), s("--segmentation"), seg(tn),
+            s("correction"), s("-q"), s("--model"), model0, s("--source-pca"), self.pca(sn, "pca"),
+            s("--target-pca"), self.pca(tn, "pca"), s("--segmentation"), self.seg(tn),
         ];
         for t in &training {
             args.extend([s("--target-training"), t.clone()]);
         }
-        if has_truth0 {
-            args.extend([s("--truth"), truth0.clone()]);
+        if let Some(t) = &truth0 {
+            args.extend([s("--truth"), t.clone()]);
         }
         args.extend([
-            s("--size"), s("300"), aligned(sn, m0), s("--out"), fig5.clone(), s("--report"),
-            format!("{out}/figures/fig5-{m0}.json"),
+            s("--size"), s("300"), self.aligned(sn, m0), s("--out"), fig5.clone(), s("--report"),
+            format!("{}/figures/fig5-{m0}.json", self.out),
         ]);
-        stamps.push(graph.push(Task::run("paper-figure", fig5, inputs, args).mkdir_target()));
+        self.stamps.push(graph.push(Task::run("paper-figure", fig5, inputs, args).mkdir_target()));
         let names: Vec<String> = Method::ALL
             .into_iter()
-        .filter(|m| opt.methods.contains(m))
-        .map(|m| m.name().to_string())
-        .chain(std::iter::once(s("gpr-nn-keyposes")))
-        .collect();
-        let fig10 = format!("{out}/figures/fig10-{dn0}-{m0}/contact.png");
-        let mut seqs = vec![join(root, &[sn, m0])];
-        seqs.extend(names.iter().map(|n| format!("{out}/transfer/{dn0}/{m0}/{n}")));
-        if has_truth0 {
-            seqs.push(truth0.clone());
-        }
+            .filter(|m| self.opt.methods.contains(m))
+            .map(|m| m.name().to_string())
+            .chain(std::iter::once(s("gpr-nn-keyposes")))
+            .collect();
+        let fig10 = format!("{}/figures/fig10-{dn0}-{m0}/contact.png", self.out);
+        let mut seqs = vec![join(&self.set.root, &[sn, m0])];
+        seqs.extend(names.iter().map(|n| format!("{}/transfer/{dn0}/{m0}/{n}", self.out)));
+        seqs.extend(truth0.clone());
         let inputs = names
             .iter()
-            .map(|n| format!("{w}/predict/{dn0}/{m0}/{n}-{}.json", default_pl.name()))
+            .map(|n| format!("{}/predict/{dn0}/{m0}/{n}-{}.json", self.work, self.opt.placement.name()))
             .collect();
-        let labels = format!("source,{}{}", names.join(","), if has_truth0 { ",truth" } else { "" });
-        stamps.push(graph.push(render_sheet(&fig10, inputs, &labels, true, seqs)));
+        let labels = format!("source,{}{}", names.join(","), if truth0.is_some() { ",truth" } else { "" });
+        self.stamps.push(graph.push(render_sheet(&fig10, inputs, &labels, true, seqs)));
         // The report's 3D view: the first forward test motion, after correction and stitching.
-        views = vec![
-            format!("source={}", join(root, &[sn, m0])),
-            format!("transfer={out}/transfer/{dn0}/{m0}/gpr-nn+correct+stitch"),
-            format!("truth={truth0}"),
+        let mut views = vec![
+            format!("source={}", join(&self.set.root, &[sn, m0])),
+            format!("transfer={}/transfer/{dn0}/{m0}/gpr-nn+correct+stitch", self.out),
         ];
+        views.extend(truth0.map(|t| format!("truth={t}")));
+        views
     }
+}
+
+/// Adds the transfer pipeline's tasks and its variables (`TRANSFER_RECORDS`, `TRANSFER_STAMPS`,
+/// `TRANSFER_REPORT_VIEWS`) to `graph`. `out` is the pipeline's output folder.
+pub fn plan(set: &CaptureSet, out: &str, opt: &TransferOptions, graph: &mut Graph) -> Result<()> {
+    let work = format!("{out}/work");
+    let (sn, tn) = (set.spec.source.clone(), set.spec.target.clone());
+    let mut subjects = BTreeMap::new();
+    for x in [&sn, &tn] {
+        subjects.insert(x.clone(), subject(set, &work, x, graph)?);
+    }
+    let train = BTreeMap::from([
+        (sn.clone(), set.spec.train.iter().map(|p| p.source.clone()).collect()),
+        (tn.clone(), set.spec.train.iter().map(|p| p.target.clone()).collect()),
+    ]);
+    let mut plan = Plan { set, out, work, opt, subjects, train, records: Vec::new(), stamps: Vec::new() };
+    for x in [&sn, &tn] {
+        plan.front_end(x, graph)?;
+    }
+    let pairs = plan.pairs(graph);
+    let directions = plan.directions()?;
+    let first_test = directions[0].tests.first().cloned();
+    for d in &directions {
+        plan.direction(d, &pairs, graph);
+    }
+    drop(directions);
+    plan.learning_curves(&pairs, graph);
+    let views = plan.figures(first_test.as_deref(), graph);
     graph.variable("TRANSFER_REPORT_VIEWS", views);
-    graph.variable("TRANSFER_RECORDS", records.clone());
-    graph.variable("TRANSFER_STAMPS", stamps.clone());
+    graph.variable("TRANSFER_RECORDS", plan.records.clone());
+    graph.variable("TRANSFER_STAMPS", plan.stamps.clone());
 
     // Every evaluation record merged into one list; the other products are prerequisites so
     // that `results.json` stands for the whole run.
     let results = format!("{out}/results.json");
-    let mut inputs = records.clone();
-    inputs.extend(stamps);
+    let mut inputs = plan.records.clone();
+    inputs.extend(plan.stamps);
     let mut args = vec![s("collect"), s("transfer"), s("--out"), results.clone()];
-    args.extend(records);
+    args.extend(plan.records);
     graph.push(Task {
         kind: "collect-results".into(),
         target: results,

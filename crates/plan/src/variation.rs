@@ -1,10 +1,12 @@
 //! The variation pipeline's tasks (3DV): per movement group `prealign` (time-aligned motions and
 //! pre-blends), `gpdm-train` (one GPDM per part, one task per part joined by `merge-parts`:
 //! [`per_part`]), `hmc-sample` (variations, then their contact sheets), `variation-eval`; and
-//! the merge of every group's records into `variation.json`.
+//! the merge of every group's records into `variation.json`. A group none of whose motions the
+//! subject has is left out; when no group is left (a lab's own set, whose motions have other
+//! names), each of the subject's training motions is a group of its own.
 
 use anyhow::Result;
-use mesh_core::capture_set::{CaptureSet, SubjectSpec};
+use mesh_core::capture_set::CaptureSet;
 
 use crate::options::{words, VariationOptions};
 use crate::per_part;
@@ -20,6 +22,8 @@ pub fn plan(set: &CaptureSet, out: &str, opt: &VariationOptions, graph: &mut Gra
         (opt.groups.clone(), false)
     };
     let subject = opt.variation_subject.clone().unwrap_or_else(|| set.spec.source.clone());
+    let described = crate::subjects::subject(set, &format!("{out}/work"), &subject, graph)?;
+    let groups = groups_present(set, &subject, groups)?;
     let set_root = set.root.to_string_lossy().into_owned();
     let mut records = Vec::new();
     let mut names = Vec::new();
@@ -30,16 +34,8 @@ pub fn plan(set: &CaptureSet, out: &str, opt: &VariationOptions, graph: &mut Gra
         // The group's parts are the subject's, unless prealign models the whole body (then one
         // task fits it); a subject prealign cannot read fails in prealign, naming its file.
         let whole_body = opt.prealign_words(g).iter().any(|w| w == "--whole-body" || w == "--fallback-whole-body");
-        let mut parts: Vec<String> = Vec::new();
-        if let Ok(spec) = SubjectSpec::load(set.subject_json(&subject)) {
-            if !whole_body {
-                parts = spec.parts.keys().cloned().collect();
-            }
-            inputs.push(set.subject_json(&subject).to_string_lossy().into_owned());
-            if let Ok(t) = set.template_path(&subject, &spec) {
-                inputs.push(t.to_string_lossy().into_owned());
-            }
-        }
+        let parts: Vec<String> = if whole_body { Vec::new() } else { described.parts.clone() };
+        inputs.extend([described.json.clone(), described.template.clone()]);
         for m in motions.split(',').filter(|m| !m.is_empty()) {
             if let Ok(frames) = set.frames(&subject, m) {
                 inputs.extend(frames.iter().map(|f| f.to_string_lossy().into_owned()));
@@ -49,6 +45,9 @@ pub fn plan(set: &CaptureSet, out: &str, opt: &VariationOptions, graph: &mut Gra
         let mut args = vec![s("-q"), s("--set"), set_root.clone()];
         if let Some(sub) = &opt.variation_subject {
             args.extend([s("--subject-name"), sub.clone()]);
+        }
+        if described.proposed() {
+            args.extend([s("--subject"), described.json.clone()]);
         }
         args.extend([s("--group-name"), g.clone(), s("--motions"), motions.clone()]);
         if prealign_defaults && g == "locomotion" {
@@ -120,4 +119,25 @@ pub fn plan(set: &CaptureSet, out: &str, opt: &VariationOptions, graph: &mut Gra
         steps: vec![Step::Run { bin: "plan".into(), args }],
     });
     Ok(())
+}
+
+/// The groups of which the subject has at least one motion; when there is none, one group per
+/// training motion of the subject, named after it.
+fn groups_present(set: &CaptureSet, subject: &str, groups: Vec<(String, String)>) -> Result<Vec<(String, String)>> {
+    let have = set.motions(subject)?;
+    let kept: Vec<(String, String)> = groups
+        .into_iter()
+        .filter(|(_, motions)| motions.split(',').any(|m| have.iter().any(|h| h == m)))
+        .collect();
+    if !kept.is_empty() {
+        return Ok(kept);
+    }
+    let mut own: Vec<String> = set
+        .spec
+        .train
+        .iter()
+        .map(|p| if subject == set.spec.target { p.target.clone() } else { p.source.clone() })
+        .collect();
+    own.dedup();
+    Ok(own.into_iter().map(|m| (m.clone(), m)).collect())
 }

@@ -58,8 +58,13 @@ fn make_fragment_with_part_tasks_has_the_pieces_and_merges() {
     let frag = dir.path().join("plan.mk");
     plan(&["make", "--part-tasks", "--set", "fixtures/tiny-set", "--pipeline-out", "out", "--out", frag.to_str().unwrap()]);
     let text = std::fs::read_to_string(&frag).unwrap();
-    let slurm_tasks = tiny_graph().tasks.len();
-    assert!(text.contains(&format!("--of 1/{slurm_tasks} ")), "not the Slurm graph's {slurm_tasks} tasks");
+    // Each pipeline counts its own steps: the first task is the first of the transfer's.
+    let graph = tiny_graph();
+    let (transfer, variation) = (graph.place(0).1, graph.place(graph.tasks.len() - 1));
+    assert_eq!(variation.0, variation.1, "the last task is the variation's last");
+    assert_eq!(transfer + variation.1, graph.tasks.len());
+    assert!(text.contains(&format!("--of 1/{transfer} ")), "not the Slurm graph's {transfer} transfer tasks");
+    assert!(text.contains(&format!("--of 1/{} ", variation.1)), "not the Slurm graph's {} variation tasks", variation.1);
     for want in ["out/work/variation/locomotion.parts/torso.piece:", "--part torso", "$(BIN)/merge-parts -q out/work/A/pca.parts/"] {
         assert!(text.contains(want), "no `{want}` in the fragment");
     }

@@ -8,7 +8,7 @@
 //!   close to those of the same set with the hand-built curves.
 //!
 //! The stage binaries are the workspace's release build (`cargo build --release --workspace`);
-//! `make` runs with `CARGO=true` so that it does not rebuild from inside the test.
+//! `make` runs with `NO_BUILD=1` so that it does not rebuild from inside the test.
 
 use std::path::{Path, PathBuf};
 use std::process::Command;
@@ -51,7 +51,7 @@ fn synth_tiny(set: &Path) {
 fn make(target: &str, set: &Path, out: &Path) {
     run(Command::new("make")
         .current_dir(root())
-        .args(["--no-print-directory", "-s", target, "CARGO=true"])
+        .args(["--no-print-directory", "-s", target, "NO_BUILD=1"])
         .arg(format!("SET={}", set.display()))
         .arg(format!("OUT={}", out.display()))
         .env_remove("MAKEFLAGS"));

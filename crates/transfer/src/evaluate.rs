@@ -12,6 +12,14 @@
 //!   motion per frame of the prediction's sole centroids
 //!   (`mesh_core::feet::contact_sliding`); `truth_foot_sliding_m` is the same
 //!   measure on the truth itself, for scale.
+//!
+//! Without truth (a lab's own test motions) the record holds what can be known
+//! from the source alone ([`without_truth`]): `foot_sliding_m` on the source's
+//! contacts (detected on its meshes, as `gpr-predict` plants the feet), the
+//! source's own sliding on them (`source_foot_sliding_m`), and `floor_offset_m`:
+//! over the frames where the source stands on a foot, the median height of the
+//! transfer's lowest sole point above the target's floor (the lowest sole point
+//! of its template, a captured frame).
 
 use mesh_core::rigid::procrustes;
 use mesh_core::sequence::MeshSequence;
@@ -29,15 +37,79 @@ pub struct EvalRecord {
     pub placement: String,
     /// `dense` (DTW pairs) or `keyposes` (key-pose pairs only).
     pub training: String,
-    pub rms_pose_m: f64,
-    pub rms_placed_m: f64,
+    /// Pose error against the truth; `null` without truth.
+    pub rms_pose_m: Option<f64>,
+    pub rms_placed_m: Option<f64>,
     pub frames: usize,
-    /// Sliding of the prediction's planted feet (m per frame), where contacts are known.
+    /// Sliding of the prediction's planted feet (m per frame), where contacts are known
+    /// (the truth's, or without truth the source's).
     pub foot_sliding_m: Option<f64>,
     /// The same measure on the truth.
     pub truth_foot_sliding_m: Option<f64>,
-    /// `rms_pose_m` of each frame.
+    /// Without truth: the source's own sliding on its contacts.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub source_foot_sliding_m: Option<f64>,
+    /// Median height of the prediction's planted soles above the target's floor (m).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub floor_offset_m: Option<f64>,
+    /// `rms_pose_m` of each frame (empty without truth).
     pub frame_pose_m: Vec<f64>,
+}
+
+/// What a transfer shows without truth, measured on the source's contacts.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct SourceMeasures {
+    pub foot_sliding_m: Option<f64>,
+    pub source_foot_sliding_m: Option<f64>,
+    pub floor_offset_m: Option<f64>,
+}
+
+/// Median of the values (None when empty).
+fn median(mut v: Vec<f64>) -> Option<f64> {
+    if v.is_empty() {
+        return None;
+    }
+    v.sort_by(f64::total_cmp);
+    let n = v.len();
+    Some(if n % 2 == 1 { v[n / 2] } else { 0.5 * (v[n / 2 - 1] + v[n / 2]) })
+}
+
+/// The prediction's sliding and floor offset on the source's `contacts` (per frame `[left,
+/// right]`, one per prediction frame): `soles` the target's two soles, `floor` the height (along
+/// `up`) of the target's floor, and `source` (placed source frames with its `source_soles`) for
+/// the source's own sliding.
+pub fn without_truth(
+    pred: &MeshSequence,
+    soles: &[Vec<u32>],
+    floor: f64,
+    contacts: &[[bool; 2]],
+    source: (&[Vec<Vector3<f64>>], &[Vec<u32>]),
+    up: &Vector3<f64>,
+) -> Result<SourceMeasures> {
+    let n = pred.n_vertices();
+    if let Some(v) = soles.iter().flatten().find(|&&v| v as usize >= n) {
+        return Err(Error::invalid(format!("sole vertex {v} is beyond the prediction's {n} vertices")));
+    }
+    if contacts.len() != pred.n_frames() {
+        return Err(Error::invalid(format!(
+            "{} source contact frames for {} predicted frames",
+            contacts.len(),
+            pred.n_frames()
+        )));
+    }
+    // Where the source stands on a foot, the transfer's lowest sole point is on its floor.
+    let heights: Vec<f64> = pred
+        .frames
+        .iter()
+        .zip(contacts)
+        .filter(|(_, c)| c[0] || c[1])
+        .map(|(frame, _)| soles.iter().flatten().map(|&v| frame[v as usize].dot(up)).fold(f64::INFINITY, f64::min) - floor)
+        .collect();
+    Ok(SourceMeasures {
+        foot_sliding_m: mesh_core::feet::contact_sliding(&pred.frames, soles, contacts, up),
+        source_foot_sliding_m: mesh_core::feet::contact_sliding(source.0, source.1, contacts, up),
+        floor_offset_m: median(heights),
+    })
 }
 
 /// Sum of squared distances between matching points.

@@ -131,6 +131,26 @@ pub fn corrections(
         .collect())
 }
 
+/// The source motion as placed in the world, its soles and the contacts detected on them.
+pub struct SourceContacts {
+    pub world: Vec<Vec<Vector3<f64>>>,
+    pub soles: [Vec<u32>; 2],
+    pub contacts: Vec<[bool; 2]>,
+}
+
+/// The source's contacts, detected on its own placed meshes ([`contact_detector::detect`]);
+/// None when it has no two leg parts or no frame rate.
+pub fn source_contacts(source_pca: &PcaModel, motion: &AlignedMotion) -> Option<SourceContacts> {
+    let up = Vector3::from(motion.capture.up);
+    let soles = soles(source_pca, &up)?;
+    if !(motion.capture.fps > 0.0) {
+        return None;
+    }
+    let world = place(&motion.poses, &motion.frames);
+    let contacts = contact_detector::detect(&world, &soles, &up, motion.capture.fps, &Rule::default())?;
+    Some(SourceContacts { world, soles, contacts })
+}
+
 /// Cleans `frames` (the placed transfer of `motion`, one frame per source frame, the target
 /// `ratio` times the source's size) in place with smoothness `λ` (module doc). None, and `frames`
 /// untouched, when either subject has no two leg parts or the source no frame rate.
@@ -143,14 +163,10 @@ pub fn plant(
     smoothness: f64,
 ) -> Result<Option<Planted>> {
     let up = Vector3::from(motion.capture.up);
-    let (Some(source_soles), Some(target_soles)) = (soles(source_pca, &up), soles(target_pca, &up)) else {
+    let Some(target_soles) = soles(target_pca, &up) else {
         return Ok(None);
     };
-    if !(motion.capture.fps > 0.0) {
-        return Ok(None);
-    }
-    let world = place(&motion.poses, &motion.frames);
-    let Some(contacts) = contact_detector::detect(&world, &source_soles, &up, motion.capture.fps, &Rule::default()) else {
+    let Some(SourceContacts { world, soles: source_soles, contacts }) = source_contacts(source_pca, motion) else {
         return Ok(None);
     };
     let mut notes = Vec::new();

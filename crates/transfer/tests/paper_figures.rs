@@ -275,11 +275,13 @@ fn confidence_files(dir: &std::path::Path, frames: usize, eval_frames: usize) ->
         method: "gpr-nn".into(),
         placement: "regressed".into(),
         training: "dense".into(),
-        rms_pose_m: 0.05,
-        rms_placed_m: 0.07,
+        rms_pose_m: Some(0.05),
+        rms_placed_m: Some(0.07),
         frames: eval_frames,
         foot_sliding_m: None,
         truth_foot_sliding_m: None,
+        source_foot_sliding_m: None,
+        floor_offset_m: None,
         frame_pose_m,
     };
     let (cp, ep) = (dir.join("punch-confidence.json"), dir.join("punch-eval.json"));

@@ -212,7 +212,7 @@ fn transfer_pipeline_on_a_known_synthetic_set() {
     for r in &results {
         eprintln!(
             "{} {:<15} {:<14} pose {:.4} m placed {:.4} m",
-            r.direction, r.method, r.placement, r.rms_pose_m, r.rms_placed_m
+            r.direction, r.method, r.placement, r.rms_pose_m.unwrap(), r.rms_placed_m.unwrap()
         );
     }
     eprintln!("rest-pose baseline: {baseline:.4} m");
@@ -225,9 +225,9 @@ fn transfer_pipeline_on_a_known_synthetic_set() {
     let nn = get("gpr-nn", "regressed");
     // The pose transfer must explain most of the deformation the rest pose misses.
     assert!(
-        nn.rms_pose_m < 0.3 * baseline,
+        nn.rms_pose_m.unwrap() < 0.3 * baseline,
         "gpr-nn pose error {} vs rest pose {baseline}",
-        nn.rms_pose_m
+        nn.rms_pose_m.unwrap()
     );
     // Placement: the integrated displacements must follow the truth's path far
     // better than not travelling at all (the RMS distance of the truth's
@@ -248,13 +248,13 @@ fn transfer_pipeline_on_a_known_synthetic_set() {
     for pl in ["regressed", "scaled-source", "blended"] {
         let r = get("gpr-nn", pl);
         assert!(
-            r.rms_placed_m < 0.25 * travel,
+            r.rms_placed_m.unwrap() < 0.25 * travel,
             "{pl}: placed error {} vs travel {travel}",
-            r.rms_placed_m
+            r.rms_placed_m.unwrap()
         );
     }
     // The pose is the same whatever the placement.
-    assert!((get("gpr-nn", "blended").rms_pose_m - nn.rms_pose_m).abs() < 1e-9);
+    assert!((get("gpr-nn", "blended").rms_pose_m.unwrap() - nn.rms_pose_m.unwrap()).abs() < 1e-9);
 
     // Paper section 6 after gpr-nn: correction (M = 3) and stitching give the
     // target's topology, one frame per source frame, and do not lose the pose.
@@ -291,12 +291,12 @@ fn transfer_pipeline_on_a_known_synthetic_set() {
         let (pose, _) = transfer::evaluate::rms_errors(&pred, &truth).unwrap();
         eprintln!(
             "gpr-nn+{surface}: pose {pose:.4} m (gpr-nn {:.4} m)",
-            nn.rms_pose_m
+            nn.rms_pose_m.unwrap()
         );
         assert!(
-            pose < 1.5 * nn.rms_pose_m + 1e-3,
+            pose < 1.5 * nn.rms_pose_m.unwrap() + 1e-3,
             "{surface}: pose error {pose} vs gpr-nn {}",
-            nn.rms_pose_m
+            nn.rms_pose_m.unwrap()
         );
     }
 

@@ -197,6 +197,9 @@ pub fn pair_blend_name(a: &str, b: &str, w: f64) -> String {
 pub struct GroupSpec {
     pub name: String,
     pub subject: String,
+    /// The subject's description in place of the set's `subject.json` (e.g. the one
+    /// `propose-curves` wrote for a set without curves).
+    pub subject_json: Option<std::path::PathBuf>,
     /// Motions of the group, in order; missing ones are skipped (reported by [`build`]).
     pub motions: Vec<String>,
     /// Reference motion (default: the first present).
@@ -219,7 +222,8 @@ pub struct GroupSpec {
 /// motions, segmentation fallback).
 pub fn build(set: &CaptureSet, spec: &GroupSpec) -> Result<(Group, Vec<String>)> {
     // Spec and template without curve validation: `segment` validates them (or we fall back).
-    let subject_spec = SubjectSpec::load(set.subject_json(&spec.subject))?;
+    let subject_json = spec.subject_json.clone().unwrap_or_else(|| set.subject_json(&spec.subject));
+    let subject_spec = SubjectSpec::load(&subject_json)?;
     let template = &mesh_core::io::read_mesh(set.template_path(&spec.subject, &subject_spec)?)?;
     let available = set.motions(&spec.subject)?;
     let (present, skipped): (Vec<String>, Vec<String>) = spec
@@ -260,11 +264,11 @@ pub fn build(set: &CaptureSet, spec: &GroupSpec) -> Result<(Group, Vec<String>)>
             Err(e) if spec.fallback_whole_body => {
                 notes.push(format!(
                     "{}: {e}: body parts unusable, modelling the whole body as one part",
-                    set.subject_json(&spec.subject).display()
+                    subject_json.display()
                 ));
                 capture::part_pca::whole_body(template.n_vertices())
             }
-            Err(e) => return Err(Error::file(set.subject_json(&spec.subject), e.to_string())),
+            Err(e) => return Err(Error::file(&subject_json, e.to_string())),
         }
     };
     let parts = seg
@@ -296,7 +300,7 @@ pub fn build(set: &CaptureSet, spec: &GroupSpec) -> Result<(Group, Vec<String>)>
         let aligned = align_motion(template, &seq)
             .map_err(|e| Error::invalid(format!("{}: {e}", dir.display())))?;
         let mut c = contacts::from_subject(&subject_spec, m, aligned.n_frames())
-            .map_err(|e| Error::file(set.subject_json(&spec.subject), e.to_string()))?;
+            .map_err(|e| Error::file(&subject_json, e.to_string()))?;
         if c.is_none() && has_legs {
             c = capture::contact_detector::detect(
                 &seq.frames,
@@ -319,17 +323,24 @@ pub fn build(set: &CaptureSet, spec: &GroupSpec) -> Result<(Group, Vec<String>)>
         .expect("checked");
     // Windows `[start, start + len)` kept of each motion: everything, or whole gait cycles.
     let mut windows: Vec<(usize, usize)> = loaded.iter().map(|l| (0, l.1.n_frames())).collect();
-    if spec.gait_cycles {
-        let periods = loaded
+    // A motion without a repeating gait leaves every motion whole (noted).
+    let periods: Option<Vec<usize>> = match spec.gait_cycles {
+        false => None,
+        true => loaded
             .iter()
             .map(|(m, a, _)| {
-                gait::period(&a.frames, &gait::GaitOptions::default()).ok_or_else(|| {
-                    Error::invalid(format!(
-                        "motion '{m}': no gait cycle found (its poses do not repeat); cut cycles only for locomotion groups"
-                    ))
-                })
+                let p = gait::period(&a.frames, &gait::GaitOptions::default());
+                if p.is_none() {
+                    notes.push(format!(
+                        "motion '{m}': no gait cycle found (its poses do not repeat): the group's motions are used whole"
+                    ));
+                }
+                p
             })
-            .collect::<Result<Vec<usize>>>()?;
+            .collect(),
+    };
+    let cut_cycles = periods.is_some();
+    if let Some(periods) = periods {
         let lp: Vec<(usize, usize)> = loaded
             .iter()
             .zip(&periods)
@@ -356,7 +367,7 @@ pub fn build(set: &CaptureSet, spec: &GroupSpec) -> Result<(Group, Vec<String>)>
         } else {
             // Whole gait cycles: every start of the window is tried, the cheapest DTW kept,
             // with one contact weight λ for all (that of the first window).
-            let starts = if spec.gait_cycles {
+            let starts = if cut_cycles {
                 0..=motion.n_frames() - len
             } else {
                 0..=0

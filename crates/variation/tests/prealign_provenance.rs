@@ -45,11 +45,11 @@ fn prealign_records_every_input_file_and_parameter() {
     assert_eq!(header.params["motions"], serde_json::json!(["walk", "run"]));
     assert_eq!(header.params["blend_weights"], serde_json::json!([0.25, 0.75]));
     assert_eq!(header.params["gait_cycles"], false);
-    assert_eq!(header.params["subject"], "A", "the subject it resolved to (the set's source)");
+    assert_eq!(header.params["subject_name"], "A", "the subject it resolved to (the set's source)");
     // Every option is recorded under its flag's name, defaults included (the stage's Params).
     assert_eq!(header.params["set"], serde_json::json!(set));
     assert_eq!(header.params["out"], serde_json::json!(out));
-    for key in ["subject_name", "reference", "contact_weight", "export"] {
+    for key in ["subject", "reference", "contact_weight", "export"] {
         assert!(header.params[key].is_null(), "{key}: not given");
     }
     for key in ["whole_body", "fallback_whole_body"] {

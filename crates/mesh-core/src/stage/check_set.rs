@@ -12,7 +12,9 @@ use crate::cli::{report_error, AlreadyReported, CommonArgs};
 #[command(
     name = "check-set",
     version,
-    after_help = "Exit status 1 when there is any problem. docs/FORMATS.md describes the layout.\n\
+    after_help = "Exit status 1 when there is any problem. What the set lacks that the pipelines can do\n\
+                  without (curves, true correspondences, contacts, ground truth) is listed as notes, with\n\
+                  what they do instead; -q leaves the notes out. docs/FORMATS.md describes the layout.\n\
                   e.g.: check-set out/demo/set\n\
                   e.g.: check-set -v fixtures/tiny-set     # also a summary of what was checked"
 )]
@@ -30,6 +32,9 @@ pub fn run(p: &Params) -> anyhow::Result<()> {
     let report = crate::set_check::check_set(&p.set);
     for problem in &report.problems {
         report_error(&anyhow::anyhow!("{problem}"));
+    }
+    for note in &report.notes {
+        crate::note!("{note}");
     }
     crate::info!(
         "{}: {} subjects, {} motion folders, {} frames: {} problems",

@@ -1,5 +1,7 @@
 //! The `transfer-eval` stage: per-vertex RMS error of a transferred sequence against its ground
-//! truth (pose-aligned and as placed) and, given the contacts, the soles' sliding.
+//! truth (pose-aligned and as placed) and, given the contacts, the soles' sliding; given the
+//! source motion and both PCA models, the sliding and floor offset on the source's contacts
+//! (all that is measured without truth).
 
 use std::path::PathBuf;
 
@@ -13,14 +15,20 @@ use mesh_core::segmentation::Segmentation;
 use mesh_core::sequence::MeshSequence;
 use serde::Serialize;
 
-use crate::evaluate::{foot_sliding, rms_errors_per_frame, EvalRecord};
+use capture::align::AlignedMotion;
+use capture::part_pca::PcaModel;
+use nalgebra::Vector3;
 
-/// Per-vertex RMS error of a transferred sequence against its ground truth (pose-aligned and as placed)
+use crate::evaluate::{foot_sliding, rms_errors_per_frame, without_truth, EvalRecord, SourceMeasures};
+
+/// Per-vertex RMS error of a transferred sequence against its ground truth (pose-aligned and as placed), foot sliding and floor offset
 #[derive(Parser, Debug, Serialize)]
 #[command(
     name = "transfer-eval",
     version,
-    after_help = "e.g.: transfer-eval out/transfer/A-to-B/punch/gpr-nn set/truth/B/punch --direction 'A->B' --motion punch --method gpr-nn --out out/eval/A-to-B/punch/gpr-nn.json"
+    after_help = "e.g.: transfer-eval out/transfer/A-to-B/punch/gpr-nn set/truth/B/punch --direction 'A->B' --motion punch --method gpr-nn --out out/eval/A-to-B/punch/gpr-nn.json\n      \
+                  transfer-eval out/transfer/A-to-B/punch/gpr-nn --source-motion work/A/punch.aligned --source-pca work/A/pca.model --target-pca work/B/pca.model \\\n        \
+                  --direction 'A->B' --motion punch --method gpr-nn --out eval.json     # without truth"
 )]
 pub struct Params {
     #[command(flatten)]
@@ -28,8 +36,10 @@ pub struct Params {
     pub common: CommonArgs,
     /// Transferred sequence folder (from gpr-predict)
     pub prediction: PathBuf,
-    /// Ground-truth folder (same frame count and topology)
-    pub truth: PathBuf,
+    /// Ground-truth folder (same frame count and topology) [default: none: the record holds the
+    /// measures on the source's contacts, which need --source-motion]
+    #[arg(required_unless_present = "source_motion")]
+    pub truth: Option<PathBuf>,
     /// Direction label for the record, e.g. A->B
     #[arg(long)]
     pub direction: String,
@@ -55,6 +65,16 @@ pub struct Params {
     /// The target's template mesh (rest pose: the soles are its lowest leg vertices)
     #[arg(long)]
     pub template: Option<PathBuf>,
+    /// The aligned source motion the prediction transfers (align): foot sliding and floor offset on
+    /// its contacts, detected on its meshes (needs --source-pca and --target-pca)
+    #[arg(long, value_name = "ALIGNED", requires_all = ["source_pca", "target_pca"])]
+    pub source_motion: Option<PathBuf>,
+    /// Per-part PCA model of the source (its leg parts give the source's soles)
+    #[arg(long)]
+    pub source_pca: Option<PathBuf>,
+    /// Per-part PCA model of the target (its leg parts give the soles, its template the floor)
+    #[arg(long)]
+    pub target_pca: Option<PathBuf>,
     /// Output JSON record (stdout when omitted)
     #[arg(short, long)]
     pub out: Option<PathBuf>,
@@ -63,7 +83,20 @@ pub struct Params {
 /// Writes the JSON record to `--out`, or prints it on stdout.
 pub fn run(p: &Params) -> anyhow::Result<()> {
     let pred = MeshSequence::load_dir(&p.prediction)?;
-    let truth = MeshSequence::load_dir(&p.truth)?;
+    let source = match &p.source_motion {
+        Some(m) => source_measures(p, m, &pred)?,
+        None => SourceMeasures::default(),
+    };
+    let Some(truth_dir) = &p.truth else {
+        let record = EvalRecord {
+            foot_sliding_m: source.foot_sliding_m,
+            source_foot_sliding_m: source.source_foot_sliding_m,
+            floor_offset_m: source.floor_offset_m,
+            ..record(p, &pred, None, None, Vec::new())
+        };
+        return write(p, &record);
+    };
+    let truth = MeshSequence::load_dir(truth_dir)?;
     let (rms_pose_m, rms_placed_m, frame_pose_m) = rms_errors_per_frame(&pred, &truth)
         .with_context(|| p.prediction.display().to_string())?;
     let (mut foot_sliding_m, mut truth_foot_sliding_m) = (None, None);
@@ -100,22 +133,60 @@ pub fn run(p: &Params) -> anyhow::Result<()> {
         }
     }
     let record = EvalRecord {
+        foot_sliding_m,
+        truth_foot_sliding_m,
+        floor_offset_m: source.floor_offset_m,
+        ..record(p, &pred, Some(rms_pose_m), Some(rms_placed_m), frame_pose_m)
+    };
+    write(p, &record)
+}
+
+/// The record's labels and errors, without foot measures.
+fn record(p: &Params, pred: &MeshSequence, pose: Option<f64>, placed: Option<f64>, frames: Vec<f64>) -> EvalRecord {
+    EvalRecord {
         direction: p.direction.clone(),
         motion: p.motion.clone(),
         method: p.method.clone(),
         placement: p.placement.name().to_string(),
         training: p.correspondences.name().to_string(),
-        rms_pose_m,
-        rms_placed_m,
+        rms_pose_m: pose,
+        rms_placed_m: placed,
         frames: pred.n_frames(),
-        foot_sliding_m,
-        truth_foot_sliding_m,
-        frame_pose_m,
-    };
-    let text = serde_json::to_string_pretty(&record)?;
+        foot_sliding_m: None,
+        truth_foot_sliding_m: None,
+        source_foot_sliding_m: None,
+        floor_offset_m: None,
+        frame_pose_m: frames,
+    }
+}
+
+fn write(p: &Params, record: &EvalRecord) -> anyhow::Result<()> {
+    let text = serde_json::to_string_pretty(record)?;
     match &p.out {
         Some(path) => mesh_core::atomic::write_bytes_atomic(path, text.as_bytes())?,
         None => println!("{text}"),
     }
     Ok(())
+}
+
+/// Sliding and floor offset of `pred` on the contacts of the source motion at `motion`.
+fn source_measures(p: &Params, motion: &std::path::Path, pred: &MeshSequence) -> anyhow::Result<SourceMeasures> {
+    let (Some(sp), Some(tp)) = (&p.source_pca, &p.target_pca) else {
+        anyhow::bail!("--source-motion needs --source-pca and --target-pca");
+    };
+    let source = AlignedMotion::load(motion)?;
+    let (source_pca, target_pca) = (PcaModel::load(sp)?, PcaModel::load(tp)?);
+    let up = Vector3::from(source.capture.up);
+    let Some(found) = crate::feet::source_contacts(&source_pca, &source) else {
+        mesh_core::info!("{}: no two leg parts or no frame rate: no contacts", motion.display());
+        return Ok(SourceMeasures::default());
+    };
+    let Some(soles) = crate::feet::soles(&target_pca, &up) else {
+        mesh_core::info!("{}: the target has no two leg parts: no soles", tp.display());
+        return Ok(SourceMeasures::default());
+    };
+    let template = target_pca.template_vertices();
+    let floor = soles.iter().flatten().map(|&v| template[v as usize].dot(&up)).fold(f64::INFINITY, f64::min);
+    without_truth(pred, &soles, floor, &found.contacts, (&found.world, &found.soles), &up)
+        .with_context(|| p.prediction.display().to_string())
 }

@@ -30,6 +30,10 @@ pub struct Params {
     /// Subject, by its name in set.json (default: the set's source subject)
     #[arg(long, value_name = "NAME")]
     pub subject_name: Option<String>,
+    /// The subject's description in place of the set's subject.json (e.g. one written by
+    /// propose-curves for a set without curves)
+    #[arg(long, value_name = "JSON")]
+    pub subject: Option<PathBuf>,
     /// Name of the group written (e.g. locomotion)
     #[arg(long, value_name = "NAME")]
     pub group_name: String,
@@ -75,7 +79,7 @@ fn pairs_as_text<S: serde::Serializer>(pairs: &[(String, String)], ser: S) -> Re
     ser.collect_seq(pairs.iter().map(|(a, b)| format!("{a}:{b}")))
 }
 
-/// Writes the group; the header records `p` plus the subject it resolved to (`subject`), set.json,
+/// Writes the group; the header records `p` with the subject it resolved to (`subject_name`), set.json,
 /// the subject's subject.json and template and every frame of the grouped motions.
 pub fn run(p: &Params) -> anyhow::Result<()> {
     let set = CaptureSet::open(&p.set)?;
@@ -86,6 +90,7 @@ pub fn run(p: &Params) -> anyhow::Result<()> {
     let spec = GroupSpec {
         name: p.group_name.clone(),
         subject,
+        subject_json: p.subject.clone(),
         motions: p.motions.clone(),
         reference: p.reference.clone(),
         blend_weights: p.blend_weights.clone(),
@@ -107,10 +112,10 @@ pub fn run(p: &Params) -> anyhow::Result<()> {
     {
         mesh_core::warn!("group '{}' has one motion: no blends", group.name);
     }
-    let subject_json = set.subject_json(&spec.subject);
+    let subject_json = p.subject.clone().unwrap_or_else(|| set.subject_json(&spec.subject));
     let subject_spec = SubjectSpec::load(&subject_json)?;
     let mut params = serde_json::to_value(p)?;
-    params["subject"] = spec.subject.clone().into();
+    params["subject_name"] = spec.subject.clone().into();
     let mut header = p
         .common
         .header("prealign", env!("CARGO_PKG_VERSION"))
