@@ -1,8 +1,9 @@
 //! The report's view of a transfer `results.json` (one record per direction, motion, method,
 //! placement and training): the pose error per motion as a table of the layout of
 //! docs/RESULTS.md ("Every method": rows direction and motion, one column per method, RMS in
-//! cm, a pooled row), the same numbers as an inline SVG bar chart, and the records without
-//! their per-frame arrays.
+//! cm, a pooled row), the same numbers as an inline SVG bar chart, the floor offset and the
+//! foot sliding as tables of the same layout (all a run without truth has), and the records
+//! without their per-frame arrays.
 //!
 //! A method's column is its name, with `-keyposes` appended for records trained on the
 //! key-poses only. Pose error does not depend on the placement, so each (motion, column) takes
@@ -58,11 +59,17 @@ fn text<'a>(r: &'a Value, key: &str) -> &'a str {
 /// Reads the pose-error table from a `results.json` value; `None` when it is not a list of
 /// transfer records (objects with `direction`, `motion`, `method` and `rms_pose_m`).
 pub fn pose_table(results: &Value) -> Option<PoseTable> {
+    measure_table(results, "rms_pose_m")
+}
+
+/// The table of any per-record measure in metres (`rms_pose_m`, `floor_offset_m`,
+/// `foot_sliding_m`), in cm; `None` when no record has it.
+pub fn measure_table(results: &Value, key: &str) -> Option<PoseTable> {
     let records = results.as_array()?;
     let usable: Vec<&Value> = records
         .iter()
         .filter(|r| {
-            r.get("rms_pose_m").and_then(Value::as_f64).is_some_and(f64::is_finite)
+            r.get(key).and_then(Value::as_f64).is_some_and(f64::is_finite)
                 && ["direction", "motion", "method"].iter().all(|k| r.get(*k).is_some_and(Value::is_string))
         })
         .collect();
@@ -90,7 +97,7 @@ pub fn pose_table(results: &Value) -> Option<PoseTable> {
         let cell = Cell {
             row: row.clone(),
             column: column.clone(),
-            cm: 100.0 * r["rms_pose_m"].as_f64().unwrap_or(f64::NAN),
+            cm: 100.0 * r[key].as_f64().unwrap_or(f64::NAN),
             frames: r.get("frames").and_then(Value::as_u64).unwrap_or(0),
         };
         let is_usual = text(r, "placement") == usual;
@@ -118,7 +125,12 @@ pub fn pose_table(results: &Value) -> Option<PoseTable> {
 /// The table as HTML (`<table class="pose-error">`, one decimal, `-` where a motion lacks a
 /// method), with the pooled row.
 pub fn pose_table_html(t: &PoseTable) -> String {
-    let mut s = String::from("<table class=\"pose-error\"><thead><tr><th>direction, motion (frames)</th>");
+    table_html(t, "pose-error")
+}
+
+/// A measure's table as HTML of class `class`, one decimal, with the pooled (RMS) row.
+pub fn table_html(t: &PoseTable, class: &str) -> String {
+    let mut s = format!("<table class=\"{class}\"><thead><tr><th>direction, motion (frames)</th>");
     for c in &t.columns {
         s += &format!("<th>{}</th>", escape(c));
     }
@@ -269,17 +281,36 @@ pub fn records_html(results: &Value) -> String {
     json_to_html(&Value::Array(slim))
 }
 
-/// The whole transfer section's content: table, plot, then the records; `None` when `results`
-/// holds no transfer record.
+/// The whole transfer section's content: the pose-error table and plot where the run had
+/// truth (else a line saying so), the floor offset and foot sliding tables, then the records;
+/// `None` when `results` holds no transfer record.
 pub fn section_html(results: &Value) -> Option<String> {
-    let t = pose_table(results)?;
-    Some(format!(
-        "<h3>Pose error per motion (RMS per vertex, cm)</h3>{}<figure class=\"plot\">{}</figure>\
-         <h3>Every record</h3>{}",
-        pose_table_html(&t),
-        pose_plot_svg(&t),
-        records_html(results)
-    ))
+    let pose = pose_table(results);
+    let floor = measure_table(results, "floor_offset_m");
+    let sliding = measure_table(results, "foot_sliding_m");
+    if pose.is_none() && floor.is_none() && sliding.is_none() {
+        return None;
+    }
+    let mut s = match &pose {
+        Some(t) => format!(
+            "<h3>Pose error per motion (RMS per vertex, cm)</h3>{}<figure class=\"plot\">{}</figure>",
+            pose_table_html(t),
+            pose_plot_svg(t)
+        ),
+        None => "<p class=\"no-truth\">No ground truth of these motions: no pose error. What a transfer \
+                 shows without it follows, measured where the source stands on a foot.</p>"
+            .to_string(),
+    };
+    if let Some(t) = floor {
+        s += "<h3>Floor offset (median height of the lowest sole point above the target's floor where the \
+              source stands on a foot, cm; pooled: RMS)</h3>";
+        s += &table_html(&t, "floor-offset");
+    }
+    if let Some(t) = sliding {
+        s += "<h3>Foot sliding on contacts (cm per frame; pooled: RMS)</h3>";
+        s += &table_html(&t, "foot-sliding");
+    }
+    Some(s + &format!("<h3>Every record</h3>{}", records_html(results)))
 }
 
 #[cfg(test)]

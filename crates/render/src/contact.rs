@@ -22,6 +22,9 @@ pub struct Row<'a> {
     pub sequences: Vec<(Rgb, SeqView<'a>)>,
 }
 
+/// How many times the median row's size a row may be and still set the sheet's scale.
+pub const CLIP_FACTOR: f64 = 3.0;
+
 /// A contact sheet description; [`ContactSheet::render`] draws it.
 #[derive(Clone, Debug)]
 pub struct ContactSheet<'a> {
@@ -84,18 +87,43 @@ impl<'a> ContactSheet<'a> {
         }
     }
 
+    /// The rows the camera frames: every row whose bounding box (over the frame range) is at
+    /// most [`CLIP_FACTOR`] times the median row's diagonal; a row beyond (a method whose output
+    /// explodes) is drawn clipped by the cells at the others' scale, and marked.
+    pub fn framed_rows(&self) -> Vec<bool> {
+        let diag: Vec<f64> = self
+            .rows
+            .iter()
+            .map(|r| {
+                let views: Vec<SeqView> = r.sequences.iter().map(|s| s.1).collect();
+                let b = bounding_box(&views, self.frames.clone());
+                if b.is_empty() { 0.0 } else { (b.max - b.min).norm() }
+            })
+            .collect();
+        let mut sorted = diag.clone();
+        sorted.sort_by(f64::total_cmp);
+        let median = sorted.get(sorted.len() / 2).copied().unwrap_or(0.0);
+        diag.iter().map(|&d| !(d > CLIP_FACTOR * median)).collect()
+    }
+
     /// Draws the sheet. One camera frames every frame of the range of every
-    /// sequence in every row, so cells are directly comparable.
+    /// sequence in every row ([`ContactSheet::framed_rows`]), so cells are directly comparable.
     pub fn render(&self) -> RgbImage {
         let cols = self.column_frames();
+        let framed = self.framed_rows();
+        let labels: Vec<String> = self
+            .rows
+            .iter()
+            .zip(&framed)
+            .map(|(r, &f)| if f { r.label.clone() } else { format!("{}\n(clipped)", r.label) })
+            .collect();
         let s = self.font_scale.max(1);
         let line_h = (font::GLYPH_H + 3) * s;
         let pad = 4 * s;
         let label_w = if self.labels {
-            let w = self
-                .rows
+            let w = labels
                 .iter()
-                .flat_map(|r| r.label.lines().map(|l| font::text_width(l, s)))
+                .flat_map(|l| l.lines().map(|l| font::text_width(l, s)))
                 .max()
                 .unwrap_or(0);
             if w > 0 {
@@ -118,7 +146,9 @@ impl<'a> ContactSheet<'a> {
         let all: Vec<SeqView> = self
             .rows
             .iter()
-            .flat_map(|r| r.sequences.iter().map(|s| s.1))
+            .zip(&framed)
+            .filter(|(_, &f)| f)
+            .flat_map(|(r, _)| r.sequences.iter().map(|s| s.1))
             .collect();
         let bbox = bounding_box(&all, self.frames.clone());
         let renderer = Renderer::new(
@@ -170,7 +200,7 @@ impl<'a> ContactSheet<'a> {
         for (r, row) in self.rows.iter().enumerate() {
             let y0 = header_h as i64 + r as i64 * self.cell_height as i64;
             if label_w > 0 {
-                let lines: Vec<&str> = row.label.lines().collect();
+                let lines: Vec<&str> = labels[r].lines().collect();
                 let legend = lines.len() == row.sequences.len() && lines.len() > 1;
                 let block = lines.len() as i64 * line_h as i64;
                 let top = y0 + (self.cell_height as i64 - block) / 2;
@@ -263,6 +293,35 @@ mod tests {
                 let hit = (0..30)
                     .any(|y| (0..40).any(|x| img.get(c * 40 + x, r * 30 + y) != colour::WHITE));
                 assert!(hit, "cell {r},{c} is empty");
+            }
+        }
+    }
+
+    /// A row a hundred times the others' size (an exploding method) does not set the scale: the
+    /// other rows are drawn as large as without it, and it is marked clipped.
+    #[test]
+    fn an_exploding_row_is_clipped_and_the_others_keep_their_scale() {
+        let (f, fr) = tri_frames(5);
+        let big: Vec<Vec<Vector3<f64>>> = fr.iter().map(|v| v.iter().map(|p| p * 100.0).collect()).collect();
+        let (small, huge) = (SeqView::new(&f, &fr), SeqView::new(&f, &big));
+        let row = |label: &str, v| Row { label: label.into(), sequences: vec![(colour::palette(0), v)] };
+        let sheet_of = |rows| {
+            let mut sheet = ContactSheet::new(rows);
+            sheet.n_columns = 2;
+            sheet.cell_width = 40;
+            sheet.cell_height = 40;
+            sheet.labels = false;
+            sheet.style.supersample = 1;
+            sheet
+        };
+        let with = sheet_of(vec![row("a", small), row("b", small), row("exploding", huge)]);
+        assert_eq!(with.framed_rows(), vec![true, true, false]);
+        let without = sheet_of(vec![row("a", small), row("b", small)]);
+        assert_eq!(without.framed_rows(), vec![true, true]);
+        let (img, reference) = (with.render(), without.render());
+        for y in 0..80 {
+            for x in 0..80 {
+                assert_eq!(img.get(x, y), reference.get(x, y), "pixel {x},{y} of the first two rows");
             }
         }
     }

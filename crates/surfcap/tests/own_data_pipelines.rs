@@ -5,7 +5,10 @@
 //!   `check-set` and `make transfer`;
 //! - a capture set whose `subject.json` files have no curves and no part tree: `check-set`
 //!   points to `propose-curves`, which finds them, then `make transfer`, whose errors stay
-//!   close to those of the same set with the hand-built curves.
+//!   close to those of the same set with the hand-built curves;
+//! - a lab's set: the tiny preset stripped to frames, frame rates and key-poses (no truth,
+//!   correspondences, contacts, curves or part tree): `check-set` notes each missing piece,
+//!   and `make transfer` and `make variation` run through to a report that opens in Chromium.
 //!
 //! The stage binaries are the workspace's release build (`cargo build --release --workspace`);
 //! `make` runs with `NO_BUILD=1` so that it does not rebuild from inside the test.
@@ -164,9 +167,10 @@ fn propose_curves_then_make_transfer_on_a_set_without_curves() {
         std::fs::write(&json, v.to_string()).unwrap();
     }
     let check = Command::new(bin("check-set")).arg(&set).output().unwrap();
-    assert!(!check.status.success());
+    assert!(check.status.success(), "a set without curves is usable: the pipelines propose them");
     let err = String::from_utf8_lossy(&check.stderr);
-    assert!(err.lines().count() == 2 && err.lines().all(|l| l.contains("propose-curves")), "{err}");
+    let curve_notes = err.lines().filter(|l| l.contains("note:") && l.contains("propose-curves")).count();
+    assert_eq!(curve_notes, 2, "{err}");
     for x in ["A", "B"] {
         let json = set.join(x).join("subject.json");
         run(Command::new(bin("propose-curves"))
@@ -205,4 +209,87 @@ fn propose_curves_then_make_transfer_on_a_set_without_curves() {
         assert!(e / h < MEAN_RATIO, "{method}: mean {e:.4} m with proposed curves, {h:.4} m hand-built\n{table}");
     }
     assert!(out.join("index.html").is_file());
+}
+
+/// The capture set at `set` cut down to what a lab has: the frames, each subject's frame rate,
+/// units and up axis, and set.json's training pairs with their key-poses and test motions.
+fn strip_to_a_labs_set(set: &Path) {
+    let edit = |path: PathBuf, keep: &dyn Fn(&str) -> bool| {
+        let v: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(&path).unwrap()).unwrap();
+        let kept: serde_json::Map<String, serde_json::Value> =
+            v.as_object().unwrap().iter().filter(|(k, _)| keep(k)).map(|(k, v)| (k.clone(), v.clone())).collect();
+        std::fs::write(&path, serde_json::Value::Object(kept).to_string()).unwrap();
+    };
+    edit(set.join("set.json"), &|k| ["source", "target", "train", "test"].contains(&k));
+    let path = set.join("set.json");
+    let mut v: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(&path).unwrap()).unwrap();
+    for pair in v["train"].as_array_mut().unwrap() {
+        pair.as_object_mut().unwrap().retain(|k, _| ["source", "target", "keyposes"].contains(&k.as_str()));
+    }
+    std::fs::write(&path, v.to_string()).unwrap();
+    for x in ["A", "B"] {
+        edit(set.join(x).join("subject.json"), &|k| ["fps", "units", "up"].contains(&k));
+    }
+    std::fs::remove_dir_all(set.join("truth")).unwrap();
+}
+
+#[test]
+fn a_labs_set_of_frames_rates_and_keyposes_runs_both_pipelines_to_a_report() {
+    let tmp = tempfile::tempdir().unwrap();
+    let set = tmp.path().join("set");
+    synth_tiny(&set);
+    strip_to_a_labs_set(&set);
+    // check-set accepts it and says, one line each, what is missing and what happens instead.
+    let err = run(Command::new(bin("check-set")).arg(&set));
+    for (what, count) in [("no part curves", 2), ("no foot contacts", 2), ("no true frame correspondences", 1), ("no ground truth", 1)] {
+        let n = err.lines().filter(|l| l.contains("note:") && l.contains(what)).count();
+        assert_eq!(n, count, "{what}:\n{err}");
+    }
+    let out = tmp.path().join("out");
+    make("transfer", &set, &out);
+    make("variation", &set, &out);
+    // The proposed curves and their picture.
+    for x in ["A", "B"] {
+        assert!(out.join("work").join(x).join("curves.png").is_file(), "no curve picture of {x}");
+    }
+    // results.json: a record per motion and method, no pose error, the measures on the
+    // source's contacts finite and small (a transfer on the floor does not float by decimetres).
+    let results: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(out.join("results.json")).unwrap()).unwrap();
+    let records = results.as_array().unwrap();
+    assert!(!records.is_empty());
+    for r in records {
+        assert!(r["rms_pose_m"].is_null(), "{r}");
+        let floor = r["floor_offset_m"].as_f64().unwrap_or_else(|| panic!("no floor offset: {r}"));
+        assert!(floor.abs() < 0.25, "{r}");
+        assert!(r["foot_sliding_m"].as_f64().is_some_and(|s| s.is_finite() && s >= 0.0), "{r}");
+    }
+    let full = records.iter().filter(|r| r["method"] == "gpr-nn+correct+stitch").count();
+    assert_eq!(full, 3, "the three test motions through the full pipeline");
+    // Learning curves on the DTW pairs, labelled so.
+    let csv = std::fs::read_to_string(out.join("learning-curves/learning_curves.csv")).unwrap();
+    assert!(csv.lines().skip(1).all(|l| l.split(',').nth(1) == Some("dtw")), "{csv}");
+    // The variation ran (its groups' motions exist in this set) and the report opens.
+    let variation: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(out.join("variation.json")).unwrap()).unwrap();
+    assert!(variation.as_object().is_some_and(|g| !g.is_empty()), "{variation}");
+    let page = out.join("index.html");
+    let shot = tmp.path().join("report.png");
+    let web = root().join("crates/export/web");
+    let res = Command::new("node").arg(web.join("browser-test.mjs")).arg(&page).arg(&shot).output().unwrap();
+    let stdout = String::from_utf8_lossy(&res.stdout);
+    let json: serde_json::Value = serde_json::from_str(stdout.lines().last().unwrap_or("null")).unwrap_or_default();
+    // The page loads without errors and shows the measures that need no truth.
+    let tables = &json["tables"];
+    assert!(tables["floor-offset"].as_array().is_some_and(|t| t.len() > 2), "no floor-offset table: {stdout}{}", String::from_utf8_lossy(&res.stderr));
+    assert!(tables["foot-sliding"].as_array().is_some_and(|t| t.len() > 2), "no foot-sliding table: {stdout}");
+    assert!(tables["pose-error"].is_null(), "a pose table without truth: {stdout}");
+    // Every problem the browser saw (console errors, a blank canvas, Play not advancing); the
+    // page's opening time is the report tests' to judge, on an idle machine.
+    let problems: Vec<&str> = json["problems"]
+        .as_array()
+        .unwrap_or_else(|| panic!("browser test gave no result: {stdout}{}", String::from_utf8_lossy(&res.stderr)))
+        .iter()
+        .filter_map(|p| p.as_str())
+        .filter(|p| !p.contains("to open (limit"))
+        .collect();
+    assert!(problems.is_empty(), "{problems:?}");
 }

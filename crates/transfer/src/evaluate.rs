@@ -260,6 +260,32 @@ mod tests {
         assert!(foot_sliding(&pred, &truth, &[vec![7]], &contacts, &Vector3::y()).is_err());
     }
 
+    /// Without truth: a transfer whose lowest sole point stands 3 cm above the target's floor
+    /// (at 0.5 m) wherever the source stands has a floor offset of 3 cm, frames where the source
+    /// is in the air left out; dragged 2 cm per frame it slides 0.02 m/frame, the still source 0.
+    #[test]
+    fn floor_offset_and_sliding_on_the_sources_contacts() {
+        let pred = seq(
+            (0..5)
+                .map(|i| {
+                    let lift = if i == 2 { 0.4 } else { 0.0 };
+                    vec![[0.02 * i as f64, 0.53 + lift, 0.0], [1.0, 0.6 + lift, 0.0], [0.0, 1.5, 0.0]]
+                })
+                .collect(),
+        );
+        let source: Vec<Vec<Vector3<f64>>> = vec![vec![Vector3::new(0.0, 0.0, 0.0); 3]; 5];
+        let soles = vec![vec![0u32], vec![1u32]];
+        let contacts = vec![[true, false], [true, false], [false, false], [true, false], [false, true]];
+        let m = without_truth(&pred, &soles, 0.5, &contacts, (&source, &soles), &Vector3::y()).unwrap();
+        assert!((m.floor_offset_m.unwrap() - 0.03).abs() < 1e-12, "{m:?}");
+        assert!((m.foot_sliding_m.unwrap() - 0.02).abs() < 1e-12, "{m:?}");
+        assert_eq!(m.source_foot_sliding_m, Some(0.0));
+        let air = vec![[false, false]; 5];
+        let m = without_truth(&pred, &soles, 0.5, &air, (&source, &soles), &Vector3::y()).unwrap();
+        assert_eq!((m.floor_offset_m, m.foot_sliding_m), (None, None));
+        assert!(without_truth(&pred, &soles, 0.5, &contacts[..4], (&source, &soles), &Vector3::y()).is_err());
+    }
+
     #[test]
     fn rejects_mismatched_sequences() {
         let a = seq(vec![vec![[0.0; 3]; 3]]);

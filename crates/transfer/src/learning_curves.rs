@@ -589,6 +589,9 @@ const COLOURS: [plotters::style::RGBColor; 4] = [
     plotters::style::RGBColor(214, 39, 40),
 ];
 
+/// How many times the median curve's highest point the error axis reaches at most.
+const CLIP_FACTOR: f64 = 3.0;
+
 /// One series: legend name, `(n, train, test)` points, whether it is a floor.
 type Series = (String, Vec<(f64, f64, f64)>, bool);
 
@@ -610,7 +613,19 @@ fn draw<DB: plotters::prelude::DrawingBackend>(
     if !x0.is_finite() {
         x0 = 0.0;
     }
+    // The axis ends at CLIP_FACTOR times the median curve's highest point: a method whose error
+    // explodes is drawn clipped at the top (its values held there) and its legend says so.
+    let mut peaks: Vec<f64> = series
+        .iter()
+        .filter(|s| !s.2)
+        .map(|(_, p, _)| p.iter().map(|q| q.1.max(q.2)).fold(0.0, f64::max))
+        .collect();
+    peaks.sort_by(f64::total_cmp);
+    let median_peak = peaks.get(peaks.len() / 2).copied().unwrap_or(y1);
+    let y1 = y1.min(CLIP_FACTOR * median_peak);
     let y1 = if y1 > 0.0 { y1 * 1.1 * 1000.0 } else { 1.0 };
+    let top = y1 / 1.1;
+    let clip = |v: f64| (v * 1000.0).min(top);
     let mut chart = ChartBuilder::on(&root)
         .caption(title, ("sans-serif", 18))
         .margin(12)
@@ -655,19 +670,15 @@ fn draw<DB: plotters::prelude::DrawingBackend>(
         }
         let c = COLOURS[colour_index % COLOURS.len()];
         colour_index += 1;
+        let clipped = pts.iter().any(|p| p.1.max(p.2) * 1000.0 > top);
+        let mark = if clipped { ", clipped" } else { "" };
         chart
-            .draw_series(LineSeries::new(
-                pts.iter().map(|p| (p.0, p.2 * 1000.0)),
-                c.stroke_width(2),
-            ))
+            .draw_series(LineSeries::new(pts.iter().map(|p| (p.0, clip(p.2))), c.stroke_width(2)))
             .map_err(|x| e(&x))?
-            .label(format!("{name} (held out)"))
+            .label(format!("{name} (held out{mark})"))
             .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 18, y)], c.stroke_width(2)));
         chart
-            .draw_series(LineSeries::new(
-                pts.iter().map(|p| (p.0, p.1 * 1000.0)),
-                c.mix(0.5).stroke_width(1),
-            ))
+            .draw_series(LineSeries::new(pts.iter().map(|p| (p.0, clip(p.1))), c.mix(0.5).stroke_width(1)))
             .map_err(|x| e(&x))?
             .label(format!("{name} (training)"))
             .legend(move |(x, y)| {
@@ -675,8 +686,7 @@ fn draw<DB: plotters::prelude::DrawingBackend>(
             });
         chart
             .draw_series(
-                pts.iter()
-                    .map(|p| Circle::new((p.0, p.1 * 1000.0), 3, c.mix(0.5).filled())),
+                pts.iter().map(|p| Circle::new((p.0, clip(p.1)), 3, c.mix(0.5).filled())),
             )
             .map_err(|x| e(&x))?;
     }
