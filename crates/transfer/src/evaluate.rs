@@ -38,6 +38,13 @@ pub struct EvalRecord {
     pub truth_foot_sliding_m: Option<f64>,
     /// `rms_pose_m` of each frame.
     pub frame_pose_m: Vec<f64>,
+    /// Scored against a reference performance (`transfer-eval --reference`): its frame count
+    /// (the errors are then time-normalised, `crate::reference_score`).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub reference_frames: Option<usize>,
+    /// With `--reference` and `--template`: the pose error of the template held still.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub still_rms_pose_m: Option<f64>,
 }
 
 /// Sum of squared distances between matching points.

@@ -1,5 +1,7 @@
 //! The `transfer-eval` stage: per-vertex RMS error of a transferred sequence against its ground
-//! truth (pose-aligned and as placed) and, given the contacts, the soles' sliding.
+//! truth (pose-aligned and as placed) and, given the contacts, the soles' sliding; with
+//! `--reference`, against a reference performance of another length instead
+//! ([`crate::reference_score`]).
 
 use std::path::PathBuf;
 
@@ -20,7 +22,8 @@ use crate::evaluate::{foot_sliding, rms_errors_per_frame, EvalRecord};
 #[command(
     name = "transfer-eval",
     version,
-    after_help = "e.g.: transfer-eval out/transfer/A-to-B/punch/gpr-nn set/truth/B/punch --direction 'A->B' --motion punch --method gpr-nn --out out/eval/A-to-B/punch/gpr-nn.json"
+    after_help = "e.g.: transfer-eval out/transfer/A-to-B/punch/gpr-nn set/truth/B/punch --direction 'A->B' --motion punch --method gpr-nn --out out/eval/A-to-B/punch/gpr-nn.json\n\
+                  e.g.: transfer-eval pred/back set/reference/sorceress/back --reference --template set/sorceress/walk/000000.ply --direction 'sarge->sorceress' --motion back --method gpr-nn"
 )]
 pub struct Params {
     #[command(flatten)]
@@ -28,8 +31,14 @@ pub struct Params {
     pub common: CommonArgs,
     /// Transferred sequence folder (from gpr-predict)
     pub prediction: PathBuf,
-    /// Ground-truth folder (same frame count and topology)
+    /// Ground-truth folder (same frame count and topology), or with --reference a reference
+    /// performance (any frame count)
     pub truth: PathBuf,
+    /// TRUTH is a reference: the target performing the motion its own way, timed differently.
+    /// Each frame is compared with the reference at the same fraction of its length; with
+    /// --template, the template held still is scored too (`still_rms_pose_m`)
+    #[arg(long, conflicts_with = "contacts")]
+    pub reference: bool,
     /// Direction label for the record, e.g. A->B
     #[arg(long)]
     pub direction: String,
@@ -52,7 +61,8 @@ pub struct Params {
     /// The target's segmentation (its leg parts give the soles)
     #[arg(long)]
     pub segmentation: Option<PathBuf>,
-    /// The target's template mesh (rest pose: the soles are its lowest leg vertices)
+    /// The target's template mesh (rest pose: the soles are its lowest leg vertices; with
+    /// --reference, the pose held still for the baseline score)
     #[arg(long)]
     pub template: Option<PathBuf>,
     /// Output JSON record (stdout when omitted)
@@ -64,6 +74,9 @@ pub struct Params {
 pub fn run(p: &Params) -> anyhow::Result<()> {
     let pred = MeshSequence::load_dir(&p.prediction)?;
     let truth = MeshSequence::load_dir(&p.truth)?;
+    if p.reference {
+        return write_record(p, reference_record(p, &pred, &truth)?);
+    }
     let (rms_pose_m, rms_placed_m, frame_pose_m) = rms_errors_per_frame(&pred, &truth)
         .with_context(|| p.prediction.display().to_string())?;
     let (mut foot_sliding_m, mut truth_foot_sliding_m) = (None, None);
@@ -111,7 +124,39 @@ pub fn run(p: &Params) -> anyhow::Result<()> {
         foot_sliding_m,
         truth_foot_sliding_m,
         frame_pose_m,
+        reference_frames: None,
+        still_rms_pose_m: None,
     };
+    write_record(p, record)
+}
+
+/// The record of `--reference`: time-normalised errors and the still baseline.
+fn reference_record(p: &Params, pred: &MeshSequence, reference: &MeshSequence) -> anyhow::Result<EvalRecord> {
+    let rest = match &p.template {
+        Some(path) => Some(mesh_core::io::read_mesh(path)?.vertices),
+        None => None,
+    };
+    let s = crate::reference_score::score_against_reference(pred, reference, rest.as_deref())
+        .with_context(|| p.prediction.display().to_string())?;
+    Ok(EvalRecord {
+        direction: p.direction.clone(),
+        motion: p.motion.clone(),
+        method: p.method.clone(),
+        placement: p.placement.name().to_string(),
+        training: p.correspondences.name().to_string(),
+        rms_pose_m: s.rms_pose_m,
+        rms_placed_m: s.rms_placed_m,
+        frames: pred.n_frames(),
+        foot_sliding_m: None,
+        truth_foot_sliding_m: None,
+        frame_pose_m: s.frame_pose_m,
+        reference_frames: Some(reference.n_frames()),
+        still_rms_pose_m: s.still_rms_pose_m,
+    })
+}
+
+/// Writes `record` to `--out`, or prints it on stdout.
+fn write_record(p: &Params, record: EvalRecord) -> anyhow::Result<()> {
     let text = serde_json::to_string_pretty(&record)?;
     match &p.out {
         Some(path) => mesh_core::atomic::write_bytes_atomic(path, text.as_bytes())?,
