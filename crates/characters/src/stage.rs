@@ -36,7 +36,7 @@ pub struct Params {
     #[arg(long, value_name = "SOURCE:TARGET", default_values_t = ["sarge:sorceress".to_string(), "major:liz".to_string()])]
     pub characters: Vec<String>,
     /// Frame rate of every motion written
-    #[arg(long, default_value_t = 25.0)]
+    #[arg(long, value_name = "F", default_value_t = 25.0)]
     pub fps: f64,
     /// Folder of player folders (<name>/{lower,upper,head}.md3, animation.cfg)
     /// [default: $SURFCAP_CACHE/assets/openarena, else ~/.cache/surfcap/assets/openarena]

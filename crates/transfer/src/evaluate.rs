@@ -38,11 +38,11 @@ pub struct EvalRecord {
     pub truth_foot_sliding_m: Option<f64>,
     /// `rms_pose_m` of each frame.
     pub frame_pose_m: Vec<f64>,
-    /// Scored against a reference performance (`transfer-eval --reference`): its frame count
+    /// Scored against a reference performance (`transfer-eval --time-normalise`): its frame count
     /// (the errors are then time-normalised, `crate::reference_score`).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub reference_frames: Option<usize>,
-    /// With `--reference` and `--template`: the pose error of the template held still.
+    /// With `--time-normalise` and `--template`: the pose error of the template held still.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub still_rms_pose_m: Option<f64>,
 }

@@ -1,6 +1,6 @@
 //! The `transfer-eval` stage: per-vertex RMS error of a transferred sequence against its ground
 //! truth (pose-aligned and as placed) and, given the contacts, the soles' sliding; with
-//! `--reference`, against a reference performance of another length instead
+//! `--time-normalise`, against a reference performance of another length instead
 //! ([`crate::reference_score`]).
 
 use std::path::PathBuf;
@@ -23,7 +23,7 @@ use crate::evaluate::{foot_sliding, rms_errors_per_frame, EvalRecord};
     name = "transfer-eval",
     version,
     after_help = "e.g.: transfer-eval out/transfer/A-to-B/punch/gpr-nn set/truth/B/punch --direction 'A->B' --motion punch --method gpr-nn --out out/eval/A-to-B/punch/gpr-nn.json\n\
-                  e.g.: transfer-eval pred/back set/reference/sorceress/back --reference --template set/sorceress/walk/000000.ply --direction 'sarge->sorceress' --motion back --method gpr-nn"
+                  e.g.: transfer-eval pred/back set/reference/sorceress/back --time-normalise --template set/sorceress/walk/000000.ply --direction 'sarge->sorceress' --motion back --method gpr-nn"
 )]
 pub struct Params {
     #[command(flatten)]
@@ -31,14 +31,15 @@ pub struct Params {
     pub common: CommonArgs,
     /// Transferred sequence folder (from gpr-predict)
     pub prediction: PathBuf,
-    /// Ground-truth folder (same frame count and topology), or with --reference a reference
+    /// Ground-truth folder (same frame count and topology), or with --time-normalise a reference
     /// performance (any frame count)
     pub truth: PathBuf,
-    /// TRUTH is a reference: the target performing the motion its own way, timed differently.
+    /// TRUTH is a reference performance: the target performing the motion its own way, timed
+    /// differently.
     /// Each frame is compared with the reference at the same fraction of its length; with
     /// --template, the template held still is scored too (`still_rms_pose_m`)
     #[arg(long, conflicts_with = "contacts")]
-    pub reference: bool,
+    pub time_normalise: bool,
     /// Direction label for the record, e.g. A->B
     #[arg(long)]
     pub direction: String,
@@ -62,7 +63,7 @@ pub struct Params {
     #[arg(long)]
     pub segmentation: Option<PathBuf>,
     /// The target's template mesh (rest pose: the soles are its lowest leg vertices; with
-    /// --reference, the pose held still for the baseline score)
+    /// --time-normalise, the pose held still for the baseline score)
     #[arg(long)]
     pub template: Option<PathBuf>,
     /// Output JSON record (stdout when omitted)
@@ -74,7 +75,7 @@ pub struct Params {
 pub fn run(p: &Params) -> anyhow::Result<()> {
     let pred = MeshSequence::load_dir(&p.prediction)?;
     let truth = MeshSequence::load_dir(&p.truth)?;
-    if p.reference {
+    if p.time_normalise {
         return write_record(p, reference_record(p, &pred, &truth)?);
     }
     let (rms_pose_m, rms_placed_m, frame_pose_m) = rms_errors_per_frame(&pred, &truth)
@@ -130,7 +131,7 @@ pub fn run(p: &Params) -> anyhow::Result<()> {
     write_record(p, record)
 }
 
-/// The record of `--reference`: time-normalised errors and the still baseline.
+/// The record of `--time-normalise`: time-normalised errors and the still baseline.
 fn reference_record(p: &Params, pred: &MeshSequence, reference: &MeshSequence) -> anyhow::Result<EvalRecord> {
     let rest = match &p.template {
         Some(path) => Some(mesh_core::io::read_mesh(path)?.vertices),
