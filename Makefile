@@ -6,6 +6,7 @@
 #   make transfer SET=<set> OUT=<dir>   the transfer pipeline (CVPR 2017), results.json + report
 #   make variation SET=<set> OUT=<dir>  the variation pipeline (3DV 2017), variation.json + report
 #   make demo-data | holdout-data | outside-data   synthesise the demo / held-out / outside benchmark capture set (out/...)
+#   make characters-data   capture sets from real animated game characters (out/characters/...)
 #   make demo-render   contact sheets and GIFs of the demo set
 #   make report OUT=<dir>   the HTML report of a run;  make assets   fetch the real bodies and mocap
 #   make export OUT=<dir>   .glb and OBJ + PC2 of a run's final transfers and the report's variations

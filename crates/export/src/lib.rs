@@ -6,6 +6,8 @@
 //! - [`glb`]: a glTF 2.0 binary with the animation as morph targets whose
 //!   weights are sampled one-hot per frame (validator-clean by default;
 //!   frame stride and int16 quantisation on request).
+//! - [`md3`]: Quake 3 MD3 models (vertex-animated surfaces and tags), read
+//!   for the animated-character benchmark.
 //! - [`rate`]: the frame rate a sequence folder plays at (its rate file, its
 //!   capture's `subject.json`, or `--fps`).
 //! - [`report`]: the static `OUT/index.html` page of a pipeline run, with
@@ -20,6 +22,7 @@ pub mod base64;
 pub mod frames;
 pub mod glb;
 pub mod html;
+pub mod md3;
 pub mod pc2;
 pub mod rate;
 pub mod report;

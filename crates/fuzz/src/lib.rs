@@ -1,6 +1,8 @@
 //! An in-process mutation fuzzer on stable Rust over every surfcap reader.
 //!
-//! Targets ([`Target`]): PLY and OBJ meshes, PC2 point caches, the capture
+//! Targets ([`Target`]): PLY and OBJ meshes, PC2 point caches, Quake 3 MD3
+//! models (welded as the `characters` stage welds them) and their
+//! `animation.cfg`, the capture
 //! set's `set.json` and `subject.json` (with the subject's curves resolved on
 //! a template, as `segment` does), and artifacts: every kind's decoder and
 //! validator (segmentation, pca-model, aligned-motion, correspondences,
@@ -45,6 +47,8 @@ pub enum Target {
     Ply,
     Obj,
     Pc2,
+    Md3,
+    AnimationCfg,
     SetJson,
     SubjectJson,
     Artifact,
@@ -56,6 +60,8 @@ impl Target {
             Target::Ply => "ply",
             Target::Obj => "obj",
             Target::Pc2 => "pc2",
+            Target::Md3 => "md3",
+            Target::AnimationCfg => "animation-cfg",
             Target::SetJson => "set-json",
             Target::SubjectJson => "subject-json",
             Target::Artifact => "artifact",
@@ -70,6 +76,8 @@ impl Target {
             "ply" => Target::Ply,
             "obj" => Target::Obj,
             "pc2" => Target::Pc2,
+            "md3" => Target::Md3,
+            "cfg" if name == "animation.cfg" => Target::AnimationCfg,
             "json" if name == "set.json" => Target::SetJson,
             "json" if name == "subject.json" => Target::SubjectJson,
             _ => {
@@ -112,6 +120,18 @@ pub fn exercise(target: Target, bytes: &[u8]) {
         }
         Target::Pc2 => {
             let _ = export::pc2::parse_pc2(bytes);
+        }
+        Target::Md3 => {
+            if let Ok(model) = export::md3::parse_md3(bytes) {
+                let _ = characters::character::weld(&model);
+            }
+        }
+        Target::AnimationCfg => {
+            if let Ok(cfg) = characters::animation_cfg::parse_animation_cfg(bytes) {
+                for anim in cfg.animations.values() {
+                    let _ = anim.frame_at(3 * anim.count + 1);
+                }
+            }
         }
         Target::SetJson => {
             let _ = SetSpec::parse(bytes);
@@ -227,6 +247,8 @@ pub fn seed_corpus() -> Vec<(Target, Vec<u8>)> {
     let mut b = Vec::new();
     export::pc2::encode_pc2(&mut b, &frames[..3]).unwrap();
     out.push((Target::Pc2, b));
+    out.push((Target::Md3, md3_seed(&mesh, &frames[..2])));
+    out.push((Target::AnimationCfg, ANIMATION_CFG_SEED.to_vec()));
     out.push((Target::SetJson, br#"{"source": "A", "target": "B", "train": [{"source": "walk", "target": "walk", "keyposes": [[0, 0], [12, 25]]}], "test": ["punch"]}"#.to_vec()));
     let near = l.ring(l.body_ring(8));
     let far = l.ring(l.body_ring(12));
@@ -264,6 +286,34 @@ pub fn seed_corpus() -> Vec<(Target, Vec<u8>)> {
     out.push((Target::Artifact, artifact_bytes(&corr, &header)));
     out
 }
+
+/// A two-frame MD3 of `mesh` in two surfaces, with a tag (positions in
+/// decimetres, so the body fits MD3's 16-bit coordinates with room to spare).
+fn md3_seed(mesh: &TriMesh, frames: &[Vec<Vector3<f64>>]) -> Vec<u8> {
+    use export::md3::{Md3, Md3Frame, Surface, Tag};
+    let half = mesh.faces.len() / 2;
+    let surface = |name: &str, faces: &[[u32; 3]]| Surface {
+        name: name.into(),
+        triangles: faces.to_vec(),
+        frames: frames.iter().map(|f| f.iter().map(|p| p * 10.0).collect()).collect(),
+    };
+    let frame = Md3Frame { name: "f".into(), min: Vector3::zeros(), max: Vector3::zeros(), origin: Vector3::zeros(), radius: 1.0 };
+    let tag = Tag { name: "tag_torso".into(), origin: Vector3::new(0.0, 0.0, 8.0), axis: nalgebra::Matrix3::identity() };
+    let model = Md3 {
+        name: "seed".into(),
+        frames: vec![frame; frames.len()],
+        tags: vec![vec![tag]; frames.len()],
+        surfaces: vec![surface("a", &mesh.faces[..half]), surface("b", &mesh.faces[half..])],
+    };
+    export::md3::encode_md3(&model).expect("the seed fits MD3")
+}
+
+/// A player's `animation.cfg` (the 25 animations, keywords and comments).
+const ANIMATION_CFG_SEED: &[u8] = b"// animation config file\nsex m\nheadoffset 0 0 0\nfootsteps boot\n\n\
+0 30 0 25 // BOTH_DEATH1\n29 1 0 25\n30 30 0 25\n59 1 0 25\n60 30 0 25\n89 1 0 25\n\
+90 40 0 13 // TORSO_GESTURE\n130 6 0 15\n136 6 0 15\n142 5 0 20\n147 4 0 20\n151 1 0 15\n152 1 0 15\n\
+153 8 8 20 // LEGS_WALKCR\n161 12 12 20\n173 9 9 15\n182 10 10 18\n185 10 10 15\n202 8 0 15\n\
+211 8 0 20\n219 9 0 15\n228 -6 0 20\n234 10 4 10\n244 10 10 0\n254 7 7 18 // LEGS_TURN\n";
 
 fn artifact_bytes<T: Artifact>(value: &T, header: &Header) -> Vec<u8> {
     mesh_core::artifact::encode_artifact(T::KIND, T::VERSION, header, value).unwrap()
@@ -399,7 +449,7 @@ pub fn mutate(rng: &mut ChaCha8Rng, input: &[u8], target: Target, corpus: &[(Tar
                 let v: u64 = 1 << rng.random_range(8..63);
                 b[at + 1..at + 9].copy_from_slice(&v.to_le_bytes());
             }
-            7 | 8 if target != Target::Artifact && target != Target::Pc2 => {
+            7 | 8 if !matches!(target, Target::Artifact | Target::Pc2 | Target::Md3) => {
                 // Token swap or replacement in text.
                 // The tokens at two random positions (a scan of the whole text per mutation
                 // cost more than the parse on large files).
@@ -603,7 +653,16 @@ fn fuzz_worker(
 /// `true` if it no longer panics.
 pub fn replay(path: &Path) -> Option<bool> {
     let name = path.file_name()?.to_str()?;
-    let target = [Target::Ply, Target::Obj, Target::Pc2, Target::SetJson, Target::SubjectJson, Target::Artifact]
+    let target = [
+        Target::Ply,
+        Target::Obj,
+        Target::Pc2,
+        Target::Md3,
+        Target::AnimationCfg,
+        Target::SetJson,
+        Target::SubjectJson,
+        Target::Artifact,
+    ]
         .into_iter()
         .find(|t| name.contains(&format!("-{}-", t.name())))?;
     let bytes = std::fs::read(path).ok()?;

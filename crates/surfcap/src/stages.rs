@@ -25,6 +25,7 @@ const PIPELINE: &str = "pipelines and tools";
 /// Every stage, in the order the pipelines run them.
 pub const STAGES: &[Stage] = &[
     st("synth", "synth", DATA, "build a capture set from real bodies and real mocap, with ground truth"),
+    st("characters", "characters", DATA, "build capture sets from real animated game characters (Quake 3 MD3 players), with references"),
     st("mesh-import", "mesh-import", DATA, "read OBJ/PLY frames (any naming) or OBJ + PC2 into a folder of PLY frames"),
     st("check-set", "check-set", DATA, "validate a capture set and list every problem, one line each"),
     st("propose-curves", "propose-curves", DATA, "find limb loops on a template without annotation, into a copy of subject.json"),

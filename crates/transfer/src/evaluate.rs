@@ -54,6 +54,13 @@ pub struct EvalRecord {
     pub floor_offset_m: Option<f64>,
     /// `rms_pose_m` of each frame (empty without truth).
     pub frame_pose_m: Vec<f64>,
+    /// Scored against a reference performance (`transfer-eval --time-normalise`): its frame count
+    /// (the errors are then time-normalised, `crate::reference_score`).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub reference_frames: Option<usize>,
+    /// With `--time-normalise` and `--template`: the pose error of the template held still.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub still_rms_pose_m: Option<f64>,
 }
 
 /// What a transfer shows without truth, measured on the source's contacts.

@@ -17,6 +17,7 @@ pub mod quality;
 pub mod placement;
 pub mod feet;
 pub mod evaluate;
+pub mod reference_score;
 pub mod learning_curves;
 pub mod figures;
 pub mod stage;

@@ -1,7 +1,8 @@
 //! The `transfer-eval` stage: per-vertex RMS error of a transferred sequence against its ground
 //! truth (pose-aligned and as placed) and, given the contacts, the soles' sliding; given the
 //! source motion and both PCA models, the sliding and floor offset on the source's contacts
-//! (all that is measured without truth).
+//! (all that is measured without truth); with `--time-normalise`, against a reference
+//! performance of another length instead ([`crate::reference_score`]).
 
 use std::path::PathBuf;
 
@@ -28,7 +29,8 @@ use crate::evaluate::{foot_sliding, rms_errors_per_frame, without_truth, EvalRec
     version,
     after_help = "e.g.: transfer-eval out/transfer/A-to-B/punch/gpr-nn set/truth/B/punch --direction 'A->B' --motion punch --method gpr-nn --out out/eval/A-to-B/punch/gpr-nn.json\n      \
                   transfer-eval out/transfer/A-to-B/punch/gpr-nn --source-motion work/A/punch.aligned --source-pca work/A/pca.model --target-pca work/B/pca.model \\\n        \
-                  --direction 'A->B' --motion punch --method gpr-nn --out eval.json     # without truth"
+                  --direction 'A->B' --motion punch --method gpr-nn --out eval.json     # without truth\n      \
+                  transfer-eval pred/back set/reference/sorceress/back --time-normalise --template set/sorceress/walk/000000.ply --direction 'sarge->sorceress' --motion back --method gpr-nn"
 )]
 pub struct Params {
     #[command(flatten)]
@@ -36,10 +38,16 @@ pub struct Params {
     pub common: CommonArgs,
     /// Transferred sequence folder (from gpr-predict)
     pub prediction: PathBuf,
-    /// Ground-truth folder (same frame count and topology) [default: none: the record holds the
-    /// measures on the source's contacts, which need --source-motion]
+    /// Ground-truth folder (same frame count and topology), or with --time-normalise a reference
+    /// performance (any frame count) [default: none: the record holds the measures on the
+    /// source's contacts, which need --source-motion]
     #[arg(required_unless_present = "source_motion")]
     pub truth: Option<PathBuf>,
+    /// TRUTH is a reference performance: the target performing the motion its own way, timed
+    /// differently. Each frame is compared with the reference at the same fraction of its
+    /// length; with --template, the template held still is scored too (`still_rms_pose_m`)
+    #[arg(long, conflicts_with = "contacts", requires = "truth")]
+    pub time_normalise: bool,
     /// Direction label for the record, e.g. A->B
     #[arg(long)]
     pub direction: String,
@@ -62,7 +70,8 @@ pub struct Params {
     /// The target's segmentation (its leg parts give the soles)
     #[arg(long)]
     pub segmentation: Option<PathBuf>,
-    /// The target's template mesh (rest pose: the soles are its lowest leg vertices)
+    /// The target's template mesh (rest pose: the soles are its lowest leg vertices; with
+    /// --time-normalise, the pose held still for the baseline score)
     #[arg(long)]
     pub template: Option<PathBuf>,
     /// The aligned source motion the prediction transfers (align): foot sliding and floor offset on
@@ -97,6 +106,9 @@ pub fn run(p: &Params) -> anyhow::Result<()> {
         return write(p, &record);
     };
     let truth = MeshSequence::load_dir(truth_dir)?;
+    if p.time_normalise {
+        return write(p, &reference_record(p, &pred, &truth)?);
+    }
     let (rms_pose_m, rms_placed_m, frame_pose_m) = rms_errors_per_frame(&pred, &truth)
         .with_context(|| p.prediction.display().to_string())?;
     let (mut foot_sliding_m, mut truth_foot_sliding_m) = (None, None);
@@ -157,7 +169,24 @@ fn record(p: &Params, pred: &MeshSequence, pose: Option<f64>, placed: Option<f64
         source_foot_sliding_m: None,
         floor_offset_m: None,
         frame_pose_m: frames,
+        reference_frames: None,
+        still_rms_pose_m: None,
     }
+}
+
+/// The record of `--time-normalise`: time-normalised errors and the still baseline.
+fn reference_record(p: &Params, pred: &MeshSequence, reference: &MeshSequence) -> anyhow::Result<EvalRecord> {
+    let rest = match &p.template {
+        Some(path) => Some(mesh_core::io::read_mesh(path)?.vertices),
+        None => None,
+    };
+    let s = crate::reference_score::score_against_reference(pred, reference, rest.as_deref())
+        .with_context(|| p.prediction.display().to_string())?;
+    Ok(EvalRecord {
+        reference_frames: Some(reference.n_frames()),
+        still_rms_pose_m: s.still_rms_pose_m,
+        ..record(p, pred, Some(s.rms_pose_m), Some(s.rms_placed_m), s.frame_pose_m)
+    })
 }
 
 fn write(p: &Params, record: &EvalRecord) -> anyhow::Result<()> {
