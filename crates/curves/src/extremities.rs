@@ -21,7 +21,8 @@
 //!    distances to the centre agree (left/right symmetry) and which lie far apart on the body
 //!    (not two toes of one foot). **Hands**: of what remains at least [`LIMB_SEPARATION`] from
 //!    the feet, the pair farthest from the centre (geodesic plus straight-line distance) with the
-//!    same symmetry and separation.
+//!    same symmetry and separation, one on each side of the plane half-way between the feet (at
+//!    least [`SIDE_OFFSET`] from it) when the toes tell the sides (5).
 //! 5. **Left and right**: the body faces where its toes point (the horizontal offset from the
 //!    lower shin to the toe tip, summed over both feet); left is `up × forward`.
 //!
@@ -45,6 +46,8 @@ pub const MAX_CANDIDATES: usize = 16;
 pub const MIN_SEPARATION: f64 = 0.1;
 /// Least geodesic distance of a hand from either foot, in body heights.
 pub const LIMB_SEPARATION: f64 = 0.4;
+/// Least distance of each hand from the plane half-way between the feet, in body heights.
+pub const SIDE_OFFSET: f64 = 0.03;
 /// The head is the candidate highest along the up axis less this many times its horizontal
 /// distance from the centre.
 pub const HEAD_OFFSET_WEIGHT: f64 = 1.0;
@@ -258,19 +261,25 @@ pub fn find(graph: &BodyGraph, up: &Vector3<f64>, hints: &BTreeMap<String, u32>)
     let feet_cost = |a: usize, b: usize| (h(tips[a].v) + h(tips[b].v) - 2.0 * base) / extent + 2.0 * asymmetry(a, b);
     let feet = pair(&limbs, [hint("foot_l"), hint("foot_r")], &feet_cost)
         .ok_or_else(|| anyhow::anyhow!("no pair of tips for the feet"))?;
-    // The hands lie far from the feet (not a heel or an ankle of a foot modelled in pieces).
+    // The hands lie far from the feet (not a heel or an ankle of a foot modelled in pieces) and,
+    // when the toes tell left from right, one on each side of the plane half-way between the feet.
+    let height = h(hv) - h(tips[feet[0]].v).min(h(tips[feet[1]].v));
+    let left = body_left(graph, up, [tips[feet[0]].v, tips[feet[1]].v], height);
+    let mid = (pos[tips[feet[0]].v as usize] + pos[tips[feet[1]].v as usize]) / 2.0;
+    let lateral = |k: usize| (pos[tips[k].v as usize] - mid).dot(&left);
     let off_feet = |k: &usize| feet.iter().all(|&f| tips[f].d[tips[*k].v as usize] > LIMB_SEPARATION * extent);
     let rest: Vec<usize> = limbs.iter().copied().filter(|k| !feet.contains(k)).filter(off_feet).collect();
+    let o = SIDE_OFFSET * extent;
+    let sides = |a: usize, b: usize| left.norm() == 0.0 || (lateral(a) > o && lateral(b) < -o) || (lateral(a) < -o && lateral(b) > o);
     // Far from the centre along the body and in space (the inner end of an arm modelled as a
     // piece pushed into the torso is a tip too, but a near one).
     let reach = |k: usize| dck(k) + (pos[tips[k].v as usize] - pos[centre as usize]).norm();
-    let hands_cost = |a: usize, b: usize| 2.0 * asymmetry(a, b) - (reach(a) + reach(b)) / extent;
+    let hands_cost = |a: usize, b: usize| if sides(a, b) { 2.0 * asymmetry(a, b) - (reach(a) + reach(b)) / extent } else { f64::INFINITY };
     let hands = pair(&rest, [hint("hand_l"), hint("hand_r")], &hands_cost)
+        .filter(|p| hands_cost(p[0], p[1]).is_finite() || (hint("hand_l").is_some() && hint("hand_r").is_some()))
         .ok_or_else(|| anyhow::anyhow!("no pair of tips for the hands (head at vertex {hv})"))?;
 
     // 5. Left and right.
-    let height = h(hv) - h(tips[feet[0]].v).min(h(tips[feet[1]].v));
-    let left = body_left(graph, up, [tips[feet[0]].v, tips[feet[1]].v], height);
     let side = |k: usize| pos[tips[k].v as usize].dot(&left);
     let order = |p: [usize; 2], l: Option<usize>, r: Option<usize>| -> [usize; 2] {
         match (l, r) {

@@ -165,7 +165,6 @@ fn check(b: &Body) {
 }
 
 #[test]
-#[ignore = "the extremity choice still takes the inner end of a limb piece for a hand on this body"]
 fn a_body_of_separate_pieces_gets_each_hand_and_foot_in_its_own_limb() {
     check(&body(false));
 }
@@ -178,7 +177,7 @@ fn a_knee_long_hair_sheet_stays_with_the_torso_and_is_not_taken_for_a_limb() {
 }
 
 #[test]
-#[ignore = "the extremity choice still takes the inner end of a limb piece for a hand on this body"]
+#[ignore = "left undone: the braid's inner end inside the head is kept as a candidate instead of the head's top, and the parts come out wrong"]
 fn a_braid_stays_with_the_torso_and_is_not_taken_for_a_limb() {
     let mut b = body(false);
     add_braid(&mut b);
@@ -186,7 +185,6 @@ fn a_braid_stays_with_the_torso_and_is_not_taken_for_a_limb() {
 }
 
 #[test]
-#[ignore = "the extremity choice still takes the inner end of a limb piece for a hand on this body"]
 fn a_separate_prop_goes_with_the_torso_it_is_nearest_to() {
     let mut b = body(false);
     add_prop(&mut b);
@@ -194,15 +192,14 @@ fn a_separate_prop_goes_with_the_torso_it_is_nearest_to() {
 }
 
 #[test]
-#[ignore = "the extremity choice still takes the inner end of a limb piece for a hand on this body"]
-fn a_hand_raised_above_the_head_is_a_hand_and_the_head_stays_the_head() {
+fn a_hand_raised_above_the_head_falls_in_its_arm() {
     let mut b = body(true);
     add_hair_sheet(&mut b);
     check(&b);
 }
 
 #[test]
-#[ignore = "the extremity choice still takes the inner end of a limb piece for a hand on this body"]
+#[ignore = "left undone: fails with the braid (see the braid case)"]
 fn non_manifold_edges_and_every_hard_case_at_once_still_give_the_right_parts() {
     let mut b = body(true);
     add_hair_sheet(&mut b);
@@ -270,7 +267,7 @@ fn extremity_pixels(png_path: &Path) -> usize {
 }
 
 #[test]
-#[ignore = "the extremity choice still takes the inner end of a limb piece for a hand on this body"]
+#[ignore = "left undone: the failure, its message and picture pass; the hinted rerun still puts some leg vertices in the wrong part"]
 fn when_it_cannot_decide_it_names_the_extremities_and_still_draws_them() {
     let dir = tempfile::tempdir().unwrap();
     let b = footless();
@@ -315,7 +312,6 @@ fn a_malformed_hint_is_a_usage_error_and_a_vertex_past_the_mesh_a_one_line_error
 }
 
 #[test]
-#[ignore = "the extremity choice still takes the inner end of a limb piece for a hand on this body"]
 fn verbose_names_the_extremities_chosen_on_success() {
     let dir = tempfile::tempdir().unwrap();
     let b = body(false);
