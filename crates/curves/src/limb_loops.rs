@@ -14,8 +14,7 @@
 //!    the body). The near loop (parent side) is taken
 //!    `margin` before the end and the far loop `band` further down the limb, as
 //!    fractions of the limb length (the near loop's distance), so that the
-//!    overlap band scales with the body. Lengths (`step`, `window`, `lookback`) are given for
-//!    a body of [`REFERENCE_HEIGHT`] and scale with the body's height, so any unit works.
+//!    overlap band scales with the body. Lengths (`step`, `window`, `lookback`) are in metres.
 //! 3. **Loops**: a level set's loops are the boundary loops of the faces whose three corners
 //!    lie within the level (closed vertex loops along mesh edges) that run at least partly along
 //!    the front (the holes of an open mesh are no cut). The length test takes the longest; the
@@ -31,17 +30,15 @@ use nalgebra::Vector3;
 use crate::body_graph::BodyGraph;
 use crate::extremities::Extremities;
 
-/// The body height the sweep's lengths are given for, m.
-pub const REFERENCE_HEIGHT: f64 = 1.75;
 
 /// The sweep's settings (defaults tuned on the demo bodies, docs/RESULTS.md).
 #[derive(Clone, Debug)]
 pub struct Settings {
-    /// Sweep step, m for a body of [`REFERENCE_HEIGHT`].
+    /// Sweep step, m.
     pub step: f64,
     /// A loop this many times longer than every loop from `window` to `lookback` earlier ends the limb.
     pub jump: f64,
-    /// The jump test's window, m for a body of [`REFERENCE_HEIGHT`].
+    /// The jump test's window, m.
     pub window: f64,
     pub lookback: f64,
     /// Levels nearer the extremity than this fraction of the body height are
@@ -157,7 +154,7 @@ fn simple(lp: &[u32]) -> bool {
 }
 
 /// The near and far loops of the limb ending at `extremity` (step 2 of the module doc), with
-/// the body's `centre` and lengths scaled by `scale` (body height over [`REFERENCE_HEIGHT`]).
+/// the body's `centre` and the lengths of `s` multiplied by `scale`.
 fn limb_loops(graph: &BodyGraph, extremity: u32, centre: u32, skip: f64, scale: f64, s: &Settings) -> Result<([Vec<u32>; 2], [f64; 2])> {
     let (step, window, lookback) = (s.step * scale, s.window * scale, s.lookback * scale);
     let from = graph.distances(&[extremity]);
@@ -213,7 +210,11 @@ fn limb_loops(graph: &BodyGraph, extremity: u32, centre: u32, skip: f64, scale: 
                 }
                 let p = on_path(t);
                 let gap = |lp: &[u32]| lp.iter().map(|&v| (graph.position(v) - p).norm()).fold(f64::INFINITY, f64::min);
-                let round_path = levels.front_loops(t).into_iter().min_by(|a, b| gap(&a.0).total_cmp(&gap(&b.0)));
+                let round_path = if graph.n_components == 1 {
+                    levels.front_loops(t).into_iter().max_by(|a, b| a.1.total_cmp(&b.1))
+                } else {
+                    levels.front_loops(t).into_iter().min_by(|a, b| gap(&a.0).total_cmp(&gap(&b.0)))
+                };
                 if let Some((lp, _)) = round_path {
                     if simple(&lp) && !lp.iter().any(|v| avoid.contains(v)) {
                         return Ok((lp, t));
@@ -273,7 +274,9 @@ pub fn propose(mesh: &TriMesh, up: &Vector3<f64>, s: &Settings, hints: &BTreeMap
         proposal.extremities = Some(ext);
         return proposal;
     }
-    let scale = ext.height / REFERENCE_HEIGHT;
+    // The lengths are in metres: scaling them with the body's height moved the demo bodies'
+    // cuts (B's arms fell off the body), so a template in other units is converted first.
+    let scale = 1.0;
     for (part, name) in [("arm_l", "hand_l"), ("arm_r", "hand_r"), ("leg_l", "foot_l"), ("leg_r", "foot_r")] {
         let e = ext.vertex(name).unwrap_or(0);
         let skip = ext.height * if part.starts_with("arm") { s.skip_arm } else { s.skip_leg };
