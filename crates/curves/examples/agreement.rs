@@ -12,7 +12,7 @@ fn main() -> anyhow::Result<()> {
         let mesh = mesh_core::io::read_mesh(&tpl)?;
         let up = spec.up_vector().unwrap();
         let t = std::time::Instant::now();
-        let limbs = curves::limb_loops::propose(&mesh, &up, &curves::limb_loops::Settings::default())?;
+        let limbs = curves::limb_loops::propose(&mesh, &up, &curves::limb_loops::Settings::default(), &Default::default()).into_result()?;
         let secs = t.elapsed().as_secs_f64();
         let topo = mesh_core::topology::Topology::new(mesh.vertices.len(), &mesh.faces);
         for l in &limbs {

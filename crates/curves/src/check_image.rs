@@ -1,7 +1,10 @@
 //! A picture for checking proposed curves by eye: the template drawn from the front, the left
-//! side and the back, every vertex coloured by the part it falls in (the overlap bands as a
-//! 50/50 mix of the two parts, as `render --parts` draws them) and the loops drawn over it in
-//! black where they are not hidden, with the part names and colours as a legend.
+//! side and the back, every vertex coloured by the part `segment` gives it (the overlap bands as
+//! a 50/50 mix of the two parts, as `render --parts` draws them; pieces of the mesh that no loop
+//! crosses in the colour of the part they join), the loops drawn over it in black where they
+//! are not hidden, the chosen extremities marked and named, and the part names and colours as a
+//! legend. When the curves do not cut the template into parts (or there are none yet) the
+//! template is drawn in the root's colour with whatever loops there are.
 
 use std::path::Path;
 
@@ -14,8 +17,12 @@ use render::colour::Rgb;
 use render::image::RgbImage;
 use render::scene::{Layer, Renderer, Style};
 
+use crate::extremities::{Extremities, NAMES};
+
 /// Colour of the loops.
 pub const LOOP_COLOUR: Rgb = [20, 20, 20];
+/// Colour of the extremities' marks and names.
+pub const EXTREMITY_COLOUR: Rgb = [200, 0, 160];
 /// Size of one view, in pixels.
 const VIEW_W: u32 = 360;
 const VIEW_H: u32 = 540;
@@ -37,9 +44,35 @@ pub fn loop_segments(mesh: &TriMesh, spec: &SubjectSpec) -> Vec<(Vector3<f64>, V
     lines
 }
 
-/// The three views side by side with a legend, as an image.
-pub fn check_image(mesh: &TriMesh, spec: &SubjectSpec, spec_path: &Path) -> Result<RgbImage> {
-    let colours = render::parts::part_colours(spec, spec_path, &mesh.vertices, &mesh.faces)?;
+/// Per-vertex colours from the segmentation of `mesh` by `spec`: the part's colour, a band
+/// vertex the mix of the part's and its parent's; all the root's colour when `spec` does not
+/// segment the mesh.
+pub fn part_colours(mesh: &TriMesh, spec: &SubjectSpec) -> Vec<Rgb> {
+    let n = mesh.vertices.len();
+    let Ok(seg) = mesh_core::segmentation::segment(mesh, spec) else {
+        return vec![render::parts::ROOT_COLOUR; n];
+    };
+    let palette = render::parts::part_palette(spec);
+    let colour = |p: &str| palette.get(p).copied().unwrap_or(render::parts::ROOT_COLOUR);
+    let root = seg.parts.iter().find(|p| p.parent.is_none()).map(|p| colour(&p.name)).unwrap_or(render::parts::ROOT_COLOUR);
+    let mut colours = vec![root; n];
+    for part in seg.parts.iter().filter(|p| p.parent.is_some()) {
+        let own = colour(&part.name);
+        let band = render::colour::mix(own, colour(part.parent.as_deref().unwrap_or_default()), 0.5);
+        for &v in &part.vertices {
+            colours[v as usize] = own;
+        }
+        for &l in &part.overlap {
+            colours[part.vertices[l as usize] as usize] = band;
+        }
+    }
+    colours
+}
+
+/// The three views side by side with a legend, as an image; with `extremities`, each marked
+/// and named in every view.
+pub fn check_image(mesh: &TriMesh, spec: &SubjectSpec, extremities: Option<&Extremities>, spec_path: &Path) -> Result<RgbImage> {
+    let colours = part_colours(mesh, spec);
     let lines = loop_segments(mesh, spec);
     let up = Axis::parse(&spec.up).with_context(|| format!("{}: 'up' must be one of +x -x +y -y +z -z", spec_path.display()))?;
     let bbox = Aabb::from_points(&mesh.vertices);
@@ -50,7 +83,14 @@ pub fn check_image(mesh: &TriMesh, spec: &SubjectSpec, spec_path: &Path) -> Resu
     let layer = Layer { vertices: &mesh.vertices, faces: &mesh.faces, colour: render::parts::ROOT_COLOUR, vertex_colours: Some(&colours) };
     for (i, (name, view)) in views.iter().enumerate() {
         let renderer = Renderer::new(&bbox, view, &up, ProjectionKind::Orthographic, VIEW_W, VIEW_H, style);
-        let panel = renderer.render_with_lines(&[layer], &lines, 0.004 * bbox_diagonal);
+        let mut panel = renderer.render_with_lines(&[layer], &lines, 0.004 * bbox_diagonal);
+        for (name, v) in extremities.iter().flat_map(|e| NAMES.iter().zip(e.vertices)) {
+            if let Some([px, py, _]) = renderer.camera.project(&mesh.vertices[v as usize]) {
+                let (px, py) = (px.round() as i64, py.round() as i64);
+                panel.fill_rect(px - 3, py - 3, 7, 7, EXTREMITY_COLOUR);
+                render::font::draw_text(&mut panel, px + 6, py - 3, name, 1, EXTREMITY_COLOUR);
+            }
+        }
         let x = (i as u32 * VIEW_W) as i64;
         image.blit(&panel, x, 0);
         render::font::draw_text(&mut image, x + 8, 8, name, 2, [60, 60, 60]);
@@ -58,6 +98,9 @@ pub fn check_image(mesh: &TriMesh, spec: &SubjectSpec, spec_path: &Path) -> Resu
     // Legend: a swatch and the name of each part, then the loops.
     let mut entries: Vec<(String, Rgb)> = render::parts::part_palette(spec).into_iter().collect();
     entries.push(("loops".into(), LOOP_COLOUR));
+    if extremities.is_some() {
+        entries.push(("extremities".into(), EXTREMITY_COLOUR));
+    }
     let mut x = 8i64;
     let y = (VIEW_H + 6) as i64;
     for (name, c) in &entries {
@@ -69,8 +112,8 @@ pub fn check_image(mesh: &TriMesh, spec: &SubjectSpec, spec_path: &Path) -> Resu
 }
 
 /// Writes [`check_image`] as a PNG at `out` (atomically).
-pub fn write_check_image(mesh: &TriMesh, spec: &SubjectSpec, spec_path: &Path, out: &Path) -> Result<()> {
-    let image = check_image(mesh, spec, spec_path)?;
+pub fn write_check_image(mesh: &TriMesh, spec: &SubjectSpec, extremities: Option<&Extremities>, spec_path: &Path, out: &Path) -> Result<()> {
+    let image = check_image(mesh, spec, extremities, spec_path)?;
     mesh_core::atomic::write_bytes_atomic(out, &image.encode_png())?;
     Ok(())
 }

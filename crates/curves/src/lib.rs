@@ -3,6 +3,8 @@
 //! the loops and parts for checking them ([`check_image`]).
 
 pub mod agreement;
+pub mod body_graph;
 pub mod check_image;
+pub mod extremities;
 pub mod limb_loops;
 pub mod stage;

@@ -1,31 +1,34 @@
 //! Limb loops of a human template found without annotation.
 //!
-//! 1. **Extremities**: farthest-point sampling in geodesic distance, started
-//!    from the vertex farthest from the one nearest the centroid, gives five
-//!    points: head, hands and feet. Along the subject's up axis the highest is
-//!    the head, the two lowest the feet, the other two the hands.
-//! 2. **Left and right**: the body faces where its toes point (the horizontal
-//!    offset from the lower shin to the toe tip, summed over both feet);
-//!    left is `up × forward`.
-//! 3. **The cut that separates a limb**: the level sets of the geodesic
+//! 1. **Extremities**: head, hands and feet, left and right ([`crate::extremities`]), on the
+//!    body graph ([`crate::body_graph`]: mesh edges plus the joins between separate pieces).
+//! 2. **The cut that separates a limb**: the level sets of the geodesic
 //!    distance `d` from the extremity are swept outward in steps of `step`.
 //!    Up the limb each level set is one loop around it whose length grows
 //!    slowly (with noise of a few centimetres); where the front reaches the
 //!    torso (armpit, crotch) its length jumps. The first level whose loop is
 //!    `jump` times longer than every loop from `window` to `lookback` earlier
-//!    ends the limb; the near loop (parent side) is taken
-//!    `margin` before it and the far loop `band` further down the limb, as
+//!    ends the limb; when the shortest path from the extremity to the body's centre
+//!    crossed into another piece of the mesh (a join) within `window` before that level,
+//!    the limb ends where it crossed (a limb modelled as its own piece ends where it meets
+//!    the body). The near loop (parent side) is taken
+//!    `margin` before the end and the far loop `band` further down the limb, as
 //!    fractions of the limb length (the near loop's distance), so that the
-//!    overlap band scales with the body.
-//! 4. **Loops**: a level set's loop is the boundary of the faces whose three
-//!    corners lie within the level (a closed vertex loop along mesh edges).
+//!    overlap band scales with the body. Lengths (`step`, `window`, `lookback`) are in metres.
+//! 3. **Loops**: a level set's loops are the boundary loops of the faces whose three corners
+//!    lie within the level (closed vertex loops along mesh edges) that run at least partly along
+//!    the front (the holes of an open mesh are no cut). The length test takes the longest; the
+//!    near and far loops are the ones nearest the shortest path from the extremity to the
+//!    centre at their level, so that they go round the limb and not round another piece.
 
 use std::collections::BTreeMap;
 
 use anyhow::{bail, Context, Result};
-use mesh_core::topology::Topology;
 use mesh_core::TriMesh;
 use nalgebra::Vector3;
+
+use crate::body_graph::BodyGraph;
+use crate::extremities::Extremities;
 
 
 /// The sweep's settings (defaults tuned on the demo bodies, docs/RESULTS.md).
@@ -64,46 +67,83 @@ pub struct Limb {
     pub levels: [f64; 2],
 }
 
-/// Five extremities by geodesic farthest-point sampling.
-fn extremities(topo: &Topology, pos: &[Vector3<f64>]) -> Vec<u32> {
-    let centroid = pos.iter().sum::<Vector3<f64>>() / pos.len() as f64;
-    let centre = (0..pos.len()).min_by(|&a, &b| (pos[a] - centroid).norm().total_cmp(&(pos[b] - centroid).norm())).unwrap_or(0) as u32;
-    let d0 = topo.edge_distances(pos, &[centre]);
-    let far = argmax(&d0);
-    let mut chosen = vec![far];
-    let mut dmin = topo.edge_distances(pos, &[far]);
-    while chosen.len() < 5 {
-        let next = argmax(&dmin);
-        chosen.push(next);
-        let d = topo.edge_distances(pos, &[next]);
-        for (m, x) in dmin.iter_mut().zip(d) {
-            *m = m.min(x);
-        }
-    }
-    chosen
+/// The level sets `d <= t` of the distance `d` from one extremity: the faces in order of their
+/// farthest corner, so that the faces within a level are a prefix.
+struct LevelSets<'a> {
+    graph: &'a BodyGraph<'a>,
+    d: &'a [f64],
+    /// Per face, the largest distance of its corners.
+    face_level: Vec<f64>,
+    /// Face indices by ascending `face_level`.
+    order: Vec<u32>,
 }
 
-fn argmax(d: &[f64]) -> u32 {
-    let mut best = 0;
-    for (i, &x) in d.iter().enumerate() {
-        if x.is_finite() && (!d[best].is_finite() || x > d[best]) {
-            best = i;
-        }
+impl<'a> LevelSets<'a> {
+    fn new(graph: &'a BodyGraph<'a>, d: &'a [f64]) -> Self {
+        let face_level: Vec<f64> = graph.mesh.faces.iter().map(|f| f.iter().map(|&v| d[v as usize]).fold(0.0, f64::max)).collect();
+        let mut order: Vec<u32> = (0..face_level.len() as u32).collect();
+        order.sort_by(|&a, &b| face_level[a as usize].total_cmp(&face_level[b as usize]).then(a.cmp(&b)));
+        LevelSets { graph, d, face_level, order }
     }
-    best as u32
-}
 
-/// The longest boundary loop of the faces whose corners all have `d <= t`, with its length.
-fn level_loop(mesh: &TriMesh, d: &[f64], t: f64) -> Option<(Vec<u32>, f64)> {
-    let faces: Vec<[u32; 3]> = mesh.faces.iter().copied().filter(|f| f.iter().all(|&v| d[v as usize] <= t)).collect();
-    if faces.is_empty() {
-        return None;
+    /// The boundary loops of the faces whose three corners lie within `t` (an edge is on the
+    /// boundary when exactly one of its faces is within), each following its faces' edges, that
+    /// run at least partly along the front (a vertex with a neighbour beyond `t`), with their
+    /// lengths.
+    fn front_loops(&self, t: f64) -> Vec<(Vec<u32>, f64)> {
+        let topo = &self.graph.topology;
+        let faces = &self.graph.mesh.faces;
+        let within = self.order.partition_point(|&f| self.face_level[f as usize] <= t);
+        let inside = |f: u32| self.face_level[f as usize] <= t;
+        let mut out: Vec<[u32; 2]> = Vec::new();
+        for &f in &self.order[..within] {
+            let face = faces[f as usize];
+            for k in 0..3 {
+                let (a, b) = (face[k], face[(k + 1) % 3]);
+                let Some(e) = topo.edge_index(a, b) else { continue };
+                if topo.edge_faces(e).iter().filter(|&&g| inside(g)).count() == 1 {
+                    out.push([a, b]);
+                }
+            }
+        }
+        out.sort_unstable();
+        out.dedup();
+        // Chain the half-edges into loops, as `Topology::boundary_loops` does.
+        let mut used = vec![false; out.len()];
+        let mut loops = Vec::new();
+        for start in 0..out.len() {
+            if used[start] {
+                continue;
+            }
+            used[start] = true;
+            let first = out[start][0];
+            let mut lp = vec![first];
+            let mut cur = out[start][1];
+            while cur != first {
+                lp.push(cur);
+                let lo = out.partition_point(|h| h[0] < cur);
+                match (lo..out.len()).take_while(|&i| out[i][0] == cur).find(|&i| !used[i]) {
+                    Some(i) => {
+                        used[i] = true;
+                        cur = out[i][1];
+                    }
+                    None => break,
+                }
+            }
+            loops.push(lp);
+        }
+        let pos = &self.graph.mesh.vertices;
+        let len = |lp: &[u32]| -> f64 { (0..lp.len()).map(|k| (pos[lp[k] as usize] - pos[lp[(k + 1) % lp.len()] as usize]).norm()).sum() };
+        let on_front = |v: &u32| topo.vertex_neighbors(*v).iter().any(|&w| self.d[w as usize] > t);
+        loops
+            .into_iter()
+            .filter(|lp| lp.iter().any(on_front))
+            .map(|lp| {
+                let l = len(&lp);
+                (lp, l)
+            })
+            .collect()
     }
-    let topo = Topology::new(mesh.vertices.len(), &faces);
-    let len = |lp: &[u32]| -> f64 {
-        (0..lp.len()).map(|k| (mesh.vertices[lp[k] as usize] - mesh.vertices[lp[(k + 1) % lp.len()] as usize]).norm()).sum()
-    };
-    topo.boundary_loops().into_iter().map(|lp| { let l = len(&lp); (lp, l) }).max_by(|a, b| a.1.total_cmp(&b.1))
 }
 
 /// A loop is usable when it visits no vertex twice.
@@ -113,19 +153,31 @@ fn simple(lp: &[u32]) -> bool {
     s.windows(2).all(|w| w[0] != w[1]) && lp.len() >= 3
 }
 
-/// The near and far loops of the limb ending at `extremity` (step 3 of the module doc).
-fn limb_loops(mesh: &TriMesh, topo: &Topology, extremity: u32, skip: f64, s: &Settings) -> Result<([Vec<u32>; 2], [f64; 2])> {
-    let d = topo.edge_distances(&mesh.vertices, &[extremity]);
+/// The near and far loops of the limb ending at `extremity` (step 2 of the module doc), with
+/// the body's `centre` and the lengths of `s` multiplied by `scale`.
+fn limb_loops(graph: &BodyGraph, extremity: u32, centre: u32, skip: f64, scale: f64, s: &Settings) -> Result<([Vec<u32>; 2], [f64; 2])> {
+    let (step, window, lookback) = (s.step * scale, s.window * scale, s.lookback * scale);
+    let from = graph.distances(&[extremity]);
+    let d = &from.d;
+    // The shortest path from the extremity to the centre, and where it crosses between pieces.
+    let mut path = from.path_from(centre);
+    path.reverse();
+    let crossings: Vec<f64> = path
+        .windows(2)
+        .filter(|w| graph.component[w[0] as usize] != graph.component[w[1] as usize])
+        .map(|w| d[w[0] as usize])
+        .collect();
     let dmax = d.iter().copied().filter(|x| x.is_finite()).fold(0.0, f64::max);
+    let levels = LevelSets::new(graph, d);
     let mut lengths: Vec<(f64, f64)> = Vec::new();
-    let mut t = s.step;
+    let mut t = step;
     let mut end = None;
     while t < dmax {
-        if let Some((_, l)) = level_loop(mesh, &d, t) {
+        if let Some(l) = levels.front_loops(t).into_iter().map(|(_, l)| l).max_by(f64::total_cmp) {
             // The longest loop between `window` and `lookback` back.
             let before = lengths
                 .iter()
-                .filter(|(u, _)| *u >= t - s.window && *u <= t - s.lookback)
+                .filter(|(u, _)| *u >= t - window && *u <= t - lookback)
                 .map(|(_, l)| *l)
                 .fold(0.0, f64::max);
             lengths.push((t, l));
@@ -134,72 +186,113 @@ fn limb_loops(mesh: &TriMesh, topo: &Topology, extremity: u32, skip: f64, s: &Se
                 break;
             }
         }
-        t += s.step;
+        t += step;
     }
-    let end = end.with_context(|| format!("no level set from vertex {extremity} separates a limb"))?;
+    let mut end = end.with_context(|| format!("no level set from vertex {extremity} separates a limb"))?;
+    if let Some(&c) = crossings.iter().find(|&&c| c > skip && c <= end && c >= end - window) {
+        end = c;
+    }
     let near_t = end * (1.0 - s.margin);
     let far_t = near_t * (1.0 - s.band);
-    // The nearest level to `target` whose loop is simple and shares no vertex with `avoid`
-    // (on a coarse mesh two nearby levels can share their loop).
+    // The vertex of the path at distance `t`.
+    let on_path = |t: f64| -> Vector3<f64> {
+        let v = path.iter().copied().find(|&v| d[v as usize] >= t).unwrap_or(centre);
+        graph.position(v)
+    };
+    // The nearest level to `target` whose loop round the path is simple and shares no vertex
+    // with `avoid` (on a coarse mesh two nearby levels can share their loop).
     let pick = |target: f64, avoid: &[u32]| -> Result<(Vec<u32>, f64)> {
         for k in 0..60 {
             for sign in [-1.0, 1.0] {
-                let t = target + sign * k as f64 * s.step * 0.5;
-                if let Some((lp, _)) = level_loop(mesh, &d, t) {
+                let t = target + sign * k as f64 * step * 0.5;
+                if t <= 0.0 {
+                    continue;
+                }
+                let p = on_path(t);
+                let gap = |lp: &[u32]| lp.iter().map(|&v| (graph.position(v) - p).norm()).fold(f64::INFINITY, f64::min);
+                let round_path = if graph.n_components == 1 {
+                    levels.front_loops(t).into_iter().max_by(|a, b| a.1.total_cmp(&b.1))
+                } else {
+                    levels.front_loops(t).into_iter().min_by(|a, b| gap(&a.0).total_cmp(&gap(&b.0)))
+                };
+                if let Some((lp, _)) = round_path {
                     if simple(&lp) && !lp.iter().any(|v| avoid.contains(v)) {
                         return Ok((lp, t));
                     }
                 }
             }
         }
-        bail!("no simple loop near distance {target:.3} m from vertex {extremity}")
+        bail!("no simple loop near distance {target:.3} from vertex {extremity}")
     };
     let (near, tn) = pick(near_t, &[])?;
-    let (far, tf) = pick(far_t.min(tn - s.step), &near)?;
+    let (far, tf) = pick(far_t.min(tn - step), &near)?;
     Ok(([near, far], [tn, tf]))
 }
 
-/// Finds the four limbs of `mesh` (`up`: the subject's up axis), named
-/// `arm_l`, `arm_r`, `leg_l`, `leg_r` (the body's own left).
-pub fn propose(mesh: &TriMesh, up: &Vector3<f64>, s: &Settings) -> Result<Vec<Limb>> {
-    if mesh.vertices.len() < 10 {
-        bail!("the template has {} vertices: too few for a body", mesh.vertices.len());
-    }
-    let topo = Topology::new(mesh.vertices.len(), &mesh.faces);
-    let pos = &mesh.vertices;
-    let h = |v: u32| pos[v as usize].dot(up);
-    let mut ext = extremities(&topo, pos);
-    ext.sort_by(|&a, &b| h(a).total_cmp(&h(b)));
-    let height = h(ext[4]) - h(ext[0]);
-    let (feet, hands) = ([ext[0], ext[1]], [ext[2], ext[3]]);
-    // Forward: from the lower shin (level set at 15% of the height) to the toe tip.
-    let mut forward = Vector3::zeros();
-    for &f in &feet {
-        let d = topo.edge_distances(pos, &[f]);
-        let band: Vec<usize> = (0..pos.len()).filter(|&v| (d[v] - 0.15 * height).abs() < 0.02 * height).collect();
-        if band.is_empty() {
-            continue;
+/// What [`propose`] found: the extremities when it got that far, the limbs it could cut, and
+/// why it stopped, if it did.
+pub struct Proposal {
+    pub extremities: Option<Extremities>,
+    pub limbs: Vec<Limb>,
+    pub error: Option<anyhow::Error>,
+}
+
+impl Proposal {
+    /// The four limbs, or the error (naming the extremities chosen).
+    pub fn into_result(self) -> Result<Vec<Limb>> {
+        match self.error {
+            None => Ok(self.limbs),
+            Some(e) => Err(e),
         }
-        let c = band.iter().map(|&v| pos[v]).sum::<Vector3<f64>>() / band.len() as f64;
-        let off = pos[f as usize] - c;
-        forward += off - up * off.dot(up);
     }
-    if forward.norm() < 1e-9 {
-        bail!("cannot tell which way the body faces (no toe offset)");
+}
+
+/// Finds the four limbs of `mesh` (`up`: the subject's up axis), named
+/// `arm_l`, `arm_r`, `leg_l`, `leg_r` (the body's own left), taking the extremities in
+/// `hints` (name to vertex, [`crate::extremities::NAMES`]) as given.
+pub fn propose(mesh: &TriMesh, up: &Vector3<f64>, s: &Settings, hints: &BTreeMap<String, u32>) -> Proposal {
+    let mut proposal = Proposal { extremities: None, limbs: Vec::new(), error: None };
+    if mesh.vertices.len() < 10 {
+        proposal.error = Some(anyhow::anyhow!("the template has {} vertices: too few for a body", mesh.vertices.len()));
+        return proposal;
     }
-    let left = up.cross(&forward.normalize());
-    let side = |v: u32| pos[v as usize].dot(&left);
-    let name = |pair: [u32; 2], limb: &str| -> [(String, u32); 2] {
-        let (l, r) = if side(pair[0]) > side(pair[1]) { (pair[0], pair[1]) } else { (pair[1], pair[0]) };
-        [(format!("{limb}_l"), l), (format!("{limb}_r"), r)]
+    let graph = BodyGraph::new(mesh);
+    let up = up.normalize();
+    let ext = match crate::extremities::find(&graph, &up, hints) {
+        Ok(e) => e,
+        Err(e) => {
+            proposal.error = Some(e.context("cannot choose the extremities (give them with --extremity NAME=VERTEX)"));
+            return proposal;
+        }
     };
-    let mut out = Vec::new();
-    for (part, e) in name(hands, "arm").into_iter().chain(name(feet, "leg")) {
-        let skip = height * if part.starts_with("arm") { s.skip_arm } else { s.skip_leg };
-        let (loops, levels) = limb_loops(mesh, &topo, e, skip, s).with_context(|| format!("part '{part}'"))?;
-        out.push(Limb { part, extremity: e, loops, levels });
+    mesh_core::info!("extremities: {}", ext.describe(mesh));
+    if !ext.sided {
+        proposal.error = Some(anyhow::anyhow!(
+            "cannot tell the body's left from its right (the feet show no toes; extremities {}; give them with --extremity NAME=VERTEX)",
+            ext.describe(mesh)
+        ));
+        proposal.extremities = Some(ext);
+        return proposal;
     }
-    Ok(out)
+    // The lengths are in metres: scaling them with the body's height moved the demo bodies'
+    // cuts (B's arms fell off the body), so a template in other units is converted first.
+    let scale = 1.0;
+    for (part, name) in [("arm_l", "hand_l"), ("arm_r", "hand_r"), ("leg_l", "foot_l"), ("leg_r", "foot_r")] {
+        let e = ext.vertex(name).unwrap_or(0);
+        let skip = ext.height * if part.starts_with("arm") { s.skip_arm } else { s.skip_leg };
+        match limb_loops(&graph, e, ext.centre, skip, scale, s) {
+            Ok((loops, levels)) => proposal.limbs.push(Limb { part: part.to_string(), extremity: e, loops, levels }),
+            Err(err) => {
+                proposal.error = Some(anyhow::anyhow!(
+                    "part '{part}': {err} (extremities {}; give them with --extremity NAME=VERTEX)",
+                    ext.describe(mesh)
+                ));
+                break;
+            }
+        }
+    }
+    proposal.extremities = Some(ext);
+    proposal
 }
 
 /// `subject` (the parsed `subject.json`) with the proposed curves, and the

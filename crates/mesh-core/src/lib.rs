@@ -17,6 +17,7 @@ pub mod sequence;
 pub mod capture_set;
 pub mod set_check;
 pub mod segmentation;
+pub mod component_joins;
 pub mod artifact;
 pub mod part_merge;
 pub mod atomic;

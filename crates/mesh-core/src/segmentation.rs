@@ -17,6 +17,10 @@
 //! blocked, and the parent side of `far` by flooding from `near` with `far`
 //! blocked; a loop that does not cut the mesh (the flood reaches the other
 //! side) is an error.
+//!
+//! A template of several connected components floods across the joins of
+//! [`crate::component_joins`]: a piece that no loop crosses goes with the
+//! part its closest vertex is in.
 
 use std::collections::BTreeMap;
 
@@ -126,15 +130,15 @@ impl Segmentation {
     }
 }
 
-/// Floods the vertex graph from `seeds`, never entering `blocked`.
-fn flood(topology: &Topology, seeds: &[u32], blocked: &[bool]) -> Vec<bool> {
+/// Floods the vertex graph (mesh edges and component `joins`) from `seeds`, never entering `blocked`.
+fn flood(topology: &Topology, joins: &[Vec<u32>], seeds: &[u32], blocked: &[bool]) -> Vec<bool> {
     let mut seen = vec![false; topology.n_vertices()];
     let mut stack: Vec<u32> = seeds.iter().copied().filter(|&s| !blocked[s as usize]).collect();
     for &s in &stack {
         seen[s as usize] = true;
     }
     while let Some(v) = stack.pop() {
-        for &w in topology.vertex_neighbors(v) {
+        for &w in topology.vertex_neighbors(v).iter().chain(&joins[v as usize]) {
             if !seen[w as usize] && !blocked[w as usize] {
                 seen[w as usize] = true;
                 stack.push(w);
@@ -159,6 +163,7 @@ pub fn segment(template: &TriMesh, subject: &SubjectSpec) -> Result<Segmentation
     let loops = subject.validate(template, &topology)?;
     let n = template.n_vertices();
     let root = subject.root().ok_or_else(|| Error::invalid("the part tree has no root"))?.to_string();
+    let joins = crate::component_joins::join_neighbours(n, &crate::component_joins::component_joins(&topology, &template.vertices));
 
     // Per child part: its own region (limb side of `near` plus `near`) and
     // what it removes from its parent (strictly beyond `far`).
@@ -170,8 +175,8 @@ pub fn segment(template: &TriMesh, subject: &SubjectSpec) -> Result<Segmentation
         if near.iter().any(|&v| far_mask[v as usize]) {
             return Err(Error::invalid(format!("part '{name}': its two curves share vertices")));
         }
-        let limb = flood(&topology, far, &near_mask);
-        let parent_side = flood(&topology, near, &far_mask);
+        let limb = flood(&topology, &joins, far, &near_mask);
+        let parent_side = flood(&topology, &joins, near, &far_mask);
         // `near` must separate: the limb side may not reach the parent side of `near`.
         let limb_count = limb.iter().filter(|b| **b).count();
         if limb_count + near.len() >= n {
@@ -340,6 +345,28 @@ mod tests {
         }
         let err = segment(&mesh, &spec(one_ring)).unwrap_err().to_string();
         assert!(err.contains("part 'top': curve 1 does not cut the limb off the body (part 'bottom'"), "{err}");
+    }
+
+    #[test]
+    fn a_separate_piece_goes_with_the_part_it_is_nearest_to() {
+        // The capsule (y from 0 to 2, limb above ring 4 of 9) with two small spheres beside it:
+        // one next to the limb's end (y = 1.9), one next to the torso (y = 0.2).
+        let (mut mesh, subject, _) = capsule_subject(4, 6);
+        let n0 = mesh.n_vertices() as u32;
+        let ball = crate::shapes::icosphere(1);
+        for y in [1.9, 0.2] {
+            let base = mesh.vertices.len() as u32;
+            mesh.vertices.extend(ball.vertices.iter().map(|p| p * 0.05 + nalgebra::Vector3::new(0.3, y, 0.0)));
+            mesh.faces.extend(ball.faces.iter().map(|f| [f[0] + base, f[1] + base, f[2] + base]));
+        }
+        let s = segment(&mesh, &subject).unwrap();
+        s.check().unwrap();
+        let nb = ball.vertices.len() as u32;
+        let (near_limb_end, near_torso) = (n0..n0 + nb, n0 + nb..n0 + 2 * nb);
+        let limb = s.part("limb").unwrap();
+        let torso = s.part("torso").unwrap();
+        assert!(near_limb_end.clone().all(|v| limb.vertices.binary_search(&v).is_ok() && torso.vertices.binary_search(&v).is_err()));
+        assert!(near_torso.clone().all(|v| torso.vertices.binary_search(&v).is_ok() && limb.vertices.binary_search(&v).is_err()));
     }
 
     #[test]

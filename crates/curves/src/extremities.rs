@@ -1,0 +1,336 @@
+//! Head, hands and feet of a body found without annotation, in a body-aligned frame.
+//!
+//! 1. **Candidates**: farthest-point sampling in geodesic distance on the body graph
+//!    ([`crate::body_graph`]), started from the vertex farthest from the one nearest the per-axis
+//!    median of the positions, keeps up to [`MAX_CANDIDATES`] tips, each
+//!    at least [`MIN_SEPARATION`] body heights from the others: hands, feet and head, but also
+//!    hair, braids, props, wings, a tail. Each is then moved up the distance from the centre
+//!    (below) to the tip it lies on, so that a point half-way down a limb becomes its end.
+//!    The body's **centre** is the vertex whose largest distance to the first five tips is
+//!    least (between head, hands and feet, on the torso).
+//! 2. **Head**: the candidate highest along the subject's up axis less [`HEAD_OFFSET_WEIGHT`]
+//!    times its horizontal distance from the centre: a hand raised above the head is higher but
+//!    off to the side by at least the shoulder's half-width, a shoulder pad lower.
+//! 3. **Hanging from the head**: a tip whose shortest path to the centre passes by the head
+//!    (hair, a braid, a hat's ribbon) has a small excess `d(x, head) + d(head, centre) -
+//!    d(x, centre)` (twice the way from the head to where the piece hangs from it, about 0.15
+//!    body heights at most), a hand's path leaves the head aside (the excess is the detour
+//!    over the neck and the head, about 0.4 heights whatever the pose), a foot's more. Tips whose
+//!    excess is below [`HANGING_EXCESS`] times the head's distance to the centre are no limb.
+//! 4. **Feet**: of the remaining tips, the pair lowest along the up axis whose two geodesic
+//!    distances to the centre agree (left/right symmetry) and which lie far apart on the body
+//!    (not two toes of one foot). **Hands**: of what remains at least [`LIMB_SEPARATION`] from
+//!    the feet, the pair farthest from the centre (geodesic plus straight-line distance) with the
+//!    same symmetry and separation, one on each side of the plane half-way between the feet (at
+//!    least [`SIDE_OFFSET`] from it) when the toes tell the sides (5).
+//! 5. **Left and right**: the body faces where its toes point (the horizontal offset from the
+//!    lower shin to the toe tip, summed over both feet); left is `up × forward`.
+//!
+//! Hints (`--extremity hand_l=VERTEX`) replace any of the five choices; the others are then
+//! chosen among the candidates not within [`MIN_SEPARATION`] of a hinted vertex.
+
+use std::collections::BTreeMap;
+
+use anyhow::{bail, Result};
+use mesh_core::TriMesh;
+use nalgebra::Vector3;
+
+use crate::body_graph::BodyGraph;
+
+/// The names of the five extremities, as `--extremity` takes them.
+pub const NAMES: [&str; 5] = ["head", "hand_l", "hand_r", "foot_l", "foot_r"];
+/// Most candidate tips kept by the farthest-point sampling.
+pub const MAX_CANDIDATES: usize = 16;
+/// Least geodesic distance between two candidates, in body heights (the fingers of one hand
+/// give one candidate).
+pub const MIN_SEPARATION: f64 = 0.1;
+/// Least geodesic distance of a hand from either foot, in body heights.
+pub const LIMB_SEPARATION: f64 = 0.4;
+/// Least distance of each hand from the plane half-way between the feet, in body heights.
+pub const SIDE_OFFSET: f64 = 0.03;
+/// The head is the candidate highest along the up axis less this many times its horizontal
+/// distance from the centre.
+pub const HEAD_OFFSET_WEIGHT: f64 = 1.0;
+/// A tip whose head excess is below this fraction of the head's distance to the centre hangs
+/// from the head.
+pub const HANGING_EXCESS: f64 = 0.7;
+
+/// The five chosen extremities and the body frame.
+#[derive(Clone, Debug)]
+pub struct Extremities {
+    /// Vertex of `head`, `hand_l`, `hand_r`, `foot_l`, `foot_r` (the order of [`NAMES`]).
+    pub vertices: [u32; 5],
+    /// Height of the body along the up axis, from the lower foot to the head.
+    pub height: f64,
+    /// Towards the body's left (`up × forward`), unit; zero when the toes give no direction.
+    pub left: Vector3<f64>,
+    /// Candidate tips rejected as hanging from the head (hair, braids).
+    pub hanging: Vec<u32>,
+    /// The body's centre: the vertex whose farthest distance to the first five candidates is least.
+    pub centre: u32,
+    /// Whether left and right are known (from the toes or from hints).
+    pub sided: bool,
+}
+
+impl Extremities {
+    pub fn vertex(&self, name: &str) -> Option<u32> {
+        NAMES.iter().position(|n| *n == name).map(|k| self.vertices[k])
+    }
+
+    /// `head 12 (0.010, 1.710, 0.030), hand_l 811 (...), ...`, for messages.
+    pub fn describe(&self, mesh: &TriMesh) -> String {
+        NAMES
+            .iter()
+            .zip(self.vertices)
+            .map(|(n, v)| {
+                let p = mesh.vertices[v as usize];
+                format!("{n} {v} ({:.3}, {:.3}, {:.3})", p.x, p.y, p.z)
+            })
+            .collect::<Vec<_>>()
+            .join(", ")
+    }
+}
+
+/// Checks the form of one `NAME=VERTEX` hint (clap's value parser for `--extremity`).
+pub fn check_hint(h: &str) -> std::result::Result<String, String> {
+    let (name, v) = h.split_once('=').ok_or_else(|| format!("expected NAME=VERTEX (NAME one of {})", NAMES.join(", ")))?;
+    if !NAMES.contains(&name) {
+        return Err(format!("unknown extremity '{name}' (one of {})", NAMES.join(", ")));
+    }
+    v.parse::<u32>().map_err(|_| format!("'{v}' is not a vertex index"))?;
+    Ok(h.to_string())
+}
+
+/// Parses `NAME=VERTEX` hints, checking the name and that the vertex exists.
+pub fn parse_hints(hints: &[String], n_vertices: usize) -> Result<BTreeMap<String, u32>> {
+    let mut out = BTreeMap::new();
+    for h in hints {
+        let Some((name, v)) = h.split_once('=') else {
+            bail!("--extremity {h}: expected NAME=VERTEX (NAME one of {})", NAMES.join(", "));
+        };
+        if !NAMES.contains(&name) {
+            bail!("--extremity {h}: unknown extremity '{name}' (one of {})", NAMES.join(", "));
+        }
+        let v: u32 = v.parse().map_err(|_| anyhow::anyhow!("--extremity {h}: '{v}' is not a vertex index"))?;
+        if v as usize >= n_vertices {
+            bail!("--extremity {h}: the template has {n_vertices} vertices");
+        }
+        if out.insert(name.to_string(), v).is_some() {
+            bail!("--extremity {name} is given twice");
+        }
+    }
+    Ok(out)
+}
+
+/// One candidate tip and its distances to every vertex.
+struct Tip {
+    v: u32,
+    d: Vec<f64>,
+}
+
+/// Chooses the five extremities of the body in `graph` (`up`: the subject's up axis, unit),
+/// taking the `hints` (name to vertex) as given.
+pub fn find(graph: &BodyGraph, up: &Vector3<f64>, hints: &BTreeMap<String, u32>) -> Result<Extremities> {
+    let pos = &graph.mesh.vertices;
+    let n = pos.len();
+    let h = |v: u32| pos[v as usize].dot(up);
+    let heights: Vec<f64> = pos.iter().map(|p| p.dot(up)).collect();
+    let base = heights.iter().copied().fold(f64::INFINITY, f64::min);
+    let extent = heights.iter().copied().fold(f64::NEG_INFINITY, f64::max) - base;
+    if !(extent > 0.0) {
+        bail!("the template is flat along the up axis");
+    }
+    // A start for the sampling: the vertex nearest the per-axis median of the positions.
+    let median = |k: usize| {
+        let mut c: Vec<f64> = pos.iter().map(|p| p[k]).collect();
+        c.sort_by(f64::total_cmp);
+        c[c.len() / 2]
+    };
+    let m = Vector3::new(median(0), median(1), median(2));
+    let start = (0..n as u32).min_by(|&a, &b| (pos[a as usize] - m).norm().total_cmp(&(pos[b as usize] - m).norm())).unwrap_or(0);
+    let d_start = graph.distances(&[start]).d;
+
+    // 1. Candidates: the hints, then farthest-point sampling.
+    let mut tips: Vec<Tip> = Vec::new();
+    let mut dmin = vec![f64::INFINITY; n];
+    let add = |tips: &mut Vec<Tip>, dmin: &mut Vec<f64>, v: u32| {
+        let d = graph.distances(&[v]).d;
+        for (m, x) in dmin.iter_mut().zip(&d) {
+            *m = m.min(*x);
+        }
+        tips.push(Tip { v, d });
+    };
+    for &v in hints.values() {
+        add(&mut tips, &mut dmin, v);
+    }
+    let hinted = tips.len();
+    if tips.is_empty() {
+        add(&mut tips, &mut dmin, argmax(&d_start));
+    }
+    while tips.len() < MAX_CANDIDATES + hinted {
+        let next = argmax(&dmin);
+        if !(dmin[next as usize] > MIN_SEPARATION * extent) {
+            break;
+        }
+        add(&mut tips, &mut dmin, next);
+    }
+    // The centre: the vertex whose farthest distance to the first five tips is least (the
+    // middle of the body between head, hands and feet).
+    let first = &tips[..tips.len().min(5)];
+    let centre = (0..n as u32)
+        .min_by(|&a, &b| {
+            let far = |v: u32| first.iter().map(|t| t.d[v as usize]).fold(0.0, f64::max);
+            far(a).total_cmp(&far(b)).then(a.cmp(&b))
+        })
+        .unwrap_or(start);
+    let dc = graph.distances(&[centre]).d;
+    // Each sampled candidate moved up the distance from the centre to the tip it lies on
+    // (a point half-way down a leg becomes the toe), duplicates dropped.
+    let mut snapped: Vec<u32> = Vec::new();
+    for t in &tips[hinted..] {
+        let mut v = t.v;
+        while let Some(&w) = graph.neighbours(v).max_by(|&&a, &&b| dc[a as usize].total_cmp(&dc[b as usize])).filter(|&&w| dc[w as usize] > dc[v as usize]) {
+            v = w;
+        }
+        if !snapped.contains(&v) && !tips[..hinted].iter().any(|t| t.v == v) {
+            snapped.push(v);
+        }
+    }
+    tips.truncate(hinted);
+    for v in snapped {
+        let d = graph.distances(&[v]).d;
+        if tips.iter().all(|t| d[t.v as usize] > MIN_SEPARATION * extent) {
+            tips.push(Tip { v, d });
+        }
+    }
+    let free: Vec<usize> = (hinted..tips.len()).filter(|&k| (0..hinted).all(|j| tips[j].d[tips[k].v as usize] > MIN_SEPARATION * extent)).collect();
+    let hint = |name: &str| hints.get(name).map(|&v| tips.iter().position(|t| t.v == v).unwrap_or(0));
+
+    // 2. Head: high and over the centre.
+    let over_centre = |k: usize| {
+        let off = pos[tips[k].v as usize] - pos[centre as usize];
+        h(tips[k].v) - HEAD_OFFSET_WEIGHT * (off - up * off.dot(up)).norm()
+    };
+    let head = match hint("head") {
+        Some(k) => k,
+        None => free
+            .iter()
+            .copied()
+            .max_by(|&a, &b| over_centre(a).total_cmp(&over_centre(b)))
+            .ok_or_else(|| anyhow::anyhow!("no candidate for the head"))?,
+    };
+    let hv = tips[head].v;
+    let dh = &tips[head].d;
+    let to_head = dc[hv as usize];
+    // 3. Tips hanging from the head.
+    let excess = |k: usize| dh[tips[k].v as usize] + to_head - dc[tips[k].v as usize];
+    let near_head = |k: usize| tips[k].d[hv as usize] <= MIN_SEPARATION * extent;
+    let hanging: Vec<usize> = free.iter().copied().filter(|&k| k != head && !near_head(k) && excess(k) < HANGING_EXCESS * to_head).collect();
+    let limbs: Vec<usize> = free.iter().copied().filter(|&k| k != head && !near_head(k) && !hanging.contains(&k)).collect();
+
+    if mesh_core::cli::verbosity() >= 2 {
+        for &k in &free {
+            let p = pos[tips[k].v as usize];
+            mesh_core::info!(
+                "candidate {} ({:.3}, {:.3}, {:.3}): to the centre {:.3}, head excess {:.3}{}",
+                tips[k].v, p.x, p.y, p.z, dc[tips[k].v as usize], excess(k),
+                if k == head { " (head)" } else if hanging.contains(&k) { " (hangs from the head)" } else if near_head(k) { " (on the head)" } else { "" }
+            );
+        }
+    }
+    // 4. Feet, then hands: symmetric pairs far apart.
+    let dck = |k: usize| dc[tips[k].v as usize];
+    let apart = |a: usize, b: usize| tips[a].d[tips[b].v as usize] > 0.8 * dck(a).min(dck(b));
+    let asymmetry = |a: usize, b: usize| (dck(a) - dck(b)).abs() / extent;
+    let pair = |pool: &[usize], fixed: [Option<usize>; 2], cost: &dyn Fn(usize, usize) -> f64| -> Option<[usize; 2]> {
+        let by_cost = |x: &(usize, usize), y: &(usize, usize)| cost(x.0, x.1).total_cmp(&cost(y.0, y.1));
+        match fixed {
+            [Some(a), Some(b)] => Some([a, b]),
+            [Some(f), None] | [None, Some(f)] => {
+                pool.iter().map(|&a| (f, a)).filter(|&(f, a)| a != f && apart(f, a)).min_by(by_cost).map(|(f, a)| [f, a])
+            }
+            [None, None] => pool
+                .iter()
+                .enumerate()
+                .flat_map(|(i, &a)| pool[i + 1..].iter().map(move |&b| (a, b)))
+                .filter(|&(a, b)| apart(a, b))
+                .min_by(by_cost)
+                .map(|(a, b)| [a, b]),
+        }
+    };
+    let feet_cost = |a: usize, b: usize| (h(tips[a].v) + h(tips[b].v) - 2.0 * base) / extent + 2.0 * asymmetry(a, b);
+    let feet = pair(&limbs, [hint("foot_l"), hint("foot_r")], &feet_cost)
+        .ok_or_else(|| anyhow::anyhow!("no pair of tips for the feet"))?;
+    // The hands lie far from the feet (not a heel or an ankle of a foot modelled in pieces) and,
+    // when the toes tell left from right, one on each side of the plane half-way between the feet.
+    let height = h(hv) - h(tips[feet[0]].v).min(h(tips[feet[1]].v));
+    let left = body_left(graph, up, [tips[feet[0]].v, tips[feet[1]].v], height);
+    let mid = (pos[tips[feet[0]].v as usize] + pos[tips[feet[1]].v as usize]) / 2.0;
+    let lateral = |k: usize| (pos[tips[k].v as usize] - mid).dot(&left);
+    let off_feet = |k: &usize| feet.iter().all(|&f| tips[f].d[tips[*k].v as usize] > LIMB_SEPARATION * extent);
+    let rest: Vec<usize> = limbs.iter().copied().filter(|k| !feet.contains(k)).filter(off_feet).collect();
+    let o = SIDE_OFFSET * extent;
+    let sides = |a: usize, b: usize| left.norm() == 0.0 || (lateral(a) > o && lateral(b) < -o) || (lateral(a) < -o && lateral(b) > o);
+    // Far from the centre along the body and in space (the inner end of an arm modelled as a
+    // piece pushed into the torso is a tip too, but a near one).
+    let reach = |k: usize| dck(k) + (pos[tips[k].v as usize] - pos[centre as usize]).norm();
+    let hands_cost = |a: usize, b: usize| if sides(a, b) { 2.0 * asymmetry(a, b) - (reach(a) + reach(b)) / extent } else { f64::INFINITY };
+    let hands = pair(&rest, [hint("hand_l"), hint("hand_r")], &hands_cost)
+        .filter(|p| hands_cost(p[0], p[1]).is_finite() || (hint("hand_l").is_some() && hint("hand_r").is_some()))
+        .ok_or_else(|| anyhow::anyhow!("no pair of tips for the hands (head at vertex {hv})"))?;
+
+    // 5. Left and right.
+    let side = |k: usize| pos[tips[k].v as usize].dot(&left);
+    let order = |p: [usize; 2], l: Option<usize>, r: Option<usize>| -> [usize; 2] {
+        match (l, r) {
+            (Some(l), _) => [l, if p[0] == l { p[1] } else { p[0] }],
+            (None, Some(r)) => [if p[0] == r { p[1] } else { p[0] }, r],
+            _ if side(p[0]) >= side(p[1]) => p,
+            _ => [p[1], p[0]],
+        }
+    };
+    let hands = order(hands, hint("hand_l"), hint("hand_r"));
+    let feet = order(feet, hint("foot_l"), hint("foot_r"));
+    let missing_side = left.norm() == 0.0 && (hint("hand_l").or(hint("hand_r")).is_none() || hint("foot_l").or(hint("foot_r")).is_none());
+    let ext = Extremities {
+        vertices: [hv, tips[hands[0]].v, tips[hands[1]].v, tips[feet[0]].v, tips[feet[1]].v],
+        height,
+        left,
+        hanging: hanging.iter().map(|&k| tips[k].v).collect(),
+        centre,
+        sided: !missing_side,
+    };
+    Ok(ext)
+}
+
+/// The body's left (`up × forward`), forward being where the toes point: the horizontal
+/// offset from the lower shin (the level set at 15 % of the height from each foot) to the foot's
+/// tip, summed over both feet. Zero when the feet show no direction.
+fn body_left(graph: &BodyGraph, up: &Vector3<f64>, feet: [u32; 2], height: f64) -> Vector3<f64> {
+    let pos = &graph.mesh.vertices;
+    let mut forward = Vector3::zeros();
+    for f in feet {
+        let d = graph.distances(&[f]).d;
+        let band: Vec<usize> = (0..pos.len()).filter(|&v| (d[v] - 0.15 * height).abs() < 0.02 * height).collect();
+        if band.is_empty() {
+            continue;
+        }
+        let c = band.iter().map(|&v| pos[v]).sum::<Vector3<f64>>() / band.len() as f64;
+        let off = pos[f as usize] - c;
+        forward += off - up * off.dot(up);
+    }
+    if forward.norm() < 1e-9 * height.max(1e-9) {
+        return Vector3::zeros();
+    }
+    up.cross(&forward.normalize())
+}
+
+fn argmax(d: &[f64]) -> u32 {
+    let mut best = 0;
+    for (i, &x) in d.iter().enumerate() {
+        if x.is_finite() && (!d[best].is_finite() || x > d[best]) {
+            best = i;
+        }
+    }
+    best as u32
+}
