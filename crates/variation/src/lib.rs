@@ -22,6 +22,7 @@ pub mod gait;
 pub mod grounding;
 pub mod group;
 pub mod latent_smoothing;
+pub mod memory_budget;
 pub mod metrics;
 pub mod part_data;
 pub mod plots;
