@@ -11,7 +11,9 @@
 //!   distance to the source, to the nearest source frame, timing offset, edge distortion,
 //!   foot sliding on the carried-over contacts and by the height rule (raw → after the
 //!   clean-up), floor penetration after grounding (raw), the mean distance between
-//!   variations, and the diversity measures; the source's value in brackets.
+//!   variations, the diversity measures, and the frames that spin or tear (summed over the
+//!   variations, against the captures' fastest turn and longest edge, which the figures
+//!   table gives per group); the source's value in brackets.
 //! - Training, one row per group (`<table class="variation-training">`): parts, frames per
 //!   part, seconds, objective evaluations and why the optimiser stopped.
 //!
@@ -119,6 +121,13 @@ fn figures(groups: &[(&String, &Value)]) -> String {
             parts.join(", ") + " mm"
         }
     });
+    s += &row("captures' fastest turn and longest edge (a variation frame spins past 1.25×, tears past 1.5×)", &|v| {
+        let c = &v["samples"]["capture_limits"];
+        match (c["max_turn_deg"].as_f64(), c["max_edge_m"].as_f64()) {
+            (Some(t), Some(e)) => format!("{t:.1}°/frame, {:.1} mm", 1e3 * e),
+            _ => "-".into(),
+        }
+    });
     s += &row("HMC acceptance (target 0.7), mean (range over chains)", &|v| {
         let a = &v["samples"]["accept_rate"];
         match (a["mean"].as_f64(), a["min"].as_f64(), a["max"].as_f64()) {
@@ -140,7 +149,7 @@ fn before_after(seq: &Value, raw: &str, after: &str, source: &str, scale: f64, d
 }
 
 /// Column heads of the per-sequence table, in order.
-pub const SEQUENCE_COLUMNS: [&str; 12] = [
+pub const SEQUENCE_COLUMNS: [&str; 13] = [
     "group",
     "sequence (frames)",
     "pose distance to source, mm",
@@ -153,7 +162,19 @@ pub const SEQUENCE_COLUMNS: [&str; 12] = [
     "distance between variations, m",
     "coverage",
     "diversity global / local, mm",
+    "frames spinning / torn, of all",
 ];
+
+/// `spinning / torn, of all` frames summed over a sequence's variations (`-` without the
+/// measure).
+fn spins_and_tears(seq: &Value) -> String {
+    let Some(vars) = seq["turns_and_tears"].as_array().filter(|a| !a.is_empty()) else {
+        return "-".into();
+    };
+    let count = |k: &str| -> usize { vars.iter().map(|v| v[k].as_array().map_or(0, Vec::len)).sum() };
+    let all = seq["frames"].as_u64().map_or(String::new(), |f| format!(", of {}", f as usize * vars.len()));
+    format!("{} / {}{all}", count("spinning_frames"), count("torn_frames"))
+}
 
 fn sequences(groups: &[(&String, &Value)]) -> String {
     let mut s = String::from("<table class=\"variation-sequences\"><thead><tr>");
@@ -179,6 +200,7 @@ fn sequences(groups: &[(&String, &Value)]) -> String {
                 one(q["pairwise_distance_m"].get("mean"), 1.0, 2),
                 one(d.get("coverage"), 1.0, 2),
                 format!("{} / {}", one(d.get("global_m"), 1e3, 0), one(d.get("local_m"), 1e3, 0)),
+                spins_and_tears(q),
             ];
             s += "<tr>";
             for c in &cells {
@@ -273,10 +295,13 @@ mod tests {
                      "latent_blend": [{"w": 0.25, "guided_m": 0.00179, "unguided_m": 0.00206}],
                      "mean_prediction": [{"sequence": "walk", "error_m": 0.0089}]},
             "samples": {"accept_rate": {"mean": 0.7, "min": 0.54, "max": 0.82}, "notes": [],
+                "capture_limits": {"max_turn_deg": 6.96, "max_edge_m": 0.0412},
                 "sequences": [{"label": "walk", "frames": 25, "pose_distance_to_source_m": [0.094, 0.124],
                     "raw_contact_sliding_m": [0.061, 0.079], "contact_sliding_m": [0.0, 1e-17],
                     "source_contact_sliding_m": 0.005, "pairwise_distance_m": {"mean": 0.4},
-                    "diversity": {"coverage": 0.5, "global_m": 0.1, "local_m": 0.05}}]}}});
+                    "diversity": {"coverage": 0.5, "global_m": 0.1, "local_m": 0.05},
+                    "turns_and_tears": [{"spinning_frames": [3, 4], "torn_frames": [4]},
+                                        {"spinning_frames": [9], "torn_frames": []}]}]}}});
         assert!(is_variation_table(&v));
         let h = section_html(&v).unwrap();
         for needle in [
@@ -286,7 +311,8 @@ mod tests {
             "<td>0.70 (0.54-0.82)</td>",
             "<td>walk (25)</td><td>94-124</td>",
             "<td>0.061-0.079 → 0.000 (0.005)</td>",
-            "<td>0.40</td><td>0.50</td><td>100 / 50</td>",
+            "<td>0.40</td><td>0.50</td><td>100 / 50</td><td>3 / 1, of 50</td>",
+            "and longest edge (a variation frame spins past 1.25×, tears past 1.5×)</th><td>7.0°/frame, 41.2 mm</td>",
             "<td>torso, leg_l</td><td>75</td><td>1</td><td>0.50-1.50</td><td>100-300</td><td>ValueTolerance, GradientTolerance</td>",
         ] {
             assert!(h.contains(needle), "{needle} not in {h}");

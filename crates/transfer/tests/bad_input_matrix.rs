@@ -111,6 +111,15 @@ fn motion_with_frame(b: &Base, dir: &Path, name: &str, bytes: &[u8]) -> String {
     s(&m)
 }
 
+/// `hmc-sample` arguments with `extra` (the model and group are never read: the rows that use
+/// it are usage errors).
+fn hmc_args(dir: &Path, extra: &[&str]) -> Vec<String> {
+    let mut a: Vec<String> = vec!["-q".into(), "--model".into(), s(&dir.join("x.model")), "--group".into(), s(&dir.join("x.group")),
+        "--out".into(), s(&dir.join("out"))];
+    a.extend(extra.iter().map(|x| x.to_string()));
+    a
+}
+
 /// `align` arguments for the motion folder `motion`, output `dir/out.aligned`.
 fn align_args(b: &Base, dir: &Path, motion: String) -> Vec<String> {
     vec![
@@ -272,6 +281,12 @@ fn cases() -> Vec<Case> {
             build: |b, _| vec!["--template".into(), b.p("set/A/walk/000000.ply"), b.p("A-walk.aligned")] },
         Case { name: "--threads 0", stage: "pca-fit", code: 2, pattern: &["threads"],
             build: |b, d| { let mut a = pca_args(b, d, b.p("A.seg"), b.p("A-walk.aligned")); a.push("--threads".into()); a.push("0".into()); a } },
+        Case { name: "hmc-sample --thin 0", stage: "hmc-sample", code: 2, pattern: &["--thin"],
+            build: |_, d| hmc_args(d, &["--thin", "0"]) },
+        Case { name: "hmc-sample -n 0", stage: "hmc-sample", code: 2, pattern: &["-n"],
+            build: |_, d| hmc_args(d, &["-n", "0"]) },
+        Case { name: "hmc-sample --frame-count 1", stage: "hmc-sample", code: 2, pattern: &["--frame-count"],
+            build: |_, d| hmc_args(d, &["--frame-count", "1"]) },
         Case { name: "bad enum value", stage: "align", code: 2, pattern: &["--frame"],
             build: |b, d| { let mut a = align_args(b, d, b.p("set/A/walk")); a.push("--frame".into()); a.push("torso".into()); a } },
     ]

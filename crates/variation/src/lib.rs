@@ -7,7 +7,8 @@
 //! (mean prediction + HMC over latent trajectories, §6; latent blending, §7) -> [`reconstruct`]
 //! (3DV eqs. 11-13, stitching, displacement integration) -> [`grounding`] (feet on the source's floor, a
 //! post-process) -> [`footskate`] (planted feet kept in place by a root shift, a post-process) ->
-//! [`foot_lock`] (the rest of each planted sole's slide absorbed by its leg) -> [`metrics`] and [`plots`].
+//! [`foot_lock`] (the rest of each planted sole's slide absorbed by its leg) -> [`metrics`],
+//! [`turns_and_tears`] (frames that spin or tear past the captures' own figures) and [`plots`].
 
 pub mod contacts;
 pub mod diversity;
@@ -21,6 +22,7 @@ pub mod gait;
 pub mod grounding;
 pub mod group;
 pub mod latent_smoothing;
+pub mod memory_budget;
 pub mod metrics;
 pub mod part_data;
 pub mod plots;
@@ -31,3 +33,4 @@ pub mod stage;
 pub mod synthesize;
 pub mod train;
 pub mod trained_on;
+pub mod turns_and_tears;

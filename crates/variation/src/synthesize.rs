@@ -34,6 +34,7 @@ use crate::sample::{
     HmcStart, Sampler, Variations,
 };
 use crate::train::VariationModel;
+use crate::turns_and_tears::{CaptureLimits, TurnsAndTears};
 
 /// Settings of [`run`].
 #[derive(Clone, Debug, Serialize, Deserialize)]
@@ -187,6 +188,10 @@ pub struct SequenceReport {
     /// when `blend` is a learned weight.
     #[serde(default)]
     pub guided_from: Option<(f64, f64)>,
+    /// Per variation, its frames that turn faster or stretch an edge further than the
+    /// captures ever do ([`crate::turns_and_tears`]; `SynthReport::capture_limits`).
+    #[serde(default)]
+    pub turns_and_tears: Vec<TurnsAndTears>,
 }
 
 /// Everything `hmc-sample` reports.
@@ -212,6 +217,10 @@ pub struct SynthReport {
     /// None with exact decoding.
     #[serde(default)]
     pub decoding_bound_m: Option<f64>,
+    /// The captures' fastest turn and longest edge, which every sequence's
+    /// `turns_and_tears` is held to (None without statistics).
+    #[serde(default)]
+    pub capture_limits: Option<CaptureLimits>,
 }
 
 /// Sole vertices of the model's template (both feet, [`metrics::soles`]).
@@ -453,7 +462,7 @@ impl Post<'_> {
     }
 }
 
-fn measure(job: &Job, decoded: &[Decoded], model: &VariationModel) -> SequenceReport {
+fn measure(job: &Job, decoded: &[Decoded], model: &VariationModel, limits: &CaptureLimits) -> SequenceReport {
     let (label, blend, source) = (&job.label, job.blend, &job.source);
     let vars: Vec<&Vec<Vec<Vector3<f64>>>> = decoded.iter().map(|d| &d.meshes).collect();
     let edges = metrics::edges(&model.faces);
@@ -520,6 +529,7 @@ fn measure(job: &Job, decoded: &[Decoded], model: &VariationModel) -> SequenceRe
         footskate_max_m: decoded.iter().map(|d| d.footskate_max).collect(),
         diversity: Some(diversity::from_costs(&costs, source.len(), model.fps)),
         guided_from: job.guided_from,
+        turns_and_tears: vars.par_iter().map(|v| TurnsAndTears::of(v, &edges, limits)).collect(),
     }
 }
 
@@ -730,6 +740,7 @@ pub fn run_with_progress(
         soles: &all_soles,
     };
     let (mut seconds_writing, mut seconds_statistics) = (0.0, 0.0);
+    let capture_limits = cfg.statistics.then(|| CaptureLimits::of_group(group));
     let mut decoding_bound: Option<f64> = None;
     for (j, job) in jobs.iter().enumerate() {
         if cfg.footskate && job.contacts.is_none() {
@@ -805,8 +816,8 @@ pub fn run_with_progress(
             decoded.push(d);
         }
         let stats_clock = std::time::Instant::now();
-        if cfg.statistics {
-            sequences.push(measure(job, &decoded, model));
+        if let Some(limits) = &capture_limits {
+            sequences.push(measure(job, &decoded, model, limits));
         }
         seconds_statistics += stats_clock.elapsed().as_secs_f64();
         progress(j + 1, jobs.len());
@@ -824,5 +835,6 @@ pub fn run_with_progress(
         seconds_writing,
         seconds_statistics,
         decoding_bound_m: decoding_bound,
+        capture_limits,
     })
 }

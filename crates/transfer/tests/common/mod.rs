@@ -235,7 +235,7 @@ pub fn write_set(dir: &Path) {
 /// built (`cargo test --release --workspace`, or `cargo build --release --workspace` first).
 pub fn bin(name: &str) -> String {
     match name {
-        "align" | "segment" | "pca-fit" => return front_end_bin(name),
+        "align" | "segment" | "pca-fit" | "hmc-sample" => return front_end_bin(name),
         "dtw-densify" => env!("CARGO_BIN_EXE_dtw-densify"),
         "gpr-train" => env!("CARGO_BIN_EXE_gpr-train"),
         "gpr-predict" => env!("CARGO_BIN_EXE_gpr-predict"),

@@ -11,6 +11,7 @@ use serde::Serialize;
 
 use crate::frame_writer::VariationFormat;
 use crate::group::Group;
+use crate::memory_budget;
 use crate::reconstruct::Assembly;
 use crate::sample::{HmcStart, Sampler};
 use crate::synthesize::{run_with_progress, Query, SynthConfig};
@@ -34,7 +35,7 @@ pub struct Params {
     #[arg(long)]
     pub group: PathBuf,
     /// Variations per sequence
-    #[arg(short, long, default_value_t = 5)]
+    #[arg(short, long, default_value_t = 5, value_parser = at_least(1))]
     pub n: usize,
     /// Only variations of this training sequence (a motion of the group, or a pre-blend
     /// `blend-<w>`), instead of every sequence and the --blends
@@ -51,7 +52,7 @@ pub struct Params {
     pub weight: Option<f64>,
     /// Frames per variation [default: the capture's length]; longer follows the dynamics on
     /// past the capture's end, shorter cuts
-    #[arg(long, value_name = "N")]
+    #[arg(long, value_name = "N", value_parser = at_least(2))]
     pub frame_count: Option<usize>,
     /// Blend weights w* in [0, 1] to synthesise, comma-separated (empty: none)
     #[arg(long, default_value = "0.25,0.75", value_parser = parse_weights)]
@@ -85,7 +86,7 @@ pub struct Params {
     #[arg(long)]
     pub burn_in: Option<usize>,
     /// Keep one HMC iteration in THIN
-    #[arg(long, default_value_t = 10)]
+    #[arg(long, default_value_t = 10, value_parser = at_least(1))]
     pub thin: usize,
     /// Target acceptance rate during burn-in
     #[arg(long, default_value_t = 0.7)]
@@ -135,6 +136,11 @@ pub struct Params {
     pub report: Option<PathBuf>,
 }
 
+/// A count of at least `min` (a smaller one means nothing: a usage error).
+fn at_least(min: u64) -> clap::builder::RangedU64ValueParser<usize> {
+    clap::builder::RangedU64ValueParser::<usize>::new().range(min..)
+}
+
 /// `--blend` as written on the command line (`A:B`), or `null`.
 fn pair_as_text<S: serde::Serializer>(pair: &Option<(String, String)>, ser: S) -> Result<S::Ok, S::Error> {
     match pair {
@@ -167,6 +173,10 @@ pub fn run(p: &Params) -> anyhow::Result<()> {
     let (model, group) = (model?, group?);
     crate::trained_on::check(&model, &group)
         .with_context(|| format!("{} with {}", p.model.display(), p.group.display()))?;
+    // The query's size against the machine's memory, before anything of that size is allocated.
+    let frames = p.frame_count.unwrap_or(model.n_frames());
+    let needed = memory_budget::bytes_needed(p.n, frames, model.template.len(), rayon::current_num_threads());
+    memory_budget::check(p.n, frames, needed, memory_budget::physical_memory())?;
     let cfg = SynthConfig {
         n: p.n,
         blends: p.blends.0.clone(),

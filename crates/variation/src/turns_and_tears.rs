@@ -1,0 +1,162 @@
+//! Frames a viewer cannot accept: a whole-body **turn** between consecutive frames faster than
+//! the captures ever turn, and a **tear**, an edge stretched longer than any edge of any
+//! captured frame.
+//!
+//! The turn of frame `t` is the angle of the rotation of the best rigid fit (Procrustes over all
+//! vertices) taking frame `t − 1` onto frame `t`; frame 0 does not turn. The captures' rate is
+//! the largest such angle over the captured (not pre-blended) sequences of the group, divided
+//! by the number of capture frames the prealignment's frame map steps over (a step of two
+//! capture frames counts half its angle; a repeated frame is skipped). A variation frame spins
+//! when it turns faster than [`SPIN_FACTOR`] times that rate, and tears when its longest edge
+//! exceeds [`TEAR_FACTOR`] times the longest edge of any captured frame.
+
+use mesh_core::rigid::procrustes;
+use nalgebra::Vector3;
+use serde::{Deserialize, Serialize};
+
+use crate::group::Group;
+
+/// A frame spins when it turns faster than this multiple of the captures' fastest turn.
+pub const SPIN_FACTOR: f64 = 1.25;
+/// A frame tears when an edge is longer than this multiple of the captures' longest edge.
+pub const TEAR_FACTOR: f64 = 1.5;
+
+/// Angle (degrees) of the whole-body turn from each frame to the next: `turns[t]` is the turn
+/// from frame `t` to frame `t + 1` (one fewer than the frames).
+pub fn turn_degrees(frames: &[Vec<Vector3<f64>>]) -> Vec<f64> {
+    frames
+        .windows(2)
+        .map(|w| procrustes(&w[0], &w[1], None).rotation.angle().to_degrees())
+        .collect()
+}
+
+/// Length of the longest edge of each frame (model units, metres).
+pub fn longest_edges(frames: &[Vec<Vector3<f64>>], edges: &[[u32; 2]]) -> Vec<f64> {
+    frames
+        .iter()
+        .map(|f| {
+            edges
+                .iter()
+                .map(|&[a, b]| (f[a as usize] - f[b as usize]).norm())
+                .fold(0.0, f64::max)
+        })
+        .collect()
+}
+
+/// The captures' own figures, which the variations are held to.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+pub struct CaptureLimits {
+    /// Fastest whole-body turn of any captured frame (degrees per frame).
+    pub max_turn_deg: f64,
+    /// Longest edge of any captured frame (m).
+    pub max_edge_m: f64,
+}
+
+impl CaptureLimits {
+    /// The figures of the group's captured sequences (pre-blends left out; module doc).
+    pub fn of_group(group: &Group) -> CaptureLimits {
+        let edges = crate::metrics::edges(&group.faces);
+        let mut limits = CaptureLimits { max_turn_deg: 0.0, max_edge_m: 0.0 };
+        for s in group.sequences.iter().filter(|s| s.blend.is_none()) {
+            let frames = s.motion.world_frames();
+            for (t, turn) in turn_degrees(&frames).into_iter().enumerate() {
+                let step = match (s.map.get(t), s.map.get(t + 1)) {
+                    (Some(&a), Some(&b)) => b.saturating_sub(a),
+                    _ => 1,
+                };
+                if step > 0 {
+                    limits.max_turn_deg = limits.max_turn_deg.max(turn / step as f64);
+                }
+            }
+            let longest = longest_edges(&frames, &edges).into_iter().fold(0.0, f64::max);
+            limits.max_edge_m = limits.max_edge_m.max(longest);
+        }
+        limits
+    }
+
+    /// Turns faster than this spin (degrees per frame).
+    pub fn spin_bound_deg(&self) -> f64 {
+        SPIN_FACTOR * self.max_turn_deg
+    }
+
+    /// Edges longer than this tear (m).
+    pub fn tear_bound_m(&self) -> f64 {
+        TEAR_FACTOR * self.max_edge_m
+    }
+}
+
+/// One variation's spins and tears against [`CaptureLimits`].
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+pub struct TurnsAndTears {
+    /// Frames that turn faster than the spin bound (a frame `t ≥ 1` turns from `t − 1`).
+    pub spinning_frames: Vec<usize>,
+    /// Frames holding an edge longer than the tear bound.
+    pub torn_frames: Vec<usize>,
+    /// Fastest turn of the variation (degrees per frame) and its longest edge (m).
+    pub max_turn_deg: f64,
+    pub max_edge_m: f64,
+}
+
+impl TurnsAndTears {
+    /// The spins and tears of `frames` (`edges`: the mesh's unique edges).
+    pub fn of(frames: &[Vec<Vector3<f64>>], edges: &[[u32; 2]], limits: &CaptureLimits) -> Self {
+        let turns = turn_degrees(frames);
+        let longest = longest_edges(frames, edges);
+        TurnsAndTears {
+            spinning_frames: (0..turns.len())
+                .filter(|&t| turns[t] > limits.spin_bound_deg())
+                .map(|t| t + 1)
+                .collect(),
+            torn_frames: (0..longest.len())
+                .filter(|&t| longest[t] > limits.tear_bound_m())
+                .collect(),
+            max_turn_deg: turns.iter().copied().fold(0.0, f64::max),
+            max_edge_m: longest.iter().copied().fold(0.0, f64::max),
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use nalgebra::{Rotation3, Vector3};
+
+    /// A small irregular point cloud (no symmetry, so the fit's rotation is unique).
+    fn body() -> Vec<Vector3<f64>> {
+        vec![
+            Vector3::new(0.0, 0.0, 0.0),
+            Vector3::new(1.0, 0.1, 0.0),
+            Vector3::new(0.2, 1.3, 0.1),
+            Vector3::new(0.1, 0.2, 0.7),
+            Vector3::new(0.5, 0.4, 0.3),
+        ]
+    }
+
+    fn turned(deg: f64) -> Vec<Vector3<f64>> {
+        let r = Rotation3::from_axis_angle(&Vector3::y_axis(), deg.to_radians());
+        body().iter().map(|p| r * p + Vector3::new(3.0, 0.0, 1.0)).collect()
+    }
+
+    #[test]
+    fn a_body_turned_about_its_up_axis_turns_by_that_angle_whatever_its_travel() {
+        let frames = vec![turned(0.0), turned(10.0), turned(35.0), turned(-140.0)];
+        let turns = turn_degrees(&frames);
+        for (got, want) in turns.iter().zip([10.0, 25.0, 175.0]) {
+            assert!((got - want).abs() < 1e-9, "{got} vs {want}");
+        }
+    }
+
+    #[test]
+    fn frames_past_the_bounds_are_named_and_frames_within_them_are_not() {
+        let limits = CaptureLimits { max_turn_deg: 8.0, max_edge_m: 1.0 };
+        let mut frames = vec![turned(0.0), turned(9.0), turned(30.0), turned(31.0)];
+        // Frame 3 also has a stretched point: its edge 0-1 grows past 1.5 m.
+        frames[3][1] += Vector3::new(0.0, 0.0, 2.0);
+        let edges = [[0, 1], [1, 2]];
+        let r = TurnsAndTears::of(&frames, &edges, &limits);
+        // 9° is within 1.25 × 8° = 10°; 21° is not; frame 3 turns by its tear's fit.
+        assert!(r.spinning_frames.contains(&2) && !r.spinning_frames.contains(&1));
+        assert_eq!(r.torn_frames, vec![3]);
+        assert!((r.max_edge_m - longest_edges(&frames, &edges)[3]).abs() < 1e-12);
+    }
+}

@@ -1,0 +1,95 @@
+//! Variations a viewer accepts, on the tiny preset through the stage binaries: no frame turns
+//! the whole body faster than 1.25 × the captures' fastest frame-to-frame turn, and none holds
+//! an edge longer than 1.5 × the captures' longest (`variation::turns_and_tears`), under the
+//! default sampler, `--sampler ancestral` and for blends. Also: a query the machine cannot hold
+//! is refused in one line before sampling.
+
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+
+fn stage(bin: &str, args: &[&str]) -> Output {
+    Command::new(bin).args(args).env("OPENBLAS_NUM_THREADS", "1").output().unwrap()
+}
+
+fn ok(bin: &str, args: &[&str]) -> Output {
+    let out = stage(bin, args);
+    assert!(out.status.success(), "{bin} {args:?}: {}", String::from_utf8_lossy(&out.stderr));
+    out
+}
+
+/// The tiny preset's walk and run prealigned (one pre-blend) and a GPDM trained on them, in `dir`.
+fn tiny_model(dir: &Path) -> (PathBuf, PathBuf) {
+    let set = dir.join("set");
+    let cfg = synth::preset::preset("tiny", 0, true).unwrap();
+    synth::capture_set_writer::synthesise(&cfg, &set, false, &|_| {}, &|| {}).unwrap();
+    let (group, model) = (dir.join("locomotion.group"), dir.join("locomotion.model"));
+    let s = |p: &Path| p.to_string_lossy().into_owned();
+    ok(
+        env!("CARGO_BIN_EXE_prealign"),
+        &["-q", "--set", &s(&set), "--group-name", "locomotion", "--motions", "walk,run", "--blend-weights", "0.5", "--out", &s(&group)],
+    );
+    ok(env!("CARGO_BIN_EXE_gpdm-train"), &["-q", "--group", &s(&group), "--out", &s(&model)]);
+    (group, model)
+}
+
+/// Every spinning and torn frame of an `hmc-sample --report`, one line each.
+fn spins_and_tears(report: &Path) -> Vec<String> {
+    let r: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(report).unwrap()).unwrap();
+    let limits = &r["capture_limits"];
+    assert!(limits["max_turn_deg"].as_f64().unwrap() > 0.0 && limits["max_edge_m"].as_f64().unwrap() > 0.0, "{limits}");
+    let mut bad = Vec::new();
+    for s in r["sequences"].as_array().unwrap() {
+        let per = s["turns_and_tears"].as_array().unwrap();
+        assert!(!per.is_empty(), "{}: no turns_and_tears", s["label"]);
+        for (k, v) in per.iter().enumerate() {
+            for kind in ["spinning_frames", "torn_frames"] {
+                let frames = v[kind].as_array().unwrap();
+                if !frames.is_empty() {
+                    bad.push(format!("{} var{k}: {kind} {frames:?} (max turn {} deg, captures' {limits})", s["label"], v["max_turn_deg"]));
+                }
+            }
+        }
+    }
+    bad
+}
+
+#[test]
+#[ignore = "today's variations spin on the tiny preset (docs/RESULTS.md, \"Spins and tears\"): run with --ignored once the cause is fixed"]
+fn no_variation_of_the_tiny_preset_spins_or_tears_under_either_sampler_or_in_a_blend() {
+    let dir = tempfile::tempdir().unwrap();
+    let (group, model) = tiny_model(dir.path());
+    let (g, m) = (group.to_string_lossy().into_owned(), model.to_string_lossy().into_owned());
+    let mut bad = Vec::new();
+    for (name, extra) in [
+        ("hmc", vec!["--blends", "0.25,0.75"]),
+        ("ancestral", vec!["--sampler", "ancestral", "--blends", "0.25,0.75"]),
+        ("blend", vec!["--blend", "walk:run", "--weight", "0.3"]),
+    ] {
+        let (out, report) = (dir.path().join(name), dir.path().join(format!("{name}.json")));
+        let mut args = vec!["-q", "--seed", "0", "-n", "5", "--variance-scale", "0.3", "--group", &g, "--model", &m];
+        args.extend(extra);
+        let (o, r) = (out.to_string_lossy().into_owned(), report.to_string_lossy().into_owned());
+        args.extend(["--out", &o, "--report", &r]);
+        ok(env!("CARGO_BIN_EXE_hmc-sample"), &args);
+        bad.extend(spins_and_tears(&report).into_iter().map(|l| format!("{name}: {l}")));
+    }
+    assert!(bad.is_empty(), "{} variations spin or tear:\n{}", bad.len(), bad.join("\n"));
+}
+
+#[test]
+fn a_frame_count_the_machine_cannot_hold_is_refused_in_one_line_before_sampling() {
+    let dir = tempfile::tempdir().unwrap();
+    let (group, model) = tiny_model(dir.path());
+    let out = dir.path().join("out");
+    let o = stage(
+        env!("CARGO_BIN_EXE_hmc-sample"),
+        &["-q", "--group", &group.to_string_lossy(), "--model", &model.to_string_lossy(), "--motion", "walk",
+          "--frame-count", "1000000000", "--out", &out.to_string_lossy()],
+    );
+    let err = String::from_utf8_lossy(&o.stderr);
+    let lines: Vec<&str> = err.lines().collect();
+    assert_eq!(o.status.code(), Some(1), "{err}");
+    assert_eq!(lines.len(), 1, "{err}");
+    assert!(lines[0].starts_with("hmc-sample: ") && lines[0].contains("--frame-count 1000000000") && lines[0].contains("memory"), "{err}");
+    assert!(!out.exists(), "no output for a refused query");
+}
