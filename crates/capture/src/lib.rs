@@ -10,6 +10,7 @@
 pub mod align;
 pub mod motion_stream;
 pub mod part_pca;
+pub mod streamed_pca;
 pub mod assemble;
 pub mod choices;
 pub mod contact_detector;

@@ -1,7 +1,8 @@
 //! Reading an aligned motion frame by frame: each frame goes to a sink as it is decoded, so a
 //! motion of any length is read holding one frame (plus whatever the sink keeps), in one pass
 //! that also hashes the file. `gpr-train` encodes the frames into PCA coefficients this way
-//! ([`crate::part_pca::FrameEncoder`]) instead of holding whole motions.
+//! ([`crate::part_pca::FrameEncoder`]) instead of holding whole motions, and `pca-fit` reads
+//! its training motions pass by pass ([`MotionFiles`], [`crate::streamed_pca`]).
 //!
 //! The frames are checked as [`AlignedMotion::validate`] checks them, and the sink gets only
 //! frames that passed: every frame has frame 0's vertex count and finite coordinates. The
@@ -9,7 +10,7 @@
 //! checksum mismatch), then the payload's checks, then the sink's.
 
 use std::fmt;
-use std::path::Path;
+use std::path::{Path, PathBuf};
 
 use mesh_core::artifact::{read_artifact_seeded, Artifact};
 use mesh_core::rigid::RigidMotion;
@@ -18,6 +19,8 @@ use nalgebra::Vector3;
 use serde::de::{DeserializeSeed, Deserializer, Error as _, SeqAccess, Visitor};
 
 use crate::align::{check_besides_frames, AlignedMotion, CaptureInfo, FrameChecks};
+use crate::part_pca::check_same_template;
+use crate::streamed_pca::TrainingFrames;
 
 /// An aligned motion without its frames' vertices, as [`read_frames`] returns it.
 #[derive(Clone, Debug, PartialEq)]
@@ -56,6 +59,47 @@ pub fn read_frames(
         return Err(Error::file(path, e.to_string()));
     }
     Ok((MotionInfo { faces, n_frames, n_vertices: n, poses, displacements, anchor, capture }, sha256))
+}
+
+/// Aligned motion files as [`TrainingFrames`]: every pass reads them again with
+/// [`read_frames`]. The first pass checks that each motion was aligned to `template_sha256`
+/// (`pca-fit --template`) and records its hash and anchor; a later pass fails if a file's hash
+/// changed.
+pub struct MotionFiles<'a> {
+    paths: &'a [PathBuf],
+    template_sha256: String,
+    /// The SHA-256 and anchor of every file read by the first pass.
+    seen: Vec<(String, Vec<u32>)>,
+}
+
+impl<'a> MotionFiles<'a> {
+    pub fn new(paths: &'a [PathBuf], template_sha256: &str) -> Self {
+        MotionFiles { paths, template_sha256: template_sha256.to_string(), seen: Vec::new() }
+    }
+}
+
+impl TrainingFrames for MotionFiles<'_> {
+    fn pass(&mut self, sink: &mut dyn FnMut(usize, &[Vector3<f64>]) -> Result<()>) -> Result<()> {
+        for (k, path) in self.paths.iter().enumerate() {
+            let (info, sha256) = read_frames(path, |f| sink(k, &f))?;
+            match self.seen.get(k) {
+                None => {
+                    check_same_template(&info.capture.template_sha256, &self.template_sha256, "the motion was aligned to", "--template is")
+                        .map_err(|e| Error::file(path, e.to_string()))?;
+                    self.seen.push((sha256, info.anchor));
+                }
+                Some((first, _)) if *first != sha256 => {
+                    return Err(Error::file(path, "changed between two passes over the training frames"));
+                }
+                Some(_) => {}
+            }
+        }
+        Ok(())
+    }
+
+    fn anchors(&self) -> Vec<Vec<u32>> {
+        self.seen.iter().map(|(_, a)| a.clone()).collect()
+    }
 }
 
 /// The frames read so far: [`FrameChecks`], and the sink's first error.

@@ -178,7 +178,7 @@ pub struct PartReport {
 
 /// Flattens the part vertices of one frame, rigidly aligned to `reference`
 /// with [`PartAlignment::Part`], as they are with [`PartAlignment::Body`].
-fn aligned_part_row(
+pub(crate) fn aligned_part_row(
     frame: &[Vector3<f64>],
     vertices: &[u32],
     reference: &[Vector3<f64>],
@@ -227,6 +227,37 @@ fn frame_rows(
         }
     }
     m
+}
+
+/// The PCA of one part fitted on `data` (its rows, one per frame, as [`frame_rows`] makes them)
+/// and its report: explained variance and the reconstruction error of `data`.
+pub(crate) fn fit_part_rows(
+    part: &mesh_core::segmentation::Part,
+    reference: Vec<Vector3<f64>>,
+    data: &DMatrix<f64>,
+    components: Components,
+) -> Result<(PartPca, PartReport)> {
+    let pca = Pca::fit(data, components).map_err(|e| Error::invalid(format!("part '{}': {e}", part.name)))?;
+    let rms = pca.reconstruction_rms(data).map_err(|e| Error::invalid(e.to_string()))?;
+    Ok(part_result(part, reference, pca, rms))
+}
+
+/// A fitted part and its report, from its PCA and the RMS per coordinate of its reconstruction.
+pub(crate) fn part_result(
+    part: &mesh_core::segmentation::Part,
+    reference: Vec<Vector3<f64>>,
+    pca: Pca,
+    rms_per_coordinate: f64,
+) -> (PartPca, PartReport) {
+    let report = PartReport {
+        part: part.name.clone(),
+        vertices: part.vertices.len(),
+        components: pca.n_components(),
+        explained_variance: pca.explained_variance_ratio().iter().sum(),
+        // rms per coordinate -> per vertex distance: sqrt(3) * rms.
+        reconstruction_rms_m: rms_per_coordinate * 3f64.sqrt(),
+    };
+    (PartPca { name: part.name.clone(), vertices: part.vertices.clone(), reference, pca }, report)
 }
 
 /// The whole body as a single part (the paper's "whole body" comparison).
@@ -319,28 +350,7 @@ pub fn fit_selected(
                 .map(|&v| template[v as usize])
                 .collect();
             let data = part_rows(motions, &part.vertices, &reference, alignment);
-            let pca = Pca::fit(&data, components)
-                .map_err(|e| Error::invalid(format!("part '{}': {e}", part.name)))?;
-            let rms = pca
-                .reconstruction_rms(&data)
-                .map_err(|e| Error::invalid(e.to_string()))?;
-            let report = PartReport {
-                part: part.name.clone(),
-                vertices: part.vertices.len(),
-                components: pca.n_components(),
-                explained_variance: pca.explained_variance_ratio().iter().sum(),
-                // rms per coordinate -> per vertex distance: sqrt(3) * rms.
-                reconstruction_rms_m: rms * 3f64.sqrt(),
-            };
-            Ok((
-                PartPca {
-                    name: part.name.clone(),
-                    vertices: part.vertices.clone(),
-                    reference,
-                    pca,
-                },
-                report,
-            ))
+            fit_part_rows(part, reference, &data, components)
         })
         .inspect(|_| bar.inc(1))
         .collect::<Result<_>>()?;

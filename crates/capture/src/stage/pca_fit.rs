@@ -5,7 +5,6 @@ use std::path::PathBuf;
 
 use clap::Parser;
 use gp::pca::Components;
-use anyhow::Context;
 use mesh_core::artifact::{sha256_file, Artifact};
 use mesh_core::cli::CommonArgs;
 use mesh_core::io::read_mesh;
@@ -13,8 +12,9 @@ use mesh_core::part_merge::{self, PartReports};
 use mesh_core::segmentation::Segmentation;
 use serde::Serialize;
 
-use crate::align::AlignedMotion;
+use crate::motion_stream::MotionFiles;
 use crate::part_pca::{self, PcaModel};
+use crate::streamed_pca;
 
 /// Fit a PCA per body part on a subject's aligned training motions
 #[derive(Parser, Debug, Serialize)]
@@ -53,6 +53,11 @@ pub struct Params {
     #[arg(long)]
     #[serde(skip)]
     pub part: Option<String>,
+    /// Memory for the training frames' rows and the matrices they are reduced to, in MiB:
+    /// the rows are held while they fit in half of it, otherwise the motions are read again
+    /// pass by pass (the same PCA to rounding, components up to sign); the model comes on top
+    #[arg(long, value_name = "MIB", default_value_t = 1024)]
+    pub memory_budget: usize,
     /// Aligned training motions (artifacts from `align`)
     #[arg(required = true)]
     pub motions: Vec<PathBuf>,
@@ -73,21 +78,11 @@ pub fn run(p: &Params) -> anyhow::Result<()> {
         Some(seg) if !p.whole_body => Segmentation::load(seg)?,
         _ => part_pca::whole_body(template.n_vertices()),
     };
-    let motions = p
-        .motions
-        .iter()
-        .map(AlignedMotion::load)
-        .collect::<Result<Vec<_>, _>>()?;
     let choice = match p.variance {
         Some(r) => Components::ExplainedVariance(r),
         None => Components::Count(p.components),
     };
     let template_sha256 = sha256_file(&p.template)?;
-    for (m, path) in motions.iter().zip(&p.motions) {
-        part_pca::check_same_template(&m.capture.template_sha256, &template_sha256, "the motion was aligned to", "--template is")
-            .with_context(|| path.display().to_string())?;
-    }
-    let refs: Vec<&AlignedMotion> = motions.iter().collect();
     let names: Vec<String> = parts.parts.iter().map(|q| q.name.clone()).collect();
     let only = match &p.part {
         Some(name) => {
@@ -99,13 +94,14 @@ pub fn run(p: &Params) -> anyhow::Result<()> {
         }
         None => None,
     };
-    let (mut model, report) = part_pca::fit_selected(
+    let (mut model, report) = streamed_pca::fit_streamed(
         &template.vertices,
         &parts,
-        &refs,
+        &mut MotionFiles::new(&p.motions, &template_sha256),
         choice,
         p.part_alignment,
         only,
+        p.memory_budget.saturating_mul(1 << 20),
         &mesh_core::cli::stage_progress(0, "parts fitted"),
     )?;
     model.template_sha256 = template_sha256;
