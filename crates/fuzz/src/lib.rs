@@ -111,7 +111,7 @@ pub fn exercise(target: Target, bytes: &[u8]) {
             let _ = mesh_core::io::obj::parse_obj(bytes);
         }
         Target::Pc2 => {
-            let _ = export::pc2::parse_pc2(bytes);
+            let _ = mesh_core::io::pc2::parse_pc2(bytes);
         }
         Target::SetJson => {
             let _ = SetSpec::parse(bytes);
@@ -225,7 +225,7 @@ pub fn seed_corpus() -> Vec<(Target, Vec<u8>)> {
         })
         .collect();
     let mut b = Vec::new();
-    export::pc2::encode_pc2(&mut b, &frames[..3]).unwrap();
+    mesh_core::io::pc2::encode_pc2(&mut b, &frames[..3]).unwrap();
     out.push((Target::Pc2, b));
     out.push((Target::SetJson, br#"{"source": "A", "target": "B", "train": [{"source": "walk", "target": "walk", "keyposes": [[0, 0], [12, 25]]}], "test": ["punch"]}"#.to_vec()));
     let near = l.ring(l.body_ring(8));
