@@ -247,8 +247,8 @@ pub(crate) fn check_besides_frames(
     if n_poses != n_frames || n_displacements != n_frames {
         return Err(format!("{n_frames} frames but {n_poses} poses and {n_displacements} displacements"));
     }
-    if !(c.fps.is_finite() && c.fps >= 0.0) {
-        return Err(format!("frame rate {} is not a non-negative number", c.fps));
+    if c.fps != 0.0 {
+        mesh_core::frame_rate::check_fps(c.fps)?;
     }
     let up = Vector3::from(c.up);
     if !up.iter().all(|x| x.is_finite()) || (up.norm() - 1.0).abs() > 1e-9 {

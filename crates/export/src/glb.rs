@@ -157,9 +157,10 @@ pub fn encode_glb(seq: &MeshSequence, name: &str, opts: &GlbOptions) -> Result<V
     if seq.n_frames() == 0 || seq.n_vertices() == 0 {
         return Err(Error::invalid("cannot export an empty sequence to glTF"));
     }
-    if opts.stride == 0 || !(opts.fps.is_finite() && opts.fps > 0.0) {
-        return Err(Error::invalid("glTF export needs stride >= 1 and fps > 0"));
+    if opts.stride == 0 {
+        return Err(Error::invalid("glTF export needs stride >= 1"));
     }
+    mesh_core::frame_rate::check_fps(opts.fps).map_err(|e| Error::invalid(format!("glTF export: {e}")))?;
     let kept = kept_frames(seq.n_frames(), opts.stride);
     let base = &seq.frames[kept[0]];
     let deltas: Vec<Vec<Vector3<f64>>> = kept[1..]

@@ -1,8 +1,8 @@
 //! export: results people can open.
 //!
 //! - [`frames`]: a mesh sequence as one OBJ or PLY file per frame, and back.
-//! - [`pc2`]: the PC2 point cache (Blender's Mesh Cache modifier, 3ds Max),
-//!   written beside a template OBJ, and back.
+//! - OBJ + PC2 point cache: [`mesh_core::io::pc2`] (Blender's Mesh Cache
+//!   modifier, 3ds Max), written beside a template OBJ, and back.
 //! - [`glb`]: a glTF 2.0 binary with the animation as morph targets whose
 //!   weights are sampled one-hot per frame (validator-clean by default;
 //!   frame stride and int16 quantisation on request).
@@ -23,10 +23,10 @@ pub mod frames;
 pub mod glb;
 pub mod html;
 pub mod md3;
-pub mod pc2;
 pub mod rate;
 pub mod report;
 pub mod stage;
 pub mod transfer_summary;
+pub mod usd;
 pub mod variation_summary;
 pub mod viewer;

@@ -38,21 +38,27 @@ impl fmt::Display for RateSource {
 /// The frame rate of the sequence folder `dir` and where it came from (module doc).
 pub fn sequence_fps(dir: &Path, given: Option<f64>) -> Result<(f64, RateSource)> {
     if let Some(fps) = given {
-        if !(fps.is_finite() && fps > 0.0) {
-            return Err(mesh_core::Error::invalid(format!("--fps must be a positive number, got {fps}")));
-        }
+        mesh_core::frame_rate::check_fps(fps).map_err(|e| mesh_core::Error::invalid(format!("--fps: {e}")))?;
         return Ok((fps, RateSource::Given));
     }
     if let Some(fps) = mesh_core::sequence::read_rate(dir)? {
         return Ok((fps, RateSource::RateFile(dir.join(mesh_core::sequence::RATE_FILE))));
     }
-    // A motion folder of a capture set sits in its subject's folder, a test motion one deeper.
+    if let Some((path, spec)) = sequence_subject(dir)? {
+        return Ok((spec.fps, RateSource::Subject(path)));
+    }
+    Ok((FALLBACK_FPS, RateSource::Fallback))
+}
+
+/// The `subject.json` of the capture set the sequence folder `dir` belongs to, if any: a motion
+/// folder sits in its subject's folder, a test motion one deeper.
+pub fn sequence_subject(dir: &Path) -> Result<Option<(PathBuf, SubjectSpec)>> {
     for subject_dir in dir.ancestors().skip(1).take(2) {
         let path = subject_dir.join("subject.json");
         if path.is_file() {
             let spec = SubjectSpec::load(&path)?;
-            return Ok((spec.fps, RateSource::Subject(path)));
+            return Ok(Some((path, spec)));
         }
     }
-    Ok((FALLBACK_FPS, RateSource::Fallback))
+    Ok(None)
 }

@@ -190,12 +190,7 @@ pub fn write_report(opts: &ReportOptions) -> Result<PathBuf> {
             "is not a folder (the pipeline output to report on)",
         ));
     }
-    if !(opts.fps.is_finite() && opts.fps > 0.0) {
-        return Err(Error::invalid(format!(
-            "--fps must be a positive number, got {}",
-            opts.fps
-        )));
-    }
+    mesh_core::frame_rate::check_fps(opts.fps).map_err(|e| Error::invalid(format!("--fps: {e}")))?;
     let mut views = Vec::new();
     for (label, dir) in &opts.views {
         let seq = MeshSequence::load_dir(dir)?;

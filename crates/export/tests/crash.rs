@@ -42,7 +42,7 @@ fn killed_export_leaves_absent_or_complete_outputs_and_no_temporary_after_the_ne
         if out.exists() {
             match *name {
                 "frames" => assert_eq!(mesh_core::sequence::MeshSequence::load_dir(&out).unwrap().frames, seq.frames),
-                "anim.pc2" => assert_eq!(export::pc2::read_pc2(&out).unwrap().samples.len(), 120),
+                "anim.pc2" => assert_eq!(mesh_core::io::pc2::read_pc2(&out).unwrap().samples.len(), 120),
                 _ => {
                     let bytes = std::fs::read(&out).unwrap();
                     let total = u32::from_le_bytes(bytes[8..12].try_into().unwrap()) as usize;

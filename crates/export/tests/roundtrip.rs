@@ -4,7 +4,7 @@ mod common;
 use std::process::Command;
 
 use export::frames::{read_frames, write_frames, FrameFormat};
-use export::pc2::{read_obj_pc2, write_obj_pc2};
+use mesh_core::io::pc2::{read_obj_pc2, write_obj_pc2};
 use mesh_core::sequence::MeshSequence;
 
 fn f32_rounded(seq: &MeshSequence) -> Vec<Vec<nalgebra::Vector3<f64>>> {

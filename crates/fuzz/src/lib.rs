@@ -119,7 +119,7 @@ pub fn exercise(target: Target, bytes: &[u8]) {
             let _ = mesh_core::io::obj::parse_obj(bytes);
         }
         Target::Pc2 => {
-            let _ = export::pc2::parse_pc2(bytes);
+            let _ = mesh_core::io::pc2::parse_pc2(bytes);
         }
         Target::Md3 => {
             if let Ok(model) = export::md3::parse_md3(bytes) {
@@ -245,7 +245,7 @@ pub fn seed_corpus() -> Vec<(Target, Vec<u8>)> {
         })
         .collect();
     let mut b = Vec::new();
-    export::pc2::encode_pc2(&mut b, &frames[..3]).unwrap();
+    mesh_core::io::pc2::encode_pc2(&mut b, &frames[..3]).unwrap();
     out.push((Target::Pc2, b));
     out.push((Target::Md3, md3_seed(&mesh, &frames[..2])));
     out.push((Target::AnimationCfg, ANIMATION_CFG_SEED.to_vec()));

@@ -10,7 +10,7 @@ fn seeds_are_valid_inputs_of_their_readers() {
         let ok = match target {
             fuzz::Target::Ply => mesh_core::io::ply::parse_ply(&bytes).is_ok(),
             fuzz::Target::Obj => mesh_core::io::obj::parse_obj(&bytes).is_ok(),
-            fuzz::Target::Pc2 => export::pc2::parse_pc2(&bytes).is_ok(),
+            fuzz::Target::Pc2 => mesh_core::io::pc2::parse_pc2(&bytes).is_ok(),
             fuzz::Target::Md3 => export::md3::parse_md3(&bytes).is_ok(),
             fuzz::Target::AnimationCfg => characters::animation_cfg::parse_animation_cfg(&bytes).is_ok(),
             fuzz::Target::SetJson => mesh_core::capture_set::SetSpec::parse(&bytes).is_ok(),

@@ -131,10 +131,17 @@ where
     Ok(())
 }
 
-/// `e` without the temporary file's path `tempfile` adds to it: the message names the output.
+/// `e` without the temporary file's path `tempfile` adds to it: it wraps the OS error in a
+/// private error type whose message is `<OS error> at path ".surfcap-….tmp"`, so the OS error's
+/// code cannot be recovered and the message is cut before ` at path`. The line then names the
+/// output, e.g. `out.pca: Read-only file system (os error 30)`.
 fn without_path(e: std::io::Error) -> std::io::Error {
-    match e.raw_os_error() {
-        Some(code) => std::io::Error::from_raw_os_error(code),
+    if let Some(code) = e.raw_os_error() {
+        return std::io::Error::from_raw_os_error(code);
+    }
+    let text = e.to_string();
+    match text.split_once(" at path ") {
+        Some((problem, _)) => std::io::Error::new(e.kind(), problem.to_string()),
         None => e,
     }
 }
@@ -252,6 +259,21 @@ fn sync_dir(dir: &Path) -> std::io::Result<()> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// A folder where no file can be created, even by root (procfs refuses new files): the
+    /// error names the destination, never the temporary `tempfile` tried to create.
+    #[test]
+    fn a_temporary_that_cannot_be_created_is_reported_under_the_destination_name() {
+        let dest = Path::new("/proc/self/surfcap-out.bin");
+        if !dest.parent().is_some_and(Path::is_dir) {
+            eprintln!("no /proc/self here: skipped");
+            return;
+        }
+        let err = write_bytes_atomic(dest, b"x").unwrap_err().to_string();
+        assert!(err.starts_with("/proc/self/surfcap-out.bin: "), "{err}");
+        assert!(!err.contains(".surfcap-") && !err.contains(" at path "), "{err}");
+        assert!(!dest.exists());
+    }
 
     #[test]
     fn failed_fill_leaves_nothing_behind() {

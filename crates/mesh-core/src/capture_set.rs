@@ -162,9 +162,7 @@ impl SubjectSpec {
     /// [`SubjectSpec::load`] of bytes held in memory (the error without the file name).
     pub fn parse(bytes: &[u8]) -> std::result::Result<Self, String> {
         let spec: SubjectSpec = parse_json(bytes)?;
-        if !(spec.fps.is_finite() && spec.fps > 0.0) {
-            return Err(format!("fps must be a positive number, got {}", spec.fps));
-        }
+        crate::frame_rate::check_fps(spec.fps).map_err(|e| format!("'fps': {e}"))?;
         if spec.up_vector().is_none() {
             return Err(format!("up must be one of +x -x +y -y +z -z, got '{}'", spec.up));
         }

@@ -13,6 +13,7 @@ pub mod topology;
 pub mod input;
 pub mod io;
 pub mod frame_pattern;
+pub mod frame_rate;
 pub mod sequence;
 pub mod capture_set;
 pub mod set_check;

@@ -8,7 +8,7 @@ use nalgebra::Vector3;
 use rayon::prelude::*;
 
 use crate::error::{Error, Result};
-use crate::io::{read_mesh, write_ply, MeshFormat};
+use crate::io::{read_mesh, MeshFormat};
 use crate::mesh::TriMesh;
 use crate::topology::Topology;
 
@@ -63,7 +63,7 @@ impl FromStr for FrameRange {
 }
 
 /// Frame number of a file named `<digits>.ply` / `<digits>.obj`.
-fn frame_number(path: &Path) -> Option<usize> {
+pub(crate) fn frame_number(path: &Path) -> Option<usize> {
     MeshFormat::from_path(path)?;
     let stem = path.file_stem()?.to_str()?;
     if stem.is_empty() || !stem.bytes().all(|b| b.is_ascii_digit()) {
@@ -72,7 +72,7 @@ fn frame_number(path: &Path) -> Option<usize> {
     stem.parse().ok()
 }
 
-fn is_rate_file(p: &Path) -> bool {
+pub(crate) fn is_rate_file(p: &Path) -> bool {
     p.file_name().is_some_and(|n| n == RATE_FILE)
 }
 
@@ -92,8 +92,8 @@ pub fn read_rate(dir: impl AsRef<Path>) -> Result<Option<f64>> {
     let value: serde_json::Value =
         serde_json::from_str(&text).map_err(|e| Error::file(&path, format!("not JSON: {e}")))?;
     match value.get("fps").and_then(|f| f.as_f64()) {
-        Some(fps) if fps.is_finite() && fps > 0.0 => Ok(Some(fps)),
-        _ => Err(Error::file(&path, "needs \"fps\": a positive number")),
+        Some(fps) => crate::frame_rate::check_fps(fps).map(Some).map_err(|e| Error::file(&path, format!("'fps': {e}"))),
+        None => Err(Error::file(&path, "needs \"fps\": a number of frames per second")),
     }
 }
 
@@ -256,23 +256,9 @@ impl MeshSequence {
     /// [`MeshSequence::write_dir`] with the frame rate `fps` recorded in the folder's
     /// [`RATE_FILE`] (in the same atomic replacement); `None` leaves no rate file.
     pub fn write_dir_at(&self, dir: impl AsRef<Path>, fps: Option<f64>) -> Result<()> {
-        if let Some(f) = fps.filter(|f| !(f.is_finite() && *f > 0.0)) {
-            return Err(Error::invalid(format!("frame rate must be a positive number, got {f}")));
-        }
-        let keep = |p: &Path| frame_number(p).is_none() && !is_rate_file(p);
+        let writer = crate::io::ply_frames::PlyFrames::new(self.n_vertices(), &self.faces);
         let bar = crate::cli::stage_progress(self.n_frames() as u64, "frames written");
-        let done = crate::atomic::write_dir_atomic(dir.as_ref(), &keep, |tmp| {
-            (0..self.n_frames()).into_par_iter().try_for_each(|i| {
-                bar.inc(1);
-                write_ply(&tmp.join(format!("{i:06}.ply")), &self.frame_mesh(i))
-            })?;
-            if let Some(fps) = fps {
-                let path = tmp.join(RATE_FILE);
-                let text = serde_json::json!({ "fps": fps }).to_string() + "\n";
-                std::fs::write(&path, text).map_err(|e| Error::io(&path, e))?;
-            }
-            Ok(())
-        });
+        let done = writer.write_dir_counting(dir.as_ref(), &self.frames, fps, &|| bar.inc(1));
         bar.finish_and_clear();
         done
     }

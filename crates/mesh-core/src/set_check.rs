@@ -7,7 +7,7 @@
 //! - `set.json`: readable JSON of the documented shape, plain subject and
 //!   motion names, at least one training pair, key-poses in every pair;
 //! - every subject named: its folder and `subject.json`, the frame rate
-//!   (`fps` a positive number), the up axis, the part tree, and every curve
+//!   (`fps` within 1 to 10,000 frames per second), the up axis, the part tree, and every curve
 //!   (a closed loop of the template, [`crate::capture_set::resolve_loop`])
 //!   and, when all curves are valid, that they cut the template into parts
 //!   ([`crate::segmentation::segment`]);
@@ -240,9 +240,15 @@ fn check_subject(set: &CaptureSet, subject: &str, report: &mut Report) -> Option
             false
         }
         Some(v) => match v.as_f64() {
-            Some(f) if f.is_finite() && f > 0.0 => true,
-            _ => {
-                report.add(&json, format!("'fps' must be a positive number of frames per second, got {v}"));
+            Some(f) => match crate::frame_rate::check_fps(f) {
+                Ok(_) => true,
+                Err(e) => {
+                    report.add(&json, format!("'fps': {e}"));
+                    false
+                }
+            },
+            None => {
+                report.add(&json, format!("'fps' must be a number of frames per second, got {v}"));
                 false
             }
         },

@@ -186,6 +186,10 @@ pub fn synthesise(
         .to_string_lossy();
     let tmp: PathBuf = parent.join(format!(".{name}.tmp-{}", std::process::id()));
     let _ = std::fs::remove_dir_all(&tmp);
+    if let Err(e) = std::fs::create_dir(&tmp) {
+        // The temporary's own name would puzzle: the line names the set being written.
+        return Err(Error::io(out, e));
+    }
     let result = write_all(cfg, &a, &b, &motions, &tmp, truth_for_train, tick);
     if let Err(e) = result {
         let _ = std::fs::remove_dir_all(&tmp);

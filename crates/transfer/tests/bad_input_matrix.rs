@@ -128,6 +128,15 @@ fn align_args(b: &Base, dir: &Path, motion: String) -> Vec<String> {
     ]
 }
 
+/// A copy of A's `subject.json` in `dir` with `"fps"` set to `fps` (JSON number text).
+fn subject_with_fps(b: &Base, dir: &Path, fps: &str) -> String {
+    let mut v: serde_json::Value = serde_json::from_slice(&std::fs::read(b.root.join("set/A/subject.json")).unwrap()).unwrap();
+    v["fps"] = serde_json::from_str(fps).unwrap();
+    let path = dir.join("subject.json");
+    std::fs::write(&path, v.to_string()).unwrap();
+    s(&path)
+}
+
 const PLY_HEAD: &str = "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\nproperty float z\nelement face 1\nproperty list uchar int vertex_indices\nend_header\n";
 
 /// `pca-fit` of A on `aligned` (its template and parts), output `dir/out.pca`.
@@ -208,6 +217,20 @@ fn cases() -> Vec<Case> {
         Case { name: "curve index out of range", stage: "segment", code: 1, pattern: &["99999"],
             build: |b, d| { std::fs::write(d.join("subject.json"), r#"{"fps": 25, "parts": {"torso": null, "limb": "torso"}, "curves": {"limb": [[0, 1, 99999], [5, 6, 7]]}}"#).unwrap();
                 vec!["-q".into(), s(&d.join("subject.json")), "--template".into(), b.p("set/A/walk/000000.ply"), "--out".into(), s(&d.join("out.seg"))] } },
+        Case { name: "subject.json frame rate 1e-300", stage: "align", code: 1, pattern: &["subject.json", "frame rate 1e-300 fps is outside 1 to 10000 fps"],
+            build: |b, d| { let subject = subject_with_fps(b, d, "1e-300");
+                let mut args = align_args(b, d, b.p("set/A/walk")); args[4] = subject; args } },
+        Case { name: "subject.json frame rate 1e300 in check-set", stage: "check-set", code: 1, pattern: &["subject.json", "frame rate 1e300 fps is outside"],
+            build: |b, d| { let set = d.join("set");
+                assert!(Command::new("cp").arg("-r").arg(b.root.join("set")).arg(&set).status().unwrap().success());
+                std::fs::copy(subject_with_fps(b, d, "1e300"), set.join("A/subject.json")).unwrap();
+                vec!["-q".into(), s(&set)] } },
+        Case { name: "rate.json frame rate 1e300", stage: "mesh-export", code: 1, pattern: &["rate.json", "frame rate 1e300 fps is outside"],
+            build: |b, d| { let m = motion_with_frame(b, d, "rate.json", br#"{"fps": 1e300}"#);
+                std::fs::copy(b.root.join("set/A/walk/000003.ply"), Path::new(&m).join("000003.ply")).unwrap();
+                vec!["-q".into(), m, "--out".into(), s(&d.join("out.glb"))] } },
+        Case { name: "mesh-export --fps 1e-300", stage: "mesh-export", code: 1, pattern: &["--fps", "frame rate 1e-300 fps is outside"],
+            build: |b, d| vec!["-q".into(), b.p("set/A/walk"), "--fps".into(), "1e-300".into(), "--out".into(), s(&d.join("out.usda"))] },
         Case { name: "subject.json missing", stage: "segment", code: 1, pattern: &["subject.json", "No such file"],
             build: |b, d| vec!["-q".into(), s(&d.join("subject.json")), "--template".into(), b.p("set/A/walk/000000.ply"), "--out".into(), s(&d.join("out.seg"))] },
         // ---- artifacts
@@ -293,7 +316,7 @@ fn cases() -> Vec<Case> {
 }
 
 /// Output names a row's stage may write: none of them may exist afterwards.
-const OUTPUTS: [&str; 6] = ["out.aligned", "out.seg", "out.pca", "out.corr", "out.model", "out"];
+const OUTPUTS: [&str; 8] = ["out.aligned", "out.seg", "out.pca", "out.corr", "out.model", "out", "out.glb", "out.usda"];
 
 /// Runs one row; returns a description of what broke the promise, if anything.
 fn check(b: &Base, case: &Case) -> Option<String> {
@@ -419,6 +442,7 @@ fn on_a_small_tmpfs(options: &str, output: &str, problem: &str, stage: impl Fn(&
     assert_eq!(err.lines().count(), 1, "{err}");
     let named = format!("{}: {problem}", out_path.display());
     assert!(err.contains(&named), "expected '{named}' in: {err}");
+    assert!(!err.contains(".surfcap-"), "the line names a temporary: {err}");
     assert_eq!(std::fs::read_dir(mnt.path()).unwrap().count(), 0, "something left on the tmpfs");
 }
 

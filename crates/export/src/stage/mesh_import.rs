@@ -58,7 +58,7 @@ pub fn run(p: &Params) -> anyhow::Result<()> {
             .template
             .clone()
             .unwrap_or_else(|| p.input.with_extension("obj"));
-        crate::pc2::read_obj_pc2(&template, &p.input)?
+        mesh_core::io::pc2::read_obj_pc2(&template, &p.input)?
     } else if p.input.is_file() {
         anyhow::bail!(
             "{}: cannot import this file (import reads a .pc2 point cache or a folder of numbered OBJ/PLY frames)",

@@ -28,7 +28,12 @@ use crate::mesh::TriMesh;
 pub fn read_obj(path: impl AsRef<Path>) -> Result<TriMesh> {
     let path = path.as_ref();
     let bytes = crate::input::read_regular_file(path)?;
-    let (mesh, skipped) = parse(&bytes).map_err(|msg| Error::file(path, msg))?;
+    read_obj_bytes(path, &bytes)
+}
+
+/// [`read_obj`] of the bytes of `path`, already read.
+pub fn read_obj_bytes(path: &Path, bytes: &[u8]) -> Result<TriMesh> {
+    let (mesh, skipped) = parse(bytes).map_err(|msg| Error::file(path, msg))?;
     super::warn_skipped_faces(path, skipped);
     Ok(mesh)
 }

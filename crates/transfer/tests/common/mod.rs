@@ -231,11 +231,11 @@ pub fn write_set(dir: &Path) {
 }
 
 /// The stage binary `name`: this crate's own, or one of the front end (`align`, `segment`,
-/// `pca-fit`, crate `capture`), which cargo builds into the same folder when the workspace is
+/// `pca-fit`, crate `capture`) or the tools `check-set` and `mesh-export`, which cargo builds into the same folder when the workspace is
 /// built (`cargo test --release --workspace`, or `cargo build --release --workspace` first).
 pub fn bin(name: &str) -> String {
     match name {
-        "align" | "segment" | "pca-fit" | "hmc-sample" => return front_end_bin(name),
+        "align" | "segment" | "pca-fit" | "hmc-sample" | "check-set" | "mesh-export" => return front_end_bin(name),
         "dtw-densify" => env!("CARGO_BIN_EXE_dtw-densify"),
         "gpr-train" => env!("CARGO_BIN_EXE_gpr-train"),
         "gpr-predict" => env!("CARGO_BIN_EXE_gpr-predict"),

@@ -9,14 +9,19 @@
 //! Reading checks that the header's counts match the file's length exactly
 //! before allocating, so a crafted header cannot make it allocate more than
 //! the file justifies.
+//!
+//! A pair is written PC2 first, then OBJ, each atomically; the OBJ's first line names the
+//! pair's identity ([`PAIR_TAG`], [`write_pair`]) and [`read_obj_pc2`] refuses a mismatched
+//! pair, so a reader sees a whole pair or an error, never a new OBJ over an old cache.
 
 use std::io::Write;
 use std::path::Path;
 
-use mesh_core::atomic::write_atomic;
-use mesh_core::sequence::MeshSequence;
-use mesh_core::{Error, Result};
 use nalgebra::Vector3;
+
+use crate::atomic::write_atomic;
+use crate::error::{Error, Result};
+use crate::sequence::MeshSequence;
 
 /// The 12 magic bytes of a PC2 file.
 pub const MAGIC: &[u8; 12] = b"POINTCACHE2\0";
@@ -136,24 +141,66 @@ pub fn parse_pc2(bytes: &[u8]) -> std::result::Result<PointCache, String> {
 /// Reads a PC2 file; errors are one line naming the file.
 pub fn read_pc2(path: impl AsRef<Path>) -> Result<PointCache> {
     let path = path.as_ref();
-    let bytes = mesh_core::input::read_regular_file(path)?;
+    let bytes = crate::input::read_regular_file(path)?;
     parse_pc2(&bytes).map_err(|m| Error::file(path, m))
 }
 
-/// Writes `seq` as a template OBJ (frame 0 with the faces) plus a PC2 cache.
-pub fn write_obj_pc2(obj: &Path, pc2: &Path, seq: &MeshSequence) -> Result<()> {
-    if seq.n_frames() == 0 {
-        return Err(Error::invalid("cannot export an empty sequence"));
-    }
-    mesh_core::io::write_obj(obj, &seq.frame_mesh(0))?;
-    write_pc2(pc2, &seq.frames)
+/// The first line of a pair's OBJ, followed by the pair's identity (64 hex digits).
+pub const PAIR_TAG: &str = "# surfcap obj+pc2 pair sha256 ";
+
+/// The identity of an OBJ + PC2 pair: the SHA-256 of the OBJ's bytes after its first line
+/// (the vertices and faces) followed by the PC2's bytes, in lowercase hex.
+fn pair_identity(obj_body: &[u8], pc2: &[u8]) -> String {
+    use sha2::{Digest, Sha256};
+    let mut h = Sha256::new();
+    h.update(obj_body);
+    h.update(pc2);
+    h.finalize().iter().map(|b| format!("{b:02x}")).collect()
 }
 
-/// Reads a template OBJ/PLY (for the faces) plus a PC2 cache into a sequence;
-/// the cache's point count must equal the template's vertex count.
+/// Writes `seq` as a template OBJ (frame 0 with the faces) plus a PC2 cache ([`write_pair`]).
+pub fn write_obj_pc2(obj: &Path, pc2: &Path, seq: &MeshSequence) -> Result<()> {
+    write_pair(obj, pc2, &seq.faces, &seq.frames)
+}
+
+/// Writes `frames` as the PC2 cache `pc2` and the template OBJ `obj` (the first frame with
+/// `faces`), each atomically, the PC2 first. The OBJ's first line carries the pair's identity
+/// (`PAIR_TAG` + the SHA-256 of the OBJ's geometry and the PC2's bytes), so a reader refuses
+/// an OBJ beside a PC2 it was not written with: one of the two replaced by another pair's,
+/// or a write killed between the two renames.
+pub fn write_pair(obj: &Path, pc2: &Path, faces: &[[u32; 3]], frames: &[Vec<Vector3<f64>>]) -> Result<()> {
+    let Some(first) = frames.first() else {
+        return Err(Error::file(pc2, "cannot export an empty sequence"));
+    };
+    let mut cache = Vec::new();
+    encode_pc2(&mut cache, frames).map_err(|e| Error::file(pc2, e.to_string()))?;
+    let mut body = Vec::new();
+    super::obj::encode_obj(&mut body, &crate::mesh::TriMesh::new(first.clone(), faces.to_vec()))
+        .map_err(|e| Error::file(obj, e.to_string()))?;
+    let id = pair_identity(&body, &cache);
+    write_atomic(pc2, |w| w.write_all(&cache))?;
+    write_atomic(obj, |w| {
+        w.write_all(format!("{PAIR_TAG}{id}\n").as_bytes())?;
+        w.write_all(&body)
+    })
+}
+
+/// Reads a template OBJ/PLY (for the faces) plus a PC2 cache into a sequence; the cache's
+/// point count must equal the template's vertex count. A template OBJ written by
+/// [`write_pair`] must be the PC2's pair (its identity line matches); a template without that
+/// line (another tool's, or an older surfcap's) is read unchecked.
 pub fn read_obj_pc2(template: &Path, pc2: &Path) -> Result<MeshSequence> {
-    let mesh = mesh_core::io::read_mesh(template)?;
-    let cache = read_pc2(pc2)?;
+    let cache_bytes = crate::input::read_regular_file(pc2)?;
+    // The cache's own problems first (a truncated PC2 is reported as such), then the pair's.
+    let cache = parse_pc2(&cache_bytes).map_err(|m| Error::file(pc2, m))?;
+    let is_obj = super::MeshFormat::from_path(template) == Some(super::MeshFormat::Obj);
+    let mesh = if is_obj {
+        let bytes = crate::input::read_regular_file(template)?;
+        check_pair(template, pc2, &bytes, &cache_bytes)?;
+        super::obj::read_obj_bytes(template, &bytes)?
+    } else {
+        super::read_mesh(template)?
+    };
     if let Some(first) = cache.samples.first() {
         if first.len() != mesh.vertices.len() {
             return Err(Error::file(
@@ -168,6 +215,27 @@ pub fn read_obj_pc2(template: &Path, pc2: &Path) -> Result<MeshSequence> {
         }
     }
     Ok(MeshSequence::new(mesh.faces, cache.samples))
+}
+
+/// Refuses an OBJ whose pair identity line does not match its geometry and `cache`.
+fn check_pair(obj: &Path, pc2: &Path, obj_bytes: &[u8], cache: &[u8]) -> Result<()> {
+    let Some(rest) = obj_bytes.strip_prefix(PAIR_TAG.as_bytes()) else {
+        return Ok(());
+    };
+    let line_end = rest.iter().position(|&b| b == b'\n').unwrap_or(rest.len());
+    let recorded = String::from_utf8_lossy(&rest[..line_end]);
+    let body = rest.get(line_end + 1..).unwrap_or(&[]);
+    if recorded.trim() != pair_identity(body, cache) {
+        return Err(Error::file(
+            obj,
+            format!(
+                "is not the pair of {}: the pair identity in its first line does not match \
+                 (one of the two was replaced, or a write was interrupted)",
+                pc2.display()
+            ),
+        ));
+    }
+    Ok(())
 }
 
 #[cfg(test)]
@@ -217,5 +285,58 @@ mod tests {
         let mut bad = header(0, 0);
         bad[0] = b'X';
         assert!(parse_pc2(&bad).unwrap_err().contains("not a PC2"));
+    }
+
+    fn walk(shift: f64) -> MeshSequence {
+        let m = crate::shapes::icosphere(1);
+        let frames = (0..4)
+            .map(|t| m.vertices.iter().map(|p| p + Vector3::new(shift, 0.1 * t as f64, 0.0)).collect())
+            .collect();
+        MeshSequence::new(m.faces, frames)
+    }
+
+    /// Two pairs written side by side; one file of the first replaced by the second's (as a
+    /// write killed between the two renames leaves it) makes the reader refuse, naming both.
+    #[test]
+    fn a_pair_with_a_file_of_another_pair_is_refused_naming_both_files() {
+        let dir = tempfile::tempdir().unwrap();
+        let p = |n: &str| dir.path().join(n);
+        write_obj_pc2(&p("a.obj"), &p("a.pc2"), &walk(0.0)).unwrap();
+        write_obj_pc2(&p("b.obj"), &p("b.pc2"), &walk(1.0)).unwrap();
+        assert_eq!(read_obj_pc2(&p("a.obj"), &p("a.pc2")).unwrap().n_frames(), 4);
+        let first = std::fs::read_to_string(p("a.obj")).unwrap();
+        assert!(first.starts_with(PAIR_TAG) && first.lines().next().unwrap().len() == PAIR_TAG.len() + 64, "{first:.100}");
+        let (a_obj, a_pc2) = (std::fs::read(p("a.obj")).unwrap(), std::fs::read(p("a.pc2")).unwrap());
+        for (replaced, by) in [("a.pc2", "b.pc2"), ("a.obj", "b.obj")] {
+            std::fs::copy(p(by), p(replaced)).unwrap();
+            let err = read_obj_pc2(&p("a.obj"), &p("a.pc2")).unwrap_err().to_string();
+            assert!(err.contains("a.obj") && err.contains("a.pc2") && err.contains("not the pair"), "{err}");
+            assert_eq!(err.lines().count(), 1);
+            std::fs::write(p("a.obj"), &a_obj).unwrap();
+            std::fs::write(p("a.pc2"), &a_pc2).unwrap();
+        }
+        // An edited vertex of the OBJ breaks the identity as well.
+        let edited = String::from_utf8(a_obj.clone()).unwrap().replacen("\nv ", "\nv 9", 1);
+        std::fs::write(p("a.obj"), edited).unwrap();
+        assert!(read_obj_pc2(&p("a.obj"), &p("a.pc2")).unwrap_err().to_string().contains("not the pair"));
+    }
+
+    /// A pair without the identity line (another tool's, or an older export) is read unchecked.
+    #[test]
+    fn a_pair_without_the_identity_line_is_read_as_before() {
+        let dir = tempfile::tempdir().unwrap();
+        let (obj, pc2) = (dir.path().join("w.obj"), dir.path().join("w.pc2"));
+        let seq = walk(0.5);
+        super::super::write_obj(&obj, &seq.frame_mesh(0)).unwrap();
+        write_pc2(&pc2, &seq.frames).unwrap();
+        let back = read_obj_pc2(&obj, &pc2).unwrap();
+        assert_eq!(back.faces, seq.faces);
+        assert_eq!(back.n_frames(), 4);
+        // The written pair's OBJ is that same file after its identity line.
+        let (obj2, pc22) = (dir.path().join("v.obj"), dir.path().join("v.pc2"));
+        write_obj_pc2(&obj2, &pc22, &seq).unwrap();
+        let text = std::fs::read_to_string(&obj2).unwrap();
+        assert_eq!(text.split_once('\n').unwrap().1, std::fs::read_to_string(&obj).unwrap());
+        assert_eq!(std::fs::read(&pc22).unwrap(), std::fs::read(&pc2).unwrap());
     }
 }
