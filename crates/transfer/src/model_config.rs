@@ -19,6 +19,8 @@ pub enum ConfigName {
     Default,
     /// The defaults without the geometric prior (`--prior-weight 0`).
     NoPrior,
+    /// The affine mean and its GP alone: no prior, no limb orientation.
+    AffineOnly,
     /// The paper's zero-mean GP (CVPR eq. 11), with the limb orientation.
     ZeroMean,
     /// The paper's model: zero mean, NN kernel, σn² = 0.1, no prior, no limb orientation.
@@ -32,6 +34,7 @@ impl ConfigName {
             ConfigName::Auto => "auto",
             ConfigName::Default => "default",
             ConfigName::NoPrior => "no-prior",
+            ConfigName::AffineOnly => "affine-only",
             ConfigName::ZeroMean => "zero-mean",
             ConfigName::Paper => "paper",
         }
@@ -62,12 +65,14 @@ pub struct Overrides {
 pub const CONFIGS: &[(ConfigName, Settings)] = &[
     (ConfigName::Default, Settings { mean: MeanFunction::Affine, prior_weight: PRIOR_WEIGHT, orientation_weight: limb_orientation::WEIGHT }),
     (ConfigName::NoPrior, Settings { mean: MeanFunction::Affine, prior_weight: 0.0, orientation_weight: limb_orientation::WEIGHT }),
+    (ConfigName::AffineOnly, Settings { mean: MeanFunction::Affine, prior_weight: 0.0, orientation_weight: 0.0 }),
     (ConfigName::ZeroMean, Settings { mean: MeanFunction::Zero, prior_weight: 0.0, orientation_weight: limb_orientation::WEIGHT }),
     (ConfigName::Paper, Settings { mean: MeanFunction::Zero, prior_weight: 0.0, orientation_weight: 0.0 }),
 ];
 
 /// The configurations `--config auto` chooses among, in the order ties are broken.
-pub const AUTO_CANDIDATES: &[ConfigName] = &[ConfigName::Default, ConfigName::NoPrior, ConfigName::ZeroMean, ConfigName::Paper];
+pub const AUTO_CANDIDATES: &[ConfigName] =
+    &[ConfigName::Default, ConfigName::NoPrior, ConfigName::AffineOnly, ConfigName::ZeroMean, ConfigName::Paper];
 
 /// The settings of `name` with `overrides` applied; `None` for `auto`.
 pub fn settings(name: ConfigName, overrides: &Overrides) -> Option<Settings> {
