@@ -589,6 +589,7 @@ pub fn train_orientation(
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::limb_orientation::LimbMap;
 
     fn pair(f: usize, map: &dyn Fn(f64) -> f64) -> PairData {
         let xs = DMatrix::from_fn(f, 2, |i, c| ((i as f64) * 0.37 + c as f64).sin());
