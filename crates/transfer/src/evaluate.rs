@@ -124,6 +124,14 @@ fn sum_sq(a: &[Vector3<f64>], b: &[Vector3<f64>]) -> f64 {
     a.iter().zip(b).map(|(p, q)| (p - q).norm_squared()).sum()
 }
 
+/// The squared pose error of one frame: the sum over vertices of `|R p + t - q|²` after the
+/// rigid alignment (Procrustes, no scale) of `pred` to `truth` that minimises it (the frame's
+/// share of [`rms_errors`]' `rms_pose_m`).
+pub fn pose_sq_error(pred: &[Vector3<f64>], truth: &[Vector3<f64>]) -> f64 {
+    let m = procrustes(pred, truth, None);
+    sum_sq(&m.apply_all(pred), truth)
+}
+
 /// `(rms_pose_m, rms_placed_m)` of `pred` against `truth` (same frame count,
 /// same vertex count).
 pub fn rms_errors(pred: &MeshSequence, truth: &MeshSequence) -> Result<(f64, f64)> {
@@ -156,10 +164,7 @@ pub fn rms_errors_per_frame(
         .frames
         .par_iter()
         .zip(&truth.frames)
-        .map(|(p, t)| {
-            let m = procrustes(p, t, None);
-            (sum_sq(&m.apply_all(p), t), sum_sq(p, t))
-        })
+        .map(|(p, t)| (pose_sq_error(p, t), sum_sq(p, t)))
         .collect();
     let (pose, placed) = per_frame
         .iter()

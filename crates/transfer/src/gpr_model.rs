@@ -30,19 +30,14 @@ use gp::affine_mean::AffineMean;
 use gp::gpr::{Gpr, GprOptions, TrainReport};
 use gp::kernel::Kernel;
 use mesh_core::artifact::Artifact;
-use mesh_core::part_merge::Partitioned;
-use mesh_core::rigid::{integrate, RigidMotion};
 use mesh_core::{Error, Result};
-use std::path::PathBuf;
 
 pub use capture::choices::{MeanFunction, Method};
-use capture::align::{AlignedMotion, CaptureInfo};
-use capture::motion_stream::read_frames;
-use capture::part_pca::FrameEncoder;
-use crate::densify::Correspondences;
-use crate::limb_orientation::{self, LimbMap, LimbOrientation};
+pub use crate::gpr_piece::{train_piece, GprPiece, DISPLACEMENT};
+pub use crate::training_rows::{target_step, training_set, EncodedPair, PairData, PairFiles, TrainingRows, TrainingSet};
+use crate::limb_orientation::{self, LimbOrientation};
 use capture::part_pca::PcaModel;
-use nalgebra::{DMatrix, Vector6};
+use nalgebra::DMatrix;
 use serde::{Deserialize, Serialize};
 
 /// The kernel of `method`'s pose GPs (`None` for the affine baseline). Starting
@@ -118,7 +113,7 @@ impl Regressor {
     /// Internal consistency of a regressor read from a file (its GP, affine mean and scale
     /// agree in dimensions, every number finite), with `dims` = (inputs, outputs) when they
     /// are known. The error is the problem.
-    fn validate(&self, dims: Option<(usize, usize)>) -> std::result::Result<(), String> {
+    pub(crate) fn validate(&self, dims: Option<(usize, usize)>) -> std::result::Result<(), String> {
         let (d, p) = match self {
             Regressor::Gp { gpr, y_scale, mean } => {
                 gpr.validate()?;
@@ -315,241 +310,6 @@ impl Artifact for GprModel {
     }
 }
 
-/// The coefficients and displacements of one training pair of motions, with
-/// the frame pairs to learn from.
-#[derive(Clone, Debug)]
-pub struct PairData {
-    /// Source coefficients per part (`F_s x m_k`).
-    pub source_coeffs: Vec<DMatrix<f64>>,
-    /// Target coefficients per part (`F_t x m_k`).
-    pub target_coeffs: Vec<DMatrix<f64>>,
-    /// Source displacements `D_i` (align.rs), one per source frame.
-    pub source_disp: Vec<[f64; 6]>,
-    /// Target displacements, one per target frame.
-    pub target_disp: Vec<[f64; 6]>,
-    /// Dense `(source frame, target frame)` pairs.
-    pub pairs: Vec<[usize; 2]>,
-    /// Key-pose pairs (a subset of the path).
-    pub keyposes: Vec<[usize; 2]>,
-}
-
-impl PairData {
-    /// Swaps source and target (the B->A direction uses the A->B path reversed).
-    pub fn reversed(self) -> PairData {
-        let swap = |v: Vec<[usize; 2]>| v.into_iter().map(|[i, j]| [j, i]).collect();
-        PairData {
-            source_coeffs: self.target_coeffs,
-            target_coeffs: self.source_coeffs,
-            source_disp: self.target_disp,
-            target_disp: self.source_disp,
-            pairs: swap(self.pairs),
-            keyposes: swap(self.keyposes),
-        }
-    }
-}
-
-/// A `--pair` as [`PairFiles::read_encoded`] reads it.
-pub struct EncodedPair {
-    /// The pair in the set's order.
-    pub data: PairData,
-    /// Capture records of the set's source and target motions.
-    pub captures: [CaptureInfo; 2],
-    /// SHA-256 of the three files, in the command line's order.
-    pub sha256: [String; 3],
-}
-
-/// One training pair as the stages name it on the command line (`--pair SOURCE TARGET CORR`):
-/// the aligned motions of the set's source and target subjects and their correspondences.
-pub struct PairFiles {
-    pub source: AlignedMotion,
-    pub target: AlignedMotion,
-    pub corr: Correspondences,
-    paths: [PathBuf; 2],
-}
-
-impl PairFiles {
-    /// Loads the three files of one `--pair` (exactly three paths).
-    pub fn load(files: &[PathBuf]) -> Result<PairFiles> {
-        let [s, t, c] = files else {
-            return Err(Error::invalid("--pair takes three files"));
-        };
-        Ok(PairFiles {
-            source: AlignedMotion::load(s)?,
-            target: AlignedMotion::load(t)?,
-            corr: Correspondences::load(c)?,
-            paths: [s.clone(), t.clone()],
-        })
-    }
-
-    /// One `--pair` read and encoded in one pass per file, without holding its motions: the
-    /// set's source motion encoded with `source_pca` and its target motion with `target_pca`
-    /// frame block by frame block as they are decoded (`capture::part_pca::FrameEncoder`, the
-    /// coefficients of [`PairFiles::encode`] to the bit), the three files in parallel. Returns
-    /// the pair in set order, the two motions' capture records and each file's SHA-256 (in the
-    /// files' order) for the output's input records, computed in the same pass.
-    pub fn read_encoded(files: &[PathBuf], source_pca: &PcaModel, target_pca: &PcaModel) -> Result<EncodedPair> {
-        let [s, t, c] = files else {
-            return Err(Error::invalid("--pair takes three files"));
-        };
-        let encoded = |path: &PathBuf, pca: &PcaModel| {
-            let mut enc = FrameEncoder::new(pca);
-            let (info, sha) = read_frames(path, |f| enc.push(f))?;
-            let coeffs = enc.finish(&info.capture.template_sha256).map_err(|e| Error::file(path, e.to_string()))?;
-            Ok::<_, Error>((coeffs, info, sha))
-        };
-        let ((source, target), corr) = rayon::join(
-            || rayon::join(|| encoded(s, source_pca), || encoded(t, target_pca)),
-            || Correspondences::load_hashed(c),
-        );
-        let ((source_coeffs, source, hs), (target_coeffs, target, ht), (corr, hc)) = (source?, target?, corr?);
-        Ok(EncodedPair {
-            data: PairData {
-                source_coeffs,
-                target_coeffs,
-                source_disp: source.displacements,
-                target_disp: target.displacements,
-                pairs: corr.pairs,
-                keyposes: corr.keyposes,
-            },
-            captures: [source.capture, target.capture],
-            sha256: [hs, ht, hc],
-        })
-    }
-
-    /// The pair in coefficients: the set's source motion encoded with `source_pca`, its
-    /// target motion with `target_pca` (set order; [`PairData::reversed`] for B->A).
-    pub fn encode(&self, source_pca: &PcaModel, target_pca: &PcaModel) -> Result<PairData> {
-        let coeffs = |pca: &PcaModel, m: &AlignedMotion, path: &PathBuf| {
-            pca.encode(m).map_err(|e| Error::file(path, e.to_string()))
-        };
-        Ok(PairData {
-            source_coeffs: coeffs(source_pca, &self.source, &self.paths[0])?,
-            target_coeffs: coeffs(target_pca, &self.target, &self.paths[1])?,
-            source_disp: self.source.displacements.clone(),
-            target_disp: self.target.displacements.clone(),
-            pairs: self.corr.pairs.clone(),
-            keyposes: self.corr.keyposes.clone(),
-        })
-    }
-}
-
-/// Stacked regression problems: per part `(X_k, Y_k)` and the displacement `(X_d, Y_d)`.
-#[derive(Clone, Debug)]
-pub struct TrainingSet {
-    pub x_parts: Vec<DMatrix<f64>>,
-    pub y_parts: Vec<DMatrix<f64>>,
-    pub x_disp: DMatrix<f64>,
-    pub y_disp: DMatrix<f64>,
-}
-
-impl TrainingSet {
-    pub fn len(&self) -> usize {
-        self.x_disp.nrows()
-    }
-
-    pub fn is_empty(&self) -> bool {
-        self.len() == 0
-    }
-
-    /// The rows `rows` of every problem.
-    pub fn subset(&self, rows: &[usize]) -> TrainingSet {
-        let pick = |m: &DMatrix<f64>| m.select_rows(rows.iter());
-        TrainingSet {
-            x_parts: self.x_parts.iter().map(pick).collect(),
-            y_parts: self.y_parts.iter().map(pick).collect(),
-            x_disp: pick(&self.x_disp),
-            y_disp: pick(&self.y_disp),
-        }
-    }
-}
-
-/// The target's rigid displacement over **one source frame interval** ending
-/// at target frame `j`, from per-target-frame displacements `disp` and the
-/// frame ratio `q = fps_target / fps_source`.
-///
-/// With `c = ceil(q)` (`c = q` when `q` is an integer), the displacements of
-/// target frames `j-c+1 ..= j` are composed (frames before 1 are the identity:
-/// `D_0 = 0`). When `q` is not an integer (or `q < 1`), the composed 6-vector
-/// is scaled by `q / c`: a first-order approximation of scaling the twist of
-/// the motion, exact for straight-line translation at constant speed and for
-/// rotation about a fixed axis without translation.
-pub fn target_step(disp: &[[f64; 6]], j: usize, q: f64) -> [f64; 6] {
-    let c = q.ceil().max(1.0) as usize;
-    let first = (j + 1).saturating_sub(c);
-    let steps: Vec<RigidMotion> = (first..=j)
-        .map(|f| RigidMotion::from_6vec(&Vector6::from_column_slice(&disp[f])))
-        .collect();
-    let composed = *integrate(&RigidMotion::identity(), &steps)
-        .last()
-        .expect("integrate returns the start");
-    let v = composed.to_6vec() * (q / c as f64);
-    v.into()
-}
-
-/// Stacks the training rows of all pairs: pose rows for every dense pair (or
-/// key-pose pair when `keyposes_only`), displacement rows `(D^s_i, target_step(j))`.
-pub fn training_set(
-    pairs: &[PairData],
-    frame_ratio: f64,
-    keyposes_only: bool,
-) -> Result<TrainingSet> {
-    let n_parts = pairs.first().map_or(0, |p| p.source_coeffs.len());
-    if pairs.is_empty() || n_parts == 0 {
-        return Err(Error::invalid("no training pairs or no parts"));
-    }
-    let mut rows: Vec<(usize, usize, usize)> = Vec::new();
-    for (p, pair) in pairs.iter().enumerate() {
-        if pair.source_coeffs.len() != n_parts || pair.target_coeffs.len() != n_parts {
-            return Err(Error::invalid(format!(
-                "training pair {p}: part counts differ"
-            )));
-        }
-        let (fs, ft) = (pair.source_disp.len(), pair.target_disp.len());
-        let chosen = if keyposes_only {
-            &pair.keyposes
-        } else {
-            &pair.pairs
-        };
-        for &[i, j] in chosen {
-            if i >= fs || j >= ft {
-                return Err(Error::invalid(format!(
-                    "training pair {p}: frame pair ({i}, {j}) outside the motions ({fs} and {ft} frames)"
-                )));
-            }
-            rows.push((p, i, j));
-        }
-    }
-    if rows.is_empty() {
-        return Err(Error::invalid("no training frame pairs"));
-    }
-    let n = rows.len();
-    let gather = |dim: usize, get: &dyn Fn(usize, usize, usize, usize) -> f64| {
-        DMatrix::from_fn(n, dim, |r, c| {
-            let (p, i, j) = rows[r];
-            get(p, i, j, c)
-        })
-    };
-    let mut x_parts = Vec::with_capacity(n_parts);
-    let mut y_parts = Vec::with_capacity(n_parts);
-    for k in 0..n_parts {
-        let ms = pairs[0].source_coeffs[k].ncols();
-        let mt = pairs[0].target_coeffs[k].ncols();
-        x_parts.push(gather(ms, &|p, i, _, c| pairs[p].source_coeffs[k][(i, c)]));
-        y_parts.push(gather(mt, &|p, _, j, c| pairs[p].target_coeffs[k][(j, c)]));
-    }
-    let steps: Vec<[f64; 6]> = rows
-        .iter()
-        .map(|&(p, _, j)| target_step(&pairs[p].target_disp, j, frame_ratio))
-        .collect();
-    let x_disp = gather(6, &|p, i, _, c| pairs[p].source_disp[i][c]);
-    let y_disp = DMatrix::from_fn(n, 6, |r, c| steps[r][c]);
-    Ok(TrainingSet {
-        x_parts,
-        y_parts,
-        x_disp,
-        y_disp,
-    })
-}
 
 fn rms(m: &DMatrix<f64>) -> f64 {
     (m.norm_squared() / m.len().max(1) as f64).sqrt()
@@ -557,7 +317,7 @@ fn rms(m: &DMatrix<f64>) -> f64 {
 
 /// Trains the GP of `method` on every part, with `opts`. `keys` gives the
 /// key-pose rows for the affine baseline.
-fn train_parts(
+pub(crate) fn train_parts(
     method: Method,
     nn_bias: bool,
     mean_fn: MeanFunction,
@@ -567,6 +327,7 @@ fn train_parts(
     data: &TrainingSet,
     keys: &TrainingSet,
     opts: &GprOptions,
+    fixed: Option<&[Option<Hyperparameters>]>,
 ) -> Result<(Vec<Regressor>, Vec<RegressorReport>)> {
     match method_kernel(method, nn_bias) {
         Some(kernel) => {
@@ -594,7 +355,13 @@ fn train_parts(
                 mean_notes.push(notes);
                 problems.push((data.x_parts[k].clone(), r));
             }
-            let trained = gp::gpr::train_many(kernel, &problems, opts);
+            let trained: Vec<_> = match fixed {
+                None => gp::gpr::train_many(kernel, &problems, opts),
+                Some(fixed) => {
+                    use rayon::prelude::*;
+                    problems.par_iter().zip(fixed).map(|((x, y), h)| train_gp(kernel, *h, x, y, opts)).collect()
+                }
+            };
             let mut regs = Vec::new();
             let mut reports = Vec::new();
             for (((name, t), mean), notes) in names.iter().zip(trained).zip(means).zip(mean_notes) {
@@ -636,18 +403,20 @@ pub fn train_displacement(
     mean_fn: MeanFunction,
     mean_ridge: f64,
     opts: &GprOptions,
+    fixed: Option<Hyperparameters>,
 ) -> Result<(Regressor, RegressorReport)> {
     let mut notes = Vec::new();
     let (mean, resid) = fit_mean(mean_fn, mean_ridge, None, &data.x_disp, &data.y_disp, &mut notes)
         .map_err(|e| Error::invalid(format!("displacement: {e}")))?;
     let y_scale = rms(&resid).max(1e-9);
     let y = &resid / y_scale;
-    let (gpr, r) = Gpr::train(
+    let (gpr, r) = train_gp(
         Kernel::NeuralNetwork {
             l: 1.0,
             sigma_f: 1.0,
             bias: nn_bias,
         },
+        fixed,
         &data.x_disp,
         &y,
         opts,
@@ -677,7 +446,7 @@ pub fn train(
     opts: &GprOptions,
 ) -> Result<GprModel> {
     let rows = TrainingRows::new(method, part_names, pairs, frame_ratio, keyposes_only)?;
-    let regression = Regression { method, nn_bias, mean: mean_fn, mean_ridge, mean_priors, opts };
+    let regression = Regression { method, nn_bias, mean: mean_fn, mean_ridge, mean_priors, opts, fixed: None };
     train_rows(&regression, part_names, &rows)
 }
 
@@ -691,10 +460,48 @@ pub struct Regression<'a> {
     pub mean_ridge: f64,
     pub mean_priors: Option<MeanPriors<'a>>,
     pub opts: &'a GprOptions,
+    /// Condition every GP on its rows with these hyperparameters instead of optimising them
+    /// (`crate::leave_one_motion_out` refits a model's GPs on fewer motions this way).
+    pub fixed: Option<&'a FixedHyperparameters>,
+}
+
+/// A kernel with its observation-noise variance `σn²`.
+pub type Hyperparameters = (Kernel, f64);
+
+/// The hyperparameters of every GP of a model: per part (`None`: no GP, the affine baseline),
+/// then the displacement's.
+#[derive(Clone, Debug, PartialEq)]
+pub struct FixedHyperparameters {
+    pub parts: Vec<Option<Hyperparameters>>,
+    pub displacement: Hyperparameters,
+}
+
+impl FixedHyperparameters {
+    /// The hyperparameters `model`'s GPs were trained to.
+    pub fn of(model: &GprModel) -> Result<FixedHyperparameters> {
+        let of = |r: &Regressor| match r {
+            Regressor::Gp { gpr, .. } => Some((gpr.kernel, gpr.noise_var)),
+            Regressor::Affine(_) => None,
+        };
+        let displacement = of(&model.displacement).ok_or_else(|| Error::invalid("the displacement regressor is not a GP"))?;
+        Ok(FixedHyperparameters { parts: model.parts.iter().map(of).collect(), displacement })
+    }
+}
+
+/// A GP trained on `(x, y)`: its hyperparameters optimised from `kernel`'s family (the options'
+/// settings), or, given `fixed`, conditioned with those (one factorisation, no optimisation).
+fn train_gp(kernel: Kernel, fixed: Option<Hyperparameters>, x: &DMatrix<f64>, y: &DMatrix<f64>, opts: &GprOptions) -> gp::Result<(Gpr, TrainReport)> {
+    match fixed {
+        None => Gpr::train(kernel, x, y, opts),
+        Some((kernel, noise_var)) => {
+            let fixed = GprOptions { optimise: false, data_init: false, learn_noise: false, noise_var, ..*opts };
+            Gpr::train(kernel, x, y, &fixed)
+        }
+    }
 }
 
 /// The mean priors, if any, are one per part with a weight in `[0, 1]`.
-fn check_priors(mean_priors: Option<MeanPriors>, part_names: &[String]) -> Result<()> {
+pub(crate) fn check_priors(mean_priors: Option<MeanPriors>, part_names: &[String]) -> Result<()> {
     if let Some(p) = mean_priors {
         if p.maps.len() != part_names.len() {
             return Err(Error::invalid(format!("{} mean priors for {} parts", p.maps.len(), part_names.len())));
@@ -709,13 +516,16 @@ fn check_priors(mean_priors: Option<MeanPriors>, part_names: &[String]) -> Resul
 /// [`train`] on rows already gathered (so that the limb orientation, [`train_orientation`],
 /// fits on the same rows without gathering them again).
 pub fn train_rows(regression: &Regression, part_names: &[String], rows: &TrainingRows) -> Result<GprModel> {
-    let Regression { method, nn_bias, mean: mean_fn, mean_ridge, mean_priors, opts } = *regression;
+    let Regression { method, nn_bias, mean: mean_fn, mean_ridge, mean_priors, opts, fixed } = *regression;
     check_priors(mean_priors, part_names)?;
     rows.check_parts(part_names)?;
+    if let Some(f) = fixed.filter(|f| f.parts.len() != part_names.len()) {
+        return Err(Error::invalid(format!("fixed hyperparameters of {} parts for {} parts", f.parts.len(), part_names.len())));
+    }
     let (data, keys) = (&rows.data, rows.keys());
     let (parts, disp) = rayon::join(
-        || train_parts(method, nn_bias, mean_fn, mean_ridge, mean_priors, part_names, data, keys, opts),
-        || train_displacement(data, nn_bias, mean_fn, mean_ridge, opts),
+        || train_parts(method, nn_bias, mean_fn, mean_ridge, mean_priors, part_names, data, keys, opts, fixed.map(|f| f.parts.as_slice())),
+        || train_displacement(data, nn_bias, mean_fn, mean_ridge, opts, fixed.map(|f| f.displacement)),
     );
     let (parts, mut reports) = parts?;
     let (displacement, disp_report) = disp?;
@@ -776,239 +586,10 @@ pub fn train_orientation(
     Ok(Some(LimbOrientation { weight, maps }))
 }
 
-/// The rows a model of `method` trains on, gathered once from the pairs: the dense or key-pose
-/// rows, and the affine baseline's key-pose rows when they are other rows (not a copy: at 10^5
-/// pairs the rows are hundreds of MB).
-pub struct TrainingRows {
-    data: TrainingSet,
-    keys: Option<TrainingSet>,
-    frame_ratio: f64,
-    keyposes_only: bool,
-}
-
-impl TrainingRows {
-    /// The rows of `method` from `pairs` (target frame rate over source, `frame_ratio`), checked
-    /// against `part_names`.
-    pub fn new(
-        method: Method,
-        part_names: &[String],
-        pairs: &[PairData],
-        frame_ratio: f64,
-        keyposes_only: bool,
-    ) -> Result<Self> {
-        if !(frame_ratio > 0.0 && frame_ratio.is_finite()) {
-            return Err(Error::invalid(format!(
-                "frame-rate ratio must be positive, got {frame_ratio}"
-            )));
-        }
-        let data = training_set(pairs, frame_ratio, keyposes_only)?;
-        let keys = if method == Method::KeyposeAffine && !keyposes_only {
-            Some(training_set(pairs, frame_ratio, true)?)
-        } else {
-            None
-        };
-        let rows = TrainingRows { data, keys, frame_ratio, keyposes_only };
-        rows.check_parts(part_names)?;
-        Ok(rows)
-    }
-
-    /// The number of training rows (of the key-pose rows for the affine baseline).
-    pub fn len(&self, method: Method) -> usize {
-        if method == Method::KeyposeAffine { self.keys().len() } else { self.data.len() }
-    }
-
-    fn check_parts(&self, part_names: &[String]) -> Result<()> {
-        if self.data.x_parts.len() != part_names.len() {
-            return Err(Error::invalid(format!(
-                "{} part names for {} parts of coefficients",
-                part_names.len(),
-                self.data.x_parts.len()
-            )));
-        }
-        Ok(())
-    }
-
-    /// The key-pose rows of the affine baseline.
-    fn keys(&self) -> &TrainingSet {
-        self.keys.as_ref().unwrap_or(&self.data)
-    }
-}
-
-/// The name of the displacement regressor among a model's pieces: `gpr-train --part
-/// displacement` trains it alone.
-pub const DISPLACEMENT: &str = "displacement";
-
-/// One regressor of a [`GprModel`] (a part's, or the displacement's) with the model's shared
-/// fields: what `gpr-train --part NAME` writes.
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
-pub struct GprPiece {
-    pub method: Method,
-    pub regressor: Regressor,
-    pub report: RegressorReport,
-    pub n_train: usize,
-    pub frame_ratio: f64,
-    pub keyposes_only: bool,
-    pub nn_bias: bool,
-    pub mean: MeanFunction,
-    /// The model's limb orientation weight (0: none) and this part's map (`None` for the
-    /// root and the displacement).
-    pub orientation_weight: f64,
-    pub orientation: Option<LimbMap>,
-    pub templates: Templates,
-}
-
-impl GprPiece {
-    /// The fields every regressor of one model shares.
-    fn shared(&self) -> (Method, usize, u64, bool, bool, MeanFunction, u64, &Templates) {
-        (
-            self.method,
-            self.n_train,
-            self.frame_ratio.to_bits(),
-            self.keyposes_only,
-            self.nn_bias,
-            self.mean,
-            self.orientation_weight.to_bits(),
-            &self.templates,
-        )
-    }
-}
-
-/// The pieces of a model are its parts' regressors, then the displacement's ([`DISPLACEMENT`]).
-impl Partitioned for GprModel {
-    const PIECE_KIND: &'static str = "gpr-model-part";
-    type Body = GprPiece;
-
-    fn validate_body(body: &GprPiece) -> std::result::Result<(), String> {
-        body.regressor.validate(None)?;
-        if !(body.frame_ratio.is_finite() && body.frame_ratio > 0.0) {
-            return Err(format!("frame ratio {} is not a finite positive number", body.frame_ratio));
-        }
-        if !(0.0..=1.0).contains(&body.orientation_weight) {
-            return Err(format!("limb orientation weight {} is not in [0, 1]", body.orientation_weight));
-        }
-        if let Some(m) = &body.orientation {
-            m.validate()?;
-        }
-        Ok(())
-    }
-
-    fn join(parts: &[String], mut bodies: Vec<GprPiece>) -> std::result::Result<GprModel, String> {
-        let (last, names) = parts.split_last().ok_or("no parts")?;
-        if last != DISPLACEMENT || names.is_empty() || bodies.len() != parts.len() {
-            return Err(format!("the pieces of a model are its parts then '{DISPLACEMENT}', not {}", parts.join(", ")));
-        }
-        if let Some((b, name)) = bodies.iter().zip(parts).find(|(b, _)| b.shared() != bodies[0].shared()) {
-            return Err(format!(
-                "part '{name}' was trained with another method, frame ratio, mean or training set ({:?}, not {:?})",
-                b.shared(),
-                bodies[0].shared()
-            ));
-        }
-        let disp = bodies.pop().expect("one body per part");
-        let mut reports: Vec<RegressorReport> = bodies.iter().map(|b| b.report.clone()).collect();
-        reports.push(disp.report);
-        let orientation = (disp.orientation_weight > 0.0).then(|| LimbOrientation {
-            weight: disp.orientation_weight,
-            maps: bodies.iter().map(|b| b.orientation.clone()).collect(),
-        });
-        Ok(GprModel {
-            method: disp.method,
-            part_names: names.to_vec(),
-            parts: bodies.into_iter().map(|b| b.regressor).collect(),
-            displacement: disp.regressor,
-            n_train: disp.n_train,
-            frame_ratio: disp.frame_ratio,
-            keyposes_only: disp.keyposes_only,
-            nn_bias: disp.nn_bias,
-            mean: disp.mean,
-            reports,
-            orientation,
-            templates: disp.templates,
-        })
-    }
-}
-
-impl TrainingSet {
-    /// Part `k`'s problem alone, with the displacement's.
-    fn part(&self, k: usize) -> TrainingSet {
-        TrainingSet {
-            x_parts: vec![self.x_parts[k].clone()],
-            y_parts: vec![self.y_parts[k].clone()],
-            x_disp: self.x_disp.clone(),
-            y_disp: self.y_disp.clone(),
-        }
-    }
-}
-
-/// [`train`] of one regressor: part `unit` (an index into `part_names`), or the displacement
-/// when `unit == part_names.len()`; the regressor is trained exactly as in the whole model.
-pub fn train_piece(regression: &Regression, part_names: &[String], rows: &TrainingRows, unit: usize) -> Result<GprPiece> {
-    let Regression { method, nn_bias, mean: mean_fn, mean_ridge, mean_priors, opts } = *regression;
-    check_priors(mean_priors, part_names)?;
-    rows.check_parts(part_names)?;
-    let (data, keys) = (&rows.data, rows.keys());
-    let (regressor, report) = if unit < part_names.len() {
-        let priors = mean_priors.map(|p| MeanPriors { maps: &p.maps[unit..=unit], ..p });
-        let (mut regs, mut reports) = train_parts(
-            method,
-            nn_bias,
-            mean_fn,
-            mean_ridge,
-            priors,
-            &part_names[unit..=unit],
-            &data.part(unit),
-            &keys.part(unit),
-            opts,
-        )?;
-        (regs.remove(0), reports.remove(0))
-    } else if unit == part_names.len() {
-        train_displacement(data, nn_bias, mean_fn, mean_ridge, opts)?
-    } else {
-        return Err(Error::invalid(format!("regressor {unit} of {} parts and the displacement", part_names.len())));
-    };
-    Ok(GprPiece {
-        method,
-        regressor,
-        report,
-        n_train: rows.len(method),
-        frame_ratio: rows.frame_ratio,
-        keyposes_only: rows.keyposes_only,
-        nn_bias,
-        mean: mean_fn,
-        orientation_weight: 0.0,
-        orientation: None,
-        templates: Templates::default(),
-    })
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    /// Pure translation at constant speed: one source interval is `q` target
-    /// steps, for integer and fractional `q` (above and below 1).
-    #[test]
-    fn target_step_spans_one_source_interval() {
-        let d = vec![
-            [0.0; 6],
-            [0.01, 0.0, 0.02, 0.0, 0.0, 0.0],
-            [0.01, 0.0, 0.02, 0.0, 0.0, 0.0],
-            [0.01, 0.0, 0.02, 0.0, 0.0, 0.0],
-        ];
-        for q in [2.0, 1.5, 0.8, 1.0, 3.0] {
-            let s = target_step(&d, 3, q);
-            assert!(
-                (s[0] - 0.01 * q).abs() < 1e-12 && (s[2] - 0.02 * q).abs() < 1e-12,
-                "q = {q}: {s:?}"
-            );
-        }
-        // Pure rotation about a fixed axis composes exactly too.
-        let r = vec![[0.0, 0.0, 0.0, 0.0, 0.1, 0.0]; 4];
-        let s = target_step(&r, 3, 2.0);
-        assert!((s[4] - 0.2).abs() < 1e-12 && s[3].abs() < 1e-12);
-        // Near the start, frames before 0 count as the identity.
-        assert!((target_step(&d, 1, 3.0)[0] - 0.01).abs() < 1e-12);
-    }
+    use crate::limb_orientation::LimbMap;
 
     fn pair(f: usize, map: &dyn Fn(f64) -> f64) -> PairData {
         let xs = DMatrix::from_fn(f, 2, |i, c| ((i as f64) * 0.37 + c as f64).sin());

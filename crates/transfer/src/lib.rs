@@ -7,6 +7,8 @@
 
 pub mod densify;
 pub mod gpr_model;
+pub mod gpr_piece;
+pub mod training_rows;
 pub mod geometric_prior;
 pub mod limb_orientation;
 pub mod predict;
@@ -17,6 +19,8 @@ pub mod quality;
 pub mod placement;
 pub mod feet;
 pub mod evaluate;
+pub mod leave_one_motion_out;
+pub mod model_config;
 pub mod reference_score;
 pub mod learning_curves;
 pub mod figures;

@@ -7,16 +7,18 @@ use anyhow::{bail, Context};
 use clap::Parser;
 use gp::gpr::{GprOptions, PAPER_NOISE_VAR};
 use gp::sparse_gpr::Sparsity;
-use mesh_core::artifact::Artifact;
+use mesh_core::artifact::{Artifact, Header};
 use mesh_core::cli::CommonArgs;
 use mesh_core::part_merge;
-use serde::Serialize;
+use serde::{Deserialize, Serialize};
 
-use crate::limb_orientation;
 use crate::gpr_model::{
-    train_orientation, train_piece, OrientationOptions, train_rows, GprModel, Regression, TrainingRows, MeanFunction, MeanPrior, MeanPriors, Method, PairFiles, RegressorReport, Templates, DISPLACEMENT,
-    MEAN_RIDGE, PRIOR_WEIGHT,
+    train_orientation, train_piece, train_rows, FixedHyperparameters, GprModel, MeanFunction, MeanPrior, MeanPriors, Method,
+    OrientationOptions, PairFiles, Regression, RegressorReport, Templates, TrainingRows, DISPLACEMENT, MEAN_RIDGE,
 };
+use crate::leave_one_motion_out::{cross_validate, Candidate, CrossValidation, Folds, HeldOut, MotionError};
+use crate::limb_orientation;
+use crate::model_config::{self, ConfigName, Overrides, Settings};
 use capture::part_pca::PcaModel;
 
 /// Train the source-to-target GP regression per body part and for the rigid displacement (CVPR eqs. 8-13)
@@ -51,10 +53,26 @@ pub struct Params {
     /// Neural-network kernel with the bias input (R&W eq. 4.29); eq. 10 as printed has none, which limits the GP to odd functions
     #[arg(long)]
     pub nn_bias: bool,
+    /// Named configuration (docs/RESULTS.md, "Leave-one-motion-out"): `default` (affine mean,
+    /// prior weight 0.25, limb orientation 0.5), `no-prior` (--prior-weight 0), `affine-only`
+    /// (no prior, no limb orientation), `zero-mean` (--mean zero), `paper` (zero mean, no limb
+    /// orientation: CVPR's model); `auto` trains those five and keeps the one with the lowest
+    /// leave-one-motion-out error. Explicit flags override the configuration's values
+    #[arg(long, value_enum, default_value_t = ConfigName::Default, value_name = "NAME")]
+    pub config: ConfigName,
+    /// Estimate the pose error on an unseen motion by leaving one training motion out at a
+    /// time (needs two or more pairs; `--config auto` always does): `cross_validation` in the
+    /// header and the report
+    #[arg(long)]
+    pub cross_validate: bool,
+    /// JSON report: the leave-one-motion-out errors (pooled and per motion) of every
+    /// configuration tried, and the one kept
+    #[arg(long)]
+    pub report: Option<PathBuf>,
     /// Mean function of the GPs: `affine` = least-squares affine map, GP on the residuals;
-    /// `zero` = the paper's zero-mean GP (CVPR eq. 11)
-    #[arg(long, value_enum, default_value_t = MeanFunction::Affine)]
-    pub mean: MeanFunction,
+    /// `zero` = the paper's zero-mean GP (CVPR eq. 11) [default: the configuration's, affine]
+    #[arg(long, value_enum)]
+    pub mean: Option<MeanFunction>,
     /// Relative ridge of the affine mean (shrinks the map along input directions the training
     /// poses barely span; 1e-6 is the plain least-squares fit)
     #[arg(long, default_value_t = MEAN_RIDGE)]
@@ -65,14 +83,14 @@ pub struct Params {
     pub mean_prior: MeanPrior,
     /// Weight of the geometric prior mixed into each part's affine mean (0: the fitted map alone).
     /// The default suits five training motions; with eight or more, 0 measured better on every
-    /// benchmark set (docs/RESULTS.md, "Training coverage")
-    #[arg(long, default_value_t = PRIOR_WEIGHT, value_name = "W")]
-    pub prior_weight: f64,
+    /// benchmark set (docs/RESULTS.md, "Training coverage") [default: the configuration's, 0.25]
+    #[arg(long, value_name = "W")]
+    pub prior_weight: Option<f64>,
     /// How far each limb is turned from the orientation the pose GP predicts toward the one a
     /// map of the source limb's orientation predicts (transfer::limb_orientation; 0: the
-    /// paper's model, no turn)
-    #[arg(long, default_value_t = limb_orientation::WEIGHT, value_name = "W")]
-    pub orientation_weight: f64,
+    /// paper's model, no turn) [default: the configuration's, 0.5]
+    #[arg(long, value_name = "W")]
+    pub orientation_weight: Option<f64>,
     /// Limbs whose orientation is measured relative to their attachment, the root part's region
     /// around their joint (an arm's shoulder girdle), instead of the root part's whole frame
     /// (comma-separated limb names, e.g. `arm_l,arm_r`; ignored by the whole-body method;
@@ -109,10 +127,12 @@ fn as_text<S: serde::Serializer>(s: &Sparsity, ser: S) -> Result<S::Ok, S::Error
     ser.serialize_str(&s.to_string())
 }
 
-/// Writes the model; the header records `p` plus the frame rates read from the pairs
-/// (`source_fps`, `target_fps`: `gpr-predict` reads the first), both PCA models and every pair
-/// file. With `--part` only that regressor is trained, written as a piece
-/// (`mesh_core::part_merge`).
+/// Writes the model (and the `--report`); the header records `p` (the configuration's flag
+/// values where no flag was given) plus the frame rates read from the pairs (`source_fps`,
+/// `target_fps`: `gpr-predict` reads the first), both PCA models and every pair file, and with
+/// `--cross-validate`, `--report` or `--config auto`, `cross_validation`
+/// ([`CrossValidationReport`]). With `--part` only that regressor is trained, written as a
+/// piece (`mesh_core::part_merge`).
 pub fn run(p: &Params) -> anyhow::Result<()> {
     let method = p.method;
     let (src_pca, tgt_pca) = (
@@ -136,6 +156,12 @@ pub fn run(p: &Params) -> anyhow::Result<()> {
             if names.iter().any(|n| n == DISPLACEMENT) {
                 bail!("{}: a part is named '{DISPLACEMENT}', the name of the displacement regressor", p.source_pca.display());
             }
+            if p.config == ConfigName::Auto || p.cross_validate || p.report.is_some() {
+                return Err(mesh_core::Error::invalid(
+                    "--config auto, --cross-validate and --report leave motions out of whole models: not with --part",
+                )
+                .into());
+            }
             Some(part_merge::select(&units, name, &p.source_pca)?)
         }
         None => None,
@@ -146,7 +172,20 @@ pub fn run(p: &Params) -> anyhow::Result<()> {
             names.len()
         );
     }
+    let overrides = Overrides { mean: p.mean, prior_weight: p.prior_weight, orientation_weight: p.orientation_weight };
+    if let Some(w) = p.prior_weight.filter(|w| !(0.0..=1.0).contains(w)) {
+        return Err(mesh_core::Error::invalid(format!("--prior-weight must be in [0, 1], got {w}")).into());
+    }
+    if let Some(w) = p.orientation_weight.filter(|w| !(0.0..=1.0).contains(w)) {
+        return Err(mesh_core::Error::invalid(format!("--orientation-weight must be in [0, 1], got {w}")).into());
+    }
+    let configs: Vec<(ConfigName, Settings)> = model_config::candidates(p.config)
+        .into_iter()
+        .filter_map(|c| model_config::settings(c, &overrides).map(|s| (c, s)))
+        .collect();
+    let cross_validated = p.cross_validate || p.report.is_some() || configs.len() > 1;
     let mut pairs = Vec::new();
+    let mut held_out = Vec::new();
     // The files are in the set's order (set source, set target); the PCA models are in
     // the direction's order.
     let (set_source_pca, set_target_pca) = if p.reverse {
@@ -169,13 +208,13 @@ pub fn run(p: &Params) -> anyhow::Result<()> {
                     pair.captures[0].require_fps().with_context(|| files[0].display().to_string())?,
                     pair.captures[1].require_fps().with_context(|| files[1].display().to_string())?,
                 );
-                Ok((pair.data, fps, pair.sha256))
+                Ok((pair.data, fps, pair.sha256, pair.motion))
             })
             .collect()
     };
     let mut pair_hashes = Vec::new();
     for (files, item) in p.pair.chunks(3).zip(loaded) {
-        let (data, fps, hashes) = item?;
+        let (data, fps, hashes, motion) = item?;
         if let Some(first) = set_fps.filter(|f| *f != fps) {
             bail!(
                 "{}: frame rates {} and {} differ from the first pair's {} and {}",
@@ -188,11 +227,16 @@ pub fn run(p: &Params) -> anyhow::Result<()> {
         }
         set_fps = Some(fps);
         pairs.push(if p.reverse { data.reversed() } else { data });
+        // The direction's target motion: the truth of the pair's frames when it is left out.
+        held_out.push(HeldOut { motion, truth: files[if p.reverse { 0 } else { 1 }].clone() });
         pair_hashes.extend(files.iter().zip(hashes));
     }
     let Some((set_source_fps, set_target_fps)) = set_fps else {
         bail!("no --pair given");
     };
+    if cross_validated && pairs.len() < 2 {
+        return Err(mesh_core::Error::invalid(format!("leaving one motion out needs two or more --pair, got {}", pairs.len())).into());
+    }
     let (source_fps, target_fps) = if p.reverse {
         (set_target_fps, set_source_fps)
     } else {
@@ -210,72 +254,198 @@ pub fn run(p: &Params) -> anyhow::Result<()> {
     };
     let ratio = target_fps / source_fps;
     let start = std::time::Instant::now();
-    if !(0.0..=1.0).contains(&p.prior_weight) {
-        return Err(mesh_core::Error::invalid(format!("--prior-weight must be in [0, 1], got {}", p.prior_weight)).into());
-    }
-    if !(0.0..=1.0).contains(&p.orientation_weight) {
-        return Err(mesh_core::Error::invalid(format!("--orientation-weight must be in [0, 1], got {}", p.orientation_weight)).into());
-    }
     // A misspelt limb is refused before the GPs are trained.
     limb_orientation::frames(&tgt_pca, &p.attached_limbs)?;
     let ridge_toward = p.mean_prior == MeanPrior::Geometric;
-    let maps = (p.mean == MeanFunction::Affine && (ridge_toward || p.prior_weight > 0.0))
+    let maps = configs
+        .iter()
+        .any(|(_, s)| s.mean == MeanFunction::Affine && (ridge_toward || s.prior_weight > 0.0))
         .then(|| crate::geometric_prior::part_priors(&src_pca, &tgt_pca));
-    let priors = maps.as_deref().map(|maps| MeanPriors { maps, ridge_toward, weight: p.prior_weight });
-    let mut params = serde_json::to_value(p)?;
-    params["source_fps"] = source_fps.into();
-    params["target_fps"] = target_fps.into();
-    let mut header = p
-        .common
-        .header("gpr-train", env!("CARGO_PKG_VERSION"))
-        .with_params(&params)?
-        .with_input(&p.source_pca)?
-        .with_input(&p.target_pca)?;
-    for (f, sha256) in pair_hashes {
-        header.inputs.push(mesh_core::artifact::InputRecord { path: f.display().to_string(), sha256 });
-    }
+    let header = |chosen: &Settings, cv: Option<&CrossValidationReport>| -> anyhow::Result<Header> {
+        let mut params = serde_json::to_value(p)?;
+        params["mean"] = serde_json::to_value(chosen.mean)?;
+        params["prior_weight"] = chosen.prior_weight.into();
+        params["orientation_weight"] = chosen.orientation_weight.into();
+        params["source_fps"] = source_fps.into();
+        params["target_fps"] = target_fps.into();
+        if let Some(cv) = cv {
+            params["cross_validation"] = serde_json::to_value(cv)?;
+        }
+        let mut header = p
+            .common
+            .header("gpr-train", env!("CARGO_PKG_VERSION"))
+            .with_params(&params)?
+            .with_input(&p.source_pca)?
+            .with_input(&p.target_pca)?;
+        for (f, sha256) in &pair_hashes {
+            header.inputs.push(mesh_core::artifact::InputRecord { path: f.display().to_string(), sha256: sha256.clone() });
+        }
+        Ok(header)
+    };
     // The rows are gathered once for the regressions and the limb orientation; the pairs'
-    // coefficients are not needed after that (at 10^5 pairs each is hundreds of MB).
+    // coefficients are not needed after that unless motions are left out (at 10^5 pairs each
+    // is hundreds of MB).
     let n_pairs = pairs.len();
     let rows = TrainingRows::new(method, &names, &pairs, ratio, p.keyposes_only)?;
-    drop(pairs);
-    let orientation = OrientationOptions { weight: p.orientation_weight, attached: &p.attached_limbs };
-    let regression = Regression { method, nn_bias: p.nn_bias, mean: p.mean, mean_ridge: p.mean_ridge, mean_priors: priors, opts: &opts };
+    if !cross_validated {
+        pairs = Vec::new();
+    }
     if let Some(unit) = unit {
+        let (_, chosen) = configs[0];
+        let orientation = OrientationOptions { weight: chosen.orientation_weight, attached: &p.attached_limbs };
         let spin = mesh_core::cli::spinner(
             &format!("gpr-train: {}, {} pairs", units[unit], n_pairs),
             &p.common,
         );
-        let mut piece = train_piece(&regression, &names, &rows, unit)?;
+        let mut piece = train_piece(&regression_of(p, maps.as_deref(), &opts, &chosen, None), &names, &rows, unit)?;
         if unit < names.len() {
             let o = train_orientation(method, &names, &rows, &src_pca, &tgt_pca, &orientation, Some(unit))?;
             piece.orientation = o.and_then(|mut o| o.maps.swap_remove(unit));
         }
-        piece.orientation_weight = p.orientation_weight;
+        piece.orientation_weight = chosen.orientation_weight;
         piece.templates = Templates::of(&src_pca, &tgt_pca);
         spin.finish_and_clear();
         log_report(&piece.report);
-        part_merge::save_piece::<GprModel>(&p.out, &header, &units, unit, piece)?;
+        part_merge::save_piece::<GprModel>(&p.out, &header(&chosen, None)?, &units, unit, piece)?;
         return Ok(());
     }
     let spin = mesh_core::cli::spinner(
-        &format!("gpr-train: {} parts + displacement, {} pairs", names.len(), n_pairs),
+        &format!(
+            "gpr-train: {} parts + displacement, {} pairs{}",
+            names.len(),
+            n_pairs,
+            if configs.len() > 1 { format!(", {} configurations", configs.len()) } else { String::new() }
+        ),
         &p.common,
     );
-    let mut model: GprModel = train_rows(&regression, &names, &rows)?;
-    model.orientation = train_orientation(method, &names, &rows, &src_pca, &tgt_pca, &orientation, None)?;
+    // Configurations that differ only in the prior's weight or the limb orientation have the
+    // same GPs (trained on the residuals of the same fitted mean): those are trained once and
+    // the others conditioned with their hyperparameters, which gives the same model.
+    let mut models: Vec<GprModel> = Vec::new();
+    for (_, s) in &configs {
+        let twin = configs.iter().zip(&models).find(|((_, t), _)| t.mean == s.mean).map(|(_, m)| m);
+        let fixed = twin.map(FixedHyperparameters::of).transpose()?;
+        let mut model: GprModel = train_rows(&regression_of(p, maps.as_deref(), &opts, s, fixed.as_ref()), &names, &rows)?;
+        if let Some(twin) = twin {
+            model.reports = twin.reports.clone();
+        }
+        let orientation = OrientationOptions { weight: s.orientation_weight, attached: &p.attached_limbs };
+        model.orientation = train_orientation(method, &names, &rows, &src_pca, &tgt_pca, &orientation, None)?;
+        model.templates = Templates::of(&src_pca, &tgt_pca);
+        models.push(model);
+    }
     drop(rows);
-    model.templates = Templates::of(&src_pca, &tgt_pca);
+    let trained_s = start.elapsed().as_secs_f64();
+    let cv = if cross_validated {
+        let fixed = models.iter().map(FixedHyperparameters::of).collect::<mesh_core::Result<Vec<_>>>()?;
+        let candidates: Vec<Candidate> = configs
+            .iter()
+            .zip(&fixed)
+            .map(|((_, s), f)| Candidate {
+                regression: regression_of(p, maps.as_deref(), &opts, s, Some(f)),
+                orientation: OrientationOptions { weight: s.orientation_weight, attached: &p.attached_limbs },
+            })
+            .collect();
+        let folds = Folds {
+            pairs: &pairs,
+            held_out: &held_out,
+            frame_ratio: ratio,
+            keyposes_only: p.keyposes_only,
+            part_names: &names,
+            source_pca: &src_pca,
+            target_pca: &tgt_pca,
+        };
+        let errors = cross_validate(&folds, &candidates)?;
+        Some(CrossValidationReport::choose(configs.iter().map(|(c, _)| *c).zip(errors).collect()))
+    } else {
+        None
+    };
     spin.finish_and_clear();
+    let chosen = cv.as_ref().map_or(0, |cv| cv.chosen_index);
+    let model = models.swap_remove(chosen);
     mesh_core::info!(
-        "trained {} on {} pairs in {:.3} s",
+        "trained {} on {} pairs in {:.3} s{}",
         method.name(),
         model.n_train,
-        start.elapsed().as_secs_f64()
+        trained_s,
+        match &cv {
+            Some(cv) => format!(
+                ", left each of {} motions out in {:.3} s: configuration {}, leave-one-motion-out pose error {:.4} m",
+                n_pairs,
+                start.elapsed().as_secs_f64() - trained_s,
+                cv.config.name(),
+                cv.cv_rms_pose_m
+            ),
+            None => String::new(),
+        }
     );
     model.reports.iter().for_each(log_report);
+    let header = header(&configs[chosen].1, cv.as_ref())?;
+    // The report first: the model's presence says both are complete.
+    if let (Some(r), Some(cv)) = (&p.report, &cv) {
+        let text = serde_json::to_string_pretty(cv)? + "\n";
+        mesh_core::atomic::write_bytes_atomic(r, text.as_bytes())?;
+    }
     model.save(&p.out, &header)?;
     Ok(())
+}
+
+/// The leave-one-motion-out errors of every configuration tried and the one kept: the header's
+/// `cross_validation` and the `--report`.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct CrossValidationReport {
+    /// The configuration kept: the lowest `cv_rms_pose_m` (the first in `--config auto`'s order
+    /// on a tie).
+    pub config: ConfigName,
+    /// Its error pooled over every held-out motion's frames (metres).
+    pub cv_rms_pose_m: f64,
+    /// Its error per held-out motion.
+    pub motions: Vec<MotionError>,
+    /// Every configuration tried, in order, with its errors.
+    pub candidates: Vec<CandidateError>,
+    #[serde(skip)]
+    chosen_index: usize,
+}
+
+/// One configuration's leave-one-motion-out errors.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct CandidateError {
+    pub config: ConfigName,
+    #[serde(flatten)]
+    pub errors: CrossValidation,
+}
+
+impl CrossValidationReport {
+    /// Keeps the configuration of lowest pooled error (the first on a tie).
+    fn choose(candidates: Vec<(ConfigName, CrossValidation)>) -> Self {
+        let chosen_index = (0..candidates.len())
+            .min_by(|&a, &b| candidates[a].1.cv_rms_pose_m.total_cmp(&candidates[b].1.cv_rms_pose_m).then(a.cmp(&b)))
+            .expect("at least one configuration");
+        let (config, best) = candidates[chosen_index].clone();
+        CrossValidationReport {
+            config,
+            cv_rms_pose_m: best.cv_rms_pose_m,
+            motions: best.motions,
+            candidates: candidates.into_iter().map(|(config, errors)| CandidateError { config, errors }).collect(),
+            chosen_index,
+        }
+    }
+}
+
+/// How the regressors of configuration `s` are trained: `maps` are the parts' geometric priors
+/// (when some configuration uses them), `fixed` the hyperparameters to condition with.
+fn regression_of<'a>(
+    p: &Params,
+    maps: Option<&'a [nalgebra::DMatrix<f64>]>,
+    opts: &'a GprOptions,
+    s: &Settings,
+    fixed: Option<&'a FixedHyperparameters>,
+) -> Regression<'a> {
+    let ridge_toward = p.mean_prior == MeanPrior::Geometric;
+    let priors = maps
+        .filter(|_| s.mean == MeanFunction::Affine && (ridge_toward || s.prior_weight > 0.0))
+        .map(|maps| MeanPriors { maps, ridge_toward, weight: s.prior_weight });
+    Regression { method: p.method, nn_bias: p.nn_bias, mean: s.mean, mean_ridge: p.mean_ridge, mean_priors: priors, opts, fixed }
 }
 
 /// Logs what training one regressor did (`-v`) and its numerical notes.

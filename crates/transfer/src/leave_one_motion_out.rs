@@ -1,0 +1,213 @@
+//! Leave-one-motion-out: an estimate of a transfer model's pose error on an unseen motion from
+//! its training motions alone, without ground truth.
+//!
+//! For every training pair `p` (one motion of both subjects, with its DTW correspondences),
+//! the model is trained again on the other pairs and transfers `p`'s source frames; each
+//! source frame `i` of `p`'s correspondences is compared with the target frame `j` they pair it
+//! with (the median of its `j`s when the path pairs it with several: a source frame at half the
+//! target's frame rate pairs with two), as `transfer-eval`'s `rms_pose_m` compares a
+//! prediction with the truth: the predicted target parts (limbs turned by the limb
+//! orientation) assembled into the target mesh, rigidly aligned to the target's aligned frame
+//! (Procrustes, no scale; [`crate::evaluate::pose_sq_error`]), the RMS over its vertices.
+//!
+//! The held-out models keep the hyperparameters (kernel and noise of every GP) the full model
+//! was trained to, and condition each GP on the remaining rows (one factorisation per GP, no
+//! optimisation); their affine means, prior mix and limb orientation are refitted. The estimate
+//! is therefore slightly optimistic where the hyperparameters learnt from a motion help predict
+//! it, and costs a fraction of the full training.
+//!
+//! `cv_rms_pose_m` pools every compared frame of every held-out motion: the root of the mean
+//! over frames and vertices of the squared distances, as `rms_pose_m` pools a motion's frames.
+
+use std::collections::BTreeMap;
+use std::path::PathBuf;
+
+use capture::motion_stream::read_frames;
+use capture::part_pca::PcaModel;
+use mesh_core::{Error, Result};
+use nalgebra::{DMatrix, Vector3};
+use rayon::prelude::*;
+use serde::{Deserialize, Serialize};
+
+use crate::evaluate::pose_sq_error;
+use crate::gpr_model::{train_orientation, train_rows, GprModel, OrientationOptions, Regression};
+use crate::predict::{displacement_matrix, predict};
+use crate::training_rows::{PairData, TrainingRows};
+
+/// One held-out motion's error.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct MotionError {
+    /// The motion's name (its correspondences' source motion).
+    pub motion: String,
+    /// The compared frames (source frames of its correspondences).
+    pub frames: usize,
+    /// RMS per vertex over those frames, pose only (metres).
+    pub rms_pose_m: f64,
+}
+
+/// The leave-one-motion-out error of one configuration.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct CrossValidation {
+    /// Pooled over every held-out motion's frames (metres).
+    pub cv_rms_pose_m: f64,
+    /// Per held-out motion, in the order of the pairs.
+    pub motions: Vec<MotionError>,
+}
+
+/// A training pair with what leaving it out needs besides its coefficients.
+pub struct HeldOut {
+    /// The motion's name.
+    pub motion: String,
+    /// The direction's target aligned motion of the pair: the truth its frames are compared to.
+    pub truth: PathBuf,
+}
+
+/// A configuration to cross-validate: how its regressors and limb orientation are trained
+/// ([`Regression::fixed`] holding the full model's hyperparameters).
+pub struct Candidate<'a> {
+    pub regression: Regression<'a>,
+    pub orientation: OrientationOptions<'a>,
+}
+
+/// The training set the candidates are cross-validated on: the pairs (direction order) with
+/// their motions, the frame ratio and whether only the key-poses are learnt from, the two
+/// PCA models and their part names.
+pub struct Folds<'a> {
+    pub pairs: &'a [PairData],
+    pub held_out: &'a [HeldOut],
+    pub frame_ratio: f64,
+    pub keyposes_only: bool,
+    pub part_names: &'a [String],
+    pub source_pca: &'a PcaModel,
+    pub target_pca: &'a PcaModel,
+}
+
+/// The `(source frame, target frame)` pairs compared for a held-out pair: each source frame of
+/// its correspondences once, with the median target frame it is paired with.
+pub fn compared_frames(pairs: &[[usize; 2]]) -> Vec<[usize; 2]> {
+    let mut by_source: BTreeMap<usize, Vec<usize>> = BTreeMap::new();
+    for &[i, j] in pairs {
+        by_source.entry(i).or_default().push(j);
+    }
+    by_source
+        .into_iter()
+        .map(|(i, mut js)| {
+            js.sort_unstable();
+            [i, js[js.len() / 2]]
+        })
+        .collect()
+}
+
+/// The leave-one-motion-out error of every candidate (in their order). Needs at least two
+/// pairs. Each fold reads its held-out motion's target frames once, for all candidates.
+pub fn cross_validate(folds: &Folds, candidates: &[Candidate]) -> Result<Vec<CrossValidation>> {
+    let n = folds.pairs.len();
+    if n < 2 || folds.held_out.len() != n {
+        return Err(Error::invalid(format!("leaving one motion out needs two or more training pairs, got {n}")));
+    }
+    let method = candidates.first().map(|c| c.regression.method).ok_or_else(|| Error::invalid("no configuration to cross-validate"))?;
+    // Per candidate, per fold: (sum of squared pose errors, frames compared).
+    let mut sums = vec![Vec::with_capacity(n); candidates.len()];
+    for p in 0..n {
+        let others: Vec<PairData> = folds.pairs.iter().enumerate().filter(|&(q, _)| q != p).map(|(_, d)| d.clone()).collect();
+        let rows = TrainingRows::new(method, folds.part_names, &others, folds.frame_ratio, folds.keyposes_only)?;
+        drop(others);
+        let compared = compared_frames(&folds.pairs[p].pairs);
+        let predicted = candidates
+            .iter()
+            .map(|c| predict_held_out(folds, c, &rows, &folds.pairs[p], &compared))
+            .collect::<Result<Vec<_>>>()?;
+        let errors = held_out_errors(&folds.held_out[p], &compared, &predicted)?;
+        for (c, e) in errors.into_iter().enumerate() {
+            sums[c].push((e, compared.len()));
+        }
+    }
+    Ok(sums
+        .into_iter()
+        .map(|per_fold| {
+            let nv = folds.target_pca.n_vertices.max(1) as f64;
+            let pooled: f64 = per_fold.iter().map(|(e, _)| e).sum();
+            let frames: usize = per_fold.iter().map(|(_, f)| f).sum();
+            CrossValidation {
+                cv_rms_pose_m: (pooled / (frames.max(1) as f64 * nv)).sqrt(),
+                motions: per_fold
+                    .iter()
+                    .zip(folds.held_out)
+                    .map(|(&(e, f), h)| MotionError { motion: h.motion.clone(), frames: f, rms_pose_m: (e / (f.max(1) as f64 * nv)).sqrt() })
+                    .collect(),
+            }
+        })
+        .collect())
+}
+
+/// The target meshes (assembled, in the aligned frame) a candidate trained on `rows` predicts
+/// for the source frames of `compared` of the held-out pair.
+fn predict_held_out(
+    folds: &Folds,
+    candidate: &Candidate,
+    rows: &TrainingRows,
+    held_out: &PairData,
+    compared: &[[usize; 2]],
+) -> Result<Vec<Vec<Vector3<f64>>>> {
+    let method = candidate.regression.method;
+    let mut model: GprModel = train_rows(&candidate.regression, folds.part_names, rows)?;
+    model.orientation = train_orientation(method, folds.part_names, rows, folds.source_pca, folds.target_pca, &candidate.orientation, None)?;
+    let sources: Vec<usize> = compared.iter().map(|&[i, _]| i).collect();
+    if let Some(&i) = sources.iter().find(|&&i| i >= held_out.source_disp.len()) {
+        return Err(Error::invalid(format!("source frame {i} of the correspondences is outside the motion ({} frames)", held_out.source_disp.len())));
+    }
+    let xs: Vec<DMatrix<f64>> = held_out.source_coeffs.iter().map(|c| c.select_rows(sources.iter())).collect();
+    let disp: Vec<[f64; 6]> = sources.iter().map(|&i| held_out.source_disp[i]).collect();
+    let pred = predict(&model, &xs, &displacement_matrix(&disp), false)?;
+    let mut decoded = folds.target_pca.decode(&pred.coeffs)?;
+    if let Some(o) = &model.orientation {
+        crate::limb_orientation::apply(o, folds.source_pca, folds.target_pca, &xs, &mut decoded)?;
+    }
+    let plan = capture::assemble::plan(folds.target_pca)?;
+    Ok(capture::assemble::assemble(&plan, folds.target_pca, &decoded))
+}
+
+/// Per candidate, the summed squared pose error of its `predicted` meshes against the truth
+/// frames `compared` points to, read in one pass over the held-out motion's file.
+fn held_out_errors(held_out: &HeldOut, compared: &[[usize; 2]], predicted: &[Vec<Vec<Vector3<f64>>>]) -> Result<Vec<f64>> {
+    let mut wanted: BTreeMap<usize, Vec<usize>> = BTreeMap::new();
+    for (c, &[_, j]) in compared.iter().enumerate() {
+        wanted.entry(j).or_default().push(c);
+    }
+    let mut sums = vec![0.0; predicted.len()];
+    let mut frame = 0;
+    let (info, _) = read_frames(&held_out.truth, |truth| {
+        if let Some(cs) = wanted.remove(&frame) {
+            for (sum, meshes) in sums.iter_mut().zip(predicted) {
+                let per_frame: Vec<f64> = cs.par_iter().map(|&c| meshes[c].as_slice()).map(|m| {
+                    if m.len() == truth.len() { Ok(pose_sq_error(m, &truth)) } else { Err(m.len()) }
+                }).collect::<std::result::Result<_, usize>>()
+                .map_err(|n| Error::invalid(format!("{} vertices per frame, the prediction {n}: not the target's topology", truth.len())))?;
+                *sum += per_frame.iter().sum::<f64>();
+            }
+        }
+        frame += 1;
+        Ok(())
+    })?;
+    if let Some((j, _)) = wanted.into_iter().next() {
+        return Err(Error::file(
+            &held_out.truth,
+            format!("target frame {j} of the correspondences is outside the motion ({} frames)", info.n_frames),
+        ));
+    }
+    Ok(sums)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Each source frame is compared once, with the median of the target frames the path pairs
+    /// it with: one when the path steps diagonally, the upper of two at twice the rate, the
+    /// middle one of three.
+    #[test]
+    fn each_source_frame_is_compared_once_with_its_median_target_frame() {
+        let path = [[0, 0], [0, 1], [1, 2], [1, 3], [2, 4], [3, 4], [4, 5], [4, 6], [4, 7]];
+        assert_eq!(compared_frames(&path), vec![[0, 1], [1, 3], [2, 4], [3, 4], [4, 6]]);
+    }
+}

@@ -1,0 +1,118 @@
+//! Named configurations of the transfer model (`gpr-train --config NAME`): each a preset of
+//! existing `gpr-train` flags, in one table ([`CONFIGS`]). `--config auto` trains the
+//! candidates of [`AUTO_CANDIDATES`] and keeps the one with the lowest leave-one-motion-out
+//! error (`crate::leave_one_motion_out`). A flag given explicitly overrides the preset's value.
+
+use serde::{Deserialize, Serialize};
+
+use crate::gpr_model::{MeanFunction, PRIOR_WEIGHT};
+use crate::limb_orientation;
+
+/// A configuration's name on the command line.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, PartialOrd, Ord, Serialize, Deserialize, clap::ValueEnum)]
+#[serde(rename_all = "kebab-case")]
+pub enum ConfigName {
+    /// Try the candidates and keep the one with the lowest leave-one-motion-out error.
+    Auto,
+    /// The defaults: affine mean with the geometric prior mixed in, limb orientation.
+    #[default]
+    Default,
+    /// The defaults without the geometric prior (`--prior-weight 0`).
+    NoPrior,
+    /// The affine mean and its GP alone: no prior, no limb orientation.
+    AffineOnly,
+    /// The paper's zero-mean GP (CVPR eq. 11), with the limb orientation.
+    ZeroMean,
+    /// The paper's model: zero mean, NN kernel, σn² = 0.1, no prior, no limb orientation.
+    Paper,
+}
+
+impl ConfigName {
+    /// The name as written on the command line.
+    pub fn name(self) -> &'static str {
+        match self {
+            ConfigName::Auto => "auto",
+            ConfigName::Default => "default",
+            ConfigName::NoPrior => "no-prior",
+            ConfigName::AffineOnly => "affine-only",
+            ConfigName::ZeroMean => "zero-mean",
+            ConfigName::Paper => "paper",
+        }
+    }
+}
+
+/// The flag values a configuration sets. The others (kernel, σn², ridge, ...) keep their
+/// defaults: the paper's NN kernel without the bias input and σn² = 0.1 in every preset.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Settings {
+    /// `--mean`.
+    pub mean: MeanFunction,
+    /// `--prior-weight` (used with the affine mean only).
+    pub prior_weight: f64,
+    /// `--orientation-weight`.
+    pub orientation_weight: f64,
+}
+
+/// The flags given explicitly on the command line, which override a preset's.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct Overrides {
+    pub mean: Option<MeanFunction>,
+    pub prior_weight: Option<f64>,
+    pub orientation_weight: Option<f64>,
+}
+
+/// The named configurations (every name but `auto`).
+pub const CONFIGS: &[(ConfigName, Settings)] = &[
+    (ConfigName::Default, Settings { mean: MeanFunction::Affine, prior_weight: PRIOR_WEIGHT, orientation_weight: limb_orientation::WEIGHT }),
+    (ConfigName::NoPrior, Settings { mean: MeanFunction::Affine, prior_weight: 0.0, orientation_weight: limb_orientation::WEIGHT }),
+    (ConfigName::AffineOnly, Settings { mean: MeanFunction::Affine, prior_weight: 0.0, orientation_weight: 0.0 }),
+    (ConfigName::ZeroMean, Settings { mean: MeanFunction::Zero, prior_weight: 0.0, orientation_weight: limb_orientation::WEIGHT }),
+    (ConfigName::Paper, Settings { mean: MeanFunction::Zero, prior_weight: 0.0, orientation_weight: 0.0 }),
+];
+
+/// The configurations `--config auto` chooses among, in the order ties are broken.
+pub const AUTO_CANDIDATES: &[ConfigName] =
+    &[ConfigName::Default, ConfigName::NoPrior, ConfigName::AffineOnly, ConfigName::ZeroMean, ConfigName::Paper];
+
+/// The settings of `name` with `overrides` applied; `None` for `auto`.
+pub fn settings(name: ConfigName, overrides: &Overrides) -> Option<Settings> {
+    let (_, s) = CONFIGS.iter().find(|(n, _)| *n == name)?;
+    Some(Settings {
+        mean: overrides.mean.unwrap_or(s.mean),
+        prior_weight: overrides.prior_weight.unwrap_or(s.prior_weight),
+        orientation_weight: overrides.orientation_weight.unwrap_or(s.orientation_weight),
+    })
+}
+
+/// The configurations `name` stands for: itself, or the candidates of `auto`.
+pub fn candidates(name: ConfigName) -> Vec<ConfigName> {
+    match name {
+        ConfigName::Auto => AUTO_CANDIDATES.to_vec(),
+        n => vec![n],
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Every name but `auto` has one row, `default` is the flags' defaults, `paper` is CVPR's
+    /// model, and an explicit flag wins over any preset.
+    #[test]
+    fn every_name_has_one_preset_and_explicit_flags_override_it() {
+        use clap::ValueEnum;
+        for n in ConfigName::value_variants() {
+            let rows = CONFIGS.iter().filter(|(c, _)| c == n).count();
+            assert_eq!(rows, usize::from(*n != ConfigName::Auto), "{n:?}");
+        }
+        let none = Overrides::default();
+        let d = settings(ConfigName::Default, &none).unwrap();
+        assert_eq!((d.mean, d.prior_weight, d.orientation_weight), (MeanFunction::Affine, PRIOR_WEIGHT, limb_orientation::WEIGHT));
+        let p = settings(ConfigName::Paper, &none).unwrap();
+        assert_eq!((p.mean, p.prior_weight, p.orientation_weight), (MeanFunction::Zero, 0.0, 0.0));
+        let o = Overrides { orientation_weight: Some(0.7), ..none };
+        assert_eq!(settings(ConfigName::Paper, &o).unwrap().orientation_weight, 0.7);
+        assert_eq!(settings(ConfigName::Auto, &none), None);
+        assert!(AUTO_CANDIDATES.iter().all(|c| settings(*c, &none).is_some()));
+    }
+}

@@ -1,0 +1,122 @@
+//! `gpr-train --config auto` on the `tiny` preset of `synth` (real bodies and mocap; needs the
+//! synth assets, as `make test` does): every candidate configuration is also trained on its
+//! own, fixed by name, and its leave-one-motion-out error measured there; the automatic choice
+//! is the one of lowest error among those independent runs, the auto run reports the same
+//! errors, and the model it writes is the one `--config NAME` trains for the chosen name.
+
+mod common;
+
+use common::run;
+
+use std::path::{Path, PathBuf};
+use std::process::Command;
+
+use capture::align::AlignedMotion;
+use mesh_core::artifact::{read_header, Artifact};
+use transfer::gpr_model::GprModel;
+
+fn s(p: &Path) -> String {
+    p.to_str().unwrap().to_string()
+}
+
+const TRAIN: [&str; 5] = ["walk", "run", "jump", "kick", "dance"];
+const CANDIDATES: [&str; 5] = ["default", "no-prior", "affine-only", "zero-mean", "paper"];
+
+/// The header's `cross_validation` of a model.
+fn cross_validation(model: &Path) -> serde_json::Value {
+    let (_, _, header) = read_header(model).unwrap();
+    header.params["cross_validation"].clone()
+}
+
+#[test]
+fn auto_keeps_the_configuration_of_lowest_leave_one_motion_out_error_among_the_fixed_runs() {
+    let dir = tempfile::tempdir().unwrap();
+    let set = dir.path().join("set");
+    let work = dir.path().join("work");
+    let cfg = synth::preset::preset("tiny", 0, true).unwrap();
+    synth::capture_set_writer::synthesise(&cfg, &set, false, &|_| {}, &|| {}).unwrap();
+    let tpl = |x: &str| set.join(x).join("walk").join("000000.ply");
+    let w = |rel: String| -> PathBuf { work.join(rel) };
+    for x in ["A", "B"] {
+        std::fs::create_dir_all(work.join(x)).unwrap();
+        let seg = w(format!("{x}/parts.seg"));
+        run("segment", &[s(&set.join(x).join("subject.json")), "--template".into(), s(&tpl(x)), "--out".into(), s(&seg)]);
+        for m in TRAIN {
+            run("align", &["--segmentation".into(), s(&seg), "--subject".into(), s(&set.join(x).join("subject.json")), "--template".into(), s(&tpl(x)), s(&set.join(x).join(m)), "--out".into(), s(&w(format!("{x}/{m}.aligned")))]);
+        }
+        let mut args = vec!["--template".into(), s(&tpl(x)), "--segmentation".into(), s(&seg), "--out".into(), s(&w(format!("{x}/pca.model")))];
+        args.extend(TRAIN.iter().map(|m| s(&w(format!("{x}/{m}.aligned")))));
+        run("pca-fit", &args);
+    }
+    let mut train_args = vec!["--source-pca".into(), s(&w("A/pca.model".into())), "--target-pca".into(), s(&w("B/pca.model".into()))];
+    for m in TRAIN {
+        let corr = w(format!("{m}.corr"));
+        run("dtw-densify", &[
+            "--set".into(), s(&set), "--motion".into(), m.into(),
+            "--source-pca".into(), s(&w("A/pca.model".into())), "--target-pca".into(), s(&w("B/pca.model".into())),
+            s(&w(format!("A/{m}.aligned"))), s(&w(format!("B/{m}.aligned"))),
+            "--out".into(), s(&corr),
+        ]);
+        train_args.extend(["--pair".into(), s(&w(format!("A/{m}.aligned"))), s(&w(format!("B/{m}.aligned"))), s(&corr)]);
+    }
+    let train = |extra: &[&str], out: &Path| {
+        let mut args = train_args.clone();
+        args.extend(extra.iter().map(|a| a.to_string()));
+        args.extend(["--out".into(), s(out)]);
+        run("gpr-train", &args);
+    };
+
+    // Each candidate fixed by name, its error measured in its own run.
+    let mut fixed = Vec::new();
+    for name in CANDIDATES {
+        let model = w(format!("{name}.model"));
+        train(&["--config", name, "--cross-validate"], &model);
+        let cv = cross_validation(&model);
+        assert_eq!(cv["config"], name);
+        let motions = cv["motions"].as_array().unwrap();
+        assert_eq!(motions.len(), TRAIN.len(), "one error per training motion");
+        for (m, want) in motions.iter().zip(TRAIN) {
+            assert_eq!(m["motion"], want);
+            // Every source frame of the held-out motion is compared once (the path covers them).
+            let frames = AlignedMotion::load(w(format!("A/{want}.aligned"))).unwrap().frames.len();
+            assert_eq!(m["frames"].as_u64().unwrap() as usize, frames, "{name}: {want}");
+        }
+        let e = cv["cv_rms_pose_m"].as_f64().unwrap();
+        // A transfer error of a few centimetres on bodies of 1.6-1.9 m: neither zero nor a
+        // different body.
+        assert!(e > 1e-3 && e < 0.3, "{name}: {e} m");
+        fixed.push((name, e));
+    }
+
+    let auto = w("auto.model".into());
+    let report = w("auto.json".into());
+    train(&["--config", "auto", "--report", &s(&report)], &auto);
+    let cv = cross_validation(&auto);
+    let from_report: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(&report).unwrap()).unwrap();
+    assert_eq!(cv, from_report, "the report is the header's record");
+    let (best, best_e) = fixed.iter().copied().min_by(|a, b| a.1.total_cmp(&b.1)).unwrap();
+    assert_eq!(cv["config"], best, "fixed runs: {fixed:?}");
+    let candidates = cv["candidates"].as_array().unwrap();
+    assert_eq!(candidates.len(), CANDIDATES.len());
+    for ((name, e), c) in fixed.iter().zip(candidates) {
+        assert_eq!(c["config"], *name);
+        let got = c["cv_rms_pose_m"].as_f64().unwrap();
+        assert!((got - e).abs() <= 1e-9 * e, "{name}: {got} in the auto run, {e} on its own");
+    }
+    assert!((cv["cv_rms_pose_m"].as_f64().unwrap() - best_e).abs() <= 1e-9 * best_e);
+    // The model kept is the chosen configuration's, and the header says which flags it used.
+    let (chosen, alone) = (GprModel::load(&auto).unwrap(), GprModel::load(w(format!("{best}.model"))).unwrap());
+    assert_eq!((&chosen.parts, &chosen.displacement, &chosen.orientation, &chosen.reports), (&alone.parts, &alone.displacement, &alone.orientation, &alone.reports));
+    let ((_, _, ha), (_, _, hb)) = (read_header(&auto).unwrap(), read_header(w(format!("{best}.model"))).unwrap());
+    for key in ["mean", "prior_weight", "orientation_weight"] {
+        assert_eq!(ha.params[key], hb.params[key], "{key}");
+    }
+
+    // Leaving motions out needs whole models.
+    let mut args = train_args.clone();
+    args.extend(["--config", "auto", "--part", "displacement", "--out"].map(String::from));
+    args.push(s(&w("piece".into())));
+    let out = Command::new(common::bin("gpr-train")).args(&args).env("OPENBLAS_NUM_THREADS", "1").output().unwrap();
+    assert_eq!(out.status.code(), Some(1));
+    assert!(String::from_utf8_lossy(&out.stderr).contains("not with --part"));
+}
