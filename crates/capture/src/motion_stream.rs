@@ -81,11 +81,24 @@ impl<'a> MotionFiles<'a> {
 impl TrainingFrames for MotionFiles<'_> {
     fn pass(&mut self, sink: &mut dyn FnMut(usize, &[Vector3<f64>]) -> Result<()>) -> Result<()> {
         for (k, path) in self.paths.iter().enumerate() {
-            let (info, sha256) = read_frames(path, |f| sink(k, &f))?;
+            // The sink's first error waits for the file's own checks: a motion aligned to another
+            // template is reported as that, not as the frame size it then has.
+            let mut sink_error: Option<Error> = None;
+            let (info, sha256) = read_frames(path, |f| {
+                if sink_error.is_none() {
+                    sink_error = sink(k, &f).err();
+                }
+                Ok(())
+            })?;
+            if self.seen.get(k).is_none() {
+                check_same_template(&info.capture.template_sha256, &self.template_sha256, "the motion was aligned to", "--template is")
+                    .map_err(|e| Error::file(path, e.to_string()))?;
+            }
+            if let Some(e) = sink_error {
+                return Err(Error::file(path, e.to_string()));
+            }
             match self.seen.get(k) {
                 None => {
-                    check_same_template(&info.capture.template_sha256, &self.template_sha256, "the motion was aligned to", "--template is")
-                        .map_err(|e| Error::file(path, e.to_string()))?;
                     self.seen.push((sha256, info.anchor));
                 }
                 Some((first, _)) if *first != sha256 => {

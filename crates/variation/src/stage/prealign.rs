@@ -32,7 +32,7 @@ pub struct Params {
     pub subject_name: Option<String>,
     /// The subject's description in place of the set's subject.json (e.g. one written by
     /// propose-curves for a set without curves)
-    #[arg(long, value_name = "JSON")]
+    #[arg(long, value_name = "SUBJECT_JSON")]
     pub subject: Option<PathBuf>,
     /// Name of the group written (e.g. locomotion)
     #[arg(long, value_name = "NAME")]
