@@ -513,15 +513,22 @@ pub(crate) fn check_priors(mean_priors: Option<MeanPriors>, part_names: &[String
     Ok(())
 }
 
+/// The checks every training of `rows` starts with: the mean priors and the rows cover
+/// `part_names`, and fixed hyperparameters (if any) are one per part.
+pub(crate) fn check_inputs(regression: &Regression, part_names: &[String], rows: &TrainingRows) -> Result<()> {
+    check_priors(regression.mean_priors, part_names)?;
+    rows.check_parts(part_names)?;
+    if let Some(f) = regression.fixed.filter(|f| f.parts.len() != part_names.len()) {
+        return Err(Error::invalid(format!("fixed hyperparameters of {} parts for {} parts", f.parts.len(), part_names.len())));
+    }
+    Ok(())
+}
+
 /// [`train`] on rows already gathered (so that the limb orientation, [`train_orientation`],
 /// fits on the same rows without gathering them again).
 pub fn train_rows(regression: &Regression, part_names: &[String], rows: &TrainingRows) -> Result<GprModel> {
     let Regression { method, nn_bias, mean: mean_fn, mean_ridge, mean_priors, opts, fixed } = *regression;
-    check_priors(mean_priors, part_names)?;
-    rows.check_parts(part_names)?;
-    if let Some(f) = fixed.filter(|f| f.parts.len() != part_names.len()) {
-        return Err(Error::invalid(format!("fixed hyperparameters of {} parts for {} parts", f.parts.len(), part_names.len())));
-    }
+    check_inputs(regression, part_names, rows)?;
     let (data, keys) = (&rows.data, rows.keys());
     let (parts, disp) = rayon::join(
         || train_parts(method, nn_bias, mean_fn, mean_ridge, mean_priors, part_names, data, keys, opts, fixed.map(|f| f.parts.as_slice())),

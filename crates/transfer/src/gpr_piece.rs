@@ -6,7 +6,7 @@ use mesh_core::{Error, Result};
 use serde::{Deserialize, Serialize};
 
 use crate::gpr_model::{
-    check_priors, train_displacement, train_parts, GprModel, MeanFunction, MeanPriors, Method, Regression, Regressor,
+    check_inputs, train_displacement, train_parts, GprModel, MeanFunction, MeanPriors, Method, Regression, Regressor,
     RegressorReport, Templates,
 };
 use crate::limb_orientation::{LimbMap, LimbOrientation};
@@ -110,11 +110,7 @@ impl Partitioned for GprModel {
 /// when `unit == part_names.len()`; the regressor is trained exactly as in the whole model.
 pub fn train_piece(regression: &Regression, part_names: &[String], rows: &TrainingRows, unit: usize) -> Result<GprPiece> {
     let Regression { method, nn_bias, mean: mean_fn, mean_ridge, mean_priors, opts, fixed } = *regression;
-    check_priors(mean_priors, part_names)?;
-    rows.check_parts(part_names)?;
-    if let Some(f) = fixed.filter(|f| f.parts.len() != part_names.len()) {
-        return Err(Error::invalid(format!("fixed hyperparameters of {} parts for {} parts", f.parts.len(), part_names.len())));
-    }
+    check_inputs(regression, part_names, rows)?;
     let (data, keys) = (&rows.data, rows.keys());
     let (regressor, report) = if unit < part_names.len() {
         let priors = mean_priors.map(|p| MeanPriors { maps: &p.maps[unit..=unit], ..p });
