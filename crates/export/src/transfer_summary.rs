@@ -302,8 +302,8 @@ pub fn section_html(results: &Value) -> Option<String> {
             .to_string(),
     };
     if let Some(t) = floor {
-        s += "<h3>Floor offset (median height of the lowest sole point above the target's floor where the \
-              source stands on a foot, cm; pooled: RMS)</h3>";
+        s += "<h3>Floor offset (median height of the standing leg's lowest point above the target's floor \
+              where the source stands on a foot, cm; pooled: RMS)</h3>";
         s += &table_html(&t, "floor-offset");
     }
     if let Some(t) = sliding {

@@ -2,6 +2,7 @@
 //! Shared by the transfer's evaluation and the variation's figures of merit.
 
 use nalgebra::Vector3;
+use std::collections::HashSet;
 
 /// Fails unless the smoothness `λ` of a foot-skating clean-up (the weight of its second
 /// differences) is a finite number >= 0.
@@ -75,6 +76,54 @@ fn split_soles(template: &[Vector3<f64>], up: &Vector3<f64>, tol: f64) -> Vec<Ve
         .iter()
         .partition(|&&v| (template[v as usize] - c).dot(&axis) > 0.0);
     vec![l, r]
+}
+
+/// Smoothstep `3x² − 2x³` of `x` clamped to `[0, 1]`.
+pub fn smoothstep(x: f64) -> f64 {
+    let x = x.clamp(0.0, 1.0);
+    x * x * (3.0 - 2.0 * x)
+}
+
+/// Weights `(vertex, w(v))`, `w > 0`, of a leg deformation that moves the sole and leaves the
+/// hip seam in place: `w = 1` on the `sole` vertices, `w = 0` at and above the lowest vertex of
+/// the leg part's boundary loop (the seam with the torso; the leg's top without one), a
+/// smoothstep of the template height along `up` between. `leg` is the leg part's vertices.
+pub fn leg_weights(
+    leg: &[u32],
+    sole: &[u32],
+    template: &[Vector3<f64>],
+    faces: &[[u32; 3]],
+    up: &Vector3<f64>,
+) -> Vec<(u32, f64)> {
+    let h = |v: u32| template[v as usize].dot(up);
+    let in_leg: HashSet<u32> = leg.iter().copied().collect();
+    let is_sole: HashSet<u32> = sole.iter().copied().collect();
+    // Boundary loop: leg vertices sharing a face with a vertex outside the leg.
+    let mut top = f64::INFINITY;
+    for f in faces {
+        if f.iter().any(|v| in_leg.contains(v)) && f.iter().any(|v| !in_leg.contains(v)) {
+            for &v in f.iter().filter(|v| in_leg.contains(v)) {
+                top = top.min(h(v));
+            }
+        }
+    }
+    if !top.is_finite() {
+        top = leg.iter().map(|&v| h(v)).fold(f64::NEG_INFINITY, f64::max);
+    }
+    let bottom = sole.iter().map(|&v| h(v)).fold(f64::NEG_INFINITY, f64::max);
+    let span = top - bottom;
+    leg.iter()
+        .filter_map(|&v| {
+            let w = if is_sole.contains(&v) {
+                1.0
+            } else if span > 0.0 {
+                1.0 - smoothstep((h(v) - bottom) / span)
+            } else {
+                0.0
+            };
+            (w > 0.0).then_some((v, w))
+        })
+        .collect()
 }
 
 /// Sole centroid of each foot in every frame.

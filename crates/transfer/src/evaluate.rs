@@ -18,9 +18,10 @@
 //! contacts (detected on its meshes, as `gpr-predict` plants the feet), the
 //! source's own sliding on them (`source_foot_sliding_m`), and `floor_offset_m`:
 //! over the frames where the source stands on a foot, the median height of the
-//! transfer's lowest sole point above the target's floor (the lowest sole point
-//! of its template, a captured frame).
+//! lowest point of the transfer's standing legs above the target's floor (the
+//! lowest leg point of its template, a captured frame).
 
+use crate::feet::TargetFeet;
 use mesh_core::rigid::procrustes;
 use mesh_core::sequence::MeshSequence;
 use mesh_core::{Error, Result};
@@ -82,20 +83,18 @@ fn median(mut v: Vec<f64>) -> Option<f64> {
 }
 
 /// The prediction's sliding and floor offset on the source's `contacts` (per frame `[left,
-/// right]`, one per prediction frame): `soles` the target's two soles, `floor` the height (along
-/// `up`) of the target's floor, and `source` (placed source frames with its `source_soles`) for
-/// the source's own sliding.
+/// right]`, one per prediction frame): `target` the target's soles, legs and floor, and
+/// `source` (placed source frames with its `source_soles`) for the source's own sliding.
 pub fn without_truth(
     pred: &MeshSequence,
-    soles: &[Vec<u32>],
-    floor: f64,
+    target: &TargetFeet,
     contacts: &[[bool; 2]],
     source: (&[Vec<Vector3<f64>>], &[Vec<u32>]),
     up: &Vector3<f64>,
 ) -> Result<SourceMeasures> {
     let n = pred.n_vertices();
-    if let Some(v) = soles.iter().flatten().find(|&&v| v as usize >= n) {
-        return Err(Error::invalid(format!("sole vertex {v} is beyond the prediction's {n} vertices")));
+    if let Some(v) = target.soles.iter().chain(&target.legs).flatten().find(|&&v| v as usize >= n) {
+        return Err(Error::invalid(format!("foot vertex {v} is beyond the prediction's {n} vertices")));
     }
     if contacts.len() != pred.n_frames() {
         return Err(Error::invalid(format!(
@@ -104,16 +103,17 @@ pub fn without_truth(
             pred.n_frames()
         )));
     }
-    // Where the source stands on a foot, the transfer's lowest sole point is on its floor.
-    let heights: Vec<f64> = pred
-        .frames
+    // Where the source stands on a foot, the lowest point of the transfer's leg on that side
+    // is on its floor.
+    let lowest = crate::feet::lowest_points(&pred.frames, &target.legs, up);
+    let heights: Vec<f64> = contacts
         .iter()
-        .zip(contacts)
+        .enumerate()
         .filter(|(_, c)| c[0] || c[1])
-        .map(|(frame, _)| soles.iter().flatten().map(|&v| frame[v as usize].dot(up)).fold(f64::INFINITY, f64::min) - floor)
+        .map(|(t, c)| (0..2).filter(|&f| c[f]).map(|f| lowest[f][t]).fold(f64::INFINITY, f64::min) - target.floor)
         .collect();
     Ok(SourceMeasures {
-        foot_sliding_m: mesh_core::feet::contact_sliding(&pred.frames, soles, contacts, up),
+        foot_sliding_m: mesh_core::feet::contact_sliding(&pred.frames, &target.soles, contacts, up),
         source_foot_sliding_m: mesh_core::feet::contact_sliding(source.0, source.1, contacts, up),
         floor_offset_m: median(heights),
     })
@@ -272,30 +272,34 @@ mod tests {
         assert!(foot_sliding(&pred, &truth, &[vec![7]], &contacts, &Vector3::y()).is_err());
     }
 
-    /// Without truth: a transfer whose lowest sole point stands 3 cm above the target's floor
-    /// (at 0.5 m) wherever the source stands has a floor offset of 3 cm, frames where the source
-    /// is in the air left out; dragged 2 cm per frame it slides 0.02 m/frame, the still source 0.
+    /// Without truth: a transfer whose standing leg's lowest point is 3 cm above the target's
+    /// floor (at 0.5 m) wherever the source stands has a floor offset of 3 cm (the left leg's
+    /// second point, lower but in the air when the right foot stands, does not count), frames
+    /// where the source is in the air left out; dragged 2 cm per frame it slides 0.02 m/frame,
+    /// the still source 0.
     #[test]
     fn floor_offset_and_sliding_on_the_sources_contacts() {
         let pred = seq(
             (0..5)
                 .map(|i| {
                     let lift = if i == 2 { 0.4 } else { 0.0 };
-                    vec![[0.02 * i as f64, 0.53 + lift, 0.0], [1.0, 0.6 + lift, 0.0], [0.0, 1.5, 0.0]]
+                    let left_low = if i == 4 { 0.51 } else { 0.9 };
+                    vec![[0.02 * i as f64, 0.53 + lift, 0.0], [1.0, 0.53 + lift, 0.0], [0.0, 1.5, 0.0], [0.0, left_low, 0.0]]
                 })
                 .collect(),
         );
-        let source: Vec<Vec<Vector3<f64>>> = vec![vec![Vector3::new(0.0, 0.0, 0.0); 3]; 5];
-        let soles = vec![vec![0u32], vec![1u32]];
+        let source: Vec<Vec<Vector3<f64>>> = vec![vec![Vector3::new(0.0, 0.0, 0.0); 4]; 5];
+        let soles = [vec![0u32], vec![1u32]];
+        let target = TargetFeet { soles: soles.clone(), legs: [vec![0, 3], vec![1]], floor: 0.5 };
         let contacts = vec![[true, false], [true, false], [false, false], [true, false], [false, true]];
-        let m = without_truth(&pred, &soles, 0.5, &contacts, (&source, &soles), &Vector3::y()).unwrap();
+        let m = without_truth(&pred, &target, &contacts, (&source, &soles), &Vector3::y()).unwrap();
         assert!((m.floor_offset_m.unwrap() - 0.03).abs() < 1e-12, "{m:?}");
         assert!((m.foot_sliding_m.unwrap() - 0.02).abs() < 1e-12, "{m:?}");
         assert_eq!(m.source_foot_sliding_m, Some(0.0));
         let air = vec![[false, false]; 5];
-        let m = without_truth(&pred, &soles, 0.5, &air, (&source, &soles), &Vector3::y()).unwrap();
+        let m = without_truth(&pred, &target, &air, (&source, &soles), &Vector3::y()).unwrap();
         assert_eq!((m.floor_offset_m, m.foot_sliding_m), (None, None));
-        assert!(without_truth(&pred, &soles, 0.5, &contacts[..4], (&source, &soles), &Vector3::y()).is_err());
+        assert!(without_truth(&pred, &target, &contacts[..4], (&source, &soles), &Vector3::y()).is_err());
     }
 
     #[test]

@@ -20,8 +20,26 @@
 //! (holdout 6.91 -> 6.90 cm, demo 7.59 -> 7.63) and the sliding comes within 1.15x of the
 //! truth's on 7 of 9 benchmark motions (4 without the clean-up; docs/RESULTS.md). The source's
 //! contacts are detected on its own meshes ([`capture::contact_detector`]), never on the
-//! target's, whose sliding soles are what is being corrected. Whole frames move, so each frame's shape, and its pose error after a per-frame rigid
-//! fit, is unchanged; only the placement changes.
+//! target's, whose sliding soles are what is being corrected.
+//!
+//! The shift moves whole frames, so each frame's shape, and its pose error after a per-frame
+//! rigid fit, is unchanged.
+//!
+//! The same contacts put the transfer's feet on the target's floor ("foot height"). A
+//! transferred leg need not reach the floor where the source's does: its pose is regressed,
+//! and its root height is the source's scaled by `r`. Moving the whole body would trade the
+//! feet's error for the body's (on the tiny preset the placed error rose from 7.2 to 11.5 cm on
+//! a jump whose body height was right and whose feet floated 5 cm). So each leg is deformed
+//! instead, hip seam fixed, every leg vertex `v` moved by `w(v) e_f(t)` along up with the leg
+//! weights of [`mesh_core::feet::leg_weights`] (1 on the sole, 0 at the seam), where the drop
+//! `e_f` of leg `f` solves
+//!
+//! `min_e  Σ_{t: foot f down} (l_f(t) + e(t) − floor)² + λ Σ_t (e(t−1) − 2 e(t) + e(t+1))²
+//!        + μ Σ_t e(t)²`
+//!
+//! (`l_f` the lowest point of leg `f` along up, `floor` the template's lowest leg point, the
+//! floor the template stands on), so a planted foot stands on the floor and a lifted one eases
+//! back to its regressed height.
 
 use capture::align::AlignedMotion;
 use capture::contact_detector::{self, Rule};
@@ -56,11 +74,18 @@ pub const SMOOTHNESS: f64 = 1.0;
 /// of the transferred legs do not accumulate into drift.
 pub const RETURN: f64 = 0.1;
 
-/// What [`plant`] did: the number of frames with a planted foot and the largest root shift (m).
+/// Weight `μ` of the foot-height drops themselves (module doc), against weight 1 per planted
+/// frame: it leaves a planted sole 1 % of its distance off the floor and brings a lifted
+/// foot's drop back toward zero within about 8 frames.
+pub const HEIGHT_RETURN: f64 = 0.01;
+
+/// What [`plant`] did: the number of frames with a planted foot, the largest horizontal root
+/// shift, and how far a planted sole was moved onto the floor (median over planted frames, m).
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct Planted {
     pub planted_frames: usize,
     pub max_shift_m: f64,
+    pub median_foot_move_m: f64,
 }
 
 /// The horizontal shifts `d(t)` of the module doc: `target` and `source` the two subjects' sole
@@ -131,6 +156,81 @@ pub fn corrections(
         .collect())
 }
 
+/// The vertices of the two legs (left, right) of a subject's template: its `leg*` parts or,
+/// without them, the template's two sides ([`mesh_core::feet::soles`] with no height limit).
+/// The lowest point of a leg is its foot's in any pose, whichever part of the foot touched the
+/// floor in the template.
+pub fn legs(pca: &PcaModel, up: &Vector3<f64>) -> [Vec<u32>; 2] {
+    let parts: Vec<(&str, &[u32])> = pca.parts.iter().map(|p| (p.name.as_str(), p.vertices.as_slice())).collect();
+    let mut found = mesh_core::feet::soles(&parts, &pca.template_vertices(), up, f64::INFINITY).into_iter();
+    [found.next().unwrap_or_default(), found.next().unwrap_or_default()]
+}
+
+/// Per frame, the lowest point along `up` of each of the two `legs` (left, right) of `frames`.
+pub fn lowest_points(frames: &[Vec<Vector3<f64>>], legs: &[Vec<u32>; 2], up: &Vector3<f64>) -> [Vec<f64>; 2] {
+    legs.clone().map(|s| {
+        frames
+            .iter()
+            .map(|f| s.iter().map(|&v| f[v as usize].dot(up)).fold(f64::INFINITY, f64::min))
+            .collect()
+    })
+}
+
+/// The drops `e(t)` of one leg's sole (module doc) that put the leg's lowest point `lowest`
+/// (per frame, from [`lowest_points`]) on `floor` wherever `planted`, with smoothness `λ`,
+/// returning to zero away from the contacts. All zero without contacts.
+pub fn leg_drops(
+    lowest: &[f64],
+    planted: &[bool],
+    floor: f64,
+    smoothness: f64,
+    notes: &mut Vec<String>,
+) -> Result<Vec<f64>> {
+    let n = planted.len();
+    mesh_core::feet::check_smoothness(smoothness)?;
+    if lowest.len() != n {
+        return Err(Error::invalid(format!(
+            "foot height: {n} contact frames but a leg track of {} frames",
+            lowest.len()
+        )));
+    }
+    if !(0..n).any(|t| planted[t] && lowest[t].is_finite()) {
+        return Ok(vec![0.0; n]);
+    }
+    let mut a = DMatrix::<f64>::identity(n, n) * HEIGHT_RETURN;
+    let mut b = DMatrix::<f64>::zeros(n, 1);
+    for t in (0..n).filter(|&t| planted[t] && lowest[t].is_finite()) {
+        a[(t, t)] += 1.0;
+        b[(t, 0)] += floor - lowest[t];
+    }
+    let w = [1.0, -2.0, 1.0];
+    for t in 1..n.saturating_sub(1) {
+        for (u, wu) in w.iter().enumerate() {
+            for (v, wv) in w.iter().enumerate() {
+                a[(t + u - 1, t + v - 1)] += smoothness * wu * wv;
+            }
+        }
+    }
+    let chol = Cholesky::new(&a, "foot-height normal equations", notes)
+        .map_err(|e| Error::invalid(format!("foot height: {e}")))?;
+    let x = chol.solve(&b);
+    Ok((0..n).map(|t| x[(t, 0)]).collect())
+}
+
+/// The median of `values` (reordered); 0 when empty.
+fn median(values: &mut [f64]) -> f64 {
+    if values.is_empty() {
+        return 0.0;
+    }
+    values.sort_by(f64::total_cmp);
+    let m = values.len() / 2;
+    if values.len() % 2 == 1 {
+        values[m]
+    } else {
+        0.5 * (values[m - 1] + values[m])
+    }
+}
+
 /// The source motion as placed in the world, its soles and the contacts detected on them.
 pub struct SourceContacts {
     pub world: Vec<Vec<Vector3<f64>>>,
@@ -151,44 +251,98 @@ pub fn source_contacts(source_pca: &PcaModel, motion: &AlignedMotion) -> Option<
     Some(SourceContacts { world, soles, contacts })
 }
 
+/// What a transfer's feet are measured and cleaned with on a target: its soles ([`soles`]),
+/// its legs ([`legs`]) and its floor, the height along up of its template's lowest leg point.
+#[derive(Clone, Debug, PartialEq)]
+pub struct TargetFeet {
+    pub soles: [Vec<u32>; 2],
+    pub legs: [Vec<u32>; 2],
+    pub floor: f64,
+}
+
+impl TargetFeet {
+    /// None without two non-empty soles.
+    pub fn of(target_pca: &PcaModel, up: &Vector3<f64>) -> Option<TargetFeet> {
+        let soles = soles(target_pca, up)?;
+        let legs = legs(target_pca, up);
+        let template = target_pca.template_vertices();
+        let floor = legs.iter().flatten().map(|&v| template[v as usize].dot(up)).fold(f64::INFINITY, f64::min);
+        Some(TargetFeet { soles, legs, floor })
+    }
+}
+
+/// The feet clean-ups [`plant`] runs: the horizontal foot-skating shift and the vertical leg
+/// deformation onto the floor (module doc), with smoothness `λ`; `faces` the target's (its
+/// legs' seams with the torso).
+#[derive(Clone, Copy, Debug)]
+pub struct CleanUp<'a> {
+    pub footskate: bool,
+    pub foot_height: bool,
+    pub smoothness: f64,
+    pub faces: &'a [[u32; 3]],
+}
+
 /// Cleans `frames` (the placed transfer of `motion`, one frame per source frame, the target
-/// `ratio` times the source's size) in place with smoothness `λ` (module doc). None, and `frames`
-/// untouched, when either subject has no two leg parts or the source no frame rate.
+/// `ratio` times the source's size) in place (module doc). None, and `frames` untouched, when
+/// neither clean-up is asked for, either subject has no two leg parts or the source no frame
+/// rate.
 pub fn plant(
     frames: &mut [Vec<Vector3<f64>>],
     source_pca: &PcaModel,
     target_pca: &PcaModel,
     motion: &AlignedMotion,
     ratio: f64,
-    smoothness: f64,
+    clean_up: &CleanUp,
 ) -> Result<Option<Planted>> {
+    if !(clean_up.footskate || clean_up.foot_height) {
+        return Ok(None);
+    }
+    mesh_core::feet::check_smoothness(clean_up.smoothness)?;
     let up = Vector3::from(motion.capture.up);
-    let Some(target_soles) = soles(target_pca, &up) else {
+    let Some(target) = TargetFeet::of(target_pca, &up) else {
         return Ok(None);
     };
     let Some(SourceContacts { world, soles: source_soles, contacts }) = source_contacts(source_pca, motion) else {
         return Ok(None);
     };
     let mut notes = Vec::new();
-    let shifts = corrections(
-        &mesh_core::feet::feet_tracks(frames, &target_soles),
-        &mesh_core::feet::feet_tracks(&world, &source_soles),
-        &contacts,
-        ratio,
-        &up,
-        smoothness,
-        &mut notes,
-    )?;
+    let mut planted = Planted { planted_frames: contacts.iter().filter(|c| c[0] || c[1]).count(), ..Planted::default() };
+    if clean_up.footskate {
+        let shifts = corrections(
+            &mesh_core::feet::feet_tracks(frames, &target.soles),
+            &mesh_core::feet::feet_tracks(&world, &source_soles),
+            &contacts,
+            ratio,
+            &up,
+            clean_up.smoothness,
+            &mut notes,
+        )?;
+        for (f, d) in frames.iter_mut().zip(&shifts) {
+            f.iter_mut().for_each(|p| *p += d);
+        }
+        planted.max_shift_m = shifts.iter().map(|d| d.norm()).fold(0.0, f64::max);
+    }
+    if clean_up.foot_height {
+        let lowest = lowest_points(frames, &target.legs, &up);
+        let template = target_pca.template_vertices();
+        let mut moved = Vec::new();
+        for side in 0..2 {
+            let down: Vec<bool> = contacts.iter().map(|c| c[side]).collect();
+            let drops = leg_drops(&lowest[side], &down, target.floor, clean_up.smoothness, &mut notes)?;
+            let weights = mesh_core::feet::leg_weights(&target.legs[side], &target.soles[side], &template, clean_up.faces, &up);
+            for (f, e) in frames.iter_mut().zip(&drops) {
+                for &(v, w) in &weights {
+                    f[v as usize] += up * (e * w);
+                }
+            }
+            moved.extend(down.iter().zip(&drops).filter(|(d, _)| **d).map(|(_, e)| e.abs()));
+        }
+        planted.median_foot_move_m = median(&mut moved);
+    }
     for note in notes {
         mesh_core::info!("{note}");
     }
-    for (f, d) in frames.iter_mut().zip(&shifts) {
-        f.iter_mut().for_each(|p| *p += d);
-    }
-    Ok(Some(Planted {
-        planted_frames: contacts.iter().filter(|c| c[0] || c[1]).count(),
-        max_shift_m: shifts.iter().map(|d| d.norm()).fold(0.0, f64::max),
-    }))
+    Ok(Some(planted))
 }
 
 #[cfg(test)]
@@ -288,5 +442,37 @@ mod tests {
         assert!(e.to_string().contains("smoothness"), "{e}");
         let e = corrections(&target, &source, &none[..39], RATIO, &UP, SMOOTHNESS, &mut Vec::new()).unwrap_err();
         assert!(e.to_string().contains("39"), "{e}");
+    }
+
+    /// A leg whose lowest point floats 3 cm above a floor at 0.1 m where its foot is down
+    /// (frames 5-24) and is 15 cm up elsewhere.
+    fn floating() -> (Vec<f64>, Vec<bool>) {
+        let down: Vec<bool> = (0..40).map(|t| (5..25).contains(&t)).collect();
+        (down.iter().map(|&d| if d { 0.13 } else { 0.25 }).collect(), down)
+    }
+
+    #[test]
+    fn a_floating_planted_foot_is_brought_down_onto_the_floor_and_eased_back_in_the_air() {
+        // Through the contact the drop is -3 cm within 1 mm (the foot ends on the floor); it
+        // fades back toward zero once the foot is up, by less than 1 cm per frame, and is under
+        // a tenth of its size 8 frames after the contact.
+        let (lowest, down) = floating();
+        let e = leg_drops(&lowest, &down, 0.1, SMOOTHNESS, &mut Vec::new()).unwrap();
+        assert!(e[8..22].iter().all(|e| (e + 0.03).abs() < 0.001), "{e:?}");
+        assert!(e.windows(2).all(|w| (w[1] - w[0]).abs() < 0.01), "{e:?}");
+        assert!(e[33..].iter().all(|e| e.abs() < 0.003), "{e:?}");
+    }
+
+    #[test]
+    fn a_sinking_foot_is_raised_and_no_contact_means_no_move() {
+        let (mut lowest, down) = floating();
+        lowest.iter_mut().for_each(|l| *l -= 0.05);
+        let e = leg_drops(&lowest, &down, 0.1, SMOOTHNESS, &mut Vec::new()).unwrap();
+        assert!(e[8..22].iter().all(|e| (e - 0.02).abs() < 0.001), "{e:?}");
+        let none = vec![false; 40];
+        assert!(leg_drops(&lowest, &none, 0.1, SMOOTHNESS, &mut Vec::new()).unwrap().iter().all(|e| *e == 0.0));
+        let e = leg_drops(&lowest, &down[..39], 0.1, SMOOTHNESS, &mut Vec::new()).unwrap_err();
+        assert!(e.to_string().contains("39"), "{e}");
+        assert!(leg_drops(&lowest, &down, 0.1, f64::NAN, &mut Vec::new()).is_err());
     }
 }

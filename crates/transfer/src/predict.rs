@@ -95,7 +95,7 @@ pub struct Transferred {
     pub poses: Vec<mesh_core::rigid::RigidMotion>,
     /// Per-frame weight of the scaled source in the `blended` placement.
     pub blend_weights: Option<Vec<f64>>,
-    /// What the foot-skating clean-up did (None: not asked for, or no two leg parts).
+    /// What the feet clean-ups did (None: not asked for, or no two leg parts).
     pub planted: Option<crate::feet::Planted>,
     pub timing: Timing,
 }
@@ -104,8 +104,8 @@ pub struct Transferred {
 /// source coefficients -> target coefficients (and displacements) -> target
 /// parts (limbs turned by the model's limb orientation, `crate::limb_orientation`) ->
 /// assembled target mesh (or `reconstructor`'s §6 correction and
-/// stitching) -> placed from the source's first world pose -> with `footskate` (its smoothness
-/// λ), planted feet pinned ([`crate::feet`]).
+/// stitching) -> placed from the source's first world pose -> planted feet cleaned up as
+/// `feet` asks ([`crate::feet`]).
 pub fn transfer_motion(
     model: &GprModel,
     source_pca: &capture::part_pca::PcaModel,
@@ -113,7 +113,7 @@ pub fn transfer_motion(
     motion: &capture::align::AlignedMotion,
     placement: crate::placement::Placement,
     reconstructor: Option<&mut crate::reconstruct::Reconstructor>,
-    footskate: Option<f64>,
+    feet: &crate::feet::CleanUp,
 ) -> Result<Transferred> {
     use capture::align::root_poses;
     use crate::placement::{
@@ -168,10 +168,7 @@ pub fn transfer_motion(
     let start = scaled_start(&source_start.first().copied().unwrap_or_default(), ratio);
     let world_poses = world_poses(&poses(&start, &steps), &target_root);
     let mut frames = place(&world_poses, &frames);
-    let planted = match footskate {
-        Some(smoothness) => crate::feet::plant(&mut frames, source_pca, target_pca, motion, ratio, smoothness)?,
-        None => None,
-    };
+    let planted = crate::feet::plant(&mut frames, source_pca, target_pca, motion, ratio, feet)?;
     let decode_s = t2.elapsed().as_secs_f64();
     Ok(Transferred {
         frames,

@@ -14,11 +14,10 @@
 //! clearance, never lowered),
 //!
 //! smoothed in time by [`grounding::smooth`] (σ = [`SIGMA_FRAMES`]), moves every vertex `v` of
-//! that leg by `w(v) o_f(t) up`, with the leg weights of [`foot_lock::leg_weights`] (1 on the
+//! that leg by `w(v) o_f(t) up`, with the leg weights of [`mesh_core::feet::leg_weights`] (1 on the
 //! sole, 0 at the hip seam, so the seam never opens).
 //!
 //! [`grounding::smooth`]: crate::grounding::smooth
-//! [`foot_lock::leg_weights`]: crate::foot_lock::leg_weights
 
 use nalgebra::Vector3;
 

@@ -9,10 +9,9 @@
 //!
 //! `δ(t) = a_I − p_f(t)` (horizontal part, `t ∈ I`),
 //!
-//! is removed by displacing every vertex `v` of that leg by `w(v) δ(t)`. The weight is a
-//! smoothstep of the template height along the leg: `w = 1` on the sole vertices (so the sole
-//! centroid lands exactly on `a_I`), `w = 0` at and above the lowest vertex of the leg part's
-//! boundary loop (the hip seam with the torso, so the seam never opens). Between contacts the
+//! is removed by displacing every vertex `v` of that leg by `w(v) δ(t)`, with the leg weights of
+//! [`mesh_core::feet::leg_weights`]: `w = 1` on the sole vertices (so the sole centroid lands
+//! exactly on `a_I`), `w = 0` at the hip seam, so the seam never opens. Between contacts the
 //! displacement is eased in and out over [`EASE_FRAMES`] `= R` frames with the smoothstep `S`
 //! ([`displacements`]), so nothing pops when a contact starts or ends. Two easings ([`Ease`]):
 //! `position` (the default) blends the sole's horizontal *position* from its free path to the
@@ -28,7 +27,7 @@ use crate::footskate::intervals;
 use mesh_core::feet::feet_tracks;
 use crate::group::PartDef;
 use nalgebra::Vector3;
-use std::collections::HashSet;
+use mesh_core::feet::smoothstep;
 
 /// Frames `R` over which the displacement is eased in before and out after each contact.
 pub const EASE_FRAMES: usize = 4;
@@ -45,52 +44,6 @@ pub enum Ease {
     Position,
     /// Fade the contact's offset: the free path's velocity is kept up to the contact.
     Offset,
-}
-
-/// Smoothstep `3x² − 2x³` of `x` clamped to `[0, 1]`.
-fn smoothstep(x: f64) -> f64 {
-    let x = x.clamp(0.0, 1.0);
-    x * x * (3.0 - 2.0 * x)
-}
-
-/// Leg weights `(vertex, w(v))` with `w > 0`, one list per foot (module doc). `leg` is the leg
-/// part's vertices, `sole` its sole vertices; heights are template positions along `up`.
-pub fn leg_weights(
-    leg: &[u32],
-    sole: &[u32],
-    template: &[Vector3<f64>],
-    faces: &[[u32; 3]],
-    up: &Vector3<f64>,
-) -> Vec<(u32, f64)> {
-    let h = |v: u32| template[v as usize].dot(up);
-    let in_leg: HashSet<u32> = leg.iter().copied().collect();
-    let is_sole: HashSet<u32> = sole.iter().copied().collect();
-    // Boundary loop: leg vertices sharing a face with a vertex outside the leg.
-    let mut top = f64::INFINITY;
-    for f in faces {
-        if f.iter().any(|v| in_leg.contains(v)) && f.iter().any(|v| !in_leg.contains(v)) {
-            for &v in f.iter().filter(|v| in_leg.contains(v)) {
-                top = top.min(h(v));
-            }
-        }
-    }
-    if !top.is_finite() {
-        top = leg.iter().map(|&v| h(v)).fold(f64::NEG_INFINITY, f64::max);
-    }
-    let bottom = sole.iter().map(|&v| h(v)).fold(f64::NEG_INFINITY, f64::max);
-    let span = top - bottom;
-    leg.iter()
-        .filter_map(|&v| {
-            let w = if is_sole.contains(&v) {
-                1.0
-            } else if span > 0.0 {
-                1.0 - smoothstep((h(v) - bottom) / span)
-            } else {
-                0.0
-            };
-            (w > 0.0).then_some((v, w))
-        })
-        .collect()
 }
 
 /// Leg parts of a segmentation in the order of [`crate::metrics::soles`] (left first).
@@ -232,6 +185,7 @@ pub fn lock(
 #[cfg(test)]
 mod tests {
     use super::*;
+    use mesh_core::feet::leg_weights;
 
     /// A leg strip: vertex `i` at height `0.1 i` (i = 0..=10), plus a "torso" vertex 11 at
     /// height 1.0 sharing a face with the top leg vertex 10 (the seam). Sole: vertex 0.

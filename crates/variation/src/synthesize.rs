@@ -237,7 +237,7 @@ fn model_soles(model: &VariationModel) -> Vec<Vec<u32>> {
     )
 }
 
-/// [`foot_lock::leg_weights`] of the model's two leg parts (None without them).
+/// [`mesh_core::feet::leg_weights`] of the model's two leg parts (None without them).
 fn model_leg_weights(
     model: &VariationModel,
     soles: &[Vec<u32>; 2],
@@ -245,7 +245,7 @@ fn model_leg_weights(
     let parts: Vec<_> = model.parts.iter().map(|p| p.part.clone()).collect();
     match foot_lock::leg_parts(&parts).as_slice() {
         [l, r] => Some([0, 1].map(|f| {
-            foot_lock::leg_weights(
+            mesh_core::feet::leg_weights(
                 &[l, r][f].vertices,
                 &soles[f],
                 &model.template,
@@ -343,7 +343,7 @@ impl Job {
 }
 
 /// Per frame, the height of each leg's lowest point (`legs[f]`: the leg weights of
-/// [`foot_lock::leg_weights`], whose vertices are the leg) above `floor`.
+/// [`mesh_core::feet::leg_weights`], whose vertices are the leg) above `floor`.
 fn legs_above_floor(
     frames: &[Vec<Vector3<f64>>],
     legs: &[Vec<(u32, f64)>; 2],

@@ -71,6 +71,11 @@ pub struct Params {
     /// the contact residuals; larger: smoother root, feet pinned less tightly)
     #[arg(long, default_value_t = crate::feet::SMOOTHNESS)]
     pub footskate_smoothness: f64,
+    /// Do not put planted feet on the floor (by default, where the source has a foot down, the
+    /// target's leg is deformed, hip seam fixed, so that its lowest point is at the height of the
+    /// template's, smoothly in time; the root is not moved)
+    #[arg(long)]
+    pub no_foot_height: bool,
     /// Aligned source motion (from align)
     pub motion: PathBuf,
     /// Output folder of PLY frames 000000.ply, ... (the target's topology, one frame per source frame)
@@ -170,7 +175,12 @@ pub fn run(p: &Params) -> anyhow::Result<()> {
         &motion,
         p.placement,
         recon.as_mut(),
-        (!p.no_footskate).then_some(p.footskate_smoothness),
+        &crate::feet::CleanUp {
+            footskate: !p.no_footskate,
+            foot_height: !p.no_foot_height,
+            smoothness: p.footskate_smoothness,
+            faces: &faces,
+        },
     )
     .with_context(|| p.motion.display().to_string())?;
     let total = t0.elapsed().as_secs_f64();

@@ -210,12 +210,10 @@ fn source_measures(p: &Params, motion: &std::path::Path, pred: &MeshSequence) ->
         mesh_core::info!("{}: no two leg parts or no frame rate: no contacts", motion.display());
         return Ok(SourceMeasures::default());
     };
-    let Some(soles) = crate::feet::soles(&target_pca, &up) else {
+    let Some(target) = crate::feet::TargetFeet::of(&target_pca, &up) else {
         mesh_core::info!("{}: the target has no two leg parts: no soles", tp.display());
         return Ok(SourceMeasures::default());
     };
-    let template = target_pca.template_vertices();
-    let floor = soles.iter().flatten().map(|&v| template[v as usize].dot(&up)).fold(f64::INFINITY, f64::min);
-    without_truth(pred, &soles, floor, &found.contacts, (&found.world, &found.soles), &up)
+    without_truth(pred, &target, &found.contacts, (&found.world, &found.soles), &up)
         .with_context(|| p.prediction.display().to_string())
 }
