@@ -27,7 +27,7 @@ use anyhow::{bail, Context, Result};
 use mesh_core::TriMesh;
 use nalgebra::Vector3;
 
-use crate::body_graph::BodyGraph;
+use crate::body_graph::{BodyGraph, Distances};
 use crate::extremities::Extremities;
 
 
@@ -155,10 +155,10 @@ fn simple(lp: &[u32]) -> bool {
 
 /// The near and far loops of the limb ending at `extremity` (step 2 of the module doc), with
 /// the body's `centre` and the lengths of `s` multiplied by `scale`.
-fn limb_loops(graph: &BodyGraph, extremity: u32, centre: u32, skip: f64, scale: f64, s: &Settings) -> Result<([Vec<u32>; 2], [f64; 2])> {
-    let (step, window, lookback) = (s.step * scale, s.window * scale, s.lookback * scale);
-    let from = graph.distances(&[extremity]);
+fn limb_loops(graph: &BodyGraph, from: &Distances, centre: u32, meet: f64, skip: f64, s: &Settings) -> Result<([Vec<u32>; 2], [f64; 2])> {
+    let (step, window, lookback) = (s.step, s.window, s.lookback);
     let d = &from.d;
+    let extremity = from.path_from(centre).last().copied().unwrap_or(centre);
     // The shortest path from the extremity to the centre, and where it crosses between pieces.
     let mut path = from.path_from(centre);
     path.reverse();
@@ -172,7 +172,7 @@ fn limb_loops(graph: &BodyGraph, extremity: u32, centre: u32, skip: f64, scale: 
     let mut lengths: Vec<(f64, f64)> = Vec::new();
     let mut t = step;
     let mut end = None;
-    while t < dmax {
+    while t < dmax.min(meet) {
         if let Some(l) = levels.front_loops(t).into_iter().map(|(_, l)| l).max_by(f64::total_cmp) {
             // The longest loop between `window` and `lookback` back.
             let before = lengths
@@ -188,7 +188,11 @@ fn limb_loops(graph: &BodyGraph, extremity: u32, centre: u32, skip: f64, scale: 
         }
         t += step;
     }
-    let mut end = end.with_context(|| format!("no level set from vertex {extremity} separates a limb"))?;
+    let mut end = match end {
+        Some(t) => t,
+        None if meet.is_finite() && meet > skip => meet,
+        None => bail!("no level set from vertex {extremity} separates a limb"),
+    };
     if let Some(&c) = crossings.iter().find(|&&c| c > skip && c <= end && c >= end - window) {
         end = c;
     }
@@ -227,6 +231,21 @@ fn limb_loops(graph: &BodyGraph, extremity: u32, centre: u32, skip: f64, scale: 
     let (near, tn) = pick(near_t, &[])?;
     let (far, tf) = pick(far_t.min(tn - step), &near)?;
     Ok(([near, far], [tn, tf]))
+}
+
+/// Per limb, the level of its distance at which its front meets another limb's: the least
+/// distance from its extremity of a vertex at least as near another limb's extremity (the
+/// crotch for a leg, whose front meets the other leg's there). A limb's cut lies below it.
+fn meeting_levels(from: &[Distances]) -> Vec<f64> {
+    (0..from.len())
+        .map(|k| {
+            let d = &from[k].d;
+            (0..d.len())
+                .filter(|&v| from.iter().enumerate().any(|(j, o)| j != k && o.d[v] <= d[v]))
+                .map(|v| d[v])
+                .fold(f64::INFINITY, f64::min)
+        })
+        .collect()
 }
 
 /// What [`propose`] found: the extremities when it got that far, the limbs it could cut, and
@@ -274,13 +293,13 @@ pub fn propose(mesh: &TriMesh, up: &Vector3<f64>, s: &Settings, hints: &BTreeMap
         proposal.extremities = Some(ext);
         return proposal;
     }
-    // The lengths are in metres: scaling them with the body's height moved the demo bodies'
-    // cuts (B's arms fell off the body), so a template in other units is converted first.
-    let scale = 1.0;
-    for (part, name) in [("arm_l", "hand_l"), ("arm_r", "hand_r"), ("leg_l", "foot_l"), ("leg_r", "foot_r")] {
+    let limbs = [("arm_l", "hand_l"), ("arm_r", "hand_r"), ("leg_l", "foot_l"), ("leg_r", "foot_r")];
+    let from: Vec<Distances> = limbs.iter().map(|(_, name)| graph.distances(&[ext.vertex(name).unwrap_or(0)])).collect();
+    let meet = meeting_levels(&from);
+    for (k, (part, name)) in limbs.iter().enumerate() {
         let e = ext.vertex(name).unwrap_or(0);
         let skip = ext.height * if part.starts_with("arm") { s.skip_arm } else { s.skip_leg };
-        match limb_loops(&graph, e, ext.centre, skip, scale, s) {
+        match limb_loops(&graph, &from[k], ext.centre, meet[k], skip, s) {
             Ok((loops, levels)) => proposal.limbs.push(Limb { part: part.to_string(), extremity: e, loops, levels }),
             Err(err) => {
                 proposal.error = Some(anyhow::anyhow!(
