@@ -35,7 +35,7 @@ use anyhow::{bail, Result};
 use mesh_core::TriMesh;
 use nalgebra::Vector3;
 
-use crate::body_graph::BodyGraph;
+use crate::body_graph::{BodyGraph, Distances};
 
 /// The names of the five extremities, as `--extremity` takes them.
 pub const NAMES: [&str; 5] = ["head", "hand_l", "hand_r", "foot_l", "foot_r"];
@@ -50,10 +50,13 @@ pub const LIMB_SEPARATION: f64 = 0.4;
 pub const SIDE_OFFSET: f64 = 0.03;
 /// The head is the candidate highest along the up axis less this many times its horizontal
 /// distance from the centre.
-pub const HEAD_OFFSET_WEIGHT: f64 = 1.0;
+pub const HEAD_OFFSET_WEIGHT: f64 = 2.0;
 /// A tip whose head excess is below this fraction of the head's distance to the centre hangs
 /// from the head.
 pub const HANGING_EXCESS: f64 = 0.7;
+/// A hand's branch leaves the spine (head to foot) within this fraction of it from the head
+/// (at the shoulder); a tail's or the other leg's leaves it at the hip.
+pub const UPPER_BODY: f64 = 0.45;
 
 /// The five chosen extremities and the body frame.
 #[derive(Clone, Debug)]
@@ -185,7 +188,9 @@ pub fn find(graph: &BodyGraph, up: &Vector3<f64>, hints: &BTreeMap<String, u32>)
         .unwrap_or(start);
     let dc = graph.distances(&[centre]).d;
     // Each sampled candidate moved up the distance from the centre to the tip it lies on
-    // (a point half-way down a leg becomes the toe), duplicates dropped.
+    // (a point half-way down a leg becomes the toe); of tips nearer each other than
+    // MIN_SEPARATION the one farthest from the centre is kept (the top of the head, not the end
+    // of a braid hidden inside it).
     let mut snapped: Vec<u32> = Vec::new();
     for t in &tips[hinted..] {
         let mut v = t.v;
@@ -197,6 +202,7 @@ pub fn find(graph: &BodyGraph, up: &Vector3<f64>, hints: &BTreeMap<String, u32>)
         }
     }
     tips.truncate(hinted);
+    snapped.sort_by(|&a, &b| dc[b as usize].total_cmp(&dc[a as usize]).then(a.cmp(&b)));
     for v in snapped {
         let d = graph.distances(&[v]).d;
         if tips.iter().all(|t| d[t.v as usize] > MIN_SEPARATION * extent) {
@@ -204,21 +210,32 @@ pub fn find(graph: &BodyGraph, up: &Vector3<f64>, hints: &BTreeMap<String, u32>)
         }
     }
     let free: Vec<usize> = (hinted..tips.len()).filter(|&k| (0..hinted).all(|j| tips[j].d[tips[k].v as usize] > MIN_SEPARATION * extent)).collect();
-    let hint = |name: &str| hints.get(name).map(|&v| tips.iter().position(|t| t.v == v).unwrap_or(0));
 
-    // 2. Head: high and over the centre.
+    // 2. Head: high and over the centre, at the top of the blob its tip lies on (the tip is
+    // where the blob is farthest from the centre, which on a head modelled as a piece of its
+    // own is opposite where it is joined, not its top).
+    let top = |k: usize| {
+        (0..n as u32).filter(|&v| tips[k].d[v as usize] < MIN_SEPARATION * extent).max_by(|&a, &b| h(a).total_cmp(&h(b))).unwrap_or(tips[k].v)
+    };
     let over_centre = |k: usize| {
-        let off = pos[tips[k].v as usize] - pos[centre as usize];
-        h(tips[k].v) - HEAD_OFFSET_WEIGHT * (off - up * off.dot(up)).norm()
+        let off = pos[top(k) as usize] - pos[centre as usize];
+        h(top(k)) - HEAD_OFFSET_WEIGHT * (off - up * off.dot(up)).norm()
     };
-    let head = match hint("head") {
+    let hinted_head = hints.get("head").map(|&v| tips.iter().position(|t| t.v == v).unwrap_or(0));
+    let head = match hinted_head {
         Some(k) => k,
-        None => free
-            .iter()
-            .copied()
-            .max_by(|&a, &b| over_centre(a).total_cmp(&over_centre(b)))
-            .ok_or_else(|| anyhow::anyhow!("no candidate for the head"))?,
+        None => {
+            let k = free
+                .iter()
+                .copied()
+                .max_by(|&a, &b| over_centre(a).total_cmp(&over_centre(b)))
+                .ok_or_else(|| anyhow::anyhow!("no candidate for the head"))?;
+            let v = top(k);
+            tips[k] = Tip { v, d: graph.distances(&[v]).d };
+            k
+        }
     };
+    let hint = |name: &str| hints.get(name).map(|&v| tips.iter().position(|t| t.v == v).unwrap_or(0));
     let hv = tips[head].v;
     let dh = &tips[head].d;
     let to_head = dc[hv as usize];
@@ -228,16 +245,6 @@ pub fn find(graph: &BodyGraph, up: &Vector3<f64>, hints: &BTreeMap<String, u32>)
     let hanging: Vec<usize> = free.iter().copied().filter(|&k| k != head && !near_head(k) && excess(k) < HANGING_EXCESS * to_head).collect();
     let limbs: Vec<usize> = free.iter().copied().filter(|&k| k != head && !near_head(k) && !hanging.contains(&k)).collect();
 
-    if mesh_core::cli::verbosity() >= 2 {
-        for &k in &free {
-            let p = pos[tips[k].v as usize];
-            mesh_core::info!(
-                "candidate {} ({:.3}, {:.3}, {:.3}): to the centre {:.3}, head excess {:.3}{}",
-                tips[k].v, p.x, p.y, p.z, dc[tips[k].v as usize], excess(k),
-                if k == head { " (head)" } else if hanging.contains(&k) { " (hangs from the head)" } else if near_head(k) { " (on the head)" } else { "" }
-            );
-        }
-    }
     // 4. Feet, then hands: symmetric pairs far apart.
     let dck = |k: usize| dc[tips[k].v as usize];
     let apart = |a: usize, b: usize| tips[a].d[tips[b].v as usize] > 0.8 * dck(a).min(dck(b));
@@ -265,23 +272,41 @@ pub fn find(graph: &BodyGraph, up: &Vector3<f64>, hints: &BTreeMap<String, u32>)
     // when the toes tell left from right, one on each side of the plane half-way between the feet.
     let height = h(hv) - h(tips[feet[0]].v).min(h(tips[feet[1]].v));
     let left = body_left(graph, up, [tips[feet[0]].v, tips[feet[1]].v], height);
-    let mid = (pos[tips[feet[0]].v as usize] + pos[tips[feet[1]].v as usize]) / 2.0;
-    let lateral = |k: usize| (pos[tips[k].v as usize] - mid).dot(&left);
     let off_feet = |k: &usize| feet.iter().all(|&f| tips[f].d[tips[*k].v as usize] > LIMB_SEPARATION * extent);
-    let rest: Vec<usize> = limbs.iter().copied().filter(|k| !feet.contains(k)).filter(off_feet).collect();
+    // Where each tip's branch leaves the path from the head to the nearer foot, and how long it is.
+    let branch = Branches::new(graph, hv, [&tips[feet[0]].d, &tips[feet[1]].d]);
+    let spine = branch.spine;
+    let upper = |k: &usize| {
+        let (_, along) = branch.of(tips[*k].v);
+        along > HANGING_EXCESS * 0.5 * to_head && along < UPPER_BODY * spine
+    };
+    let rest: Vec<usize> = limbs.iter().copied().filter(|k| !feet.contains(k)).filter(off_feet).filter(upper).collect();
     let o = SIDE_OFFSET * extent;
-    let sides = |a: usize, b: usize| left.norm() == 0.0 || (lateral(a) > o && lateral(b) < -o) || (lateral(a) < -o && lateral(b) > o);
-    // Far from the centre along the body and in space (the inner end of an arm modelled as a
-    // piece pushed into the torso is a tip too, but a near one).
-    let reach = |k: usize| dck(k) + (pos[tips[k].v as usize] - pos[centre as usize]).norm();
-    let hands_cost = |a: usize, b: usize| if sides(a, b) { 2.0 * asymmetry(a, b) - (reach(a) + reach(b)) / extent } else { f64::INFINITY };
+    let root_side = |k: usize| branch.root(tips[k].v, &tips[k].d).dot(&left);
+    let sides = |a: usize, b: usize| left.norm() == 0.0 || (root_side(a) - root_side(b)).abs() > o;
+    let length = |k: usize| branch.of(tips[k].v).0;
+    let hands_cost = |a: usize, b: usize| {
+        // Two arms, not two ends of one: their branches share no way to each other.
+        let own_branches = tips[a].d[tips[b].v as usize] > 0.9 * (length(a) + length(b));
+        if sides(a, b) && own_branches { ((length(a) - length(b)).abs() - length(a) - length(b)) / extent } else { f64::INFINITY }
+    };
+    if mesh_core::cli::verbosity() >= 2 {
+        for &k in &free {
+            let p = pos[tips[k].v as usize];
+            mesh_core::info!(
+                "candidate {} ({:.3}, {:.3}, {:.3}): to the centre {:.3}, head excess {:.3}, branch {:.3} leaving the spine {:.3} from the head, root side {:.3}{}",
+                tips[k].v, p.x, p.y, p.z, dc[tips[k].v as usize], excess(k), branch.of(tips[k].v).0, branch.of(tips[k].v).1, root_side(k),
+                if k == head { " (head)" } else if hanging.contains(&k) { " (hangs from the head)" } else if near_head(k) { " (on the head)" } else { "" }
+            );
+        }
+    }
     let hands = pair(&rest, [hint("hand_l"), hint("hand_r")], &hands_cost)
         .filter(|p| hands_cost(p[0], p[1]).is_finite() || (hint("hand_l").is_some() && hint("hand_r").is_some()))
         .ok_or_else(|| anyhow::anyhow!("no pair of tips for the hands (head at vertex {hv})"))?;
 
     // 5. Left and right.
     let side = |k: usize| pos[tips[k].v as usize].dot(&left);
-    let order = |p: [usize; 2], l: Option<usize>, r: Option<usize>| -> [usize; 2] {
+    let order_by = |p: [usize; 2], l: Option<usize>, r: Option<usize>, side: &dyn Fn(usize) -> f64| -> [usize; 2] {
         match (l, r) {
             (Some(l), _) => [l, if p[0] == l { p[1] } else { p[0] }],
             (None, Some(r)) => [if p[0] == r { p[1] } else { p[0] }, r],
@@ -289,7 +314,8 @@ pub fn find(graph: &BodyGraph, up: &Vector3<f64>, hints: &BTreeMap<String, u32>)
             _ => [p[1], p[0]],
         }
     };
-    let hands = order(hands, hint("hand_l"), hint("hand_r"));
+    let order = |p: [usize; 2], l: Option<usize>, r: Option<usize>| order_by(p, l, r, &side);
+    let hands = order_by(hands, hint("hand_l"), hint("hand_r"), &root_side);
     let feet = order(feet, hint("foot_l"), hint("foot_r"));
     let missing_side = left.norm() == 0.0 && (hint("hand_l").or(hint("hand_r")).is_none() || hint("foot_l").or(hint("foot_r")).is_none());
     let ext = Extremities {
@@ -301,6 +327,45 @@ pub fn find(graph: &BodyGraph, up: &Vector3<f64>, hints: &BTreeMap<String, u32>)
         sided: !missing_side,
     };
     Ok(ext)
+}
+
+/// The branches of the body off its spine, the shortest path from the head to the nearer foot:
+/// a tip `x` leaves it at `along = (d(x, head) - d(x, foot) + d(head, foot)) / 2` from the head
+/// (the Gromov product), by a branch `length = d(x, head) - along` long. An arm leaves it at the
+/// shoulder, high up; hair at the head, a tail or the other leg at the hip.
+struct Branches<'a> {
+    graph: &'a BodyGraph<'a>,
+    head: u32,
+    /// Distances from the head, with its shortest paths.
+    from_head: Distances,
+    feet: [&'a [f64]; 2],
+    /// Length of the spine.
+    spine: f64,
+}
+
+impl<'a> Branches<'a> {
+    fn new(graph: &'a BodyGraph<'a>, head: u32, feet: [&'a [f64]; 2]) -> Self {
+        let spine = feet[0][head as usize].min(feet[1][head as usize]);
+        Branches { graph, head, from_head: graph.distances(&[head]), feet, spine }
+    }
+
+    /// `(length, along)` of the branch ending at `x`.
+    fn of(&self, x: u32) -> (f64, f64) {
+        let (x, h) = (x as usize, self.head as usize);
+        let foot = if self.feet[0][x] <= self.feet[1][x] { self.feet[0] } else { self.feet[1] };
+        let dh = self.from_head.d[x];
+        let along = ((dh - foot[x] + foot[h]) / 2.0).clamp(0.0, dh);
+        (dh - along, along)
+    }
+
+    /// Where the branch ending at `x` joins the spine: the vertex of its shortest path to the
+    /// head `length` from `x` (`dx`: distances from `x`).
+    fn root(&self, x: u32, dx: &[f64]) -> Vector3<f64> {
+        let (length, _) = self.of(x);
+        let path = self.from_head.path_from(x);
+        let v = path.iter().copied().find(|&v| dx[v as usize] >= length).unwrap_or(self.head);
+        self.graph.position(v)
+    }
 }
 
 /// The body's left (`up × forward`), forward being where the toes point: the horizontal

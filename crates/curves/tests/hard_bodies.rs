@@ -128,6 +128,7 @@ fn add_fin(b: &mut Body) {
 
 /// The proposed parts of `b` (segmented as `segment` does) and the vertices of each.
 fn proposed_parts(b: &Body, hints: &BTreeMap<String, u32>) -> BTreeMap<String, Vec<u32>> {
+    if let Ok(d) = std::env::var("DUMP") { mesh_core::io::write_ply(format!("/tmp/pc/hb-{d}-{}.ply", std::thread::current().name().unwrap_or("x")), &b.mesh).unwrap(); }
     let limbs = propose(&b.mesh, &Vector3::y(), &Settings::default(), hints).into_result().unwrap();
     let value = with_curves(serde_json::json!({"fps": 25, "up": "+y"}), &limbs).unwrap();
     let spec: SubjectSpec = serde_json::from_value(value).unwrap();
