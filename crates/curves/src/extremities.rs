@@ -54,9 +54,11 @@ pub const HEAD_OFFSET_WEIGHT: f64 = 2.0;
 /// A tip whose head excess is below this fraction of the head's distance to the centre hangs
 /// from the head.
 pub const HANGING_EXCESS: f64 = 0.7;
-/// A hand's branch leaves the spine (head to foot) within this fraction of it from the head
-/// (at the shoulder); a tail's or the other leg's leaves it at the hip.
-pub const UPPER_BODY: f64 = 0.45;
+/// The root of a hand's branch (its shoulder) lies higher than this fraction of the body's
+/// height above the lower foot; a tail's lies at the hip.
+pub const UPPER_BODY: f64 = 0.5;
+/// A hand's side is that of its branch this fraction of the way from the hand to the spine.
+pub const ROOT_FRACTION: f64 = 0.85;
 
 /// The five chosen extremities and the body frame.
 #[derive(Clone, Debug)]
@@ -275,11 +277,9 @@ pub fn find(graph: &BodyGraph, up: &Vector3<f64>, hints: &BTreeMap<String, u32>)
     let off_feet = |k: &usize| feet.iter().all(|&f| tips[f].d[tips[*k].v as usize] > LIMB_SEPARATION * extent);
     // Where each tip's branch leaves the path from the head to the nearer foot, and how long it is.
     let branch = Branches::new(graph, hv, [&tips[feet[0]].d, &tips[feet[1]].d]);
-    let spine = branch.spine;
-    let upper = |k: &usize| {
-        let (_, along) = branch.of(tips[*k].v);
-        along > HANGING_EXCESS * 0.5 * to_head && along < UPPER_BODY * spine
-    };
+    // An arm leaves the body at the shoulder, high up; a tail at the hip.
+    let root_height = |k: usize| (branch.root(tips[k].v, &tips[k].d).dot(up) - (h(hv) - height)) / height;
+    let upper = |k: &usize| root_height(*k) > UPPER_BODY;
     let rest: Vec<usize> = limbs.iter().copied().filter(|k| !feet.contains(k)).filter(off_feet).filter(upper).collect();
     let o = SIDE_OFFSET * extent;
     let root_side = |k: usize| branch.root(tips[k].v, &tips[k].d).dot(&left);
@@ -291,11 +291,12 @@ pub fn find(graph: &BodyGraph, up: &Vector3<f64>, hints: &BTreeMap<String, u32>)
         if sides(a, b) && own_branches { ((length(a) - length(b)).abs() - length(a) - length(b)) / extent } else { f64::INFINITY }
     };
     if mesh_core::cli::verbosity() >= 2 {
+        mesh_core::info!("the legs part {:.3} from the head along the spine", branch.crotch);
         for &k in &free {
             let p = pos[tips[k].v as usize];
             mesh_core::info!(
-                "candidate {} ({:.3}, {:.3}, {:.3}): to the centre {:.3}, head excess {:.3}, branch {:.3} leaving the spine {:.3} from the head, root side {:.3}{}",
-                tips[k].v, p.x, p.y, p.z, dc[tips[k].v as usize], excess(k), branch.of(tips[k].v).0, branch.of(tips[k].v).1, root_side(k),
+                "candidate {} ({:.3}, {:.3}, {:.3}): to the centre {:.3}, head excess {:.3}, branch {:.3} leaving the spine {:.3} from the head, root side {:.3} height {:.3}{}",
+                tips[k].v, p.x, p.y, p.z, dc[tips[k].v as usize], excess(k), branch.of(tips[k].v).0, branch.of(tips[k].v).1, root_side(k), root_height(k),
                 if k == head { " (head)" } else if hanging.contains(&k) { " (hangs from the head)" } else if near_head(k) { " (on the head)" } else { "" }
             );
         }
@@ -339,14 +340,18 @@ struct Branches<'a> {
     /// Distances from the head, with its shortest paths.
     from_head: Distances,
     feet: [&'a [f64]; 2],
-    /// Length of the spine.
-    spine: f64,
+    /// Where the legs part (the other foot's branch leaves the spine), from the head.
+    pub crotch: f64,
 }
 
 impl<'a> Branches<'a> {
     fn new(graph: &'a BodyGraph<'a>, head: u32, feet: [&'a [f64]; 2]) -> Self {
-        let spine = feet[0][head as usize].min(feet[1][head as usize]);
-        Branches { graph, head, from_head: graph.distances(&[head]), feet, spine }
+        let from_head = graph.distances(&[head]);
+        // The other foot's branch off the path from the head to one foot.
+        let foot = |k: usize| (0..feet[k].len()).find(|&v| feet[k][v] == 0.0).unwrap_or(0);
+        let (f0, f1) = (foot(0), foot(1));
+        let crotch = ((from_head.d[f1] - feet[0][f1] + from_head.d[f0]) / 2.0).max(0.0);
+        Branches { graph, head, from_head, feet, crotch }
     }
 
     /// `(length, along)` of the branch ending at `x`.
@@ -358,12 +363,14 @@ impl<'a> Branches<'a> {
         (dh - along, along)
     }
 
-    /// Where the branch ending at `x` joins the spine: the vertex of its shortest path to the
-    /// head `length` from `x` (`dx`: distances from `x`).
+    /// The root of the branch ending at `x`, just before it joins the spine: the vertex of its
+    /// shortest path to the head [`ROOT_FRACTION`] of its length from `x` (`dx`: distances from
+    /// `x`). Where the branches join the spine (at the neck, for arms whose way to the head
+    /// passes over the shoulders) does not tell the sides; the shoulders do.
     fn root(&self, x: u32, dx: &[f64]) -> Vector3<f64> {
         let (length, _) = self.of(x);
         let path = self.from_head.path_from(x);
-        let v = path.iter().copied().find(|&v| dx[v as usize] >= length).unwrap_or(self.head);
+        let v = path.iter().copied().find(|&v| dx[v as usize] >= ROOT_FRACTION * length).unwrap_or(self.head);
         self.graph.position(v)
     }
 }

@@ -167,6 +167,13 @@ fn limb_loops(graph: &BodyGraph, from: &Distances, centre: u32, meet: f64, skip:
         .filter(|w| graph.component[w[0] as usize] != graph.component[w[1] as usize])
         .map(|w| d[w[0] as usize])
         .collect();
+    // Where the path enters the piece the centre lies on: a limb modelled as its own piece is
+    // cut before its join to the body, wherever that join is.
+    let body = graph.component[centre as usize];
+    let entry = path
+        .windows(2)
+        .find(|w| graph.component[w[0] as usize] != body && graph.component[w[1] as usize] == body)
+        .map(|w| d[w[0] as usize]);
     let dmax = d.iter().copied().filter(|x| x.is_finite()).fold(0.0, f64::max);
     let levels = LevelSets::new(graph, d);
     let mut lengths: Vec<(f64, f64)> = Vec::new();
@@ -196,13 +203,14 @@ fn limb_loops(graph: &BodyGraph, from: &Distances, centre: u32, meet: f64, skip:
     if let Some(&c) = crossings.iter().find(|&&c| c > skip && c <= end && c >= end - window) {
         end = c;
     }
+    if let Some(c) = entry.filter(|&c| c > 2.0 * step && c < end) {
+        end = c;
+    }
     let near_t = end * (1.0 - s.margin);
     let far_t = near_t * (1.0 - s.band);
     // The vertex of the path at distance `t`.
-    let on_path = |t: f64| -> Vector3<f64> {
-        let v = path.iter().copied().find(|&v| d[v as usize] >= t).unwrap_or(centre);
-        graph.position(v)
-    };
+    let on_path_vertex = |t: f64| path.iter().copied().find(|&v| d[v as usize] >= t).unwrap_or(centre);
+    let on_path = |t: f64| -> Vector3<f64> { graph.position(on_path_vertex(t)) };
     // The nearest level to `target` whose loop round the path is simple and shares no vertex
     // with `avoid` (on a coarse mesh two nearby levels can share their loop).
     let pick = |target: f64, avoid: &[u32]| -> Result<(Vec<u32>, f64)> {
@@ -214,10 +222,12 @@ fn limb_loops(graph: &BodyGraph, from: &Distances, centre: u32, meet: f64, skip:
                 }
                 let p = on_path(t);
                 let gap = |lp: &[u32]| lp.iter().map(|&v| (graph.position(v) - p).norm()).fold(f64::INFINITY, f64::min);
+                let piece = graph.component[on_path_vertex(t) as usize];
+                let on_piece = levels.front_loops(t).into_iter().filter(|(lp, _)| graph.component[lp[0] as usize] == piece);
                 let round_path = if graph.n_components == 1 {
-                    levels.front_loops(t).into_iter().max_by(|a, b| a.1.total_cmp(&b.1))
+                    on_piece.max_by(|a, b| a.1.total_cmp(&b.1))
                 } else {
-                    levels.front_loops(t).into_iter().min_by(|a, b| gap(&a.0).total_cmp(&gap(&b.0)))
+                    on_piece.min_by(|a, b| gap(&a.0).total_cmp(&gap(&b.0)))
                 };
                 if let Some((lp, _)) = round_path {
                     if simple(&lp) && !lp.iter().any(|v| avoid.contains(v)) {
