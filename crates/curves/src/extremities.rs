@@ -40,7 +40,7 @@ use crate::body_graph::{BodyGraph, Distances};
 /// The names of the five extremities, as `--extremity` takes them.
 pub const NAMES: [&str; 5] = ["head", "hand_l", "hand_r", "foot_l", "foot_r"];
 /// Most candidate tips kept by the farthest-point sampling.
-pub const MAX_CANDIDATES: usize = 16;
+pub const MAX_CANDIDATES: usize = 24;
 /// Least geodesic distance between two candidates, in body heights (the fingers of one hand
 /// give one candidate).
 pub const MIN_SEPARATION: f64 = 0.1;
@@ -188,7 +188,8 @@ pub fn find(graph: &BodyGraph, up: &Vector3<f64>, hints: &BTreeMap<String, u32>)
             far(a).total_cmp(&far(b)).then(a.cmp(&b))
         })
         .unwrap_or(start);
-    let dc = graph.distances(&[centre]).d;
+    let from_centre = graph.distances(&[centre]);
+    let dc = &from_centre.d;
     // Each sampled candidate moved up the distance from the centre to the tip it lies on
     // (a point half-way down a leg becomes the toe); of tips nearer each other than
     // MIN_SEPARATION the one farthest from the centre is kept (the top of the head, not the end
@@ -284,7 +285,14 @@ pub fn find(graph: &BodyGraph, up: &Vector3<f64>, hints: &BTreeMap<String, u32>)
     let o = SIDE_OFFSET * extent;
     let root_side = |k: usize| branch.root(tips[k].v, &tips[k].d).dot(&left);
     let sides = |a: usize, b: usize| left.norm() == 0.0 || (root_side(a) - root_side(b)).abs() > o;
-    let length = |k: usize| branch.of(tips[k].v).0;
+    // A branch counts up to where it enters the body's piece: a limb modelled as a piece of its
+    // own is joined where it is pushed into the body, at its root, a prop anywhere along it.
+    let body = graph.component[centre as usize];
+    let to_body = |k: usize| {
+        let path = from_centre.path_from(tips[k].v);
+        path.iter().find(|&&v| graph.component[v as usize] == body).map_or(0.0, |&v| tips[k].d[v as usize])
+    };
+    let length = |k: usize| branch.of(tips[k].v).0.min(if graph.component[tips[k].v as usize] == body { f64::INFINITY } else { to_body(k) });
     let hands_cost = |a: usize, b: usize| {
         // Two arms, not two ends of one: their branches share no way to each other.
         let own_branches = tips[a].d[tips[b].v as usize] > 0.9 * (length(a) + length(b));

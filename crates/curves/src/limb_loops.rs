@@ -208,40 +208,68 @@ fn limb_loops(graph: &BodyGraph, from: &Distances, centre: u32, meet: f64, skip:
     }
     let near_t = end * (1.0 - s.margin);
     let far_t = near_t * (1.0 - s.band);
-    // The vertex of the path at distance `t`.
-    let on_path_vertex = |t: f64| path.iter().copied().find(|&v| d[v as usize] >= t).unwrap_or(centre);
-    let on_path = |t: f64| -> Vector3<f64> { graph.position(on_path_vertex(t)) };
-    // The nearest level to `target` whose loop round the path is simple and shares no vertex
-    // with `avoid` (on a coarse mesh two nearby levels can share their loop).
-    let pick = |target: f64, avoid: &[u32]| -> Result<(Vec<u32>, f64)> {
-        for k in 0..60 {
-            for sign in [-1.0, 1.0] {
-                let t = target + sign * k as f64 * step * 0.5;
-                if t <= 0.0 {
-                    continue;
-                }
-                let p = on_path(t);
-                let gap = |lp: &[u32]| lp.iter().map(|&v| (graph.position(v) - p).norm()).fold(f64::INFINITY, f64::min);
-                let piece = graph.component[on_path_vertex(t) as usize];
-                let on_piece = levels.front_loops(t).into_iter().filter(|(lp, _)| graph.component[lp[0] as usize] == piece);
-                let round_path = if graph.n_components == 1 {
-                    on_piece.max_by(|a, b| a.1.total_cmp(&b.1))
-                } else {
-                    on_piece.min_by(|a, b| gap(&a.0).total_cmp(&gap(&b.0)))
-                };
-                if let Some((lp, _)) = round_path {
-                    if simple(&lp) && !lp.iter().any(|v| avoid.contains(v)) {
-                        return Ok((lp, t));
-                    }
-                }
+    let rings = rings(graph, &levels, &path, d, step, end, &[near_t, far_t]);
+    choose_loops(&rings, near_t, far_t).with_context(|| format!("no two loops round the limb of vertex {extremity} below distance {end:.3}"))
+}
+
+/// The distinct simple loops round `path` (from the extremity, with distances `d`) at the levels
+/// `step, 2 step, ...` and `also` below `end`, each with the first level it is the loop at: on a
+/// coarse mesh one ring of vertices is the loop of a range of levels.
+fn rings(graph: &BodyGraph, levels: &LevelSets, path: &[u32], d: &[f64], step: f64, end: f64, also: &[f64]) -> Vec<(Vec<u32>, f64)> {
+    let mut ts: Vec<f64> = (1..).map(|k| k as f64 * step).take_while(|&t| t < end).chain(also.iter().copied().filter(|&t| t > 0.0 && t < end)).collect();
+    ts.sort_by(f64::total_cmp);
+    let mut rings: Vec<(Vec<u32>, f64)> = Vec::new();
+    let mut seen: Vec<Vec<u32>> = Vec::new();
+    for t in ts {
+        if let Some(lp) = round_path(graph, levels, path, d, t).filter(|lp| simple(lp)) {
+            let mut key = lp.clone();
+            key.sort_unstable();
+            if !seen.contains(&key) {
+                seen.push(key);
+                rings.push((lp, t));
             }
         }
-        bail!("no simple loop near distance {target:.3} from vertex {extremity}")
-    };
-    let (near, tn) = pick(near_t, &[])?;
-    let (far, tf) = pick(far_t.min(tn - step), &near)?;
-    Ok(([near, far], [tn, tf]))
+    }
+    rings
 }
+
+/// The loop at level `t` round the path: on the piece of the mesh the path is on at `t`, the
+/// longest (one piece) or the nearest the path (the loops of other pieces' holes are no cut).
+fn round_path(graph: &BodyGraph, levels: &LevelSets, path: &[u32], d: &[f64], t: f64) -> Option<Vec<u32>> {
+    let at = path.iter().copied().find(|&v| d[v as usize] >= t).or(path.last().copied())?;
+    let p = graph.position(at);
+    let gap = |lp: &[u32]| lp.iter().map(|&v| (graph.position(v) - p).norm()).fold(f64::INFINITY, f64::min);
+    let on_piece = levels.front_loops(t).into_iter().filter(|(lp, _)| graph.component[lp[0] as usize] == graph.component[at as usize]);
+    let best = if graph.n_components == 1 {
+        on_piece.max_by(|a, b| a.1.total_cmp(&b.1))
+    } else {
+        on_piece.min_by(|a, b| gap(&a.0).total_cmp(&gap(&b.0)))
+    };
+    best.map(|(lp, _)| lp)
+}
+
+/// The near loop: the last ring at or below `near_t` (else the first); the far loop: the ring
+/// before it nearest `far_t` sharing no vertex with it, or when there is none, the near ring
+/// with the next ring up as the near loop.
+fn choose_loops(rings: &[(Vec<u32>, f64)], near_t: f64, far_t: f64) -> Result<([Vec<u32>; 2], [f64; 2])> {
+    let disjoint = |a: &[u32], b: &[u32]| !a.iter().any(|v| b.contains(v));
+    let near = rings.iter().rposition(|(_, t)| *t <= near_t).unwrap_or(0);
+    let below = |near: usize| {
+        rings[..near]
+            .iter()
+            .filter(|(lp, _)| disjoint(lp, &rings[near].0))
+            .min_by(|a, b| (a.1 - far_t).abs().total_cmp(&(b.1 - far_t).abs()))
+    };
+    let (near, far) = match below(near) {
+        Some(far) => (&rings[near], far),
+        None => {
+            let up = rings.get(near + 1).filter(|(lp, _)| disjoint(lp, &rings[near].0)).context("one ring only")?;
+            (up, &rings[near])
+        }
+    };
+    Ok(([near.0.clone(), far.0.clone()], [near.1, far.1]))
+}
+
 
 /// Per limb, the level of its distance at which its front meets another limb's: the least
 /// distance from its extremity of a vertex at least as near another limb's extremity (the
