@@ -57,6 +57,14 @@ pub const HANGING_EXCESS: f64 = 0.7;
 /// The root of a hand's branch (its shoulder) lies higher than this fraction of the body's
 /// height above the lower foot; a tail's lies at the hip.
 pub const UPPER_BODY: f64 = 0.5;
+/// The hands are the pair of branches longest together less this many times the difference of
+/// their lengths (the two arms are about as long).
+pub const ARM_ASYMMETRY: f64 = 1.5;
+/// A hand is wider than this fraction of the body's height (a braid, a strap or a cord is not).
+pub const HAND_WIDTH: f64 = 0.025;
+/// A hand lies higher than this fraction of the body's height above the lower foot (above the
+/// knees; a tail's tip lies lower).
+pub const HAND_LOWEST: f64 = 0.25;
 /// A hand's side is that of its branch this fraction of the way from the hand to the spine.
 pub const ROOT_FRACTION: f64 = 0.85;
 
@@ -280,8 +288,9 @@ pub fn find(graph: &BodyGraph, up: &Vector3<f64>, hints: &BTreeMap<String, u32>)
     let branch = Branches::new(graph, hv, [&tips[feet[0]].d, &tips[feet[1]].d]);
     // An arm leaves the body at the shoulder, high up; a tail at the hip.
     let root_height = |k: usize| (branch.root(tips[k].v, &tips[k].d).dot(up) - (h(hv) - height)) / height;
-    let upper = |k: &usize| root_height(*k) > UPPER_BODY;
-    let rest: Vec<usize> = limbs.iter().copied().filter(|k| !feet.contains(k)).filter(off_feet).filter(upper).collect();
+    let upper = |k: &usize| root_height(*k) > UPPER_BODY && (h(tips[*k].v) - (h(hv) - height)) / height > HAND_LOWEST;
+    let thick = |k: &usize| tip_width(graph, tips[*k].v, &tips[*k].d, extent) > HAND_WIDTH * extent;
+    let rest: Vec<usize> = limbs.iter().copied().filter(|k| !feet.contains(k)).filter(off_feet).filter(upper).filter(thick).collect();
     let o = SIDE_OFFSET * extent;
     let root_side = |k: usize| branch.root(tips[k].v, &tips[k].d).dot(&left);
     let sides = |a: usize, b: usize| left.norm() == 0.0 || (root_side(a) - root_side(b)).abs() > o;
@@ -296,15 +305,15 @@ pub fn find(graph: &BodyGraph, up: &Vector3<f64>, hints: &BTreeMap<String, u32>)
     let hands_cost = |a: usize, b: usize| {
         // Two arms, not two ends of one: their branches share no way to each other.
         let own_branches = tips[a].d[tips[b].v as usize] > 0.9 * (length(a) + length(b));
-        if sides(a, b) && own_branches { ((length(a) - length(b)).abs() - length(a) - length(b)) / extent } else { f64::INFINITY }
+        if sides(a, b) && own_branches { (ARM_ASYMMETRY * (length(a) - length(b)).abs() - length(a) - length(b)) / extent } else { f64::INFINITY }
     };
     if mesh_core::cli::verbosity() >= 2 {
         mesh_core::info!("the legs part {:.3} from the head along the spine", branch.crotch);
         for &k in &free {
             let p = pos[tips[k].v as usize];
             mesh_core::info!(
-                "candidate {} ({:.3}, {:.3}, {:.3}): to the centre {:.3}, head excess {:.3}, branch {:.3} leaving the spine {:.3} from the head, root side {:.3} height {:.3}{}",
-                tips[k].v, p.x, p.y, p.z, dc[tips[k].v as usize], excess(k), branch.of(tips[k].v).0, branch.of(tips[k].v).1, root_side(k), root_height(k),
+                "candidate {} ({:.3}, {:.3}, {:.3}): to the centre {:.3}, head excess {:.3}, branch {:.3} leaving the spine {:.3} from the head, root side {:.3} height {:.3} width {:.3}{}",
+                tips[k].v, p.x, p.y, p.z, dc[tips[k].v as usize], excess(k), branch.of(tips[k].v).0, branch.of(tips[k].v).1, root_side(k), root_height(k), tip_width(graph, tips[k].v, &tips[k].d, extent) / extent,
                 if k == head { " (head)" } else if hanging.contains(&k) { " (hangs from the head)" } else if near_head(k) { " (on the head)" } else { "" }
             );
         }
@@ -381,6 +390,19 @@ impl<'a> Branches<'a> {
         let v = path.iter().copied().find(|&v| dx[v as usize] >= ROOT_FRACTION * length).unwrap_or(self.head);
         self.graph.position(v)
     }
+}
+
+/// The width of the body round a tip `x` (`dx`: distances from it): twice the largest distance
+/// from the line from the tip through their centroid of the vertices between 0.05 and 0.1
+/// `extent` from the tip (the palm of a hand, a braid's thickness).
+fn tip_width(graph: &BodyGraph, x: u32, dx: &[f64], extent: f64) -> f64 {
+    let band: Vec<Vector3<f64>> = (0..dx.len()).filter(|&v| dx[v] >= 0.05 * extent && dx[v] <= 0.1 * extent).map(|v| graph.position(v as u32)).collect();
+    if band.is_empty() {
+        return 0.0;
+    }
+    let tip = graph.position(x);
+    let axis = (band.iter().sum::<Vector3<f64>>() / band.len() as f64 - tip).try_normalize(1e-12).unwrap_or_else(Vector3::zeros);
+    2.0 * band.iter().map(|p| ((p - tip) - axis * (p - tip).dot(&axis)).norm()).fold(0.0, f64::max)
 }
 
 /// The body's left (`up × forward`), forward being where the toes point: the horizontal
