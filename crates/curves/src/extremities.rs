@@ -5,12 +5,14 @@
 //!    median of the positions, keeps up to [`MAX_CANDIDATES`] tips, each
 //!    at least [`MIN_SEPARATION`] body heights from the others: hands, feet and head, but also
 //!    hair, braids, props, wings, a tail. Each is then moved up the distance from the centre
-//!    (below) to the tip it lies on, so that a point half-way down a limb becomes its end.
+//!    (below) to the tip it lies on, so that a point half-way down a limb becomes its end; of
+//!    tips nearer each other than [`MIN_SEPARATION`] the one farther from the centre is kept.
 //!    The body's **centre** is the vertex whose largest distance to the first five tips is
 //!    least (between head, hands and feet, on the torso).
-//! 2. **Head**: the candidate highest along the subject's up axis less [`HEAD_OFFSET_WEIGHT`]
-//!    times its horizontal distance from the centre: a hand raised above the head is higher but
-//!    off to the side by at least the shoulder's half-width, a shoulder pad lower.
+//! 2. **Head**: the candidate whose blob's top (its highest vertex within [`MIN_SEPARATION`])
+//!    is highest along the subject's up axis less [`HEAD_OFFSET_WEIGHT`] times its horizontal
+//!    distance from the centre: a hand raised above the head is higher but off to the side by
+//!    at least the shoulder's half-width, a shoulder pad lower. The head is that top.
 //! 3. **Hanging from the head**: a tip whose shortest path to the centre passes by the head
 //!    (hair, a braid, a hat's ribbon) has a small excess `d(x, head) + d(head, centre) -
 //!    d(x, centre)` (twice the way from the head to where the piece hangs from it, about 0.15
@@ -19,12 +21,23 @@
 //!    excess is below [`HANGING_EXCESS`] times the head's distance to the centre are no limb.
 //! 4. **Feet**: of the remaining tips, the pair lowest along the up axis whose two geodesic
 //!    distances to the centre agree (left/right symmetry) and which lie far apart on the body
-//!    (not two toes of one foot). **Hands**: of what remains at least [`LIMB_SEPARATION`] from
-//!    the feet, the pair farthest from the centre (geodesic plus straight-line distance) with the
-//!    same symmetry and separation, one on each side of the plane half-way between the feet (at
-//!    least [`SIDE_OFFSET`] from it) when the toes tell the sides (5).
-//! 5. **Left and right**: the body faces where its toes point (the horizontal offset from the
-//!    lower shin to the toe tip, summed over both feet); left is `up × forward`.
+//!    (not two toes of one foot).
+//! 5. **Hands**: every tip is the end of a branch off the **spine**, the shortest path from the
+//!    head to the nearer foot ([`Branches`]). A hand's branch is an arm: its root (the point
+//!    [`ROOT_FRACTION`] of the way from the tip to the spine, the shoulder) lies higher than
+//!    [`UPPER_BODY`] of the height (a tail's lies at the hip), the hand lies above
+//!    [`HAND_LOWEST`] of the height and is wider than [`HAND_WIDTH`] of it (a braid or a strap
+//!    is thinner), and it lies at least [`LIMB_SEPARATION`] from the feet. A branch on a piece
+//!    of its own counts up to where its path to the centre enters the body's piece (a limb
+//!    pushed into the body is joined at its root, a prop anywhere along it). The hands are the
+//!    two such branches longest together less [`ARM_ASYMMETRY`] times the difference of their
+//!    lengths, whose ways to each other share nothing (two arms, not two ends of one) and
+//!    whose roots lie on either side of the body (at least [`SIDE_OFFSET`] apart across it)
+//!    when the toes tell the sides (6).
+//! 6. **Left and right**: the body faces where its toes point (the horizontal offset from the
+//!    lower shin to the toe tip, summed over both feet); left is `up × forward`. Feet are
+//!    sided by their tips, hands by their roots: a hand held across the body lies on the
+//!    other side, its shoulder does not.
 //!
 //! Hints (`--extremity hand_l=VERTEX`) replace any of the five choices; the others are then
 //! chosen among the candidates not within [`MIN_SEPARATION`] of a hinted vertex.

@@ -8,18 +8,23 @@
 //!    slowly (with noise of a few centimetres); where the front reaches the
 //!    torso (armpit, crotch) its length jumps. The first level whose loop is
 //!    `jump` times longer than every loop from `window` to `lookback` earlier
-//!    ends the limb; when the shortest path from the extremity to the body's centre
-//!    crossed into another piece of the mesh (a join) within `window` before that level,
-//!    the limb ends where it crossed (a limb modelled as its own piece ends where it meets
-//!    the body). The near loop (parent side) is taken
-//!    `margin` before the end and the far loop `band` further down the limb, as
-//!    fractions of the limb length (the near loop's distance), so that the
-//!    overlap band scales with the body. Lengths (`step`, `window`, `lookback`) are in metres.
+//!    ends the limb. The limb ends earlier
+//!    - where its front meets another limb's ([`meeting_levels`]: the crotch, for a leg whose
+//!      loop would otherwise go round both legs);
+//!    - where the shortest path from the extremity to the body's centre enters the piece of
+//!      the mesh the centre lies on (a limb modelled as a piece of its own is cut before its
+//!      join to the body), or crossed into another piece within `window` before the jump.
+//!
+//!    The near loop (parent side) is taken `margin` before the end and the far loop `band`
+//!    further down the limb, as fractions of the limb length, so that the overlap band scales
+//!    with the body. Lengths (`step`, `window`, `lookback`) are in metres.
 //! 3. **Loops**: a level set's loops are the boundary loops of the faces whose three corners
 //!    lie within the level (closed vertex loops along mesh edges) that run at least partly along
 //!    the front (the holes of an open mesh are no cut). The length test takes the longest; the
-//!    near and far loops are the ones nearest the shortest path from the extremity to the
-//!    centre at their level, so that they go round the limb and not round another piece.
+//!    near and far loops are taken on the piece the path from the extremity to the centre is on
+//!    at their level, the longest there (one piece) or the nearest the path. On a coarse mesh
+//!    one ring of vertices is the loop of a range of levels: the near and far loops are chosen
+//!    among the distinct rings below the end ([`choose_loops`]), two different ones.
 
 use std::collections::BTreeMap;
 
