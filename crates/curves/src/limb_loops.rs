@@ -8,18 +8,23 @@
 //!    slowly (with noise of a few centimetres); where the front reaches the
 //!    torso (armpit, crotch) its length jumps. The first level whose loop is
 //!    `jump` times longer than every loop from `window` to `lookback` earlier
-//!    ends the limb; when the shortest path from the extremity to the body's centre
-//!    crossed into another piece of the mesh (a join) within `window` before that level,
-//!    the limb ends where it crossed (a limb modelled as its own piece ends where it meets
-//!    the body). The near loop (parent side) is taken
-//!    `margin` before the end and the far loop `band` further down the limb, as
-//!    fractions of the limb length (the near loop's distance), so that the
-//!    overlap band scales with the body. Lengths (`step`, `window`, `lookback`) are in metres.
+//!    ends the limb. The limb ends earlier
+//!    - where its front meets another limb's ([`meeting_levels`]: the crotch, for a leg whose
+//!      loop would otherwise go round both legs);
+//!    - where the shortest path from the extremity to the body's centre enters the piece of
+//!      the mesh the centre lies on (a limb modelled as a piece of its own is cut before its
+//!      join to the body), or crossed into another piece within `window` before the jump.
+//!
+//!    The near loop (parent side) is taken `margin` before the end and the far loop `band`
+//!    further down the limb, as fractions of the limb length, so that the overlap band scales
+//!    with the body. Lengths (`step`, `window`, `lookback`) are in metres.
 //! 3. **Loops**: a level set's loops are the boundary loops of the faces whose three corners
 //!    lie within the level (closed vertex loops along mesh edges) that run at least partly along
 //!    the front (the holes of an open mesh are no cut). The length test takes the longest; the
-//!    near and far loops are the ones nearest the shortest path from the extremity to the
-//!    centre at their level, so that they go round the limb and not round another piece.
+//!    near and far loops are taken on the piece the path from the extremity to the centre is on
+//!    at their level, the longest there (one piece) or the nearest the path. On a coarse mesh
+//!    one ring of vertices is the loop of a range of levels: the near and far loops are chosen
+//!    among the distinct rings below the end ([`choose_loops`]), two different ones.
 
 use std::collections::BTreeMap;
 
@@ -27,7 +32,7 @@ use anyhow::{bail, Context, Result};
 use mesh_core::TriMesh;
 use nalgebra::Vector3;
 
-use crate::body_graph::BodyGraph;
+use crate::body_graph::{BodyGraph, Distances};
 use crate::extremities::Extremities;
 
 
@@ -155,10 +160,10 @@ fn simple(lp: &[u32]) -> bool {
 
 /// The near and far loops of the limb ending at `extremity` (step 2 of the module doc), with
 /// the body's `centre` and the lengths of `s` multiplied by `scale`.
-fn limb_loops(graph: &BodyGraph, extremity: u32, centre: u32, skip: f64, scale: f64, s: &Settings) -> Result<([Vec<u32>; 2], [f64; 2])> {
-    let (step, window, lookback) = (s.step * scale, s.window * scale, s.lookback * scale);
-    let from = graph.distances(&[extremity]);
+fn limb_loops(graph: &BodyGraph, from: &Distances, centre: u32, meet: f64, skip: f64, s: &Settings) -> Result<([Vec<u32>; 2], [f64; 2])> {
+    let (step, window, lookback) = (s.step, s.window, s.lookback);
     let d = &from.d;
+    let extremity = from.path_from(centre).last().copied().unwrap_or(centre);
     // The shortest path from the extremity to the centre, and where it crosses between pieces.
     let mut path = from.path_from(centre);
     path.reverse();
@@ -167,12 +172,19 @@ fn limb_loops(graph: &BodyGraph, extremity: u32, centre: u32, skip: f64, scale: 
         .filter(|w| graph.component[w[0] as usize] != graph.component[w[1] as usize])
         .map(|w| d[w[0] as usize])
         .collect();
+    // Where the path enters the piece the centre lies on: a limb modelled as its own piece is
+    // cut before its join to the body, wherever that join is.
+    let body = graph.component[centre as usize];
+    let entry = path
+        .windows(2)
+        .find(|w| graph.component[w[0] as usize] != body && graph.component[w[1] as usize] == body)
+        .map(|w| d[w[0] as usize]);
     let dmax = d.iter().copied().filter(|x| x.is_finite()).fold(0.0, f64::max);
     let levels = LevelSets::new(graph, d);
     let mut lengths: Vec<(f64, f64)> = Vec::new();
     let mut t = step;
     let mut end = None;
-    while t < dmax {
+    while t < dmax.min(meet) {
         if let Some(l) = levels.front_loops(t).into_iter().map(|(_, l)| l).max_by(f64::total_cmp) {
             // The longest loop between `window` and `lookback` back.
             let before = lengths
@@ -188,45 +200,95 @@ fn limb_loops(graph: &BodyGraph, extremity: u32, centre: u32, skip: f64, scale: 
         }
         t += step;
     }
-    let mut end = end.with_context(|| format!("no level set from vertex {extremity} separates a limb"))?;
+    let mut end = match end {
+        Some(t) => t,
+        None if meet.is_finite() && meet > skip => meet,
+        None => bail!("no level set from vertex {extremity} separates a limb"),
+    };
     if let Some(&c) = crossings.iter().find(|&&c| c > skip && c <= end && c >= end - window) {
+        end = c;
+    }
+    if let Some(c) = entry.filter(|&c| c > 2.0 * step && c < end) {
         end = c;
     }
     let near_t = end * (1.0 - s.margin);
     let far_t = near_t * (1.0 - s.band);
-    // The vertex of the path at distance `t`.
-    let on_path = |t: f64| -> Vector3<f64> {
-        let v = path.iter().copied().find(|&v| d[v as usize] >= t).unwrap_or(centre);
-        graph.position(v)
-    };
-    // The nearest level to `target` whose loop round the path is simple and shares no vertex
-    // with `avoid` (on a coarse mesh two nearby levels can share their loop).
-    let pick = |target: f64, avoid: &[u32]| -> Result<(Vec<u32>, f64)> {
-        for k in 0..60 {
-            for sign in [-1.0, 1.0] {
-                let t = target + sign * k as f64 * step * 0.5;
-                if t <= 0.0 {
-                    continue;
-                }
-                let p = on_path(t);
-                let gap = |lp: &[u32]| lp.iter().map(|&v| (graph.position(v) - p).norm()).fold(f64::INFINITY, f64::min);
-                let round_path = if graph.n_components == 1 {
-                    levels.front_loops(t).into_iter().max_by(|a, b| a.1.total_cmp(&b.1))
-                } else {
-                    levels.front_loops(t).into_iter().min_by(|a, b| gap(&a.0).total_cmp(&gap(&b.0)))
-                };
-                if let Some((lp, _)) = round_path {
-                    if simple(&lp) && !lp.iter().any(|v| avoid.contains(v)) {
-                        return Ok((lp, t));
-                    }
-                }
+    let rings = rings(graph, &levels, &path, d, step, end, &[near_t, far_t]);
+    choose_loops(&rings, near_t, far_t).with_context(|| format!("no two loops round the limb of vertex {extremity} below distance {end:.3}"))
+}
+
+/// The distinct simple loops round `path` (from the extremity, with distances `d`) at the levels
+/// `step, 2 step, ...` and `also` below `end`, each with the first level it is the loop at: on a
+/// coarse mesh one ring of vertices is the loop of a range of levels.
+fn rings(graph: &BodyGraph, levels: &LevelSets, path: &[u32], d: &[f64], step: f64, end: f64, also: &[f64]) -> Vec<(Vec<u32>, f64)> {
+    let mut ts: Vec<f64> = (1..).map(|k| k as f64 * step).take_while(|&t| t < end).chain(also.iter().copied().filter(|&t| t > 0.0 && t < end)).collect();
+    ts.sort_by(f64::total_cmp);
+    let mut rings: Vec<(Vec<u32>, f64)> = Vec::new();
+    let mut seen: Vec<Vec<u32>> = Vec::new();
+    for t in ts {
+        if let Some(lp) = round_path(graph, levels, path, d, t).filter(|lp| simple(lp)) {
+            let mut key = lp.clone();
+            key.sort_unstable();
+            if !seen.contains(&key) {
+                seen.push(key);
+                rings.push((lp, t));
             }
         }
-        bail!("no simple loop near distance {target:.3} from vertex {extremity}")
+    }
+    rings
+}
+
+/// The loop at level `t` round the path: on the piece of the mesh the path is on at `t`, the
+/// longest (one piece) or the nearest the path (the loops of other pieces' holes are no cut).
+fn round_path(graph: &BodyGraph, levels: &LevelSets, path: &[u32], d: &[f64], t: f64) -> Option<Vec<u32>> {
+    let at = path.iter().copied().find(|&v| d[v as usize] >= t).or(path.last().copied())?;
+    let p = graph.position(at);
+    let gap = |lp: &[u32]| lp.iter().map(|&v| (graph.position(v) - p).norm()).fold(f64::INFINITY, f64::min);
+    let on_piece = levels.front_loops(t).into_iter().filter(|(lp, _)| graph.component[lp[0] as usize] == graph.component[at as usize]);
+    let best = if graph.n_components == 1 {
+        on_piece.max_by(|a, b| a.1.total_cmp(&b.1))
+    } else {
+        on_piece.min_by(|a, b| gap(&a.0).total_cmp(&gap(&b.0)))
     };
-    let (near, tn) = pick(near_t, &[])?;
-    let (far, tf) = pick(far_t.min(tn - step), &near)?;
-    Ok(([near, far], [tn, tf]))
+    best.map(|(lp, _)| lp)
+}
+
+/// The near loop: the last ring at or below `near_t` (else the first); the far loop: the ring
+/// before it nearest `far_t` sharing no vertex with it, or when there is none, the near ring
+/// with the next ring up as the near loop.
+fn choose_loops(rings: &[(Vec<u32>, f64)], near_t: f64, far_t: f64) -> Result<([Vec<u32>; 2], [f64; 2])> {
+    let disjoint = |a: &[u32], b: &[u32]| !a.iter().any(|v| b.contains(v));
+    let near = rings.iter().rposition(|(_, t)| *t <= near_t).unwrap_or(0);
+    let below = |near: usize| {
+        rings[..near]
+            .iter()
+            .filter(|(lp, _)| disjoint(lp, &rings[near].0))
+            .min_by(|a, b| (a.1 - far_t).abs().total_cmp(&(b.1 - far_t).abs()))
+    };
+    let (near, far) = match below(near) {
+        Some(far) => (&rings[near], far),
+        None => {
+            let up = rings.get(near + 1).filter(|(lp, _)| disjoint(lp, &rings[near].0)).context("one ring only")?;
+            (up, &rings[near])
+        }
+    };
+    Ok(([near.0.clone(), far.0.clone()], [near.1, far.1]))
+}
+
+
+/// Per limb, the level of its distance at which its front meets another limb's: the least
+/// distance from its extremity of a vertex at least as near another limb's extremity (the
+/// crotch for a leg, whose front meets the other leg's there). A limb's cut lies below it.
+fn meeting_levels(from: &[Distances]) -> Vec<f64> {
+    (0..from.len())
+        .map(|k| {
+            let d = &from[k].d;
+            (0..d.len())
+                .filter(|&v| from.iter().enumerate().any(|(j, o)| j != k && o.d[v] <= d[v]))
+                .map(|v| d[v])
+                .fold(f64::INFINITY, f64::min)
+        })
+        .collect()
 }
 
 /// What [`propose`] found: the extremities when it got that far, the limbs it could cut, and
@@ -274,13 +336,13 @@ pub fn propose(mesh: &TriMesh, up: &Vector3<f64>, s: &Settings, hints: &BTreeMap
         proposal.extremities = Some(ext);
         return proposal;
     }
-    // The lengths are in metres: scaling them with the body's height moved the demo bodies'
-    // cuts (B's arms fell off the body), so a template in other units is converted first.
-    let scale = 1.0;
-    for (part, name) in [("arm_l", "hand_l"), ("arm_r", "hand_r"), ("leg_l", "foot_l"), ("leg_r", "foot_r")] {
+    let limbs = [("arm_l", "hand_l"), ("arm_r", "hand_r"), ("leg_l", "foot_l"), ("leg_r", "foot_r")];
+    let from: Vec<Distances> = limbs.iter().map(|(_, name)| graph.distances(&[ext.vertex(name).unwrap_or(0)])).collect();
+    let meet = meeting_levels(&from);
+    for (k, (part, name)) in limbs.iter().enumerate() {
         let e = ext.vertex(name).unwrap_or(0);
         let skip = ext.height * if part.starts_with("arm") { s.skip_arm } else { s.skip_leg };
-        match limb_loops(&graph, e, ext.centre, skip, scale, s) {
+        match limb_loops(&graph, &from[k], ext.centre, meet[k], skip, s) {
             Ok((loops, levels)) => proposal.limbs.push(Limb { part: part.to_string(), extremity: e, loops, levels }),
             Err(err) => {
                 proposal.error = Some(anyhow::anyhow!(

@@ -8,11 +8,11 @@ use std::process::Command;
 
 use mesh_core::capture_set::SubjectSpec;
 
-fn synthesised() -> (tempfile::TempDir, PathBuf) {
+fn synthesised(preset: &str) -> (tempfile::TempDir, PathBuf) {
     let tmp = tempfile::tempdir().unwrap();
     let set = tmp.path().join("set");
-    // As `synth --preset tiny` writes it (with its capture noise).
-    let cfg = synth::preset::preset("tiny", 0, true).unwrap();
+    // As `synth --preset PRESET` writes it (with its capture noise).
+    let cfg = synth::preset::preset(preset, 0, true).unwrap();
     synth::capture_set_writer::synthesise(&cfg, &set, false, &|_| {}, &|| {})
         .expect("synth failed (are the assets fetched? run scripts/fetch-assets)");
     (tmp, set)
@@ -24,7 +24,18 @@ fn bin(name: &str) -> PathBuf {
 
 #[test]
 fn curves_proposed_for_the_tiny_bodies_agree_with_the_hand_built_ones() {
-    let (_tmp, set) = synthesised();
+    check_preset("tiny", MIN_AGREEMENT, MIN_PART_IOU);
+}
+
+/// The demo bodies, whose legs touch at the thighs: each leg's loop goes round that leg only
+/// (measured: 99.3 % and 99.0 % agreement, every part's IoU at least 0.97).
+#[test]
+fn curves_proposed_for_the_demo_bodies_go_round_one_leg_each() {
+    check_preset("default", 0.97, 0.93);
+}
+
+fn check_preset(preset: &str, min_agreement: f64, min_part_iou: f64) {
+    let (_tmp, set) = synthesised(preset);
     for x in ["A", "B"] {
         let json = set.join(x).join("subject.json");
         let hand = SubjectSpec::load(&json).unwrap();
@@ -55,9 +66,9 @@ fn curves_proposed_for_the_tiny_bodies_agree_with_the_hand_built_ones() {
         assert_eq!(proposed.extra, hand.extra);
         let mesh = mesh_core::io::read_mesh(&tpl).unwrap();
         let (per, all) = curves::agreement::vertex_agreement(&mesh, &hand, &proposed).unwrap();
-        assert!(all > MIN_AGREEMENT, "{x}: {all:.3} of the vertices agree ({per:?})");
+        assert!(all > min_agreement, "{x}: {all:.3} of the vertices agree ({per:?})");
         for (part, iou) in &per {
-            assert!(*iou > MIN_PART_IOU, "{x} {part}: IoU {iou:.3}");
+            assert!(*iou > min_part_iou, "{x} {part}: IoU {iou:.3}");
         }
         check_picture(&png, &proposed);
     }
