@@ -10,7 +10,9 @@
 //!    form, equal to the SVD route); the non-isometric `S_f` is dropped;
 //! 4. `N_k` deformed by the rotations only: target gradients `J_f = R_f ∇N_k` (gradients on
 //!    `N_k`'s own geometry), Poisson solve with `N_k`'s cotangent Laplacian and one Dirichlet
-//!    vertex (vertex 0), then translated so its centroid is `P`'s centroid;
+//!    vertex per connected piece of the part (its first vertex; a part modelled as several
+//!    pieces, a game character's pads or hair, has several), then each piece translated so its
+//!    centroid is the same piece's centroid in `P`;
 //! 5. result `Σ_k w_k X_k`.
 //!
 //! Each training mesh's operator and factorisation are built on first use and cached, so a
@@ -37,6 +39,9 @@ struct Prepared {
 /// The training part meshes of one body part, ready to correct predictions of that part.
 pub struct Corrector {
     faces: Vec<[u32; 3]>,
+    /// The part's connected pieces (through edges; an isolated vertex is a piece), each the
+    /// sorted list of its vertices.
+    pieces: Vec<Vec<u32>>,
     training: Vec<Vec<Vector3<f64>>>,
     prepared: Vec<OnceLock<std::result::Result<Prepared, String>>>,
 }
@@ -75,8 +80,10 @@ impl Corrector {
             check_vertices(t, n, &format!("correct: training mesh {k}"))?;
         }
         let prepared = (0..training.len()).map(|_| OnceLock::new()).collect();
+        let pieces = mesh_core::topology::Topology::new(n, &faces).connected_components();
         Ok(Corrector {
             faces,
+            pieces,
             training,
             prepared,
         })
@@ -107,8 +114,8 @@ impl Corrector {
             .get_or_init(|| {
                 let n = &self.training[k];
                 let op = GradientOperator::new(n, &self.faces);
-                let solver =
-                    PoissonSolver::new(&op.stiffness(), &[0]).map_err(|e| e.to_string())?;
+                let solver = PoissonSolver::new(&op.stiffness(), &self.piece_roots())
+                    .map_err(|e| e.to_string())?;
                 let own_gradient = op.gradient(n);
                 Ok(Prepared {
                     op,
@@ -140,10 +147,19 @@ impl Corrector {
                 r * g
             })
             .collect();
-        let mut x = p.solver.solve(&p.op.divergence(&field), &[nk[0]])?;
-        let shift = centroid(prediction) - centroid(&x);
-        x.iter_mut().for_each(|v| *v += shift);
+        let roots: Vec<Vector3<f64>> = self.piece_roots().iter().map(|&r| nk[r]).collect();
+        let mut x = p.solver.solve(&p.op.divergence(&field), &roots)?;
+        for piece in &self.pieces {
+            let of = |m: &[Vector3<f64>]| piece.iter().map(|&v| m[v as usize]).collect::<Vec<_>>();
+            let shift = centroid(&of(prediction)) - centroid(&of(&x));
+            piece.iter().for_each(|&v| x[v as usize] += shift);
+        }
         Ok(x)
+    }
+
+    /// The Dirichlet vertex of each piece: its first.
+    fn piece_roots(&self) -> Vec<usize> {
+        self.pieces.iter().map(|p| p[0] as usize).collect()
     }
 
     /// Corrects one predicted part mesh with the `m` nearest training meshes.

@@ -458,3 +458,33 @@ fn in_place_refactorisation_equals_a_new_solver() {
         assert!(err.is_err());
     }
 }
+
+/// A part modelled as several pieces (a rolled sheet, a separate flat pad beside it, and a
+/// vertex in no face), as game characters' parts are: each piece is corrected on its own and
+/// lands where the prediction has it. The prediction is training mesh 1 with the pad moved
+/// 10 cm and turned: the sheet comes back as training mesh 1, the pad as the prediction's.
+#[test]
+fn a_part_of_separate_pieces_is_corrected_piece_by_piece() {
+    let pieces = |k: f64| {
+        let (mut v, mut f) = rolled_sheet(k);
+        let (pad, pad_faces, _) = grid(3, 3, 0.0);
+        let base = v.len() as u32;
+        v.extend(pad.iter().map(|p| p * 0.3 + Vector3::new(2.0, 0.0, 0.0)));
+        f.extend(pad_faces.iter().map(|t| t.map(|i| i + base)));
+        v.push(Vector3::new(-1.0, 0.5, 0.0));
+        (v, f)
+    };
+    let f = pieces(0.0).1;
+    let training: Vec<_> = [0.0, 0.8, 1.6].iter().map(|&k| pieces(k).0).collect();
+    let corrector = Corrector::new(f.clone(), training.clone()).unwrap();
+    let pad_start = rolled_sheet(0.0).0.len();
+    let r = rot([0.0, 0.0, 1.0], 0.4);
+    let mut prediction = training[1].clone();
+    let n = prediction.len();
+    let pad_centre = surface::centroid(&prediction[pad_start..n - 1]);
+    for p in &mut prediction[pad_start..n - 1] {
+        *p = r * (*p - pad_centre) + pad_centre + Vector3::new(0.0, 0.1, 0.0);
+    }
+    let out = corrector.correct(&prediction, 1).unwrap();
+    assert!(max_dist(&out, &prediction) < 1e-9, "{}", max_dist(&out, &prediction));
+}

@@ -60,6 +60,7 @@ pub struct Reconstructor {
     stitcher: Option<(Stitcher, Vec<usize>)>,
     /// Counts corrected parts and stitched frames (hidden unless set).
     progress: ProgressBar,
+    unstitched_frames: usize,
 }
 
 impl Reconstructor {
@@ -125,6 +126,7 @@ impl Reconstructor {
             neighbours,
             stitcher,
             progress: ProgressBar::hidden(),
+            unstitched_frames: 0,
         })
     }
 
@@ -169,18 +171,36 @@ impl Reconstructor {
             return Ok(assemble(&self.plan, pca, parts));
         };
         let n_frames = parts.first().map_or(0, |p| p.len());
-        (0..n_frames)
+        let mut unstitched = 0;
+        let merged = (0..n_frames)
             .map(|f| {
                 let frame: Vec<Vec<Vector3<f64>>> =
                     order.iter().map(|&k| parts[k][f].clone()).collect();
-                let v = stitcher
-                    .stitch(&frame)
-                    .map_err(|e| Error::invalid(format!("frame {f}: {e}")))?
-                    .vertices;
                 self.progress.inc(1);
-                Ok(self.plan.to_template_frame(&v))
+                match stitcher.stitch(&frame) {
+                    Ok(stitched) => self.plan.to_template_frame(&stitched.vertices),
+                    Err(e) => {
+                        if unstitched == 0 {
+                            mesh_core::warn!("stitch: frame {f}: {e}: such frames are assembled (overlaps averaged)");
+                        }
+                        unstitched += 1;
+                        let one: Vec<Vec<Vec<Vector3<f64>>>> = parts.iter().map(|p| vec![p[f].clone()]).collect();
+                        assemble(&self.plan, pca, &one).swap_remove(0)
+                    }
+                }
             })
-            .collect()
+            .collect();
+        if unstitched > 0 {
+            mesh_core::warn!("stitch: {unstitched} of {n_frames} frames assembled instead of stitched");
+        }
+        self.unstitched_frames += unstitched;
+        Ok(merged)
+    }
+
+    /// Frames [`Reconstructor::merge`] could not stitch (a part's overlap band that is not one
+    /// ring, as on meshes modelled as separate pieces) and assembled instead.
+    pub fn unstitched_frames(&self) -> usize {
+        self.unstitched_frames
     }
 
     /// [`Reconstructor::correct`] then [`Reconstructor::merge`].

@@ -228,6 +228,7 @@ pub fn run(p: &Params) -> anyhow::Result<()> {
             "frames": motion.n_frames(), "encode_s": result.timing.encode_s, "gp_s": result.timing.gp_s,
             "gp_frames_per_s": n / result.timing.gp_s.max(1e-12), "decode_assemble_s": result.timing.decode_s,
             "total_s": total, "frames_per_s_without_writing": n / total.max(1e-12), "ply_write_s": write,
+            "unstitched_frames": recon.as_ref().map_or(0, |r| r.unstitched_frames()),
         });
         mesh_core::atomic::write_bytes_atomic(
             path,
