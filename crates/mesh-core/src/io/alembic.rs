@@ -1,0 +1,723 @@
+//! Alembic (`.abc`) mesh caches: one animated PolyMesh read into a [`MeshSequence`] and its
+//! frame rate. The container is Ogawa ([`super::ogawa`]); this module walks Alembic's schema on
+//! top of it, only as far as a PolyMesh's points and faces:
+//!
+//! - The root group: child 0 the archive version (`i32`), 1 the library version (`i32`), 2 the
+//!   top object, 3 the archive's metadata, 4 the time samplings, 5 the indexed metadata.
+//! - An object group: child 0 its properties (a compound), children `1..=n` its `n` child
+//!   objects, the last child the headers of those children (name, metadata; 32 bytes of hashes
+//!   at the end). A PolyMesh's metadata holds `schema=AbcGeom_PolyMesh_v1`.
+//! - A compound property group: one child per property, the last child the packed property
+//!   headers (kind, plain-old-data type and extent, sample counts, time sampling, name, metadata).
+//! - An array property: two children per stored sample, the data (a 16-byte key, then the
+//!   values) and its dimensions. Samples equal to the one before are not stored: the header's
+//!   first and last changed indices map a sample to the one stored.
+//! - A time sampling: time per cycle and the sample times of a cycle; one time per cycle is
+//!   uniform sampling, `1 / time per cycle` frames per second.
+//!
+//! Read: the PolyMesh's `.geom` compound: `P` (float32 or float64 3-vectors, one sample per
+//! frame, a constant vertex count), `.faceCounts` and `.faceIndices` (int32), constant over the
+//! samples. Faces are stored clockwise (Alembic's convention, which Blender's and Maya's
+//! exporters follow by reversing their polygons): each polygon is reversed back to
+//! counter-clockwise and fan-triangulated. Positions are the mesh's own coordinates (Alembic is
+//! +Y up like surfcap's capture sets: Blender's exporter turns its +Z up into +Y up); parent
+//! transforms are not applied. Not read: normals, UVs, velocities, face sets, subdivision
+//! surfaces, changing topology, other schemas.
+//!
+//! Hardening: every count and offset is checked against the file's length before anything is
+//! allocated, the object tree is walked without recursion and each object group at most once,
+//! and the frames written out (samples repeated from a stored one included) may not need more
+//! than [`EXPANSION_LIMIT`] times the file's size.
+
+use std::collections::HashSet;
+use std::path::Path;
+
+use nalgebra::Vector3;
+
+use super::ogawa::{Group, Ogawa};
+use crate::error::{Error, Result};
+use crate::input::escape_control;
+use crate::sequence::MeshSequence;
+
+/// The frames read (as f64 vertices) may need at most this many times the file's bytes:
+/// samples that repeat the one before are stored once, so a few bytes could otherwise ask for
+/// any number of frames.
+pub const EXPANSION_LIMIT: u64 = 32;
+
+/// The Alembic library version the newest Ogawa files carry at least (Alembic 0.9.9).
+const MIN_LIBRARY_VERSION: i32 = 9999;
+/// Time per cycle of acyclic time samplings (`f64::MAX / 32` in Alembic).
+const ACYCLIC_TIME_PER_CYCLE: f64 = f64::MAX / 32.0;
+const POLYMESH_SCHEMA: &str = "AbcGeom_PolyMesh_v1";
+
+/// A PolyMesh read from an Alembic file.
+#[derive(Clone, Debug)]
+pub struct AlembicMesh {
+    /// The object's full path in the file (`/Cube/CubeShape`).
+    pub path: String,
+    /// The frames, counter-clockwise triangles.
+    pub sequence: MeshSequence,
+    /// Frames per second of `P`'s time sampling.
+    pub fps: f64,
+    /// Time of the first sample, seconds.
+    pub start_time: f64,
+    /// Polygons left out as degenerate (fewer than 3 distinct corners).
+    pub skipped_faces: usize,
+}
+
+/// Plain-old-data types of Alembic's property headers.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum Pod {
+    Int32,
+    Float32,
+    Float64,
+    Other(u8),
+}
+
+impl Pod {
+    fn of(code: u8) -> Pod {
+        match code {
+            6 => Pod::Int32,
+            10 => Pod::Float32,
+            11 => Pod::Float64,
+            c => Pod::Other(c),
+        }
+    }
+    fn name(self) -> String {
+        const NAMES: [&str; 14] = [
+            "bool", "uint8", "int8", "uint16", "int16", "uint32", "int32", "uint64", "int64",
+            "float16", "float32", "float64", "string", "wstring",
+        ];
+        let code = match self {
+            Pod::Int32 => 6,
+            Pod::Float32 => 10,
+            Pod::Float64 => 11,
+            Pod::Other(c) => c,
+        };
+        NAMES.get(code as usize).map_or(format!("type {code}"), |s| s.to_string())
+    }
+    fn size(self) -> Option<usize> {
+        match self {
+            Pod::Int32 | Pod::Float32 => Some(4),
+            Pod::Float64 => Some(8),
+            Pod::Other(_) => None,
+        }
+    }
+}
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum Kind {
+    Compound,
+    Scalar,
+    Array,
+}
+
+/// One entry of a compound's packed property headers.
+#[derive(Clone, Debug)]
+struct PropertyHeader {
+    name: String,
+    kind: Kind,
+    pod: Pod,
+    extent: u8,
+    /// Number of samples (stored or repeated).
+    samples: u32,
+    first_changed: u32,
+    last_changed: u32,
+    time_sampling: u32,
+}
+
+impl PropertyHeader {
+    /// The stored sample that sample `i` reads (Alembic stores a run of equal samples once).
+    fn stored_index(&self, i: u32) -> Option<u64> {
+        let (first, last) = (self.first_changed, self.last_changed);
+        if i < first || (first == 0 && last == 0) {
+            Some(0)
+        } else if i >= last {
+            Some(u64::from(last.checked_sub(first)?) + 1)
+        } else {
+            Some(u64::from(i - first) + 1)
+        }
+    }
+}
+
+/// A time sampling: time per cycle and the times of one cycle.
+#[derive(Clone, Debug)]
+struct TimeSampling {
+    time_per_cycle: f64,
+    times: Vec<f64>,
+}
+
+/// Little-endian readers over a header buffer that fail instead of panicking.
+struct Cursor<'a> {
+    b: &'a [u8],
+    at: usize,
+    what: &'static str,
+}
+
+impl<'a> Cursor<'a> {
+    fn new(b: &'a [u8], what: &'static str) -> Self {
+        Cursor { b, at: 0, what }
+    }
+    fn done(&self) -> bool {
+        self.at >= self.b.len()
+    }
+    fn take(&mut self, n: usize) -> std::result::Result<&'a [u8], String> {
+        let end = self.at.checked_add(n).filter(|&e| e <= self.b.len()).ok_or_else(|| {
+            format!("{} cut short: {n} bytes needed at byte {} of {}", self.what, self.at, self.b.len())
+        })?;
+        let s = &self.b[self.at..end];
+        self.at = end;
+        Ok(s)
+    }
+    fn u8(&mut self) -> std::result::Result<u8, String> {
+        Ok(self.take(1)?[0])
+    }
+    fn u16(&mut self) -> std::result::Result<u16, String> {
+        let b = self.take(2)?;
+        Ok(u16::from_le_bytes([b[0], b[1]]))
+    }
+    fn u32(&mut self) -> std::result::Result<u32, String> {
+        let b = self.take(4)?;
+        Ok(u32::from_le_bytes([b[0], b[1], b[2], b[3]]))
+    }
+    fn f64(&mut self) -> std::result::Result<f64, String> {
+        let b = self.take(8)?;
+        let mut a = [0u8; 8];
+        a.copy_from_slice(b);
+        Ok(f64::from_le_bytes(a))
+    }
+    /// A `u32` stored in 1, 2 or 4 bytes (`hint` 0, 1, 2).
+    fn hinted(&mut self, hint: u32) -> std::result::Result<u32, String> {
+        match hint {
+            0 => self.u8().map(u32::from),
+            1 => self.u16().map(u32::from),
+            2 => self.u32(),
+            _ => Err(format!("{}: bad size hint {hint}", self.what)),
+        }
+    }
+    fn text(&mut self, n: usize) -> std::result::Result<String, String> {
+        Ok(String::from_utf8_lossy(self.take(n)?).into_owned())
+    }
+}
+
+/// The value of `key` in Alembic metadata (`key=value;key=value`).
+fn meta_value<'m>(meta: &'m str, key: &str) -> Option<&'m str> {
+    meta.split(';').find_map(|kv| kv.split_once('=').filter(|(k, _)| *k == key).map(|(_, v)| v))
+}
+
+/// The archive: its time samplings, indexed metadata and top object.
+struct Archive<'a> {
+    time_samplings: Vec<TimeSampling>,
+    metadata: Vec<String>,
+    top: Group<'a>,
+    /// Header bytes parsed so far, and the most allowed (the file's length: each header block
+    /// once; a crafted file sharing one block between many groups stops here).
+    parsed: u64,
+    budget: u64,
+}
+
+fn i32_data(d: &[u8], what: &str) -> std::result::Result<i32, String> {
+    let b: [u8; 4] = d
+        .try_into()
+        .map_err(|_| format!("{what} is {} bytes, expected 4", d.len()))?;
+    Ok(i32::from_le_bytes(b))
+}
+
+impl<'a> Archive<'a> {
+    fn open(file: &Ogawa<'a>) -> std::result::Result<Self, String> {
+        let root = file.root()?;
+        let layout_ok = root.len() >= 6
+            && root.is_data(0)
+            && root.is_data(1)
+            && root.is_group(2)
+            && root.is_data(3)
+            && root.is_data(4)
+            && root.is_data(5);
+        if !layout_ok {
+            return Err(format!(
+                "not an Alembic archive: the root group ({} children) lacks the version, \
+                 top object, time samplings and metadata Alembic puts there",
+                root.len()
+            ));
+        }
+        let version = i32_data(root.data(0)?, "the archive version")?;
+        if !(0..=1).contains(&version) {
+            return Err(format!("unsupported Alembic archive version {version} (expected 0 or 1)"));
+        }
+        let library = i32_data(root.data(1)?, "the library version")?;
+        if library < MIN_LIBRARY_VERSION {
+            return Err(format!("unsupported Alembic library version {library} (expected {MIN_LIBRARY_VERSION} or later)"));
+        }
+        let time_samplings = parse_time_samplings(root.data(4)?)?;
+        let metadata = parse_indexed_metadata(root.data(5)?)?;
+        Ok(Archive {
+            time_samplings,
+            metadata,
+            top: root.group(2)?,
+            parsed: 0,
+            budget: file.len(),
+        })
+    }
+
+    fn charge(&mut self, bytes: usize) -> std::result::Result<(), String> {
+        self.parsed += bytes as u64;
+        if self.parsed > self.budget {
+            return Err("the object tree refers to the same headers again and again (more header bytes than the file holds)".into());
+        }
+        Ok(())
+    }
+
+    /// The metadata of an inline (`0xff`) or indexed entry.
+    fn indexed(&self, index: u32, what: &str) -> std::result::Result<String, String> {
+        self.metadata
+            .get(index as usize)
+            .cloned()
+            .ok_or_else(|| format!("{what}: metadata index {index} but the archive indexes {}", self.metadata.len()))
+    }
+
+    /// The headers of `group`'s child objects: (name, metadata).
+    fn object_headers(&mut self, group: &Group<'a>) -> std::result::Result<Vec<(String, String)>, String> {
+        let n = group.len();
+        if n == 0 || !group.is_data(n - 1) {
+            return Ok(Vec::new());
+        }
+        let data = group.data(n - 1)?;
+        self.charge(data.len())?;
+        if data.len() <= 32 {
+            return Ok(Vec::new());
+        }
+        let mut c = Cursor::new(&data[..data.len() - 32], "object headers");
+        let mut out = Vec::new();
+        while !c.done() {
+            let size = c.u32()? as usize;
+            if size == 0 {
+                return Err("object headers: an object without a name".into());
+            }
+            let name = c.text(size)?;
+            let index = c.u8()?;
+            let meta = if index == 0xff {
+                let size = c.u32()? as usize;
+                c.text(size)?
+            } else {
+                self.indexed(u32::from(index), "object headers")?
+            };
+            out.push((name, meta));
+        }
+        Ok(out)
+    }
+
+    /// The property headers of a compound property group.
+    fn property_headers(&mut self, group: &Group<'a>) -> std::result::Result<Vec<PropertyHeader>, String> {
+        let n = group.len();
+        if n == 0 || !group.is_data(n - 1) {
+            return Ok(Vec::new());
+        }
+        let data = group.data(n - 1)?;
+        self.charge(data.len())?;
+        let mut c = Cursor::new(data, "property headers");
+        let mut out = Vec::new();
+        while !c.done() {
+            let info = c.u32()?;
+            let kind = match info & 3 {
+                0 => Kind::Compound,
+                1 => Kind::Scalar,
+                _ => Kind::Array,
+            };
+            let hint = (info >> 2) & 3;
+            let mut h = PropertyHeader {
+                name: String::new(),
+                kind,
+                pod: Pod::Other(0xff),
+                extent: 0,
+                samples: 0,
+                first_changed: 0,
+                last_changed: 0,
+                time_sampling: 0,
+            };
+            if kind != Kind::Compound {
+                let pod = ((info >> 4) & 0xf) as u8;
+                if pod > 13 {
+                    return Err(format!("property headers: unknown data type {pod}"));
+                }
+                h.pod = Pod::of(pod);
+                h.extent = ((info >> 12) & 0xff) as u8;
+                h.samples = c.hinted(hint)?;
+                if info & 0x200 != 0 {
+                    h.first_changed = c.hinted(hint)?;
+                    h.last_changed = c.hinted(hint)?;
+                } else if info & 0x800 != 0 {
+                    (h.first_changed, h.last_changed) = (0, 0);
+                } else {
+                    h.first_changed = 1;
+                    h.last_changed = h.samples.saturating_sub(1);
+                }
+                if info & 0x100 != 0 {
+                    h.time_sampling = c.hinted(hint)?;
+                }
+            }
+            let size = c.hinted(hint)? as usize;
+            if size == 0 {
+                return Err("property headers: a property without a name".into());
+            }
+            h.name = c.text(size)?;
+            let meta_index = (info >> 20) & 0xff;
+            if meta_index == 0xff {
+                let size = c.hinted(hint)? as usize;
+                c.take(size)?;
+            } else {
+                self.indexed(meta_index, "property headers")?;
+            }
+            out.push(h);
+        }
+        Ok(out)
+    }
+}
+
+fn parse_time_samplings(data: &[u8]) -> std::result::Result<Vec<TimeSampling>, String> {
+    let mut c = Cursor::new(data, "time samplings");
+    let mut out = Vec::new();
+    while !c.done() {
+        let _max_sample = c.u32()?;
+        let time_per_cycle = c.f64()?;
+        let n = c.u32()? as usize;
+        if n == 0 {
+            return Err("time samplings: a sampling with no sample times".into());
+        }
+        // Checked against the buffer before allocating.
+        let raw = c.take(n.checked_mul(8).ok_or("time samplings: count overflows")?)?;
+        let times = raw
+            .chunks_exact(8)
+            .map(|b| f64::from_le_bytes(b.try_into().unwrap_or([0; 8])))
+            .collect();
+        out.push(TimeSampling { time_per_cycle, times });
+    }
+    Ok(out)
+}
+
+fn parse_indexed_metadata(data: &[u8]) -> std::result::Result<Vec<String>, String> {
+    // Entry 0 is the empty metadata; the archive indexes at most 255 more, each under 256 bytes.
+    let mut out = vec![String::new()];
+    let mut c = Cursor::new(data, "indexed metadata");
+    while !c.done() {
+        let n = c.u8()? as usize;
+        out.push(c.text(n)?);
+        if out.len() > 256 {
+            return Err("indexed metadata: more than 255 entries".into());
+        }
+    }
+    Ok(out)
+}
+
+/// A PolyMesh object found in the tree.
+struct Found<'a> {
+    path: String,
+    group: Group<'a>,
+}
+
+/// The PolyMesh named `wanted` (its name or full path), else the first in depth-first order;
+/// also the paths of every PolyMesh seen (for the error when none matches).
+fn find_polymesh<'a>(
+    archive: &mut Archive<'a>,
+    wanted: Option<&str>,
+) -> std::result::Result<(Option<Found<'a>>, Vec<String>), String> {
+    let mut seen_groups = HashSet::new();
+    let mut meshes = Vec::new();
+    // Depth-first with an explicit stack: a crafted tree cannot exhaust the call stack.
+    let mut stack = vec![(String::new(), archive.top)];
+    while let Some((path, group)) = stack.pop() {
+        if group.offset() != 0 && !seen_groups.insert(group.offset()) {
+            return Err(format!("object {}: its group is reached twice (a cycle in the object tree)", escape_control(&path)));
+        }
+        let headers = archive.object_headers(&group).map_err(|e| format!("object {}: {e}", escape_control(if path.is_empty() { "/" } else { &path })))?;
+        let mut children = Vec::with_capacity(headers.len());
+        for (i, (name, meta)) in headers.into_iter().enumerate() {
+            let child_path = format!("{path}/{name}");
+            let child = group
+                .group(i as u64 + 1)
+                .map_err(|e| format!("object {}: {e}", escape_control(&child_path)))?;
+            if meta_value(&meta, "schema") == Some(POLYMESH_SCHEMA) {
+                let hit = match wanted {
+                    Some(w) => w == name || w == child_path,
+                    None => true,
+                };
+                if hit {
+                    return Ok((Some(Found { path: child_path, group: child }), meshes));
+                }
+                meshes.push(child_path.clone());
+            }
+            children.push((child_path, child));
+        }
+        stack.extend(children.into_iter().rev());
+    }
+    Ok((None, meshes))
+}
+
+/// The sub-property `name` of a compound group, with its group.
+fn property<'a>(
+    archive: &mut Archive<'a>,
+    compound: &Group<'a>,
+    name: &str,
+) -> std::result::Result<Option<(PropertyHeader, Group<'a>)>, String> {
+    let headers = archive.property_headers(compound)?;
+    let Some(i) = headers.iter().position(|h| h.name == name) else {
+        return Ok(None);
+    };
+    let group = compound.group(i as u64)?;
+    Ok(Some((headers[i].clone(), group)))
+}
+
+/// The values of stored sample `stored` of an array property: the bytes after the 16-byte key,
+/// checked against the element size and the recorded dimensions.
+fn array_sample<'a>(h: &PropertyHeader, g: &Group<'a>, stored: u64) -> std::result::Result<&'a [u8], String> {
+    let elem = h.pod.size().ok_or_else(|| format!("{} values are {}, not read", h.name, h.pod.name()))? * h.extent as usize;
+    let data = g.data(2 * stored).map_err(|e| format!("{} sample {stored}: {e}", h.name))?;
+    if data.is_empty() {
+        return Ok(data);
+    }
+    if data.len() < 16 || elem == 0 {
+        return Err(format!("{} sample {stored}: {} bytes, not a key and values", h.name, data.len()));
+    }
+    let values = &data[16..];
+    if values.len() % elem != 0 {
+        return Err(format!("{} sample {stored}: {} bytes of values, not whole {elem}-byte elements", h.name, values.len()));
+    }
+    let dims = g.data(2 * stored + 1).map_err(|e| format!("{} sample {stored} dimensions: {e}", h.name))?;
+    if !dims.is_empty() {
+        if dims.len() % 8 != 0 {
+            return Err(format!("{} sample {stored}: dimensions of {} bytes", h.name, dims.len()));
+        }
+        let count = dims.chunks_exact(8).try_fold(1u64, |acc, d| {
+            acc.checked_mul(u64::from_le_bytes(d.try_into().unwrap_or([0xff; 8])))
+        });
+        if count != Some((values.len() / elem) as u64) {
+            return Err(format!(
+                "{} sample {stored}: dimensions do not match its {} elements",
+                h.name,
+                values.len() / elem
+            ));
+        }
+    }
+    Ok(values)
+}
+
+fn int32s(values: &[u8]) -> impl Iterator<Item = i32> + '_ {
+    values.chunks_exact(4).map(|b| i32::from_le_bytes([b[0], b[1], b[2], b[3]]))
+}
+
+/// The frames per second of a time sampling: uniform (one time per cycle), or acyclic with
+/// evenly spaced times.
+fn sampling_fps(ts: &TimeSampling) -> std::result::Result<f64, String> {
+    let fps = if ts.time_per_cycle >= ACYCLIC_TIME_PER_CYCLE {
+        let steps: Vec<f64> = ts.times.windows(2).map(|w| w[1] - w[0]).collect();
+        let Some(&dt) = steps.first() else {
+            return Err("P's acyclic time sampling has a single time: no frame rate".into());
+        };
+        if steps.iter().any(|s| (s - dt).abs() > 1e-9 * dt.abs()) {
+            return Err("P's time sampling is acyclic with uneven steps: no frame rate".into());
+        }
+        1.0 / dt
+    } else if ts.times.len() == 1 {
+        1.0 / ts.time_per_cycle
+    } else {
+        return Err(format!(
+            "P's time sampling is cyclic ({} samples per cycle), not uniform: no frame rate",
+            ts.times.len()
+        ));
+    };
+    // 1 / (1/24) may come back as 24.000000000000004: snap to a thousandth when that close.
+    let snapped = (fps * 1000.0).round() / 1000.0;
+    let fps = if (fps - snapped).abs() <= 1e-9 * fps.abs() { snapped } else { fps };
+    crate::frame_rate::check_fps(fps).map_err(|e| format!("P's time sampling: {e}"))
+}
+
+/// Reads a PolyMesh from an Alembic file held in memory: the one named `object` (its name or
+/// full path), else the first. The error is the problem without the file name.
+pub fn parse_alembic(bytes: &[u8], object: Option<&str>) -> std::result::Result<AlembicMesh, String> {
+    let file = Ogawa::parse(bytes)?;
+    let mut archive = Archive::open(&file)?;
+    let (found, others) = find_polymesh(&mut archive, object)?;
+    let Some(Found { path, group }) = found else {
+        return Err(match object {
+            Some(w) if !others.is_empty() => format!(
+                "no PolyMesh named '{}' (the file has {})",
+                escape_control(w),
+                escape_control(&others.join(", "))
+            ),
+            Some(w) => format!("no PolyMesh named '{}' (the file has none)", escape_control(w)),
+            None => "holds no PolyMesh (only PolyMesh objects are read)".into(),
+        });
+    };
+    let at = |e: String| format!("PolyMesh {}: {e}", escape_control(&path));
+    if !group.is_group(0) {
+        return Err(at("has no properties".into()));
+    }
+    let props = group.group(0).map_err(at)?;
+    let (geom_h, geom) = property(&mut archive, &props, ".geom")
+        .map_err(at)?
+        .ok_or_else(|| at("has no .geom properties".into()))?;
+    if geom_h.kind != Kind::Compound {
+        return Err(at(".geom is not a compound property".into()));
+    }
+    let mut array = |name: &str| -> std::result::Result<(PropertyHeader, Group), String> {
+        let (h, g) = property(&mut archive, &geom, name)?.ok_or_else(|| format!("has no {name}"))?;
+        if h.kind != Kind::Array {
+            return Err(format!("{name} is not an array property"));
+        }
+        Ok((h, g))
+    };
+    let (p_h, p_g) = array("P").map_err(at)?;
+    let (counts_h, counts_g) = array(".faceCounts").map_err(at)?;
+    let (indices_h, indices_g) = array(".faceIndices").map_err(at)?;
+
+    // Topology: every stored sample equal to the first.
+    let mut topology = Vec::with_capacity(2);
+    for (h, g) in [(&counts_h, &counts_g), (&indices_h, &indices_g)] {
+        if h.pod != Pod::Int32 || h.extent != 1 {
+            return Err(at(format!("{} is {} x{}, expected int32", h.name, h.pod.name(), h.extent)));
+        }
+        if h.samples == 0 {
+            return Err(at(format!("{} has no samples", h.name)));
+        }
+        let last = h.stored_index(h.samples - 1).ok_or_else(|| at(format!("{}: inconsistent sample indices", h.name)))?;
+        let first = array_sample(h, g, 0).map_err(at)?;
+        for k in 1..=last {
+            if array_sample(h, g, k).map_err(at)? != first {
+                return Err(at(format!(
+                    "{} changes at stored sample {k}: only constant topology is read",
+                    h.name
+                )));
+            }
+        }
+        topology.push(first);
+    }
+    let (counts, indices) = (topology[0], topology[1]);
+
+    // Points.
+    if !matches!(p_h.pod, Pod::Float32 | Pod::Float64) || p_h.extent != 3 {
+        return Err(at(format!("P is {} x{}, expected float32 or float64 x3", p_h.pod.name(), p_h.extent)));
+    }
+    if p_h.samples == 0 {
+        return Err(at("P has no samples".into()));
+    }
+    let first = array_sample(&p_h, &p_g, 0).map_err(at)?;
+    let elem = p_h.pod.size().unwrap_or(4) * 3;
+    let n_vertices = first.len() / elem;
+    let n_frames = p_h.samples as usize;
+    let needed = (n_frames as u128) * (n_vertices as u128) * 24;
+    if needed > u128::from(EXPANSION_LIMIT) * bytes.len() as u128 {
+        return Err(at(format!(
+            "P has {n_frames} samples of {n_vertices} points: {needed} bytes of frames, more than {EXPANSION_LIMIT} times the file's {} bytes",
+            bytes.len()
+        )));
+    }
+    let decode = |values: &[u8], k: u32| -> std::result::Result<Vec<Vector3<f64>>, String> {
+        let mut v = Vec::with_capacity(values.len() / elem);
+        for (j, e) in values.chunks_exact(elem).enumerate() {
+            let p = if p_h.pod == Pod::Float32 {
+                let f = |i: usize| f64::from(f32::from_le_bytes([e[i], e[i + 1], e[i + 2], e[i + 3]]));
+                Vector3::new(f(0), f(4), f(8))
+            } else {
+                let f = |i: usize| {
+                    let mut a = [0u8; 8];
+                    a.copy_from_slice(&e[i..i + 8]);
+                    f64::from_le_bytes(a)
+                };
+                Vector3::new(f(0), f(8), f(16))
+            };
+            if !p.iter().all(|c| c.is_finite()) {
+                return Err(format!("P sample {k}, point {j}: coordinate is not finite"));
+            }
+            v.push(p);
+        }
+        Ok(v)
+    };
+    let mut frames: Vec<Vec<Vector3<f64>>> = Vec::with_capacity(n_frames);
+    let mut last_stored = None;
+    for k in 0..p_h.samples {
+        let stored = p_h.stored_index(k).ok_or_else(|| at("P: inconsistent sample indices".into()))?;
+        if last_stored == Some(stored) {
+            let copy = frames.last().cloned().unwrap_or_default();
+            frames.push(copy);
+            continue;
+        }
+        let values = array_sample(&p_h, &p_g, stored).map_err(at)?;
+        if values.len() / elem != n_vertices {
+            return Err(at(format!(
+                "P sample {k} has {} points, sample 0 has {n_vertices}: only constant topology is read",
+                values.len() / elem
+            )));
+        }
+        frames.push(decode(values, k).map_err(at)?);
+        last_stored = Some(stored);
+    }
+
+    // Faces: clockwise polygons reversed and fan-triangulated.
+    let mut faces = Vec::with_capacity(indices.len() / 4);
+    let mut all = int32s(indices);
+    let mut poly = Vec::new();
+    let mut skipped = 0;
+    let mut used = 0usize;
+    for (f, count) in int32s(counts).enumerate() {
+        let count = usize::try_from(count).map_err(|_| at(format!("face {f} has {count} corners")))?;
+        if count > indices.len() / 4 - used {
+            return Err(at(format!(
+                ".faceCounts asks for more corners than the {} of .faceIndices",
+                indices.len() / 4
+            )));
+        }
+        used += count;
+        poly.clear();
+        for _ in 0..count {
+            let i = all.next().unwrap_or(-1);
+            if i < 0 || i as usize >= n_vertices {
+                return Err(at(format!("face {f}: vertex index {i} out of range (0..{n_vertices})")));
+            }
+            poly.push(i as u32);
+        }
+        poly.reverse();
+        skipped += super::push_fan(&mut faces, &poly);
+    }
+    if used != indices.len() / 4 {
+        return Err(at(format!(
+            ".faceCounts covers {used} corners but .faceIndices has {}",
+            indices.len() / 4
+        )));
+    }
+
+    let ts = archive
+        .time_samplings
+        .get(p_h.time_sampling as usize)
+        .ok_or_else(|| at(format!("P's time sampling {} is not in the archive's {}", p_h.time_sampling, archive.time_samplings.len())))?;
+    let fps = sampling_fps(ts).map_err(at)?;
+    let start_time = ts.times.first().copied().unwrap_or(0.0);
+    Ok(AlembicMesh {
+        path,
+        sequence: MeshSequence::new(faces, frames),
+        fps,
+        start_time,
+        skipped_faces: skipped,
+    })
+}
+
+/// Reads a PolyMesh from the Alembic file `path` (see [`parse_alembic`]); errors are one line
+/// naming the file.
+pub fn read_alembic(path: impl AsRef<Path>, object: Option<&str>) -> Result<AlembicMesh> {
+    let path = path.as_ref();
+    let bytes = crate::input::read_regular_file(path)?;
+    let mesh = parse_alembic(&bytes, object).map_err(|m| Error::file(path, m))?;
+    super::warn_skipped_faces(path, mesh.skipped_faces);
+    Ok(mesh)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn dump() {
+        let bytes = std::fs::read(concat!(env!("CARGO_MANIFEST_DIR"), "/../../fixtures/alembic/cube.abc")).unwrap();
+        let m = parse_alembic(&bytes, None).unwrap();
+        eprintln!("{} fps {} start {} faces {:?}", m.path, m.fps, m.start_time, m.sequence.faces);
+        for f in &m.sequence.frames { eprintln!("{:?}", f.iter().map(|v| (v.x, v.y, v.z)).collect::<Vec<_>>()); }
+    }
+}
