@@ -68,6 +68,8 @@ pub struct AlembicMesh {
 /// Plain-old-data types of Alembic's property headers.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 enum Pod {
+    Bool,
+    Uint8,
     Int32,
     Float32,
     Float64,
@@ -77,6 +79,8 @@ enum Pod {
 impl Pod {
     fn of(code: u8) -> Pod {
         match code {
+            0 => Pod::Bool,
+            1 => Pod::Uint8,
             6 => Pod::Int32,
             10 => Pod::Float32,
             11 => Pod::Float64,
@@ -89,6 +93,8 @@ impl Pod {
             "float16", "float32", "float64", "string", "wstring",
         ];
         let code = match self {
+            Pod::Bool => 0,
+            Pod::Uint8 => 1,
             Pod::Int32 => 6,
             Pod::Float32 => 10,
             Pod::Float64 => 11,
@@ -98,6 +104,7 @@ impl Pod {
     }
     fn size(self) -> Option<usize> {
         match self {
+            Pod::Bool | Pod::Uint8 => Some(1),
             Pod::Int32 | Pod::Float32 => Some(4),
             Pod::Float64 => Some(8),
             Pod::Other(_) => None,
@@ -408,48 +415,258 @@ fn parse_indexed_metadata(data: &[u8]) -> std::result::Result<Vec<String>, Strin
     Ok(out)
 }
 
-/// A PolyMesh object found in the tree.
-struct Found<'a> {
-    path: String,
+/// Object trees deeper than this are refused (real scenes are a few levels deep).
+const MAX_DEPTH: usize = 1000;
+const XFORM_SCHEMA: &str = "AbcGeom_Xform_v3";
+
+/// An object of the tree walked so far.
+struct Node<'a> {
+    name: String,
     group: Group<'a>,
+    parent: Option<usize>,
+    depth: usize,
+    is_xform: bool,
 }
 
-/// The PolyMesh named `wanted` (its name or full path), else the first in depth-first order;
-/// also the paths of every PolyMesh seen (for the error when none matches).
+/// The object tree walked down to the PolyMesh sought.
+struct Tree<'a> {
+    nodes: Vec<Node<'a>>,
+}
+
+impl Tree<'_> {
+    /// The full path of node `i` (`/Cube/CubeShape`).
+    fn path(&self, i: usize) -> String {
+        let mut names = Vec::new();
+        let mut at = Some(i);
+        while let Some(n) = at {
+            names.push(self.nodes[n].name.as_str());
+            at = self.nodes[n].parent;
+        }
+        names.iter().rev().fold(String::new(), |p, n| p + "/" + n)
+    }
+
+    /// Whether node `i` is the object `wanted`: its name, or its full path when `wanted`
+    /// starts with `/` (compared upwards, without building the path).
+    fn is(&self, i: usize, wanted: &str) -> bool {
+        let Some(path) = wanted.strip_prefix('/') else {
+            return self.nodes[i].name == wanted;
+        };
+        let mut at = Some(i);
+        for part in path.rsplit('/') {
+            match at {
+                Some(n) if self.nodes[n].name == part => at = self.nodes[n].parent,
+                _ => return false,
+            }
+        }
+        at.is_none()
+    }
+
+    /// The Xform ancestors of node `i`, outermost first.
+    fn xforms(&self, i: usize) -> Vec<usize> {
+        let mut out = Vec::new();
+        let mut at = self.nodes[i].parent;
+        while let Some(n) = at {
+            if self.nodes[n].is_xform {
+                out.push(n);
+            }
+            at = self.nodes[n].parent;
+        }
+        out.reverse();
+        out
+    }
+}
+
+/// The PolyMesh named `wanted` (its name or full path), else the first in depth-first order,
+/// with the tree walked to reach it; also the paths of (up to 10) other PolyMeshes seen, for the
+/// error when none matches.
 fn find_polymesh<'a>(
     archive: &mut Archive<'a>,
     wanted: Option<&str>,
-) -> std::result::Result<(Option<Found<'a>>, Vec<String>), String> {
+) -> std::result::Result<(Tree<'a>, Option<usize>, Vec<String>), String> {
     let mut seen_groups = HashSet::new();
-    let mut meshes = Vec::new();
+    let mut tree = Tree { nodes: Vec::new() };
+    let mut others = Vec::new();
     // Depth-first with an explicit stack: a crafted tree cannot exhaust the call stack.
-    let mut stack = vec![(String::new(), archive.top)];
-    while let Some((path, group)) = stack.pop() {
+    let mut stack: Vec<(Option<usize>, Group<'a>)> = vec![(None, archive.top)];
+    while let Some((node, group)) = stack.pop() {
+        let where_ = |tree: &Tree| escape_control(&node.map_or("/".to_string(), |n| tree.path(n))).into_owned();
         if group.offset() != 0 && !seen_groups.insert(group.offset()) {
-            return Err(format!("object {}: its group is reached twice (a cycle in the object tree)", escape_control(&path)));
+            return Err(format!("object {}: its group is reached twice (a cycle in the object tree)", where_(&tree)));
         }
-        let headers = archive.object_headers(&group).map_err(|e| format!("object {}: {e}", escape_control(if path.is_empty() { "/" } else { &path })))?;
+        let depth = node.map_or(0, |n| tree.nodes[n].depth + 1);
+        if depth > MAX_DEPTH {
+            return Err(format!("the object tree is deeper than {MAX_DEPTH} levels"));
+        }
+        let headers = archive.object_headers(&group).map_err(|e| format!("object {}: {e}", where_(&tree)))?;
         let mut children = Vec::with_capacity(headers.len());
         for (i, (name, meta)) in headers.into_iter().enumerate() {
-            let child_path = format!("{path}/{name}");
             let child = group
                 .group(i as u64 + 1)
-                .map_err(|e| format!("object {}: {e}", escape_control(&child_path)))?;
-            if meta_value(&meta, "schema") == Some(POLYMESH_SCHEMA) {
-                let hit = match wanted {
-                    Some(w) => w == name || w == child_path,
-                    None => true,
-                };
-                if hit {
-                    return Ok((Some(Found { path: child_path, group: child }), meshes));
+                .map_err(|e| format!("object {}/{}: {e}", where_(&tree), escape_control(&name)))?;
+            let schema = meta_value(&meta, "schema");
+            tree.nodes.push(Node {
+                name,
+                group: child,
+                parent: node,
+                depth,
+                is_xform: schema == Some(XFORM_SCHEMA),
+            });
+            let id = tree.nodes.len() - 1;
+            if schema == Some(POLYMESH_SCHEMA) {
+                if wanted.is_none_or(|w| tree.is(id, w)) {
+                    return Ok((tree, Some(id), others));
                 }
-                meshes.push(child_path.clone());
+                if others.len() < 10 {
+                    others.push(tree.path(id));
+                }
             }
-            children.push((child_path, child));
+            children.push((Some(id), child));
         }
         stack.extend(children.into_iter().rev());
     }
-    Ok((None, meshes))
+    Ok((tree, None, others))
+}
+
+/// Where a sample lies in time: sample `i` of a sampling.
+fn sample_time(ts: &TimeSampling, i: u32) -> f64 {
+    let n = ts.times.len().max(1);
+    if ts.time_per_cycle >= ACYCLIC_TIME_PER_CYCLE {
+        return ts.times.get(i as usize).or(ts.times.last()).copied().unwrap_or(0.0);
+    }
+    let (cycle, k) = (i as usize / n, i as usize % n);
+    ts.times.get(k).copied().unwrap_or(0.0) + cycle as f64 * ts.time_per_cycle
+}
+
+/// The sample (of `samples`) of a sampling nearest to time `t`.
+fn sample_near(ts: &TimeSampling, samples: u32, t: f64) -> u32 {
+    // Times increase with the index: the first sample at or after t, or the one before it.
+    let (mut lo, mut hi) = (0u32, samples.saturating_sub(1));
+    while lo < hi {
+        let mid = lo + (hi - lo) / 2;
+        if sample_time(ts, mid) < t {
+            lo = mid + 1;
+        } else {
+            hi = mid;
+        }
+    }
+    if lo > 0 && (t - sample_time(ts, lo - 1)).abs() <= (sample_time(ts, lo) - t).abs() {
+        lo - 1
+    } else {
+        lo
+    }
+}
+
+/// An Xform's operations and its channel values per stored sample.
+struct Xform {
+    path: String,
+    ops: Vec<u8>,
+    header: Option<PropertyHeader>,
+    values: Vec<Vec<f64>>,
+    inherits: bool,
+}
+
+impl Xform {
+    /// The matrix at time `t`.
+    fn matrix_at(&self, archive: &Archive, t: f64) -> std::result::Result<nalgebra::Matrix4<f64>, String> {
+        let vals = match &self.header {
+            Some(h) if h.samples > 1 => {
+                let ts = archive.time_samplings.get(h.time_sampling as usize).ok_or_else(|| {
+                    format!("Xform {}: time sampling {} is not in the archive", escape_control(&self.path), h.time_sampling)
+                })?;
+                let k = sample_near(ts, h.samples, t);
+                let stored = h.stored_index(k).unwrap_or(0) as usize;
+                self.values.get(stored).or(self.values.last())
+            }
+            _ => self.values.first(),
+        };
+        let defaults;
+        let vals = match vals {
+            Some(v) => v,
+            None => {
+                defaults = super::alembic_xform::default_values(&self.ops);
+                &defaults
+            }
+        };
+        super::alembic_xform::matrix(&self.ops, vals).map_err(|e| format!("Xform {}: {e}", escape_control(&self.path)))
+    }
+}
+
+/// The values of a scalar property's stored sample `stored` (after the 16-byte key), `size`
+/// bytes per value.
+fn scalar_sample<'a>(h: &PropertyHeader, g: &Group<'a>, stored: u64, size: usize) -> std::result::Result<&'a [u8], String> {
+    let data = g.data(stored).map_err(|e| format!("{} sample {stored}: {e}", h.name))?;
+    let want = size * h.extent as usize;
+    if data.len() != 16 + want {
+        return Err(format!("{} sample {stored}: {} bytes, expected a 16-byte key and {want} bytes", h.name, data.len()));
+    }
+    Ok(&data[16..])
+}
+
+fn f64s(values: &[u8]) -> Vec<f64> {
+    values
+        .chunks_exact(8)
+        .map(|b| f64::from_le_bytes([b[0], b[1], b[2], b[3], b[4], b[5], b[6], b[7]]))
+        .collect()
+}
+
+/// Reads the Xform object `group` (`.xform`: `.ops`, `.vals`, `.inherits`).
+fn read_xform<'a>(archive: &mut Archive<'a>, path: String, group: &Group<'a>) -> std::result::Result<Xform, String> {
+    let mut x = Xform { path, ops: Vec::new(), header: None, values: Vec::new(), inherits: true };
+    let at = |e: String| format!("Xform {}: {e}", escape_control(&x.path));
+    if group.is_empty() || !group.is_group(0) {
+        return Ok(x);
+    }
+    let props = group.group(0).map_err(at)?;
+    let Some((xh, xg)) = property(archive, &props, ".xform").map_err(at)? else {
+        return Ok(x);
+    };
+    if xh.kind != Kind::Compound {
+        return Err(at(".xform is not a compound property".into()));
+    }
+    let headers = archive.property_headers(&xg).map_err(at)?;
+    for (i, h) in headers.iter().enumerate() {
+        let g = || xg.group(i as u64);
+        match h.name.as_str() {
+            ".ops" if h.samples > 0 => {
+                if h.kind != Kind::Scalar || h.pod != Pod::Uint8 {
+                    return Err(at(format!(".ops is {} {:?}, expected uint8 scalar", h.pod.name(), h.kind)));
+                }
+                x.ops = scalar_sample(h, &g().map_err(at)?, 0, 1).map_err(at)?.to_vec();
+            }
+            ".inherits" if h.samples > 0 => {
+                if h.kind != Kind::Scalar || !matches!(h.pod, Pod::Bool | Pod::Uint8) || h.extent != 1 {
+                    return Err(at(format!(".inherits is {} x{}, expected bool", h.pod.name(), h.extent)));
+                }
+                x.inherits = scalar_sample(h, &g().map_err(at)?, 0, 1).map_err(at)?[0] != 0;
+            }
+            ".vals" if h.samples > 0 => {
+                if h.pod != Pod::Float64 || h.kind == Kind::Compound {
+                    return Err(at(format!(".vals is {} {:?}, expected float64", h.pod.name(), h.kind)));
+                }
+                let vg = g().map_err(at)?;
+                let last = h.stored_index(h.samples - 1).ok_or_else(|| at(".vals: inconsistent sample indices".into()))?;
+                for k in 0..=last {
+                    let bytes = if h.kind == Kind::Scalar {
+                        scalar_sample(h, &vg, k, 8)
+                    } else {
+                        array_sample(h, &vg, k)
+                    }
+                    .map_err(at)?;
+                    x.values.push(f64s(bytes));
+                }
+                x.header = Some(h.clone());
+            }
+            _ => {}
+        }
+    }
+    let need = super::alembic_xform::channel_count(&x.ops).map_err(at)?;
+    if let Some(bad) = x.values.iter().position(|v| v.len() != need) {
+        return Err(at(format!(
+            ".vals sample {bad} has {} values, the operations take {need}",
+            x.values[bad].len()
+        )));
+    }
+    Ok(x)
 }
 
 /// The sub-property `name` of a compound group, with its group.
@@ -535,8 +752,8 @@ fn sampling_fps(ts: &TimeSampling) -> std::result::Result<f64, String> {
 pub fn parse_alembic(bytes: &[u8], object: Option<&str>) -> std::result::Result<AlembicMesh, String> {
     let file = Ogawa::parse(bytes)?;
     let mut archive = Archive::open(&file)?;
-    let (found, others) = find_polymesh(&mut archive, object)?;
-    let Some(Found { path, group }) = found else {
+    let (tree, found, others) = find_polymesh(&mut archive, object)?;
+    let Some(mesh_node) = found else {
         return Err(match object {
             Some(w) if !others.is_empty() => format!(
                 "no PolyMesh named '{}' (the file has {})",
@@ -547,6 +764,8 @@ pub fn parse_alembic(bytes: &[u8], object: Option<&str>) -> std::result::Result<
             None => "holds no PolyMesh (only PolyMesh objects are read)".into(),
         });
     };
+    let path = tree.path(mesh_node);
+    let group = tree.nodes[mesh_node].group;
     let at = |e: String| format!("PolyMesh {}: {e}", escape_control(&path));
     if !group.is_group(0) {
         return Err(at("has no properties".into()));
@@ -631,24 +850,51 @@ pub fn parse_alembic(bytes: &[u8], object: Option<&str>) -> std::result::Result<
         }
         Ok(v)
     };
+    let ts = archive
+        .time_samplings
+        .get(p_h.time_sampling as usize)
+        .ok_or_else(|| at(format!("P's time sampling {} is not in the archive's {}", p_h.time_sampling, archive.time_samplings.len())))?
+        .clone();
+    let fps = sampling_fps(&ts).map_err(at)?;
+    let start_time = ts.times.first().copied().unwrap_or(0.0);
+    // The Xforms above the mesh, outermost first: frame k is placed by their matrices at P's
+    // time k (each Xform's sample nearest that time).
+    let mut xforms = Vec::new();
+    for n in tree.xforms(mesh_node) {
+        let node_path = tree.path(n);
+        xforms.push(read_xform(&mut archive, node_path, &tree.nodes[n].group)?);
+    }
     let mut frames: Vec<Vec<Vector3<f64>>> = Vec::with_capacity(n_frames);
+    let mut local: Vec<Vector3<f64>> = Vec::new();
     let mut last_stored = None;
     for k in 0..p_h.samples {
         let stored = p_h.stored_index(k).ok_or_else(|| at("P: inconsistent sample indices".into()))?;
-        if last_stored == Some(stored) {
-            let copy = frames.last().cloned().unwrap_or_default();
-            frames.push(copy);
-            continue;
+        if last_stored != Some(stored) {
+            let values = array_sample(&p_h, &p_g, stored).map_err(at)?;
+            if values.len() / elem != n_vertices {
+                return Err(at(format!(
+                    "P sample {k} has {} points, sample 0 has {n_vertices}: only constant topology is read",
+                    values.len() / elem
+                )));
+            }
+            local = decode(values, k).map_err(at)?;
+            last_stored = Some(stored);
         }
-        let values = array_sample(&p_h, &p_g, stored).map_err(at)?;
-        if values.len() / elem != n_vertices {
-            return Err(at(format!(
-                "P sample {k} has {} points, sample 0 has {n_vertices}: only constant topology is read",
-                values.len() / elem
-            )));
+        let t = sample_time(&ts, k);
+        let mut world = nalgebra::Matrix4::identity();
+        for x in &xforms {
+            let m = x.matrix_at(&archive, t)?;
+            world = if x.inherits { world * m } else { m };
         }
-        frames.push(decode(values, k).map_err(at)?);
-        last_stored = Some(stored);
+        if world == nalgebra::Matrix4::identity() {
+            frames.push(local.clone());
+        } else {
+            let placed: Vec<Vector3<f64>> = local.iter().map(|p| (world * p.push(1.0)).xyz()).collect();
+            if let Some(j) = placed.iter().position(|p| !p.iter().all(|c| c.is_finite())) {
+                return Err(at(format!("P sample {k}, point {j}: not finite once placed by its Xforms")));
+            }
+            frames.push(placed);
+        }
     }
 
     // Faces: clockwise polygons reversed and fan-triangulated.
@@ -684,12 +930,6 @@ pub fn parse_alembic(bytes: &[u8], object: Option<&str>) -> std::result::Result<
         )));
     }
 
-    let ts = archive
-        .time_samplings
-        .get(p_h.time_sampling as usize)
-        .ok_or_else(|| at(format!("P's time sampling {} is not in the archive's {}", p_h.time_sampling, archive.time_samplings.len())))?;
-    let fps = sampling_fps(ts).map_err(at)?;
-    let start_time = ts.times.first().copied().unwrap_or(0.0);
     Ok(AlembicMesh {
         path,
         sequence: MeshSequence::new(faces, frames),

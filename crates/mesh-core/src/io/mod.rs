@@ -14,6 +14,7 @@
 //! malformed number such as `3.1+e2`, an index out of range).
 
 pub mod alembic;
+pub mod alembic_xform;
 pub mod obj;
 pub mod ogawa;
 pub mod pc2;
