@@ -957,8 +957,9 @@ mod tests {
         std::fs::read(concat!(env!("CARGO_MANIFEST_DIR"), "/../../fixtures/alembic/cube.abc")).unwrap()
     }
 
-    /// `fixtures/alembic/cube.abc`, written by Blender 5.0.1 (`fixtures/alembic/cube.py`), read
-    /// back as the values Blender printed, turned +Z up -> +Y up, within float32 rounding.
+    /// `fixtures/alembic/cube.abc`, written by Blender 5.0.1 (`fixtures/alembic/cube.py`): a cube
+    /// with a shape key, turned, scaled and moving (an animated Xform above the mesh), read back
+    /// as the world-space values Blender printed (7 decimals), turned +Z up -> +Y up.
     #[test]
     fn blenders_cube_reads_as_blender_had_it() {
         let m = parse_alembic(&cube(), None).unwrap();
@@ -967,12 +968,18 @@ mod tests {
         assert!((m.start_time - 0.04).abs() < 1e-12, "{}", m.start_time);
         assert_eq!(m.skipped_faces, 0);
         let blender: [[[f64; 3]; 8]; 3] = [
-            [[-1.0, -1.0, -1.0], [-1.0, -1.0, 1.0], [-1.0, 1.0, -1.0], [-1.0, 1.0, 1.0],
-             [1.0, -1.0, -1.0], [1.0, -1.0, 1.0], [1.0, 1.0, -1.0], [1.0, 1.0, 1.0]],
-            [[-1.25, -1.125, -1.5], [-1.2, -1.125, 1.0], [-1.15, 1.375, -1.5], [-1.1, 1.375, 1.0],
-             [1.45, -1.125, -1.5], [1.5, -1.125, 1.0], [1.55, 1.375, -1.5], [1.6, 1.375, 1.0]],
-            [[-1.5, -1.25, -2.0], [-1.4, -1.25, 1.0], [-1.3, 1.75, -2.0], [-1.2, 1.75, 1.0],
-             [1.9, -1.25, -2.0], [2.0, -1.25, 1.0], [2.0999999, 1.75, -2.0], [2.2, 1.75, 1.0]],
+            [[0.2554128, -2.2618861, 1.2268115], [0.4457921, -2.4879124, 2.182148],
+             [-0.9754766, -0.8005229, 1.817852], [-0.7850972, -1.0265492, 2.7731886],
+             [1.7850972, -0.9734508, 1.2268115], [1.9754765, -1.1994772, 2.182148],
+             [0.5542079, 0.4879125, 1.817852], [0.7445872, 0.2618862, 2.7731886]],
+            [[0.5935379, -1.9577692, 1.2010374], [0.8697543, -2.2080913, 2.3952079],
+             [-0.8685894, -0.0666433, 1.9398379], [-0.5923732, -0.3169653, 3.1340086],
+             [2.658612, -0.2183814, 1.2010374], [2.9348283, -0.4687035, 2.3952079],
+             [1.1964844, 1.6727444, 1.9398379], [1.4727008, 1.4224224, 3.1340086]],
+            [[0.9316632, -1.6536522, 1.1752632], [1.2937164, -1.92827, 2.608268],
+             [-0.7617023, 0.6672363, 2.0618238], [-0.3996491, 0.3926186, 3.4948287],
+             [3.5321267, 0.5366879, 1.1752632], [3.8941798, 0.2620701, 2.608268],
+             [1.8387611, 2.8575764, 2.0618238], [2.2008145, 2.5829587, 3.4948287]],
         ];
         assert_eq!(m.sequence.n_frames(), 3);
         for (frame, want) in m.sequence.frames.iter().zip(&blender) {
@@ -988,9 +995,10 @@ mod tests {
         assert_eq!(m.sequence.faces, want);
         // Outward normals: the faces wind counter-clockwise seen from outside.
         let f0 = &m.sequence.frames[0];
+        let middle = f0.iter().sum::<Vector3<f64>>() / 8.0;
         for t in &m.sequence.faces {
             let [a, b, c] = t.map(|i| f0[i as usize]);
-            let centre = (a + b + c) / 3.0;
+            let centre = (a + b + c) / 3.0 - middle;
             assert!((b - a).cross(&(c - a)).dot(&centre) > 0.0, "{t:?} winds inwards");
         }
         // Picked by name or by path; a missing name lists the meshes there are.
@@ -998,6 +1006,9 @@ mod tests {
         assert_eq!(parse_alembic(&cube(), Some("/Cube/CubeShape")).unwrap().path, "/Cube/CubeShape");
         let err = parse_alembic(&cube(), Some("Cube")).unwrap_err();
         assert_eq!(err, "no PolyMesh named 'Cube' (the file has /Cube/CubeShape)");
+        for wrong in ["/CubeShape", "/X/CubeShape", "Cube/CubeShape", "//Cube/CubeShape"] {
+            assert!(parse_alembic(&cube(), Some(wrong)).unwrap_err().starts_with("no PolyMesh named"), "{wrong}");
+        }
     }
 
     /// Every proper prefix of the fixture is an error, never a panic.
