@@ -207,6 +207,25 @@ impl<'a> Cursor<'a> {
     }
 }
 
+/// The schemas of objects this reader tells apart.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum Schema {
+    PolyMesh,
+    Xform,
+    Other,
+}
+
+impl Schema {
+    /// The schema named in object metadata.
+    fn of(meta: &str) -> Schema {
+        match meta_value(meta, "schema") {
+            Some(POLYMESH_SCHEMA) => Schema::PolyMesh,
+            Some(XFORM_SCHEMA) => Schema::Xform,
+            _ => Schema::Other,
+        }
+    }
+}
+
 /// The value of `key` in Alembic metadata (`key=value;key=value`).
 fn meta_value<'m>(meta: &'m str, key: &str) -> Option<&'m str> {
     meta.split(';').find_map(|kv| kv.split_once('=').filter(|(k, _)| *k == key).map(|(_, v)| v))
@@ -274,16 +293,16 @@ impl<'a> Archive<'a> {
         Ok(())
     }
 
-    /// The metadata of an inline (`0xff`) or indexed entry.
-    fn indexed(&self, index: u32, what: &str) -> std::result::Result<String, String> {
+    /// The indexed metadata entry `index`.
+    fn indexed(&self, index: u32, what: &str) -> std::result::Result<&str, String> {
         self.metadata
             .get(index as usize)
-            .cloned()
+            .map(String::as_str)
             .ok_or_else(|| format!("{what}: metadata index {index} but the archive indexes {}", self.metadata.len()))
     }
 
-    /// The headers of `group`'s child objects: (name, metadata).
-    fn object_headers(&mut self, group: &Group<'a>) -> std::result::Result<Vec<(String, String)>, String> {
+    /// The headers of `group`'s child objects: name and schema.
+    fn object_headers(&mut self, group: &Group<'a>) -> std::result::Result<Vec<(String, Schema)>, String> {
         let n = group.len();
         if n == 0 || !group.is_data(n - 1) {
             return Ok(Vec::new());
@@ -302,13 +321,13 @@ impl<'a> Archive<'a> {
             }
             let name = c.text(size)?;
             let index = c.u8()?;
-            let meta = if index == 0xff {
+            let schema = if index == 0xff {
                 let size = c.u32()? as usize;
-                c.text(size)?
+                Schema::of(&String::from_utf8_lossy(c.take(size)?))
             } else {
-                self.indexed(u32::from(index), "object headers")?
+                Schema::of(self.indexed(u32::from(index), "object headers")?)
             };
-            out.push((name, meta));
+            out.push((name, schema));
         }
         Ok(out)
     }
@@ -499,20 +518,19 @@ fn find_polymesh<'a>(
         }
         let headers = archive.object_headers(&group).map_err(|e| format!("object {}: {e}", where_(&tree)))?;
         let mut children = Vec::with_capacity(headers.len());
-        for (i, (name, meta)) in headers.into_iter().enumerate() {
+        for (i, (name, schema)) in headers.into_iter().enumerate() {
             let child = group
                 .group(i as u64 + 1)
                 .map_err(|e| format!("object {}/{}: {e}", where_(&tree), escape_control(&name)))?;
-            let schema = meta_value(&meta, "schema");
             tree.nodes.push(Node {
                 name,
                 group: child,
                 parent: node,
                 depth,
-                is_xform: schema == Some(XFORM_SCHEMA),
+                is_xform: schema == Schema::Xform,
             });
             let id = tree.nodes.len() - 1;
-            if schema == Some(POLYMESH_SCHEMA) {
+            if schema == Schema::PolyMesh {
                 if wanted.is_none_or(|w| tree.is(id, w)) {
                     return Ok((tree, Some(id), others));
                 }
@@ -777,8 +795,11 @@ pub fn parse_alembic(bytes: &[u8], object: Option<&str>) -> std::result::Result<
     if geom_h.kind != Kind::Compound {
         return Err(at(".geom is not a compound property".into()));
     }
-    let mut array = |name: &str| -> std::result::Result<(PropertyHeader, Group), String> {
-        let (h, g) = property(&mut archive, &geom, name)?.ok_or_else(|| format!("has no {name}"))?;
+    // The .geom headers parsed once, each property looked up in them.
+    let geom_headers = archive.property_headers(&geom).map_err(at)?;
+    let array = |name: &str| -> std::result::Result<(PropertyHeader, Group), String> {
+        let i = geom_headers.iter().position(|h| h.name == name).ok_or_else(|| format!("has no {name}"))?;
+        let (h, g) = (geom_headers[i].clone(), geom.group(i as u64)?);
         if h.kind != Kind::Array {
             return Err(format!("{name} is not an array property"));
         }
