@@ -765,6 +765,19 @@ fn sampling_fps(ts: &TimeSampling) -> std::result::Result<f64, String> {
     crate::frame_rate::check_fps(fps).map_err(|e| format!("P's time sampling: {e}"))
 }
 
+/// Refuses `n_frames` frames of `n_vertices` vertices (f64) when they need more than
+/// [`EXPANSION_LIMIT`] times a file of `file_len` bytes.
+fn check_expansion(n_frames: usize, n_vertices: usize, file_len: usize) -> std::result::Result<(), String> {
+    let needed = (n_frames as u128) * (n_vertices as u128) * 24;
+    if needed > u128::from(EXPANSION_LIMIT) * file_len as u128 {
+        return Err(format!(
+            "P has {n_frames} samples of {n_vertices} points: {needed} bytes of frames, more than \
+             {EXPANSION_LIMIT} times the file's {file_len} bytes (samples stored once and repeated)"
+        ));
+    }
+    Ok(())
+}
+
 /// Reads a PolyMesh from an Alembic file held in memory: the one named `object` (its name or
 /// full path), else the first. The error is the problem without the file name.
 pub fn parse_alembic(bytes: &[u8], object: Option<&str>) -> std::result::Result<AlembicMesh, String> {
@@ -843,13 +856,7 @@ pub fn parse_alembic(bytes: &[u8], object: Option<&str>) -> std::result::Result<
     let elem = p_h.pod.size().unwrap_or(4) * 3;
     let n_vertices = first.len() / elem;
     let n_frames = p_h.samples as usize;
-    let needed = (n_frames as u128) * (n_vertices as u128) * 24;
-    if needed > u128::from(EXPANSION_LIMIT) * bytes.len() as u128 {
-        return Err(at(format!(
-            "P has {n_frames} samples of {n_vertices} points: {needed} bytes of frames, more than {EXPANSION_LIMIT} times the file's {} bytes",
-            bytes.len()
-        )));
-    }
+    check_expansion(n_frames, n_vertices, bytes.len()).map_err(at)?;
     let decode = |values: &[u8], k: u32| -> std::result::Result<Vec<Vector3<f64>>, String> {
         let mut v = Vec::with_capacity(values.len() / elem);
         for (j, e) in values.chunks_exact(elem).enumerate() {
@@ -1073,6 +1080,15 @@ mod tests {
         assert!(err.ends_with("not an Alembic (Ogawa) file: it does not start with \"Ogawa\""), "{err}");
     }
 
+    /// A few bytes claiming 4 billion repeats of one stored sample are refused before allocating.
+    #[test]
+    fn repeats_beyond_the_files_size_are_refused() {
+        assert!(check_expansion(3, 8, 3258).is_ok());
+        assert!(check_expansion(1000, 100_000, 300_000_000).is_ok());
+        let err = check_expansion(u32::MAX as usize, 8, 3258).unwrap_err();
+        assert!(err.contains("more than 32 times the file's 3258 bytes"), "{err}");
+    }
+
     #[test]
     fn repeated_samples_map_to_the_stored_ones() {
         let h = |samples, first_changed, last_changed| PropertyHeader {
@@ -1106,5 +1122,12 @@ mod tests {
         assert!(sampling_fps(&ts(1e-300, &[0.0])).unwrap_err().contains("outside 1 to 10000 fps"));
         assert!(sampling_fps(&ts(0.0, &[0.0])).is_err());
         assert!(sampling_fps(&ts(-0.04, &[0.0])).is_err());
+        // Sample times, and the sample of an animated Xform nearest a frame's time.
+        let uniform = ts(0.04, &[0.04]);
+        assert!((sample_time(&uniform, 2) - 0.12).abs() < 1e-15);
+        assert_eq!([0.08, 0.081, 10.0, -5.0].map(|t| sample_near(&uniform, 3, t)), [1, 1, 2, 0]);
+        let acyclic = ts(ACYCLIC_TIME_PER_CYCLE, &[0.0, 0.5, 2.0]);
+        assert_eq!([0.2, 0.3, 1.9, 9.0].map(|t| sample_near(&acyclic, 3, t)), [0, 1, 2, 2]);
+        assert_eq!(sample_near(&uniform, 0, 1.0), 0);
     }
 }
