@@ -36,8 +36,8 @@ pub struct Params {
     #[arg(long)]
     #[serde(serialize_with = "pattern_as_text")]
     pub pattern: Option<mesh_core::frame_pattern::FramePattern>,
-    /// The PolyMesh to read from an .abc INPUT: its name (`bodyShape`) or path (`/body/bodyShape`)
-    /// [default: the first]
+    /// The PolyMesh to read from an .abc INPUT: its name (`bodyShape`) or path (`/body/bodyShape`),
+    /// or an object above it (`body`: its first PolyMesh) [default: the first]
     #[arg(long)]
     pub object: Option<String>,
 }

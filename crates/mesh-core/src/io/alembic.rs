@@ -445,6 +445,8 @@ struct Node<'a> {
     parent: Option<usize>,
     depth: usize,
     is_xform: bool,
+    /// The object `--object` names, or one below it (every object when none is named).
+    chosen: bool,
 }
 
 /// The object tree walked down to the PolyMesh sought.
@@ -495,7 +497,8 @@ impl Tree<'_> {
     }
 }
 
-/// The PolyMesh named `wanted` (its name or full path), else the first in depth-first order,
+/// The first PolyMesh (depth-first) that `wanted` names (by name or full path) or that lies
+/// below the object it names (Maya's transform `body` above `bodyShape`), else the first,
 /// with the tree walked to reach it; also the paths of (up to 10) other PolyMeshes seen, for the
 /// error when none matches.
 fn find_polymesh<'a>(
@@ -522,16 +525,20 @@ fn find_polymesh<'a>(
             let child = group
                 .group(i as u64 + 1)
                 .map_err(|e| format!("object {}/{}: {e}", where_(&tree), escape_control(&name)))?;
+            let parent_chosen = node.is_some_and(|n| tree.nodes[n].chosen);
             tree.nodes.push(Node {
                 name,
                 group: child,
                 parent: node,
                 depth,
                 is_xform: schema == Schema::Xform,
+                chosen: false,
             });
             let id = tree.nodes.len() - 1;
+            let chosen = wanted.is_none_or(|w| parent_chosen || tree.is(id, w));
+            tree.nodes[id].chosen = chosen;
             if schema == Schema::PolyMesh {
-                if wanted.is_none_or(|w| tree.is(id, w)) {
+                if chosen {
                     return Ok((tree, Some(id), others));
                 }
                 if others.len() < 10 {
@@ -787,11 +794,11 @@ pub fn parse_alembic(bytes: &[u8], object: Option<&str>) -> std::result::Result<
     let Some(mesh_node) = found else {
         return Err(match object {
             Some(w) if !others.is_empty() => format!(
-                "no PolyMesh named '{}' (the file has {})",
+                "no PolyMesh at or below '{}' (the file has {})",
                 escape_control(w),
                 escape_control(&others.join(", "))
             ),
-            Some(w) => format!("no PolyMesh named '{}' (the file has none)", escape_control(w)),
+            Some(w) => format!("no PolyMesh at or below '{}' (the file has none)", escape_control(w)),
             None => "holds no PolyMesh (only PolyMesh objects are read)".into(),
         });
     };
@@ -1032,10 +1039,13 @@ mod tests {
         // Picked by name or by path; a missing name lists the meshes there are.
         assert_eq!(parse_alembic(&cube(), Some("CubeShape")).unwrap().path, "/Cube/CubeShape");
         assert_eq!(parse_alembic(&cube(), Some("/Cube/CubeShape")).unwrap().path, "/Cube/CubeShape");
-        let err = parse_alembic(&cube(), Some("Cube")).unwrap_err();
-        assert_eq!(err, "no PolyMesh named 'Cube' (the file has /Cube/CubeShape)");
-        for wrong in ["/CubeShape", "/X/CubeShape", "Cube/CubeShape", "//Cube/CubeShape"] {
-            assert!(parse_alembic(&cube(), Some(wrong)).unwrap_err().starts_with("no PolyMesh named"), "{wrong}");
+        // The Xform above it names it too.
+        assert_eq!(parse_alembic(&cube(), Some("Cube")).unwrap().path, "/Cube/CubeShape");
+        assert_eq!(parse_alembic(&cube(), Some("/Cube")).unwrap().path, "/Cube/CubeShape");
+        let err = parse_alembic(&cube(), Some("Suzanne")).unwrap_err();
+        assert_eq!(err, "no PolyMesh at or below 'Suzanne' (the file has /Cube/CubeShape)");
+        for wrong in ["/CubeShape", "/X/CubeShape", "Cube/CubeShape", "//Cube/CubeShape", "/"] {
+            assert!(parse_alembic(&cube(), Some(wrong)).unwrap_err().starts_with("no PolyMesh at or below"), "{wrong}");
         }
     }
 
