@@ -256,8 +256,9 @@ pub fn seed_corpus() -> Vec<(Target, Vec<u8>)> {
     let mut b = Vec::new();
     mesh_core::io::pc2::encode_pc2(&mut b, &frames[..3]).unwrap();
     out.push((Target::Pc2, b));
-    // Blender 5.0.1's Alembic export of a 3-frame cube (fixtures/alembic/cube.py).
+    // Blender 5.0.1's Alembic exports: a 3-frame cube, a rigid motion (fixtures/alembic/*.py).
     out.push((Target::Alembic, include_bytes!("../../../fixtures/alembic/cube.abc").to_vec()));
+    out.push((Target::Alembic, include_bytes!("../../../fixtures/alembic/rigid.abc").to_vec()));
     out.push((Target::Md3, md3_seed(&mesh, &frames[..2])));
     out.push((Target::AnimationCfg, ANIMATION_CFG_SEED.to_vec()));
     out.push((Target::SetJson, br#"{"source": "A", "target": "B", "train": [{"source": "walk", "target": "walk", "keyposes": [[0, 0], [12, 25]]}], "test": ["punch"]}"#.to_vec()));

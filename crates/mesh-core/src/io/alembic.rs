@@ -592,10 +592,10 @@ struct Xform {
 
 impl Xform {
     /// The matrix at time `t`.
-    fn matrix_at(&self, archive: &Archive, t: f64) -> std::result::Result<nalgebra::Matrix4<f64>, String> {
+    fn matrix_at(&self, samplings: &[TimeSampling], t: f64) -> std::result::Result<nalgebra::Matrix4<f64>, String> {
         let vals = match &self.header {
             Some(h) if h.samples > 1 => {
-                let ts = archive.time_samplings.get(h.time_sampling as usize).ok_or_else(|| {
+                let ts = samplings.get(h.time_sampling as usize).ok_or_else(|| {
                     format!("Xform {}: time sampling {} is not in the archive", escape_control(&self.path), h.time_sampling)
                 })?;
                 let k = sample_near(ts, h.samples, t);
@@ -748,28 +748,28 @@ fn int32s(values: &[u8]) -> impl Iterator<Item = i32> + '_ {
 
 /// The frames per second of a time sampling: uniform (one time per cycle), or acyclic with
 /// evenly spaced times.
-fn sampling_fps(ts: &TimeSampling) -> std::result::Result<f64, String> {
+fn sampling_fps(ts: &TimeSampling, what: &str) -> std::result::Result<f64, String> {
     let fps = if ts.time_per_cycle >= ACYCLIC_TIME_PER_CYCLE {
         let steps: Vec<f64> = ts.times.windows(2).map(|w| w[1] - w[0]).collect();
         let Some(&dt) = steps.first() else {
-            return Err("P's acyclic time sampling has a single time: no frame rate".into());
+            return Err(format!("{what}'s acyclic time sampling has a single time: no frame rate"));
         };
         if steps.iter().any(|s| (s - dt).abs() > 1e-9 * dt.abs()) {
-            return Err("P's time sampling is acyclic with uneven steps: no frame rate".into());
+            return Err(format!("{what}'s time sampling is acyclic with uneven steps: no frame rate"));
         }
         1.0 / dt
     } else if ts.times.len() == 1 {
         1.0 / ts.time_per_cycle
     } else {
         return Err(format!(
-            "P's time sampling is cyclic ({} samples per cycle), not uniform: no frame rate",
+            "{what}'s time sampling is cyclic ({} samples per cycle), not uniform: no frame rate",
             ts.times.len()
         ));
     };
     // 1 / (1/24) may come back as 24.000000000000004: snap to a thousandth when that close.
     let snapped = (fps * 1000.0).round() / 1000.0;
     let fps = if (fps - snapped).abs() <= 1e-9 * fps.abs() { snapped } else { fps };
-    crate::frame_rate::check_fps(fps).map_err(|e| format!("P's time sampling: {e}"))
+    crate::frame_rate::check_fps(fps).map_err(|e| format!("{what}'s time sampling: {e}"))
 }
 
 /// Refuses `n_frames` frames of `n_vertices` vertices (f64) when they need more than
@@ -862,8 +862,6 @@ pub fn parse_alembic(bytes: &[u8], object: Option<&str>) -> std::result::Result<
     let first = array_sample(&p_h, &p_g, 0).map_err(at)?;
     let elem = p_h.pod.size().unwrap_or(4) * 3;
     let n_vertices = first.len() / elem;
-    let n_frames = p_h.samples as usize;
-    check_expansion(n_frames, n_vertices, bytes.len()).map_err(at)?;
     let decode = |values: &[u8], k: u32| -> std::result::Result<Vec<Vector3<f64>>, String> {
         let mut v = Vec::with_capacity(values.len() / elem);
         for (j, e) in values.chunks_exact(elem).enumerate() {
@@ -885,40 +883,51 @@ pub fn parse_alembic(bytes: &[u8], object: Option<&str>) -> std::result::Result<
         }
         Ok(v)
     };
-    let ts = archive
-        .time_samplings
-        .get(p_h.time_sampling as usize)
-        .ok_or_else(|| at(format!("P's time sampling {} is not in the archive's {}", p_h.time_sampling, archive.time_samplings.len())))?
-        .clone();
-    let fps = sampling_fps(&ts).map_err(at)?;
-    let start_time = ts.times.first().copied().unwrap_or(0.0);
-    // The Xforms above the mesh, outermost first: frame k is placed by their matrices at P's
-    // time k (each Xform's sample nearest that time).
+    let samplings = std::mem::take(&mut archive.time_samplings);
+    let sampling = |index: u32, what: &str| -> std::result::Result<TimeSampling, String> {
+        samplings.get(index as usize).cloned().ok_or_else(|| {
+            at(format!("{what}'s time sampling {index} is not in the archive's {}", samplings.len()))
+        })
+    };
+    let p_ts = sampling(p_h.time_sampling, "P")?;
+    // The Xforms above the mesh, outermost first: frame k is placed by their matrices at its
+    // time (each Xform's sample nearest that time).
     let mut xforms = Vec::new();
     for n in tree.xforms(mesh_node) {
         let node_path = tree.path(n);
         xforms.push(read_xform(&mut archive, node_path, &tree.nodes[n].group)?);
     }
-    let mut frames: Vec<Vec<Vector3<f64>>> = Vec::with_capacity(n_frames);
+    // The frames are P's samples; points that never change under an animated Xform (a rigid
+    // object's motion: Blender writes P once) follow the Xform with the most samples instead.
+    let animated = xforms.iter().filter_map(|x| x.header.as_ref()).filter(|h| h.samples > 1).max_by_key(|h| h.samples);
+    let (ts, n_frames, follows_p) = match animated {
+        Some(h) if p_h.samples == 1 => (sampling(h.time_sampling, "its Xform")?, h.samples, false),
+        _ => (p_ts.clone(), p_h.samples, true),
+    };
+    let fps = sampling_fps(&ts, if follows_p { "P" } else { "its Xform" }).map_err(at)?;
+    let start_time = ts.times.first().copied().unwrap_or(0.0);
+    check_expansion(n_frames as usize, n_vertices, bytes.len()).map_err(at)?;
+    let mut frames: Vec<Vec<Vector3<f64>>> = Vec::with_capacity(n_frames as usize);
     let mut local: Vec<Vector3<f64>> = Vec::new();
     let mut last_stored = None;
-    for k in 0..p_h.samples {
-        let stored = p_h.stored_index(k).ok_or_else(|| at("P: inconsistent sample indices".into()))?;
+    for k in 0..n_frames {
+        let t = sample_time(&ts, k);
+        let pk = if follows_p { k } else { sample_near(&p_ts, p_h.samples, t) };
+        let stored = p_h.stored_index(pk).ok_or_else(|| at("P: inconsistent sample indices".into()))?;
         if last_stored != Some(stored) {
             let values = array_sample(&p_h, &p_g, stored).map_err(at)?;
             if values.len() / elem != n_vertices {
                 return Err(at(format!(
-                    "P sample {k} has {} points, sample 0 has {n_vertices}: only constant topology is read",
+                    "P sample {pk} has {} points, sample 0 has {n_vertices}: only constant topology is read",
                     values.len() / elem
                 )));
             }
-            local = decode(values, k).map_err(at)?;
+            local = decode(values, pk).map_err(at)?;
             last_stored = Some(stored);
         }
-        let t = sample_time(&ts, k);
         let mut world = nalgebra::Matrix4::identity();
         for x in &xforms {
-            let m = x.matrix_at(&archive, t)?;
+            let m = x.matrix_at(&samplings, t)?;
             world = if x.inherits { world * m } else { m };
         }
         if world == nalgebra::Matrix4::identity() {
@@ -1049,6 +1058,36 @@ mod tests {
         }
     }
 
+    /// `fixtures/alembic/rigid.abc` (`rigid.py`): a mesh that does not deform under an animated
+    /// parent, written by Blender as one sample of points below animated Xforms (/Rig, /Rig/Tet),
+    /// reads as Blender's world-space frames, at the Xforms' 4 samples and 30 fps; the still
+    /// `Ball` beside it by `--object`.
+    #[test]
+    fn a_rigid_motion_is_the_xforms_frames() {
+        let bytes = std::fs::read(concat!(env!("CARGO_MANIFEST_DIR"), "/../../fixtures/alembic/rigid.abc")).unwrap();
+        let m = parse_alembic(&bytes, None).unwrap();
+        assert_eq!((m.path.as_str(), m.fps, m.sequence.n_frames()), ("/Rig/Tet/TetShape", 30.0, 4));
+        let blender = [
+            [[1.4794255, 2.0, 3.8775826], [2.357008, 2.0, 3.3981571], [1.4794255, 3.0, 3.8775826], [1.9588511, 2.0, 4.7551651]],
+            [[1.9476438, 2.0, 3.7253461], [2.6729898, 2.0, 3.0369618], [1.9476438, 3.0, 3.7253461], [2.6360281, 2.0, 4.4506922]],
+            [[2.6867652, 2.0, 3.3240955], [3.0108607, 2.0, 2.3780711], [2.6867652, 3.0, 3.3240955], [3.6327896, 2.0, 3.648191]],
+            [[2.9974949, 2.0, 3.0707371], [3.0682321, 2.0, 2.0732422], [2.9974949, 3.0, 3.0707371], [3.9949899, 2.0, 3.1414742]],
+        ];
+        for (frame, want) in m.sequence.frames.iter().zip(&blender) {
+            for (got, b) in frame.iter().zip(want) {
+                let want = Vector3::new(b[0], b[2], -b[1]);
+                assert!((got - want).amax() < 1e-6, "{got:?} vs {want:?}");
+            }
+        }
+        assert_eq!(m.sequence.faces, vec![[0, 2, 1], [0, 1, 3], [0, 3, 2], [1, 2, 3]]);
+        let ball = parse_alembic(&bytes, Some("Ball")).unwrap();
+        assert_eq!((ball.path.as_str(), ball.sequence.n_frames(), ball.sequence.n_vertices()), ("/Ball/Icosphere", 1, 12));
+        assert!(ball.sequence.frames[0].iter().all(|p| (p.x - 3.0).abs() <= 1.0 + 1e-6));
+        for n in 0..bytes.len() {
+            assert!(parse_alembic(&bytes[..n], None).is_err(), "prefix of {n} bytes read");
+        }
+    }
+
     /// Every proper prefix of the fixture is an error, never a panic.
     #[test]
     fn every_truncation_is_an_error() {
@@ -1123,15 +1162,15 @@ mod tests {
     #[test]
     fn frame_rates_of_time_samplings() {
         let ts = |time_per_cycle, times: &[f64]| TimeSampling { time_per_cycle, times: times.to_vec() };
-        assert_eq!(sampling_fps(&ts(1.0 / 24.0, &[0.0])), Ok(24.0));
-        assert_eq!(sampling_fps(&ts(1.0 / 25.0, &[1.0 / 25.0])), Ok(25.0));
-        assert!((sampling_fps(&ts(1001.0 / 30000.0, &[0.0])).unwrap() - 30000.0 / 1001.0).abs() < 1e-9);
-        assert_eq!(sampling_fps(&ts(ACYCLIC_TIME_PER_CYCLE, &[0.0, 0.02, 0.04])), Ok(50.0));
-        assert!(sampling_fps(&ts(ACYCLIC_TIME_PER_CYCLE, &[0.0, 0.02, 0.05])).unwrap_err().contains("uneven"));
-        assert!(sampling_fps(&ts(1.0, &[0.0, 0.5])).unwrap_err().contains("cyclic"));
-        assert!(sampling_fps(&ts(1e-300, &[0.0])).unwrap_err().contains("outside 1 to 10000 fps"));
-        assert!(sampling_fps(&ts(0.0, &[0.0])).is_err());
-        assert!(sampling_fps(&ts(-0.04, &[0.0])).is_err());
+        assert_eq!(sampling_fps(&ts(1.0 / 24.0, &[0.0]), "P"), Ok(24.0));
+        assert_eq!(sampling_fps(&ts(1.0 / 25.0, &[1.0 / 25.0]), "P"), Ok(25.0));
+        assert!((sampling_fps(&ts(1001.0 / 30000.0, &[0.0]), "P").unwrap() - 30000.0 / 1001.0).abs() < 1e-9);
+        assert_eq!(sampling_fps(&ts(ACYCLIC_TIME_PER_CYCLE, &[0.0, 0.02, 0.04]), "P"), Ok(50.0));
+        assert!(sampling_fps(&ts(ACYCLIC_TIME_PER_CYCLE, &[0.0, 0.02, 0.05]), "P").unwrap_err().contains("uneven"));
+        assert!(sampling_fps(&ts(1.0, &[0.0, 0.5]), "P").unwrap_err().contains("cyclic"));
+        assert!(sampling_fps(&ts(1e-300, &[0.0]), "P").unwrap_err().contains("outside 1 to 10000 fps"));
+        assert!(sampling_fps(&ts(0.0, &[0.0]), "P").is_err());
+        assert!(sampling_fps(&ts(-0.04, &[0.0]), "P").is_err());
         // Sample times, and the sample of an animated Xform nearest a frame's time.
         let uniform = ts(0.04, &[0.04]);
         assert!((sample_time(&uniform, 2) - 0.12).abs() < 1e-15);
