@@ -862,6 +862,9 @@ pub fn parse_alembic(bytes: &[u8], object: Option<&str>) -> std::result::Result<
     let first = array_sample(&p_h, &p_g, 0).map_err(at)?;
     let elem = p_h.pod.size().unwrap_or(4) * 3;
     let n_vertices = first.len() / elem;
+    if n_vertices == 0 {
+        return Err(at("P has no points".into()));
+    }
     let decode = |values: &[u8], k: u32| -> std::result::Result<Vec<Vector3<f64>>, String> {
         let mut v = Vec::with_capacity(values.len() / elem);
         for (j, e) in values.chunks_exact(elem).enumerate() {
