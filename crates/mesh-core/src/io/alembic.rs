@@ -29,6 +29,8 @@
 //! and the frames written out (samples repeated from a stored one included) may not need more
 //! than [`EXPANSION_LIMIT`] times the file's size.
 
+#![forbid(unsafe_code)]
+
 use std::collections::HashSet;
 use std::path::Path;
 

@@ -7,6 +7,8 @@
 //! sample's matrix (column vectors, `p' = M p`) is `O_1 O_2 ... O_n`, as Alembic's
 //! `XformSample::getMatrix` composes them in its row-vector convention.
 
+#![forbid(unsafe_code)]
+
 use nalgebra::{Matrix4, Rotation3, Unit, Vector3};
 
 /// Channel counts per operation type, or `None` for an unknown type.

@@ -13,6 +13,8 @@
 //! checked against the file's length before it is used, so a truncated or crafted file gives
 //! an error (the problem, without the file name), never a panic or an out-of-range read.
 
+#![forbid(unsafe_code)]
+
 /// The first 5 bytes of an Ogawa file.
 pub const MAGIC: &[u8; 5] = b"Ogawa";
 /// The container version this reader knows.
