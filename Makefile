@@ -57,11 +57,13 @@ STAGE_BINARIES := $(if $(NO_BUILD),,$(BUILD_STAMP))
 
 # assets: synth's tests use the real bodies; setup-web: glTF validator + headless Chromium tests;
 # scripts/slurm-test installs Slurm + munge and runs the tiny preset's pipelines as job arrays.
-# scripts/usd-check reads the .usda export back with usd-core and Blender (PyPI bpy, Python 3.11).
+# scripts/usd-check reads the .usda export back with usd-core and Blender (PyPI bpy, Python 3.11);
+# scripts/alembic-check reads Blender's Alembic export of a sequence back with mesh-import.
 test: build assets setup-web
 	$(CARGO) test --release --workspace
 	scripts/blender-check
 	scripts/usd-check
+	scripts/alembic-check
 	scripts/slurm-test
 
 clean-out:

@@ -1,6 +1,7 @@
 //! An in-process mutation fuzzer on stable Rust over every surfcap reader.
 //!
-//! Targets ([`Target`]): PLY and OBJ meshes, PC2 point caches, Quake 3 MD3
+//! Targets ([`Target`]): PLY and OBJ meshes, PC2 point caches, Alembic (Ogawa) mesh caches,
+//! Quake 3 MD3
 //! models (welded as the `characters` stage welds them) and their
 //! `animation.cfg`, the capture
 //! set's `set.json` and `subject.json` (with the subject's curves resolved on
@@ -47,6 +48,7 @@ pub enum Target {
     Ply,
     Obj,
     Pc2,
+    Alembic,
     Md3,
     AnimationCfg,
     SetJson,
@@ -60,6 +62,7 @@ impl Target {
             Target::Ply => "ply",
             Target::Obj => "obj",
             Target::Pc2 => "pc2",
+            Target::Alembic => "alembic",
             Target::Md3 => "md3",
             Target::AnimationCfg => "animation-cfg",
             Target::SetJson => "set-json",
@@ -76,6 +79,7 @@ impl Target {
             "ply" => Target::Ply,
             "obj" => Target::Obj,
             "pc2" => Target::Pc2,
+            "abc" => Target::Alembic,
             "md3" => Target::Md3,
             "cfg" if name == "animation.cfg" => Target::AnimationCfg,
             "json" if name == "set.json" => Target::SetJson,
@@ -120,6 +124,11 @@ pub fn exercise(target: Target, bytes: &[u8]) {
         }
         Target::Pc2 => {
             let _ = mesh_core::io::pc2::parse_pc2(bytes);
+        }
+        Target::Alembic => {
+            if let Ok(m) = mesh_core::io::alembic::parse_alembic(bytes, None) {
+                let _ = m.sequence.topology();
+            }
         }
         Target::Md3 => {
             if let Ok(model) = export::md3::parse_md3(bytes) {
@@ -247,6 +256,9 @@ pub fn seed_corpus() -> Vec<(Target, Vec<u8>)> {
     let mut b = Vec::new();
     mesh_core::io::pc2::encode_pc2(&mut b, &frames[..3]).unwrap();
     out.push((Target::Pc2, b));
+    // Blender 5.0.1's Alembic exports: a 3-frame cube, a rigid motion (fixtures/alembic/*.py).
+    out.push((Target::Alembic, include_bytes!("../../../fixtures/alembic/cube.abc").to_vec()));
+    out.push((Target::Alembic, include_bytes!("../../../fixtures/alembic/rigid.abc").to_vec()));
     out.push((Target::Md3, md3_seed(&mesh, &frames[..2])));
     out.push((Target::AnimationCfg, ANIMATION_CFG_SEED.to_vec()));
     out.push((Target::SetJson, br#"{"source": "A", "target": "B", "train": [{"source": "walk", "target": "walk", "keyposes": [[0, 0], [12, 25]]}], "test": ["punch"]}"#.to_vec()));
@@ -449,7 +461,7 @@ pub fn mutate(rng: &mut ChaCha8Rng, input: &[u8], target: Target, corpus: &[(Tar
                 let v: u64 = 1 << rng.random_range(8..63);
                 b[at + 1..at + 9].copy_from_slice(&v.to_le_bytes());
             }
-            7 | 8 if !matches!(target, Target::Artifact | Target::Pc2 | Target::Md3) => {
+            7 | 8 if !matches!(target, Target::Artifact | Target::Pc2 | Target::Alembic | Target::Md3) => {
                 // Token swap or replacement in text.
                 // The tokens at two random positions (a scan of the whole text per mutation
                 // cost more than the parse on large files).
@@ -657,6 +669,7 @@ pub fn replay(path: &Path) -> Option<bool> {
         Target::Ply,
         Target::Obj,
         Target::Pc2,
+        Target::Alembic,
         Target::Md3,
         Target::AnimationCfg,
         Target::SetJson,

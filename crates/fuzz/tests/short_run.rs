@@ -11,6 +11,7 @@ fn seeds_are_valid_inputs_of_their_readers() {
             fuzz::Target::Ply => mesh_core::io::ply::parse_ply(&bytes).is_ok(),
             fuzz::Target::Obj => mesh_core::io::obj::parse_obj(&bytes).is_ok(),
             fuzz::Target::Pc2 => mesh_core::io::pc2::parse_pc2(&bytes).is_ok(),
+            fuzz::Target::Alembic => mesh_core::io::alembic::parse_alembic(&bytes, None).is_ok(),
             fuzz::Target::Md3 => export::md3::parse_md3(&bytes).is_ok(),
             fuzz::Target::AnimationCfg => characters::animation_cfg::parse_animation_cfg(&bytes).is_ok(),
             fuzz::Target::SetJson => mesh_core::capture_set::SetSpec::parse(&bytes).is_ok(),
@@ -36,7 +37,7 @@ fn twenty_thousand_mutated_inputs_raise_no_panic_and_no_hang() {
     eprintln!("{r:?}");
     assert_eq!(r.inputs, 20_000);
     assert_eq!((r.panics, r.hangs), (0, 0), "kept: {:?}", r.kept);
-    assert!(r.per_target.len() == 8, "{:?}", r.per_target);
+    assert!(r.per_target.len() == 9, "{:?}", r.per_target);
 }
 
 #[test]

@@ -1,5 +1,6 @@
 //! Mesh file input and output: PLY ([`ply`]) and OBJ ([`obj`]); folders of binary PLY frames
-//! ([`ply_frames`]); the PC2 point cache beside a template OBJ ([`pc2`]).
+//! ([`ply_frames`]); the PC2 point cache beside a template OBJ ([`pc2`]); Alembic mesh caches
+//! ([`alembic`], on the Ogawa container [`ogawa`]).
 //!
 //! [`read_mesh`] and [`write_mesh`] pick the format from the file extension
 //! (`.ply` or `.obj`, case-insensitive). Reading validates the mesh (finite
@@ -12,7 +13,10 @@
 //! Everything whose meaning is ambiguous stays an error (OBJ index 0, a
 //! malformed number such as `3.1+e2`, an index out of range).
 
+pub mod alembic;
+pub mod alembic_xform;
 pub mod obj;
+pub mod ogawa;
 pub mod pc2;
 pub mod ply;
 pub mod ply_frames;
