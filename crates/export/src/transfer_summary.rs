@@ -281,6 +281,19 @@ pub fn records_html(results: &Value) -> String {
     json_to_html(&Value::Array(slim))
 }
 
+/// Per direction, in order of first appearance, the leave-one-motion-out estimate its records
+/// carry (`cv_rms_pose_m`, m).
+pub fn cross_validation_estimates(results: &Value) -> Vec<(String, f64)> {
+    let mut out: Vec<(String, f64)> = Vec::new();
+    for r in results.as_array().into_iter().flatten() {
+        let (Some(d), Some(cv)) = (r["direction"].as_str(), r["cv_rms_pose_m"].as_f64()) else { continue };
+        if !out.iter().any(|(x, _)| x == d) {
+            out.push((d.to_string(), cv));
+        }
+    }
+    out
+}
+
 /// The whole transfer section's content: the pose-error table and plot where the run had
 /// truth (else a line saying so), the floor offset and foot sliding tables, then the records;
 /// `None` when `results` holds no transfer record.
@@ -301,6 +314,15 @@ pub fn section_html(results: &Value) -> Option<String> {
                  shows without it follows, measured where the source stands on a foot.</p>"
             .to_string(),
     };
+    let estimates = cross_validation_estimates(results);
+    if !estimates.is_empty() {
+        let items: Vec<String> = estimates.iter().map(|(d, cv)| format!("{} {:.1} cm", escape(d), cv * 100.0)).collect();
+        s += &format!(
+            "<p class=\"cv-estimate\">Pose error to expect on an unseen motion, estimated from the training \
+             motions alone (leave-one-motion-out, gpr-nn): {}.</p>",
+            items.join(", ")
+        );
+    }
     if let Some(t) = floor {
         s += "<h3>Floor offset (median height of the standing leg's lowest point above the target's floor \
               where the source stands on a foot, cm; pooled: RMS)</h3>";
@@ -366,5 +388,21 @@ mod tests {
         assert!(pose_table(&serde_json::json!([{"x": 1}])).is_none());
         assert_eq!(nice_step(13.0, 5.0), 5.0);
         assert_eq!(nice_step(0.9, 5.0), 0.2);
+    }
+
+    /// The leave-one-motion-out estimate of each direction, once per direction, shown in the
+    /// section as cm; none without it.
+    #[test]
+    fn the_estimate_from_the_training_motions_is_shown_once_per_direction() {
+        let mut a = rec("A->B", "punch", "gpr-nn", "scaled-source", "dense", 0.05, 10);
+        let mut b = rec("A->B", "kick", "gpr-nn", "scaled-source", "dense", 0.06, 10);
+        a["cv_rms_pose_m"] = serde_json::json!(0.0571);
+        b["cv_rms_pose_m"] = serde_json::json!(0.0571);
+        let c = rec("B->A", "dance", "gpr-nn", "scaled-source", "dense", 0.02, 30);
+        let v = Value::Array(vec![a, b, c.clone()]);
+        assert_eq!(cross_validation_estimates(&v), vec![("A->B".to_string(), 0.0571)]);
+        let html = section_html(&v).unwrap();
+        assert!(html.contains("A-&gt;B 5.7 cm") && html.matches("cv-estimate").count() == 1, "{html}");
+        assert!(!section_html(&Value::Array(vec![c])).unwrap().contains("cv-estimate"));
     }
 }

@@ -29,8 +29,21 @@ fn record_key(v: &Value) -> [String; 5] {
         .map(|k| v.get(k).and_then(Value::as_str).unwrap_or("").to_string())
 }
 
-/// Merges transfer evaluation records into one sorted list at `out`.
-pub fn transfer(records: &[PathBuf], out: &Path) -> Result<()> {
+/// Merges transfer evaluation records into one sorted list at `out`; each record of a direction
+/// named in `cross_validations` (`DIRECTION=REPORT`) gets the report's `cv_rms_pose_m`.
+pub fn transfer(records: &[PathBuf], cross_validations: &[String], out: &Path) -> Result<()> {
+    let mut estimates: Vec<(String, Value)> = Vec::new();
+    for cv in cross_validations {
+        let Some((direction, report)) = cv.split_once('=') else {
+            anyhow::bail!("--cross-validation {cv}: expected DIRECTION=REPORT");
+        };
+        let path = Path::new(report);
+        let value = load(path)?
+            .get("cv_rms_pose_m")
+            .cloned()
+            .with_context(|| format!("{report}: no cv_rms_pose_m"))?;
+        estimates.push((direction.to_string(), value));
+    }
     let mut recs = records
         .iter()
         .map(|p| {
@@ -41,6 +54,13 @@ pub fn transfer(records: &[PathBuf], out: &Path) -> Result<()> {
             Ok(v)
         })
         .collect::<Result<Vec<_>>>()?;
+    for r in &mut recs {
+        let direction = r.get("direction").and_then(Value::as_str).unwrap_or("").to_string();
+        if let (Some((_, cv)), Value::Object(fields)) = (estimates.iter().find(|(d, _)| *d == direction), r) {
+            fields.retain(|(k, _)| k != "cv_rms_pose_m");
+            fields.push(("cv_rms_pose_m".to_string(), cv.clone()));
+        }
+    }
     recs.sort_by_cached_key(record_key);
     save(out, &Value::Array(recs))
 }
@@ -59,4 +79,38 @@ pub fn variation(work: &Path, groups: &[String], out: &Path) -> Result<()> {
         }
     }
     save(out, &Value::Object(table))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Records of two directions, a leave-one-motion-out report for one: its records get the
+    /// report's `cv_rms_pose_m`, the other direction's none; a report without it, or an argument
+    /// without `=`, is an error naming it.
+    #[test]
+    fn each_record_of_a_cross_validated_direction_gets_its_estimate() {
+        let dir = tempfile::tempdir().unwrap();
+        let file = |name: &str, text: &str| {
+            let p = dir.path().join(name);
+            std::fs::write(&p, text).unwrap();
+            p
+        };
+        let records = [
+            file("a.json", r#"{"direction": "B->A", "motion": "m", "method": "gpr-nn"}"#),
+            file("b.json", r#"{"direction": "A->B", "motion": "m", "method": "gpr-nn"}"#),
+            file("c.json", r#"{"direction": "A->B", "motion": "n", "method": "gpr-nn"}"#),
+        ];
+        let cv = file("cv.json", r#"{"config": "default", "cv_rms_pose_m": 0.0512}"#);
+        let out = dir.path().join("results.json");
+        transfer(&records, &[format!("A->B={}", cv.display())], &out).unwrap();
+        let table = load(&out).unwrap();
+        let Value::Array(rows) = table else { panic!("{table:?}") };
+        let estimates: Vec<Option<&Value>> = rows.iter().map(|r| r.get("cv_rms_pose_m")).collect();
+        assert_eq!(estimates, vec![Some(&Value::Number("0.0512".into())), Some(&Value::Number("0.0512".into())), None]);
+        let bad = file("bad.json", r#"{"config": "default"}"#);
+        let e = transfer(&records, &[format!("A->B={}", bad.display())], &out).unwrap_err();
+        assert!(format!("{e:#}").contains("bad.json"), "{e:#}");
+        assert!(transfer(&records, &["A->B".into()], &out).is_err());
+    }
 }

@@ -129,6 +129,11 @@ pub enum Collect {
         /// Output table (results.json)
         #[arg(short, long)]
         out: PathBuf,
+        /// DIRECTION=REPORT: the direction's leave-one-motion-out report (gpr-train
+        /// --cross-validate --report); its `cv_rms_pose_m` goes into each of the direction's
+        /// records (repeat per direction)
+        #[arg(long, value_name = "DIRECTION=REPORT")]
+        cross_validation: Vec<String>,
         /// Evaluation records (transfer-eval --out)
         #[arg(required = true)]
         records: Vec<PathBuf>,
@@ -207,9 +212,9 @@ pub fn run(args: &Params) -> Result<()> {
             }
             crate::task_table::run_task(&task, &a.bin).with_context(|| task.target.clone())?;
         }
-        Command::Collect(Collect::Transfer { common, out, records }) => {
+        Command::Collect(Collect::Transfer { common, out, cross_validation, records }) => {
             common.init()?;
-            crate::collect::transfer(records, out)?;
+            crate::collect::transfer(records, cross_validation, out)?;
         }
         Command::Collect(Collect::Variation { common, work, out, groups }) => {
             common.init()?;

@@ -62,6 +62,8 @@ struct Plan<'a> {
     /// Every evaluation record (results.json's rows) and every other product of the run.
     records: Vec<String>,
     stamps: Vec<String>,
+    /// Per direction label, its leave-one-motion-out report (`gpr-train --cross-validate`).
+    cross_validations: Vec<(String, String)>,
 }
 
 /// One direction of the transfer: from `src` onto `tgt`, its test motions, and whether it is the
@@ -252,6 +254,9 @@ impl<'a> Plan<'a> {
                 _ => self.subjects[d.src].parts.clone(),
             };
             units.push(s("displacement"));
+            if name == "gpr-nn" && self.set.spec.train.len() >= 2 {
+                self.cross_validation(d, &model, &inputs, &args, graph);
+            }
             for t in per_part::fit(graph.part_tasks, "gpr-train", &model, None, inputs, args, &units) {
                 graph.push(t);
             }
@@ -267,6 +272,18 @@ impl<'a> Plan<'a> {
                 }
             }
         }
+    }
+
+    /// The leave-one-motion-out estimate of direction `d`'s pose error: the gpr-nn model trained
+    /// whole once more (`--cross-validate` needs every part in one task, whatever the cluster
+    /// split) with its report, whose `cv_rms_pose_m` results.json carries beside the direction's
+    /// records.
+    fn cross_validation(&mut self, d: &Direction, model: &str, inputs: &[String], args: &[String], graph: &mut Graph) {
+        let report = model.replace(".model", ".cv.json");
+        let mut a = args.to_vec();
+        a.extend([s("--cross-validate"), s("--report"), report.clone(), s("--out"), model.replace(".model", ".cv.model")]);
+        graph.push(Task::run("gpr-train", report.clone(), inputs.to_vec(), a).mkdir_target());
+        self.cross_validations.push((d.label(), report));
     }
 
     /// `gpr-predict` of test motion `m` with one model (gpr-nn at every placement) and the
@@ -479,7 +496,7 @@ pub fn plan(set: &CaptureSet, out: &str, opt: &TransferOptions, graph: &mut Grap
         (sn.clone(), set.spec.train.iter().map(|p| p.source.clone()).collect()),
         (tn.clone(), set.spec.train.iter().map(|p| p.target.clone()).collect()),
     ]);
-    let mut plan = Plan { set, out, work, opt, subjects, train, records: Vec::new(), stamps: Vec::new() };
+    let mut plan = Plan { set, out, work, opt, subjects, train, records: Vec::new(), stamps: Vec::new(), cross_validations: Vec::new() };
     for x in [&sn, &tn] {
         plan.front_end(x, graph)?;
     }
@@ -502,6 +519,10 @@ pub fn plan(set: &CaptureSet, out: &str, opt: &TransferOptions, graph: &mut Grap
     let mut inputs = plan.records.clone();
     inputs.extend(plan.stamps);
     let mut args = vec![s("collect"), s("transfer"), s("--out"), results.clone()];
+    for (label, report) in plan.cross_validations {
+        args.extend([s("--cross-validation"), format!("{label}={report}")]);
+        inputs.push(report);
+    }
     args.extend(plan.records);
     graph.push(Task {
         kind: "collect-results".into(),
