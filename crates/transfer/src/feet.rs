@@ -176,22 +176,11 @@ pub fn lowest_points(frames: &[Vec<Vector3<f64>>], legs: &[Vec<u32>; 2], up: &Ve
     })
 }
 
-/// Passes of the foot-height deformation (see [`plant`]).
-const FOOT_HEIGHT_PASSES: usize = 2;
-
-/// The lowest vertex of `leg` in `frame` along `up` and its height.
-fn lowest_vertex(frame: &[Vector3<f64>], leg: &[u32], up: &Vector3<f64>) -> (u32, f64) {
-    leg.iter()
-        .map(|&v| (v, frame[v as usize].dot(up)))
-        .fold((0, f64::INFINITY), |a, b| if b.1 < a.1 { b } else { a })
-}
-
 /// The drops `e(t)` of one leg's sole (module doc) that put the leg's lowest point `lowest`
-/// (per frame), which moves by `reach(t) e(t)` (its leg weight), on `floor` wherever `planted`,
-/// with smoothness `λ`, returning to zero away from the contacts. All zero without contacts.
+/// (per frame, from [`lowest_points`]) on `floor` wherever `planted`, with smoothness `λ`,
+/// returning to zero away from the contacts. All zero without contacts.
 pub fn leg_drops(
     lowest: &[f64],
-    reach: &[f64],
     planted: &[bool],
     floor: f64,
     smoothness: f64,
@@ -199,10 +188,10 @@ pub fn leg_drops(
 ) -> Result<Vec<f64>> {
     let n = planted.len();
     mesh_core::feet::check_smoothness(smoothness)?;
-    if lowest.len() != n || reach.len() != n {
+    if lowest.len() != n {
         return Err(Error::invalid(format!(
             "foot height: {n} contact frames but a leg track of {} frames",
-            lowest.len().min(reach.len())
+            lowest.len()
         )));
     }
     if !(0..n).any(|t| planted[t] && lowest[t].is_finite()) {
@@ -211,8 +200,8 @@ pub fn leg_drops(
     let mut a = DMatrix::<f64>::identity(n, n) * HEIGHT_RETURN;
     let mut b = DMatrix::<f64>::zeros(n, 1);
     for t in (0..n).filter(|&t| planted[t] && lowest[t].is_finite()) {
-        a[(t, t)] += reach[t] * reach[t];
-        b[(t, 0)] += reach[t] * (floor - lowest[t]);
+        a[(t, t)] += 1.0;
+        b[(t, 0)] += floor - lowest[t];
     }
     let w = [1.0, -2.0, 1.0];
     for t in 1..n.saturating_sub(1) {
@@ -334,32 +323,21 @@ pub fn plant(
         planted.max_shift_m = shifts.iter().map(|d| d.norm()).fold(0.0, f64::max);
     }
     if clean_up.foot_height {
+        let lowest = lowest_points(frames, &target.legs, &up);
         let template = target_pca.template_vertices();
-        let mut moved = vec![Vec::new(); FOOT_HEIGHT_PASSES];
+        let mut moved = Vec::new();
         for side in 0..2 {
             let down: Vec<bool> = contacts.iter().map(|c| c[side]).collect();
+            let drops = leg_drops(&lowest[side], &down, target.floor, clean_up.smoothness, &mut notes)?;
             let weights = mesh_core::feet::leg_weights(&target.legs[side], &target.soles[side], &template, clean_up.faces, &up);
-            let weight_of: std::collections::HashMap<u32, f64> = weights.iter().copied().collect();
-            // A frame's lowest leg point need not be on the sole (a bent leg's knee), so it moves
-            // by its own weight; a second pass settles the point that became the lowest.
-            for pass in &mut moved {
-                let (lowest, reach): (Vec<f64>, Vec<f64>) = frames
-                    .iter()
-                    .map(|f| {
-                        let (v, h) = lowest_vertex(f, &target.legs[side], &up);
-                        (h, weight_of.get(&v).copied().unwrap_or(0.0))
-                    })
-                    .unzip();
-                let drops = leg_drops(&lowest, &reach, &down, target.floor, clean_up.smoothness, &mut notes)?;
-                for (f, e) in frames.iter_mut().zip(&drops) {
-                    for &(v, w) in &weights {
-                        f[v as usize] += up * (e * w);
-                    }
+            for (f, e) in frames.iter_mut().zip(&drops) {
+                for &(v, w) in &weights {
+                    f[v as usize] += up * (e * w);
                 }
-                pass.extend(down.iter().zip(drops.iter().zip(&reach)).filter(|(d, _)| **d).map(|(_, (e, r))| (e * r).abs()));
             }
+            moved.extend(down.iter().zip(&drops).filter(|(d, _)| **d).map(|(_, e)| e.abs()));
         }
-        planted.median_foot_move_m = median(&mut moved[0]);
+        planted.median_foot_move_m = median(&mut moved);
     }
     for note in notes {
         mesh_core::info!("{note}");
@@ -479,7 +457,7 @@ mod tests {
         // fades back toward zero once the foot is up, by less than 1 cm per frame, and is under
         // a tenth of its size 8 frames after the contact.
         let (lowest, down) = floating();
-        let e = leg_drops(&lowest, &[1.0; 40], &down, 0.1, SMOOTHNESS, &mut Vec::new()).unwrap();
+        let e = leg_drops(&lowest, &down, 0.1, SMOOTHNESS, &mut Vec::new()).unwrap();
         assert!(e[8..22].iter().all(|e| (e + 0.03).abs() < 0.001), "{e:?}");
         assert!(e.windows(2).all(|w| (w[1] - w[0]).abs() < 0.01), "{e:?}");
         assert!(e[33..].iter().all(|e| e.abs() < 0.003), "{e:?}");
@@ -489,12 +467,12 @@ mod tests {
     fn a_sinking_foot_is_raised_and_no_contact_means_no_move() {
         let (mut lowest, down) = floating();
         lowest.iter_mut().for_each(|l| *l -= 0.05);
-        let e = leg_drops(&lowest, &[1.0; 40], &down, 0.1, SMOOTHNESS, &mut Vec::new()).unwrap();
+        let e = leg_drops(&lowest, &down, 0.1, SMOOTHNESS, &mut Vec::new()).unwrap();
         assert!(e[8..22].iter().all(|e| (e - 0.02).abs() < 0.001), "{e:?}");
         let none = vec![false; 40];
-        assert!(leg_drops(&lowest, &[1.0; 40], &none, 0.1, SMOOTHNESS, &mut Vec::new()).unwrap().iter().all(|e| *e == 0.0));
-        let e = leg_drops(&lowest, &[1.0; 40], &down[..39], 0.1, SMOOTHNESS, &mut Vec::new()).unwrap_err();
+        assert!(leg_drops(&lowest, &none, 0.1, SMOOTHNESS, &mut Vec::new()).unwrap().iter().all(|e| *e == 0.0));
+        let e = leg_drops(&lowest, &down[..39], 0.1, SMOOTHNESS, &mut Vec::new()).unwrap_err();
         assert!(e.to_string().contains("39"), "{e}");
-        assert!(leg_drops(&lowest, &[1.0; 40], &down, 0.1, f64::NAN, &mut Vec::new()).is_err());
+        assert!(leg_drops(&lowest, &down, 0.1, f64::NAN, &mut Vec::new()).is_err());
     }
 }
