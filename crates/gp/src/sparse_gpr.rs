@@ -627,7 +627,7 @@ pub fn train_sparse_observed(
 /// First step of the profiled search in `log l` (then secant steps). On the 12 benchmark
 /// models (1100 pairs, data-driven start) the optimum lies 0.04-0.4 from the start on the
 /// forward and displacement models: 0.5 brackets it at once, and took 4-6 points per model
-/// where 0.25 took 4-5 but more time to GPy's bound (docs/PERFORMANCE.md).
+/// where 0.25 took 4-5 but more time to GPy's bound.
 const PROFILE_FIRST_STEP: f64 = 0.5;
 
 /// What [`maximise_profiled`] found.
