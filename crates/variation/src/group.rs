@@ -1,5 +1,5 @@
 //! A movement group ready for modelling: the subject's template and body parts, its motions
-//! rigidly aligned and time-warped onto a reference motion ([`crate::prealign`]), plus the
+//! rigidly aligned (each frame's pose fitted on the root part's core, [`root_core`]) and time-warped onto a reference motion ([`crate::prealign`]), plus the
 //! pre-blended sequences `Y_w = blend(Y_1, Y_2, w)` for `w ∈ W` (paper §7), made with the
 //! non-linear mesh interpolation `surface::blend::Blender` on the aligned frames. A group may
 //! hold any number of motions and pre-blend any pairs of them (by default the first two); the
@@ -21,7 +21,7 @@ use mesh_core::sequence::MeshSequence;
 use mesh_core::{Error, Result};
 use nalgebra::{Rotation3, Unit, Vector3};
 use serde::{Deserialize, Serialize};
-use capture::align::{align_motion, AlignedMotion};
+use capture::align::{align_motion_on, AlignedMotion};
 
 use crate::contacts::{self, Contacts};
 use crate::gait;
@@ -284,6 +284,7 @@ pub fn build(set: &CaptureSet, spec: &GroupSpec) -> Result<(Group, Vec<String>)>
         })
         .collect::<Vec<PartDef>>();
     let up = subject_spec.up_vector().unwrap_or(Vector3::y());
+    let core = root_core(&parts, template.n_vertices());
     // Soles of the two leg parts, left first, for motions without contact annotations.
     let soles = crate::metrics::soles(&parts, &template.vertices, &up, mesh_core::feet::SOLE_TOLERANCE);
     let has_legs = parts.iter().filter(|p| p.name.starts_with("leg")).count() == 2;
@@ -297,7 +298,7 @@ pub fn build(set: &CaptureSet, spec: &GroupSpec) -> Result<(Group, Vec<String>)>
         bar.inc(1);
         let dir = set.motion_dir(&spec.subject, m);
         let seq = MeshSequence::load_dir(&dir)?;
-        let aligned = align_motion(template, &seq)
+        let aligned = align_motion_on(template, &seq, &core)
             .map_err(|e| Error::invalid(format!("{}: {e}", dir.display())))?;
         let mut c = contacts::from_subject(&subject_spec, m, aligned.n_frames())
             .map_err(|e| Error::file(&subject_json, e.to_string()))?;
@@ -442,6 +443,36 @@ pub fn build(set: &CaptureSet, spec: &GroupSpec) -> Result<(Group, Vec<String>)>
     }
     bar.finish_and_clear();
     Ok((group, notes))
+}
+
+/// The vertices a body's rigid pose is fitted on: the root part's core, its vertices in no
+/// other part (the torso without the bands it shares with the limbs; `capture::align`'s
+/// `AlignFrame::Root`). A fit on every vertex lets the limbs decide the heading: a template in
+/// another pose than the frame then turns it by tens of degrees from one frame to the next.
+/// Empty (every vertex) when the core has fewer than 3 vertices.
+pub fn root_core(parts: &[PartDef], n_vertices: usize) -> Vec<u32> {
+    let Some(root) = parts.iter().find(|p| p.parent.is_none()) else {
+        return Vec::new();
+    };
+    let mut in_child = vec![false; n_vertices];
+    for p in parts.iter().filter(|p| p.parent.is_some()) {
+        for &v in &p.vertices {
+            if let Some(c) = in_child.get_mut(v as usize) {
+                *c = true;
+            }
+        }
+    }
+    let core: Vec<u32> = root
+        .vertices
+        .iter()
+        .copied()
+        .filter(|&v| !in_child.get(v as usize).copied().unwrap_or(true))
+        .collect();
+    if core.len() < 3 {
+        Vec::new()
+    } else {
+        core
+    }
 }
 
 /// The pairs of [`GroupSpec::blend_pairs`] as indices into `present` (the motions found, in
