@@ -1,5 +1,5 @@
 //! Temporal smoothing of sampled latent trajectories (a post-process; σ = [`DEFAULT_SIGMA`]
-//! frame by default).
+//! frames by default).
 //!
 //! The sampled trajectories follow the learned first-order dynamics with their one-step noise,
 //! so consecutive latent points jitter; decoded, the legs shake frame to frame, swing feet
@@ -12,9 +12,9 @@
 
 use nalgebra::DMatrix;
 
-/// `hmc-sample`'s σ (frames): one frame removes the frame-to-frame jumps and keeps the
-/// variations as far from their source as unsmoothed (docs/RESULTS.md).
-pub const DEFAULT_SIGMA: f64 = 1.0;
+/// `hmc-sample`'s σ (frames): two frames remove the frame-to-frame jumps (one leaves some)
+/// and keep the variations as far from their source as unsmoothed (docs/RESULTS.md).
+pub const DEFAULT_SIGMA: f64 = 2.0;
 
 /// Smooths each trajectory (T × d, one row per frame) in place; `sigma <= 0` leaves it alone.
 pub fn smooth_trajectory(x: &mut DMatrix<f64>, sigma: f64) {

@@ -120,9 +120,9 @@ pub struct Params {
     #[arg(long)]
     pub no_foot_height: bool,
     /// Smooth every sampled latent trajectory in time with a Gaussian of SIGMA frames before
-    /// decoding (first point kept; 0 = off: the trajectories as sampled). One frame by default:
-    /// the sampled trajectories jitter frame to frame, which decoded turns the body faster
-    /// than any capture
+    /// decoding (first point kept; 0 = off: the trajectories as sampled). Two frames by
+    /// default: the sampled trajectories jitter frame to frame, which decoded turns the body
+    /// faster than any capture
     #[arg(long, value_name = "SIGMA", default_value_t = crate::latent_smoothing::DEFAULT_SIGMA)]
     pub latent_smoothing: f64,
     /// Output folder: <out>/<sequence>/var<k>/NNNNNN.ply, or with --frame-format pc2
