@@ -6,6 +6,12 @@
 //! first pair is the group's blend pair (its pre-blends are named `blend-<w>`, those of the
 //! other pairs `blend-<A>-<B>-<w>`).
 //!
+//! Every sequence's displacements are those of its root point (`capture::align`'s definition,
+//! the root point the centroid of the root part's core, [`Group::root_point`]), recomputed from
+//! its world poses once the motions are re-timed and blended ([`root_displacements`]): a turn
+//! or lean of the torso then moves the torso and not, by its lever arm, a point wherever the
+//! template stands.
+//!
 //! A blend's world poses ([`blend_poses`]) interpolate the two motions' poses expressed in
 //! their own ground frame (start position on the ground, start heading about the up axis):
 //! translations linearly, rotations along the geodesic; the result is placed at the first
@@ -74,7 +80,7 @@ pub struct Group {
 
 impl Artifact for Group {
     const KIND: &'static str = "variation-group";
-    const VERSION: u32 = 3;
+    const VERSION: u32 = 4;
 
     /// A valid body ([`check_body`]); at least one sequence, each a valid aligned motion of
     /// the template's vertex count, all of one frame count, with contacts and a frame map of
@@ -179,6 +185,24 @@ impl Group {
     pub fn n_frames(&self) -> usize {
         self.sequences.first().map_or(0, |s| s.motion.n_frames())
     }
+    /// The template point whose motion the displacements are: the centroid of the root part's
+    /// core ([`root_core`]).
+    pub fn root_point(&self) -> Vector3<f64> {
+        capture::align::root_point(&self.template, &root_core(&self.parts, self.template.len()))
+    }
+}
+
+/// Displacements `D_i = Q_{i-1}⁻¹ Q_i` (`D_0 = 0`) of the root poses `Q_i = P_i ∘ T(root)` of
+/// world poses `P_i` (`capture::align`).
+pub fn root_displacements(poses: &[RigidMotion], root: &Vector3<f64>) -> Vec<[f64; 6]> {
+    let roots = capture::align::root_poses(poses, root);
+    let mut d = vec![[0.0; 6]];
+    for w in roots.windows(2) {
+        let v = relative_in_body_frame(&w[0], &w[1]).to_6vec();
+        d.push(std::array::from_fn(|k| v[k]));
+    }
+    d.truncate(poses.len());
+    d
 }
 
 /// Name of the pre-blended sequence at weight `w` of the group's blend pair.
@@ -440,6 +464,10 @@ pub fn build(set: &CaptureSet, spec: &GroupSpec) -> Result<(Group, Vec<String>)>
                 group.sequences.push(s);
             }
         }
+    }
+    let root = group.root_point();
+    for s in &mut group.sequences {
+        s.motion.displacements = root_displacements(&s.motion.poses, &root);
     }
     bar.finish_and_clear();
     Ok((group, notes))

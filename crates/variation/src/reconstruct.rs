@@ -1,8 +1,9 @@
 //! Pose reconstruction of sampled latent trajectories (3DV §6, eqs. 11-13) and assembly of the
 //! body: every part's pose from its GP (mean, 3DV eq. 12, or a draw from eq. 11), the parts merged
 //! into one template mesh, the result rigidly aligned to the template on the root part's core
-//! (`group::root_core`, the normalisation `group::build` applied to the training frames), then placed in the world by integrating
-//! the predicted displacements from the source sequence's starting pose.
+//! (`group::root_core`, the normalisation `group::build` applied to the training frames), then
+//! placed in the world by integrating the predicted displacements of the root point
+//! (`group::root_displacements`) from the source sequence's starting pose.
 //!
 //! Merging: [`Assembly::Stitch`] is the paper's (child aligned to parent on the overlap band,
 //! optimal boundary loop, Poisson merge: `surface::stitch::Stitcher`, one sparse factorisation
@@ -67,6 +68,8 @@ pub struct Decoder<'a> {
     /// empty: every vertex), and per template vertex whether it is one of them.
     core: Vec<u32>,
     in_core: Vec<bool>,
+    /// The template's root point, whose motion the displacements are (`Group::root_point`).
+    root: Vector3<f64>,
     /// Per part and vertex of the part: its weight in the merged vertex, for `Average` (1 /
     /// coverage) and for `Feather` ([`surface::feather::band_weights`]).
     uniform: Vec<Vec<f64>>,
@@ -214,6 +217,7 @@ impl<'a> Decoder<'a> {
             torso_extra: None,
             bands,
             coverage,
+            root: capture::align::root_point(&model.template, &core),
             core,
             in_core,
             uniform,
@@ -401,6 +405,7 @@ impl<'a> Decoder<'a> {
             &decoded.gravity,
             &self.model.up,
             start,
+            &self.root,
         ))
     }
 }
@@ -468,7 +473,7 @@ impl Decoder<'_> {
         let grav: Vec<[f64; 4]> = (0..t_len)
             .map(|t| std::array::from_fn(|k| extra(t, 6 + k)))
             .collect();
-        let world = world_poses(t_len, &disp, &grav, &self.model.up, start);
+        let world = world_poses(t_len, &disp, &grav, &self.model.up, start, &self.root);
         let tpl = &self.model.template;
         let (cd, n_core) = self.core_centroid();
         scratch.sum.resize(3 * nv, 0.0);
@@ -911,7 +916,7 @@ impl FusedDecoder<'_, '_> {
         let grav: Vec<[f64; 4]> = (0..t_len)
             .map(|t| std::array::from_fn(|k| extra(t, 6 + k)))
             .collect();
-        let world = world_poses(t_len, &disp, &grav, &dec.model.up, start);
+        let world = world_poses(t_len, &disp, &grav, &dec.model.up, start, &dec.root);
         // Band rows and moments of every frame.
         let small = |m: &faer::Mat<f64>, c: &faer::Mat<f64>| {
             let mut o = faer::Mat::<f64>::zeros(m.nrows(), c.ncols());
@@ -1174,9 +1179,13 @@ pub fn world_poses(
     gravity: &[[f64; 4]],
     up: &Vector3<f64>,
     start: &RigidMotion,
+    root: &Vector3<f64>,
 ) -> Vec<RigidMotion> {
     let mut poses = Vec::with_capacity(n);
-    let mut cur = *start;
+    let to_root = RigidMotion::new(nalgebra::Rotation3::identity(), *root);
+    let back = to_root.inverse();
+    // The root pose `Q = P ∘ T(root)` is integrated and corrected; each frame's `P = Q ∘ T(−root)`.
+    let mut cur = start.compose(&to_root);
     for t in 0..n {
         if t > 0 {
             cur = cur.compose(&RigidMotion::from_6vec(&Vector6::from_row_slice(
@@ -1194,15 +1203,16 @@ pub fn world_poses(
             }
             cur.translation += up * (g[0] - cur.translation.dot(up));
         }
-        poses.push(cur);
+        poses.push(cur.compose(&back));
     }
     poses
 }
 
-/// World frames: `P_0 = G_0(start)`, `P_t = G_t(P_{t−1} ∘ D_t)` (the first displacement is
-/// ignored), where `G_t` is the gravity correction (deviation, see [`crate::part_data`]): the
-/// smallest world rotation about the body origin taking the pose's body-frame up axis to the
-/// decoded one, then the height set to the decoded height. Heading and horizontal travel stay
+/// World frames `P_t = Q_t ∘ T(−root)` of the root poses `Q_0 = G_0(start ∘ T(root))`,
+/// `Q_t = G_t(Q_{t−1} ∘ D_t)` (the first displacement is ignored), where `G_t` is the gravity
+/// correction (deviation, see [`crate::part_data`]): the smallest world rotation about the root
+/// point taking the pose's body-frame up axis to the decoded one, then the root point's height
+/// set to the decoded height. Heading and horizontal travel stay
 /// integrated. Frame 0 is corrected too: a variation starts at its source's first pose, whose
 /// lean and height can be another motion's (a blend starts where its first motion does), and
 /// would otherwise tilt by the difference between frames 0 and 1. With `gravity` empty, plain
@@ -1213,8 +1223,9 @@ pub fn place(
     gravity: &[[f64; 4]],
     up: &Vector3<f64>,
     start: &RigidMotion,
+    root: &Vector3<f64>,
 ) -> Vec<Vec<Vector3<f64>>> {
-    let poses = world_poses(body.len(), displacements, gravity, up, start);
+    let poses = world_poses(body.len(), displacements, gravity, up, start, root);
     body.iter()
         .zip(&poses)
         .map(|(f, p)| p.apply_all(f))
