@@ -7,10 +7,9 @@
 //! other pairs `blend-<A>-<B>-<w>`).
 //!
 //! Every sequence's displacements are those of its root point (`capture::align`'s definition,
-//! the root point the centroid of the root part's core, [`Group::root_point`]), recomputed from
-//! its world poses once the motions are re-timed and blended ([`root_displacements`]): a turn
-//! or lean of the torso then moves the torso and not, by its lever arm, a point wherever the
-//! template stands.
+//! the root point the centroid of the root part's core, [`Group::root_point`]), computed from
+//! its world poses after re-timing and blending ([`root_displacements`]): a turn or lean of the
+//! torso then moves the torso and not, by its lever arm, a point wherever the template stands.
 //!
 //! A blend's world poses ([`blend_poses`]) interpolate the two motions' poses expressed in
 //! their own ground frame (start position on the ground, start heading about the up axis):
@@ -309,6 +308,7 @@ pub fn build(set: &CaptureSet, spec: &GroupSpec) -> Result<(Group, Vec<String>)>
         .collect::<Vec<PartDef>>();
     let up = subject_spec.up_vector().unwrap_or(Vector3::y());
     let core = root_core(&parts, template.n_vertices());
+    let root = capture::align::root_point(&template.vertices, &core);
     // Soles of the two leg parts, left first, for motions without contact annotations.
     let soles = crate::metrics::soles(&parts, &template.vertices, &up, mesh_core::feet::SOLE_TOLERANCE);
     let has_legs = parts.iter().filter(|p| p.name.starts_with("leg")).count() == 2;
@@ -426,7 +426,7 @@ pub fn build(set: &CaptureSet, spec: &GroupSpec) -> Result<(Group, Vec<String>)>
             name,
             blend: None,
             blend_of: None,
-            motion: apply(&motion, &map),
+            motion: apply(&motion, &map, &root),
             contacts,
             map,
         });
@@ -456,6 +456,7 @@ pub fn build(set: &CaptureSet, spec: &GroupSpec) -> Result<(Group, Vec<String>)>
                     &group.sequences[b],
                     w,
                     &group.up,
+                    &root,
                 )?;
                 s.blend_of = Some((a, b));
                 if i > 0 {
@@ -464,10 +465,6 @@ pub fn build(set: &CaptureSet, spec: &GroupSpec) -> Result<(Group, Vec<String>)>
                 group.sequences.push(s);
             }
         }
-    }
-    let root = group.root_point();
-    for s in &mut group.sequences {
-        s.motion.displacements = root_displacements(&s.motion.poses, &root);
     }
     bar.finish_and_clear();
     Ok((group, notes))
@@ -535,16 +532,17 @@ fn blend_pairs(
     Ok(pairs)
 }
 
-/// The pre-blended sequence `Y_w` of two time-aligned sequences (module doc); its `blend_of`
-/// is left to the caller, which knows their indices.
+/// The pre-blended sequence `Y_w` of two time-aligned sequences (module doc; displacements of
+/// the template point `root`); its `blend_of` is left to the caller, which knows their indices.
 pub fn blend_sequences(
     blender: &surface::blend::Blender,
     a: &GroupSequence,
     b: &GroupSequence,
     w: f64,
     up: &Vector3<f64>,
+    root: &Vector3<f64>,
 ) -> Result<GroupSequence> {
-    let mut out = blend_sequences_at(blender, a, b, &[w], up)?;
+    let mut out = blend_sequences_at(blender, a, b, &[w], up, root)?;
     Ok(out.remove(0))
 }
 
@@ -556,6 +554,7 @@ pub fn blend_sequences_at(
     b: &GroupSequence,
     weights: &[f64],
     up: &Vector3<f64>,
+    root: &Vector3<f64>,
 ) -> Result<Vec<GroupSequence>> {
     use rayon::prelude::*;
     let n = a.motion.n_frames();
@@ -589,11 +588,7 @@ pub fn blend_sequences_at(
         .zip(by_weight)
         .map(|(&w, frames)| {
             let poses = blend_poses(&a.motion.poses, &b.motion.poses, w, up);
-            let mut disp = vec![[0.0; 6]];
-            for p in poses.windows(2) {
-                let d = relative_in_body_frame(&p[0], &p[1]).to_6vec();
-                disp.push(std::array::from_fn(|k| d[k]));
-            }
+            let disp = root_displacements(&poses, root);
             let contacts = if w < 0.5 {
                 a.contacts.clone()
             } else {

@@ -670,6 +670,7 @@ pub fn run_with_progress(
                 &group.sequences[b],
                 &weights,
                 &group.up,
+                &group.root_point(),
             )?;
             for (j, t) in same.into_iter().zip(made) {
                 truths[j] = Some(t);
