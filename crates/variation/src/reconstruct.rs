@@ -541,15 +541,9 @@ impl Decoder<'_> {
         Ok(())
     }
 
-    /// Centroid of the template's core vertices and their count.
+    /// Centroid of the template's core vertices (the root point) and their count.
     fn core_centroid(&self) -> (Vector3<f64>, usize) {
-        let tpl = &self.model.template;
-        let (sum, n) = tpl
-            .iter()
-            .zip(&self.in_core)
-            .filter(|(_, &c)| c)
-            .fold((Vector3::zeros(), 0usize), |(s, n), (v, _)| (s + v, n + 1));
-        (sum / n.max(1) as f64, n.max(1))
+        (self.root, self.in_core.iter().filter(|&&c| c).count().max(1))
     }
 
     /// [`Decoder::decode_average_into`] for many variations in parallel (rayon, one variation
