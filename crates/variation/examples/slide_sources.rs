@@ -45,7 +45,7 @@ fn main() -> mesh_core::Result<()> {
     let mut sequences = group.sequences.clone();
     if let ([a, b, ..], false) = (&group.sequences[..], weights.is_empty()) {
         let blender = surface::blend::Blender::new(group.template.clone(), group.faces.clone())?;
-        let blended = variation::group::blend_sequences_at(&blender, a, b, &weights, &group.up)?;
+        let blended = variation::group::blend_sequences_at(&blender, a, b, &weights, &group.up, &group.root_point())?;
         for (mut s, w) in blended.into_iter().zip(&weights) {
             s.name = variation::group::blend_name(*w);
             sequences.push(s);

@@ -201,6 +201,7 @@ pub fn evaluate(
                 &group.sequences[b],
                 w,
                 &group.up,
+                &group.root_point(),
             )?;
             let xa = model.latents(a);
             let xb = model.latents(b);

@@ -13,9 +13,18 @@
 //! `o_f(t) = max(0, g_f(t) − h_f(t))` elsewhere (a swing foot is raised to the source's
 //! clearance, never lowered),
 //!
-//! smoothed in time by [`grounding::smooth`] (σ = [`SIGMA_FRAMES`]), moves every vertex `v` of
-//! that leg by `w(v) o_f(t) up`, with the leg weights of [`mesh_core::feet::leg_weights`] (1 on the
+//! each clamped to ±[`MAX_OFFSET`] and smoothed in time by [`grounding::smooth`] (σ =
+//! [`SIGMA_FRAMES`]), moves every vertex `v` of that leg by `w(v) o_f(t) up`, with the leg
+//! weights of [`mesh_core::feet::leg_weights`] (1 on the
 //! sole, 0 at the hip seam, so the seam never opens).
+//!
+//! The clamp: the legs are sampled independently of the body the DTW matches to the source, so
+//! a variation's leg can be in another phase than the source's at the matched frame (planted
+//! where the source's swings, or the reverse). Following the source's height there would lift a
+//! planted foot by the source's whole clearance (and the body with it: the lowest point floats)
+//! or pull a swinging foot down to the floor, stretching the leg by as much. The errors the
+//! clean-up is for are centimetres; a foot farther than [`MAX_OFFSET`] from the source's height
+//! is moved by that much at most and otherwise keeps its own motion.
 //!
 //! [`grounding::smooth`]: crate::grounding::smooth
 
@@ -25,6 +34,9 @@ use crate::grounding::{at, lowest, smooth};
 
 /// Smoothing width of the offsets (frames): one frame, so that a swing's peak clearance is kept.
 pub const SIGMA_FRAMES: f64 = 1.0;
+
+/// Largest vertical move of a foot (m; module doc).
+pub const MAX_OFFSET: f64 = 0.05;
 
 /// The smoothed offsets `o_f(t)` of one foot (module doc). `var_low[t]` = `h_f(t)`,
 /// `source_low` the source's lowest sole heights per source frame, `matches[t]` = `m(t)`,
@@ -45,11 +57,8 @@ pub fn offsets(
         .zip(planted)
         .map(|((&h, &m), &p)| {
             let d = at(source_low, m) - h;
-            if p {
-                d
-            } else {
-                d.max(0.0)
-            }
+            let d = if p { d } else { d.max(0.0) };
+            d.clamp(-MAX_OFFSET, MAX_OFFSET)
         })
         .collect();
     smooth(&raw, sigma)
@@ -100,9 +109,9 @@ mod tests {
 
     #[test]
     fn planted_feet_follow_the_source_and_swings_are_only_raised() {
-        // Source sole heights 0 (planted) then 0.10 (swing); the variation's foot floats 3 cm
-        // while planted, then swings 6 cm too low (frames 5-9) and 5 cm too high (frames 10-14).
-        let src: Vec<f64> = (0..15).map(|t| if t < 5 { 0.0 } else { 0.10 }).collect();
+        // Source sole heights 0 (planted) then 0.08 (swing); the variation's foot floats 3 cm
+        // while planted, then swings 4 cm too low (frames 5-9) and 7 cm too high (frames 10-14).
+        let src: Vec<f64> = (0..15).map(|t| if t < 5 { 0.0 } else { 0.08 }).collect();
         let var: Vec<f64> = (0..15)
             .map(|t| match t {
                 0..=4 => 0.03,
@@ -117,10 +126,27 @@ mod tests {
             assert!((o[t] + 0.03).abs() < 1e-12, "planted: lowered onto the floor");
         }
         for t in 5..10 {
-            assert!((o[t] - 0.06).abs() < 1e-12, "low swing raised to the source's clearance");
+            assert!((o[t] - 0.04).abs() < 1e-12, "low swing raised to the source's clearance");
         }
         for t in 10..15 {
             assert_eq!(o[t], 0.0, "a higher swing is kept");
+        }
+    }
+
+    #[test]
+    fn a_foot_in_another_phase_than_the_source_moves_by_the_clamp_at_most() {
+        // The source swings its foot 40 cm up where the variation's is planted (frames 0-4), and
+        // plants it where the variation's swings 30 cm up (frames 5-9).
+        let src: Vec<f64> = (0..10).map(|t| if t < 5 { 0.40 } else { 0.0 }).collect();
+        let var: Vec<f64> = (0..10).map(|t| if t < 5 { 0.0 } else { 0.30 }).collect();
+        let matches: Vec<f64> = (0..10).map(|t| t as f64).collect();
+        let planted: Vec<bool> = (0..10).map(|t| t >= 5).collect();
+        let o = offsets(&var, &src, &matches, &planted, 0.0);
+        for t in 0..5 {
+            assert_eq!(o[t], MAX_OFFSET, "a planted foot is not lifted to the source's swing");
+        }
+        for t in 5..10 {
+            assert_eq!(o[t], -MAX_OFFSET, "a swinging foot is not pulled down to the floor");
         }
     }
 

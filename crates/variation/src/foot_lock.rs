@@ -22,6 +22,12 @@
 //! (up to about 1.6x a steady approach speed with `R = 4`); `offset` fades the contact's
 //! *offset* `δ` instead, which keeps the free path's velocity: a foot that lands at swing speed
 //! stops dead on the contact's first frame.
+//!
+//! The displacement is at most [`MAX_SHIFT`] long (shortened along its direction beyond it). The
+//! contacts are the source's at the DTW-matched frames, and the legs are sampled independently
+//! of the body that match is made on: where a variation's leg is in another phase than the
+//! source's, or its body has turned away from the anchor, the full offset would stretch the leg
+//! across the floor to reach the anchor (a tear); such a sole keeps sliding by the rest instead.
 
 use crate::footskate::intervals;
 use mesh_core::feet::feet_tracks;
@@ -31,6 +37,9 @@ use mesh_core::feet::smoothstep;
 
 /// Frames `R` over which the displacement is eased in before and out after each contact.
 pub const EASE_FRAMES: usize = 4;
+
+/// Longest horizontal move of a sole by the lock (m; module doc): about a foot's length.
+pub const MAX_SHIFT: f64 = 0.1;
 
 /// How the lock's displacement is eased in before and out after each contact (module doc).
 #[derive(
@@ -107,6 +116,17 @@ pub fn displacements(
     d
 }
 
+/// Shortens every displacement longer than `max` to that length, along its direction
+/// (continuous, so eased displacements stay eased).
+pub fn limit(d: &mut [Vector3<f64>], max: f64) {
+    for x in d {
+        let n = x.norm();
+        if n > max {
+            *x *= max / n;
+        }
+    }
+}
+
 /// Contacts for the lock: each interval of `contacts[t][f]` grown on either side, by at most
 /// `max_frames`, to the farthest frame where that foot's lowest point `low[t][f]` is within
 /// `height` of the floor, the frames between included. A contact carried over from the source by
@@ -158,7 +178,7 @@ pub fn close_clip_ends(contacts: &[[bool; 2]], low: &[[f64; 2]], height: f64) ->
 }
 
 /// Locks planted feet in place (module doc), in place; returns the largest displacement.
-/// `legs[f]` are the weights of [`leg_weights`], `soles[f]` the sole vertices, `contacts[t][f]`.
+/// `legs[f]` are the weights of [`mesh_core::feet::leg_weights`], `soles[f]` the sole vertices, `contacts[t][f]`.
 pub fn lock(
     frames: &mut [Vec<Vector3<f64>>],
     legs: &[Vec<(u32, f64)>; 2],
@@ -171,7 +191,8 @@ pub fn lock(
     let mut max: f64 = 0.0;
     for f in 0..2 {
         let flags: Vec<bool> = contacts.iter().map(|c| c[f]).collect();
-        let d = displacements(&tracks[f], &flags, up, ease);
+        let mut d = displacements(&tracks[f], &flags, up, ease);
+        limit(&mut d, MAX_SHIFT);
         for (frame, dt) in frames.iter_mut().zip(&d) {
             max = max.max(dt.norm());
             for &(v, w) in &legs[f] {
@@ -374,6 +395,28 @@ mod tests {
         assert!(q[10..].iter().all(|x| x.abs() < 1e-12));
         let o = placed(Ease::Offset);
         assert!((o[10] - o[9] - 0.1).abs() < 1e-12);
+    }
+
+    #[test]
+    fn a_sole_out_of_reach_moves_by_the_limit_along_its_offset() {
+        // The sole stands at the origin, then 1 m away (a leg in another phase than the
+        // source's), in one contact: the anchor is half way, 50 cm from either, and the sole
+        // moves 10 cm towards it.
+        let up = Vector3::y();
+        let track: Vec<_> = (0..10)
+            .map(|t| if t < 5 { Vector3::zeros() } else { Vector3::new(0.6, 0.0, 0.8) })
+            .collect();
+        let contact = vec![true; 10];
+        let mut d = displacements(&track, &contact, &up, Ease::Position);
+        limit(&mut d, MAX_SHIFT);
+        for (t, x) in d.iter().enumerate() {
+            assert!(x.norm() <= MAX_SHIFT + 1e-12, "frame {t}: {x}");
+        }
+        assert!((d[0] - Vector3::new(0.06, 0.0, 0.08)).norm() < 1e-12, "{}", d[0]);
+        assert!((d[9] + d[0]).norm() < 1e-12, "{}", d[9]);
+        let mut small = vec![Vector3::new(0.03, 0.0, 0.04)];
+        limit(&mut small, MAX_SHIFT);
+        assert_eq!(small[0], Vector3::new(0.03, 0.0, 0.04), "a reachable offset is kept");
     }
 
     #[test]

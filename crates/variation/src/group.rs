@@ -1,10 +1,15 @@
 //! A movement group ready for modelling: the subject's template and body parts, its motions
-//! rigidly aligned and time-warped onto a reference motion ([`crate::prealign`]), plus the
+//! rigidly aligned (each frame's pose fitted on the root part's core, [`root_core`]) and time-warped onto a reference motion ([`crate::prealign`]), plus the
 //! pre-blended sequences `Y_w = blend(Y_1, Y_2, w)` for `w ∈ W` (paper §7), made with the
 //! non-linear mesh interpolation `surface::blend::Blender` on the aligned frames. A group may
 //! hold any number of motions and pre-blend any pairs of them (by default the first two); the
 //! first pair is the group's blend pair (its pre-blends are named `blend-<w>`, those of the
 //! other pairs `blend-<A>-<B>-<w>`).
+//!
+//! Every sequence's displacements are those of its root point (`capture::align`'s definition,
+//! the root point the centroid of the root part's core, [`Group::root_point`]), computed from
+//! its world poses after re-timing and blending ([`root_displacements`]): a turn or lean of the
+//! torso then moves the torso and not, by its lever arm, a point wherever the template stands.
 //!
 //! A blend's world poses ([`blend_poses`]) interpolate the two motions' poses expressed in
 //! their own ground frame (start position on the ground, start heading about the up axis):
@@ -21,7 +26,7 @@ use mesh_core::sequence::MeshSequence;
 use mesh_core::{Error, Result};
 use nalgebra::{Rotation3, Unit, Vector3};
 use serde::{Deserialize, Serialize};
-use capture::align::{align_motion, AlignedMotion};
+use capture::align::{align_motion_on, AlignedMotion};
 
 use crate::contacts::{self, Contacts};
 use crate::gait;
@@ -74,7 +79,7 @@ pub struct Group {
 
 impl Artifact for Group {
     const KIND: &'static str = "variation-group";
-    const VERSION: u32 = 3;
+    const VERSION: u32 = 4;
 
     /// A valid body ([`check_body`]); at least one sequence, each a valid aligned motion of
     /// the template's vertex count, all of one frame count, with contacts and a frame map of
@@ -179,6 +184,24 @@ impl Group {
     pub fn n_frames(&self) -> usize {
         self.sequences.first().map_or(0, |s| s.motion.n_frames())
     }
+    /// The template point whose motion the displacements are: the centroid of the root part's
+    /// core ([`root_core`]).
+    pub fn root_point(&self) -> Vector3<f64> {
+        capture::align::root_point(&self.template, &root_core(&self.parts, self.template.len()))
+    }
+}
+
+/// Displacements `D_i = Q_{i-1}⁻¹ Q_i` (`D_0 = 0`) of the root poses `Q_i = P_i ∘ T(root)` of
+/// world poses `P_i` (`capture::align`).
+pub fn root_displacements(poses: &[RigidMotion], root: &Vector3<f64>) -> Vec<[f64; 6]> {
+    let roots = capture::align::root_poses(poses, root);
+    let mut d = vec![[0.0; 6]];
+    for w in roots.windows(2) {
+        let v = relative_in_body_frame(&w[0], &w[1]).to_6vec();
+        d.push(std::array::from_fn(|k| v[k]));
+    }
+    d.truncate(poses.len());
+    d
 }
 
 /// Name of the pre-blended sequence at weight `w` of the group's blend pair.
@@ -284,6 +307,8 @@ pub fn build(set: &CaptureSet, spec: &GroupSpec) -> Result<(Group, Vec<String>)>
         })
         .collect::<Vec<PartDef>>();
     let up = subject_spec.up_vector().unwrap_or(Vector3::y());
+    let core = root_core(&parts, template.n_vertices());
+    let root = capture::align::root_point(&template.vertices, &core);
     // Soles of the two leg parts, left first, for motions without contact annotations.
     let soles = crate::metrics::soles(&parts, &template.vertices, &up, mesh_core::feet::SOLE_TOLERANCE);
     let has_legs = parts.iter().filter(|p| p.name.starts_with("leg")).count() == 2;
@@ -297,7 +322,7 @@ pub fn build(set: &CaptureSet, spec: &GroupSpec) -> Result<(Group, Vec<String>)>
         bar.inc(1);
         let dir = set.motion_dir(&spec.subject, m);
         let seq = MeshSequence::load_dir(&dir)?;
-        let aligned = align_motion(template, &seq)
+        let aligned = align_motion_on(template, &seq, &core)
             .map_err(|e| Error::invalid(format!("{}: {e}", dir.display())))?;
         let mut c = contacts::from_subject(&subject_spec, m, aligned.n_frames())
             .map_err(|e| Error::file(&subject_json, e.to_string()))?;
@@ -401,7 +426,7 @@ pub fn build(set: &CaptureSet, spec: &GroupSpec) -> Result<(Group, Vec<String>)>
             name,
             blend: None,
             blend_of: None,
-            motion: apply(&motion, &map),
+            motion: apply(&motion, &map, &root),
             contacts,
             map,
         });
@@ -431,6 +456,7 @@ pub fn build(set: &CaptureSet, spec: &GroupSpec) -> Result<(Group, Vec<String>)>
                     &group.sequences[b],
                     w,
                     &group.up,
+                    &root,
                 )?;
                 s.blend_of = Some((a, b));
                 if i > 0 {
@@ -442,6 +468,36 @@ pub fn build(set: &CaptureSet, spec: &GroupSpec) -> Result<(Group, Vec<String>)>
     }
     bar.finish_and_clear();
     Ok((group, notes))
+}
+
+/// The vertices a body's rigid pose is fitted on: the root part's core, its vertices in no
+/// other part (the torso without the bands it shares with the limbs; `capture::align`'s
+/// `AlignFrame::Root`). A fit on every vertex lets the limbs decide the heading: a template in
+/// another pose than the frame then turns it by tens of degrees from one frame to the next.
+/// Empty (every vertex) when the core has fewer than 3 vertices.
+pub fn root_core(parts: &[PartDef], n_vertices: usize) -> Vec<u32> {
+    let Some(root) = parts.iter().find(|p| p.parent.is_none()) else {
+        return Vec::new();
+    };
+    let mut in_child = vec![false; n_vertices];
+    for p in parts.iter().filter(|p| p.parent.is_some()) {
+        for &v in &p.vertices {
+            if let Some(c) = in_child.get_mut(v as usize) {
+                *c = true;
+            }
+        }
+    }
+    let core: Vec<u32> = root
+        .vertices
+        .iter()
+        .copied()
+        .filter(|&v| !in_child.get(v as usize).copied().unwrap_or(true))
+        .collect();
+    if core.len() < 3 {
+        Vec::new()
+    } else {
+        core
+    }
 }
 
 /// The pairs of [`GroupSpec::blend_pairs`] as indices into `present` (the motions found, in
@@ -476,16 +532,17 @@ fn blend_pairs(
     Ok(pairs)
 }
 
-/// The pre-blended sequence `Y_w` of two time-aligned sequences (module doc); its `blend_of`
-/// is left to the caller, which knows their indices.
+/// The pre-blended sequence `Y_w` of two time-aligned sequences (module doc; displacements of
+/// the template point `root`); its `blend_of` is left to the caller, which knows their indices.
 pub fn blend_sequences(
     blender: &surface::blend::Blender,
     a: &GroupSequence,
     b: &GroupSequence,
     w: f64,
     up: &Vector3<f64>,
+    root: &Vector3<f64>,
 ) -> Result<GroupSequence> {
-    let mut out = blend_sequences_at(blender, a, b, &[w], up)?;
+    let mut out = blend_sequences_at(blender, a, b, &[w], up, root)?;
     Ok(out.remove(0))
 }
 
@@ -497,6 +554,7 @@ pub fn blend_sequences_at(
     b: &GroupSequence,
     weights: &[f64],
     up: &Vector3<f64>,
+    root: &Vector3<f64>,
 ) -> Result<Vec<GroupSequence>> {
     use rayon::prelude::*;
     let n = a.motion.n_frames();
@@ -530,11 +588,7 @@ pub fn blend_sequences_at(
         .zip(by_weight)
         .map(|(&w, frames)| {
             let poses = blend_poses(&a.motion.poses, &b.motion.poses, w, up);
-            let mut disp = vec![[0.0; 6]];
-            for p in poses.windows(2) {
-                let d = relative_in_body_frame(&p[0], &p[1]).to_6vec();
-                disp.push(std::array::from_fn(|k| d[k]));
-            }
+            let disp = root_displacements(&poses, root);
             let contacts = if w < 0.5 {
                 a.contacts.clone()
             } else {

@@ -1,13 +1,20 @@
-//! Temporal smoothing of sampled latent trajectories (a post-process, off by default).
+//! Temporal smoothing of sampled latent trajectories (a post-process; σ = [`DEFAULT_SIGMA`]
+//! frames by default).
 //!
 //! The sampled trajectories follow the learned first-order dynamics with their one-step noise,
-//! so consecutive latent points jitter; decoded, the legs shake frame to frame and swing feet
-//! skim the floor (docs/RESULTS.md, "Latent smoothing"). This filter convolves every latent
+//! so consecutive latent points jitter; decoded, the legs shake frame to frame, swing feet
+//! skim the floor, and a jump of the limbs between two frames turns the whole body's best rigid
+//! fit faster than any capture turns (docs/RESULTS.md, "Latent smoothing" and "Spins and
+//! tears"). This filter convolves every latent
 //! coordinate of every part with a Gaussian of `sigma` frames (truncated at 3σ, weights
 //! renormalised at the ends of the sequence) and keeps the first point exactly, as the sampler
 //! does (the paper's fixed `x1`).
 
 use nalgebra::DMatrix;
+
+/// `hmc-sample`'s σ (frames): two frames remove the frame-to-frame jumps (one leaves some)
+/// and keep the variations as far from their source as unsmoothed (docs/RESULTS.md).
+pub const DEFAULT_SIGMA: f64 = 2.0;
 
 /// Smooths each trajectory (T × d, one row per frame) in place; `sigma <= 0` leaves it alone.
 pub fn smooth_trajectory(x: &mut DMatrix<f64>, sigma: f64) {

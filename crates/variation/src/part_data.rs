@@ -14,8 +14,9 @@
 //!
 //! **Gravity values (deviation from the paper).** Integrating sampled displacements is a random
 //! walk: sampled variations drifted upwards and tilted within a second. The torso vector
-//! therefore also carries 4 absolute values per frame: the height of the frame's world pose
-//! (`up · t_i`, scaled like translations) and the world up axis in body coordinates
+//! therefore also carries 4 absolute values per frame: the height of the frame's root point
+//! (`up · Q_i(0)`, the root pose of `crate::group::root_displacements`; scaled like
+//! translations) and the world up axis in body coordinates
 //! (`R_iᵀ up`, scaled like rotations). [`crate::reconstruct::place`] keeps the integrated
 //! heading and horizontal travel but takes height and tilt from these.
 
@@ -119,14 +120,15 @@ pub fn displacement_scale(torso: &[DMatrix<f64>], disp: &[Vec<[f64; 6]>]) -> Dis
 /// Columns appended to the torso vector: 6 displacement values, height, body-frame up axis.
 pub const TORSO_EXTRA: usize = 10;
 
-/// Per frame `[height, (R_iᵀ up)_x, _y, _z]` of a motion's world poses (module doc).
-pub fn gravity(motion: &AlignedMotion, up: &Vector3<f64>) -> Vec<[f64; 4]> {
+/// Per frame `[height, (R_iᵀ up)_x, _y, _z]` of a motion's root poses (module doc; `root` the
+/// template's root point).
+pub fn gravity(motion: &AlignedMotion, up: &Vector3<f64>, root: &Vector3<f64>) -> Vec<[f64; 4]> {
     motion
         .poses
         .iter()
         .map(|p| {
             let u = p.rotation.inverse() * up;
-            [p.translation.dot(up), u.x, u.y, u.z]
+            [p.apply(root).dot(up), u.x, u.y, u.z]
         })
         .collect()
 }

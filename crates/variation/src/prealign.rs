@@ -12,7 +12,6 @@
 //! displacements recomputed from them (so the body still travels the captured path).
 
 use gp::dtw::{dtw_path, DtwOptions, Endpoints};
-use mesh_core::rigid::relative_in_body_frame;
 use mesh_core::{Error, Result};
 use nalgebra::{DMatrix, Vector3};
 use rayon::prelude::*;
@@ -195,16 +194,12 @@ pub fn reference_map(path: &[(usize, usize)], n_ref: usize) -> Vec<usize> {
         .collect()
 }
 
-/// The motion re-timed by `map`: frames and world poses `map[j]`, displacements recomputed.
-pub fn apply(motion: &AlignedMotion, map: &[usize]) -> AlignedMotion {
+/// The motion re-timed by `map`: frames and world poses `map[j]`, displacements of the template
+/// point `root` recomputed (`group::root_displacements`).
+pub fn apply(motion: &AlignedMotion, map: &[usize], root: &Vector3<f64>) -> AlignedMotion {
     let frames = map.iter().map(|&i| motion.frames[i].clone()).collect();
     let poses: Vec<_> = map.iter().map(|&i| motion.poses[i]).collect();
-    let mut displacements = vec![[0.0; 6]];
-    for w in poses.windows(2) {
-        let d = relative_in_body_frame(&w[0], &w[1]).to_6vec();
-        displacements.push([d[0], d[1], d[2], d[3], d[4], d[5]]);
-    }
-    displacements.truncate(poses.len());
+    let displacements = crate::group::root_displacements(&poses, root);
     AlignedMotion {
         faces: motion.faces.clone(),
         frames,

@@ -1,8 +1,9 @@
 //! Pose reconstruction of sampled latent trajectories (3DV §6, eqs. 11-13) and assembly of the
 //! body: every part's pose from its GP (mean, 3DV eq. 12, or a draw from eq. 11), the parts merged
-//! into one template mesh, the result rigidly aligned to the template (the same normalisation
-//! `capture::align` applied to the training frames), then placed in the world by integrating
-//! the predicted displacements from the source sequence's starting pose.
+//! into one template mesh, the result rigidly aligned to the template on the root part's core
+//! (`group::root_core`, the normalisation `group::build` applied to the training frames), then
+//! placed in the world by integrating the predicted displacements of the root point
+//! (`group::root_displacements`) from the source sequence's starting pose.
 //!
 //! Merging: [`Assembly::Stitch`] is the paper's (child aligned to parent on the overlap band,
 //! optimal boundary loop, Poisson merge: `surface::stitch::Stitcher`, one sparse factorisation
@@ -18,6 +19,7 @@ use std::sync::Mutex;
 
 use surface::poisson::Factorisation;
 use surface::stitch::Stitcher;
+use capture::align::fit_on;
 use mesh_core::rigid::{procrustes, rigid_from_moments, RigidMotion};
 use mesh_core::{Error, Result};
 use nalgebra::{DMatrix, Vector3, Vector6};
@@ -25,7 +27,7 @@ use rand::Rng;
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 
-use crate::group::PartDef;
+use crate::group::{root_core, PartDef};
 use crate::part_data::{extra_scale, split_torso, unflatten, TORSO_EXTRA};
 use crate::train::VariationModel;
 
@@ -62,6 +64,12 @@ pub struct Decoder<'a> {
     /// Per child part: (its local index, parent's local index) of every band vertex.
     bands: Vec<Vec<(usize, usize)>>,
     coverage: Vec<u32>,
+    /// Template vertices the assembled body is aligned to the template on (`group::root_core`;
+    /// empty: every vertex), and per template vertex whether it is one of them.
+    core: Vec<u32>,
+    in_core: Vec<bool>,
+    /// The template's root point, whose motion the displacements are (`Group::root_point`).
+    root: Vector3<f64>,
     /// Per part and vertex of the part: its weight in the merged vertex, for `Average` (1 /
     /// coverage) and for `Feather` ([`surface::feather::band_weights`]).
     uniform: Vec<Vec<f64>>,
@@ -199,12 +207,19 @@ impl<'a> Decoder<'a> {
             .map(|p| surface::stitch::Part { vertices: p.vertices.clone(), parent: p.parent })
             .collect();
         let feathered = surface::feather::band_weights(&model.template, &model.faces, &layout);
+        let defs: Vec<PartDef> = parts.iter().map(|&p| p.clone()).collect();
+        let core = root_core(&defs, n);
+        let mut in_core = vec![core.is_empty(); n];
+        core.iter().for_each(|&v| in_core[v as usize] = true);
         Ok(Decoder {
             model,
             predictors,
             torso_extra: None,
             bands,
             coverage,
+            root: capture::align::root_point(&model.template, &core),
+            core,
+            in_core,
             uniform,
             feathered,
             stitchers: Mutex::new(Vec::new()),
@@ -317,7 +332,7 @@ impl<'a> Decoder<'a> {
                     let parts: Vec<&[Vector3<f64>]> =
                         decoded.parts.iter().map(|p| p[t].as_slice()).collect();
                     let body = self.assemble_weighted(&parts, how);
-                    procrustes(&body, &self.model.template, None).apply_all(&body)
+                    fit_on(&body, &self.model.template, &self.core).apply_all(&body)
                 })
                 .collect());
         }
@@ -335,7 +350,7 @@ impl<'a> Decoder<'a> {
                     let parts: Vec<Vec<Vector3<f64>>> =
                         decoded.parts.iter().map(|p| p[t].clone()).collect();
                     let body = s.stitch(&parts)?.vertices;
-                    Ok(procrustes(&body, &self.model.template, None).apply_all(&body))
+                    Ok(fit_on(&body, &self.model.template, &self.core).apply_all(&body))
                 },
             )
             .collect()
@@ -390,6 +405,7 @@ impl<'a> Decoder<'a> {
             &decoded.gravity,
             &self.model.up,
             start,
+            &self.root,
         ))
     }
 }
@@ -457,9 +473,9 @@ impl Decoder<'_> {
         let grav: Vec<[f64; 4]> = (0..t_len)
             .map(|t| std::array::from_fn(|k| extra(t, 6 + k)))
             .collect();
-        let world = world_poses(t_len, &disp, &grav, &self.model.up, start);
+        let world = world_poses(t_len, &disp, &grav, &self.model.up, start, &self.root);
         let tpl = &self.model.template;
-        let cd = tpl.iter().sum::<Vector3<f64>>() / nv.max(1) as f64;
+        let (cd, n_core) = self.core_centroid();
         scratch.sum.resize(3 * nv, 0.0);
         let mut placed: Vec<RigidMotion> = Vec::with_capacity(k_parts);
         for t in 0..t_len {
@@ -498,18 +514,20 @@ impl Decoder<'_> {
                     }
                 }
             }
-            // Average, and the moments of the template alignment (procrustes to the template:
-            // H = Σ b_v (τ_v − τ̄)ᵀ since Σ (τ_v − τ̄) = 0).
+            // Average, and the moments of the template alignment on the core (procrustes to
+            // the template: H = Σ b_v (τ_v − τ̄)ᵀ over the core since Σ (τ_v − τ̄) = 0 there).
             let mut cs = Vector3::zeros();
             let mut h = nalgebra::Matrix3::zeros();
             for (v, (s, &cov)) in sum.chunks_exact_mut(3).zip(&self.coverage).enumerate() {
                 let inv = 1.0 / cov as f64;
                 let b = Vector3::new(s[0] * inv, s[1] * inv, s[2] * inv);
                 s.copy_from_slice(b.as_slice());
-                cs += b;
-                h += b * (tpl[v] - cd).transpose();
+                if self.in_core[v] {
+                    cs += b;
+                    h += b * (tpl[v] - cd).transpose();
+                }
             }
-            cs /= nv as f64;
+            cs /= n_core as f64;
             let align = rigid_from_moments(&cs, &cd, &h);
             let g = world[t].compose(&align);
             let r = g.rotation.matrix();
@@ -521,6 +539,11 @@ impl Decoder<'_> {
             }
         }
         Ok(())
+    }
+
+    /// Centroid of the template's core vertices (the root point) and their count.
+    fn core_centroid(&self) -> (Vector3<f64>, usize) {
+        (self.root, self.in_core.iter().filter(|&&c| c).count().max(1))
     }
 
     /// [`Decoder::decode_average_into`] for many variations in parallel (rayon, one variation
@@ -581,8 +604,9 @@ fn vertex_rows(basis: &faer::Mat<f64>, verts: impl Iterator<Item = usize>) -> fa
 /// first computed per frame from the coefficients `[c(x_t); 1]` alone:
 /// - the child-to-parent band alignments (Procrustes on the band rows only: `3·|band|` rows of
 ///   `[B | ȳ]` per child and parent);
-/// - the body's alignment to the template, from moments that are linear in the coefficients:
-///   with `b_v = Σ_{k∋v} w_v (R_k p_{k,v} + t_k)` (`w_v = 1/coverage`) and `e_v = τ_v − τ̄`,
+/// - the body's alignment to the template on the core, from moments that are linear in the
+///   coefficients: with `b_v = Σ_{k∋v} w_v (R_k p_{k,v} + t_k)` (`w_v` the merge weight, 0 off
+///   the core) and `e_v = τ_v − τ̄` (`τ̄` the core's centroid),
 ///   `Σ_v b_v = Σ_k R_k S_k c + t_k Σ w` and `H = Σ_v b_v e_vᵀ = Σ_k R_k M_k c + t_k (Σ w e)ᵀ`,
 ///   where `S_k = Σ_v w_v [B | ȳ]_v` (3 rows) and `M_k = Σ_v w_v e_v[b] [B | ȳ]_{v,a}` (9 rows)
 ///   are precomputed;
@@ -614,7 +638,9 @@ pub struct FusedDecoder<'d, 'a> {
     vbasis: Vec<faer::Mat<f64>>,
     /// Per part: reordered position → local vertex index.
     order: Vec<Vec<usize>>,
+    /// Centroid of the template's core and its vertex count.
     cd: Vector3<f64>,
+    n_core: usize,
     block: usize,
 }
 
@@ -662,7 +688,7 @@ impl<'a> Decoder<'a> {
             }
         }
         let tpl = &model.template;
-        let cd = tpl.iter().sum::<Vector3<f64>>() / nv.max(1) as f64;
+        let (cd, n_core) = self.core_centroid();
         let mut seen = vec![false; nv];
         let (mut weight, mut first, mut order) = (Vec::new(), Vec::new(), Vec::new());
         let (mut vlist, mut singles) = (Vec::new(), Vec::new());
@@ -679,6 +705,9 @@ impl<'a> Decoder<'a> {
                 let mut mom = faer::Mat::<f64>::zeros(12, b.ncols());
                 let (mut ws, mut es) = (0.0, Vector3::zeros());
                 for (i, &v) in p.part.vertices.iter().enumerate() {
+                    if !self.in_core[v as usize] {
+                        continue;
+                    }
                     let wi = pw[i];
                     let e = tpl[v as usize] - cd;
                     ws += wi;
@@ -748,6 +777,7 @@ impl<'a> Decoder<'a> {
             vbasis: Vec::new(),
             order,
             cd,
+            n_core,
             block: 0,
         }
         .with_block_vertices(FUSED_BLOCK_VERTICES))
@@ -845,7 +875,6 @@ impl FusedDecoder<'_, '_> {
         let dec = self.dec;
         let k_parts = self.maps.len();
         let t_len = variation_frames(latents, k_parts)?;
-        let nv = dec.model.template.len();
         let coef = dec
             .predictors
             .iter()
@@ -881,7 +910,7 @@ impl FusedDecoder<'_, '_> {
         let grav: Vec<[f64; 4]> = (0..t_len)
             .map(|t| std::array::from_fn(|k| extra(t, 6 + k)))
             .collect();
-        let world = world_poses(t_len, &disp, &grav, &dec.model.up, start);
+        let world = world_poses(t_len, &disp, &grav, &dec.model.up, start, &dec.root);
         // Band rows and moments of every frame.
         let small = |m: &faer::Mat<f64>, c: &faer::Mat<f64>| {
             let mut o = faer::Mat::<f64>::zeros(m.nrows(), c.ncols());
@@ -930,7 +959,7 @@ impl FusedDecoder<'_, '_> {
                 cs += pk.rotation * s + pk.translation * self.wsum[k];
                 h += pk.rotation.matrix() * mk + pk.translation * self.esum[k].transpose();
             }
-            cs /= nv as f64;
+            cs /= self.n_core as f64;
             let g = world[t].compose(&rigid_from_moments(&cs, &self.cd, &h));
             for (f, pk) in frames.iter_mut().zip(&placed) {
                 f.push(g.compose(pk));
@@ -1144,44 +1173,53 @@ pub fn world_poses(
     gravity: &[[f64; 4]],
     up: &Vector3<f64>,
     start: &RigidMotion,
+    root: &Vector3<f64>,
 ) -> Vec<RigidMotion> {
     let mut poses = Vec::with_capacity(n);
-    let mut cur = *start;
+    let to_root = RigidMotion::new(nalgebra::Rotation3::identity(), *root);
+    let back = to_root.inverse();
+    // The root pose `Q = P ∘ T(root)` is integrated and corrected; each frame's `P = Q ∘ T(−root)`.
+    let mut cur = start.compose(&to_root);
     for t in 0..n {
         if t > 0 {
             cur = cur.compose(&RigidMotion::from_6vec(&Vector6::from_row_slice(
                 &displacements[t],
             )));
-            if let Some(g) = gravity.get(t) {
-                let u = Vector3::new(g[1], g[2], g[3]);
-                if u.norm() > 1e-9 {
-                    // World direction the decoded body-up axis currently points to; rotate it onto `up`.
-                    let now = cur.rotation * u.normalize();
-                    if let Some(q) = nalgebra::Rotation3::rotation_between(&now, up) {
-                        cur.rotation = q * cur.rotation;
-                    }
-                }
-                cur.translation += up * (g[0] - cur.translation.dot(up));
-            }
         }
-        poses.push(cur);
+        if let Some(g) = gravity.get(t) {
+            let u = Vector3::new(g[1], g[2], g[3]);
+            if u.norm() > 1e-9 {
+                // World direction the decoded body-up axis currently points to; rotate it onto `up`.
+                let now = cur.rotation * u.normalize();
+                if let Some(q) = nalgebra::Rotation3::rotation_between(&now, up) {
+                    cur.rotation = q * cur.rotation;
+                }
+            }
+            cur.translation += up * (g[0] - cur.translation.dot(up));
+        }
+        poses.push(cur.compose(&back));
     }
     poses
 }
 
-/// World frames: `P_0 = start`, `P_t = G_t(P_{t−1} ∘ D_t)` (the first displacement is
-/// ignored), where `G_t` is the gravity correction (deviation, see [`crate::part_data`]): the
-/// smallest world rotation about the body origin taking the pose's body-frame up axis to the
-/// decoded one, then the height set to the decoded height. Heading and horizontal travel stay
-/// integrated. With `gravity` empty, plain integration.
+/// World frames `P_t = Q_t ∘ T(−root)` of the root poses `Q_0 = G_0(start ∘ T(root))`,
+/// `Q_t = G_t(Q_{t−1} ∘ D_t)` (the first displacement is ignored), where `G_t` is the gravity
+/// correction (deviation, see [`crate::part_data`]): the smallest world rotation about the root
+/// point taking the pose's body-frame up axis to the decoded one, then the root point's height
+/// set to the decoded height. Heading and horizontal travel stay
+/// integrated. Frame 0 is corrected too: a variation starts at its source's first pose, whose
+/// lean and height can be another motion's (a blend starts where its first motion does), and
+/// would otherwise tilt by the difference between frames 0 and 1. With `gravity` empty, plain
+/// integration.
 pub fn place(
     body: &[Vec<Vector3<f64>>],
     displacements: &[[f64; 6]],
     gravity: &[[f64; 4]],
     up: &Vector3<f64>,
     start: &RigidMotion,
+    root: &Vector3<f64>,
 ) -> Vec<Vec<Vector3<f64>>> {
-    let poses = world_poses(body.len(), displacements, gravity, up, start);
+    let poses = world_poses(body.len(), displacements, gravity, up, start, root);
     body.iter()
         .zip(&poses)
         .map(|(f, p)| p.apply_all(f))

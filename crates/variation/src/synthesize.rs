@@ -86,7 +86,8 @@ pub struct SynthConfig {
     #[serde(default = "yes")]
     pub statistics: bool,
     /// Gaussian σ in frames of the temporal smoothing of every sampled latent trajectory
-    /// before decoding ([`crate::latent_smoothing`]); 0 (the default) leaves them as sampled.
+    /// before decoding ([`crate::latent_smoothing`]; `hmc-sample` uses
+    /// [`crate::latent_smoothing::DEFAULT_SIGMA`]); 0 leaves them as sampled.
     #[serde(default)]
     pub latent_smoothing: f64,
     /// What to synthesise: None (every training sequence and the blends `blends` of the
@@ -669,6 +670,7 @@ pub fn run_with_progress(
                 &group.sequences[b],
                 &weights,
                 &group.up,
+                &group.root_point(),
             )?;
             for (j, t) in same.into_iter().zip(made) {
                 truths[j] = Some(t);

@@ -70,7 +70,7 @@ pub struct VariationModel {
 
 impl Artifact for VariationModel {
     const KIND: &'static str = "variation-model";
-    const VERSION: u32 = 3;
+    const VERSION: u32 = 4;
 
     /// A valid body (`group::check_body`); per part a reference of its vertex count and a
     /// valid GPDM with one latent trajectory per training sequence, each of the
@@ -432,7 +432,7 @@ pub fn training_data(group: &Group, stride: usize) -> (Vec<Vec<DMatrix<f64>>>, D
         .collect();
     let scale = part_data::displacement_scale(&data[0], &disp);
     for ((m, d), s) in data[0].iter_mut().zip(&disp).zip(&group.sequences) {
-        let grav = part_data::gravity(&s.motion, &group.up);
+        let grav = part_data::gravity(&s.motion, &group.up, &group.root_point());
         let grav: Vec<[f64; 4]> = frame_stride::kept_frames(grav.len(), stride)
             .into_iter()
             .map(|f| grav[f])

@@ -54,7 +54,6 @@ fn spins_and_tears(report: &Path) -> Vec<String> {
 }
 
 #[test]
-#[ignore = "today's variations spin on the tiny preset (docs/RESULTS.md, \"Spins and tears\"): run with --ignored once the cause is fixed"]
 fn no_variation_of_the_tiny_preset_spins_or_tears_under_either_sampler_or_in_a_blend() {
     let dir = tempfile::tempdir().unwrap();
     let (group, model) = tiny_model(dir.path());

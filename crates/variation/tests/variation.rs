@@ -177,7 +177,7 @@ fn blends_at_zero_and_one_reproduce_the_endpoints() {
     let (a, b) = (make(0.1, "a"), make(0.3, "b"));
     let blender = surface::blend::Blender::new(mesh.vertices.clone(), mesh.faces.clone()).unwrap();
     for (w, end) in [(0.0, &a), (1.0, &b)] {
-        let s = blend_sequences(&blender, &a, &b, w, &nalgebra::Vector3::y()).unwrap();
+        let s = blend_sequences(&blender, &a, &b, w, &nalgebra::Vector3::y(), &nalgebra::Vector3::zeros()).unwrap();
         let err = metrics::mean_vertex_distance(&s.motion.frames, &end.motion.frames);
         assert!(err < 1e-8, "w = {w}: {err}");
         let pe = s
@@ -189,16 +189,16 @@ fn blends_at_zero_and_one_reproduce_the_endpoints() {
             .fold(0.0, f64::max);
         assert!(pe < 1e-12, "w = {w}: poses differ by {pe}");
     }
-    let mid = blend_sequences(&blender, &a, &b, 0.5, &nalgebra::Vector3::y()).unwrap();
+    let mid = blend_sequences(&blender, &a, &b, 0.5, &nalgebra::Vector3::y(), &nalgebra::Vector3::zeros()).unwrap();
     assert!(metrics::mean_vertex_distance(&mid.motion.frames, &a.motion.frames) > 1e-3);
     // Several weights from one decomposition per frame: the same sequences as one by one.
     let weights = [0.25, 0.5, 0.75];
     let many =
-        variation::group::blend_sequences_at(&blender, &a, &b, &weights, &nalgebra::Vector3::y())
+        variation::group::blend_sequences_at(&blender, &a, &b, &weights, &nalgebra::Vector3::y(), &nalgebra::Vector3::zeros())
             .unwrap();
     assert_eq!(many.len(), 3);
     for (s, &w) in many.iter().zip(&weights) {
-        assert_eq!(s, &blend_sequences(&blender, &a, &b, w, &nalgebra::Vector3::y()).unwrap());
+        assert_eq!(s, &blend_sequences(&blender, &a, &b, w, &nalgebra::Vector3::y(), &nalgebra::Vector3::zeros()).unwrap());
     }
     // Latent blending (§7) at the bounding weights gives the bounding trajectories.
     let xa = DMatrix::from_fn(5, 3, |i, j| (i + j) as f64);

@@ -106,7 +106,7 @@ pub struct Params {
     pub footskate_smoothness: f64,
     /// Do not lock planted feet by deforming the legs (by default, after the root clean-up,
     /// each planted sole's remaining slide is removed by shifting its leg, weighted from the
-    /// sole up to the hip)
+    /// sole up to the hip, by 10 cm at most)
     #[arg(long)]
     pub no_foot_lock: bool,
     /// How the foot lock eases in before and out after each contact: position (the sole's
@@ -116,12 +116,14 @@ pub struct Params {
     pub foot_ease: crate::foot_lock::Ease,
     /// Do not set the feet's heights by deforming the legs (by default, after the root
     /// clean-up, each planted sole is brought to the source's height at the matched frame and
-    /// each swing foot raised to at least the source's clearance)
+    /// each swing foot raised to at least the source's clearance, by 5 cm at most)
     #[arg(long)]
     pub no_foot_height: bool,
     /// Smooth every sampled latent trajectory in time with a Gaussian of SIGMA frames before
-    /// decoding (first point kept; 0 = off: the trajectories as sampled)
-    #[arg(long, value_name = "SIGMA", default_value_t = 0.0)]
+    /// decoding (first point kept; 0 = off: the trajectories as sampled). Two frames by
+    /// default: the sampled trajectories jitter frame to frame, which decoded turns the body
+    /// faster than any capture
+    #[arg(long, value_name = "SIGMA", default_value_t = crate::latent_smoothing::DEFAULT_SIGMA)]
     pub latent_smoothing: f64,
     /// Output folder: <out>/<sequence>/var<k>/NNNNNN.ply, or with --frame-format pc2
     /// <out>/<sequence>/var<k>.obj + var<k>.pc2
