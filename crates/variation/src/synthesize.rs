@@ -530,7 +530,11 @@ fn measure(job: &Job, decoded: &[Decoded], model: &VariationModel, limits: &Capt
         footskate_max_m: decoded.iter().map(|d| d.footskate_max).collect(),
         diversity: Some(diversity::from_costs(&costs, source.len(), model.fps)),
         guided_from: job.guided_from,
-        turns_and_tears: vars.par_iter().map(|v| TurnsAndTears::of(v, &edges, limits)).collect(),
+        turns_and_tears: {
+            let defs: Vec<crate::group::PartDef> = model.parts.iter().map(|p| p.part.clone()).collect();
+            let core = crate::group::root_core(&defs, model.template.len());
+            vars.par_iter().map(|v| TurnsAndTears::of(v, &edges, &core, limits)).collect()
+        },
     }
 }
 

@@ -9,6 +9,13 @@
 //! capture frames counts half its angle; a repeated frame is skipped). A variation frame spins
 //! when it turns faster than [`SPIN_FACTOR`] times that rate, and tears when its longest edge
 //! exceeds [`TEAR_FACTOR`] times the longest edge of any captured frame.
+//!
+//! A slow turn passes that bound frame by frame and still takes a body off its course: a
+//! variation frame is **off course** when its torso has turned from the variation's first frame
+//! by more than [`SPIN_FACTOR`] times the most any captured sequence of the group turns from its
+//! own first frame. That angle is the best rigid fit of the root part's core
+//! ([`crate::group::root_core`]), frame 0 onto frame `t`: over every vertex, two strides whose
+//! legs and arms have swapped fit best turned by up to 180°.
 
 use mesh_core::rigid::procrustes;
 use nalgebra::Vector3;
@@ -27,6 +34,23 @@ pub fn turn_degrees(frames: &[Vec<Vector3<f64>>]) -> Vec<f64> {
     frames
         .windows(2)
         .map(|w| procrustes(&w[0], &w[1], None).rotation.angle().to_degrees())
+        .collect()
+}
+
+/// Angle (degrees) of the turn of the vertices `core` (every vertex when empty) from the first
+/// frame to each frame (0 for the first).
+pub fn course_degrees(frames: &[Vec<Vector3<f64>>], core: &[u32]) -> Vec<f64> {
+    let pick = |f: &[Vector3<f64>]| -> Vec<Vector3<f64>> {
+        if core.is_empty() {
+            f.to_vec()
+        } else {
+            core.iter().map(|&v| f[v as usize]).collect()
+        }
+    };
+    let Some(first) = frames.first().map(|f| pick(f)) else { return Vec::new() };
+    frames
+        .iter()
+        .map(|f| procrustes(&first, &pick(f), None).rotation.angle().to_degrees())
         .collect()
 }
 
@@ -50,13 +74,17 @@ pub struct CaptureLimits {
     pub max_turn_deg: f64,
     /// Longest edge of any captured frame (m).
     pub max_edge_m: f64,
+    /// The most any captured sequence turns from its first frame (degrees).
+    #[serde(default)]
+    pub max_course_turn_deg: f64,
 }
 
 impl CaptureLimits {
     /// The figures of the group's captured sequences (pre-blends left out; module doc).
     pub fn of_group(group: &Group) -> CaptureLimits {
         let edges = crate::metrics::edges(&group.faces);
-        let mut limits = CaptureLimits { max_turn_deg: 0.0, max_edge_m: 0.0 };
+        let core = crate::group::root_core(&group.parts, group.template.len());
+        let mut limits = CaptureLimits { max_turn_deg: 0.0, max_edge_m: 0.0, max_course_turn_deg: 0.0 };
         for s in group.sequences.iter().filter(|s| s.blend.is_none()) {
             let frames = s.motion.world_frames();
             for (t, turn) in turn_degrees(&frames).into_iter().enumerate() {
@@ -70,6 +98,8 @@ impl CaptureLimits {
             }
             let longest = longest_edges(&frames, &edges).into_iter().fold(0.0, f64::max);
             limits.max_edge_m = limits.max_edge_m.max(longest);
+            let course = course_degrees(&frames, &core).into_iter().fold(0.0, f64::max);
+            limits.max_course_turn_deg = limits.max_course_turn_deg.max(course);
         }
         limits
     }
@@ -83,6 +113,11 @@ impl CaptureLimits {
     pub fn tear_bound_m(&self) -> f64 {
         TEAR_FACTOR * self.max_edge_m
     }
+
+    /// Frames turned further than this from the first are off course (degrees).
+    pub fn course_bound_deg(&self) -> f64 {
+        SPIN_FACTOR * self.max_course_turn_deg
+    }
 }
 
 /// One variation's spins and tears against [`CaptureLimits`].
@@ -92,17 +127,27 @@ pub struct TurnsAndTears {
     pub spinning_frames: Vec<usize>,
     /// Frames holding an edge longer than the tear bound.
     pub torn_frames: Vec<usize>,
+    /// Frames turned from the first further than the course bound.
+    #[serde(default)]
+    pub off_course_frames: Vec<usize>,
+    /// The most the variation turns from its first frame (degrees).
+    #[serde(default)]
+    pub max_course_turn_deg: f64,
     /// Fastest turn of the variation (degrees per frame) and its longest edge (m).
     pub max_turn_deg: f64,
     pub max_edge_m: f64,
 }
 
 impl TurnsAndTears {
-    /// The spins and tears of `frames` (`edges`: the mesh's unique edges).
-    pub fn of(frames: &[Vec<Vector3<f64>>], edges: &[[u32; 2]], limits: &CaptureLimits) -> Self {
+    /// The spins and tears of `frames` (`edges`: the mesh's unique edges; `core`: the vertices
+    /// the course is measured on, [`course_degrees`]).
+    pub fn of(frames: &[Vec<Vector3<f64>>], edges: &[[u32; 2]], core: &[u32], limits: &CaptureLimits) -> Self {
         let turns = turn_degrees(frames);
         let longest = longest_edges(frames, edges);
+        let course = course_degrees(frames, core);
         TurnsAndTears {
+            off_course_frames: (0..course.len()).filter(|&t| course[t] > limits.course_bound_deg()).collect(),
+            max_course_turn_deg: course.iter().copied().fold(0.0, f64::max),
             spinning_frames: (0..turns.len())
                 .filter(|&t| turns[t] > limits.spin_bound_deg())
                 .map(|t| t + 1)
@@ -148,15 +193,30 @@ mod tests {
 
     #[test]
     fn frames_past_the_bounds_are_named_and_frames_within_them_are_not() {
-        let limits = CaptureLimits { max_turn_deg: 8.0, max_edge_m: 1.0 };
+        let limits = CaptureLimits { max_turn_deg: 8.0, max_edge_m: 1.0, max_course_turn_deg: 20.0 };
         let mut frames = vec![turned(0.0), turned(9.0), turned(30.0), turned(31.0)];
         // Frame 3 also has a stretched point: its edge 0-1 grows past 1.5 m.
         frames[3][1] += Vector3::new(0.0, 0.0, 2.0);
         let edges = [[0, 1], [1, 2]];
-        let r = TurnsAndTears::of(&frames, &edges, &limits);
+        let r = TurnsAndTears::of(&frames, &edges, &[], &limits);
         // 9° is within 1.25 × 8° = 10°; 21° is not; frame 3 turns by its tear's fit.
         assert!(r.spinning_frames.contains(&2) && !r.spinning_frames.contains(&1));
         assert_eq!(r.torn_frames, vec![3]);
+        // 30° and 31° from the first frame are past 1.25 × 20° = 25°; 9° is not.
+        assert_eq!(r.off_course_frames, vec![2, 3]);
         assert!((r.max_edge_m - longest_edges(&frames, &edges)[3]).abs() < 1e-12);
+    }
+
+    #[test]
+    fn a_slow_steady_turn_spins_nowhere_but_goes_off_course() {
+        // 6° a frame for 20 frames: under an 8°/frame capture rate at every step, 114° from the
+        // start by the end, against captures that turn at most 15° from their first frame.
+        let limits = CaptureLimits { max_turn_deg: 8.0, max_edge_m: 10.0, max_course_turn_deg: 15.0 };
+        let frames: Vec<_> = (0..20).map(|t| turned(6.0 * t as f64)).collect();
+        let r = TurnsAndTears::of(&frames, &[[0, 1]], &[], &limits);
+        assert!(r.spinning_frames.is_empty(), "{:?}", r.spinning_frames);
+        // 18.75° is the bound: frames 4 (24°) on are off course.
+        assert_eq!(r.off_course_frames, (4..20).collect::<Vec<_>>());
+        assert!((r.max_course_turn_deg - 114.0).abs() < 1e-9);
     }
 }

@@ -75,6 +75,40 @@ fn no_variation_of_the_tiny_preset_spins_or_tears_under_either_sampler_or_in_a_b
     assert!(bad.is_empty(), "{} variations spin or tear:\n{}", bad.len(), bad.join("\n"));
 }
 
+/// The largest turn from the first frame of every variation of an `hmc-sample --report` and
+/// the captures' own, with the frames past the course bound, one line per off-course variation.
+fn off_course(report: &Path) -> Vec<String> {
+    let r: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(report).unwrap()).unwrap();
+    let captures = r["capture_limits"]["max_course_turn_deg"].as_f64().unwrap();
+    assert!(captures > 0.0, "{}", r["capture_limits"]);
+    let mut bad = Vec::new();
+    for s in r["sequences"].as_array().unwrap() {
+        for (k, v) in s["turns_and_tears"].as_array().unwrap().iter().enumerate() {
+            let frames = v["off_course_frames"].as_array().unwrap();
+            if !frames.is_empty() {
+                bad.push(format!("{} var{k}: {} frames off course, turned {:.0} deg from the start (captures {captures:.0})", s["label"], frames.len(), v["max_course_turn_deg"]));
+            }
+        }
+    }
+    bad
+}
+
+#[test]
+#[ignore = "the decoded mean turns a run about 4 deg per frame (docs/RESULTS.md, \"Spins and tears\"): run with --ignored once the cause is fixed"]
+fn no_variation_of_the_tiny_preset_turns_off_its_captures_course() {
+    let dir = tempfile::tempdir().unwrap();
+    let (group, model) = tiny_model(dir.path());
+    let (g, m) = (group.to_string_lossy().into_owned(), model.to_string_lossy().into_owned());
+    let (out, report) = (dir.path().join("out"), dir.path().join("r.json"));
+    let (o, r) = (out.to_string_lossy().into_owned(), report.to_string_lossy().into_owned());
+    ok(
+        env!("CARGO_BIN_EXE_hmc-sample"),
+        &["-q", "--seed", "0", "-n", "5", "--variance-scale", "0.3", "--group", &g, "--model", &m, "--out", &o, "--report", &r],
+    );
+    let bad = off_course(&report);
+    assert!(bad.is_empty(), "{} variations go off course:\n{}", bad.len(), bad.join("\n"));
+}
+
 #[test]
 fn a_frame_count_the_machine_cannot_hold_is_refused_in_one_line_before_sampling() {
     let dir = tempfile::tempdir().unwrap();
