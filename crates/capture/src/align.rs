@@ -42,6 +42,18 @@ pub enum AlignFrame {
     Body,
 }
 
+/// The root part's core: its vertices in no child part (the torso without the bands it shares
+/// with the limbs), of a template of `n_vertices`.
+pub fn root_core<'a>(root: &[u32], children: impl IntoIterator<Item = &'a [u32]>, n_vertices: usize) -> Vec<u32> {
+    let mut in_child = vec![false; n_vertices];
+    for &v in children.into_iter().flatten() {
+        if let Some(c) = in_child.get_mut(v as usize) {
+            *c = true;
+        }
+    }
+    root.iter().copied().filter(|&v| !in_child.get(v as usize).copied().unwrap_or(true)).collect()
+}
+
 /// The template vertices `frame` aligns on (sorted; empty means every vertex).
 /// `Root` needs the subject's segmentation.
 pub fn anchor_vertices(frame: AlignFrame, parts: Option<&Segmentation>) -> Result<Vec<u32>> {
@@ -56,20 +68,8 @@ pub fn anchor_vertices(frame: AlignFrame, parts: Option<&Segmentation>) -> Resul
                 .iter()
                 .find(|p| p.parent.is_none())
                 .ok_or_else(|| Error::invalid("the segmentation has no root part"))?;
-            let mut in_child = vec![false; parts.n_vertices];
-            for p in parts.parts.iter().filter(|p| p.parent.is_some()) {
-                for &v in &p.vertices {
-                    if let Some(c) = in_child.get_mut(v as usize) {
-                        *c = true;
-                    }
-                }
-            }
-            let core: Vec<u32> = root
-                .vertices
-                .iter()
-                .copied()
-                .filter(|&v| !in_child.get(v as usize).copied().unwrap_or(true))
-                .collect();
+            let children = parts.parts.iter().filter(|p| p.parent.is_some()).map(|p| p.vertices.as_slice());
+            let core = root_core(&root.vertices, children, parts.n_vertices);
             if core.len() < 3 {
                 return Err(Error::invalid(format!(
                     "root part '{}' keeps {} vertices outside its children's bands (need 3 to align on)",

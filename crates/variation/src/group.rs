@@ -479,20 +479,8 @@ pub fn root_core(parts: &[PartDef], n_vertices: usize) -> Vec<u32> {
     let Some(root) = parts.iter().find(|p| p.parent.is_none()) else {
         return Vec::new();
     };
-    let mut in_child = vec![false; n_vertices];
-    for p in parts.iter().filter(|p| p.parent.is_some()) {
-        for &v in &p.vertices {
-            if let Some(c) = in_child.get_mut(v as usize) {
-                *c = true;
-            }
-        }
-    }
-    let core: Vec<u32> = root
-        .vertices
-        .iter()
-        .copied()
-        .filter(|&v| !in_child.get(v as usize).copied().unwrap_or(true))
-        .collect();
+    let children = parts.iter().filter(|p| p.parent.is_some()).map(|p| p.vertices.as_slice());
+    let core = capture::align::root_core(&root.vertices, children, n_vertices);
     if core.len() < 3 {
         Vec::new()
     } else {
