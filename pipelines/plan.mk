@@ -13,7 +13,7 @@ PLAN_OPTIONS := $(OUT)/work/plan.options
 PLAN_GOALS := transfer-results transfer-report variation-results
 PLAN_ARGS := --set $(SET) --pipeline-out $(OUT) \
   --methods $(TRANSFER_METHODS) --align-frame $(ALIGN_FRAME) --part-alignment $(PART_ALIGNMENT) \
-  --placement $(PLACEMENT) --gpr-mean $(GPR_MEAN) --gpr-train-flags '$(GPR_TRAIN_FLAGS)' \
+  --placement $(PLACEMENT) $(if $(GPR_MEAN),--gpr-mean $(GPR_MEAN)) --gpr-train-flags '$(GPR_TRAIN_FLAGS)' \
   --pca-components $(PCA_COMPONENTS) $(if $(VARIATION_SUBJECT),--variation-subject $(VARIATION_SUBJECT)) \
   $(foreach g,$(VARIATION_GROUPS),--variation-group $(g)=$(VARIATION_MOTIONS_$(g)) \
     $(if $(VARIATION_PREALIGN_FLAGS_$(g)),'--prealign-flags=$(g)=$(VARIATION_PREALIGN_FLAGS_$(g))')) \

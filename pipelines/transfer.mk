@@ -15,8 +15,9 @@ ALIGN_FRAME ?= root
 PART_ALIGNMENT ?= body
 # gpr-predict --placement of every method's output (gpr-nn is also placed the other two ways)
 PLACEMENT ?= scaled-source
-# gpr-train --mean: affine (least-squares affine map, GP on the residuals) or zero (the paper)
-GPR_MEAN ?= affine
+# gpr-train --mean: affine (least-squares affine map, GP on the residuals) or zero (the paper);
+# empty: the configuration's (gpr-train --config in GPR_TRAIN_FLAGS; the default's is affine)
+GPR_MEAN ?=
 # Further gpr-train flags for every model (e.g. --learn-noise, --nn-bias), and pca-fit components
 GPR_TRAIN_FLAGS ?=
 PCA_COMPONENTS ?= 20

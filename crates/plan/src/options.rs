@@ -52,9 +52,10 @@ pub struct TransferOptions {
     /// gpr-predict --placement of every method (PLACEMENT); gpr-nn is also placed the other ways
     #[arg(long, value_enum, default_value = "scaled-source")]
     pub placement: Placement,
-    /// gpr-train --mean (GPR_MEAN)
-    #[arg(long, value_enum, default_value = "affine")]
-    pub gpr_mean: MeanFunction,
+    /// gpr-train --mean of every model (GPR_MEAN); unset: the configuration's (gpr-train
+    /// --config, in GPR_TRAIN_FLAGS; the default configuration's is affine)
+    #[arg(long, value_enum)]
+    pub gpr_mean: Option<MeanFunction>,
     /// Further gpr-train flags for every model, one string (GPR_TRAIN_FLAGS)
     #[arg(long, default_value = "", allow_hyphen_values = true, value_name = "FLAGS")]
     pub gpr_train_flags: String,

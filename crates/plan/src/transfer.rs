@@ -237,7 +237,10 @@ impl<'a> Plan<'a> {
             let model = format!("{}/models/{}/{name}.model", self.work, d.name());
             let mut inputs = vec![self.pca(d.src, kind), self.pca(d.tgt, kind)];
             inputs.extend(pairs.1.iter().cloned());
-            let mut args = vec![s("-q"), s("--mean"), value_name(self.opt.gpr_mean)];
+            let mut args = vec![s("-q")];
+            if let Some(mean) = self.opt.gpr_mean {
+                args.extend([s("--mean"), value_name(mean)]);
+            }
             args.extend(crate::options::words(&self.opt.gpr_train_flags));
             args.extend([s("--method"), method.name().to_string()]);
             if *keys {

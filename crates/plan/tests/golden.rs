@@ -338,3 +338,23 @@ fn a_group_of_one_motion_is_sampled_without_blends() {
     assert_eq!(blends("solo"), "");
     assert_eq!(blends("pair"), "0.3,0.6");
 }
+
+/// `gpr-train` gets `--mean` only when the pipeline is given one (GPR_MEAN), so a configuration
+/// in GPR_TRAIN_FLAGS (`--config zero-mean`, `--config auto`) decides the mean otherwise.
+#[test]
+fn the_mean_is_the_configurations_unless_the_pipeline_names_one() {
+    let means = |g: &plan::task::Graph| -> Vec<Option<String>> {
+        g.tasks
+            .iter()
+            .filter(|t| t.kind == "gpr-train")
+            .map(|t| match &t.steps[..] {
+                [plan::task::Step::Run { args, .. }] => args.iter().position(|a| a == "--mean").map(|k| args[k + 1].clone()),
+                _ => panic!("{}: not one stage run", t.target),
+            })
+            .collect()
+    };
+    let default = means(&tiny_graph_with(&["--gpr-train-flags", "--config zero-mean"]));
+    assert!(!default.is_empty() && default.iter().all(Option::is_none), "{default:?}");
+    let named = means(&tiny_graph_with(&["--gpr-mean", "zero"]));
+    assert!(named.iter().all(|m| m.as_deref() == Some("zero")), "{named:?}");
+}
