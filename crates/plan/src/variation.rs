@@ -92,7 +92,7 @@ pub fn plan(set: &CaptureSet, out: &str, opt: &VariationOptions, graph: &mut Gra
                 Step::RenderVariations {
                     dir: format!("{vout}/{g}"),
                     out_dir: format!("{vout}/render/{g}"),
-                    flags: vec![s("-q"), s("--no-frames"), s("--stride"), s("2")],
+                    flags: vec![s("-q"), s("--no-frames"), s("--stride"), s("2"), s("--separate-rows"), s("--follow")],
                 },
                 Step::Rename { from: tmp, to: samples.clone() },
             ],

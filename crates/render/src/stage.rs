@@ -90,7 +90,8 @@ pub struct Params {
     /// Do not write anim.gif
     #[arg(long)]
     pub no_gif: bool,
-    /// Camera follows the first sequence across the ground (keeps travelling motions large in frame)
+    /// Camera follows the first sequence across the ground (keeps travelling motions large in
+    /// frame); with --separate-rows, every sequence is followed on its own
     #[arg(long)]
     pub follow: bool,
 }
@@ -144,6 +145,18 @@ pub fn follow_first(seqs: &mut [MeshSequence], up: &nalgebra::Vector3<f64>) {
     }
 }
 
+/// [`follow_first`] for the overlaid sequences, or with `each` (one contact-sheet row per
+/// sequence) every sequence followed on its own.
+pub fn follow(seqs: &mut [MeshSequence], up: &nalgebra::Vector3<f64>, each: bool) {
+    if each {
+        for seq in seqs.iter_mut() {
+            follow_first(std::slice::from_mut(seq), up);
+        }
+    } else {
+        follow_first(seqs, up);
+    }
+}
+
 /// Runs the stage (after `args.common.init()`).
 pub fn run(args: &Params) -> anyhow::Result<()> {
     let n_seq = args.seq_dirs.len();
@@ -172,7 +185,7 @@ pub fn run(args: &Params) -> anyhow::Result<()> {
         .map(MeshSequence::load_dir)
         .collect::<Result<_, _>>()?;
     if args.follow {
-        follow_first(&mut seqs, &args.up.vector());
+        follow(&mut seqs, &args.up.vector(), args.separate_rows);
     }
     let lens: Vec<usize> = seqs.iter().map(|s| s.frames.len()).collect();
     let longest = *lens.iter().max().unwrap_or(&0);
@@ -408,6 +421,23 @@ mod follow_tests {
         assert!((c(&seqs[0].frames[0]).x - c(&seqs[0].frames[1]).x).abs() < 1e-12);
         assert!((c(&seqs[0].frames[1]).y - (2.0 + 1.0 / 3.0)).abs() < 1e-12, "height kept");
         assert!((c(&seqs[1].frames[1]).x - c(&seqs[0].frames[1]).x - 1.0).abs() < 1e-12, "relative offset kept");
+    }
+
+    #[test]
+    fn with_one_row_per_sequence_each_sequence_is_followed_on_its_own() {
+        let tri = vec![[0u32, 1, 2]];
+        let frame = |x: f64, z: f64| vec![Vector3::new(x, 0.0, z), Vector3::new(x + 1.0, 0.0, z), Vector3::new(x, 1.0, z)];
+        let a = MeshSequence::new(tri.clone(), vec![frame(0.0, 0.0), frame(5.0, 0.0)]);
+        let b = MeshSequence::new(tri, vec![frame(0.0, 3.0), frame(-4.0, 9.0)]);
+        let mut seqs = vec![a, b];
+        follow(&mut seqs, &Vector3::y(), true);
+        let c = |f: &Vec<Vector3<f64>>| f.iter().sum::<Vector3<f64>>() / 3.0;
+        for s in &seqs {
+            for f in &s.frames {
+                let g = c(f);
+                assert!(g.x.abs() < 1e-12 && g.z.abs() < 1e-12, "{g:?}");
+            }
+        }
     }
 }
 
