@@ -94,7 +94,7 @@ fn off_course(report: &Path) -> Vec<String> {
 }
 
 #[test]
-#[ignore = "the decoded mean turns a run about 4 deg per frame (docs/RESULTS.md, \"Spins and tears\"): run with --ignored once the cause is fixed"]
+#[ignore = "the decoded mean turns a run about 4 deg per frame (docs/studies/25-spins-and-tears.md): run with --ignored once the cause is fixed"]
 fn no_variation_of_the_tiny_preset_turns_off_its_captures_course() {
     let dir = tempfile::tempdir().unwrap();
     let (group, model) = tiny_model(dir.path());
