@@ -62,6 +62,10 @@ pub struct SynthConfig {
     /// Ground every variation on its source ([`crate::grounding`]); on by default.
     #[serde(default = "yes")]
     pub grounding: bool,
+    /// Turn every variation onto its source's course ([`crate::course`]), before grounding;
+    /// on by default.
+    #[serde(default = "yes")]
+    pub course: bool,
     /// Pin planted feet by a horizontal root correction ([`crate::footskate`]), after
     /// grounding; on by default. Needs the source's contact annotations.
     #[serde(default = "yes")]
@@ -374,6 +378,8 @@ struct Post<'a> {
     leg_weights: Option<&'a [Vec<(u32, f64)>; 2]>,
     /// Sole vertices of the geometric foot-sliding rule.
     soles: &'a [Vec<u32>],
+    /// The root part's core (`group::root_core`): headings are measured on it.
+    core: &'a [u32],
 }
 
 impl Post<'_> {
@@ -387,6 +393,10 @@ impl Post<'_> {
         let (model, cfg) = (self.model, self.cfg);
         // Rigid shifts of the variation leave the (pose-normalised) DTW unchanged.
         let matches = matcher.matches(&m);
+        if cfg.course {
+            let sigma = crate::course::SIGMA_SECONDS * model.fps;
+            crate::course::keep(&mut m, &job.source, &matches, self.core, &model.up, sigma);
+        }
         let low = grounding::lowest(&m, &[], &model.up);
         let ungrounded =
             grounding::floor_contact(&low, &job.source_low, &matches, CONTACT_HEIGHT);
@@ -533,7 +543,7 @@ fn measure(job: &Job, decoded: &[Decoded], model: &VariationModel, limits: &Capt
         turns_and_tears: {
             let defs: Vec<crate::group::PartDef> = model.parts.iter().map(|p| p.part.clone()).collect();
             let core = crate::group::root_core(&defs, model.template.len());
-            vars.par_iter().map(|v| TurnsAndTears::of(v, &edges, &core, limits)).collect()
+            vars.par_iter().map(|v| TurnsAndTears::of(v, &edges, &core, &model.up, limits)).collect()
         },
     }
 }
@@ -723,6 +733,10 @@ pub fn run_with_progress(
         _ => None,
     };
     let leg_weights = feet.as_ref().and_then(|f| model_leg_weights(model, f));
+    let core = {
+        let defs: Vec<_> = model.parts.iter().map(|p| p.part.clone()).collect();
+        crate::group::root_core(&defs, model.template.len())
+    };
     if cfg.foot_lock && cfg.footskate && feet.is_some() && leg_weights.is_none() {
         notes.push("foot lock skipped: the segmentation has no left and right leg parts".into());
     }
@@ -744,6 +758,7 @@ pub fn run_with_progress(
         feet: feet.as_ref(),
         leg_weights: leg_weights.as_ref(),
         soles: &all_soles,
+        core: &core,
     };
     let (mut seconds_writing, mut seconds_statistics) = (0.0, 0.0);
     let capture_limits = cfg.statistics.then(|| CaptureLimits::of_group(group));
