@@ -44,6 +44,9 @@ pub enum ChainStart {
     /// chain's seed). HMC leaves its target invariant, so a chain started at a draw of it is
     /// stationary from the first iteration; burn-in then only has to adapt the step size.
     Ancestral,
+    /// The given trajectory itself (the sequence's learned one: §1's "initialized with a
+    /// latent motion trajectory to generate variants of this latter").
+    Learned,
 }
 
 /// Sampler options.
@@ -584,6 +587,7 @@ pub fn sample_trajectories_scaled(
                 mean
             }
         }
+        ChainStart::Learned => template.clone(),
         ChainStart::Ancestral => crate::ancestral::sample_trajectories_ancestral(
             pred,
             &x1,

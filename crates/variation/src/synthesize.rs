@@ -148,6 +148,14 @@ pub struct SequenceReport {
     pub manifold_distance_m: Vec<f64>,
     /// Mean |i − j| along the DTW path between variation and source (frames).
     pub timing_offset_frames: Vec<f64>,
+    /// Each variation's pace: its [`metrics::pose_speed`] over the source's (1: as lively as
+    /// the source; a trajectory that settles toward a point gives a fraction).
+    #[serde(default)]
+    pub pose_speed_ratio: Vec<f64>,
+    /// Each variation's horizontal travel along the source's, as a fraction of the source's
+    /// ([`metrics::travel_ratio`]; None where the source stays in place).
+    #[serde(default)]
+    pub travel_ratio: Vec<Option<f64>>,
     /// Mean per-vertex distance between pairs of variations (m).
     pub pairwise_distance_m: Stats,
     /// Mean relative edge-length change against the template: variations, and the source.
@@ -483,7 +491,8 @@ fn measure(job: &Job, decoded: &[Decoded], model: &VariationModel, limits: &Capt
     // Each variation's frames aligned to the template (pose only) once, for every pose figure
     // and its diversity cost matrix, then dropped.
     let source_pose = metrics::normalise(source, &model.template);
-    type PerVariation = (f64, f64, f64, Option<f64>, f64, f64, FloorContact, nalgebra::DMatrix<f64>);
+    let source_speed = metrics::pose_speed(&source_pose);
+    type PerVariation = (f64, f64, f64, Option<f64>, f64, f64, FloorContact, nalgebra::DMatrix<f64>, f64, Option<f64>);
     let per: Vec<PerVariation> = decoded
         .par_iter()
         .map(|d| {
@@ -498,6 +507,8 @@ fn measure(job: &Job, decoded: &[Decoded], model: &VariationModel, limits: &Capt
                 metrics::nearest_frame_distance(&pose, &source_pose, 2000),
                 floor_contact(v, job, &d.matches, model),
                 crate::prealign::pose_cost(&pose, &source_pose, 400),
+                metrics::pose_speed(&pose) / source_speed.max(f64::MIN_POSITIVE),
+                metrics::travel_ratio(v, source, &model.up),
             )
         })
         .collect();
@@ -521,6 +532,8 @@ fn measure(job: &Job, decoded: &[Decoded], model: &VariationModel, limits: &Capt
         pose_distance_to_source_m: per.iter().map(|p| p.4).collect(),
         manifold_distance_m: per.iter().map(|p| p.5).collect(),
         timing_offset_frames: per.iter().map(|p| p.1).collect(),
+        pose_speed_ratio: per.iter().map(|p| p.8).collect(),
+        travel_ratio: per.iter().map(|p| p.9).collect(),
         pairwise_distance_m: Stats::of(&pair),
         edge_distortion: per.iter().map(|p| p.2).collect(),
         source_edge_distortion: metrics::edge_distortion(source, &model.template, &edges),
