@@ -60,6 +60,7 @@ STAGE_BINARIES := $(if $(NO_BUILD),,$(BUILD_STAMP))
 # scripts/usd-check reads the .usda export back with usd-core and Blender (PyPI bpy, Python 3.11);
 # scripts/alembic-check reads Blender's Alembic export of a sequence back with mesh-import.
 test: build assets setup-web
+	scripts/check-doc-links
 	$(CARGO) test --release --workspace
 	scripts/blender-check
 	scripts/usd-check

@@ -18,7 +18,7 @@ PLAN_ARGS := --set $(SET) --pipeline-out $(OUT) \
   $(foreach g,$(VARIATION_GROUPS),--variation-group $(g)=$(VARIATION_MOTIONS_$(g)) \
     $(if $(VARIATION_PREALIGN_FLAGS_$(g)),'--prealign-flags=$(g)=$(VARIATION_PREALIGN_FLAGS_$(g))')) \
   --variation-w $(VARIATION_W) --variation-blends $(VARIATION_BLENDS) --variation-n $(VARIATION_N) \
-  --variation-seed $(VARIATION_SEED) --variation-variance-scale $(VARIATION_VARIANCE_SCALE) \
+  --variation-seed $(VARIATION_SEED) $(if $(VARIATION_VARIANCE_SCALE),--variation-variance-scale $(VARIATION_VARIANCE_SCALE)) \
   --variation-train-flags '$(VARIATION_TRAIN_FLAGS)' --variation-sample-flags '$(VARIATION_SAMPLE_FLAGS)'
 
 # PART_TASKS=1: make runs Slurm's split (one task per part of each model of several parts and

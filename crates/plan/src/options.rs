@@ -89,9 +89,9 @@ pub struct VariationOptions {
     /// hmc-sample and variation-eval --seed (VARIATION_SEED)
     #[arg(long, default_value_t = 0, value_name = "S")]
     pub variation_seed: u64,
-    /// hmc-sample --variance-scale (VARIATION_VARIANCE_SCALE)
-    #[arg(long, default_value = "0.3", value_name = "X")]
-    pub variation_variance_scale: String,
+    /// hmc-sample --variance-scale (VARIATION_VARIANCE_SCALE); unset: hmc-sample's own default
+    #[arg(long, value_name = "X")]
+    pub variation_variance_scale: Option<String>,
     /// Further gpdm-train flags, one string (VARIATION_TRAIN_FLAGS)
     #[arg(long, default_value = "", allow_hyphen_values = true, value_name = "FLAGS")]
     pub variation_train_flags: String,

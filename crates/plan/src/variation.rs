@@ -29,7 +29,7 @@ pub fn plan(set: &CaptureSet, out: &str, opt: &VariationOptions, graph: &mut Gra
     let mut names = Vec::new();
     for (g, motions) in &groups {
         // prealign reads the set, the subject's description and template, and the frames of
-        // the group's motions that exist (missing ones are skipped).
+        // the group's motions (those the subject has, `groups_present`).
         let mut inputs = vec![set.set_json().to_string_lossy().into_owned()];
         // The group's parts are the subject's, unless prealign models the whole body (then one
         // task fits it); a subject prealign cannot read fails in prealign, naming its file.
@@ -75,10 +75,11 @@ pub fn plan(set: &CaptureSet, out: &str, opt: &VariationOptions, graph: &mut Gra
             _ => opt.variation_blends.clone(),
         };
         let tmp = format!("{samples}.tmp");
-        let mut args = vec![
-            s("-q"), s("--seed"), opt.variation_seed.to_string(), s("-n"), opt.variation_n.to_string(),
-            s("--variance-scale"), opt.variation_variance_scale.clone(), s("--blends"), blends,
-        ];
+        let mut args = vec![s("-q"), s("--seed"), opt.variation_seed.to_string(), s("-n"), opt.variation_n.to_string()];
+        if let Some(kappa) = &opt.variation_variance_scale {
+            args.extend([s("--variance-scale"), kappa.clone()]);
+        }
+        args.extend([s("--blends"), blends]);
         args.extend(words(&opt.variation_sample_flags));
         args.extend([s("--group"), group.clone(), s("--model"), model.clone(), s("--out"), format!("{vout}/{g}"), s("--report"), tmp.clone()]);
         graph.push(Task {
@@ -125,9 +126,15 @@ pub fn plan(set: &CaptureSet, out: &str, opt: &VariationOptions, graph: &mut Gra
 /// training motion of the subject, named after it.
 fn groups_present(set: &CaptureSet, subject: &str, groups: Vec<(String, String)>) -> Result<Vec<(String, String)>> {
     let have = set.motions(subject)?;
+    // Each group keeps the motions the subject has (a group of one motion is sampled without
+    // blends); a group with none is dropped.
     let kept: Vec<(String, String)> = groups
         .into_iter()
-        .filter(|(_, motions)| motions.split(',').any(|m| have.iter().any(|h| h == m)))
+        .map(|(g, motions)| {
+            let present: Vec<&str> = motions.split(',').filter(|m| have.iter().any(|h| h == m)).collect();
+            (g, present.join(","))
+        })
+        .filter(|(_, motions)| !motions.is_empty())
         .collect();
     if !kept.is_empty() {
         return Ok(kept);

@@ -358,3 +358,17 @@ fn the_mean_is_the_configurations_unless_the_pipeline_names_one() {
     let named = means(&tiny_graph_with(&["--gpr-mean", "zero"]));
     assert!(named.iter().all(|m| m.as_deref() == Some("zero")), "{named:?}");
 }
+
+/// A variation group naming a motion the subject does not have keeps the ones it has (a group of
+/// one motion is sampled without blends), and a group with none of its motions is left out:
+/// prealign is never asked for a missing motion.
+#[test]
+fn a_variation_group_keeps_the_motions_the_subject_has() {
+    let g = tiny_graph_with(&["--variation-group", "jumps=jump,backflip", "--variation-group", "none=backflip,cartwheel"]);
+    let prealigns: Vec<&plan::task::Task> = g.tasks.iter().filter(|t| t.kind == "prealign").collect();
+    assert_eq!(prealigns.len(), 1, "{:?}", prealigns.iter().map(|t| &t.target).collect::<Vec<_>>());
+    let plan::task::Step::Run { args, .. } = &prealigns[0].steps[0] else { panic!("prealign is not one stage run") };
+    let motions = args.iter().position(|a| a == "--motions").map(|i| args[i + 1].as_str());
+    assert_eq!(motions, Some("jump"));
+    assert!(prealigns[0].target.ends_with("jumps.group"));
+}

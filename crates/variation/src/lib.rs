@@ -23,6 +23,7 @@ pub mod gait;
 pub mod grounding;
 pub mod group;
 pub mod latent_smoothing;
+pub mod local_linear;
 pub mod memory_budget;
 pub mod metrics;
 pub mod part_data;

@@ -110,6 +110,13 @@ impl HmcStart {
     }
 }
 
+/// Default scale κ of every one-step variance of the sampled dynamics (`hmc-sample
+/// --variance-scale`; 1 is the paper's density). At 1 the learned dynamics noise makes every frame
+/// jitter: foot sliding 10-20x the captures' and variations scattered 0.7-1.5 m apart; at 0.3
+/// sliding 2-8x, and the variations still differ from their source
+/// (docs/studies/14-variance-scale.md).
+pub const VARIANCE_SCALE: f64 = 0.3;
+
 /// `variations[k][part]`: latent trajectory (T × d) of part `part` in variation `k`.
 pub type Variations = Vec<Vec<DMatrix<f64>>>;
 

@@ -26,8 +26,9 @@ pub struct Params {
     /// Prealigned group (kind variation-group, from prealign)
     #[arg(long)]
     pub group: PathBuf,
-    /// Latent dimension d
-    #[arg(long, default_value_t = 3)]
+    /// Latent dimension d of every part (the paper's is 3; with 3 a run's variations settle
+    /// toward a standstill)
+    #[arg(long, default_value_t = crate::train::LATENT_DIM)]
     pub latent_dim: usize,
     /// Lower bound on the pose-noise variance 1/α3 in m² (0 = none)
     #[arg(long, default_value_t = 1e-6)]

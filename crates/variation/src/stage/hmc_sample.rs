@@ -74,7 +74,7 @@ pub struct Params {
     pub sampler: Sampler,
     /// Scale κ of every one-step variance of the sampled dynamics (1: the model's density, as in
     /// the paper; below 1: trajectories closer to the learned dynamics, less frame-to-frame jitter)
-    #[arg(long, default_value_t = 1.0)]
+    #[arg(long, default_value_t = crate::sample::VARIANCE_SCALE)]
     pub variance_scale: f64,
     /// Where every HMC chain starts: mean (the mean prediction, 3DV eq. 8, as in the paper)
     /// or ancestral (an exact draw of the sampled density: stationary from the start, so a
