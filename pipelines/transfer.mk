@@ -9,12 +9,13 @@
 
 SET ?= $(OUT)/demo/set
 TRANSFER_METHODS ?= gpr-nn gpr-se gpr-linear keypose-affine whole-body
-# align --frame: root (poses fitted on the torso core, the default) or body (the paper's whole mesh)
-ALIGN_FRAME ?= root
+# Empty: the stage's own default (`<stage> --help`; docs/DEFAULTS.md).
+# align --frame: root (poses fitted on the torso core) or body (the paper's whole mesh)
+ALIGN_FRAME ?=
 # pca-fit --part-alignment: body (parts cut from the aligned frames) or part (each part Procrustes-aligned)
-PART_ALIGNMENT ?= body
+PART_ALIGNMENT ?=
 # gpr-predict --placement of every method's output (gpr-nn is also placed the other two ways)
-PLACEMENT ?= scaled-source
+PLACEMENT ?=
 # gpr-train --mean: affine (least-squares affine map, GP on the residuals) or zero (the paper);
 # empty: the configuration's (gpr-train --config in GPR_TRAIN_FLAGS; the default's is affine)
 GPR_MEAN ?=

@@ -66,6 +66,10 @@ pub enum Placement {
 }
 
 impl Placement {
+    /// `gpr-predict --placement`'s default, and so `make transfer`'s: the scaled source
+    /// displacement (the paper regresses it; docs/studies/04-placement.md).
+    pub const PREDICT_DEFAULT: Placement = Placement::ScaledSource;
+
     pub fn name(&self) -> &'static str {
         match self {
             Placement::Regressed => "regressed",

@@ -43,14 +43,15 @@ pub struct TransferOptions {
     /// Transfer methods (TRANSFER_METHODS); gpr-nn with key-poses only is always added
     #[arg(long, num_args = 1.., value_parser = parse_method, default_values = ["gpr-nn", "gpr-se", "gpr-linear", "keypose-affine", "whole-body"])]
     pub methods: Vec<Method>,
-    /// align --frame (ALIGN_FRAME)
-    #[arg(long, value_enum, default_value = "root")]
+    /// align --frame (ALIGN_FRAME) [default: align's]
+    #[arg(long, value_enum, default_value_t = AlignFrame::default(), hide_default_value = true)]
     pub align_frame: AlignFrame,
-    /// pca-fit --part-alignment (PART_ALIGNMENT)
-    #[arg(long, value_enum, default_value = "body")]
+    /// pca-fit --part-alignment (PART_ALIGNMENT) [default: pca-fit's]
+    #[arg(long, value_enum, default_value_t = PartAlignment::default(), hide_default_value = true)]
     pub part_alignment: PartAlignment,
     /// gpr-predict --placement of every method (PLACEMENT); gpr-nn is also placed the other ways
-    #[arg(long, value_enum, default_value = "scaled-source")]
+    /// [default: gpr-predict's]
+    #[arg(long, value_enum, default_value_t = Placement::PREDICT_DEFAULT, hide_default_value = true)]
     pub placement: Placement,
     /// gpr-train --mean of every model (GPR_MEAN); unset: the configuration's (gpr-train
     /// --config, in GPR_TRAIN_FLAGS; the default configuration's is affine)

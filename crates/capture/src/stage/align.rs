@@ -34,7 +34,7 @@ pub struct Params {
     pub template: PathBuf,
     /// Vertices each frame's rigid pose is fitted on: `root` = the root part without the
     /// bands it shares with the limbs (needs --segmentation); `body` = every vertex (the paper)
-    #[arg(long, value_enum, default_value_t = AlignFrame::Root)]
+    #[arg(long, value_enum, default_value_t = AlignFrame::default())]
     pub frame: AlignFrame,
     /// Segmentation artifact of the subject (from `segment`), for --frame root
     #[arg(long)]

@@ -45,7 +45,7 @@ pub struct Params {
     /// How each part is aligned before PCA: `body` = cut from the whole-body-aligned frames
     /// (assembly averages overlaps); `part` = also Procrustes per part (assembly re-orients
     /// children on their overlap band)
-    #[arg(long, value_enum, default_value_t = part_pca::PartAlignment::Body)]
+    #[arg(long, value_enum, default_value_t = part_pca::PartAlignment::default())]
     pub part_alignment: part_pca::PartAlignment,
     /// Fit only this part (a name of the segmentation, `body` with --whole-body) and write it
     /// alone, as kind pca-model-part (its --report of that part alone): `merge-parts` joins the

@@ -44,7 +44,7 @@ pub struct Params {
     #[arg(long)]
     pub target_template: PathBuf,
     /// How the poses are placed in the world
-    #[arg(long, value_enum, default_value_t = Placement::ScaledSource)]
+    #[arg(long, value_enum, default_value_t = Placement::PREDICT_DEFAULT)]
     pub placement: Placement,
     /// Surface reconstruction after PCA decoding (paper §6): `assemble` averages overlaps,
     /// `correct` applies §6.1 first, `correct-stitch` also stitches along optimal loops (§6.2)
