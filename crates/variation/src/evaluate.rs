@@ -311,6 +311,32 @@ pub fn evaluate(
             crate::plots::latent_plot(&p, title, series)?;
             written.push(p.display().to_string());
         }
+        // Fig. 4: training-mesh reconstruction per part, GPDM against PCA of the same dimension.
+        let parts: Vec<String> = reconstruction.iter().map(|r| r.part.clone()).collect();
+        let mm = |f: &dyn Fn(&ReconstructionError) -> f64| reconstruction.iter().map(|r| 1e3 * f(r)).collect::<Vec<f64>>();
+        let p = dir.join("fig4-reconstruction.png");
+        crate::plots::series_plot(
+            &p,
+            &format!("{}: training-mesh reconstruction, mean per vertex (d = {d})", model.group),
+            ("part", "error (mm)"),
+            Some(&parts),
+            &[(format!("GPDM (d = {d})"), mm(&|r| r.gpdm_m)), (format!("PCA ({d} components)"), mm(&|r| r.pca_m))],
+        )?;
+        written.push(p.display().to_string());
+        // Fig. 7b: per frame, the latent interpolation guided by the learned pre-blends and the
+        // unguided one against the non-linear mesh blend.
+        for b in &latent_blend {
+            let p = dir.join(format!("fig7b-blend-{}.png", b.w));
+            let to_mm = |v: &[f64]| v.iter().map(|x| 1e3 * x).collect::<Vec<f64>>();
+            crate::plots::series_plot(
+                &p,
+                &format!("{}: interpolation at w = {} against the non-linear blend", model.group, b.w),
+                ("frame", "mean vertex distance (mm)"),
+                None,
+                &[("guided".to_string(), to_mm(&b.guided_per_frame_m)), ("unguided".to_string(), to_mm(&b.unguided_per_frame_m))],
+            )?;
+            written.push(p.display().to_string());
+        }
         let hmc = HmcOptions {
             n_samples: 20,
             burn_in: 200,

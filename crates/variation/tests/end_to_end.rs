@@ -306,10 +306,19 @@ fn tiny_set_end_to_end() {
             .n_frames(),
         t
     );
-    let ev = variation::evaluate::evaluate(&m2, &group, None, 0).unwrap();
+    let plots = dir.path().join("plots");
+    let ev = variation::evaluate::evaluate(&m2, &group, Some(&plots), 0).unwrap();
     assert!(
         ev.reconstruction_gpdm_m < 0.05,
         "strided reconstruction {} m",
         ev.reconstruction_gpdm_m
     );
+    // Figs. 3-7b as PNG files: fig. 4 once per model, fig. 7b once per blend weight.
+    let names: Vec<String> = ev.plots.iter().map(|p| std::path::Path::new(p).file_name().unwrap().to_string_lossy().into_owned()).collect();
+    assert!(names.iter().any(|n| n == "fig4-reconstruction.png"), "{names:?}");
+    assert_eq!(names.iter().filter(|n| n.starts_with("fig7b-blend-")).count(), ev.latent_blend.len(), "{names:?}");
+    for p in &ev.plots {
+        let bytes = std::fs::read(p).unwrap();
+        assert!(bytes.starts_with(b"\x89PNG"), "{p}");
+    }
 }
