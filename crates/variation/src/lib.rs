@@ -25,6 +25,7 @@ pub mod group;
 pub mod latent_smoothing;
 pub mod memory_budget;
 pub mod metrics;
+pub mod motion_matching;
 pub mod part_data;
 pub mod plots;
 pub mod prealign;
