@@ -242,8 +242,8 @@ fn patches(examples: &[DMatrix<f64>], patch: usize) -> (Vec<Vec<f64>>, Vec<(usiz
 
 /// One matching iteration at one level: every window of `patch` rows of `syn` replaced by its
 /// nearest example window (completeness-normalised with `alpha`), the overlapping windows
-/// averaged frame by frame. Ties go to the first example window, so the result does not depend
-/// on the number of threads.
+/// averaged frame by frame; with the chosen example windows. Ties go to the first example
+/// window, so the result does not depend on the number of threads.
 fn match_step(
     syn: &DMatrix<f64>,
     examples: &[DMatrix<f64>],
@@ -251,8 +251,8 @@ fn match_step(
     owner: &[(usize, usize)],
     patch: usize,
     alpha: Option<f64>,
-) -> DMatrix<f64> {
-    let (len, d) = syn.shape();
+) -> (DMatrix<f64>, Vec<(usize, usize)>) {
+    let len = syn.nrows();
     let queries: Vec<Vec<f64>> = (0..=len - patch)
         .map(|s| (s..s + patch).flat_map(|t| syn.row(t).iter().copied().collect::<Vec<_>>()).collect())
         .collect();
@@ -273,20 +273,36 @@ fn match_step(
             .collect(),
         None => vec![1.0; keys.len()],
     };
+    let chosen: Vec<(usize, usize)> = dist
+        .iter()
+        .map(|row| {
+            let mut best = (f64::INFINITY, 0usize);
+            for (j, (&v, &n)) in row.iter().zip(&norm).enumerate() {
+                let v = v / n;
+                if v < best.0 {
+                    best = (v, j);
+                }
+            }
+            owner[best.1]
+        })
+        .collect();
+    let out = blend_patches(&chosen, patch, len, examples);
+    (out, chosen)
+}
+
+/// The synthesis that matched window `q` (rows `q..q + patch`) to rows `s..s + patch` of
+/// example `e` for every `(e, s) = chosen[q]`: every row the mean of the example rows its
+/// windows matched. Applied to other sequences time-aligned with the examples (same rows), it
+/// gives their frames at the same moments ([`Synthesis`]).
+pub fn blend_patches(chosen: &[(usize, usize)], patch: usize, len: usize, examples: &[DMatrix<f64>]) -> DMatrix<f64> {
+    let d = examples.iter().map(|e| e.ncols()).max().unwrap_or(0);
     let mut sum = DMatrix::<f64>::zeros(len, d);
     let mut count = vec![0usize; len];
-    for (q, row) in dist.iter().enumerate() {
-        let mut best = (f64::INFINITY, 0usize);
-        for (j, (&v, &n)) in row.iter().zip(&norm).enumerate() {
-            let v = v / n;
-            if v < best.0 {
-                best = (v, j);
-            }
-        }
-        let (e, s) = owner[best.1];
-        for t in 0..patch {
+    for (q, &(e, s)) in chosen.iter().enumerate() {
+        for t in 0..patch.min(len.saturating_sub(q)) {
+            let Some(src) = examples.get(e).filter(|x| s + t < x.nrows() && x.ncols() == d) else { continue };
             for c in 0..d {
-                sum[(q + t, c)] += examples[e][(s + t, c)];
+                sum[(q + t, c)] += src[(s + t, c)];
             }
             count[q + t] += 1;
         }
@@ -297,6 +313,16 @@ fn match_step(
         }
     }
     sum
+}
+
+/// A synthesised trajectory and how it was made: at the finest level, window `q` (rows
+/// `q..q + patch`) matched rows `s..s + patch` of example `e`, `(e, s) = chosen[q]`, and `rows`
+/// is [`blend_patches`] of them.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Synthesis {
+    pub rows: DMatrix<f64>,
+    pub chosen: Vec<(usize, usize)>,
+    pub patch: usize,
 }
 
 /// A trajectory of `len` rows made of the `examples`' patches (all with the same columns),
@@ -311,7 +337,7 @@ pub fn synthesize(
     noise: &[f64],
     o: &MatchOptions,
     rng: &mut ChaCha8Rng,
-) -> Result<DMatrix<f64>> {
+) -> Result<Synthesis> {
     o.check()?;
     let d = start.ncols();
     if examples.is_empty() || examples.iter().all(|e| e.nrows() == 0) {
@@ -321,7 +347,7 @@ pub fn synthesize(
         return Err(Error::invalid("motion matching: the examples, start and noise differ in columns"));
     }
     if len == 0 {
-        return Ok(DMatrix::zeros(0, d));
+        return Ok(Synthesis { rows: DMatrix::zeros(0, d), chosen: Vec::new(), patch: 0 });
     }
     let lens: Vec<usize> = examples.iter().map(|e| e.nrows()).collect();
     let (patch, levels) = pyramid(&lens, len, o);
@@ -353,6 +379,7 @@ pub fn synthesize(
             syn[(t, c)] += o.noise * noise[c] * normal(rng);
         }
     }
+    let (mut chosen, mut last_patch) = (Vec::new(), 0);
     for l in (0..levels).rev() {
         let at: Vec<DMatrix<f64>> =
             examples.iter().map(|e| resample(e, level_len(e.nrows(), o.ratio, l).min(e.nrows()))).collect();
@@ -364,10 +391,15 @@ pub fn synthesize(
             return Err(Error::invalid(format!("motion matching: no example holds a patch of {p} frames")));
         }
         for _ in 0..o.iterations {
-            syn = match_step(&syn, &at, &keys, &owner, p, o.alpha);
+            let (next, c) = match_step(&syn, &at, &keys, &owner, p, o.alpha);
+            syn = next;
+            if l == 0 {
+                chosen = c;
+                last_patch = p;
+            }
         }
     }
-    Ok(syn)
+    Ok(Synthesis { rows: syn, chosen, patch: last_patch })
 }
 
 #[cfg(test)]
@@ -392,7 +424,7 @@ mod tests {
     fn a_patch_as_long_as_the_only_example_copies_it() {
         let x = example(30, 2.0);
         let o = MatchOptions { patch: 30, ..Default::default() };
-        let y = synthesize(&[x.clone()], &x, 30, &[1.0, 1.0], &o, &mut rng(3)).unwrap();
+        let y = synthesize(&[x.clone()], &x, 30, &[1.0, 1.0], &o, &mut rng(3)).unwrap().rows;
         assert!((y - x).abs().max() < 1e-12);
     }
 
@@ -401,19 +433,19 @@ mod tests {
         let ex = [example(200, 7.3), example(150, 4.1)];
         // Random crops recombined (a source start finds its own patches again: a copy).
         let o = MatchOptions { start: Start::Shuffle, levels: 2, ..Default::default() };
-        let a = synthesize(&ex, &ex[0], 120, &[0.5, 0.5], &o, &mut rng(7)).unwrap();
-        let b = synthesize(&ex, &ex[0], 120, &[0.5, 0.5], &o, &mut rng(7)).unwrap();
-        let c = synthesize(&ex, &ex[0], 120, &[0.5, 0.5], &o, &mut rng(8)).unwrap();
+        let a = synthesize(&ex, &ex[0], 120, &[0.5, 0.5], &o, &mut rng(7)).unwrap().rows;
+        let b = synthesize(&ex, &ex[0], 120, &[0.5, 0.5], &o, &mut rng(7)).unwrap().rows;
+        let c = synthesize(&ex, &ex[0], 120, &[0.5, 0.5], &o, &mut rng(8)).unwrap().rows;
         assert_eq!(a, b);
         assert_ne!(a, c);
         // The same on one thread as on several.
         let one = rayon::ThreadPoolBuilder::new().num_threads(1).build().unwrap();
-        let d = one.install(|| synthesize(&ex, &ex[0], 120, &[0.5, 0.5], &o, &mut rng(7)).unwrap());
+        let d = one.install(|| synthesize(&ex, &ex[0], 120, &[0.5, 0.5], &o, &mut rng(7)).unwrap().rows);
         assert_eq!(a, d);
         // With GenMM's completeness term too.
         let o = MatchOptions { alpha: Some(0.01), ..o };
-        let e = synthesize(&ex, &ex[0], 120, &[0.5, 0.5], &o, &mut rng(7)).unwrap();
-        assert_eq!(e, synthesize(&ex, &ex[0], 120, &[0.5, 0.5], &o, &mut rng(7)).unwrap());
+        let e = synthesize(&ex, &ex[0], 120, &[0.5, 0.5], &o, &mut rng(7)).unwrap().rows;
+        assert_eq!(e, synthesize(&ex, &ex[0], 120, &[0.5, 0.5], &o, &mut rng(7)).unwrap().rows);
     }
 
     #[test]
@@ -422,8 +454,19 @@ mod tests {
         // whatever the noise (the noise averages out over a patch's coordinates).
         let x = example(64, 2.0);
         let o = MatchOptions { start: Start::Source, noise: 0.3, ..Default::default() };
-        let y = synthesize(&[x.clone()], &x, 64, &[1.0, 1.0], &o, &mut rng(5)).unwrap();
+        let y = synthesize(&[x.clone()], &x, 64, &[1.0, 1.0], &o, &mut rng(5)).unwrap().rows;
         assert!((y - &x).abs().max() < 1e-12);
+    }
+
+    #[test]
+    fn the_chosen_windows_rebuild_the_synthesis_and_carry_over_to_an_aligned_sequence() {
+        let ex = [example(80, 3.0)];
+        let o = MatchOptions { start: Start::Shuffle, levels: 2, ..Default::default() };
+        let y = synthesize(&ex, &ex[0], 90, &[0.5, 0.5], &o, &mut rng(2)).unwrap();
+        assert_eq!(blend_patches(&y.chosen, y.patch, 90, &ex), y.rows);
+        // A sequence aligned with the example (here twice it) gets the same moments: twice y.
+        let twice = [&ex[0] * 2.0];
+        assert!((blend_patches(&y.chosen, y.patch, 90, &twice) - &y.rows * 2.0).abs().max() < 1e-12);
     }
 
     #[test]
@@ -431,7 +474,7 @@ mod tests {
         let ex = [example(50, 2.5), example(40, 1.5)];
         for (seed, start) in (0..6).zip([Start::Shuffle, Start::Source, Start::Phase].into_iter().cycle()) {
             let o = MatchOptions { noise: 3.0, start, alpha: (seed % 2 == 0).then_some(0.01), ..Default::default() };
-            let y = synthesize(&ex, &ex[1], 70, &[1.0, 1.0], &o, &mut rng(seed)).unwrap();
+            let y = synthesize(&ex, &ex[1], 70, &[1.0, 1.0], &o, &mut rng(seed)).unwrap().rows;
             for c in 0..2 {
                 let lo = ex.iter().map(|e| e.column(c).min()).fold(f64::INFINITY, f64::min);
                 let hi = ex.iter().map(|e| e.column(c).max()).fold(f64::NEG_INFINITY, f64::max);
@@ -445,15 +488,15 @@ mod tests {
         let ex = [example(20, 1.0)];
         for start in [Start::Shuffle, Start::Source] {
             let o = MatchOptions { start, ..Default::default() };
-            let y = synthesize(&ex, &ex[0], 75, &[0.3, 0.3], &o, &mut rng(1)).unwrap();
+            let y = synthesize(&ex, &ex[0], 75, &[0.3, 0.3], &o, &mut rng(1)).unwrap().rows;
             assert_eq!(y.shape(), (75, 2));
             assert!(y.iter().all(|v| v.is_finite()));
         }
-        let y = synthesize(&ex, &ex[0], 75, &[0.3, 0.3], &MatchOptions::default(), &mut rng(1)).unwrap();
+        let y = synthesize(&ex, &ex[0], 75, &[0.3, 0.3], &MatchOptions::default(), &mut rng(1)).unwrap().rows;
         assert!(y.iter().all(|v| v.is_finite()));
         // Shorter than a patch and one frame work too.
-        assert_eq!(synthesize(&ex, &ex[0], 4, &[0.3, 0.3], &MatchOptions::default(), &mut rng(1)).unwrap().nrows(), 4);
-        assert_eq!(synthesize(&ex, &ex[0], 1, &[0.3, 0.3], &MatchOptions::default(), &mut rng(1)).unwrap().nrows(), 1);
+        assert_eq!(synthesize(&ex, &ex[0], 4, &[0.3, 0.3], &MatchOptions::default(), &mut rng(1)).unwrap().rows.nrows(), 4);
+        assert_eq!(synthesize(&ex, &ex[0], 1, &[0.3, 0.3], &MatchOptions::default(), &mut rng(1)).unwrap().rows.nrows(), 1);
     }
 
     #[test]

@@ -389,86 +389,22 @@ pub fn matched_variations(
     seed: u64,
     o: &MatchOptions,
 ) -> Result<(Variations, Vec<ChainStats>)> {
+    let m = Matched::new(dec, s, len, n, seed, o)?;
+    let parts: Vec<Vec<DMatrix<f64>>> = m.syntheses.iter().map(|y| m.split(&y.rows)).collect();
     let model = dec.model;
-    let info = model
-        .sequences
-        .get(s)
-        .ok_or_else(|| Error::invalid(format!("no training sequence {s}")))?;
-    if len < 2 {
-        return Err(Error::invalid(format!(
-            "{}: {len} frames requested, at least 2 are needed",
-            info.name
-        )));
-    }
-    o.check()?;
-    let frames = len;
-    let steps = frame_stride::covering_count(frames, model.stride);
-    let dims: Vec<usize> = model.model_latents(s).iter().map(|x| x.ncols()).collect();
-    // One row per training step: every part's latent point side by side.
-    let joint = |i: usize| {
-        let xs = model.model_latents(i);
-        let rows = xs.first().map_or(0, |x| x.nrows());
-        let mut m = DMatrix::zeros(rows, dims.iter().sum());
-        let mut c0 = 0;
-        for x in &xs {
-            m.view_mut((0, c0), (rows, x.ncols())).copy_from(x);
-            c0 += x.ncols();
-        }
-        m
-    };
-    let used: Vec<usize> = match o.examples {
-        Examples::Own => vec![s],
-        Examples::Group => (0..model.sequences.len()).collect(),
-    };
-    let raw: Vec<DMatrix<f64>> = used.iter().map(|&i| joint(i)).collect();
-    let norm = Normaliser::new(&raw, &dims);
-    let examples: Vec<DMatrix<f64>> = raw.iter().map(|x| norm.forward(x)).collect();
-    let source = joint(s);
-    // A random phase only where the learned trajectory closes into a cycle: its replay seam
-    // (from the end's extrapolated next step to the nearest point a quarter back or more) no
-    // longer than twice its median step. Elsewhere (a jump, a clip not cut to whole cycles) a
-    // replay from mid-way jumps, and the variation starts at the source's first point.
-    let closes = cycle_closes(&norm.forward(&source));
-    let drawn: Vec<DMatrix<f64>> = (0..n)
-        .into_par_iter()
-        .map(|k| {
-            let mut rng = ChaCha8Rng::seed_from_u64(mix(seed, s as u64 + 1, 0x4D4D_0000_0000 + k as u64));
-            // The learned trajectory, from a random point of its first half with `Start::Phase`,
-            // replayed past its end ([`learned_template`]).
-            let phase = match o.start {
-                Start::Phase if closes => rng.random_range(0..source.nrows().div_ceil(2)),
-                _ => 0,
-            };
-            let start = norm.forward(&learned_template(&source, steps + phase).rows(phase, steps).into_owned());
-            motion_matching::synthesize(&examples, &start, steps, norm.noise_scale(), o, &mut rng)
-                .map(|y| norm.inverse(&y))
-                .map_err(|e| Error::invalid(format!("{}: {e}", info.name)))
-        })
-        .collect::<Result<_>>()?;
-    // Split every joint trajectory into the parts.
-    let split = |y: &DMatrix<f64>| {
-        let mut c0 = 0;
-        dims.iter()
-            .map(|&d| {
-                let x = y.columns(c0, d).into_owned();
-                c0 += d;
-                x
-            })
-            .collect::<Vec<_>>()
-    };
-    let parts: Vec<Vec<DMatrix<f64>>> = drawn.iter().map(split).collect();
+    let name = &model.sequences[s].name;
     let mut stats = Vec::with_capacity(model.parts.len());
     for (k, pm) in model.parts.iter().enumerate() {
         let (mut off_data_points, mut max_pose_variance_ratio) = (0, 0.0f64);
         for v in &parts {
             let ratios = dec.predictors[k]
                 .pose_variance_ratio(&v[k])
-                .map_err(|e| Error::invalid(format!("{} part '{}': {e}", info.name, pm.part.name)))?;
+                .map_err(|e| Error::invalid(format!("{name} part '{}': {e}", pm.part.name)))?;
             off_data_points += ratios.iter().filter(|&&r| r > gpdm::hmc::OFF_DATA_VARIANCE).count();
             max_pose_variance_ratio = ratios.iter().copied().fold(max_pose_variance_ratio, f64::max);
         }
         stats.push(ChainStats {
-            sequence: info.name.clone(),
+            sequence: name.clone(),
             part: pm.part.name.clone(),
             accept_rate: 1.0,
             burn_in_accept_rate: 1.0,
@@ -479,11 +415,155 @@ pub fn matched_variations(
             hmc_instead: false,
         });
     }
-    let vars = parts
-        .into_iter()
-        .map(|v| v.iter().map(|x| frame_stride::upsample(x, model.stride, frames)).collect())
-        .collect();
+    let vars = parts.into_iter().map(|v| m.to_capture_rate(&v)).collect();
     Ok((vars, stats))
+}
+
+/// `n` variations of the blend at `w` of training sequences `a` and `b` by motion matching:
+/// the variations of the nearest learned weight below `w` ([`blend_entries`]) matched against
+/// that sequence alone ([`matched_variations`] with `Examples::Own`), and their matched windows
+/// ([`motion_matching::Synthesis`]) applied to the nearest learned weight above `w` too (the
+/// sequences are time-aligned, so the same rows are the same moments); the two blended in
+/// proportion (§7, `gpdm::blend::blend_pair`). Variation `k` is seeded as variation `k` of the
+/// lower sequence.
+pub fn matched_blend_variations(
+    dec: &Decoder,
+    (a, b): (usize, usize),
+    w: f64,
+    len: usize,
+    n: usize,
+    seed: u64,
+    o: &MatchOptions,
+) -> Result<Variations> {
+    let entries = blend_entries(dec.model, a, b);
+    let lo = entries.iter().rev().find(|e| e.0 <= w);
+    let hi = entries.iter().find(|e| e.0 >= w);
+    let (Some(&(w1, i1)), Some(&(w2, i2))) = (lo, hi) else {
+        return Err(Error::invalid(format!("blend weight {w} outside [0, 1]")));
+    };
+    let own = MatchOptions { examples: Examples::Own, ..o.clone() };
+    let m = Matched::new(dec, i1, len, n, seed, &own)?;
+    // The chosen windows name training sequence i1 (the only example): read them from i2.
+    let mut upper = vec![DMatrix::zeros(0, 0); dec.model.sequences.len()];
+    upper[i1] = m.joint(i2);
+    Ok(m.syntheses
+        .iter()
+        .map(|y| {
+            let x = if i1 == i2 {
+                y.rows.clone()
+            } else {
+                let u = motion_matching::blend_patches(&y.chosen, y.patch, y.rows.nrows(), &upper);
+                gpdm::blend::blend_pair(&y.rows, w1, &u, w2, w)
+            };
+            m.to_capture_rate(&m.split(&x))
+        })
+        .collect())
+}
+
+/// Motion-matching syntheses of one sequence, in the joint coordinates (every part's latent
+/// points side by side, at the training steps), before they are split into parts.
+struct Matched<'a> {
+    dec: &'a Decoder<'a>,
+    dims: Vec<usize>,
+    frames: usize,
+    syntheses: Vec<motion_matching::Synthesis>,
+}
+
+impl<'a> Matched<'a> {
+    fn new(dec: &'a Decoder<'a>, s: usize, len: usize, n: usize, seed: u64, o: &MatchOptions) -> Result<Self> {
+        let model = dec.model;
+        let info = model
+            .sequences
+            .get(s)
+            .ok_or_else(|| Error::invalid(format!("no training sequence {s}")))?;
+        if len < 2 {
+            return Err(Error::invalid(format!(
+                "{}: {len} frames requested, at least 2 are needed",
+                info.name
+            )));
+        }
+        o.check()?;
+        let steps = frame_stride::covering_count(len, model.stride);
+        let dims: Vec<usize> = model.model_latents(s).iter().map(|x| x.ncols()).collect();
+        let mut m = Matched { dec, dims, frames: len, syntheses: Vec::new() };
+        let used: Vec<usize> = match o.examples {
+            Examples::Own => vec![s],
+            Examples::Group => (0..model.sequences.len()).collect(),
+        };
+        // The examples are matched with every part's block at a unit RMS radius (the
+        // synthesis is an average of example rows, so it comes back to the latent coordinates
+        // through the inverse map, and the chosen windows apply to the raw points alike).
+        let raw: Vec<DMatrix<f64>> = used.iter().map(|&i| m.joint(i)).collect();
+        let norm = Normaliser::new(&raw, &m.dims);
+        let examples: Vec<DMatrix<f64>> = raw.iter().map(|x| norm.forward(x)).collect();
+        let source = m.joint(s);
+        // A random phase only where the learned trajectories close into cycles: their replay
+        // seams (from the end's extrapolated next step to the nearest point a quarter back or
+        // more) no longer than twice their median step. Elsewhere (a jump, a clip not cut to
+        // whole cycles) a replay from mid-way jumps, and every variation starts at the source's
+        // first point. Every sequence of the group has to close, so that variation `k` of every
+        // sequence starts at the same phase (the sequences are time-aligned).
+        let closes = (0..model.sequences.len()).all(|i| {
+            let x = m.joint(i);
+            cycle_closes(&Normaliser::new(std::slice::from_ref(&x), &m.dims).forward(&x))
+        });
+        m.syntheses = (0..n)
+            .into_par_iter()
+            .map(|k| {
+                let mut rng = ChaCha8Rng::seed_from_u64(mix(seed, s as u64 + 1, 0x4D4D_0000_0000 + k as u64));
+                // The phase of variation `k` is drawn from its own stream, the same for every
+                // sequence; the learned trajectory from there on, replayed past its end
+                // ([`learned_template`]).
+                let phase = match o.start {
+                    Start::Phase if closes => ChaCha8Rng::seed_from_u64(mix(seed, 0x9A5E, k as u64))
+                        .random_range(0..source.nrows().div_ceil(2)),
+                    _ => 0,
+                };
+                let start = norm.forward(&learned_template(&source, steps + phase).rows(phase, steps).into_owned());
+                motion_matching::synthesize(&examples, &start, steps, norm.noise_scale(), o, &mut rng)
+                    .map(|mut y| {
+                        y.rows = norm.inverse(&y.rows);
+                        // Example `e` of the synthesis is training sequence `used[e]`.
+                        y.chosen.iter_mut().for_each(|c| c.0 = used[c.0]);
+                        y
+                    })
+                    .map_err(|e| Error::invalid(format!("{}: {e}", info.name)))
+            })
+            .collect::<Result<_>>()?;
+        Ok(m)
+    }
+
+    /// Training sequence `i`'s learned points of every part side by side, one row per training
+    /// step.
+    fn joint(&self, i: usize) -> DMatrix<f64> {
+        let xs = self.dec.model.model_latents(i);
+        let rows = xs.first().map_or(0, |x| x.nrows());
+        let mut m = DMatrix::zeros(rows, self.dims.iter().sum());
+        let mut c0 = 0;
+        for x in &xs {
+            m.view_mut((0, c0), (rows, x.ncols())).copy_from(x);
+            c0 += x.ncols();
+        }
+        m
+    }
+
+    /// A joint trajectory split into the parts' trajectories.
+    fn split(&self, y: &DMatrix<f64>) -> Vec<DMatrix<f64>> {
+        let mut c0 = 0;
+        self.dims
+            .iter()
+            .map(|&d| {
+                let x = y.columns(c0, d).into_owned();
+                c0 += d;
+                x
+            })
+            .collect()
+    }
+
+    /// Parts' trajectories at the training steps brought to the capture's rate.
+    fn to_capture_rate(&self, parts: &[DMatrix<f64>]) -> Vec<DMatrix<f64>> {
+        parts.iter().map(|x| frame_stride::upsample(x, self.dec.model.stride, self.frames)).collect()
+    }
 }
 
 /// Whether the trajectory `x` closes into a cycle: the gap between its end's extrapolated next

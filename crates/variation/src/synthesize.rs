@@ -31,8 +31,8 @@ use crate::metrics::{self, Stats};
 use crate::motion_matching::MatchOptions;
 use crate::reconstruct::{Assembly, Decoder};
 use crate::sample::{
-    blend_entries, blend_variations, default_hmc, matched_variations, mix, sequence_variations_len, ChainStats,
-    HmcStart, Sampler, Variations,
+    blend_entries, blend_variations, default_hmc, matched_blend_variations, matched_variations, mix,
+    sequence_variations_len, ChainStats, HmcStart, Sampler, Variations,
 };
 use crate::train::VariationModel;
 use crate::turns_and_tears::{CaptureLimits, TurnsAndTears};
@@ -699,7 +699,18 @@ pub fn run_with_progress(
         }
         for (&(a, b, w), truth) in blends.iter().zip(truths) {
             let truth = truth.expect("every blend made above");
-            let vars = blend_variations(&dec, &pools, (a, b), w, cfg.n, cfg.seed)?;
+            let vars = match cfg.sampler {
+                Sampler::MotionMatching => matched_blend_variations(
+                    &dec,
+                    (a, b),
+                    w,
+                    frames,
+                    cfg.n,
+                    cfg.seed,
+                    &cfg.motion_matching,
+                )?,
+                _ => blend_variations(&dec, &pools, (a, b), w, cfg.n, cfg.seed)?,
+            };
             let label = match cfg.query {
                 None => blend_name(w),
                 Some(_) => format!(
