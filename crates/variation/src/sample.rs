@@ -8,6 +8,9 @@
 //! For a blend weight `w*`, each part's `gpdm::blend::BlendSet` of sampled variants at
 //! `W ∪ {0, 1}` gives `X̃_{w*}` from random variants of the bounding trajectories.
 //! Every chain has its own seed derived from `(seed, sequence, part)`: same seed, same samples.
+//! A training-free baseline to both GPDM samplers, `Sampler::MotionMatching`, recombines the
+//! learned latent points of all parts jointly instead ([`matched_variations`],
+//! [`matched_blend_variations`]; the algorithm in [`crate::motion_matching`]).
 
 use gpdm::ancestral::sample_trajectories_on_data;
 use gpdm::blend::BlendSet;
