@@ -362,10 +362,12 @@ pub fn synthesize(
                 .iter()
                 .map(|e| resample(e, level_len(e.nrows(), o.ratio, coarsest).min(e.nrows())))
                 .collect();
+            // Only examples with rows are cropped (at least one has: checked above).
+            let held: Vec<&DMatrix<f64>> = at.iter().filter(|e| e.nrows() > 0).collect();
             let mut m = DMatrix::zeros(n0, d);
             let mut t = 0;
             while t < n0 {
-                let e = &at[rng.random_range(0..at.len())];
+                let e = held[rng.random_range(0..held.len())];
                 let w = patch.min(e.nrows()).min(n0 - t).max(1);
                 let s0 = rng.random_range(0..=e.nrows() - w);
                 m.rows_mut(t, w).copy_from(&e.rows(s0, w));
@@ -509,6 +511,12 @@ mod tests {
         assert!(bad(MatchOptions { alpha: Some(0.0), ..Default::default() }));
         assert!(synthesize(&[], &ex[0], 20, &[1.0, 1.0], &MatchOptions::default(), &mut rng(0)).is_err());
         assert!(synthesize(&ex, &ex[0], 20, &[1.0], &MatchOptions::default(), &mut rng(0)).is_err());
+        // An empty example beside one with rows is skipped.
+        let with_empty = [DMatrix::zeros(0, 2), example(20, 1.0)];
+        for start in [Start::Shuffle, Start::Source] {
+            let o = MatchOptions { start, ..Default::default() };
+            assert_eq!(synthesize(&with_empty, &ex[0], 30, &[1.0, 1.0], &o, &mut rng(0)).unwrap().rows.nrows(), 30);
+        }
     }
 
     #[test]
