@@ -34,7 +34,9 @@ pub enum Examples {
     Group,
 }
 
-/// How the coarsest level of a synthesis starts.
+/// How the coarsest level of a synthesis starts. `Phase` is a start the caller makes
+/// (`crate::sample::matched_variations` passes the re-phased trajectory as `start`);
+/// [`synthesize`] uses it as it uses `Source`.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize, clap::ValueEnum)]
 #[serde(rename_all = "lowercase")]
 pub enum Start {
@@ -45,8 +47,8 @@ pub enum Start {
     /// noise: the matching then recombines the examples' pieces in a new order.
     Shuffle,
     /// The queried trajectory from a random point of its first half on, replayed past its end
-    /// from its nearest point (as `crate::sample::learned_template`), with noise: the source's
-    /// motion at another phase, its seams repaired by the matching (the caller makes `start`).
+    /// from its nearest point, with noise: the source's motion at another phase (where the
+    /// group's learned trajectories close into cycles; else from its first point).
     #[default]
     Phase,
 }

@@ -71,9 +71,11 @@ pub struct Params {
     /// Trajectory sampler: hmc (the paper's Hybrid Monte Carlo), ancestral (independent draws
     /// of the same density kept on the learned data, one forward pass each; burn-in and thinning
     /// do not apply) or motion-matching (a training-free baseline: generative motion matching,
-    /// GenMM, over every part's learned latent points jointly, patches of the queried sequence
-    /// recombined coarse to fine; the --match-* settings apply, the HMC ones and
-    /// --variance-scale do not; docs/studies/37-motion-matching-baseline.md)
+    /// GenMM, over every part's learned latent points jointly, the queried sequence's patches
+    /// matched coarse to fine from a random phase of its cycle; no new poses, and copies of the
+    /// source where the learned trajectories are no closed cycles, e.g. jumps; the --match-*
+    /// settings apply, the HMC ones and --variance-scale do not;
+    /// docs/studies/37-motion-matching-baseline.md)
     #[arg(long, value_enum, default_value_t = Sampler::Hmc)]
     pub sampler: Sampler,
     /// With --sampler motion-matching: the sequences matched against, own (the queried one) or
@@ -81,7 +83,8 @@ pub struct Params {
     #[arg(long, value_enum, default_value_t = Examples::Own)]
     pub match_examples: Examples,
     /// With --sampler motion-matching: noise added to the coarsest start, in units of each
-    /// part's spread (larger: variations further from the source's order)
+    /// part's spread (a patch's many coordinates average it out: on the demo set 0 to 3 give the
+    /// same variations)
     #[arg(long, default_value_t = MatchOptions::default().noise)]
     pub match_noise: f64,
     /// With --sampler motion-matching: patch length in training steps (the same at every level)
