@@ -26,6 +26,7 @@ pub mod latent_smoothing;
 pub mod local_linear;
 pub mod memory_budget;
 pub mod metrics;
+pub mod motion_matching;
 pub mod part_data;
 pub mod plots;
 pub mod prealign;

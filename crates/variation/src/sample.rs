@@ -8,18 +8,22 @@
 //! For a blend weight `w*`, each part's `gpdm::blend::BlendSet` of sampled variants at
 //! `W ∪ {0, 1}` gives `X̃_{w*}` from random variants of the bounding trajectories.
 //! Every chain has its own seed derived from `(seed, sequence, part)`: same seed, same samples.
+//! A training-free baseline to both GPDM samplers, `Sampler::MotionMatching`, recombines the
+//! learned latent points of all parts jointly instead ([`matched_variations`],
+//! [`matched_blend_variations`]; the algorithm in [`crate::motion_matching`]).
 
 use gpdm::ancestral::sample_trajectories_on_data;
 use gpdm::blend::BlendSet;
 use gpdm::hmc::{sample_trajectories_scaled, ChainStart, HmcOptions};
 use mesh_core::{Error, Result};
 use nalgebra::DMatrix;
-use rand::SeedableRng;
+use rand::{RngExt, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 
 use crate::frame_stride;
+use crate::motion_matching::{self, Examples, MatchOptions, Normaliser, Start};
 use crate::reconstruct::Decoder;
 use crate::train::VariationModel;
 
@@ -62,14 +66,21 @@ pub enum Sampler {
     /// burn-in, thinning and chains do not apply. A part whose draws still leave the data
     /// (where the dynamics lead them off) takes the paper's chains instead, as with `Hmc`.
     Ancestral,
+    /// A training-free baseline, not the GPDM's density: generative motion matching (GenMM)
+    /// over the learned latent points of all parts jointly ([`crate::motion_matching`]);
+    /// variance scale, burn-in, thinning and chains do not apply.
+    #[value(name = "motion-matching")]
+    #[serde(rename = "motion-matching")]
+    MotionMatching,
 }
 
 impl Sampler {
-    /// From its command-line name (`hmc`, `ancestral`).
+    /// From its command-line name (`hmc`, `ancestral`, `motion-matching`).
     pub fn from_name(name: &str) -> Option<Sampler> {
         match name {
             "hmc" => Some(Sampler::Hmc),
             "ancestral" => Some(Sampler::Ancestral),
+            "motion-matching" => Some(Sampler::MotionMatching),
             _ => None,
         }
     }
@@ -209,7 +220,9 @@ pub fn sequence_variations(
 /// [`Sampler::Ancestral`] every part is one task of `opts.n_samples` independent draws (seeded
 /// the same way; `chains` and the HMC settings other than the seed are not used), and its
 /// statistics report acceptance 1 and step size 0. `variance_scale` κ scales every one-step
-/// variance of the dynamics (1: the model's density; `hmc-sample --variance-scale`).
+/// variance of the dynamics (1: the model's density; `hmc-sample --variance-scale`). With
+/// [`Sampler::MotionMatching`] the variations are [`matched_variations`] with the default
+/// [`MatchOptions`] (seeded from `opts.seed`; the other settings do not apply).
 pub fn sequence_variations_len(
     dec: &Decoder,
     s: usize,
@@ -230,6 +243,9 @@ pub fn sequence_variations_len(
     let (chains, per) = match sampler {
         Sampler::Hmc => (chains, opts.n_samples.div_ceil(chains)),
         Sampler::Ancestral => (1, opts.n_samples),
+        Sampler::MotionMatching => {
+            return matched_variations(dec, s, len, opts.n_samples, opts.seed, &MatchOptions::default())
+        }
     };
     let tasks: Vec<(usize, usize)> = (0..model.parts.len())
         .flat_map(|k| (0..chains).map(move |c| (k, c)))
@@ -281,6 +297,7 @@ pub fn sequence_variations_len(
                         false,
                     )
                 }
+                Sampler::MotionMatching => unreachable!("motion matching returned above"),
                 Sampler::Ancestral => {
                     let x1: Vec<f64> = template.row(0).iter().copied().collect();
                     let (drawn, off) = sample_trajectories_on_data(
@@ -366,6 +383,219 @@ pub fn sequence_variations_len(
     ))
 }
 
+/// `n` variations of `len` capture frames of training sequence `s` by generative motion
+/// matching ([`motion_matching::synthesize`]) over every part's learned latent points side by
+/// side, at the model's training steps (`frame_stride::covering_count(len, stride)` rows), then
+/// brought to the capture's rate ([`crate::frame_stride::upsample`]) and split into the parts.
+/// The examples are sequence `s` alone or every training sequence (`o.examples`); each
+/// variation starts (`o.start`) from `s`'s learned trajectory ([`learned_template`] of the joint
+/// points, so past its end the parts replay together; with `Start::Phase` from a random point
+/// of its first half) or from random crops of the examples, with noise. Variation `k` is seeded with
+/// `mix(seed, s + 1, 0x4D4D_0000_0000 + k)`; the variations run as parallel tasks, the result
+/// is the same for any number of threads. The per-part statistics report acceptance 1, step
+/// size 0 and the points off the learned data as the samplers' do.
+pub fn matched_variations(
+    dec: &Decoder,
+    s: usize,
+    len: usize,
+    n: usize,
+    seed: u64,
+    o: &MatchOptions,
+) -> Result<(Variations, Vec<ChainStats>)> {
+    let m = Matched::new(dec, s, len, n, seed, o)?;
+    let parts: Vec<Vec<DMatrix<f64>>> = m.syntheses.iter().map(|y| m.split(&y.rows)).collect();
+    let model = dec.model;
+    let name = &model.sequences[s].name;
+    let mut stats = Vec::with_capacity(model.parts.len());
+    for (k, pm) in model.parts.iter().enumerate() {
+        let (mut off_data_points, mut max_pose_variance_ratio) = (0, 0.0f64);
+        for v in &parts {
+            let ratios = dec.predictors[k]
+                .pose_variance_ratio(&v[k])
+                .map_err(|e| Error::invalid(format!("{name} part '{}': {e}", pm.part.name)))?;
+            off_data_points += ratios.iter().filter(|&&r| r > gpdm::hmc::OFF_DATA_VARIANCE).count();
+            max_pose_variance_ratio = ratios.iter().copied().fold(max_pose_variance_ratio, f64::max);
+        }
+        stats.push(ChainStats {
+            sequence: name.clone(),
+            part: pm.part.name.clone(),
+            accept_rate: 1.0,
+            burn_in_accept_rate: 1.0,
+            step_size: 0.0,
+            started_at_learned: true,
+            off_data_points,
+            max_pose_variance_ratio,
+            hmc_instead: false,
+        });
+    }
+    let vars = parts.into_iter().map(|v| m.to_capture_rate(&v)).collect();
+    Ok((vars, stats))
+}
+
+/// `n` variations of the blend at `w` of training sequences `a` and `b` by motion matching:
+/// the variations of the nearest learned weight below `w` ([`blend_entries`]) matched against
+/// that sequence alone ([`matched_variations`] with `Examples::Own`), and their matched windows
+/// ([`motion_matching::Synthesis`]) applied to the nearest learned weight above `w` too (the
+/// sequences are time-aligned, so the same rows are the same moments); the two blended in
+/// proportion (§7, `gpdm::blend::blend_pair`). Variation `k` is seeded as variation `k` of the
+/// lower sequence.
+pub fn matched_blend_variations(
+    dec: &Decoder,
+    (a, b): (usize, usize),
+    w: f64,
+    len: usize,
+    n: usize,
+    seed: u64,
+    o: &MatchOptions,
+) -> Result<Variations> {
+    let entries = blend_entries(dec.model, a, b);
+    let lo = entries.iter().rev().find(|e| e.0 <= w);
+    let hi = entries.iter().find(|e| e.0 >= w);
+    let (Some(&(w1, i1)), Some(&(w2, i2))) = (lo, hi) else {
+        return Err(Error::invalid(format!("blend weight {w} outside [0, 1]")));
+    };
+    let own = MatchOptions { examples: Examples::Own, ..o.clone() };
+    let m = Matched::new(dec, i1, len, n, seed, &own)?;
+    // The chosen windows name training sequence i1 (the only example): read them from i2.
+    let mut upper = vec![DMatrix::zeros(0, 0); dec.model.sequences.len()];
+    upper[i1] = m.joint(i2);
+    Ok(m.syntheses
+        .iter()
+        .map(|y| {
+            let x = if i1 == i2 {
+                y.rows.clone()
+            } else {
+                let u = motion_matching::blend_patches(&y.chosen, y.patch, y.rows.nrows(), &upper);
+                gpdm::blend::blend_pair(&y.rows, w1, &u, w2, w)
+            };
+            m.to_capture_rate(&m.split(&x))
+        })
+        .collect())
+}
+
+/// Motion-matching syntheses of one sequence, in the joint coordinates (every part's latent
+/// points side by side, at the training steps), before they are split into parts.
+struct Matched<'a> {
+    dec: &'a Decoder<'a>,
+    dims: Vec<usize>,
+    frames: usize,
+    syntheses: Vec<motion_matching::Synthesis>,
+}
+
+impl<'a> Matched<'a> {
+    fn new(dec: &'a Decoder<'a>, s: usize, len: usize, n: usize, seed: u64, o: &MatchOptions) -> Result<Self> {
+        let model = dec.model;
+        let info = model
+            .sequences
+            .get(s)
+            .ok_or_else(|| Error::invalid(format!("no training sequence {s}")))?;
+        if len < 2 {
+            return Err(Error::invalid(format!(
+                "{}: {len} frames requested, at least 2 are needed",
+                info.name
+            )));
+        }
+        o.check()?;
+        let steps = frame_stride::covering_count(len, model.stride);
+        let dims: Vec<usize> = model.model_latents(s).iter().map(|x| x.ncols()).collect();
+        let mut m = Matched { dec, dims, frames: len, syntheses: Vec::new() };
+        let used: Vec<usize> = match o.examples {
+            Examples::Own => vec![s],
+            Examples::Group => (0..model.sequences.len()).collect(),
+        };
+        // The examples are matched with every part's block at a unit RMS radius (the
+        // synthesis is an average of example rows, so it comes back to the latent coordinates
+        // through the inverse map, and the chosen windows apply to the raw points alike).
+        let raw: Vec<DMatrix<f64>> = used.iter().map(|&i| m.joint(i)).collect();
+        let norm = Normaliser::new(&raw, &m.dims);
+        let examples: Vec<DMatrix<f64>> = raw.iter().map(|x| norm.forward(x)).collect();
+        let source = m.joint(s);
+        // A random phase only where the learned trajectories close into cycles: their replay
+        // seams (from the end's extrapolated next step to the nearest point a quarter back or
+        // more) no longer than twice their median step. Elsewhere (a jump, a clip not cut to
+        // whole cycles) a replay from mid-way jumps, and every variation starts at the source's
+        // first point. Every sequence of the group has to close, so that variation `k` of every
+        // sequence starts at the same phase (the sequences are time-aligned).
+        let closes = (0..model.sequences.len()).all(|i| {
+            let x = m.joint(i);
+            cycle_closes(&Normaliser::new(std::slice::from_ref(&x), &m.dims).forward(&x))
+        });
+        m.syntheses = (0..n)
+            .into_par_iter()
+            .map(|k| {
+                let mut rng = ChaCha8Rng::seed_from_u64(mix(seed, s as u64 + 1, 0x4D4D_0000_0000 + k as u64));
+                // The phase of variation `k` is drawn from its own stream, the same for every
+                // sequence; the learned trajectory from there on, replayed past its end
+                // ([`learned_template`]).
+                let phase = match o.start {
+                    Start::Phase if closes => ChaCha8Rng::seed_from_u64(mix(seed, 0x9A5E, k as u64))
+                        .random_range(0..source.nrows().div_ceil(2)),
+                    _ => 0,
+                };
+                let start = norm.forward(&learned_template(&source, steps + phase).rows(phase, steps).into_owned());
+                motion_matching::synthesize(&examples, &start, steps, norm.noise_scale(), o, &mut rng)
+                    .map(|mut y| {
+                        y.rows = norm.inverse(&y.rows);
+                        // Example `e` of the synthesis is training sequence `used[e]`.
+                        y.chosen.iter_mut().for_each(|c| c.0 = used[c.0]);
+                        y
+                    })
+                    .map_err(|e| Error::invalid(format!("{}: {e}", info.name)))
+            })
+            .collect::<Result<_>>()?;
+        Ok(m)
+    }
+
+    /// Training sequence `i`'s learned points of every part side by side, one row per training
+    /// step.
+    fn joint(&self, i: usize) -> DMatrix<f64> {
+        let xs = self.dec.model.model_latents(i);
+        let rows = xs.first().map_or(0, |x| x.nrows());
+        let mut m = DMatrix::zeros(rows, self.dims.iter().sum());
+        let mut c0 = 0;
+        for x in &xs {
+            m.view_mut((0, c0), (rows, x.ncols())).copy_from(x);
+            c0 += x.ncols();
+        }
+        m
+    }
+
+    /// A joint trajectory split into the parts' trajectories.
+    fn split(&self, y: &DMatrix<f64>) -> Vec<DMatrix<f64>> {
+        let mut c0 = 0;
+        self.dims
+            .iter()
+            .map(|&d| {
+                let x = y.columns(c0, d).into_owned();
+                c0 += d;
+                x
+            })
+            .collect()
+    }
+
+    /// Parts' trajectories at the training steps brought to the capture's rate.
+    fn to_capture_rate(&self, parts: &[DMatrix<f64>]) -> Vec<DMatrix<f64>> {
+        parts.iter().map(|x| frame_stride::upsample(x, self.dec.model.stride, self.frames)).collect()
+    }
+}
+
+/// Whether the trajectory `x` closes into a cycle: the gap between its end's extrapolated next
+/// step (`2 x_T − x_{T−1}`) and the nearest point at least a quarter of it (and 2 points) before
+/// the end, which [`learned_template`] replays from, is at most twice its median step.
+pub fn cycle_closes(x: &DMatrix<f64>) -> bool {
+    let t_len = x.nrows();
+    let gap = (t_len / 4).max(2);
+    if t_len <= gap + 1 {
+        return false;
+    }
+    let mut steps: Vec<f64> = (1..t_len).map(|t| (x.row(t) - x.row(t - 1)).norm()).collect();
+    steps.sort_by(f64::total_cmp);
+    let median = steps[steps.len() / 2];
+    let next = x.row(t_len - 1) * 2.0 - x.row(t_len - 2);
+    let seam = (0..t_len - gap).map(|a| (x.row(a) - &next).norm()).fold(f64::INFINITY, f64::min);
+    seam <= 2.0 * median
+}
+
 /// The learned trajectories that guide a blend of training sequences `a` (w = 0) and `b`
 /// (w = 1), as `(w, sequence index)` sorted by `w`: the endpoints, plus every pre-blended
 /// sequence of §7 between `a` and `b` (made in either order; weights flipped to `a`'s side).
@@ -430,6 +660,13 @@ mod tests {
             let a = std::f64::consts::TAU * t as f64 / n as f64;
             if c == 0 { a.cos() } else { a.sin() }
         })
+    }
+
+    #[test]
+    fn a_circle_closes_into_a_cycle_and_a_stroke_does_not() {
+        assert!(cycle_closes(&circle(40)));
+        assert!(!cycle_closes(&DMatrix::from_fn(12, 1, |t, _| t as f64)));
+        assert!(!cycle_closes(&circle(2)));
     }
 
     #[test]

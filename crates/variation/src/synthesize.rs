@@ -28,10 +28,11 @@ use crate::grounding::{self, FloorContact};
 use crate::group::{blend_name, blend_sequences_at, Group, GroupSequence};
 use crate::latent_smoothing;
 use crate::metrics::{self, Stats};
+use crate::motion_matching::MatchOptions;
 use crate::reconstruct::{Assembly, Decoder};
 use crate::sample::{
-    blend_entries, blend_variations, default_hmc, mix, sequence_variations_len, ChainStats,
-    HmcStart, Sampler, Variations,
+    blend_entries, blend_variations, default_hmc, matched_blend_variations, matched_variations, mix,
+    sequence_variations_len, ChainStats, HmcStart, Sampler, Variations,
 };
 use crate::train::VariationModel;
 use crate::turns_and_tears::{CaptureLimits, TurnsAndTears};
@@ -50,6 +51,9 @@ pub struct SynthConfig {
     /// Trajectory sampler (HMC, the paper's, by default).
     #[serde(default)]
     pub sampler: Sampler,
+    /// Settings of `Sampler::MotionMatching` ([`crate::motion_matching`]).
+    #[serde(default)]
+    pub motion_matching: MatchOptions,
     /// κ: every one-step variance of the sampled dynamics is κ σ²_X (1: the model's).
     #[serde(default = "one")]
     pub variance_scale: f64,
@@ -654,8 +658,11 @@ pub fn run_with_progress(
     // the samples do not depend on the scheduling).
     let sampled: Vec<(Variations, Vec<ChainStats>)> = wanted
         .par_iter()
-        .map(|&s| {
-            sequence_variations_len(&dec, s, frames, cfg.sampler, cfg.variance_scale, &hmc, 1)
+        .map(|&s| match cfg.sampler {
+            Sampler::MotionMatching => {
+                matched_variations(&dec, s, frames, hmc.n_samples, cfg.seed, &cfg.motion_matching)
+            }
+            _ => sequence_variations_len(&dec, s, frames, cfg.sampler, cfg.variance_scale, &hmc, 1),
         })
         .collect::<Result<_>>()?;
     let mut pools: Vec<Variations> = vec![Vec::new(); model.sequences.len()];
@@ -705,7 +712,18 @@ pub fn run_with_progress(
         }
         for (&(a, b, w), truth) in blends.iter().zip(truths) {
             let truth = truth.expect("every blend made above");
-            let vars = blend_variations(&dec, &pools, (a, b), w, cfg.n, cfg.seed)?;
+            let vars = match cfg.sampler {
+                Sampler::MotionMatching => matched_blend_variations(
+                    &dec,
+                    (a, b),
+                    w,
+                    frames,
+                    cfg.n,
+                    cfg.seed,
+                    &cfg.motion_matching,
+                )?,
+                _ => blend_variations(&dec, &pools, (a, b), w, cfg.n, cfg.seed)?,
+            };
             let label = match cfg.query {
                 None => blend_name(w),
                 Some(_) => format!(

@@ -112,6 +112,7 @@ fn tiny_set_end_to_end() {
         sample_poses: false,
         assembly: Assembly::Average,
         sampler: Sampler::Hmc,
+        motion_matching: Default::default(),
         variance_scale: 1.0,
         burn_in: 30,
         hmc_start: Default::default(),

@@ -12,6 +12,7 @@ use serde::Serialize;
 use crate::frame_writer::VariationFormat;
 use crate::group::Group;
 use crate::memory_budget;
+use crate::motion_matching::{Examples, MatchOptions, Start as MatchStart};
 use crate::reconstruct::Assembly;
 use crate::sample::{HmcStart, Sampler};
 use crate::synthesize::{run_with_progress, Query, SynthConfig};
@@ -67,11 +68,44 @@ pub struct Params {
     /// poses the poses decode through kernel bases, fused with the merge
     #[arg(long, value_enum, default_value_t = Assembly::Feather)]
     pub assembly: Assembly,
-    /// Trajectory sampler: hmc (the paper's Hybrid Monte Carlo) or ancestral (independent draws
+    /// Trajectory sampler: hmc (the paper's Hybrid Monte Carlo), ancestral (independent draws
     /// of the same density kept on the learned data, one forward pass each; burn-in and thinning
-    /// do not apply)
+    /// do not apply) or motion-matching (a training-free baseline: generative motion matching,
+    /// GenMM, over every part's learned latent points jointly, the queried sequence's patches
+    /// matched coarse to fine from a random phase of its cycle; no new poses, and copies of the
+    /// source where the learned trajectories are no closed cycles, e.g. jumps; the --match-*
+    /// settings apply, the HMC ones and --variance-scale do not;
+    /// docs/studies/39-motion-matching-baseline.md)
     #[arg(long, value_enum, default_value_t = Sampler::Hmc)]
     pub sampler: Sampler,
+    /// With --sampler motion-matching: the sequences matched against, own (the queried one) or
+    /// group (every sequence of the group, started from the queried one)
+    #[arg(long, value_enum, default_value_t = Examples::Own)]
+    pub match_examples: Examples,
+    /// With --sampler motion-matching: noise added to the coarsest start, in units of each
+    /// part's spread (a patch's many coordinates average it out: on the demo set 0 to 3 give the
+    /// same variations)
+    #[arg(long, default_value_t = MatchOptions::default().noise)]
+    pub match_noise: f64,
+    /// With --sampler motion-matching: patch length in training steps (the same at every level)
+    #[arg(long, default_value_t = MatchOptions::default().patch, value_parser = at_least(1))]
+    pub match_patch: usize,
+    /// With --sampler motion-matching: α of GenMM's completeness normalisation (each example
+    /// patch's distances divided by α plus its distance to the nearest synthesis patch, so
+    /// unused example patches are preferred; GenMM uses 0.01); 0: plain nearest neighbours
+    #[arg(long, default_value_t = MatchOptions::default().alpha.unwrap_or(0.0))]
+    pub match_alpha: f64,
+    /// With --sampler motion-matching: how the coarsest level starts, phase (the queried
+    /// trajectory from a random point of its first half, replayed past its end, with noise),
+    /// shuffle (random crops of the examples end to end: their pieces recombined; seams may
+    /// spin) or source (the queried trajectory with noise, GenMM's: on short captures the
+    /// variations are copies of their source)
+    #[arg(long, value_enum, default_value_t = MatchStart::Phase)]
+    pub match_start: MatchStart,
+    /// With --sampler motion-matching: most pyramid levels (each half the previous one's length;
+    /// fewer when a level would hold less than one patch)
+    #[arg(long, default_value_t = MatchOptions::default().levels, value_parser = at_least(1))]
+    pub match_levels: usize,
     /// Scale κ of every one-step variance of the sampled dynamics (1: the model's density, as in
     /// the paper; below 1: trajectories closer to the learned dynamics, less frame-to-frame jitter)
     #[arg(long, default_value_t = crate::sample::VARIANCE_SCALE)]
@@ -126,10 +160,12 @@ pub struct Params {
     pub no_foot_height: bool,
     /// Smooth every sampled latent trajectory in time with a Gaussian of SIGMA frames before
     /// decoding (first point kept; 0 = off: the trajectories as sampled). Two frames by
-    /// default: the sampled trajectories jitter frame to frame, which decoded turns the body
-    /// faster than any capture
-    #[arg(long, value_name = "SIGMA", default_value_t = crate::latent_smoothing::DEFAULT_SIGMA)]
-    pub latent_smoothing: f64,
+    /// default with hmc and ancestral: the sampled trajectories jitter frame to frame, which
+    /// decoded turns the body faster than any capture; 0 with motion-matching, whose
+    /// trajectories are averages of learned points and do not jitter (smoothed, a run's swift
+    /// latent steps are cut short)
+    #[arg(long, value_name = "SIGMA")]
+    pub latent_smoothing: Option<f64>,
     /// Output folder: <out>/<sequence>/var<k>/NNNNNN.ply, or with --frame-format pc2
     /// <out>/<sequence>/var<k>.obj + var<k>.pc2
     #[arg(short, long)]
@@ -191,6 +227,15 @@ pub fn run(p: &Params) -> anyhow::Result<()> {
         sample_poses: p.sample_poses,
         assembly: p.assembly,
         sampler: p.sampler,
+        motion_matching: MatchOptions {
+            examples: p.match_examples,
+            noise: p.match_noise,
+            patch: p.match_patch,
+            alpha: (p.match_alpha != 0.0).then_some(p.match_alpha),
+            start: p.match_start,
+            levels: p.match_levels,
+            ..MatchOptions::default()
+        },
         variance_scale: p.variance_scale,
         burn_in: p.burn_in.unwrap_or(p.hmc_start.default_burn_in()),
         hmc_start: p.hmc_start,
@@ -205,7 +250,10 @@ pub fn run(p: &Params) -> anyhow::Result<()> {
         foot_height: !p.no_foot_height,
         // The statistics against the sources are the report's content: skipped without one.
         statistics: p.report.is_some(),
-        latent_smoothing: p.latent_smoothing,
+        latent_smoothing: p.latent_smoothing.unwrap_or(match p.sampler {
+            Sampler::MotionMatching => 0.0,
+            _ => crate::latent_smoothing::DEFAULT_SIGMA,
+        }),
         query: match (&p.motion, &p.blend, p.weight) {
             (Some(m), _, _) => Some(Query::Motion(m.clone())),
             (None, Some((a, b)), Some(w)) => Some(Query::Blend {
