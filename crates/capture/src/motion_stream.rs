@@ -1,7 +1,7 @@
 //! Reading an aligned motion frame by frame: each frame goes to a sink as it is decoded, so a
 //! motion of any length is read holding one frame (plus whatever the sink keeps), in one pass
-//! that also hashes the file. `gpr-train` encodes the frames into PCA coefficients this way
-//! ([`crate::part_pca::FrameEncoder`]) instead of holding whole motions, and `pca-fit` reads
+//! that also hashes the file. `gpr-train` and `dtw-densify` encode the frames into PCA
+//! coefficients this way ([`read_encoded`]) instead of holding whole motions, and `pca-fit` reads
 //! its training motions pass by pass ([`MotionFiles`], [`crate::streamed_pca`]).
 //!
 //! The frames are checked as [`AlignedMotion::validate`] checks them, and the sink gets only
@@ -15,11 +15,11 @@ use std::path::{Path, PathBuf};
 use mesh_core::artifact::{read_artifact_seeded, Artifact};
 use mesh_core::rigid::RigidMotion;
 use mesh_core::{Error, Result};
-use nalgebra::Vector3;
+use nalgebra::{DMatrix, Vector3};
 use serde::de::{DeserializeSeed, Deserializer, Error as _, SeqAccess, Visitor};
 
 use crate::align::{check_besides_frames, AlignedMotion, CaptureInfo, FrameChecks};
-use crate::part_pca::check_same_template;
+use crate::part_pca::{check_same_template, FrameEncoder, PcaModel};
 use crate::streamed_pca::TrainingFrames;
 
 /// An aligned motion without its frames' vertices, as [`read_frames`] returns it.
@@ -59,6 +59,20 @@ pub fn read_frames(
         return Err(Error::file(path, e.to_string()));
     }
     Ok((MotionInfo { faces, n_frames, n_vertices: n, poses, displacements, anchor, capture }, sha256))
+}
+
+/// The aligned motion at `path` encoded with `pca` as it is read ([`read_frames`] into a
+/// [`FrameEncoder`]): per part, the coefficients of every frame (`F x m_k`, those of
+/// [`PcaModel::encode`] on the loaded motion, to the bit), the rest of the motion and the file's
+/// SHA-256. Holds the coefficients and at most two encoder blocks of frames, never the motion.
+/// Fails, naming the file, as [`PcaModel::check_motion`] fails on a motion of another vertex
+/// count or template.
+pub fn read_encoded(path: impl AsRef<Path>, pca: &PcaModel) -> Result<(Vec<DMatrix<f64>>, MotionInfo, String)> {
+    let path = path.as_ref();
+    let mut encoder = FrameEncoder::new(pca);
+    let (info, sha256) = read_frames(path, |f| encoder.push(f))?;
+    let coefficients = encoder.finish(&info.capture.template_sha256).map_err(|e| Error::file(path, e.to_string()))?;
+    Ok((coefficients, info, sha256))
 }
 
 /// Aligned motion files as [`TrainingFrames`]: every pass reads them again with

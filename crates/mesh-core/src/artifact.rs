@@ -130,6 +130,13 @@ impl Header {
         self
     }
 
+    /// Records `path` (as given) as an input whose SHA-256 is `sha256`, from a read that hashed
+    /// it on the way (e.g. [`Artifact::load_hashed`]).
+    pub fn with_input_hashed(mut self, path: impl AsRef<Path>, sha256: String) -> Self {
+        self.inputs.push(InputRecord { path: path.as_ref().display().to_string(), sha256 });
+        self
+    }
+
     /// Hashes `path` and records it as an input (path as given).
     pub fn with_input(mut self, path: impl AsRef<Path>) -> Result<Self> {
         let path = path.as_ref();
