@@ -29,7 +29,7 @@ VARIATION_N ?= 5
 VARIATION_SEED ?= 0
 # Scale of the sampled dynamics' one-step variances (hmc-sample --variance-scale; 1 = the model's
 # density as in the paper). 0.3 keeps the variations' foot sliding and scatter near the captures'
-# while they still differ from their source (docs/RESULTS.md, "Variance scale").
+# while they still differ from their source (docs/studies/14-variance-scale.md).
 VARIATION_VARIANCE_SCALE ?= 0.3
 VARIATION_TRAIN_FLAGS ?=
 # The report's 3D view: three variations of the first group's first motion, side by side.

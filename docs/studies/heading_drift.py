@@ -1,5 +1,5 @@
 # Heading of a torso band per frame against frame 0 (best rigid fit), for the
-# "slow turn" finding in docs/RESULTS.md ("Spins and tears"). Needs numpy.
+# "slow turn" finding in docs/studies/25-spins-and-tears.md. Needs numpy.
 #   python3 docs/studies/heading_drift.py SEQ_DIR...   (folders of binary-PLY frames)
 import sys,glob,struct,numpy as np
 def verts(p):

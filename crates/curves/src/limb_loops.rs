@@ -36,7 +36,7 @@ use crate::body_graph::{BodyGraph, Distances};
 use crate::extremities::Extremities;
 
 
-/// The sweep's settings (defaults tuned on the demo bodies, docs/RESULTS.md).
+/// The sweep's settings (defaults tuned on the demo bodies, docs/studies/28-propose-curves.md).
 #[derive(Clone, Debug)]
 pub struct Settings {
     /// Sweep step, m.

@@ -153,12 +153,13 @@ fn before_after(seq: &Value, raw: &str, after: &str, source: &str, scale: f64, d
 }
 
 /// Column heads of the per-sequence table, in order.
-pub const SEQUENCE_COLUMNS: [&str; 13] = [
+pub const SEQUENCE_COLUMNS: [&str; 14] = [
     "group",
     "sequence (frames)",
     "pose distance to source, mm",
     "to nearest source frame, mm",
     "timing offset, frames",
+    "pace / ground covered, of the source's",
     "edge distortion (source)",
     "sliding on contacts, m/frame, raw → after (source)",
     "sliding by height rule, m/frame, raw → after (source)",
@@ -197,6 +198,7 @@ fn sequences(groups: &[(&String, &Value)]) -> String {
                 one(q.get("pose_distance_to_source_m"), 1e3, 0),
                 one(q.get("manifold_distance_m"), 1e3, 0),
                 one(q.get("timing_offset_frames"), 1.0, 1),
+                format!("{} / {}", one(q.get("pose_speed_ratio"), 1.0, 2), one(q.get("travel_ratio"), 1.0, 2)),
                 format!("{} ({})", one(q.get("edge_distortion"), 1.0, 2), one(q.get("source_edge_distortion"), 1.0, 2)),
                 before_after(q, "raw_contact_sliding_m", "contact_sliding_m", "source_contact_sliding_m", 1.0, 3),
                 before_after(q, "raw_foot_sliding_m", "foot_sliding_m", "source_foot_sliding_m", 1.0, 3),

@@ -79,7 +79,7 @@ impl Sparsity {
     /// Cholesky and the inverse's elements) costs more than a sparse one (`~4 F M²`: `ΦᵀΦ`,
     /// `Φᵀ∂Φ`, the kernel blocks) from `F ≈ 2 M`, but measured on the demo set (588 pairs,
     /// M = 256) the exact GP still trained faster (5.8 s against 8.5 s for the two directions);
-    /// at 1100 pairs the sparse GP took half the exact time (docs/PERFORMANCE.md).
+    /// at 1100 pairs the sparse GP took half the exact time (docs/studies/08-sparse-gp.md).
     pub fn inducing_for(&self, pairs: usize) -> Option<usize> {
         match *self {
             Sparsity::Exact => None,

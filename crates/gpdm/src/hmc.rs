@@ -44,6 +44,9 @@ pub enum ChainStart {
     /// chain's seed). HMC leaves its target invariant, so a chain started at a draw of it is
     /// stationary from the first iteration; burn-in then only has to adapt the step size.
     Ancestral,
+    /// The given trajectory itself (the sequence's learned one: §1's "initialized with a
+    /// latent motion trajectory to generate variants of this latter").
+    Learned,
 }
 
 /// Sampler options.
@@ -105,8 +108,8 @@ pub struct HmcResult {
 /// Share of the pose prior's variance ([`Predictor::pose_variance_ratio`]) above which a latent
 /// point is off the learned data. On the demo and holdout models a mean prediction reaches at
 /// most 0.02 where its poses are sound and 0.88-0.99 where it has run away from the data (a
-/// torso or an arm decoded to a crumpled mean pose; docs/RESULTS.md, "Mean predictions that
-/// leave the data").
+/// torso or an arm decoded to a crumpled mean pose;
+/// docs/studies/17-mean-predictions-off-data.md).
 pub const OFF_DATA_VARIANCE: f64 = 0.5;
 
 /// Whether any point of the latent trajectory `x` is off the learned data
@@ -584,6 +587,7 @@ pub fn sample_trajectories_scaled(
                 mean
             }
         }
+        ChainStart::Learned => template.clone(),
         ChainStart::Ancestral => crate::ancestral::sample_trajectories_ancestral(
             pred,
             &x1,

@@ -30,4 +30,4 @@ pub mod predict;
 pub mod vexp;
 
 pub use error::{GpdmError, Result};
-pub use model::{Gpdm, GpdmConfig};
+pub use model::{DynamicsWeight, Gpdm, GpdmConfig};

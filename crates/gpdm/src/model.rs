@@ -78,6 +78,38 @@ pub struct GpdmConfig {
     /// Not stored in model files, like `beta_log_sd`.
     #[serde(skip, default = "default_true")]
     pub fixed_latent_scale: bool,
+    /// Weight of the dynamics term (3DV eq. 5 with the first-point priors) in the objective
+    /// (see [`DynamicsWeight`]). Not stored in model files, like `beta_log_sd`.
+    #[serde(skip)]
+    pub dynamics_weight: DynamicsWeight,
+}
+
+/// The weight λ of the dynamics term in the minimised objective `L = L_pose + λ L_dyn + priors`.
+///
+/// With `D` pose dimensions and `d` latent ones the pose term of 3DV eq. 3 counts `D/2 ln|K_Y|`
+/// against the dynamics term's `d/2 ln|K_X|`: for a body part (`D` in the thousands, `d = 3`)
+/// the latent positions are placed for the poses alone and the dynamics learned on them is weak;
+/// its mean prediction settles toward a point within a few frames. The *balanced* GPDM (Wang,
+/// Fleet and Hertzmann, "Gaussian Process Dynamical Models for Human Motion", PAMI 2008, §3.3)
+/// raises the dynamics density to the power `D/d`, which gives both terms equal say.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize, Deserialize, clap::ValueEnum)]
+#[serde(rename_all = "kebab-case")]
+pub enum DynamicsWeight {
+    /// λ = 1: 3DV eq. 7 as printed.
+    #[default]
+    Paper,
+    /// λ = D/d: the balanced GPDM.
+    Balanced,
+}
+
+impl DynamicsWeight {
+    /// λ for `d_obs` pose and `latent_dim` latent dimensions.
+    pub fn lambda(self, d_obs: usize, latent_dim: usize) -> f64 {
+        match self {
+            DynamicsWeight::Paper => 1.0,
+            DynamicsWeight::Balanced => d_obs as f64 / latent_dim.max(1) as f64,
+        }
+    }
 }
 
 fn default_true() -> bool {
@@ -100,6 +132,7 @@ impl Default for GpdmConfig {
             first_point_var: 1.0,
             beta_log_sd: default_beta_log_sd(),
             fixed_latent_scale: true,
+            dynamics_weight: DynamicsWeight::default(),
         }
     }
 }
@@ -330,7 +363,15 @@ impl Objective {
             };
             (py, px.expect("scope waits for the dynamics term"))
         };
-        let (py, px) = (py?, px?);
+        let (py, mut px) = (py?, px?);
+        let lambda = self.config.dynamics_weight.lambda(self.d_obs, d);
+        if lambda != 1.0 {
+            px.value *= lambda;
+            px.dparams.iter_mut().for_each(|g| *g *= lambda);
+            if let Some(dx) = px.dx.as_mut() {
+                *dx *= faer::Scale(lambda);
+            }
+        }
         // Priors ∏ 1/α_k, ∏ 1/β_k → Σ ln α_k + Σ ln β_k, plus the log-normal factor on β1..β3
         // (in θ, ln β_k = θ_k for k = 1..3).
         let inv_s2 = self.config.beta_log_sd.map_or(0.0, |s| 1.0 / (s * s));

@@ -88,6 +88,30 @@ fn objective_gradient_without_floor_and_two_dimensional_latent() {
     });
 }
 
+#[test]
+fn objective_gradient_of_the_balanced_gpdm() {
+    check_objective(GpdmConfig {
+        dynamics_weight: gpdm::DynamicsWeight::Balanced,
+        ..GpdmConfig::default()
+    });
+}
+
+/// The balanced objective is the paper's with the dynamics term (and the first-point priors)
+/// weighted by D/d, the pose term and the priors unchanged.
+#[test]
+fn the_balanced_objective_weights_the_dynamics_term_by_d_over_d() {
+    let seqs = vec![common::randn(7, 5, 1), common::randn(6, 5, 2)];
+    let paper = gpdm::Gpdm::new(&seqs, GpdmConfig::default()).unwrap();
+    let balanced = gpdm::Gpdm::new(&seqs, GpdmConfig { dynamics_weight: gpdm::DynamicsWeight::Balanced, ..GpdmConfig::default() }).unwrap();
+    let theta = paper.theta();
+    let a = paper.objective().unwrap().eval(&theta, None).unwrap();
+    let b = balanced.objective().unwrap().eval(&theta, None).unwrap();
+    let lambda = paper.y.ncols() as f64 / paper.config.latent_dim as f64;
+    assert!(lambda > 1.0);
+    assert!((b.pose - a.pose).abs() <= 1e-12 * a.pose.abs() && (b.prior - a.prior).abs() <= 1e-12 * a.prior.abs().max(1.0));
+    assert!((b.dynamics - lambda * a.dynamics).abs() <= 1e-10 * (lambda * a.dynamics).abs(), "{} vs {}", b.dynamics, lambda * a.dynamics);
+}
+
 /// Eq. 7 exactly as printed: no log-normal factor on β, latent scale free.
 fn as_printed() -> GpdmConfig {
     GpdmConfig {

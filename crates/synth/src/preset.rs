@@ -385,7 +385,8 @@ pub fn preset(name: &str, seed: u64, noise: bool) -> Option<Config> {
 
 /// The test clips of the benchmark sets (`default`, `holdout`, `outside`, in that order) from
 /// performances `cfg` neither tests nor trains on, added to its training motions: the
-/// training-coverage study (`synth --more-training`; docs/RESULTS.md). Every preset tests on a
+/// training-coverage study (`synth --more-training`; docs/studies/09-training-coverage.md). Every
+/// preset tests on a
 /// window of the CMU take, so the other windows of that take are never added: a test motion
 /// gains only from other motions, not from the rest of its own performance. The preset's own
 /// motions are unchanged.

@@ -1,5 +1,5 @@
-//! How far each arm reaches out from the body in mesh sequences of one subject (docs/RESULTS.md,
-//! "Where the holdout's arm error comes from"): per arm, the mean over frames of the angle between
+//! How far each arm reaches out from the body in mesh sequences of one subject
+//! (docs/studies/07-holdout-arm-error.md): per arm, the mean over frames of the angle between
 //! world down and the line from the shoulder (the centroid of the arm's band with the torso) to
 //! the hand (the centroid of the arm's quarter of vertices farthest from the shoulder), and the
 //! mean gap between those hand vertices and the torso and legs. Comparing a motion's source, its

@@ -1,6 +1,7 @@
 //! A second, distal orientation map per limb (the elbow's and knee's bend, `common/limb_bend.rs`),
 //! scored on the raw transfer (parts assembled, no §6) after the default limb orientation, at
-//! bend weights 0 (the default model) to 1 (docs/RESULTS.md, study 6). `stitch_study` scores
+//! bend weights 0 (the default model) to 1 (docs/studies/06-limb-orientation.md). `stitch_study`
+//! scores
 //! the full pipeline with it (`BEND_WEIGHT`).
 //!
 //! cargo run --release --example limb_bend_study -- WORK SET SOURCE TARGET MOTION... -- TRAIN...

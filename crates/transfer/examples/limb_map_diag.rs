@@ -1,5 +1,6 @@
 //! How well the limb orientation map (`transfer::limb_orientation`, root frame) fits and
-//! predicts (docs/RESULTS.md, study 6). Per limb: the map's RMS angle on its training pairs (and
+//! predicts (docs/studies/06-limb-orientation.md). Per limb: the map's RMS angle on its training
+//! pairs (and
 //! the identity's), its coefficients; per test motion: the mean log-rotations of the source,
 //! the truth, the GP and the map, the RMS angle of the GP's, the map's and the half-way
 //! orientation against the truth's, the source's distance to the nearest training orientation,

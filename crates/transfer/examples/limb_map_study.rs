@@ -1,5 +1,6 @@
 //! Variants of the limb orientation map, scored on the raw transfer (parts assembled, no §6)
-//! of every test motion of a run (docs/RESULTS.md, study 6). `LogRotation Count(0.5) w0.5` is
+//! of every test motion of a run (docs/studies/06-limb-orientation.md). `LogRotation Count(0.5)
+//! w0.5` is
 //! the default (`transfer::limb_orientation`).
 //!
 //! cargo run --release --example limb_map_study -- WORK SET SOURCE TARGET MOTION... -- TRAIN...

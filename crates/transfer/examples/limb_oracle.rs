@@ -1,4 +1,5 @@
-//! How much of a transfer's pose error is the limbs' orientation (docs/RESULTS.md, study 6).
+//! How much of a transfer's pose error is the limbs' orientation
+//! (docs/studies/06-limb-orientation.md).
 //! Transfers a test motion with a trained model (parts assembled, no §6) three ways: the limbs
 //! as the pose GPs predict them, as the model's limb orientation turns them (what gpr-predict
 //! does), and turned to the orientation of the truth's limbs (an oracle), and prints the pose

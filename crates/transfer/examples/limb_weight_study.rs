@@ -3,7 +3,7 @@
 //! on the others, predict the held-out motion's pairs, and take per limb the geodesic weight
 //! `w` with the least RMS angle to the held-out target's orientation. The weights are then scored
 //! on the run's test motions (raw transfer, parts assembled, no §6) beside the fixed default
-//! (docs/RESULTS.md, study 6).
+//! (docs/studies/06-limb-orientation.md).
 //!
 //! cargo run --release --example limb_weight_study -- WORK SET SOURCE TARGET MOTION... -- TRAIN...
 //! e.g. `limb_weight_study out/demo-run/work out/demo/set A B punch spinkick cmu_jump -- walk run jump kick dance`

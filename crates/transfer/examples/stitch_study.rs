@@ -1,11 +1,12 @@
 //! Where the surface stage gains or loses: a test motion's corrected parts merged by averaging
 //! (`+correct`), by stitching (`+correct+stitch`) and by a feathered mean (`+correct+feather`),
-//! with the pose error per part of each against the truth (docs/RESULTS.md, study 3).
+//! with the pose error per part of each against the truth (docs/studies/03-surface-stage.md).
 //!
 //! cargo run --release --example stitch_study -- WORK SET SOURCE TARGET MOTION -- TRAIN...
 //!
 //! With `BEND_WEIGHT=w` in the environment the limbs' distal halves are also turned toward the
-//! bend map of `common/limb_bend.rs` before the surface stage (study 6). With
+//! bend map of `common/limb_bend.rs` before the surface stage
+//! (docs/studies/06-limb-orientation.md). With
 //! `LOOP_WEIGHTS=ARM,LEG` it prints only the stitch with the arms' and the legs' loops at those
 //! weights on the parent (the torso; 0.5 is the default's mean of the two parts), to 0.1 mm.
 

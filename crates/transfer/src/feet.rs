@@ -18,7 +18,8 @@
 //! foot carries every error of the transferred leg into the root and the body drifts (placed
 //! error 6.9 -> 14.0 cm on the holdout benchmark); with it the placement is unchanged
 //! (holdout 6.91 -> 6.90 cm, demo 7.59 -> 7.63) and the sliding comes within 1.15x of the
-//! truth's on 7 of 9 benchmark motions (4 without the clean-up; docs/RESULTS.md). The source's
+//! truth's on 7 of 9 benchmark motions (4 without the clean-up; docs/studies/04-placement.md). The
+//! source's
 //! contacts are detected on its own meshes ([`capture::contact_detector`]), never on the
 //! target's, whose sliding soles are what is being corrected.
 //!

@@ -87,12 +87,13 @@ pub struct MeanPriors<'a> {
 }
 
 /// Weight of the geometric prior in each part's affine mean (`gpr-train --prior-weight`):
-/// measured on the demo, holdout and tiny sets (docs/RESULTS.md, study 2).
+/// measured on the demo, holdout and tiny sets (docs/studies/02-regression-away-from-data.md).
 pub const PRIOR_WEIGHT: f64 = 0.25;
 
 /// Relative ridge of the affine mean (`gp::affine_mean`): it shrinks the map along the
 /// input directions the training poses barely span, where an unseen motion's pose would
-/// otherwise be extrapolated on noise (docs/RESULTS.md, study 2: 1e-6 to 3e-4 measured on
+/// otherwise be extrapolated on noise (docs/studies/02-regression-away-from-data.md: 1e-6 to 3e-4
+/// measured on
 /// both benchmark sets; 1e-5 lowers the pose error on both).
 pub const MEAN_RIDGE: f64 = 1e-5;
 

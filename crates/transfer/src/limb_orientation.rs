@@ -1,6 +1,6 @@
 //! Limb orientation: how each limb is turned relative to the body it hangs from, mapped from
 //! the source on its own and fused with the orientation the pose GP predicts (a departure from
-//! CVPR §5: docs/DEVIATIONS.md; measured in docs/RESULTS.md, study 6).
+//! CVPR §5: docs/DEVIATIONS.md; measured in docs/studies/06-limb-orientation.md).
 //!
 //! The pose GPs map a part's PCA coefficients, which are linear in vertex positions: a limb
 //! turned further than any training pose is extrapolated along straight lines, and its
@@ -36,7 +36,7 @@ use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 
 /// Default of `gpr-train --orientation-weight`: how far each limb is turned from the GP's
-/// orientation toward the map's (docs/RESULTS.md, study 6).
+/// orientation toward the map's (docs/studies/06-limb-orientation.md).
 pub const WEIGHT: f64 = 0.5;
 
 /// Ridge of the maps, relative to the mean diagonal of the normal equations.

@@ -54,6 +54,7 @@ fn main() {
             let start = match a {
                 "mean" => Some(ChainStart::MeanPrediction),
                 "ancestral" => Some(ChainStart::Ancestral),
+                "learned" => Some(ChainStart::Learned),
                 "training" => None,
                 _ => panic!("start is mean, ancestral or training"),
             };
@@ -152,6 +153,7 @@ fn main() {
         let name = match start {
             Some(ChainStart::MeanPrediction) => "mean",
             Some(ChainStart::Ancestral) => "ancestral",
+            Some(ChainStart::Learned) => "learned",
             None => "training",
         };
         println!(

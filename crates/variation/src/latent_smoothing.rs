@@ -4,8 +4,8 @@
 //! The sampled trajectories follow the learned first-order dynamics with their one-step noise,
 //! so consecutive latent points jitter; decoded, the legs shake frame to frame, swing feet
 //! skim the floor, and a jump of the limbs between two frames turns the whole body's best rigid
-//! fit faster than any capture turns (docs/RESULTS.md, "Latent smoothing" and "Spins and
-//! tears"). This filter convolves every latent
+//! fit faster than any capture turns (docs/studies/15-latent-smoothing.md and
+//! docs/studies/25-spins-and-tears.md). This filter convolves every latent
 //! coordinate of every part with a Gaussian of `sigma` frames (truncated at 3σ, weights
 //! renormalised at the ends of the sequence) and keeps the first point exactly, as the sampler
 //! does (the paper's fixed `x1`).
@@ -13,7 +13,8 @@
 use nalgebra::DMatrix;
 
 /// `hmc-sample`'s σ (frames): two frames remove the frame-to-frame jumps (one leaves some)
-/// and keep the variations as far from their source as unsmoothed (docs/RESULTS.md).
+/// and keep the variations as far from their source as unsmoothed
+/// (docs/studies/15-latent-smoothing.md).
 pub const DEFAULT_SIGMA: f64 = 2.0;
 
 /// Smooths each trajectory (T × d, one row per frame) in place; `sigma <= 0` leaves it alone.

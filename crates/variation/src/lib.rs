@@ -11,6 +11,7 @@
 //! [`turns_and_tears`] (frames that spin or tear past the captures' own figures) and [`plots`].
 
 pub mod contacts;
+pub mod course;
 pub mod diversity;
 pub mod evaluate;
 pub mod foot_height;

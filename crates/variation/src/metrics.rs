@@ -78,6 +78,39 @@ pub fn normalise(
         .collect()
 }
 
+/// How fast a sequence changes pose: the mean per-vertex distance between consecutive frames
+/// of `pose` (frames aligned to the template, [`normalise`]), in m per frame; 0 for fewer than
+/// two frames. A variation whose latent trajectory settles toward a point moves at a fraction
+/// of its source's pace while every frame stays a plausible pose.
+pub fn pose_speed(pose: &[Vec<Vector3<f64>>]) -> f64 {
+    if pose.len() < 2 {
+        return 0.0;
+    }
+    mean_vertex_distance(&pose[1..], &pose[..pose.len() - 1])
+}
+
+/// Below this horizontal travel (m) a source is taken to stay in place and [`travel_ratio`]
+/// has nothing to compare with.
+pub const MIN_TRAVEL_M: f64 = 0.25;
+
+/// The horizontal travel of `frames` (centroid, last frame minus first) along the source's
+/// horizontal travel, as a fraction of the source's: 1 when the variation covers the source's
+/// ground, 0 when it stays in place, negative when it goes backwards. None when the source
+/// travels less than [`MIN_TRAVEL_M`].
+pub fn travel_ratio(frames: &[Vec<Vector3<f64>>], source: &[Vec<Vector3<f64>>], up: &Vector3<f64>) -> Option<f64> {
+    let travel = |f: &[Vec<Vector3<f64>>]| -> Option<Vector3<f64>> {
+        let centroid = |v: &[Vector3<f64>]| v.iter().sum::<Vector3<f64>>() / v.len().max(1) as f64;
+        let d = centroid(f.last()?) - centroid(f.first()?);
+        let up = up.normalize();
+        Some(d - up * d.dot(&up))
+    };
+    let s = travel(source)?;
+    if s.norm() < MIN_TRAVEL_M {
+        return None;
+    }
+    Some(travel(frames)?.dot(&s) / s.norm_squared())
+}
+
 /// Mean per-vertex distance between rows of two pose matrices (rows `(x, y, z, ...)`), ignoring
 /// columns beyond `3 × n_vertices`.
 pub fn mean_row_distance(a: &DMatrix<f64>, b: &DMatrix<f64>, n_vertices: usize) -> f64 {
@@ -243,6 +276,26 @@ impl Stats {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn pose_speed_is_the_mean_vertex_step_and_travel_ratio_compares_ground_covered() {
+        // Two vertices; the second moves 3 cm a frame, the first stays: 1.5 cm per frame.
+        let pose: Vec<Vec<Vector3<f64>>> =
+            (0..5).map(|t| vec![Vector3::zeros(), Vector3::new(0.03 * t as f64, 0.0, 0.0)]).collect();
+        assert!((pose_speed(&pose) - 0.015).abs() < 1e-12);
+        assert_eq!(pose_speed(&pose[..1]), 0.0);
+        let up = Vector3::y();
+        let walk = |step: Vector3<f64>, n: usize| -> Vec<Vec<Vector3<f64>>> {
+            (0..n).map(|t| vec![step * t as f64, step * t as f64 + Vector3::new(0.0, 1.0, 0.0)]).collect()
+        };
+        let source = walk(Vector3::new(0.0, 0.0, 0.1), 11); // 1 m along +z
+        // Half the distance, with a climb that does not count; sideways counts nothing; backwards.
+        assert!((travel_ratio(&walk(Vector3::new(0.0, 0.3, 0.05), 11), &source, &up).unwrap() - 0.5).abs() < 1e-12);
+        assert!(travel_ratio(&walk(Vector3::new(0.1, 0.0, 0.0), 11), &source, &up).unwrap().abs() < 1e-12);
+        assert!((travel_ratio(&walk(Vector3::new(0.0, 0.0, -0.1), 11), &source, &up).unwrap() + 1.0).abs() < 1e-12);
+        // A source that stays in place has no ratio.
+        assert_eq!(travel_ratio(&source, &walk(Vector3::new(0.0, 0.0, 0.01), 11), &up), None);
+    }
 
     #[test]
     fn contact_sliding_counts_annotated_pairs_only() {

@@ -85,6 +85,8 @@ pub enum HmcStart {
     /// An exact draw of the sampled density (`gpdm::ancestral`): the chain is stationary from
     /// its first iteration, and a burn-in of 50 only adapts the step size.
     Ancestral,
+    /// The sequence's learned latent trajectory.
+    Learned,
 }
 
 impl HmcStart {
@@ -93,6 +95,7 @@ impl HmcStart {
         match self {
             HmcStart::Mean => ChainStart::MeanPrediction,
             HmcStart::Ancestral => ChainStart::Ancestral,
+            HmcStart::Learned => ChainStart::Learned,
         }
     }
 
@@ -102,7 +105,7 @@ impl HmcStart {
     pub fn default_burn_in(self) -> usize {
         match self {
             HmcStart::Mean => 200,
-            HmcStart::Ancestral => 50,
+            HmcStart::Ancestral | HmcStart::Learned => 50,
         }
     }
 }

@@ -62,6 +62,10 @@ pub struct SynthConfig {
     /// Ground every variation on its source ([`crate::grounding`]); on by default.
     #[serde(default = "yes")]
     pub grounding: bool,
+    /// Turn every variation onto its source's course ([`crate::course`]), before grounding;
+    /// on by default.
+    #[serde(default = "yes")]
+    pub course: bool,
     /// Pin planted feet by a horizontal root correction ([`crate::footskate`]), after
     /// grounding; on by default. Needs the source's contact annotations.
     #[serde(default = "yes")]
@@ -144,6 +148,14 @@ pub struct SequenceReport {
     pub manifold_distance_m: Vec<f64>,
     /// Mean |i − j| along the DTW path between variation and source (frames).
     pub timing_offset_frames: Vec<f64>,
+    /// Each variation's pace: its [`metrics::pose_speed`] over the source's (1: as lively as
+    /// the source; a trajectory that settles toward a point gives a fraction).
+    #[serde(default)]
+    pub pose_speed_ratio: Vec<f64>,
+    /// Each variation's horizontal travel along the source's, as a fraction of the source's
+    /// ([`metrics::travel_ratio`]; None where the source stays in place).
+    #[serde(default)]
+    pub travel_ratio: Vec<Option<f64>>,
     /// Mean per-vertex distance between pairs of variations (m).
     pub pairwise_distance_m: Stats,
     /// Mean relative edge-length change against the template: variations, and the source.
@@ -374,6 +386,8 @@ struct Post<'a> {
     leg_weights: Option<&'a [Vec<(u32, f64)>; 2]>,
     /// Sole vertices of the geometric foot-sliding rule.
     soles: &'a [Vec<u32>],
+    /// The root part's core (`group::root_core`): headings are measured on it.
+    core: &'a [u32],
 }
 
 impl Post<'_> {
@@ -387,6 +401,10 @@ impl Post<'_> {
         let (model, cfg) = (self.model, self.cfg);
         // Rigid shifts of the variation leave the (pose-normalised) DTW unchanged.
         let matches = matcher.matches(&m);
+        if cfg.course {
+            let sigma = crate::course::SIGMA_SECONDS * model.fps;
+            crate::course::keep(&mut m, &job.source, &matches, self.core, &model.up, sigma);
+        }
         let low = grounding::lowest(&m, &[], &model.up);
         let ungrounded =
             grounding::floor_contact(&low, &job.source_low, &matches, CONTACT_HEIGHT);
@@ -473,7 +491,8 @@ fn measure(job: &Job, decoded: &[Decoded], model: &VariationModel, limits: &Capt
     // Each variation's frames aligned to the template (pose only) once, for every pose figure
     // and its diversity cost matrix, then dropped.
     let source_pose = metrics::normalise(source, &model.template);
-    type PerVariation = (f64, f64, f64, Option<f64>, f64, f64, FloorContact, nalgebra::DMatrix<f64>);
+    let source_speed = metrics::pose_speed(&source_pose);
+    type PerVariation = (f64, f64, f64, Option<f64>, f64, f64, FloorContact, nalgebra::DMatrix<f64>, f64, Option<f64>);
     let per: Vec<PerVariation> = decoded
         .par_iter()
         .map(|d| {
@@ -488,6 +507,8 @@ fn measure(job: &Job, decoded: &[Decoded], model: &VariationModel, limits: &Capt
                 metrics::nearest_frame_distance(&pose, &source_pose, 2000),
                 floor_contact(v, job, &d.matches, model),
                 crate::prealign::pose_cost(&pose, &source_pose, 400),
+                metrics::pose_speed(&pose) / source_speed.max(f64::MIN_POSITIVE),
+                metrics::travel_ratio(v, source, &model.up),
             )
         })
         .collect();
@@ -511,6 +532,8 @@ fn measure(job: &Job, decoded: &[Decoded], model: &VariationModel, limits: &Capt
         pose_distance_to_source_m: per.iter().map(|p| p.4).collect(),
         manifold_distance_m: per.iter().map(|p| p.5).collect(),
         timing_offset_frames: per.iter().map(|p| p.1).collect(),
+        pose_speed_ratio: per.iter().map(|p| p.8).collect(),
+        travel_ratio: per.iter().map(|p| p.9).collect(),
         pairwise_distance_m: Stats::of(&pair),
         edge_distortion: per.iter().map(|p| p.2).collect(),
         source_edge_distortion: metrics::edge_distortion(source, &model.template, &edges),
@@ -533,7 +556,7 @@ fn measure(job: &Job, decoded: &[Decoded], model: &VariationModel, limits: &Capt
         turns_and_tears: {
             let defs: Vec<crate::group::PartDef> = model.parts.iter().map(|p| p.part.clone()).collect();
             let core = crate::group::root_core(&defs, model.template.len());
-            vars.par_iter().map(|v| TurnsAndTears::of(v, &edges, &core, limits)).collect()
+            vars.par_iter().map(|v| TurnsAndTears::of(v, &edges, &core, &model.up, limits)).collect()
         },
     }
 }
@@ -723,6 +746,10 @@ pub fn run_with_progress(
         _ => None,
     };
     let leg_weights = feet.as_ref().and_then(|f| model_leg_weights(model, f));
+    let core = {
+        let defs: Vec<_> = model.parts.iter().map(|p| p.part.clone()).collect();
+        crate::group::root_core(&defs, model.template.len())
+    };
     if cfg.foot_lock && cfg.footskate && feet.is_some() && leg_weights.is_none() {
         notes.push("foot lock skipped: the segmentation has no left and right leg parts".into());
     }
@@ -744,6 +771,7 @@ pub fn run_with_progress(
         feet: feet.as_ref(),
         leg_weights: leg_weights.as_ref(),
         soles: &all_soles,
+        core: &core,
     };
     let (mut seconds_writing, mut seconds_statistics) = (0.0, 0.0);
     let capture_limits = cfg.statistics.then(|| CaptureLimits::of_group(group));

@@ -271,8 +271,8 @@ pub const MAX_FIT_FRAMES: usize = 240;
 
 /// Default least number of one part's training frames in the strided fit: below it the stride
 /// is lowered (down to every frame). Demo B's 104-frame jump at 50 fps kept 52 frames at 25 fps,
-/// and its variations did not jump; with every frame they do (docs/RESULTS.md, "Short clips keep
-/// their frames").
+/// and its variations did not jump; with every frame they do
+/// (docs/studies/24-short-clips.md).
 pub const MIN_FIT_FRAMES: usize = 100;
 
 /// Training settings.
@@ -303,7 +303,8 @@ pub const LBFGS_MEMORY: usize = 100;
 /// the fit stops. Demo B locomotion (50 fps, strided N = 222 per part): 1e-10 took 4016
 /// evaluations on the torso, 1e-8 takes 1809 (320-1248 → 161-762 on the limbs) for the same
 /// fig. 4 reconstruction (1.578 mm) and fig. 7b blend errors (1.724 / 1.972 mm) to 1 µm; 1e-7
-/// (905) moves fig. 7b by 0.08-0.13 mm (docs/PERFORMANCE.md, `examples/fit_tolerance`).
+/// (905) moves fig. 7b by 0.08-0.13 mm (docs/studies/12-gpdm-stopping-rule.md,
+/// `examples/fit_tolerance`).
 pub const VALUE_TOLERANCE: f64 = 1e-8;
 
 /// Iteration limit of the joint fit: with at most `max_fit_frames` frames per part the cost of one
@@ -311,7 +312,8 @@ pub const VALUE_TOLERANCE: f64 = 1e-8;
 /// 2,000 × 1.6-2 ms on one core). The demo groups converge before it (the most, A's jump torso,
 /// in 1,995 evaluations); on demo B's walk, run, dance_b group (612 frames, 204 per part) the torso
 /// was still creeping at 10,000 (19.7 s), and stopping at 2,000 (3.3 s) gave fig. 4 2.70 mm
-/// instead of 2.64, fig. 7b guided 10.12 / 8.15 mm instead of 9.46 / 9.22 (docs/PERFORMANCE.md).
+/// instead of 2.64, fig. 7b guided 10.12 / 8.15 mm instead of 9.46 / 9.22
+/// (docs/studies/12-gpdm-stopping-rule.md).
 pub const MAX_ITERATIONS: usize = 2000;
 
 impl Default for TrainConfig {

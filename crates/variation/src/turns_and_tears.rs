@@ -13,9 +13,9 @@
 //! A slow turn passes that bound frame by frame and still takes a body off its course: a
 //! variation frame is **off course** when its torso has turned from the variation's first frame
 //! by more than [`SPIN_FACTOR`] times the most any captured sequence of the group turns from its
-//! own first frame. That angle is the best rigid fit of the root part's core
-//! ([`crate::group::root_core`]), frame 0 onto frame `t`: over every vertex, two strides whose
-//! legs and arms have swapped fit best turned by up to 180°.
+//! own first frame. That angle is the heading about the up axis of the best rigid fit of the root
+//! part's core ([`crate::group::root_core`]), frame 0 onto frame `t` (over every vertex, two
+//! strides whose legs and arms have swapped fit best turned by up to 180°; a lean is not a turn).
 
 use mesh_core::rigid::procrustes;
 use nalgebra::Vector3;
@@ -37,21 +37,11 @@ pub fn turn_degrees(frames: &[Vec<Vector3<f64>>]) -> Vec<f64> {
         .collect()
 }
 
-/// Angle (degrees) of the turn of the vertices `core` (every vertex when empty) from the first
-/// frame to each frame (0 for the first).
-pub fn course_degrees(frames: &[Vec<Vector3<f64>>], core: &[u32]) -> Vec<f64> {
-    let pick = |f: &[Vector3<f64>]| -> Vec<Vector3<f64>> {
-        if core.is_empty() {
-            f.to_vec()
-        } else {
-            core.iter().map(|&v| f[v as usize]).collect()
-        }
-    };
-    let Some(first) = frames.first().map(|f| pick(f)) else { return Vec::new() };
-    frames
-        .iter()
-        .map(|f| procrustes(&first, &pick(f), None).rotation.angle().to_degrees())
-        .collect()
+/// How far (degrees, unsigned) the vertices `core` (every vertex when empty) of each frame have
+/// turned about `up` from the first frame: the heading of [`crate::course::headings`], so
+/// that a lean into a run is not counted as a turn.
+pub fn course_degrees(frames: &[Vec<Vector3<f64>>], core: &[u32], up: &Vector3<f64>) -> Vec<f64> {
+    crate::course::headings(frames, core, up).into_iter().map(|h| h.to_degrees().abs()).collect()
 }
 
 /// Length of the longest edge of each frame (model units, metres).
@@ -98,7 +88,7 @@ impl CaptureLimits {
             }
             let longest = longest_edges(&frames, &edges).into_iter().fold(0.0, f64::max);
             limits.max_edge_m = limits.max_edge_m.max(longest);
-            let course = course_degrees(&frames, &core).into_iter().fold(0.0, f64::max);
+            let course = course_degrees(&frames, &core, &group.up).into_iter().fold(0.0, f64::max);
             limits.max_course_turn_deg = limits.max_course_turn_deg.max(course);
         }
         limits
@@ -140,11 +130,11 @@ pub struct TurnsAndTears {
 
 impl TurnsAndTears {
     /// The spins and tears of `frames` (`edges`: the mesh's unique edges; `core`: the vertices
-    /// the course is measured on, [`course_degrees`]).
-    pub fn of(frames: &[Vec<Vector3<f64>>], edges: &[[u32; 2]], core: &[u32], limits: &CaptureLimits) -> Self {
+    /// the course is measured on, [`course_degrees`], about `up`).
+    pub fn of(frames: &[Vec<Vector3<f64>>], edges: &[[u32; 2]], core: &[u32], up: &Vector3<f64>, limits: &CaptureLimits) -> Self {
         let turns = turn_degrees(frames);
         let longest = longest_edges(frames, edges);
-        let course = course_degrees(frames, core);
+        let course = course_degrees(frames, core, up);
         TurnsAndTears {
             off_course_frames: (0..course.len()).filter(|&t| course[t] > limits.course_bound_deg()).collect(),
             max_course_turn_deg: course.iter().copied().fold(0.0, f64::max),
@@ -198,7 +188,7 @@ mod tests {
         // Frame 3 also has a stretched point: its edge 0-1 grows past 1.5 m.
         frames[3][1] += Vector3::new(0.0, 0.0, 2.0);
         let edges = [[0, 1], [1, 2]];
-        let r = TurnsAndTears::of(&frames, &edges, &[], &limits);
+        let r = TurnsAndTears::of(&frames, &edges, &[], &Vector3::y(), &limits);
         // 9° is within 1.25 × 8° = 10°; 21° is not; frame 3 turns by its tear's fit.
         assert!(r.spinning_frames.contains(&2) && !r.spinning_frames.contains(&1));
         assert_eq!(r.torn_frames, vec![3]);
@@ -213,7 +203,7 @@ mod tests {
         // start by the end, against captures that turn at most 15° from their first frame.
         let limits = CaptureLimits { max_turn_deg: 8.0, max_edge_m: 10.0, max_course_turn_deg: 15.0 };
         let frames: Vec<_> = (0..20).map(|t| turned(6.0 * t as f64)).collect();
-        let r = TurnsAndTears::of(&frames, &[[0, 1]], &[], &limits);
+        let r = TurnsAndTears::of(&frames, &[[0, 1]], &[], &Vector3::y(), &limits);
         assert!(r.spinning_frames.is_empty(), "{:?}", r.spinning_frames);
         // 18.75° is the bound: frames 4 (24°) on are off course.
         assert_eq!(r.off_course_frames, (4..20).collect::<Vec<_>>());

@@ -118,6 +118,7 @@ fn tiny_set_end_to_end() {
         thin: 3,
         target_accept: 0.7,
         grounding: true,
+        course: true,
         footskate: true,
         footskate_smoothness: variation::footskate::SMOOTHNESS,
         foot_lock: true,

@@ -1,4 +1,5 @@
-//! The distal (bend) map of the limb studies (docs/RESULTS.md, study 6): each limb's distal half
+//! The distal (bend) map of the limb studies (docs/studies/06-limb-orientation.md): each limb's
+//! distal half
 //! (the vertices farther from its joint than the proximal half) has a rotation relative to the
 //! proximal half's; an affine map of that relative log-rotation, source to target, is fitted on
 //! the training pairs like the proximal map (ridge 0.1 toward the identity), and at prediction

@@ -53,7 +53,7 @@ pub struct Params {
     /// Neural-network kernel with the bias input (R&W eq. 4.29); eq. 10 as printed has none, which limits the GP to odd functions
     #[arg(long)]
     pub nn_bias: bool,
-    /// Named configuration (docs/RESULTS.md, "Leave-one-motion-out"): `default` (affine mean,
+    /// Named configuration (docs/studies/10-leave-one-motion-out.md): `default` (affine mean,
     /// prior weight 0.25, limb orientation 0.5), `no-prior` (--prior-weight 0), `affine-only`
     /// (no prior, no limb orientation), `zero-mean` (--mean zero), `paper` (zero mean, no limb
     /// orientation: CVPR's model); `auto` trains those five and keeps the one with the lowest
@@ -83,7 +83,7 @@ pub struct Params {
     pub mean_prior: MeanPrior,
     /// Weight of the geometric prior mixed into each part's affine mean (0: the fitted map alone).
     /// The default suits five training motions; with eight or more, 0 measured better on every
-    /// benchmark set (docs/RESULTS.md, "Training coverage") [default: the configuration's, 0.25]
+    /// benchmark set (docs/studies/09-training-coverage.md) [default: the configuration's, 0.25]
     #[arg(long, value_name = "W")]
     pub prior_weight: Option<f64>,
     /// How far each limb is turned from the orientation the pose GP predicts toward the one a
@@ -94,7 +94,7 @@ pub struct Params {
     /// Limbs whose orientation is measured relative to their attachment, the root part's region
     /// around their joint (an arm's shoulder girdle), instead of the root part's whole frame
     /// (comma-separated limb names, e.g. `arm_l,arm_r`; ignored by the whole-body method;
-    /// default: none, docs/RESULTS.md study 6)
+    /// default: none, docs/studies/06-limb-orientation.md)
     #[arg(long, value_delimiter = ',', value_name = "PARTS")]
     pub attached_limbs: Vec<String>,
     /// Observation-noise variance σn² (the paper's 0.1; the starting value with --learn-noise)

@@ -36,6 +36,11 @@ pub struct Params {
     /// it 1/β4 collapses on some parts and HMC returns copies of the source)
     #[arg(long, default_value_t = crate::train::DYN_NOISE_FLOOR)]
     pub dyn_noise_floor: f64,
+    /// Weight of the dynamics term in the objective: paper (3DV eq. 7 as printed) or balanced
+    /// (the dynamics density raised to D/d, so the latent trajectories are shaped by the
+    /// dynamics as much as by the poses)
+    #[arg(long, value_enum, default_value_t = gpdm::DynamicsWeight::default())]
+    pub dynamics_weight: gpdm::DynamicsWeight,
     /// Alternating rounds of (X, α) and β-only L-BFGS phases (0 = one joint fit, the default)
     #[arg(long, default_value_t = 0)]
     pub rounds: usize,
@@ -90,6 +95,7 @@ pub fn run(p: &Params) -> anyhow::Result<()> {
     cfg.gpdm.latent_dim = p.latent_dim;
     cfg.gpdm.pose_noise_floor = (p.noise_floor > 0.0).then_some(p.noise_floor);
     cfg.gpdm.dyn_noise_floor = (p.dyn_noise_floor > 0.0).then_some(p.dyn_noise_floor);
+    cfg.gpdm.dynamics_weight = p.dynamics_weight;
     if p.rounds > 0 {
         cfg.options.schedule = Schedule::Alternate {
             rounds: p.rounds,

@@ -95,6 +95,11 @@ pub struct Params {
     /// time, so that its soles follow the source's at the DTW-matched frame)
     #[arg(long)]
     pub no_grounding: bool,
+    /// Do not keep the variations on their sources' course (by default each frame is turned
+    /// about the vertical, slowly in time, so that its heading follows the source's at the
+    /// DTW-matched frame; the sway within a stride is the variation's own)
+    #[arg(long)]
+    pub no_course: bool,
     /// Do not clean up foot skating (by default each frame is shifted horizontally, smoothly in
     /// time, so that feet planted in the source at the DTW-matched frame stay put; a foot on
     /// the source's floor at the clip's first or last frame counts as planted there)
@@ -192,6 +197,7 @@ pub fn run(p: &Params) -> anyhow::Result<()> {
         thin: p.thin,
         target_accept: p.target_accept,
         grounding: !p.no_grounding,
+        course: !p.no_course,
         footskate: !p.no_footskate,
         footskate_smoothness: p.footskate_smoothness,
         foot_lock: !p.no_foot_lock,
