@@ -427,6 +427,29 @@ impl PcaModel {
             .collect())
     }
 
+    /// Each part's vertices of one aligned frame in the frame PCA works in: the frame's row of
+    /// [`PcaModel::part_rows`] per part, as vertices. Fails unless the frame has the model's
+    /// vertex count.
+    pub fn frame_parts(&self, frame: &[Vector3<f64>]) -> Result<Vec<Vec<Vector3<f64>>>> {
+        if frame.len() != self.n_vertices {
+            return Err(Error::invalid(format!(
+                "a frame of {} vertices for a PCA model fitted on {}",
+                frame.len(),
+                self.n_vertices
+            )));
+        }
+        Ok(self
+            .parts
+            .iter()
+            .map(|p| {
+                aligned_part_row(frame, &p.vertices, &p.reference, self.alignment)
+                    .chunks_exact(3)
+                    .map(|c| Vector3::new(c[0], c[1], c[2]))
+                    .collect()
+            })
+            .collect())
+    }
+
     /// Coefficients of every frame of `motion`, per part (`F x m_k` each).
     pub fn encode(&self, motion: &AlignedMotion) -> Result<Vec<DMatrix<f64>>> {
         self.encode_rows(&self.part_rows(motion)?)
