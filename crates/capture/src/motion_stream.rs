@@ -267,6 +267,28 @@ mod tests {
         assert_eq!((back, sha), AlignedMotion::load_hashed(&path).unwrap());
     }
 
+    /// A motion encoded as it is read has the coefficients `encode` gives on the loaded motion,
+    /// bit for bit, and the file's hash.
+    #[test]
+    fn read_encoded_is_the_encoding_of_the_loaded_motion() {
+        use crate::part_pca::{fit, whole_body, PartAlignment};
+        let dir = tempfile::tempdir().unwrap();
+        let mut m = motion(40, 6);
+        m.faces = vec![[0, 1, 2], [2, 3, 4], [3, 4, 5]];
+        for (f, frame) in m.frames.iter_mut().enumerate() {
+            for (v, p) in frame.iter_mut().enumerate() {
+                p.z += ((f * 7 + v * 3) as f64).sin();
+            }
+        }
+        m.capture.template_sha256.clear();
+        let path = save(dir.path(), "m.aligned", &m);
+        let (model, _) = fit(&m.frames[0], &whole_body(6), &[&m], gp::pca::Components::Count(4), PartAlignment::Body).unwrap();
+        let (coefficients, info, sha) = read_encoded(&path, &model).unwrap();
+        let bits = |c: &[DMatrix<f64>]| c.iter().flat_map(|x| x.iter().map(|v| v.to_bits())).collect::<Vec<_>>();
+        assert!(bits(&coefficients) == bits(&model.encode(&m).unwrap()), "coefficients differ");
+        assert_eq!((info.n_frames, sha), (40, mesh_core::artifact::sha256_file(&path).unwrap()));
+    }
+
     /// A motion `validate` refuses is refused with the same message, and its bad frames never
     /// reach the sink; a corrupt file is a checksum mismatch, a sink's error names the file.
     #[test]

@@ -308,6 +308,33 @@ mod tests {
         }
     }
 
+    /// The training part meshes read a frame at a time are those `new` cuts from the loaded
+    /// motions, bit for bit: every `stride`-th frame of each motion in turn, on both part
+    /// alignments.
+    #[test]
+    fn training_part_meshes_read_a_frame_at_a_time_are_the_loaded_ones() {
+        use mesh_core::artifact::Artifact;
+        let (mesh, seg, motion) = bending_capsule();
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("m.aligned");
+        motion.save(&path, &mesh_core::artifact::Header::new("align", "0")).unwrap();
+        for alignment in [PartAlignment::Body, PartAlignment::Part] {
+            let (pca, _) = fit(&mesh.vertices, &seg, &[&motion], Components::Count(20), alignment).unwrap();
+            let rows = pca.part_rows(&motion).unwrap();
+            for stride in [1, 2, 3] {
+                let read = training_part_meshes(&pca, &[path.clone(), path.clone()], stride).unwrap();
+                let want: Vec<Vec<Vec<Vector3<f64>>>> = rows
+                    .iter()
+                    .map(|r| {
+                        let once: Vec<Vec<Vector3<f64>>> = rows_to_meshes(r).into_iter().step_by(stride).collect();
+                        [once.clone(), once].concat()
+                    })
+                    .collect();
+                assert!(read == want, "{alignment:?}, stride {stride}: part meshes differ");
+            }
+        }
+    }
+
     /// The correction undoes a shrinkage of the limb (the PCA regression
     /// artefact §6.1 targets): mean edge length returns to the training value.
     #[test]
