@@ -6,7 +6,8 @@
 //! e.g.: subdivided_motion --template set/A/walk/000000.ply --levels 2 --frames 250 \
 //!           --out /tmp/big work/A/walk.aligned work/A/run.aligned
 //! writes /tmp/big/template.ply and /tmp/big/motion.aligned (aligned to that template on every
-//! vertex); give `pca-fit` that motion k times for k x 250 frames.
+//! vertex); give `pca-fit` that motion k times for k x 250 frames. With `--ply`, the frames are
+//! also written as /tmp/big/frames/000000.ply, ... (a motion folder for `align`).
 
 use std::path::PathBuf;
 
@@ -31,6 +32,9 @@ struct Args {
     /// Output folder (template.ply, motion.aligned)
     #[arg(short, long)]
     out: PathBuf,
+    /// Also write the frames as PLY files in OUT/frames
+    #[arg(long)]
+    ply: bool,
     /// Aligned motions of that template
     #[arg(required = true)]
     motions: Vec<PathBuf>,
@@ -62,6 +66,10 @@ fn main() -> anyhow::Result<()> {
             v
         })
         .collect();
+    let frames: Vec<Vec<nalgebra::Vector3<f64>>> = frames;
+    if a.ply {
+        mesh_core::sequence::MeshSequence::new(faces.clone(), frames.clone()).write_dir(a.out.join("frames"))?;
+    }
     let motion = AlignedMotion {
         faces,
         frames,

@@ -280,41 +280,17 @@ pub fn align_motion_on(
     motion: &MeshSequence,
     anchor: &[u32],
 ) -> Result<AlignedMotion> {
-    if let Some(&v) = anchor.iter().find(|&&v| v as usize >= template.n_vertices()) {
-        return Err(Error::invalid(format!(
-            "alignment vertex {v} is beyond the template's {} vertices",
-            template.n_vertices()
-        )));
-    }
-    if motion.n_vertices() != template.n_vertices() || motion.faces != template.faces {
-        return Err(Error::invalid(format!(
-            "motion has {} vertices and {} faces but the template has {} and {}: not the same topology",
-            motion.n_vertices(),
-            motion.n_faces(),
-            template.n_vertices(),
-            template.n_faces()
-        )));
-    }
+    check_anchor(template, anchor)?;
+    check_topology(template, motion.n_vertices(), &motion.faces)?;
     if motion.n_frames() == 0 {
         return Err(Error::invalid("motion has no frames"));
     }
-    let poses: Vec<RigidMotion> = motion
+    let (poses, frames): (Vec<RigidMotion>, Vec<Vec<Vector3<f64>>>) = motion
         .frames
         .par_iter()
-        .map(|frame| fit_on(&template.vertices, frame, anchor))
-        .collect();
-    let frames: Vec<Vec<Vector3<f64>>> = motion
-        .frames
-        .par_iter()
-        .zip(&poses)
-        .map(|(frame, pose)| pose.inverse().apply_all(frame))
-        .collect();
-    let roots = root_poses(&poses, &root_point(&template.vertices, anchor));
-    let mut displacements = vec![[0.0; 6]];
-    for w in roots.windows(2) {
-        let d: Vector6<f64> = relative_in_body_frame(&w[0], &w[1]).to_6vec();
-        displacements.push(d.into());
-    }
+        .map(|frame| align_frame(template, frame, anchor))
+        .unzip();
+    let displacements = displacements(template, anchor, &poses);
     Ok(AlignedMotion {
         faces: motion.faces.clone(),
         frames,
@@ -323,6 +299,52 @@ pub fn align_motion_on(
         anchor: anchor.to_vec(),
         capture: CaptureInfo::default(),
     })
+}
+
+/// Fails unless every `anchor` vertex is a vertex of `template`.
+pub fn check_anchor(template: &TriMesh, anchor: &[u32]) -> Result<()> {
+    match anchor.iter().find(|&&v| v as usize >= template.n_vertices()) {
+        Some(&v) => Err(Error::invalid(format!(
+            "alignment vertex {v} is beyond the template's {} vertices",
+            template.n_vertices()
+        ))),
+        None => Ok(()),
+    }
+}
+
+/// Fails unless a motion of `n_vertices` vertices and `faces` has `template`'s topology.
+pub fn check_topology(template: &TriMesh, n_vertices: usize, faces: &[[u32; 3]]) -> Result<()> {
+    if n_vertices != template.n_vertices() || faces != template.faces.as_slice() {
+        return Err(Error::invalid(format!(
+            "motion has {} vertices and {} faces but the template has {} and {}: not the same topology",
+            n_vertices,
+            faces.len(),
+            template.n_vertices(),
+            template.n_faces()
+        )));
+    }
+    Ok(())
+}
+
+/// One frame aligned: its world pose `P` fitted on the `anchor` vertices, and the frame
+/// brought back to the template, `P⁻¹ V`. A frame's alignment depends on no other frame.
+pub fn align_frame(template: &TriMesh, frame: &[Vector3<f64>], anchor: &[u32]) -> (RigidMotion, Vec<Vector3<f64>>) {
+    let pose = fit_on(&template.vertices, frame, anchor);
+    let aligned = pose.inverse().apply_all(frame);
+    (pose, aligned)
+}
+
+/// The displacements `D_i` of frames with world poses `poses` (`D_0 = 0`; see the module
+/// documentation): motions of the root point of `template`'s `anchor` vertices.
+pub fn displacements(template: &TriMesh, anchor: &[u32], poses: &[RigidMotion]) -> Vec<[f64; 6]> {
+    let roots = root_poses(poses, &root_point(&template.vertices, anchor));
+    let mut displacements = vec![[0.0; 6]];
+    for w in roots.windows(2) {
+        let d: Vector6<f64> = relative_in_body_frame(&w[0], &w[1]).to_6vec();
+        displacements.push(d.into());
+    }
+    displacements.truncate(poses.len());
+    displacements
 }
 
 #[cfg(test)]

@@ -8,6 +8,7 @@
 //! calls the library.
 
 pub mod align;
+pub mod align_stream;
 pub mod motion_stream;
 pub mod part_pca;
 pub mod streamed_pca;

@@ -1,7 +1,7 @@
 //! Reading an aligned motion frame by frame: each frame goes to a sink as it is decoded, so a
 //! motion of any length is read holding one frame (plus whatever the sink keeps), in one pass
-//! that also hashes the file. `gpr-train` encodes the frames into PCA coefficients this way
-//! ([`crate::part_pca::FrameEncoder`]) instead of holding whole motions, and `pca-fit` reads
+//! that also hashes the file. `gpr-train` and `dtw-densify` encode the frames into PCA
+//! coefficients this way ([`read_encoded`]) instead of holding whole motions, and `pca-fit` reads
 //! its training motions pass by pass ([`MotionFiles`], [`crate::streamed_pca`]).
 //!
 //! The frames are checked as [`AlignedMotion::validate`] checks them, and the sink gets only
@@ -15,11 +15,11 @@ use std::path::{Path, PathBuf};
 use mesh_core::artifact::{read_artifact_seeded, Artifact};
 use mesh_core::rigid::RigidMotion;
 use mesh_core::{Error, Result};
-use nalgebra::Vector3;
+use nalgebra::{DMatrix, Vector3};
 use serde::de::{DeserializeSeed, Deserializer, Error as _, SeqAccess, Visitor};
 
 use crate::align::{check_besides_frames, AlignedMotion, CaptureInfo, FrameChecks};
-use crate::part_pca::check_same_template;
+use crate::part_pca::{check_same_template, FrameEncoder, PcaModel};
 use crate::streamed_pca::TrainingFrames;
 
 /// An aligned motion without its frames' vertices, as [`read_frames`] returns it.
@@ -59,6 +59,20 @@ pub fn read_frames(
         return Err(Error::file(path, e.to_string()));
     }
     Ok((MotionInfo { faces, n_frames, n_vertices: n, poses, displacements, anchor, capture }, sha256))
+}
+
+/// The aligned motion at `path` encoded with `pca` as it is read ([`read_frames`] into a
+/// [`FrameEncoder`]): per part, the coefficients of every frame (`F x m_k`, those of
+/// [`PcaModel::encode`] on the loaded motion, to the bit), the rest of the motion and the file's
+/// SHA-256. Holds the coefficients and at most two encoder blocks of frames, never the motion.
+/// Fails, naming the file, as [`PcaModel::check_motion`] fails on a motion of another vertex
+/// count or template.
+pub fn read_encoded(path: impl AsRef<Path>, pca: &PcaModel) -> Result<(Vec<DMatrix<f64>>, MotionInfo, String)> {
+    let path = path.as_ref();
+    let mut encoder = FrameEncoder::new(pca);
+    let (info, sha256) = read_frames(path, |f| encoder.push(f))?;
+    let coefficients = encoder.finish(&info.capture.template_sha256).map_err(|e| Error::file(path, e.to_string()))?;
+    Ok((coefficients, info, sha256))
 }
 
 /// Aligned motion files as [`TrainingFrames`]: every pass reads them again with
@@ -251,6 +265,28 @@ mod tests {
         let (back, sha) = read_all(&path).unwrap();
         assert_eq!(back, m);
         assert_eq!((back, sha), AlignedMotion::load_hashed(&path).unwrap());
+    }
+
+    /// A motion encoded as it is read has the coefficients `encode` gives on the loaded motion,
+    /// bit for bit, and the file's hash.
+    #[test]
+    fn read_encoded_is_the_encoding_of_the_loaded_motion() {
+        use crate::part_pca::{fit, whole_body, PartAlignment};
+        let dir = tempfile::tempdir().unwrap();
+        let mut m = motion(40, 6);
+        m.faces = vec![[0, 1, 2], [2, 3, 4], [3, 4, 5]];
+        for (f, frame) in m.frames.iter_mut().enumerate() {
+            for (v, p) in frame.iter_mut().enumerate() {
+                p.z += ((f * 7 + v * 3) as f64).sin();
+            }
+        }
+        m.capture.template_sha256.clear();
+        let path = save(dir.path(), "m.aligned", &m);
+        let (model, _) = fit(&m.frames[0], &whole_body(6), &[&m], gp::pca::Components::Count(4), PartAlignment::Body).unwrap();
+        let (coefficients, info, sha) = read_encoded(&path, &model).unwrap();
+        let bits = |c: &[DMatrix<f64>]| c.iter().flat_map(|x| x.iter().map(|v| v.to_bits())).collect::<Vec<_>>();
+        assert!(bits(&coefficients) == bits(&model.encode(&m).unwrap()), "coefficients differ");
+        assert_eq!((info.n_frames, sha), (40, mesh_core::artifact::sha256_file(&path).unwrap()));
     }
 
     /// A motion `validate` refuses is refused with the same message, and its bad frames never

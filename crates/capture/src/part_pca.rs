@@ -427,6 +427,29 @@ impl PcaModel {
             .collect())
     }
 
+    /// Each part's vertices of one aligned frame in the frame PCA works in: the frame's row of
+    /// [`PcaModel::part_rows`] per part, as vertices. Fails unless the frame has the model's
+    /// vertex count.
+    pub fn frame_parts(&self, frame: &[Vector3<f64>]) -> Result<Vec<Vec<Vector3<f64>>>> {
+        if frame.len() != self.n_vertices {
+            return Err(Error::invalid(format!(
+                "a frame of {} vertices for a PCA model fitted on {}",
+                frame.len(),
+                self.n_vertices
+            )));
+        }
+        Ok(self
+            .parts
+            .iter()
+            .map(|p| {
+                aligned_part_row(frame, &p.vertices, &p.reference, self.alignment)
+                    .chunks_exact(3)
+                    .map(|c| Vector3::new(c[0], c[1], c[2]))
+                    .collect()
+            })
+            .collect())
+    }
+
     /// Coefficients of every frame of `motion`, per part (`F x m_k` each).
     pub fn encode(&self, motion: &AlignedMotion) -> Result<Vec<DMatrix<f64>>> {
         self.encode_rows(&self.part_rows(motion)?)
@@ -482,9 +505,20 @@ impl PcaModel {
     }
 }
 
-/// Frames a [`FrameEncoder`] encodes at a time. Any count above 5 gives the same coefficients
-/// (see [`FrameEncoder`]); 256 frames of a 1,000-vertex body are 6 MB.
+/// Most frames a [`FrameEncoder`] encodes at a time. Any count above 5 gives the same
+/// coefficients (see [`FrameEncoder`]); 256 frames of a 1,000-vertex body are 6 MB.
 const ENCODE_BLOCK: usize = 256;
+/// Fewest frames a [`FrameEncoder`] encodes at a time (see [`FrameEncoder`]).
+const MIN_ENCODE_BLOCK: usize = 6;
+/// Bytes of frames a [`FrameEncoder`] encodes at a time, at most (unless [`MIN_ENCODE_BLOCK`]
+/// frames are more): a block of a 100,000-vertex body is 13 frames.
+const ENCODE_BLOCK_BYTES: usize = 32 << 20;
+
+/// The frames of `n_vertices` vertices a [`FrameEncoder`] encodes at a time.
+fn encode_block(n_vertices: usize) -> usize {
+    let frame_bytes = n_vertices.max(1).saturating_mul(std::mem::size_of::<Vector3<f64>>());
+    (ENCODE_BLOCK_BYTES / frame_bytes).clamp(MIN_ENCODE_BLOCK, ENCODE_BLOCK)
+}
 
 /// Encodes a motion's frames into per-part coefficients as they arrive (e.g. from
 /// [`crate::motion_stream::read_frames`]), a block of frames at a time, so that the motion is
@@ -493,11 +527,15 @@ const ENCODE_BLOCK: usize = 256;
 /// of a block of rows with the basis computes every coefficient by the same sum in the same
 /// order whatever the number of rows, on either of its two paths (matrixmultiply's packed
 /// kernels, which split only the shared dimension; column-by-column `gemv` when a dimension is
-/// at most 5). The path is chosen by the dimensions, so every block has more than 5 rows: a
-/// block is encoded once `2 x ENCODE_BLOCK` frames wait, and [`FrameEncoder::finish`] encodes
-/// the last `ENCODE_BLOCK` or more (or the whole motion, when it is shorter).
+/// at most 5). The path is chosen by the dimensions, so every block has more than 5 rows: with
+/// blocks of `b` frames (256, or fewer for a body above 16,000 vertices: 32 MiB of frames, at
+/// least 6), a block is encoded once `2b` frames wait, and [`FrameEncoder::finish`] encodes the
+/// last `b` or more (or the whole motion, when it is shorter). The encoder holds at most `2b`
+/// frames and their part rows, whatever the motion's length.
 pub struct FrameEncoder<'a> {
     model: &'a PcaModel,
+    /// Frames encoded at a time.
+    block: usize,
     waiting: Vec<Vec<Vector3<f64>>>,
     /// Coefficients of the blocks encoded so far: `[block][part]`.
     blocks: Vec<Vec<DMatrix<f64>>>,
@@ -506,7 +544,13 @@ pub struct FrameEncoder<'a> {
 
 impl<'a> FrameEncoder<'a> {
     pub fn new(model: &'a PcaModel) -> Self {
-        FrameEncoder { model, waiting: Vec::new(), blocks: Vec::new(), n_frames: 0 }
+        Self::with_block(model, encode_block(model.n_vertices))
+    }
+
+    /// An encoder of `block` frames at a time (at least [`MIN_ENCODE_BLOCK`]).
+    fn with_block(model: &'a PcaModel, block: usize) -> Self {
+        let block = block.max(MIN_ENCODE_BLOCK);
+        FrameEncoder { model, block, waiting: Vec::new(), blocks: Vec::new(), n_frames: 0 }
     }
 
     /// Takes the next frame; fails unless it has the model's vertex count (the message of
@@ -523,8 +567,8 @@ impl<'a> FrameEncoder<'a> {
         }
         self.n_frames += 1;
         self.waiting.push(frame);
-        if self.waiting.len() >= 2 * ENCODE_BLOCK {
-            let block: Vec<Vec<Vector3<f64>>> = self.waiting.drain(..ENCODE_BLOCK).collect();
+        if self.waiting.len() >= 2 * self.block {
+            let block: Vec<Vec<Vector3<f64>>> = self.waiting.drain(..self.block).collect();
             self.blocks.push(self.encode_block(&block)?);
         }
         Ok(())
@@ -616,8 +660,9 @@ mod tests {
     }
 
     /// The frames encoded a block at a time as they arrive give the bits `encode` gives on the
-    /// whole motion, for motions shorter and longer than a block and around the block edges, on
-    /// both product paths (3 and 8 components) and both part alignments.
+    /// whole motion, for motions shorter and longer than a block and around the block edges, for
+    /// blocks of the fewest frames and the most, on both product paths (3 and 8 components) and
+    /// both part alignments; a block is the most frames up to 32 MiB.
     #[test]
     fn frame_encoder_gives_the_whole_motion_encoding_to_the_bit() {
         let t = cylinder(6, 8, 0.1, 1.0);
@@ -638,11 +683,14 @@ mod tests {
             let mut model = fit_with(3);
             model.parts.extend(fit_with(8).parts);
             assert_eq!((model.parts[0].pca.n_components(), model.parts[1].pca.n_components()), (3, 8));
-            for n in [1, 5, 6, ENCODE_BLOCK, 2 * ENCODE_BLOCK - 1, 2 * ENCODE_BLOCK, 2 * ENCODE_BLOCK + 1, 2 * ENCODE_BLOCK + 5, longest] {
+            let blocks = [6, 7, 13, ENCODE_BLOCK].into_iter().flat_map(|b| {
+                [1, 5, 6, b, 2 * b - 1, 2 * b, 2 * b + 1, 2 * b + 5, 3 * b + 7, longest].map(|n| (b, n))
+            });
+            for (block, n) in blocks {
                 let mut motion = aligned.clone();
                 motion.frames.truncate(n);
                 let whole = model.encode(&motion).unwrap();
-                let mut enc = FrameEncoder::new(&model);
+                let mut enc = FrameEncoder::with_block(&model, block);
                 for f in &motion.frames {
                     enc.push(f.clone()).unwrap();
                 }
@@ -650,10 +698,11 @@ mod tests {
                 for (k, (a, b)) in whole.iter().zip(&streamed).enumerate() {
                     assert_eq!(a.shape(), b.shape(), "{n} frames, part {k}");
                     let bits = |m: &DMatrix<f64>| m.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
-                    assert!(bits(a) == bits(b), "{alignment:?}, {n} frames, part {k}: coefficients differ");
+                    assert!(bits(a) == bits(b), "{alignment:?}, blocks of {block}, {n} frames, part {k}: coefficients differ");
                 }
             }
         }
+        assert_eq!((encode_block(48), encode_block(100_000), encode_block(10_000_000)), (ENCODE_BLOCK, 13, MIN_ENCODE_BLOCK));
         let model = fit(&t.vertices, &seg, &[&aligned], Components::Count(3), PartAlignment::Body).unwrap().0;
         let mut enc = FrameEncoder::new(&model);
         enc.push(frame(0)).unwrap();

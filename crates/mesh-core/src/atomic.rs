@@ -102,6 +102,15 @@ pub fn write_atomic<F>(path: &Path, fill: F) -> Result<()>
 where
     F: FnOnce(&mut dyn Write) -> std::io::Result<()>,
 {
+    write_atomic_with(path, |w| fill(w).map_err(|e| Error::io(path, e)))
+}
+
+/// [`write_atomic`] with a `fill` that fails with its own error (e.g. one naming an input file
+/// it was reading while it wrote), returned as it is.
+pub fn write_atomic_with<F>(path: &Path, fill: F) -> Result<()>
+where
+    F: FnOnce(&mut dyn Write) -> Result<()>,
+{
     let dir = parent_of(path);
     std::fs::create_dir_all(dir).map_err(|e| Error::io(dir, e))?;
     if path.is_dir() {
@@ -123,7 +132,7 @@ where
         .map_err(|e| Error::io(path, without_path(e)))?;
     {
         let mut w = BufWriter::new(tmp.as_file());
-        fill(&mut w).map_err(|e| Error::io(path, e))?;
+        fill(&mut w)?;
         w.flush().map_err(|e| Error::io(path, e))?;
     }
     tmp.as_file().sync_all().map_err(|e| Error::io(path, e))?;

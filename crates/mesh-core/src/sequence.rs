@@ -207,7 +207,7 @@ impl MeshSequence {
         let meshes: Vec<Result<TriMesh>> = files.par_iter().map(read_mesh).inspect(|_| bar.inc(1)).collect();
         bar.finish_and_clear();
         let mut faces = Vec::new();
-        let mut frames = Vec::with_capacity(files.len());
+        let mut frames: Vec<Vec<Vector3<f64>>> = Vec::with_capacity(files.len());
         for (i, (mesh, path)) in meshes.into_iter().zip(files).enumerate() {
             let mesh = mesh?;
             if i == 0 {
@@ -215,31 +215,7 @@ impl MeshSequence {
                 frames.push(mesh.vertices);
                 continue;
             }
-            let first = first_path.file_name().unwrap_or_default().to_string_lossy();
-            if mesh.vertices.len() != frames[0].len() {
-                return Err(Error::file(
-                    path,
-                    format!(
-                        "has {} vertices but the first frame ({first}) has {}",
-                        mesh.vertices.len(),
-                        frames[0].len()
-                    ),
-                ));
-            }
-            if mesh.faces != faces {
-                let msg = match mesh.faces.iter().zip(&faces).position(|(a, b)| a != b) {
-                    _ if mesh.faces.len() != faces.len() => format!(
-                        "has {} faces but the first frame ({first}) has {}",
-                        mesh.faces.len(),
-                        faces.len()
-                    ),
-                    Some(f) => format!(
-                        "face {f} differs from the first frame ({first}): topology must be shared"
-                    ),
-                    None => unreachable!("equal lengths and no differing face"),
-                };
-                return Err(Error::file(path, msg));
-            }
+            check_like_first(first_path, frames[0].len(), &faces, path, &mesh)?;
             frames.push(mesh.vertices);
         }
         Ok(MeshSequence { faces, frames })
@@ -262,6 +238,37 @@ impl MeshSequence {
         bar.finish_and_clear();
         done
     }
+}
+
+/// Fails, naming `path`, unless the frame `mesh` read from it has the vertex count `n_vertices`
+/// and the faces `faces` of the sequence's first frame, read from `first_path`.
+pub fn check_like_first(
+    first_path: &Path,
+    n_vertices: usize,
+    faces: &[[u32; 3]],
+    path: &Path,
+    mesh: &TriMesh,
+) -> Result<()> {
+    let first = first_path.file_name().unwrap_or_default().to_string_lossy();
+    if mesh.vertices.len() != n_vertices {
+        return Err(Error::file(
+            path,
+            format!("has {} vertices but the first frame ({first}) has {n_vertices}", mesh.vertices.len()),
+        ));
+    }
+    if mesh.faces.len() != faces.len() {
+        return Err(Error::file(
+            path,
+            format!("has {} faces but the first frame ({first}) has {}", mesh.faces.len(), faces.len()),
+        ));
+    }
+    if let Some(f) = mesh.faces.iter().zip(faces).position(|(a, b)| a != b) {
+        return Err(Error::file(
+            path,
+            format!("face {f} differs from the first frame ({first}): topology must be shared"),
+        ));
+    }
+    Ok(())
 }
 
 /// Writes a folder of `n` numbered frames `000000.<ext>`, ... atomically

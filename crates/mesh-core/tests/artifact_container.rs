@@ -386,3 +386,42 @@ fn seeded_reading_in_one_pass_agrees_with_whole_file_reading() {
         assert_eq!(got, read_whole(&other, "test-model", 3));
     }
 }
+
+/// A payload written piece by piece, field by field and element by element, is the file
+/// `save` writes for the whole value; a wrong announced length or a failing piece leaves
+/// neither the output nor a temporary file, and the piece's own error is returned.
+#[test]
+fn streamed_writing_gives_the_saved_file() {
+    use mesh_core::artifact::{encoded_len, encoded_seq_len, write_artifact_streamed};
+    let dir = tempfile::tempdir().unwrap();
+    let (_, want) = good_file(dir.path());
+    let m = model();
+    let len = encoded_len(&m.name).unwrap()
+        + encoded_seq_len(m.values.len())
+        + m.values.iter().map(|v| encoded_len(v).unwrap()).sum::<u64>()
+        + encoded_len(&m.faces).unwrap()
+        + encoded_len(&m.parts).unwrap();
+    let fill = |w: &mut mesh_core::artifact::PayloadWriter<'_>| {
+        w.encode(&m.name)?;
+        w.seq_len(m.values.len())?;
+        for v in &m.values {
+            w.encode(v)?;
+        }
+        w.encode(&m.faces)?;
+        w.encode(&m.parts)
+    };
+    let out_dir = dir.path().join("out");
+    let out = out_dir.join("streamed.art");
+    write_artifact_streamed(&out, Model::KIND, Model::VERSION, &header(dir.path()), len, fill).unwrap();
+    assert!(std::fs::read(&out).unwrap() == want, "streamed bytes differ from the saved file");
+    std::fs::remove_file(&out).unwrap();
+
+    let err = err_of(write_artifact_streamed(&out, Model::KIND, Model::VERSION, &header(dir.path()), len + 1, fill));
+    assert!(err.contains("not the") && err.contains("announced"), "{err}");
+    let err = err_of(write_artifact_streamed(&out, Model::KIND, Model::VERSION, &header(dir.path()), len, |w| {
+        w.encode(&m.name)?;
+        Err(mesh_core::Error::file("frame.ply", "truncated"))
+    }));
+    assert_eq!(err, "frame.ply: truncated");
+    assert_eq!(std::fs::read_dir(&out_dir).unwrap().count(), 0, "output or temporary left behind");
+}

@@ -232,22 +232,34 @@ fn median(values: &mut [f64]) -> f64 {
     }
 }
 
-/// The source motion as placed in the world, its soles and the contacts detected on them.
+/// The source's soles as placed in the world and the contacts detected on them.
 pub struct SourceContacts {
+    /// Per frame, the placed sole vertices: the left sole's, then the right's.
     pub world: Vec<Vec<Vector3<f64>>>,
+    /// Indices into `world`'s frames of the left and the right sole.
     pub soles: [Vec<u32>; 2],
     pub contacts: Vec<[bool; 2]>,
 }
 
-/// The source's contacts, detected on its own placed meshes ([`contact_detector::detect`]);
-/// None when it has no two leg parts or no frame rate.
+/// The source's contacts, detected on its own placed soles ([`contact_detector::detect`], which
+/// reads the sole vertices only: the rest of the body is not placed); None when it has no two
+/// leg parts or no frame rate.
 pub fn source_contacts(source_pca: &PcaModel, motion: &AlignedMotion) -> Option<SourceContacts> {
     let up = Vector3::from(motion.capture.up);
-    let soles = soles(source_pca, &up)?;
+    let body_soles = soles(source_pca, &up)?;
     if !(motion.capture.fps > 0.0) {
         return None;
     }
-    let world = place(&motion.poses, &motion.frames);
+    let picked: Vec<u32> = body_soles.iter().flatten().copied().collect();
+    if let Some(&v) = picked.iter().find(|&&v| motion.frames.iter().any(|f| v as usize >= f.len())) {
+        mesh_core::info!("sole vertex {v} is beyond the source motion's vertices: no contacts");
+        return None;
+    }
+    let sole_frames: Vec<Vec<Vector3<f64>>> =
+        motion.frames.iter().map(|f| picked.iter().map(|&v| f[v as usize]).collect()).collect();
+    let world = place(&motion.poses, &sole_frames);
+    let left = body_soles[0].len() as u32;
+    let soles = [(0..left).collect(), (left..picked.len() as u32).collect()];
     let contacts = contact_detector::detect(&world, &soles, &up, motion.capture.fps, &Rule::default())?;
     Some(SourceContacts { world, soles, contacts })
 }

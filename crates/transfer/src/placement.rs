@@ -106,6 +106,16 @@ pub fn place(poses: &[RigidMotion], frames: &[Vec<Vector3<f64>>]) -> Vec<Vec<Vec
         .collect()
 }
 
+/// [`place`] without a second copy of the frames: each frame is replaced by its placed self.
+pub fn place_in_place(poses: &[RigidMotion], frames: &mut Vec<Vec<Vector3<f64>>>) {
+    frames.truncate(poses.len());
+    for (f, p) in frames.iter_mut().zip(poses) {
+        for v in f.iter_mut() {
+            *v = p.apply(v);
+        }
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -117,7 +117,7 @@ pub fn transfer_motion(
 ) -> Result<Transferred> {
     use capture::align::root_poses;
     use crate::placement::{
-        blend, place, poses, root_point, scaled_source, scaled_start, template_height,
+        blend, place_in_place, poses, root_point, scaled_source, scaled_start, template_height,
         world_poses, Placement,
     };
     use std::time::Instant;
@@ -129,15 +129,19 @@ pub fn transfer_motion(
     let pred = predict(model, &xs, &xd, placement == Placement::Blended)?;
     let gp_s = t1.elapsed().as_secs_f64();
     let t2 = Instant::now();
-    let mut decoded = target_pca.decode(&pred.coeffs)?;
-    if let Some(o) = &model.orientation {
-        crate::limb_orientation::apply(o, source_pca, target_pca, &xs, &mut decoded)?;
-    }
-    let frames = match reconstructor {
-        Some(r) => r.reconstruct(target_pca, &decoded)?,
-        None => {
-            let plan = capture::assemble::plan(target_pca)?;
-            capture::assemble::assemble(&plan, target_pca, &decoded)
+    // The decoded parts are dropped once assembled, and the assembled frames are placed where
+    // they are: one copy of the target motion is held, besides the source.
+    let mut frames = {
+        let mut decoded = target_pca.decode(&pred.coeffs)?;
+        if let Some(o) = &model.orientation {
+            crate::limb_orientation::apply(o, source_pca, target_pca, &xs, &mut decoded)?;
+        }
+        match reconstructor {
+            Some(r) => r.reconstruct(target_pca, &decoded)?,
+            None => {
+                let plan = capture::assemble::plan(target_pca)?;
+                capture::assemble::assemble(&plan, target_pca, &decoded)
+            }
         }
     };
     let (source_root, target_root) = (root_point(source_pca), root_point(target_pca));
@@ -167,7 +171,7 @@ pub fn transfer_motion(
     let source_start = root_poses(&motion.poses[..motion.poses.len().min(1)], &source_root);
     let start = scaled_start(&source_start.first().copied().unwrap_or_default(), ratio);
     let world_poses = world_poses(&poses(&start, &steps), &target_root);
-    let mut frames = place(&world_poses, &frames);
+    place_in_place(&world_poses, &mut frames);
     let planted = crate::feet::plant(&mut frames, source_pca, target_pca, motion, ratio, feet)?;
     let decode_s = t2.elapsed().as_secs_f64();
     Ok(Transferred {

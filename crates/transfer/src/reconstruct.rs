@@ -19,9 +19,12 @@ use rayon::prelude::*;
 use surface::correct::Corrector;
 use surface::stitch::Stitcher;
 
+use std::path::PathBuf;
+
 use capture::align::AlignedMotion;
 use capture::assemble::{assemble, plan, AssemblyPlan};
-use capture::part_pca::{PartAlignment, PcaModel};
+use capture::motion_stream::read_frames;
+use capture::part_pca::{check_same_template, PartAlignment, PcaModel};
 
 /// Which surface reconstruction follows the PCA decoding.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Serialize, clap::ValueEnum)]
@@ -63,6 +66,37 @@ pub struct Reconstructor {
     unstitched_frames: usize,
 }
 
+/// Every `stride`-th frame of the target's aligned training motions at `paths`, cut into `pca`'s
+/// parts: `[part][mesh]`, the training part meshes [`Reconstructor::new`] cuts from loaded
+/// motions, read a frame at a time so that no motion is held whole. Fails, naming the file, as
+/// [`PcaModel::check_motion`] fails on a motion of another vertex count or template.
+pub fn training_part_meshes(pca: &PcaModel, paths: &[PathBuf], stride: usize) -> Result<Vec<Vec<Vec<Vector3<f64>>>>> {
+    let mut per_part: Vec<Vec<Vec<Vector3<f64>>>> = vec![Vec::new(); pca.parts.len()];
+    for path in paths {
+        let mut i = 0usize;
+        let (info, _) = read_frames(path, |frame| {
+            if frame.len() != pca.n_vertices {
+                return Err(Error::invalid(format!(
+                    "the motion's frame {i} has {} vertices but the PCA model was fitted on {}: \
+                     the motion and the model belong to different subjects or templates",
+                    frame.len(),
+                    pca.n_vertices
+                )));
+            }
+            if i % stride.max(1) == 0 {
+                for (meshes, part) in per_part.iter_mut().zip(pca.frame_parts(&frame)?) {
+                    meshes.push(part);
+                }
+            }
+            i += 1;
+            Ok(())
+        })?;
+        check_same_template(&info.capture.template_sha256, &pca.template_sha256, "the motion was aligned to", "the PCA model was fitted on")
+            .map_err(|e| Error::file(path, e.to_string()))?;
+    }
+    Ok(per_part)
+}
+
 impl Reconstructor {
     /// `training`: the target's aligned training motions (used by the correction, every
     /// `stride`-th frame); `seg` and `faces`: the target's segmentation and template faces.
@@ -74,6 +108,27 @@ impl Reconstructor {
         surface: Surface,
         neighbours: usize,
         stride: usize,
+    ) -> Result<Self> {
+        let mut per_part: Vec<Vec<Vec<Vector3<f64>>>> = vec![Vec::new(); pca.parts.len()];
+        if matches!(surface, Surface::Correct | Surface::CorrectStitch) {
+            for m in training {
+                for (k, rows) in pca.part_rows(m)?.iter().enumerate() {
+                    per_part[k].extend(rows_to_meshes(rows).into_iter().step_by(stride.max(1)));
+                }
+            }
+        }
+        Self::with_training_meshes(pca, seg, faces, per_part, surface, neighbours)
+    }
+
+    /// [`Reconstructor::new`] with the correction's training part meshes given: `[part][mesh]`,
+    /// as [`training_part_meshes`] reads them.
+    pub fn with_training_meshes(
+        pca: &PcaModel,
+        seg: &Segmentation,
+        faces: &[[u32; 3]],
+        training: Vec<Vec<Vec<Vector3<f64>>>>,
+        surface: Surface,
+        neighbours: usize,
     ) -> Result<Self> {
         let plan = plan(pca)?;
         if seg.parts.len() != pca.parts.len()
@@ -89,18 +144,12 @@ impl Reconstructor {
         }
         let correct = matches!(surface, Surface::Correct | Surface::CorrectStitch);
         let correctors = if correct {
-            if training.is_empty() {
+            if training.iter().all(Vec::is_empty) {
                 return Err(Error::invalid(
                     "correction needs the target's training motions",
                 ));
             }
-            let mut per_part: Vec<Vec<Vec<Vector3<f64>>>> = vec![Vec::new(); pca.parts.len()];
-            for m in training {
-                for (k, rows) in pca.part_rows(m)?.iter().enumerate() {
-                    per_part[k].extend(rows_to_meshes(rows).into_iter().step_by(stride.max(1)));
-                }
-            }
-            per_part
+            training
                 .into_iter()
                 .zip(&seg.parts)
                 .map(|(t, p)| Corrector::new(p.faces.clone(), t))
@@ -255,6 +304,33 @@ mod tests {
                     Reconstructor::new(&pca, &seg, &mesh.faces, &[&motion], surface, 3, 1).unwrap();
                 let e = rebuilt_error(&pca, &mut r, &motion, true).unwrap();
                 assert!(e < 1e-8, "{alignment:?} {surface:?}: {e}");
+            }
+        }
+    }
+
+    /// The training part meshes read a frame at a time are those `new` cuts from the loaded
+    /// motions, bit for bit: every `stride`-th frame of each motion in turn, on both part
+    /// alignments.
+    #[test]
+    fn training_part_meshes_read_a_frame_at_a_time_are_the_loaded_ones() {
+        use mesh_core::artifact::Artifact;
+        let (mesh, seg, motion) = bending_capsule();
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("m.aligned");
+        motion.save(&path, &mesh_core::artifact::Header::new("align", "0")).unwrap();
+        for alignment in [PartAlignment::Body, PartAlignment::Part] {
+            let (pca, _) = fit(&mesh.vertices, &seg, &[&motion], Components::Count(20), alignment).unwrap();
+            let rows = pca.part_rows(&motion).unwrap();
+            for stride in [1, 2, 3] {
+                let read = training_part_meshes(&pca, &[path.clone(), path.clone()], stride).unwrap();
+                let want: Vec<Vec<Vec<Vector3<f64>>>> = rows
+                    .iter()
+                    .map(|r| {
+                        let once: Vec<Vec<Vector3<f64>>> = rows_to_meshes(r).into_iter().step_by(stride).collect();
+                        [once.clone(), once].concat()
+                    })
+                    .collect();
+                assert!(read == want, "{alignment:?}, stride {stride}: part meshes differ");
             }
         }
     }

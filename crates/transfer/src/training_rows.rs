@@ -9,8 +9,8 @@ use mesh_core::{Error, Result};
 use std::path::PathBuf;
 
 use capture::align::{AlignedMotion, CaptureInfo};
-use capture::motion_stream::read_frames;
-use capture::part_pca::{FrameEncoder, PcaModel};
+use capture::motion_stream::read_encoded;
+use capture::part_pca::PcaModel;
 use crate::densify::Correspondences;
 use crate::gpr_model::Method;
 use nalgebra::{DMatrix, Vector6};
@@ -93,12 +93,7 @@ impl PairFiles {
         let [s, t, c] = files else {
             return Err(Error::invalid("--pair takes three files"));
         };
-        let encoded = |path: &PathBuf, pca: &PcaModel| {
-            let mut enc = FrameEncoder::new(pca);
-            let (info, sha) = read_frames(path, |f| enc.push(f))?;
-            let coeffs = enc.finish(&info.capture.template_sha256).map_err(|e| Error::file(path, e.to_string()))?;
-            Ok::<_, Error>((coeffs, info, sha))
-        };
+        let encoded = |path: &PathBuf, pca: &PcaModel| read_encoded(path, pca);
         let ((source, target), corr) = rayon::join(
             || rayon::join(|| encoded(s, source_pca), || encoded(t, target_pca)),
             || Correspondences::load_hashed(c),

@@ -3,17 +3,18 @@
 
 use std::path::PathBuf;
 
-use anyhow::{bail, Context};
+use anyhow::bail;
 use clap::Parser;
 use mesh_core::artifact::{sha256_file, Artifact};
 use mesh_core::capture_set::SubjectSpec;
 use mesh_core::cli::CommonArgs;
 use mesh_core::io::read_mesh;
 use mesh_core::segmentation::Segmentation;
-use mesh_core::sequence::{frame_files, MeshSequence};
+use mesh_core::sequence::frame_files;
 use serde::Serialize;
 
-use crate::align::{align_motion_on, anchor_vertices, AlignFrame, CaptureInfo};
+use crate::align::{anchor_vertices, AlignFrame, CaptureInfo};
+use crate::align_stream::FrameFiles;
 
 /// Rigidly align every frame of a motion to the subject's template and record per-frame displacements
 #[derive(Parser, Debug, Serialize)]
@@ -68,16 +69,14 @@ pub fn run(p: &Params) -> anyhow::Result<()> {
     }
     let anchor = anchor_vertices(p.frame, seg.as_ref())?;
     let files = frame_files(&p.motion)?;
-    let motion = MeshSequence::load_files(&files)?;
-    let mut aligned = align_motion_on(&template, &motion, &anchor)
-        .with_context(|| p.motion.display().to_string())?;
     // SubjectSpec::load has checked `up`: the fallback is unreachable.
     let up = subject.up_vector().unwrap_or_else(nalgebra::Vector3::y);
-    aligned.capture = CaptureInfo {
+    let capture = CaptureInfo {
         fps: subject.fps,
         up: up.into(),
         template_sha256: sha256_file(&p.template)?,
     };
+    // The header comes before the frames in the file: every frame file is hashed first.
     let mut header = p
         .common
         .header("align", env!("CARGO_PKG_VERSION"))
@@ -90,6 +89,12 @@ pub fn run(p: &Params) -> anyhow::Result<()> {
     for f in &files {
         header = header.with_input(f)?;
     }
-    aligned.save(&p.out, &header)?;
+    FrameFiles::new(&template, &anchor, &files)
+        .align_into(&capture, &header, &p.out)
+        .map_err(|e| match e {
+            // A problem of the motion as a whole names its folder; a frame's names its file.
+            mesh_core::Error::Invalid(msg) => mesh_core::Error::file(&p.motion, msg),
+            e => e,
+        })?;
     Ok(())
 }

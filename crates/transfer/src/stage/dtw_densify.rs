@@ -11,7 +11,7 @@ use mesh_core::cli::CommonArgs;
 use serde::Serialize;
 
 use crate::densify::{densify, path_error, Correspondences, PAPER_SIGMA2};
-use capture::align::AlignedMotion;
+use capture::motion_stream::read_encoded;
 use capture::part_pca::PcaModel;
 
 /// Densify one training pair's key-pose correspondences by DTW on a Bayesian-linear-regression cost
@@ -53,7 +53,7 @@ pub struct Params {
 }
 
 /// Writes the correspondences (and the `--report`); the header records `p`, `set.json`, both
-/// PCA models and both motions.
+/// PCA models and both motions. Holds each motion's PCA coefficients, never its frames.
 pub fn run(p: &Params) -> anyhow::Result<()> {
     let set_json = p.set.join("set.json");
     let set = SetSpec::load(&set_json)?;
@@ -61,14 +61,15 @@ pub fn run(p: &Params) -> anyhow::Result<()> {
         bail!("{}: no training pair with source motion '{}'", set_json.display(), p.motion);
     };
     let (src_pca, tgt_pca) = (PcaModel::load(&p.source_pca)?, PcaModel::load(&p.target_pca)?);
-    let (src, tgt) = (AlignedMotion::load(&p.source)?, AlignedMotion::load(&p.target)?);
     let src_names: Vec<&str> = src_pca.parts.iter().map(|q| q.name.as_str()).collect();
     let tgt_names: Vec<&str> = tgt_pca.parts.iter().map(|q| q.name.as_str()).collect();
     if src_names != tgt_names {
         bail!("{}: parts {:?} differ from the target's {:?}", p.source_pca.display(), src_names, tgt_names);
     }
-    let xs = src_pca.encode(&src).with_context(|| p.source.display().to_string())?;
-    let ys = tgt_pca.encode(&tgt).with_context(|| p.target.display().to_string())?;
+    // The cost compares frames by their PCA coefficients: each motion is encoded as it is read,
+    // and neither is held.
+    let (xs, _, src_sha) = read_encoded(&p.source, &src_pca)?;
+    let (ys, tgt, tgt_sha) = read_encoded(&p.target, &tgt_pca)?;
     let pairs = densify(&xs, &ys, &pair.keyposes, p.sigma2).with_context(|| set_json.display().to_string())?;
     let result = Correspondences {
         source_motion: pair.source.clone(),
@@ -83,8 +84,8 @@ pub fn run(p: &Params) -> anyhow::Result<()> {
         .with_input(&set_json)?
         .with_input(&p.source_pca)?
         .with_input(&p.target_pca)?
-        .with_input(&p.source)?
-        .with_input(&p.target)?;
+        .with_input_hashed(&p.source, src_sha)
+        .with_input_hashed(&p.target, tgt_sha);
     result.save(&p.out, &header)?;
     if let Some(report) = &p.report {
         let target_fps = tgt.capture.require_fps().with_context(|| p.target.display().to_string())?;

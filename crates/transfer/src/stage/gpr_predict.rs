@@ -16,7 +16,7 @@ use serde::Serialize;
 use crate::gpr_model::GprModel;
 use crate::placement::Placement;
 use crate::predict::transfer_motion;
-use crate::reconstruct::{Reconstructor, Surface};
+use crate::reconstruct::{training_part_meshes, Reconstructor, Surface};
 use capture::align::AlignedMotion;
 use capture::part_pca::PcaModel;
 
@@ -139,24 +139,19 @@ pub fn run(p: &Params) -> anyhow::Result<()> {
         (Surface::Assemble, _) | (_, None) => None,
         (surface, Some(seg_path)) => {
             let seg = Segmentation::load(seg_path)?;
-            let training = p
-                .target_training
-                .iter()
-                .map(AlignedMotion::load)
-                .collect::<Result<Vec<_>, _>>()?;
-            for (m, path) in training.iter().zip(&p.target_training) {
-                tgt_pca.check_motion(m).with_context(|| path.display().to_string())?;
-            }
-            let refs: Vec<&AlignedMotion> = training.iter().collect();
+            // The correction's training part meshes, read a frame at a time: the training
+            // motions are never held whole. Stitching alone uses none.
+            let corrected = matches!(surface, Surface::Correct | Surface::CorrectStitch);
+            let paths = if corrected { p.target_training.as_slice() } else { &[] };
+            let training = training_part_meshes(&tgt_pca, paths, p.correct_stride.into())?;
             Some(
-                Reconstructor::new(
+                Reconstructor::with_training_meshes(
                     &tgt_pca,
                     &seg,
                     &faces,
-                    &refs,
+                    training,
                     *surface,
                     p.neighbours.into(),
-                    p.correct_stride.into(),
                 )
                 .with_context(|| seg_path.display().to_string())?
                 .with_progress(mesh_core::cli::progress_bar(
