@@ -13,7 +13,7 @@
 //! `o_f(t) = max(0, g_f(t) − h_f(t))` elsewhere (a swing foot is raised to the source's
 //! clearance, never lowered),
 //!
-//! each clamped to ±[`MAX_OFFSET`] and smoothed in time by [`grounding::smooth`] (σ =
+//! each clamped to ±[`MAX_OFFSET`] and smoothed in time by [`local_linear::fit`] (σ =
 //! [`SIGMA_FRAMES`]), moves every vertex `v` of that leg by `w(v) o_f(t) up`, with the leg
 //! weights of [`mesh_core::feet::leg_weights`] (1 on the
 //! sole, 0 at the hip seam, so the seam never opens).
@@ -26,11 +26,11 @@
 //! clean-up is for are centimetres; a foot farther than [`MAX_OFFSET`] from the source's height
 //! is moved by that much at most and otherwise keeps its own motion.
 //!
-//! [`grounding::smooth`]: crate::grounding::smooth
+//! [`local_linear::fit`]: crate::local_linear::fit
 
 use nalgebra::Vector3;
 
-use crate::grounding::{at, lowest, smooth};
+use crate::grounding::{at, lowest};
 
 /// Smoothing width of the offsets (frames): one frame, so that a swing's peak clearance is kept.
 pub const SIGMA_FRAMES: f64 = 1.0;
@@ -61,7 +61,7 @@ pub fn offsets(
             d.clamp(-MAX_OFFSET, MAX_OFFSET)
         })
         .collect();
-    smooth(&raw, sigma)
+    crate::local_linear::fit(&raw, sigma)
 }
 
 /// Applies the clean-up in place (module doc); returns the largest |offset| (m). `legs[f]` are

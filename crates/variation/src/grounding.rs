@@ -36,38 +36,6 @@ pub fn lowest(frames: &[Vec<Vector3<f64>>], vertices: &[u32], up: &Vector3<f64>)
         .collect()
 }
 
-/// Gaussian-weighted local linear regression of `values` (window ±3σ frames): the value of the
-/// line fitted around each frame. Reproduces linear profiles exactly; `sigma <= 0` is identity.
-pub fn smooth(values: &[f64], sigma: f64) -> Vec<f64> {
-    if sigma <= 0.0 || values.len() < 3 {
-        return values.to_vec();
-    }
-    let r = (3.0 * sigma).ceil() as isize;
-    let n = values.len() as isize;
-    (0..n)
-        .map(|t| {
-            let (mut s0, mut s1, mut s2, mut sy, mut sxy) = (0.0, 0.0, 0.0, 0.0, 0.0);
-            for j in (t - r).max(0)..=(t + r).min(n - 1) {
-                let x = (j - t) as f64;
-                let w = (-0.5 * (x / sigma).powi(2)).exp();
-                let y = values[j as usize];
-                s0 += w;
-                s1 += w * x;
-                s2 += w * x * x;
-                sy += w * y;
-                sxy += w * x * y;
-            }
-            let det = s0 * s2 - s1 * s1;
-            if det.abs() < 1e-12 * s0 * s0 {
-                sy / s0
-            } else {
-                // Intercept of the weighted least-squares line a + b x at x = 0.
-                (s2 * sy - s1 * sxy) / det
-            }
-        })
-        .collect()
-}
-
 /// Matching source frame (fractional) of every variation frame: the mean source index matched
 /// by DTW on template-aligned poses; the (clamped) same index when the DTW fails.
 pub fn correspondence(
@@ -214,7 +182,7 @@ pub fn offsets(var_low: &[f64], source_low: &[f64], matches: &[f64], sigma: f64)
         .zip(matches)
         .map(|(&h, &m)| at(source_low, m) - h)
         .collect();
-    smooth(&raw, sigma)
+    crate::local_linear::fit(&raw, sigma)
 }
 
 /// Grounds `var` on `source` in place (module doc); returns the applied offsets (m).
@@ -356,18 +324,6 @@ mod tests {
         for (i, &j) in m.iter().enumerate().skip(6) {
             assert!((j - (i + 4) as f64).abs() < 1e-9, "frame {i}: {m:?}");
         }
-    }
-
-    #[test]
-    fn smooth_keeps_lines_and_damps_spikes() {
-        let line: Vec<f64> = (0..20).map(|t| 0.3 - 0.01 * t as f64).collect();
-        for (a, b) in smooth(&line, 2.0).iter().zip(&line) {
-            assert!((a - b).abs() < 1e-12);
-        }
-        let mut spike = vec![0.0; 21];
-        spike[10] = 1.0;
-        let s = smooth(&spike, 2.0);
-        assert!(s[10] < 0.4 && s[10] > 0.0, "{}", s[10]);
     }
 
     #[test]

@@ -4,32 +4,34 @@
 //! Gaussian average leans toward the frames on one side (a steady drift lags, a first frame jumps
 //! toward the next ones), the fitted line follows the trend.
 
-/// Gaussian-weighted local linear fit of `e` at every frame (width `sigma` frames; `sigma <= 0`
-/// returns `e`): at frame `t`, the value at `t` of the line minimising
-/// `Σ_s exp(−(s − t)² / 2σ²) (e_s − a − b (s − t))²`.
-pub fn fit(e: &[f64], sigma: f64) -> Vec<f64> {
-    if !(sigma > 0.0) || e.len() < 3 {
-        return e.to_vec();
+/// Gaussian-weighted local linear fit of `values` at every frame (window ±3σ frames; `sigma <= 0`
+/// returns `values`): at frame `t`, the value at `t` of the line minimising
+/// `Σ_s exp(−(s − t)² / 2σ²) (values_s − a − b (s − t))²`. Reproduces linear profiles exactly.
+pub fn fit(values: &[f64], sigma: f64) -> Vec<f64> {
+    if !(sigma > 0.0) || values.len() < 3 {
+        return values.to_vec();
     }
-    let reach = (4.0 * sigma).ceil() as isize;
-    (0..e.len() as isize)
+    let r = (3.0 * sigma).ceil() as isize;
+    let n = values.len() as isize;
+    (0..n)
         .map(|t| {
-            let (mut s0, mut s1, mut s2, mut y0, mut y1) = (0.0, 0.0, 0.0, 0.0, 0.0);
-            for s in (t - reach).max(0)..=(t + reach).min(e.len() as isize - 1) {
-                let x = (s - t) as f64;
-                let w = (-0.5 * x * x / (sigma * sigma)).exp();
-                let y = e[s as usize];
+            let (mut s0, mut s1, mut s2, mut sy, mut sxy) = (0.0, 0.0, 0.0, 0.0, 0.0);
+            for j in (t - r).max(0)..=(t + r).min(n - 1) {
+                let x = (j - t) as f64;
+                let w = (-0.5 * (x / sigma).powi(2)).exp();
+                let y = values[j as usize];
                 s0 += w;
                 s1 += w * x;
                 s2 += w * x * x;
-                y0 += w * y;
-                y1 += w * x * y;
+                sy += w * y;
+                sxy += w * x * y;
             }
             let det = s0 * s2 - s1 * s1;
-            if det.abs() <= 1e-12 * s0 * s2.max(1.0) {
-                y0 / s0
+            if det.abs() < 1e-12 * s0 * s0 {
+                sy / s0
             } else {
-                (s2 * y0 - s1 * y1) / det
+                // Intercept of the weighted least-squares line a + b x at x = 0.
+                (s2 * sy - s1 * sxy) / det
             }
         })
         .collect()
@@ -48,6 +50,19 @@ mod tests {
         let sway: Vec<f64> = (0..60).map(|t| 0.2 * (t as f64 * std::f64::consts::PI / 2.0).sin()).collect();
         let smooth = fit(&sway, 5.0);
         assert!(smooth[15..45].iter().all(|v| v.abs() < 1e-3), "{smooth:?}");
+    }
+
+
+    #[test]
+    fn a_local_linear_fit_keeps_lines_and_damps_spikes() {
+        let line: Vec<f64> = (0..20).map(|t| 0.3 - 0.01 * t as f64).collect();
+        for (a, b) in fit(&line, 2.0).iter().zip(&line) {
+            assert!((a - b).abs() < 1e-12);
+        }
+        let mut spike = vec![0.0; 21];
+        spike[10] = 1.0;
+        let s = fit(&spike, 2.0);
+        assert!(s[10] < 0.4 && s[10] > 0.0, "{}", s[10]);
     }
 
 }

@@ -8,29 +8,11 @@
 //! trajectory decoded (`--match-start source`, which finds its own patches again: a copy) turns
 //! past the bound at those frames. The variations are held to that copy's count.
 
-use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
+mod common;
 
-fn ok(bin: &str, args: &[&str]) -> Output {
-    let out = Command::new(bin).args(args).env("OPENBLAS_NUM_THREADS", "1").output().unwrap();
-    assert!(out.status.success(), "{bin} {args:?}: {}", String::from_utf8_lossy(&out.stderr));
-    out
-}
+use std::path::Path;
 
-/// The tiny preset's walk and run prealigned (one pre-blend) and a GPDM trained on them, in `dir`.
-fn tiny_model(dir: &Path) -> (PathBuf, PathBuf) {
-    let set = dir.join("set");
-    let cfg = synth::preset::preset("tiny", 0, true).unwrap();
-    synth::capture_set_writer::synthesise(&cfg, &set, false, &|_| {}, &|| {}).unwrap();
-    let (group, model) = (dir.join("locomotion.group"), dir.join("locomotion.model"));
-    let s = |p: &Path| p.to_string_lossy().into_owned();
-    ok(
-        env!("CARGO_BIN_EXE_prealign"),
-        &["-q", "--set", &s(&set), "--group-name", "locomotion", "--motions", "walk,run", "--blend-weights", "0.5", "--out", &s(&group)],
-    );
-    ok(env!("CARGO_BIN_EXE_gpdm-train"), &["-q", "--group", &s(&group), "--out", &s(&model)]);
-    (group, model)
-}
+use common::{ok, tiny_model};
 
 fn report(path: &Path) -> serde_json::Value {
     serde_json::from_str(&std::fs::read_to_string(path).unwrap()).unwrap()
