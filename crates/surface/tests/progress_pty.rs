@@ -76,7 +76,7 @@ fn stage_script(set: &str, work: &str) -> (String, Vec<&'static str>) {
     let script = format!("set -e\n{}\n", lines.join("\n"));
     let labels = vec![
         "check-set: frames read [",
-        "align: frames read [",
+        "align: frames aligned [",
         "pca-fit: parts fitted [",
         "prealign: motions read, warped; blends [",
         "mesh-export: frames read [",
