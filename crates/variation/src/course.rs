@@ -71,16 +71,6 @@ fn wrap(a: f64) -> f64 {
     if r > std::f64::consts::PI { r - t } else { r }
 }
 
-/// `values` at the fractional index `at` (linear interpolation, clamped to the ends).
-fn at_fraction(values: &[f64], at: f64) -> f64 {
-    let last = values.len() - 1;
-    let at = at.clamp(0.0, last as f64);
-    let i = (at.floor() as usize).min(last);
-    let j = (i + 1).min(last);
-    let w = at - i as f64;
-    values[i] * (1.0 - w) + values[j] * w
-}
-
 /// Turns every frame of the variation `frames` back onto the course of `source` (module doc):
 /// `matches[t]` is the source frame (fractional) matched to frame `t`, `core` the vertices the
 /// headings are measured on and whose centroid each frame turns about, `sigma` the local fit's
@@ -99,7 +89,7 @@ pub fn keep(
     let hv = headings(frames, core, up);
     let hs = headings(source, core, up);
     let error: Vec<f64> =
-        (0..frames.len()).map(|t| at_fraction(&hs, matches[t]) - at_fraction(&hs, matches[0]) - hv[t]).collect();
+        (0..frames.len()).map(|t| crate::grounding::at(&hs, matches[t]) - crate::grounding::at(&hs, matches[0]) - hv[t]).collect();
     let c = crate::local_linear::fit(&error, sigma);
     let axis = Unit::new_normalize(*up);
     let centre = |f: &[Vector3<f64>]| -> Vector3<f64> {
