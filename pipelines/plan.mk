@@ -12,7 +12,8 @@ PLAN_MK := $(OUT)/work/plan.mk
 PLAN_OPTIONS := $(OUT)/work/plan.options
 PLAN_GOALS := transfer-results transfer-report variation-results
 PLAN_ARGS := --set $(SET) --pipeline-out $(OUT) \
-  --methods $(TRANSFER_METHODS) $(if $(ALIGN_FRAME),--align-frame $(ALIGN_FRAME)) \
+  $(if $(CONFIG),--config $(CONFIG)) $(if $(TRANSFER_METHODS),--methods $(TRANSFER_METHODS)) \
+  $(if $(ALIGN_FRAME),--align-frame $(ALIGN_FRAME)) \
   $(if $(PART_ALIGNMENT),--part-alignment $(PART_ALIGNMENT)) $(if $(PLACEMENT),--placement $(PLACEMENT)) \
   $(if $(GPR_MEAN),--gpr-mean $(GPR_MEAN)) --gpr-train-flags '$(GPR_TRAIN_FLAGS)' \
   --pca-components $(PCA_COMPONENTS) $(if $(VARIATION_SUBJECT),--variation-subject $(VARIATION_SUBJECT)) \

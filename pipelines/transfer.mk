@@ -8,8 +8,13 @@
 # (make's timestamps) and `make -j` safe.
 
 SET ?= $(OUT)/demo/set
-TRANSFER_METHODS ?= gpr-nn gpr-se gpr-linear keypose-affine whole-body
 # Empty: the stage's own default (`<stage> --help`; docs/DEFAULTS.md).
+# gpr-train --config of every model (default, no-prior, affine-only, zero-mean, auto, paper);
+# paper also aligns on the whole body, places by the regressed displacement, drops the foot
+# clean-ups and runs every method of the paper's comparison (CVPR §4-7)
+CONFIG ?=
+# Methods; empty: the configuration's (gpr-nn keypose-affine whole-body; paper adds gpr-se gpr-linear)
+TRANSFER_METHODS ?=
 # align --frame: root (poses fitted on the torso core) or body (the paper's whole mesh)
 ALIGN_FRAME ?=
 # pca-fit --part-alignment: body (parts cut from the aligned frames) or part (each part Procrustes-aligned)

@@ -1,5 +1,5 @@
-//! The transfer stages' named choices: the GP method, the mean function and the placement of
-//! the transferred poses. They live below the stages so that `plan`, which writes the stages'
+//! The transfer stages' named choices: the GP method, the mean function, the placement of the
+//! transferred poses and the model's named configuration. They live below the stages so that `plan`, which writes the stages'
 //! command lines, names them without depending on the transfer crate.
 
 use clap::ValueEnum;
@@ -98,3 +98,37 @@ impl Correspondences {
         }
     }
 }
+
+/// A configuration's name on the command line.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, PartialOrd, Ord, Serialize, Deserialize, ValueEnum)]
+#[serde(rename_all = "kebab-case")]
+pub enum ConfigName {
+    /// Try the candidates and keep the one with the lowest leave-one-motion-out error.
+    Auto,
+    /// The defaults: affine mean with the geometric prior mixed in, limb orientation.
+    #[default]
+    Default,
+    /// The defaults without the geometric prior (`--prior-weight 0`).
+    NoPrior,
+    /// The affine mean and its GP alone: no prior, no limb orientation.
+    AffineOnly,
+    /// The paper's zero-mean GP (CVPR eq. 11), with the limb orientation.
+    ZeroMean,
+    /// The paper's model: zero mean, NN kernel, σn² = 0.1, no prior, no limb orientation.
+    Paper,
+}
+
+impl ConfigName {
+    /// The name as written on the command line.
+    pub fn name(self) -> &'static str {
+        match self {
+            ConfigName::Auto => "auto",
+            ConfigName::Default => "default",
+            ConfigName::NoPrior => "no-prior",
+            ConfigName::AffineOnly => "affine-only",
+            ConfigName::ZeroMean => "zero-mean",
+            ConfigName::Paper => "paper",
+        }
+    }
+}
+

@@ -7,7 +7,7 @@ use std::path::PathBuf;
 use clap::{Args, ValueEnum};
 use serde::Serialize;
 pub use capture::align::AlignFrame;
-pub use capture::choices::{MeanFunction, Method};
+pub use capture::choices::{ConfigName, MeanFunction, Method};
 pub use capture::part_pca::PartAlignment;
 pub use capture::choices::Placement;
 
@@ -40,21 +40,27 @@ pub struct Paths {
 /// `make transfer`'s options (pipelines/transfer.mk).
 #[derive(Args, Clone, Debug, PartialEq, Serialize)]
 pub struct TransferOptions {
+    /// The model's named configuration (CONFIG): `gpr-train --config NAME` for every model;
+    /// `paper` also runs the rest of the pipeline as the paper does ([`TransferOptions::paper`])
+    /// [default: gpr-train's]
+    #[arg(long, value_enum, value_name = "NAME")]
+    pub config: Option<ConfigName>,
     /// Transfer methods (TRANSFER_METHODS); gpr-nn with key-poses only is always added
-    #[arg(long, num_args = 1.., value_parser = parse_method, default_values = ["gpr-nn", "gpr-se", "gpr-linear", "keypose-affine", "whole-body"])]
+    /// [default: the configuration's, [`TransferOptions::methods`]]
+    #[arg(long, num_args = 1.., value_parser = parse_method)]
     pub methods: Vec<Method>,
-    /// align --frame (ALIGN_FRAME) [default: align's]
-    #[arg(long, value_enum, default_value_t = AlignFrame::default(), hide_default_value = true)]
-    pub align_frame: AlignFrame,
+    /// align --frame (ALIGN_FRAME) [default: the configuration's, else align's]
+    #[arg(long, value_enum)]
+    pub align_frame: Option<AlignFrame>,
     /// pca-fit --part-alignment (PART_ALIGNMENT) [default: pca-fit's]
     #[arg(long, value_enum, default_value_t = PartAlignment::default(), hide_default_value = true)]
     pub part_alignment: PartAlignment,
     /// gpr-predict --placement of every method (PLACEMENT); gpr-nn is also placed the other ways
-    /// [default: gpr-predict's]
-    #[arg(long, value_enum, default_value_t = Placement::PREDICT_DEFAULT, hide_default_value = true)]
-    pub placement: Placement,
-    /// gpr-train --mean of every model (GPR_MEAN); unset: the configuration's (gpr-train
-    /// --config, in GPR_TRAIN_FLAGS; the default configuration's is affine)
+    /// [default: the configuration's, else gpr-predict's]
+    #[arg(long, value_enum)]
+    pub placement: Option<Placement>,
+    /// gpr-train --mean of every model (GPR_MEAN); unset: the configuration's (the default
+    /// configuration's is affine)
     #[arg(long, value_enum)]
     pub gpr_mean: Option<MeanFunction>,
     /// Further gpr-train flags for every model, one string (GPR_TRAIN_FLAGS)
@@ -63,6 +69,45 @@ pub struct TransferOptions {
     /// pca-fit --components per part (PCA_COMPONENTS); the whole body gets parts x this
     #[arg(long, default_value_t = 20, value_name = "K")]
     pub pca_components: u32,
+}
+
+impl TransferOptions {
+    /// `CONFIG=paper`: the paper's pipeline (CVPR §4-6) besides its model (`gpr-train --config
+    /// paper`): poses aligned on the whole mesh (`align --frame body`), placed by the regressed
+    /// displacement, no foot clean-ups, and every method of its comparison (CVPR fig. 7).
+    pub fn paper(&self) -> bool {
+        self.config == Some(ConfigName::Paper)
+    }
+
+    /// The methods run: TRANSFER_METHODS, or the configuration's. Under `paper`, the paper's
+    /// comparison: the three kernels, the key-pose baseline and the whole body. Otherwise the
+    /// kernel rows are left out: with the affine mean the three kernels' residual GPs give
+    /// transfers a few millimetres apart or equal (docs/DEFAULTS.md), so gpr-nn stands for them.
+    pub fn methods(&self) -> Vec<Method> {
+        if !self.methods.is_empty() {
+            self.methods.clone()
+        } else if self.paper() {
+            Method::ALL.to_vec()
+        } else {
+            vec![Method::GprNn, Method::KeyposeAffine, Method::WholeBody]
+        }
+    }
+
+    /// The alignment frame: ALIGN_FRAME, else the whole body under `paper`, else align's default.
+    pub fn align_frame(&self) -> AlignFrame {
+        self.align_frame.unwrap_or(if self.paper() { AlignFrame::Body } else { AlignFrame::default() })
+    }
+
+    /// The placement of every method: PLACEMENT, else the regressed displacement under `paper`,
+    /// else gpr-predict's default.
+    pub fn placement(&self) -> Placement {
+        self.placement.unwrap_or(if self.paper() { Placement::Regressed } else { Placement::PREDICT_DEFAULT })
+    }
+
+    /// Flags of every `gpr-predict`: under `paper`, no foot-skating clean-up and no foot height.
+    pub fn predict_flags(&self) -> Vec<String> {
+        if self.paper() { vec!["--no-footskate".into(), "--no-foot-height".into()] } else { Vec::new() }
+    }
 }
 
 /// `make variation`'s options (pipelines/variation.mk).

@@ -117,7 +117,7 @@ impl<'a> Plan<'a> {
             let mut inputs = vec![subject.clone(), self.template(x), self.seg(x)];
             inputs.extend(frames.iter().map(|f| f.to_string_lossy().into_owned()));
             let args = vec![
-                s("-q"), s("--frame"), value_name(self.opt.align_frame), s("--segmentation"), self.seg(x),
+                s("-q"), s("--frame"), value_name(self.opt.align_frame()), s("--segmentation"), self.seg(x),
                 s("--subject"), subject.clone(), s("--template"), self.template(x), join(&self.set.root, &[x, &m]),
                 s("--out"), self.aligned(x, &m),
             ];
@@ -230,7 +230,7 @@ impl<'a> Plan<'a> {
     /// each test motion with each, and their evaluations and contact sheets.
     fn direction(&mut self, d: &Direction, pairs: &(Vec<String>, Vec<String>), graph: &mut Graph) {
         let mut variants: Vec<(String, Method, bool)> =
-            self.opt.methods.iter().map(|m| (m.name().to_string(), *m, false)).collect();
+            self.opt.methods().into_iter().map(|m| (m.name().to_string(), m, false)).collect();
         variants.push(("gpr-nn-keyposes".into(), Method::GprNn, true));
         for (name, method, keys) in &variants {
             let kind = if *method == Method::WholeBody { "pca-whole" } else { "pca" };
@@ -238,6 +238,9 @@ impl<'a> Plan<'a> {
             let mut inputs = vec![self.pca(d.src, kind), self.pca(d.tgt, kind)];
             inputs.extend(pairs.1.iter().cloned());
             let mut args = vec![s("-q")];
+            if let Some(config) = self.opt.config {
+                args.extend([s("--config"), value_name(config)]);
+            }
             if let Some(mean) = self.opt.gpr_mean {
                 args.extend([s("--mean"), value_name(mean)]);
             }
@@ -275,6 +278,34 @@ impl<'a> Plan<'a> {
                 }
             }
         }
+        for m in &d.tests {
+            if self.set.motion_dir(d.src, m).is_dir() {
+                self.method_sheet(d, m, graph);
+            }
+        }
+    }
+
+    /// CVPR fig. 10 of test motion `m` in direction `d`: every method's raw output (no §6)
+    /// beside the source and the truth if any.
+    fn method_sheet(&mut self, d: &Direction, m: &str, graph: &mut Graph) {
+        let dn = d.name();
+        let names: Vec<String> = Method::ALL
+            .into_iter()
+            .filter(|x| self.opt.methods().contains(x))
+            .map(|x| x.name().to_string())
+            .chain(std::iter::once(s("gpr-nn-keyposes")))
+            .collect();
+        let truth = self.truth(d.tgt, m);
+        let sheet = format!("{}/figures/fig10-{dn}-{m}/contact.png", self.out);
+        let mut seqs = vec![join(&self.set.root, &[d.src, m])];
+        seqs.extend(names.iter().map(|n| format!("{}/transfer/{dn}/{m}/{n}", self.out)));
+        let labels = format!("source,{}{}", names.join(","), if truth.is_some() { ",truth" } else { "" });
+        seqs.extend(truth);
+        let inputs = names
+            .iter()
+            .map(|n| format!("{}/predict/{dn}/{m}/{n}-{}.json", self.work, self.opt.placement().name()))
+            .collect();
+        self.stamps.push(graph.push(render_sheet(&sheet, inputs, &labels, true, seqs)));
     }
 
     /// The leave-one-motion-out estimate of direction `d`'s pose error: the gpr-nn model trained
@@ -293,7 +324,7 @@ impl<'a> Plan<'a> {
     /// evaluations.
     fn predictions(&mut self, d: &Direction, m: &str, variant: (&str, Method, bool), model: &str, kind: &str, graph: &mut Graph) {
         let (name, method, keys) = variant;
-        let default_pl = self.opt.placement;
+        let default_pl = self.opt.placement();
         let mut places = vec![default_pl];
         if name == "gpr-nn" {
             let all = [Placement::ScaledSource, Placement::Regressed, Placement::Blended];
@@ -307,11 +338,13 @@ impl<'a> Plan<'a> {
                 format!("{}/placement/{dn}/{m}/{}", self.work, pl.name())
             };
             let timing = format!("{}/predict/{dn}/{m}/{name}-{}.json", self.work, pl.name());
-            let args = vec![
+            let mut args = vec![
                 s("-q"), s("--model"), s(model), s("--source-pca"), self.pca(d.src, kind), s("--target-pca"),
                 self.pca(d.tgt, kind), s("--target-template"), self.template(d.tgt), s("--placement"),
-                pl.name().into(), self.aligned(d.src, m), s("--out"), seq.clone(), s("--timing"), timing.clone(),
+                pl.name().into(),
             ];
+            args.extend(self.opt.predict_flags());
+            args.extend([self.aligned(d.src, m), s("--out"), seq.clone(), s("--timing"), timing.clone()]);
             let inputs = vec![s(model), self.aligned(d.src, m)];
             self.stamps.push(graph.push(Task::run("gpr-predict", timing.clone(), inputs, args).mkdir_target()));
             let training = if keys { "keyposes" } else { "dense" };
@@ -321,7 +354,7 @@ impl<'a> Plan<'a> {
 
     /// The contact sheet of test motion `m`: source, gpr-nn's transfer and the truth if any.
     fn transfer_sheet(&mut self, d: &Direction, m: &str, graph: &mut Graph) {
-        let default_pl = self.opt.placement;
+        let default_pl = self.opt.placement();
         {
             let sheet = format!("{}/render/{dn}/{m}/contact.png", self.out, dn = d.name());
             let mut seqs = vec![join(&self.set.root, &[d.src, m]), format!("{}/transfer/{}/{m}/gpr-nn", self.out, d.name())];
@@ -338,7 +371,7 @@ impl<'a> Plan<'a> {
     /// CVPR §6 after the regression: correction (M = 3), then stitching, of test motion `m`
     /// with gpr-nn; their evaluations, the per-frame confidence figure and contact sheets.
     fn surface_methods(&mut self, d: &Direction, m: &str, model: &str, graph: &mut Graph) {
-        let default_pl = self.opt.placement;
+        let default_pl = self.opt.placement();
         let dn = d.name();
         let training: Vec<String> = self.train[d.tgt].iter().map(|t| self.aligned(d.tgt, t)).collect();
         let truth = self.truth(d.tgt, m);
@@ -355,6 +388,7 @@ impl<'a> Plan<'a> {
                 self.pca(d.tgt, "pca"), s("--target-template"), self.template(d.tgt), s("--placement"),
                 default_pl.name().into(), s("--surface"), s(surf), s("--segmentation"), self.seg(d.tgt),
             ];
+            args.extend(self.opt.predict_flags());
             for t in &training {
                 args.extend([s("--target-training"), t.clone()]);
             }
@@ -419,8 +453,8 @@ impl<'a> Plan<'a> {
     }
 
     /// CVPR fig. 3 (the association cost of the first training pair, its DTW path, key-poses
-    /// and truth), fig. 5 (a correction example) and fig. 10 (every method's raw output) on the
-    /// first forward test motion; returns the report's 3D views.
+    /// and truth) and fig. 5 (a correction example) on the first forward test motion; returns
+    /// the report's 3D views.
     fn figures(&mut self, first_test: Option<&str>, graph: &mut Graph) -> Vec<String> {
         let (sn, tn) = (self.set.spec.source.clone(), self.set.spec.target.clone());
         let (sn, tn) = (sn.as_str(), tn.as_str());
@@ -460,22 +494,6 @@ impl<'a> Plan<'a> {
             format!("{}/figures/fig5-{m0}.json", self.out),
         ]);
         self.stamps.push(graph.push(Task::run("paper-figure", fig5, inputs, args).mkdir_target()));
-        let names: Vec<String> = Method::ALL
-            .into_iter()
-            .filter(|m| self.opt.methods.contains(m))
-            .map(|m| m.name().to_string())
-            .chain(std::iter::once(s("gpr-nn-keyposes")))
-            .collect();
-        let fig10 = format!("{}/figures/fig10-{dn0}-{m0}/contact.png", self.out);
-        let mut seqs = vec![join(&self.set.root, &[sn, m0])];
-        seqs.extend(names.iter().map(|n| format!("{}/transfer/{dn0}/{m0}/{n}", self.out)));
-        seqs.extend(truth0.clone());
-        let inputs = names
-            .iter()
-            .map(|n| format!("{}/predict/{dn0}/{m0}/{n}-{}.json", self.work, self.opt.placement.name()))
-            .collect();
-        let labels = format!("source,{}{}", names.join(","), if truth0.is_some() { ",truth" } else { "" });
-        self.stamps.push(graph.push(render_sheet(&fig10, inputs, &labels, true, seqs)));
         // The report's 3D view: the first forward test motion, after correction and stitching.
         let mut views = vec![
             format!("source={}", join(&self.set.root, &[sn, m0])),

@@ -221,7 +221,7 @@ fn one_task_per_model_is_the_part_tasks_folded() {
         assert_eq!(run_args(m), want, "{}", m.target);
         assert_eq!((&m.inputs, &m.dirs), (&first.inputs, &s.dirs), "{}", m.target);
     }
-    assert_eq!(merges, 2 + 12 + 2, "pca-fit, gpr-train and gpdm-train models");
+    assert_eq!(merges, 2 + 8 + 2, "pca-fit, gpr-train and gpdm-train models");
 }
 
 /// The models of several parts are fitted part by part: every part model (`pca.model`), every
@@ -262,9 +262,10 @@ fn multi_part_models_are_fitted_part_by_part() {
         assert_eq!(names, want, "{}", t.target);
         *merged.entry(stage.to_string()).or_default() += 1;
     }
-    // Two subjects' part models; 2 directions x 6 methods; 2 groups.
+    // Two subjects' part models; 2 directions x 4 models (gpr-nn, keypose-affine, whole-body,
+    // gpr-nn on key-poses); 2 groups.
     assert_eq!(merged.get("pca-fit"), Some(&2));
-    assert_eq!(merged.get("gpr-train"), Some(&12));
+    assert_eq!(merged.get("gpr-train"), Some(&8));
     assert_eq!(merged.get("gpdm-train"), Some(&2));
     // Nothing reads a piece but its merge, and no whole-model task of these stages is left but
     // the leave-one-motion-out estimate of each direction, which needs every part at once.
@@ -371,4 +372,70 @@ fn a_variation_group_keeps_the_motions_the_subject_has() {
     let motions = args.iter().position(|a| a == "--motions").map(|i| args[i + 1].as_str());
     assert_eq!(motions, Some("jump"));
     assert!(prealigns[0].target.ends_with("jumps.group"));
+}
+
+/// The stage arguments of every task of `kind`.
+fn runs_of(g: &plan::task::Graph, kind: &str) -> Vec<Vec<String>> {
+    g.tasks
+        .iter()
+        .filter(|t| t.kind == kind)
+        .map(|t| match &t.steps[..] {
+            [plan::task::Step::Run { args, .. }] => args.clone(),
+            _ => panic!("{}: not one stage run", t.target),
+        })
+        .collect()
+}
+
+/// The value after `flag` in `args`.
+fn after<'a>(args: &'a [String], flag: &str) -> Option<&'a str> {
+    args.iter().position(|a| a == flag).map(|k| args[k + 1].as_str())
+}
+
+/// `--config paper` runs the paper's pipeline: whole-body alignment, every model trained with
+/// `--config paper`, every prediction placed by the regressed displacement without the foot
+/// clean-ups, and the paper's five methods with a fig. 10 sheet per test motion and direction.
+/// Without it the stages' defaults hold and the kernel rows are left out.
+#[test]
+fn config_paper_runs_the_papers_pipeline() {
+    let paper = tiny_graph_with(&["--config", "paper"]);
+    let aligns = runs_of(&paper, "align");
+    assert!(!aligns.is_empty() && aligns.iter().all(|a| after(a, "--frame") == Some("body")), "{aligns:?}");
+    let trains = runs_of(&paper, "gpr-train");
+    assert!(trains.iter().all(|a| after(a, "--config") == Some("paper")), "{trains:?}");
+    let mut methods: Vec<&str> = trains.iter().filter_map(|a| after(a, "--method")).collect();
+    methods.sort();
+    methods.dedup();
+    assert_eq!(methods, ["gpr-linear", "gpr-nn", "gpr-se", "keypose-affine", "whole-body"]);
+    // Every method's output is placed the configuration's way (gpr-nn also the other ways, under
+    // the work folder); none has the foot clean-ups.
+    let predicts = runs_of(&paper, "gpr-predict");
+    for a in &predicts {
+        if after(a, "--out").is_some_and(|o| o.starts_with("out/transfer/")) {
+            assert_eq!(after(a, "--placement"), Some("regressed"), "{a:?}");
+        }
+        assert!(a.contains(&"--no-footskate".to_string()) && a.contains(&"--no-foot-height".to_string()), "{a:?}");
+    }
+    let sheets: Vec<&str> =
+        paper.tasks.iter().filter(|t| t.kind == "render" && t.target.contains("/fig10-")).map(|t| t.target.as_str()).collect();
+    let tests = ["out/figures/fig10-A-to-B-", "out/figures/fig10-B-to-A-"];
+    for d in tests {
+        assert!(sheets.iter().any(|s| s.starts_with(d)), "no fig. 10 sheet for {d}: {sheets:?}");
+    }
+
+    let default = tiny_graph_with(&[]);
+    let aligns = runs_of(&default, "align");
+    assert!(aligns.iter().all(|a| after(a, "--frame") == Some("root")), "{aligns:?}");
+    let trains = runs_of(&default, "gpr-train");
+    assert!(trains.iter().all(|a| after(a, "--config").is_none()), "{trains:?}");
+    assert!(trains.iter().all(|a| !["gpr-se", "gpr-linear"].contains(&after(a, "--method").unwrap_or(""))));
+    let predicts = runs_of(&default, "gpr-predict");
+    assert!(predicts.iter().all(|a| !a.contains(&"--no-footskate".to_string())));
+    let explicit = tiny_graph_with(&["--config", "paper", "--placement", "scaled-source", "--methods", "gpr-nn", "gpr-se"]);
+    let mut methods: Vec<String> = runs_of(&explicit, "gpr-train").iter().filter_map(|a| after(a, "--method").map(str::to_string)).collect();
+    methods.sort();
+    methods.dedup();
+    assert_eq!(methods, ["gpr-nn", "gpr-se"]);
+    let outputs = runs_of(&explicit, "gpr-predict");
+    let placed: Vec<_> = outputs.iter().filter(|a| after(a, "--out").is_some_and(|o| o.starts_with("out/transfer/"))).collect();
+    assert!(!placed.is_empty() && placed.iter().all(|a| after(a, "--placement") == Some("scaled-source")));
 }

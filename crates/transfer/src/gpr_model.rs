@@ -15,9 +15,9 @@
 //! - `whole-body`: `gpr-nn` on a single-part PCA (`pca-fit --whole-body`).
 //!
 //! Deviations (documented for the report):
-//! - The displacement GP is always a `gpr-nn` GP (also for `keypose-affine`,
-//!   which has no displacement model in Baran et al.), so that the methods
-//!   differ only in the pose mapping.
+//! - The displacement GP is a `gpr-nn` GP for every GP method; `keypose-affine`
+//!   maps the displacement by the affine key-pose map too, and has no limb
+//!   orientation: it is Baran et al.'s model class throughout.
 //! - The displacement outputs are divided by their RMS before training
 //!   (`y_scale`, undone at prediction), so that the paper's `σn² = 0.1` is a
 //!   noise level relative to the signal: per-frame displacements are a few
@@ -194,6 +194,20 @@ pub struct RegressorReport {
 }
 
 impl RegressorReport {
+    /// The report of an affine key-pose map (nothing optimised).
+    fn affine(name: &str) -> Self {
+        RegressorReport {
+            name: name.to_string(),
+            kernel: None,
+            exit: None,
+            iterations: 0,
+            initial_lml: f64::NAN,
+            lml: f64::NAN,
+            inducing: None,
+            notes: Vec::new(),
+        }
+    }
+
     fn from_train(name: &str, gpr: &Gpr, r: &TrainReport) -> Self {
         RegressorReport {
             name: name.to_string(),
@@ -381,31 +395,24 @@ pub(crate) fn train_parts(
                 let a = AffineKeypose::fit(&keys.x_parts[k], &keys.y_parts[k])
                     .map_err(|e| Error::invalid(format!("part '{name}': {e}")))?;
                 regs.push(Regressor::Affine(a));
-                reports.push(RegressorReport {
-                    name: name.clone(),
-                    kernel: None,
-                    exit: None,
-                    iterations: 0,
-                    initial_lml: f64::NAN,
-                    lml: f64::NAN,
-                    inducing: None,
-                    notes: Vec::new(),
-                });
+                reports.push(RegressorReport::affine(name));
             }
             Ok((regs, reports))
         }
     }
 }
 
-/// Trains the displacement GP (`gpr-nn` on the residuals of `mean_fn`, scaled to unit RMS).
-pub fn train_displacement(
-    data: &TrainingSet,
-    nn_bias: bool,
-    mean_fn: MeanFunction,
-    mean_ridge: f64,
-    opts: &GprOptions,
-    fixed: Option<Hyperparameters>,
-) -> Result<(Regressor, RegressorReport)> {
+/// Trains the displacement's regressor: for a GP method the `gpr-nn` GP on the residuals of
+/// `mean_fn`, scaled to unit RMS (with `fixed`, conditioned with those hyperparameters); for
+/// `keypose-affine` the affine key-pose map of the key-pose pairs' displacements.
+pub fn train_displacement(regression: &Regression, rows: &TrainingRows, fixed: Option<Hyperparameters>) -> Result<(Regressor, RegressorReport)> {
+    let Regression { method, nn_bias, mean: mean_fn, mean_ridge, opts, .. } = *regression;
+    if method == Method::KeyposeAffine {
+        let keys = rows.keys();
+        let a = AffineKeypose::fit(&keys.x_disp, &keys.y_disp).map_err(|e| Error::invalid(format!("displacement: {e}")))?;
+        return Ok((Regressor::Affine(a), RegressorReport::affine("displacement")));
+    }
+    let data = &rows.data;
     let mut notes = Vec::new();
     let (mean, resid) = fit_mean(mean_fn, mean_ridge, None, &data.x_disp, &data.y_disp, &mut notes)
         .map_err(|e| Error::invalid(format!("displacement: {e}")))?;
@@ -469,12 +476,12 @@ pub struct Regression<'a> {
 /// A kernel with its observation-noise variance `σn²`.
 pub type Hyperparameters = (Kernel, f64);
 
-/// The hyperparameters of every GP of a model: per part (`None`: no GP, the affine baseline),
-/// then the displacement's.
+/// The hyperparameters of every GP of a model: per part, then the displacement's (`None`: no
+/// GP, the affine key-pose baseline).
 #[derive(Clone, Debug, PartialEq)]
 pub struct FixedHyperparameters {
     pub parts: Vec<Option<Hyperparameters>>,
-    pub displacement: Hyperparameters,
+    pub displacement: Option<Hyperparameters>,
 }
 
 impl FixedHyperparameters {
@@ -484,8 +491,7 @@ impl FixedHyperparameters {
             Regressor::Gp { gpr, .. } => Some((gpr.kernel, gpr.noise_var)),
             Regressor::Affine(_) => None,
         };
-        let displacement = of(&model.displacement).ok_or_else(|| Error::invalid("the displacement regressor is not a GP"))?;
-        Ok(FixedHyperparameters { parts: model.parts.iter().map(of).collect(), displacement })
+        Ok(FixedHyperparameters { parts: model.parts.iter().map(of).collect(), displacement: of(&model.displacement) })
     }
 }
 
@@ -533,7 +539,7 @@ pub fn train_rows(regression: &Regression, part_names: &[String], rows: &Trainin
     let (data, keys) = (&rows.data, rows.keys());
     let (parts, disp) = rayon::join(
         || train_parts(method, nn_bias, mean_fn, mean_ridge, mean_priors, part_names, data, keys, opts, fixed.map(|f| f.parts.as_slice())),
-        || train_displacement(data, nn_bias, mean_fn, mean_ridge, opts, fixed.map(|f| f.displacement)),
+        || train_displacement(regression, rows, fixed.and_then(|f| f.displacement)),
     );
     let (parts, mut reports) = parts?;
     let (displacement, disp_report) = disp?;

@@ -128,7 +128,7 @@ pub fn train_piece(regression: &Regression, part_names: &[String], rows: &Traini
         )?;
         (regs.remove(0), reports.remove(0))
     } else if unit == part_names.len() {
-        train_displacement(data, nn_bias, mean_fn, mean_ridge, opts, fixed.map(|f| f.displacement))?
+        train_displacement(regression, rows, fixed.and_then(|f| f.displacement))?
     } else {
         return Err(Error::invalid(format!("regressor {unit} of {} parts and the displacement", part_names.len())));
     };

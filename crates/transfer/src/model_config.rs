@@ -5,41 +5,10 @@
 
 use serde::{Deserialize, Serialize};
 
+pub use capture::choices::ConfigName;
+
 use crate::gpr_model::{MeanFunction, PRIOR_WEIGHT};
 use crate::limb_orientation;
-
-/// A configuration's name on the command line.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, PartialOrd, Ord, Serialize, Deserialize, clap::ValueEnum)]
-#[serde(rename_all = "kebab-case")]
-pub enum ConfigName {
-    /// Try the candidates and keep the one with the lowest leave-one-motion-out error.
-    Auto,
-    /// The defaults: affine mean with the geometric prior mixed in, limb orientation.
-    #[default]
-    Default,
-    /// The defaults without the geometric prior (`--prior-weight 0`).
-    NoPrior,
-    /// The affine mean and its GP alone: no prior, no limb orientation.
-    AffineOnly,
-    /// The paper's zero-mean GP (CVPR eq. 11), with the limb orientation.
-    ZeroMean,
-    /// The paper's model: zero mean, NN kernel, σn² = 0.1, no prior, no limb orientation.
-    Paper,
-}
-
-impl ConfigName {
-    /// The name as written on the command line.
-    pub fn name(self) -> &'static str {
-        match self {
-            ConfigName::Auto => "auto",
-            ConfigName::Default => "default",
-            ConfigName::NoPrior => "no-prior",
-            ConfigName::AffineOnly => "affine-only",
-            ConfigName::ZeroMean => "zero-mean",
-            ConfigName::Paper => "paper",
-        }
-    }
-}
 
 /// The flag values a configuration sets. The others (kernel, σn², ridge, ...) keep their
 /// defaults: the paper's NN kernel without the bias input and σn² = 0.1 in every preset.

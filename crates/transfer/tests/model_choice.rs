@@ -1,8 +1,11 @@
-//! `gpr-train --config auto` on the `tiny` preset of `synth` (real bodies and mocap; needs the
-//! synth assets, as `make test` does): every candidate configuration is also trained on its
-//! own, fixed by name, and its leave-one-motion-out error measured there; the automatic choice
-//! is the one of lowest error among those independent runs, the auto run reports the same
-//! errors, and the model it writes is the one `--config NAME` trains for the chosen name.
+//! The transfer model's configurations and methods on the `tiny` preset of `synth` (real bodies
+//! and mocap; needs the synth assets, as `make test` does):
+//! - `gpr-train --config auto`: every candidate configuration is also trained on its own, fixed
+//!   by name, and its leave-one-motion-out error measured there; the automatic choice is the one
+//!   of lowest error among those independent runs, the auto run reports the same errors, and
+//!   the model it writes is the one `--config NAME` trains for the chosen name.
+//! - The method rows `make transfer` writes, at the default configuration and at `paper`, are
+//!   different models: no two transfer a test motion to the same meshes.
 
 mod common;
 
@@ -13,7 +16,8 @@ use std::process::Command;
 
 use capture::align::AlignedMotion;
 use mesh_core::artifact::{read_header, Artifact};
-use transfer::gpr_model::GprModel;
+use mesh_core::sequence::MeshSequence;
+use transfer::gpr_model::{GprModel, Regressor};
 
 fn s(p: &Path) -> String {
     p.to_str().unwrap().to_string()
@@ -28,11 +32,12 @@ fn cross_validation(model: &Path) -> serde_json::Value {
     header.params["cross_validation"].clone()
 }
 
-#[test]
-fn auto_keeps_the_configuration_of_lowest_leave_one_motion_out_error_among_the_fixed_runs() {
-    let dir = tempfile::tempdir().unwrap();
-    let set = dir.path().join("set");
-    let work = dir.path().join("work");
+/// The tiny preset's training pairs made ready for `gpr-train` in `dir`: the set, the work
+/// folder (segmentation, aligned motions, part and whole-body PCA models of both subjects, the
+/// test motion `punch` of A aligned) and `gpr-train`'s arguments for the pairs.
+fn tiny_training(dir: &Path) -> (PathBuf, PathBuf, Vec<String>) {
+    let set = dir.join("set");
+    let work = dir.join("work");
     let cfg = synth::preset::preset("tiny", 0, true).unwrap();
     synth::capture_set_writer::synthesise(&cfg, &set, false, &|_| {}, &|| {}).unwrap();
     let tpl = |x: &str| set.join(x).join("walk").join("000000.ply");
@@ -41,14 +46,18 @@ fn auto_keeps_the_configuration_of_lowest_leave_one_motion_out_error_among_the_f
         std::fs::create_dir_all(work.join(x)).unwrap();
         let seg = w(format!("{x}/parts.seg"));
         run("segment", &[s(&set.join(x).join("subject.json")), "--template".into(), s(&tpl(x)), "--out".into(), s(&seg)]);
-        for m in TRAIN {
+        let motions: &[&str] = if x == "A" { &["walk", "run", "jump", "kick", "dance", "punch"] } else { &TRAIN };
+        for m in motions {
             run("align", &["--segmentation".into(), s(&seg), "--subject".into(), s(&set.join(x).join("subject.json")), "--template".into(), s(&tpl(x)), s(&set.join(x).join(m)), "--out".into(), s(&w(format!("{x}/{m}.aligned")))]);
         }
         let mut args = vec!["--template".into(), s(&tpl(x)), "--segmentation".into(), s(&seg), "--out".into(), s(&w(format!("{x}/pca.model")))];
         args.extend(TRAIN.iter().map(|m| s(&w(format!("{x}/{m}.aligned")))));
         run("pca-fit", &args);
+        let mut args = vec!["--whole-body".into(), "--components".into(), "100".into(), "--template".into(), s(&tpl(x)), "--out".into(), s(&w(format!("{x}/pca-whole.model")))];
+        args.extend(TRAIN.iter().map(|m| s(&w(format!("{x}/{m}.aligned")))));
+        run("pca-fit", &args);
     }
-    let mut train_args = vec!["--source-pca".into(), s(&w("A/pca.model".into())), "--target-pca".into(), s(&w("B/pca.model".into()))];
+    let mut train_args = Vec::new();
     for m in TRAIN {
         let corr = w(format!("{m}.corr"));
         run("dtw-densify", &[
@@ -59,6 +68,16 @@ fn auto_keeps_the_configuration_of_lowest_leave_one_motion_out_error_among_the_f
         ]);
         train_args.extend(["--pair".into(), s(&w(format!("A/{m}.aligned"))), s(&w(format!("B/{m}.aligned"))), s(&corr)]);
     }
+    (set, work, train_args)
+}
+
+#[test]
+fn auto_keeps_the_configuration_of_lowest_leave_one_motion_out_error_among_the_fixed_runs() {
+    let dir = tempfile::tempdir().unwrap();
+    let (_, work, pair_args) = tiny_training(dir.path());
+    let w = |rel: String| -> PathBuf { work.join(rel) };
+    let mut train_args = vec!["--source-pca".into(), s(&w("A/pca.model".into())), "--target-pca".into(), s(&w("B/pca.model".into()))];
+    train_args.extend(pair_args);
     let train = |extra: &[&str], out: &Path| {
         let mut args = train_args.clone();
         args.extend(extra.iter().map(|a| a.to_string()));
@@ -119,4 +138,64 @@ fn auto_keeps_the_configuration_of_lowest_leave_one_motion_out_error_among_the_f
     let out = Command::new(common::bin("gpr-train")).args(&args).env("OPENBLAS_NUM_THREADS", "1").output().unwrap();
     assert_eq!(out.status.code(), Some(1));
     assert!(String::from_utf8_lossy(&out.stderr).contains("not with --part"));
+}
+
+/// Every method row of `make transfer` at the default configuration (gpr-nn, the key-pose
+/// baseline, the whole body, gpr-nn on key-poses) and at `--config paper` (the three kernels
+/// besides) transfers the test motion to meshes at least 1 mm apart somewhere from every other
+/// row's; the key-pose baseline is Baran et al.'s model class throughout (affine key-pose maps
+/// for every part and the displacement, no limb orientation).
+#[test]
+fn method_rows_are_different_models() {
+    let dir = tempfile::tempdir().unwrap();
+    let (set, work, pair_args) = tiny_training(dir.path());
+    let w = |rel: &str| -> PathBuf { work.join(rel) };
+    let transfer = |config: &str, method: &str, keyposes: bool| -> MeshSequence {
+        let kind = if method == "whole-body" { "pca-whole" } else { "pca" };
+        let (src, tgt) = (s(&w(&format!("A/{kind}.model"))), s(&w(&format!("B/{kind}.model"))));
+        let name = format!("{config}-{method}{}", if keyposes { "-keyposes" } else { "" });
+        let model = w(&format!("{name}.model"));
+        let mut args = vec!["--config".into(), config.into(), "--method".into(), method.into(), "--source-pca".into(), src.clone(), "--target-pca".into(), tgt.clone()];
+        if keyposes {
+            args.push("--keyposes-only".into());
+        }
+        args.extend(pair_args.iter().cloned());
+        args.extend(["--out".into(), s(&model)]);
+        run("gpr-train", &args);
+        if method == "keypose-affine" {
+            let m = GprModel::load(&model).unwrap();
+            assert!(m.orientation.is_none(), "{name}: the key-pose baseline has a limb orientation");
+            assert!(matches!(m.displacement, Regressor::Affine(_)), "{name}: its displacement is not the key-pose map");
+        }
+        let out = w(&name);
+        run("gpr-predict", &[
+            "--model".into(), s(&model), "--source-pca".into(), src, "--target-pca".into(), tgt,
+            "--target-template".into(), s(&set.join("B").join("walk").join("000000.ply")), s(&w("A/punch.aligned")),
+            "--out".into(), s(&out),
+        ]);
+        MeshSequence::load_dir(&out).unwrap()
+    };
+    let rows = |config: &str, methods: &[&str]| -> Vec<(String, MeshSequence)> {
+        let mut rows: Vec<(String, MeshSequence)> = methods.iter().map(|m| (m.to_string(), transfer(config, m, false))).collect();
+        rows.push(("gpr-nn-keyposes".into(), transfer(config, "gpr-nn", true)));
+        rows
+    };
+    for (config, methods) in [
+        ("default", &["gpr-nn", "keypose-affine", "whole-body"][..]),
+        ("paper", &["gpr-nn", "gpr-se", "gpr-linear", "keypose-affine", "whole-body"][..]),
+    ] {
+        let rows = rows(config, methods);
+        for (i, (a, ma)) in rows.iter().enumerate() {
+            for (b, mb) in &rows[i + 1..] {
+                let apart = ma
+                    .frames
+                    .iter()
+                    .zip(&mb.frames)
+                    .flat_map(|(fa, fb)| fa.iter().zip(fb).map(|(p, q)| (p - q).norm()))
+                    .fold(0.0, f64::max);
+                eprintln!("{config}: {a} and {b} at most {:.1} mm apart", apart * 1e3);
+                assert!(apart > 1e-3, "{config}: {a} and {b} transfer punch to the same meshes ({apart} m apart at most)");
+            }
+        }
+    }
 }

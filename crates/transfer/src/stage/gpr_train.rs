@@ -179,9 +179,14 @@ pub fn run(p: &Params) -> anyhow::Result<()> {
     if let Some(w) = p.orientation_weight.filter(|w| !(0.0..=1.0).contains(w)) {
         return Err(mesh_core::Error::invalid(format!("--orientation-weight must be in [0, 1], got {w}")).into());
     }
+    // The key-pose baseline is Baran et al.'s model class throughout: no limb orientation.
+    if method == Method::KeyposeAffine && p.orientation_weight.is_some_and(|w| w > 0.0) {
+        mesh_core::warn!("method keypose-affine has no limb orientation: --orientation-weight is not used");
+    }
     let configs: Vec<(ConfigName, Settings)> = model_config::candidates(p.config)
         .into_iter()
         .filter_map(|c| model_config::settings(c, &overrides).map(|s| (c, s)))
+        .map(|(c, s)| (c, if method == Method::KeyposeAffine { Settings { orientation_weight: 0.0, ..s } } else { s }))
         .collect();
     let cross_validated = p.cross_validate || p.report.is_some() || configs.len() > 1;
     let mut pairs = Vec::new();
