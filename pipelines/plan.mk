@@ -16,7 +16,7 @@ PLAN_ARGS := --set $(SET) --pipeline-out $(OUT) \
   $(if $(ALIGN_FRAME),--align-frame $(ALIGN_FRAME)) \
   $(if $(PART_ALIGNMENT),--part-alignment $(PART_ALIGNMENT)) $(if $(PLACEMENT),--placement $(PLACEMENT)) \
   $(if $(GPR_MEAN),--gpr-mean $(GPR_MEAN)) --gpr-train-flags '$(GPR_TRAIN_FLAGS)' \
-  --pca-components $(PCA_COMPONENTS) $(if $(VARIATION_SUBJECT),--variation-subject $(VARIATION_SUBJECT)) \
+  $(if $(PCA_COMPONENTS),--pca-components $(PCA_COMPONENTS)) $(if $(VARIATION_SUBJECT),--variation-subject $(VARIATION_SUBJECT)) \
   $(foreach g,$(VARIATION_GROUPS),--variation-group $(g)=$(VARIATION_MOTIONS_$(g)) \
     $(if $(VARIATION_PREALIGN_FLAGS_$(g)),'--prealign-flags=$(g)=$(VARIATION_PREALIGN_FLAGS_$(g))')) \
   --variation-w $(VARIATION_W) --variation-blends $(VARIATION_BLENDS) --variation-n $(VARIATION_N) \

@@ -24,9 +24,10 @@ PLACEMENT ?=
 # gpr-train --mean: affine (least-squares affine map, GP on the residuals) or zero (the paper);
 # empty: the configuration's (gpr-train --config in GPR_TRAIN_FLAGS; the default's is affine)
 GPR_MEAN ?=
-# Further gpr-train flags for every model (e.g. --learn-noise, --nn-bias), and pca-fit components
+# Further gpr-train flags for every model (e.g. --learn-noise, --nn-bias), and pca-fit --components
+# per part (the whole body gets the parts' total)
 GPR_TRAIN_FLAGS ?=
-PCA_COMPONENTS ?= 20
+PCA_COMPONENTS ?=
 
 .PHONY: transfer transfer-results transfer-report
 transfer: $(STAGE_BINARIES)

@@ -67,8 +67,9 @@ pub struct TransferOptions {
     #[arg(long, default_value = "", allow_hyphen_values = true, value_name = "FLAGS")]
     pub gpr_train_flags: String,
     /// pca-fit --components per part (PCA_COMPONENTS); the whole body gets parts x this
-    #[arg(long, default_value_t = 20, value_name = "K")]
-    pub pca_components: u32,
+    /// [default: pca-fit's]
+    #[arg(long, value_name = "K")]
+    pub pca_components: Option<usize>,
 }
 
 impl TransferOptions {
@@ -102,6 +103,11 @@ impl TransferOptions {
     /// else gpr-predict's default.
     pub fn placement(&self) -> Placement {
         self.placement.unwrap_or(if self.paper() { Placement::Regressed } else { Placement::PREDICT_DEFAULT })
+    }
+
+    /// Components per part: PCA_COMPONENTS, else pca-fit's default.
+    pub fn pca_components(&self) -> usize {
+        self.pca_components.unwrap_or(capture::stage::pca_fit::COMPONENTS)
     }
 
     /// Flags of every `gpr-predict`: under `paper`, no foot-skating clean-up and no foot height.

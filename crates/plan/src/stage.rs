@@ -258,7 +258,8 @@ mod tests {
         assert_eq!(r["subcommand"], "make");
         assert_eq!(r["set"], "s");
         assert_eq!(r["variation_group"], serde_json::json!([["g", "walk"]]));
-        assert_eq!(r["placement"], "scaled-source", "a default, by its command-line name");
+        assert_eq!(r["part_alignment"], "body", "a default, by its command-line name");
+        assert_eq!(r["placement"], serde_json::Value::Null, "unset: the configuration's or the stage's");
         let p = Params::try_parse_from(["plan", "collect", "variation", "--work", "w", "--out", "v.json", "g"]).unwrap();
         let r = serde_json::to_value(&p).unwrap();
         assert_eq!((&r["subcommand"], &r["table"], &r["groups"]), (&"collect".into(), &"variation".into(), &serde_json::json!(["g"])));

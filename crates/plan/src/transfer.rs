@@ -136,7 +136,7 @@ impl<'a> Plan<'a> {
         let mut inputs = vec![self.seg(x)];
         inputs.extend(training.iter().cloned());
         let mut args = vec![
-            s("-q"), s("--components"), self.opt.pca_components.to_string(), s("--part-alignment"),
+            s("-q"), s("--components"), self.opt.pca_components().to_string(), s("--part-alignment"),
             value_name(self.opt.part_alignment), s("--template"), self.template(x), s("--segmentation"),
             self.seg(x),
         ];
@@ -148,7 +148,7 @@ impl<'a> Plan<'a> {
         }
         // The whole-body comparison at the parts' total dimension (CVPR fig. 9: "equivalent
         // total number of input and output dimensions").
-        let whole = self.opt.pca_components as usize * parts.len();
+        let whole = self.opt.pca_components() * parts.len();
         let mut args = vec![
             s("-q"), s("--whole-body"), s("--components"), whole.to_string(), s("--template"), self.template(x),
         ];

@@ -16,6 +16,10 @@ use crate::motion_stream::MotionFiles;
 use crate::part_pca::{self, PcaModel};
 use crate::streamed_pca;
 
+/// `--components`' default: the paper's 20 per part (`make transfer` uses it unless
+/// PCA_COMPONENTS is set).
+pub const COMPONENTS: usize = gp::pca::PAPER_COMPONENTS;
+
 /// Fit a PCA per body part on a subject's aligned training motions
 #[derive(Parser, Debug, Serialize)]
 #[command(
@@ -37,7 +41,7 @@ pub struct Params {
     #[arg(long)]
     pub whole_body: bool,
     /// Components per part (the paper uses 20)
-    #[arg(long, default_value_t = 20, conflicts_with = "variance")]
+    #[arg(long, default_value_t = COMPONENTS, conflicts_with = "variance")]
     pub components: usize,
     /// Keep the fewest components explaining this fraction of variance instead
     #[arg(long)]

@@ -44,7 +44,8 @@ pub struct Params {
     /// Train the reverse direction (set target -> set source): --source-pca is then the set target's
     #[arg(long)]
     pub reverse: bool,
-    /// Transfer method (whole-body: gpr-nn on whole-body PCA models)
+    /// Transfer method (whole-body: gpr-nn on whole-body PCA models; keypose-affine: Baran et
+    /// al.'s affine key-pose maps for every part and the displacement, no limb orientation)
     #[arg(long, value_enum, default_value_t = Method::GprNn)]
     pub method: Method,
     /// Train on the key-pose pairs only (instead of the dense DTW pairs)
