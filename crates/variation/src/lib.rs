@@ -31,6 +31,7 @@ pub mod part_data;
 pub mod plots;
 pub mod prealign;
 pub mod reconstruct;
+pub mod reference;
 pub mod sample;
 pub mod stage;
 pub mod synthesize;
