@@ -176,7 +176,8 @@ pub struct Params {
     /// frame as OBJ plus a float32 point cache, a quarter of the bytes)
     #[arg(long, value_enum, default_value_t = VariationFormat::Ply)]
     pub frame_format: VariationFormat,
-    /// Statistics against the sources (JSON); without it they are not computed
+    /// Statistics against the sources (JSON); without it they are not computed. Those that
+    /// compare with the captures need --group: without it the report says they were skipped
     #[arg(long)]
     pub report: Option<PathBuf>,
 }
