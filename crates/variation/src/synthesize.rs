@@ -647,6 +647,18 @@ pub fn run_with_progress(
             (used, vec![(ia, ib, *w)])
         }
     };
+    // A blend's source is the non-linear blend of the two motions' captured meshes: refused
+    // before any sampling without them.
+    let blend_group = match (blends.is_empty(), group) {
+        (true, _) => None,
+        (false, Some(g)) => Some(g),
+        (false, None) => {
+            return Err(Error::invalid(match cfg.query {
+                Some(_) => "a blend's source is made from the captured meshes: give the group (--group)",
+                None => "blends are made from the captured meshes: give the group (--group), or no blends (--blends '')",
+            }))
+        }
+    };
     // Every (sequence, part) chain is a task of one pool (each seeded by its own indices, so
     // the samples do not depend on the scheduling).
     let sampled: Vec<(Variations, Vec<ChainStats>)> = wanted
@@ -680,14 +692,7 @@ pub fn run_with_progress(
             ));
         }
     }
-    if !blends.is_empty() {
-        // A blend's source is the non-linear blend of the two motions' captured meshes.
-        let group = group.ok_or_else(|| {
-            Error::invalid(match cfg.query {
-                Some(_) => "a blend's source is made from the captured meshes: give the group (--group)",
-                None => "blends are made from the captured meshes: give the group (--group), or no blends (--blends '')",
-            })
-        })?;
+    if let Some(group) = blend_group {
         let blender = surface::blend::Blender::new(group.template.clone(), group.faces.clone())?;
         // The blended sources, every weight of a pair from one decomposition of its frames.
         let mut truths: Vec<Option<GroupSequence>> = vec![None; blends.len()];
