@@ -432,6 +432,18 @@ pub fn read_artifact<T: DeserializeOwned>(
     decode_artifact(&bytes, kind, kind_version).map_err(|msg| Error::file(path, msg))
 }
 
+/// The error of an artifact of kind version `found` read by a build of version `build`: for an
+/// older one, the stage its header names as the producer, whose run in this build re-creates it.
+fn version_error(kind: &str, found: u32, build: u32, header_json: &[u8]) -> String {
+    let problem = format!("'{kind}' version {found} is not supported (this build reads version {build})");
+    match parse_header(header_json) {
+        Ok(h) if found < build && !h.producer.stage.is_empty() => {
+            format!("{problem}: an older build's, re-create it with this build's {}", h.producer.stage)
+        }
+        _ => problem,
+    }
+}
+
 /// Reads kind, kind version and header of any artifact (checksum verified).
 pub fn read_header(path: impl AsRef<Path>) -> Result<(String, u32, Header)> {
     let info = inspect_artifact(path)?;
@@ -492,10 +504,7 @@ pub fn decode_artifact_hashed<T: DeserializeOwned>(
         ));
     }
     if raw.kind_version != kind_version {
-        return Err(format!(
-            "'{kind}' version {} is not supported (this build reads version {kind_version})",
-            raw.kind_version
-        ));
+        return Err(version_error(kind, raw.kind_version, kind_version, raw.header_json));
     }
     let header = parse_header(raw.header_json)?;
     let payload = decode_payload::<T>(raw.payload)
@@ -843,10 +852,7 @@ impl StreamSections {
             return Err(format!("expected artifact kind '{kind}', found '{found}'"));
         }
         if self.kind_version != kind_version {
-            return Err(format!(
-                "'{kind}' version {} is not supported (this build reads version {kind_version})",
-                self.kind_version
-            ));
+            return Err(version_error(kind, self.kind_version, kind_version, &self.header_json));
         }
         parse_header(&self.header_json)
     }

@@ -46,6 +46,7 @@ fn model(level: usize) -> VariationModel {
         blend_of: None,
         start_pose: RigidMotion::identity(),
         contacts: None,
+        reference: Default::default(),
     };
     let mut m = VariationModel {
         group: "bench".into(),

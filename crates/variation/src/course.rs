@@ -71,25 +71,26 @@ fn wrap(a: f64) -> f64 {
     if r > std::f64::consts::PI { r - t } else { r }
 }
 
-/// Turns every frame of the variation `frames` back onto the course of `source` (module doc):
-/// `matches[t]` is the source frame (fractional) matched to frame `t`, `core` the vertices the
-/// headings are measured on and whose centroid each frame turns about, `sigma` the local fit's
-/// width in frames. Returns the correction `c(t)` applied (radians).
+/// Turns every frame of the variation `frames` back onto the course of its source (module doc):
+/// `source_heading` is the source's [`headings`] on `core`, `matches[t]` the source frame
+/// (fractional) matched to frame `t`, `core` the vertices the headings are measured on and whose
+/// centroid each frame turns about, `sigma` the local fit's width in frames. Returns the
+/// correction `c(t)` applied (radians).
 pub fn keep(
     frames: &mut [Vec<Vector3<f64>>],
-    source: &[Vec<Vector3<f64>>],
+    source_heading: &[f64],
     matches: &[f64],
     core: &[u32],
     up: &Vector3<f64>,
     sigma: f64,
 ) -> Vec<f64> {
-    if frames.len() < 2 || source.is_empty() || matches.len() != frames.len() {
+    if frames.len() < 2 || source_heading.is_empty() || matches.len() != frames.len() {
         return vec![0.0; frames.len()];
     }
     let hv = headings(frames, core, up);
-    let hs = headings(source, core, up);
+    let hs = source_heading;
     let error: Vec<f64> =
-        (0..frames.len()).map(|t| crate::grounding::at(&hs, matches[t]) - crate::grounding::at(&hs, matches[0]) - hv[t]).collect();
+        (0..frames.len()).map(|t| crate::grounding::at(hs, matches[t]) - crate::grounding::at(hs, matches[0]) - hv[t]).collect();
     let c = crate::local_linear::fit(&error, sigma);
     let axis = Unit::new_normalize(*up);
     let centre = |f: &[Vector3<f64>]| -> Vector3<f64> {
@@ -171,7 +172,7 @@ mod tests {
         let matches: Vec<f64> = (0..n).map(|t| t as f64).collect();
         let before = headings(&var, &[], &Vector3::y());
         assert!(before[n - 1] > 3.0, "{}", before[n - 1]);
-        keep(&mut var, &source, &matches, &[], &Vector3::y(), 5.0);
+        keep(&mut var, &headings(&source, &[], &Vector3::y()), &matches, &[], &Vector3::y(), 5.0);
         let after = headings(&var, &[], &Vector3::y());
         let own: Vec<f64> = (0..n).map(|t| (1..=t).map(sway).sum::<f64>()).collect();
         for t in 0..n {
@@ -195,7 +196,7 @@ mod tests {
         let mut var = walk(n, |t| 0.03 + 0.02 * (t as f64).sin());
         let orig = var.clone();
         let matches: Vec<f64> = (0..n).map(|t| t as f64).collect();
-        let c = keep(&mut var, &source, &matches, &[], &Vector3::y(), 5.0);
+        let c = keep(&mut var, &headings(&source, &[], &Vector3::y()), &matches, &[], &Vector3::y(), 5.0);
         assert!(c.iter().all(|v| v.abs() < 0.03), "{c:?}");
         let moved = var.iter().zip(&orig).flat_map(|(a, b)| a.iter().zip(b).map(|(p, q)| (p - q).norm())).fold(0.0, f64::max);
         assert!(moved < 0.1, "{moved}");

@@ -66,11 +66,12 @@ pub fn offsets(
 
 /// Applies the clean-up in place (module doc); returns the largest |offset| (m). `legs[f]` are
 /// the leg weights (their vertices are the leg whose lowest point is measured),
-/// `contacts[t][f]` the source's contacts at the matched frames, `matches` the DTW
-/// correspondence to `source`.
+/// `source_legs[f]` the source's lowest height of that leg per source frame ([`lowest`] of
+/// the same vertices), `contacts[t][f]` the source's contacts at the matched frames, `matches`
+/// the DTW correspondence to the source.
 pub fn lift(
     frames: &mut [Vec<Vector3<f64>>],
-    source: &[Vec<Vector3<f64>>],
+    source_legs: &[Vec<f64>; 2],
     matches: &[f64],
     legs: &[Vec<(u32, f64)>; 2],
     contacts: &[[bool; 2]],
@@ -87,7 +88,7 @@ pub fn lift(
             .collect();
         let o = offsets(
             &lowest(frames, &leg, up),
-            &lowest(source, &leg, up),
+            &source_legs[f],
             matches,
             &planted,
             SIGMA_FRAMES,
@@ -168,7 +169,8 @@ mod tests {
         let legs = [vec![(0, 1.0), (1, 0.5)], vec![(2, 1.0), (3, 0.5)]];
         let matches: Vec<f64> = (0..6).map(|t| t as f64).collect();
         let contacts = vec![[true, true]; 6];
-        let m = lift(&mut var, &source, &matches, &legs, &contacts, &up);
+        let source_legs = [0, 1].map(|f| lowest(&source, &[legs[f][0].0, legs[f][1].0], &up));
+        let m = lift(&mut var, &source_legs, &matches, &legs, &contacts, &up);
         assert!((m - 0.02).abs() < 1e-12);
         for f in &var {
             assert!(f[0].z.abs() < 1e-12, "sole on the source's floor");

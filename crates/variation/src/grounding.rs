@@ -50,9 +50,17 @@ pub fn correspondence(
 /// `prealign::pose_cost` subsamples them).
 const MATCH_VERTICES: usize = 400;
 
+/// The vertices of a body of `n` vertices the pose cost of [`correspondence`] compares: every
+/// `ceil(n / 400)`-th.
+pub fn match_vertices(n: usize) -> Vec<usize> {
+    let step = n.div_ceil(MATCH_VERTICES).max(1);
+    (0..n).step_by(step).collect()
+}
+
 /// The source side of [`correspondence`], prepared once for any number of variations: the
-/// subsampled vertices of every source frame rigidly aligned to the template (the alignment
-/// fitted on all vertices, as [`crate::metrics::normalise`] fits it; [`TemplateFit`]).
+/// subsampled vertices ([`match_vertices`]) of every source frame rigidly aligned to the
+/// template (the alignment fitted on all vertices, as [`crate::metrics::normalise`] fits it;
+/// [`TemplateFit`]).
 pub struct MatchSource {
     fit: TemplateFit,
     len: usize,
@@ -62,9 +70,7 @@ pub struct MatchSource {
 
 impl MatchSource {
     pub fn new(source: &[Vec<Vector3<f64>>], template: &[Vector3<f64>]) -> MatchSource {
-        let n = source.first().map_or(0, |f| f.len());
-        let step = n.div_ceil(MATCH_VERTICES).max(1);
-        let idx: Vec<usize> = (0..n).step_by(step).collect();
+        let idx = match_vertices(source.first().map_or(0, |f| f.len()));
         let fit = TemplateFit::new(template);
         MatchSource {
             len: source.len(),
@@ -72,6 +78,23 @@ impl MatchSource {
             fit,
             idx,
         }
+    }
+
+    /// The matcher of a source whose aligned rows (as [`MatchSource::new`] makes them from its
+    /// frames, one per frame, [`match_vertices`] of the template's vertex count each) are
+    /// `rows`.
+    pub fn from_rows(template: &[Vector3<f64>], rows: Vec<Vec<Vector3<f64>>>) -> MatchSource {
+        MatchSource {
+            len: rows.len(),
+            idx: match_vertices(template.len()),
+            fit: TemplateFit::new(template),
+            poses: rows,
+        }
+    }
+
+    /// The source's aligned rows, one per frame.
+    pub fn into_rows(self) -> Vec<Vec<Vector3<f64>>> {
+        self.poses
     }
 
     /// [`correspondence`] of `var` to this source.

@@ -6,7 +6,7 @@
 //! [`part_data`] (per-part pose vectors, §4) -> [`train`] (one GPDM per part, §5) -> [`sample`]
 //! (mean prediction + HMC over latent trajectories, §6; latent blending, §7) -> [`reconstruct`]
 //! (3DV eqs. 11-13, stitching, displacement integration) -> [`grounding`] (feet on the source's floor, a
-//! post-process) -> [`footskate`] (planted feet kept in place by a root shift, a post-process) ->
+//! post-process; the post-processes read the source's [`reference`] trajectories, stored in the model) -> [`footskate`] (planted feet kept in place by a root shift, a post-process) ->
 //! [`foot_lock`] (the rest of each planted sole's slide absorbed by its leg) -> [`metrics`],
 //! [`turns_and_tears`] (frames that spin or tear past the captures' own figures) and [`plots`].
 
@@ -31,6 +31,7 @@ pub mod part_data;
 pub mod plots;
 pub mod prealign;
 pub mod reconstruct;
+pub mod reference;
 pub mod sample;
 pub mod stage;
 pub mod synthesize;

@@ -25,11 +25,12 @@ use crate::foot_lock;
 use crate::footskate;
 use crate::frame_writer::{VariationFormat, VariationWriter};
 use crate::grounding::{self, FloorContact};
-use crate::group::{blend_name, blend_sequences_at, Group, GroupSequence};
+use crate::group::{blend_name, blend_sequences_at, Group, GroupSequence, PartDef};
 use crate::latent_smoothing;
 use crate::metrics::{self, Stats};
 use crate::motion_matching::MatchOptions;
 use crate::reconstruct::{Assembly, Decoder};
+use crate::reference::{Landmarks, Reference};
 use crate::sample::{
     blend_entries, blend_variations, default_hmc, matched_blend_variations, matched_variations, mix,
     sequence_variations_len, ChainStats, HmcStart, Sampler, Variations,
@@ -240,38 +241,10 @@ pub struct SynthReport {
     pub capture_limits: Option<CaptureLimits>,
 }
 
-/// Sole vertices of the model's template (both feet, [`metrics::soles`]).
-fn model_soles(model: &VariationModel) -> Vec<Vec<u32>> {
-    metrics::soles(
-        &model
-            .parts
-            .iter()
-            .map(|p| p.part.clone())
-            .collect::<Vec<_>>(),
-        &model.template,
-        &model.up,
-        mesh_core::feet::SOLE_TOLERANCE,
-    )
-}
-
-/// [`mesh_core::feet::leg_weights`] of the model's two leg parts (None without them).
-fn model_leg_weights(
-    model: &VariationModel,
-    soles: &[Vec<u32>; 2],
-) -> Option<[Vec<(u32, f64)>; 2]> {
-    let parts: Vec<_> = model.parts.iter().map(|p| p.part.clone()).collect();
-    match foot_lock::leg_parts(&parts).as_slice() {
-        [l, r] => Some([0, 1].map(|f| {
-            mesh_core::feet::leg_weights(
-                &[l, r][f].vertices,
-                &soles[f],
-                &model.template,
-                &model.faces,
-                &model.up,
-            )
-        })),
-        _ => None,
-    }
+/// The landmarks of the model's body ([`Landmarks::of`]).
+fn model_landmarks(model: &VariationModel) -> Landmarks {
+    let defs: Vec<PartDef> = model.parts.iter().map(|p| p.part.clone()).collect();
+    Landmarks::of(&model.template, &model.faces, &defs, &model.up)
 }
 
 /// Certified bound (m) on every pose coordinate of the kernel-basis decoding at the training
@@ -292,7 +265,7 @@ fn floor_contact(
 ) -> FloorContact {
     grounding::floor_contact(
         &grounding::lowest(v, &[], &model.up),
-        &job.source_low,
+        &job.reference.lowest,
         matches,
         CONTACT_HEIGHT,
     )
@@ -313,20 +286,24 @@ struct Decoded {
     bound: Option<f64>,
 }
 
-/// A sequence to synthesise: label, blend weight, latent variations, source frames, start
-/// pose and the source's contacts.
+/// A sequence to synthesise: label, blend weight, latent variations, the source's reference
+/// trajectories and meshes, start pose and the source's contacts.
 struct Job {
     label: String,
     blend: Option<f64>,
     vars: Variations,
-    source: Vec<Vec<Vector3<f64>>>,
+    /// What the post-processes read of the source ([`crate::reference`]).
+    reference: Reference,
+    /// The source's lowest height of each leg per frame ([`Reference::leg`]; empty without legs).
+    source_legs: [Vec<f64>; 2],
+    /// The source's meshes, for the statistics against it (None without the group).
+    source: Option<Vec<Vec<Vector3<f64>>>>,
     start: mesh_core::rigid::RigidMotion,
     contacts: Option<Contacts>,
     /// The contacts the clean-ups follow: `contacts` completed at the clip's ends
     /// ([`foot_lock::close_clip_ends`]) where the legs are known.
     cleanup_contacts: Option<Contacts>,
-    /// Height of the source's lowest point in every frame, and over all frames (its floor).
-    source_low: Vec<f64>,
+    /// The source's lowest height over all frames (its floor).
     floor: f64,
     /// For a blend, the learned weights that guide it ([`SequenceReport::guided_from`]).
     guided_from: Option<(f64, f64)>,
@@ -337,23 +314,22 @@ impl Job {
         label: String,
         blend: Option<f64>,
         vars: Variations,
-        source: Vec<Vec<Vector3<f64>>>,
+        reference: Reference,
+        source: Option<Vec<Vec<Vector3<f64>>>>,
         start: mesh_core::rigid::RigidMotion,
         contacts: Option<Contacts>,
-        up: &Vector3<f64>,
     ) -> Job {
-        let source_low = grounding::lowest(&source, &[], up);
-        let floor = source_low.iter().copied().fold(f64::INFINITY, f64::min);
         Job {
             label,
             blend,
             vars,
+            source_legs: [reference.leg(0), reference.leg(1)],
+            floor: reference.floor(),
+            reference,
             source,
             start,
             cleanup_contacts: contacts.clone(),
             contacts,
-            source_low,
-            floor,
             guided_from: None,
         }
     }
@@ -407,18 +383,18 @@ impl Post<'_> {
         let matches = matcher.matches(&m);
         if cfg.course {
             let sigma = crate::course::SIGMA_SECONDS * model.fps;
-            crate::course::keep(&mut m, &job.source, &matches, self.core, &model.up, sigma);
+            crate::course::keep(&mut m, &job.reference.heading, &matches, self.core, &model.up, sigma);
         }
         let low = grounding::lowest(&m, &[], &model.up);
         let ungrounded =
-            grounding::floor_contact(&low, &job.source_low, &matches, CONTACT_HEIGHT);
+            grounding::floor_contact(&low, &job.reference.lowest, &matches, CONTACT_HEIGHT);
         if cfg.grounding {
             // Ground on the lowest point of the whole body: sampled feet often point their toes
             // through the floor while the template soles sit at the right height.
             grounding::ground_on(
                 &mut m,
                 &low,
-                &job.source_low,
+                &job.reference.lowest,
                 &matches,
                 &model.up,
                 grounding::SIGMA_FRAMES,
@@ -455,7 +431,7 @@ impl Post<'_> {
             )?;
             footskate_max = d.iter().map(|v| v.norm()).fold(0.0, f64::max);
             if let (true, Some(legs)) = (cfg.foot_height, self.leg_weights) {
-                foot_height::lift(&mut m, &job.source, &matches, legs, c, &model.up);
+                foot_height::lift(&mut m, &job.source_legs, &matches, legs, c, &model.up);
             }
             if let (true, Some(legs)) = (cfg.foot_lock, self.leg_weights) {
                 let c = match cfg.foot_height {
@@ -485,11 +461,18 @@ impl Post<'_> {
     }
 }
 
-fn measure(job: &Job, decoded: &[Decoded], model: &VariationModel, limits: &CaptureLimits) -> SequenceReport {
-    let (label, blend, source) = (&job.label, job.blend, &job.source);
+/// The statistics of `job`'s variations `decoded` against its source's meshes `source`.
+fn measure(
+    job: &Job,
+    source: &[Vec<Vector3<f64>>],
+    decoded: &[Decoded],
+    model: &VariationModel,
+    soles: &[Vec<u32>],
+    limits: &CaptureLimits,
+) -> SequenceReport {
+    let (label, blend) = (&job.label, job.blend);
     let vars: Vec<&Vec<Vec<Vector3<f64>>>> = decoded.iter().map(|d| &d.meshes).collect();
     let edges = metrics::edges(&model.faces);
-    let soles = model_soles(model);
     let slide =
         |f: &[Vec<Vector3<f64>>]| metrics::foot_sliding(f, &soles, &model.up, CONTACT_HEIGHT);
     // Each variation's frames aligned to the template (pose only) once, for every pose figure
@@ -565,10 +548,13 @@ fn measure(job: &Job, decoded: &[Decoded], model: &VariationModel, limits: &Capt
     }
 }
 
-/// Samples, decodes, writes and measures every sequence of `model` (sources from `group`).
+/// Samples, decodes, writes and measures every sequence of `model`. The post-processes follow
+/// the sources' reference trajectories stored in the model; `group`, the captures the model was
+/// trained on, is needed for blends (their sources are blends of its meshes) and for the
+/// statistics against the sources (skipped with a note without it).
 pub fn run(
     model: &VariationModel,
-    group: &Group,
+    group: Option<&Group>,
     cfg: &SynthConfig,
     out: &Path,
 ) -> Result<SynthReport> {
@@ -579,15 +565,17 @@ pub fn run(
 /// synthesised sequence is written.
 pub fn run_with_progress(
     model: &VariationModel,
-    group: &Group,
+    group: Option<&Group>,
     cfg: &SynthConfig,
     out: &Path,
     progress: &dyn Fn(usize, usize),
 ) -> Result<SynthReport> {
-    if group.sequences.len() != model.sequences.len() || group.n_frames() != model.n_frames() {
-        return Err(Error::invalid(
-            "the group does not match the model (train the model from this group)",
-        ));
+    if let Some(group) = group {
+        if group.sequences.len() != model.sequences.len() || group.n_frames() != model.n_frames() {
+            return Err(Error::invalid(
+                "the group does not match the model (train the model from this group)",
+            ));
+        }
     }
     if !(cfg.latent_smoothing >= 0.0 && cfg.latent_smoothing.is_finite()) {
         return Err(Error::invalid(format!(
@@ -596,6 +584,11 @@ pub fn run_with_progress(
         )));
     }
     let mut notes = Vec::new();
+    // The statistics compare with the captured meshes, which only the group holds.
+    let compare = cfg.statistics && group.is_some();
+    if cfg.statistics && !compare {
+        notes.push("statistics against the sources skipped: they need the captures (--group)".into());
+    }
     // Mean poses merged by averaging decode through kernel bases, fused with the assembly
     // (`reconstruct::FusedDecoder`); eq. 11 draws and stitching decode exactly.
     let fast = cfg.assembly != Assembly::Stitch && !cfg.sample_poses;
@@ -654,6 +647,18 @@ pub fn run_with_progress(
             (used, vec![(ia, ib, *w)])
         }
     };
+    // A blend's source is the non-linear blend of the two motions' captured meshes: refused
+    // before any sampling without them.
+    let blend_group = match (blends.is_empty(), group) {
+        (true, _) => None,
+        (false, Some(g)) => Some(g),
+        (false, None) => {
+            return Err(Error::invalid(match cfg.query {
+                Some(_) => "a blend's source is made from the captured meshes: give the group (--group)",
+                None => "blends are made from the captured meshes: give the group (--group), or no blends (--blends '')",
+            }))
+        }
+    };
     // Every (sequence, part) chain is a task of one pool (each seeded by its own indices, so
     // the samples do not depend on the scheduling).
     let sampled: Vec<(Variations, Vec<ChainStats>)> = wanted
@@ -671,6 +676,7 @@ pub fn run_with_progress(
         pools[s] = v;
         chains.extend(st);
     }
+    let landmarks = model_landmarks(model);
     let mut jobs: Vec<Job> = Vec::new();
     if cfg.query.is_none() || matches!(cfg.query, Some(Query::Motion(_))) {
         for &s in &wanted {
@@ -679,14 +685,14 @@ pub fn run_with_progress(
                 info.name.clone(),
                 info.blend,
                 pools[s].clone(),
-                group.sequences[s].motion.world_frames(),
+                info.reference.clone(),
+                group.filter(|_| compare).map(|g| g.sequences[s].motion.world_frames()),
                 info.start_pose,
-                group.sequences[s].contacts.clone(),
-                &model.up,
+                info.contacts.clone(),
             ));
         }
     }
-    if !blends.is_empty() {
+    if let Some(group) = blend_group {
         let blender = surface::blend::Blender::new(group.template.clone(), group.faces.clone())?;
         // The blended sources, every weight of a pair from one decomposition of its frames.
         let mut truths: Vec<Option<GroupSequence>> = vec![None; blends.len()];
@@ -731,14 +737,15 @@ pub fn run_with_progress(
                     model.sequences[a].name, model.sequences[b].name
                 ),
             };
+            let frames = truth.motion.world_frames();
             let mut job = Job::new(
                 label,
                 Some(w),
                 vars,
-                truth.motion.world_frames(),
+                Reference::of(&frames, &model.template, &landmarks, &model.up),
+                compare.then_some(frames),
                 model.sequences[a].start_pose,
                 truth.contacts,
-                &model.up,
             );
             job.guided_from = bounding(&blend_entries(model, a, b), w);
             if let Some((lo, hi)) = job.guided_from {
@@ -758,26 +765,24 @@ pub fn run_with_progress(
     progress(0, jobs.len());
     let clock = std::time::Instant::now();
     let mut sequences = Vec::new();
-    let all_soles = model_soles(model);
-    let feet: Option<[Vec<u32>; 2]> = match all_soles.as_slice() {
-        [l, r] if !l.is_empty() && !r.is_empty() => Some([l.clone(), r.clone()]),
-        _ => None,
-    };
-    let leg_weights = feet.as_ref().and_then(|f| model_leg_weights(model, f));
-    let core = {
-        let defs: Vec<_> = model.parts.iter().map(|p| p.part.clone()).collect();
-        crate::group::root_core(&defs, model.template.len())
-    };
+    let Landmarks { core, soles: all_soles, feet, leg_weights } = landmarks;
+    // The stored leg heights are the legs' (a body without legs has none).
+    if let Some(job) = jobs.iter().find(|j| j.reference.leg_lowest.is_empty() != leg_weights.is_none()) {
+        return Err(Error::invalid(format!(
+            "{}: the model's reference trajectories do not hold the body's leg heights (retrain the model)",
+            job.label
+        )));
+    }
     if cfg.foot_lock && cfg.footskate && feet.is_some() && leg_weights.is_none() {
         notes.push("foot lock skipped: the segmentation has no left and right leg parts".into());
     }
     if cfg.footskate && feet.is_none() {
         notes.push("foot-skating clean-up skipped: no left and right soles found".into());
     }
-    if let Some(legs) = &leg_weights {
+    if leg_weights.is_some() {
         for job in &mut jobs {
             let Some(c) = &job.contacts else { continue };
-            let low = legs_above_floor(&job.source, legs, &model.up, job.floor);
+            let low = job.reference.legs_above(job.floor);
             job.cleanup_contacts = Some(foot_lock::close_clip_ends(c, &low, CONTACT_HEIGHT));
         }
     }
@@ -792,7 +797,7 @@ pub fn run_with_progress(
         core: &core,
     };
     let (mut seconds_writing, mut seconds_statistics) = (0.0, 0.0);
-    let capture_limits = cfg.statistics.then(|| CaptureLimits::of_group(group));
+    let capture_limits = group.filter(|_| compare).map(CaptureLimits::of_group);
     let mut decoding_bound: Option<f64> = None;
     for (j, job) in jobs.iter().enumerate() {
         if cfg.footskate && job.contacts.is_none() {
@@ -801,7 +806,7 @@ pub fn run_with_progress(
                 job.label
             ));
         }
-        let matcher = grounding::MatchSource::new(&job.source, &model.template);
+        let matcher = job.reference.matcher(&model.template);
         let dir = out.join(&job.label);
         // One task per variation: decode, clean up, write its folder; the meshes are kept
         // only for the statistics.
@@ -868,8 +873,8 @@ pub fn run_with_progress(
             decoded.push(d);
         }
         let stats_clock = std::time::Instant::now();
-        if let Some(limits) = &capture_limits {
-            sequences.push(measure(job, &decoded, model, limits));
+        if let (Some(limits), Some(source)) = (&capture_limits, &job.source) {
+            sequences.push(measure(job, source, &decoded, model, &all_soles, limits));
         }
         seconds_statistics += stats_clock.elapsed().as_secs_f64();
         progress(j + 1, jobs.len());

@@ -24,6 +24,7 @@ use crate::contacts::Contacts;
 use crate::frame_stride;
 use crate::group::{Group, PartDef};
 use crate::part_data::{self, DisplacementScale};
+use crate::reference::{Landmarks, Reference};
 
 /// One part's model.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
@@ -45,6 +46,8 @@ pub struct SequenceInfo {
     /// World pose of the first frame: decoded motions start here.
     pub start_pose: RigidMotion,
     pub contacts: Option<Contacts>,
+    /// What the post-processes read of the sequence's meshes ([`crate::reference`]).
+    pub reference: Reference,
 }
 
 /// The trained variation model of one movement group.
@@ -70,12 +73,13 @@ pub struct VariationModel {
 
 impl Artifact for VariationModel {
     const KIND: &'static str = "variation-model";
-    const VERSION: u32 = 4;
+    const VERSION: u32 = 5;
 
     /// A valid body (`group::check_body`); per part a reference of its vertex count and a
     /// valid GPDM with one latent trajectory per training sequence, each of the
     /// `frame_stride::kept_count(frames, stride)` training steps; a stride >= 1; contacts of
-    /// `frames` entries; the blend pair among the sequences.
+    /// `frames` entries; reference trajectories of `frames` entries ([`Reference::check`]); the
+    /// blend pair among the sequences.
     fn validate(&self) -> std::result::Result<(), String> {
         let defs: Vec<PartDef> = self.parts.iter().map(|p| p.part.clone()).collect();
         self.check(&defs)
@@ -203,6 +207,13 @@ impl VariationModel {
         }
         if let Some(s) = self.sequences.iter().find(|s| s.contacts.as_ref().is_some_and(|c| c.len() != self.frames)) {
             return Err(format!("sequence '{}': contacts of other than {} frames", s.name, self.frames));
+        }
+        // Leg heights are stored for every sequence or for none (a body without two legs).
+        let legs = self.sequences.iter().any(|s| !s.reference.leg_lowest.is_empty());
+        for s in &self.sequences {
+            s.reference
+                .check(self.frames, self.template.len(), legs)
+                .map_err(|e| format!("sequence '{}': {e}", s.name))?;
         }
         let blends: Vec<(Option<f64>, Option<(usize, usize)>)> =
             self.sequences.iter().map(|s| (s.blend, s.blend_of)).collect();
@@ -532,15 +543,17 @@ pub fn train_selected(
         parts.push(m);
         reports.push(rep);
     }
+    let landmarks = Landmarks::of(&group.template, &group.faces, &group.parts, &group.up);
     let sequences = group
         .sequences
-        .iter()
+        .par_iter()
         .map(|s| SequenceInfo {
             name: s.name.clone(),
             blend: s.blend,
             blend_of: s.blend_of,
             start_pose: s.motion.poses[0],
             contacts: s.contacts.clone(),
+            reference: Reference::of(&s.motion.world_frames(), &group.template, &landmarks, &group.up),
         })
         .collect();
     let model = VariationModel {

@@ -11,6 +11,7 @@ use mesh_core::shapes::cylinder;
 use nalgebra::{DMatrix, Vector3};
 use variation::group::{Group, GroupSequence, PartDef};
 use variation::part_data::DisplacementScale;
+use variation::reference::{Landmarks, Reference};
 use variation::train::{PartModel, SequenceInfo, VariationModel};
 
 const FRAMES: usize = 6;
@@ -52,6 +53,7 @@ fn group() -> Group {
 
 fn model() -> VariationModel {
     let g = group();
+    let landmarks = Landmarks::of(&g.template, &g.faces, &g.parts, &g.up);
     let part = |p: &PartDef| {
         let seqs: Vec<DMatrix<f64>> = (0..2)
             .map(|s| DMatrix::from_fn(FRAMES, 3 * p.vertices.len(), |i, c| ((i * 7 + c + s) as f64 * 0.3).sin()))
@@ -73,7 +75,14 @@ fn model() -> VariationModel {
         scale: DisplacementScale { translation: 1.0, rotation: 1.0 },
         sequences: ["walk", "run"]
             .iter()
-            .map(|n| SequenceInfo { name: (*n).into(), blend: None, blend_of: None, start_pose: RigidMotion::identity(), contacts: None })
+            .map(|n| SequenceInfo {
+                name: (*n).into(),
+                blend: None,
+                blend_of: None,
+                start_pose: RigidMotion::identity(),
+                contacts: None,
+                reference: Reference::of(&g.sequences[0].motion.world_frames(), &g.template, &landmarks, &g.up),
+            })
             .collect(),
         pair: Some((0, 1)),
         stride: 1,

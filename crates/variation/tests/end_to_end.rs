@@ -134,11 +134,11 @@ fn tiny_set_end_to_end() {
     let out1 = dir.path().join("o1");
     let out2 = dir.path().join("o2");
     let out3 = dir.path().join("o3");
-    let r1 = run(&model, &group, &sc, &out1).unwrap();
-    let r2 = run(&model, &group, &sc, &out2).unwrap();
+    let r1 = run(&model, Some(&group), &sc, &out1).unwrap();
+    let r2 = run(&model, Some(&group), &sc, &out2).unwrap();
     let r3 = run(
         &model,
-        &group,
+        Some(&group),
         &SynthConfig {
             seed: 8,
             ..sc.clone()
@@ -226,7 +226,7 @@ fn tiny_set_end_to_end() {
             sampler: Sampler::Ancestral,
             ..sc.clone()
         };
-        run(&model, &group, &c, out).unwrap()
+        run(&model, Some(&group), &c, out).unwrap()
     };
     for frames in [t + 9, 5] {
         let (o4, o5) = (
@@ -269,7 +269,7 @@ fn tiny_set_end_to_end() {
         query: Some(Query::Motion("swim".into())),
         ..sc.clone()
     };
-    let err = run(&model, &group, &bad, &dir.path().join("qx"))
+    let err = run(&model, Some(&group), &bad, &dir.path().join("qx"))
         .unwrap_err()
         .to_string();
     assert!(err.contains("swim") && err.contains("walk"), "{err}");
@@ -292,7 +292,7 @@ fn tiny_set_end_to_end() {
     let o7 = dir.path().join("s2");
     let r = run(
         &m2,
-        &group,
+        Some(&group),
         &SynthConfig {
             sampler: Sampler::Ancestral,
             ..sc.clone()

@@ -75,6 +75,7 @@ fn model_on(mesh: mesh_core::mesh::TriMesh, upper_min: f64, lower_max: f64) -> V
             Vector3::new(0.5, 1.0, -0.2),
         ),
         contacts: None,
+        reference: Default::default(),
     };
     let mut m = VariationModel {
         group: "test".into(),

@@ -23,7 +23,7 @@ use crate::train::VariationModel;
 #[command(
     name = "hmc-sample",
     version,
-    after_help = "e.g.: hmc-sample --seed 0 -n 5 --blends 0.25,0.75 --group work/locomotion.group --model work/locomotion.model --out out/variation/locomotion --report work/locomotion-samples.json\n      hmc-sample --group work/locomotion.group --model work/locomotion.model --motion walk -n 20 --frame-count 300 --seed 7 --out out/walk20\n      hmc-sample --group work/locomotion.group --model work/locomotion.model --blend walk:run --weight 0.3 -n 10 --sampler ancestral --out out/blend03"
+    after_help = "e.g.: hmc-sample --seed 0 -n 5 --blends 0.25,0.75 --group work/locomotion.group --model work/locomotion.model --out out/variation/locomotion --report work/locomotion-samples.json\n      hmc-sample --model work/locomotion.model --motion walk -n 20 --frame-count 300 --seed 7 --out out/walk20\n      hmc-sample --group work/locomotion.group --model work/locomotion.model --blend walk:run --weight 0.3 -n 10 --sampler ancestral --out out/blend03"
 )]
 pub struct Params {
     #[command(flatten)]
@@ -32,9 +32,11 @@ pub struct Params {
     /// Trained model (kind variation-model, from gpdm-train)
     #[arg(long)]
     pub model: PathBuf,
-    /// The prealigned group the model was trained on (sources for the statistics)
+    /// The prealigned group the model was trained on: the captures the statistics compare with
+    /// and blends are made from (without it: the variations of training sequences, from the
+    /// model alone)
     #[arg(long)]
-    pub group: PathBuf,
+    pub group: Option<PathBuf>,
     /// Variations per sequence
     #[arg(short, long, default_value_t = 5, value_parser = at_least(1))]
     pub n: usize,
@@ -174,7 +176,8 @@ pub struct Params {
     /// frame as OBJ plus a float32 point cache, a quarter of the bytes)
     #[arg(long, value_enum, default_value_t = VariationFormat::Ply)]
     pub frame_format: VariationFormat,
-    /// Statistics against the sources (JSON); without it they are not computed
+    /// Statistics against the sources (JSON); without it they are not computed. Those that
+    /// compare with the captures need --group: without it the report says they were skipped
     #[arg(long)]
     pub report: Option<PathBuf>,
 }
@@ -212,10 +215,15 @@ fn parse_weights(s: &str) -> Result<Weights, String> {
 /// Writes the variations as PLY frames (and the `--report` statistics when asked).
 pub fn run(p: &Params) -> anyhow::Result<()> {
     // The two inputs are read side by side, then checked against each other.
-    let (model, group) = rayon::join(|| VariationModel::load(&p.model), || Group::load(&p.group));
+    let (model, group) = rayon::join(
+        || VariationModel::load(&p.model),
+        || p.group.as_ref().map(Group::load).transpose(),
+    );
     let (model, group) = (model?, group?);
-    crate::trained_on::check(&model, &group)
-        .with_context(|| format!("{} with {}", p.model.display(), p.group.display()))?;
+    if let (Some(group), Some(path)) = (&group, &p.group) {
+        crate::trained_on::check(&model, group)
+            .with_context(|| format!("{} with {}", p.model.display(), path.display()))?;
+    }
     // The query's size against the machine's memory, before anything of that size is allocated.
     let frames = p.frame_count.unwrap_or(model.n_frames());
     let needed = memory_budget::bytes_needed(p.n, frames, model.template.len(), rayon::current_num_threads());
@@ -269,7 +277,7 @@ pub fn run(p: &Params) -> anyhow::Result<()> {
     // Sampling first (a spinner), then one step per synthesised sequence.
     let bar = mesh_core::cli::progress_bar(0, "hmc-sample: sampling", &p.common);
     bar.enable_steady_tick(std::time::Duration::from_millis(200));
-    let report = run_with_progress(&model, &group, &cfg, &p.out, &|done, total| {
+    let report = run_with_progress(&model, group.as_ref(), &cfg, &p.out, &|done, total| {
         if done == 0 {
             bar.set_length(total as u64);
             bar.set_message("hmc-sample: sequences");
