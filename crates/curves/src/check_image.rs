@@ -44,29 +44,11 @@ pub fn loop_segments(mesh: &TriMesh, spec: &SubjectSpec) -> Vec<(Vector3<f64>, V
     lines
 }
 
-/// Per-vertex colours from the segmentation of `mesh` by `spec`: the part's colour, a band
-/// vertex the mix of the part's and its parent's; all the root's colour when `spec` does not
-/// segment the mesh.
+/// Per-vertex colours of the parts `spec` cuts `mesh` into (`render::parts::part_colours`); all
+/// the root's colour when `spec` does not segment the mesh.
 pub fn part_colours(mesh: &TriMesh, spec: &SubjectSpec) -> Vec<Rgb> {
-    let n = mesh.vertices.len();
-    let Ok(seg) = mesh_core::segmentation::segment(mesh, spec) else {
-        return vec![render::parts::ROOT_COLOUR; n];
-    };
-    let palette = render::parts::part_palette(spec);
-    let colour = |p: &str| palette.get(p).copied().unwrap_or(render::parts::ROOT_COLOUR);
-    let root = seg.parts.iter().find(|p| p.parent.is_none()).map(|p| colour(&p.name)).unwrap_or(render::parts::ROOT_COLOUR);
-    let mut colours = vec![root; n];
-    for part in seg.parts.iter().filter(|p| p.parent.is_some()) {
-        let own = colour(&part.name);
-        let band = render::colour::mix(own, colour(part.parent.as_deref().unwrap_or_default()), 0.5);
-        for &v in &part.vertices {
-            colours[v as usize] = own;
-        }
-        for &l in &part.overlap {
-            colours[part.vertices[l as usize] as usize] = band;
-        }
-    }
-    colours
+    render::parts::part_colours(spec, Path::new("subject.json"), &mesh.vertices, &mesh.faces)
+        .unwrap_or_else(|_| vec![render::parts::ROOT_COLOUR; mesh.vertices.len()])
 }
 
 /// The three views side by side with a legend, as an image; with `extremities`, each marked
