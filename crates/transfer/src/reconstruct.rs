@@ -20,6 +20,7 @@ use surface::correct::Corrector;
 use surface::stitch::Stitcher;
 
 use std::path::PathBuf;
+use std::time::Instant;
 
 use capture::align::AlignedMotion;
 use capture::assemble::{assemble, plan, AssemblyPlan};
@@ -64,6 +65,23 @@ pub struct Reconstructor {
     /// Counts corrected parts and stitched frames (hidden unless set).
     progress: ProgressBar,
     unstitched_frames: usize,
+    /// Also merge the corrected parts by averaging ([`Reconstructor::with_corrected_assembly`]).
+    corrected_assembly: bool,
+    timing: SurfaceTiming,
+}
+
+/// Wall-clock seconds of the surface steps of every [`Reconstructor::reconstruct`] so far.
+#[derive(Clone, Copy, Debug, Default, PartialEq, serde::Serialize)]
+pub struct SurfaceTiming {
+    /// Frames reconstructed.
+    pub frames: usize,
+    /// §6.1: the nearest training meshes of every part of every frame.
+    pub nearest_s: f64,
+    /// §6.1: the corrections themselves (factorisations of the training meshes made on first
+    /// use included).
+    pub correct_s: f64,
+    /// §6.2 stitching, or the averaging merge.
+    pub merge_s: f64,
 }
 
 /// Every `stride`-th frame of the target's aligned training motions at `paths`, cut into `pca`'s
@@ -176,6 +194,8 @@ impl Reconstructor {
             stitcher,
             progress: ProgressBar::hidden(),
             unstitched_frames: 0,
+            corrected_assembly: false,
+            timing: SurfaceTiming::default(),
         })
     }
 
@@ -186,28 +206,60 @@ impl Reconstructor {
         self
     }
 
-    /// §6.1 on every part of every frame: `decoded[part][frame]` in, same shape out.
+    /// With `yes` and [`Surface::CorrectStitch`], [`Reconstructor::reconstruct_both`] also
+    /// merges the corrected parts by averaging, which is what [`Surface::Correct`] gives: both
+    /// outputs from one correction.
+    pub fn with_corrected_assembly(mut self, yes: bool) -> Self {
+        self.corrected_assembly = yes;
+        self
+    }
+
+    /// §6.1 on every part of every frame: `decoded[part][frame]` in, same shape out. The
+    /// nearest training meshes of a part's frames are found together
+    /// ([`Corrector::nearest_all`]).
     pub fn correct(
         &self,
         decoded: &[Vec<Vec<Vector3<f64>>>],
     ) -> Result<Vec<Vec<Vec<Vector3<f64>>>>> {
+        Ok(self.correct_timed(decoded)?.0)
+    }
+
+    /// [`Reconstructor::correct`] and the seconds its nearest-mesh searches took.
+    fn correct_timed(
+        &self,
+        decoded: &[Vec<Vec<Vector3<f64>>>],
+    ) -> Result<(Vec<Vec<Vec<Vector3<f64>>>>, f64)> {
         if self.correctors.is_empty() {
-            return Ok(decoded.to_vec());
+            return Ok((decoded.to_vec(), 0.0));
         }
-        decoded
+        let mut nearest_s = 0.0;
+        let corrected = decoded
             .iter()
             .zip(&self.correctors)
             .map(|(frames, c)| {
+                for p in frames {
+                    surface::check_vertices(p, c.n_vertices(), "correct: prediction")?;
+                }
+                let t = Instant::now();
+                let near = c.nearest_all(frames, self.neighbours);
+                nearest_s += t.elapsed().as_secs_f64();
                 frames
                     .par_iter()
-                    .map(|p| {
-                        let r = c.correct(p, self.neighbours);
+                    .zip(near.par_iter())
+                    .map(|(p, near)| {
+                        let r = c.correct_with(p, near);
                         self.progress.inc(1);
                         r
                     })
                     .collect()
             })
-            .collect()
+            .collect::<Result<_>>()?;
+        Ok((corrected, nearest_s))
+    }
+
+    /// Seconds of the surface steps of every reconstruction so far.
+    pub fn timing(&self) -> SurfaceTiming {
+        self.timing
     }
 
     /// One mesh per frame from `decoded[part][frame]` (after [`Reconstructor::correct`]).
@@ -258,14 +310,36 @@ impl Reconstructor {
         pca: &PcaModel,
         decoded: &[Vec<Vec<Vector3<f64>>>],
     ) -> Result<Vec<Vec<Vector3<f64>>>> {
+        Ok(self.reconstruct_both(pca, decoded)?.0)
+    }
+
+    /// [`Reconstructor::reconstruct`], and with [`Reconstructor::with_corrected_assembly`] on a
+    /// corrected and stitched reconstruction also the corrected parts merged by averaging.
+    #[allow(clippy::type_complexity)]
+    pub fn reconstruct_both(
+        &mut self,
+        pca: &PcaModel,
+        decoded: &[Vec<Vec<Vector3<f64>>>],
+    ) -> Result<(Vec<Vec<Vector3<f64>>>, Option<Vec<Vec<Vector3<f64>>>>)> {
         let n_frames = decoded.first().map_or(0, |p| p.len());
         let corrections = if self.correctors.is_empty() { 0 } else { decoded.len() * n_frames };
         let stitches = if self.stitcher.is_some() { n_frames } else { 0 };
         self.progress.set_length((corrections + stitches) as u64);
-        let corrected = self.correct(decoded)?;
+        let t = Instant::now();
+        let (corrected, nearest_s) = self.correct_timed(decoded)?;
+        let correct_s = t.elapsed().as_secs_f64() - nearest_s;
+        let t = Instant::now();
+        let assembled = (self.corrected_assembly
+            && !self.correctors.is_empty()
+            && self.stitcher.is_some())
+        .then(|| assemble(&self.plan, pca, &corrected));
         let merged = self.merge(pca, &corrected);
+        self.timing.frames += n_frames;
+        self.timing.nearest_s += nearest_s;
+        self.timing.correct_s += correct_s;
+        self.timing.merge_s += t.elapsed().as_secs_f64();
         self.progress.finish_and_clear();
-        merged
+        Ok((merged?, assembled))
     }
 }
 
