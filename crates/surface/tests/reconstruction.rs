@@ -548,3 +548,26 @@ fn correcting_a_sequence_equals_correcting_each_frame_alone() {
     }
     assert!(corrector.correct_with(&predictions[0], &[(40, 1.0)]).is_err());
 }
+
+/// Stitchers forked from one another stitch a sequence's frames to the same meshes as one
+/// stitcher alone, bit for bit, in any order.
+#[test]
+fn forked_stitchers_stitch_as_one() {
+    let (v, f, parts) = halves(12, 20, 8, 12);
+    let frames: Vec<Vec<Vec<Vector3<f64>>>> = (0..4)
+        .map(|i| {
+            let x = bend(&v, 2.0, 1.0, 0.2 * i as f64);
+            parts.iter().map(|p| p.vertices.iter().map(|&k| x[k as usize]).collect()).collect()
+        })
+        .collect();
+    let mut one = Stitcher::new(PartLayout::new(v.len(), f.clone(), parts.clone()).unwrap());
+    let want: Vec<_> = frames.iter().map(|fr| one.stitch(fr).unwrap().vertices).collect();
+    let mut fresh = Stitcher::new(PartLayout::new(v.len(), f, parts).unwrap());
+    let mut fork = fresh.fork();
+    let mut late = one.fork();
+    for (i, fr) in frames.iter().enumerate().rev() {
+        let s = if i % 2 == 0 { &mut fork } else { &mut fresh };
+        assert_eq!(s.stitch(fr).unwrap().vertices, want[i], "frame {i}");
+        assert_eq!(late.stitch(fr).unwrap().vertices, want[i], "frame {i}, forked after use");
+    }
+}

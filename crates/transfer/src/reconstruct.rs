@@ -62,6 +62,8 @@ pub struct Reconstructor {
     neighbours: usize,
     /// Stitcher and the PCA part index of each of its parts (tree order).
     stitcher: Option<(Stitcher, Vec<usize>)>,
+    /// Further stitchers, one per extra thread ([`Stitcher::fork`]).
+    forks: Vec<Stitcher>,
     /// Counts corrected parts and stitched frames (hidden unless set).
     progress: ProgressBar,
     unstitched_frames: usize,
@@ -192,6 +194,7 @@ impl Reconstructor {
             correctors,
             neighbours,
             stitcher,
+            forks: Vec::new(),
             progress: ProgressBar::hidden(),
             unstitched_frames: 0,
             corrected_assembly: false,
@@ -272,22 +275,44 @@ impl Reconstructor {
             return Ok(assemble(&self.plan, pca, parts));
         };
         let n_frames = parts.first().map_or(0, |p| p.len());
+        // Contiguous runs of frames stitched side by side, one stitcher (factorisation) per
+        // thread: each frame's result does not depend on which stitcher made it.
+        let workers = rayon::current_num_threads().clamp(1, n_frames.max(1));
+        while self.forks.len() + 1 < workers {
+            self.forks.push(stitcher.fork());
+        }
+        let run = n_frames.div_ceil(workers).max(1);
+        let (plan, progress, order) = (&self.plan, &self.progress, &*order);
+        let mut stitchers: Vec<&mut Stitcher> =
+            std::iter::once(stitcher).chain(self.forks.iter_mut()).take(workers).collect();
+        let stitched: Vec<Vec<Result<Vec<Vector3<f64>>>>> = stitchers
+            .par_iter_mut()
+            .enumerate()
+            .map(|(w, stitcher)| {
+                (w * run..((w + 1) * run).min(n_frames))
+                    .map(|f| {
+                        let frame: Vec<Vec<Vector3<f64>>> =
+                            order.iter().map(|&k| parts[k][f].clone()).collect();
+                        progress.inc(1);
+                        stitcher.stitch(&frame).map(|s| plan.to_template_frame(&s.vertices))
+                    })
+                    .collect()
+            })
+            .collect();
         let mut unstitched = 0;
-        let merged = (0..n_frames)
-            .map(|f| {
-                let frame: Vec<Vec<Vector3<f64>>> =
-                    order.iter().map(|&k| parts[k][f].clone()).collect();
-                self.progress.inc(1);
-                match stitcher.stitch(&frame) {
-                    Ok(stitched) => self.plan.to_template_frame(&stitched.vertices),
-                    Err(e) => {
-                        if unstitched == 0 {
-                            mesh_core::warn!("stitch: frame {f}: {e}: such frames are assembled (overlaps averaged)");
-                        }
-                        unstitched += 1;
-                        let one: Vec<Vec<Vec<Vector3<f64>>>> = parts.iter().map(|p| vec![p[f].clone()]).collect();
-                        assemble(&self.plan, pca, &one).swap_remove(0)
+        let merged = stitched
+            .into_iter()
+            .flatten()
+            .enumerate()
+            .map(|(f, frame)| match frame {
+                Ok(frame) => frame,
+                Err(e) => {
+                    if unstitched == 0 {
+                        mesh_core::warn!("stitch: frame {f}: {e}: such frames are assembled (overlaps averaged)");
                     }
+                    unstitched += 1;
+                    let one: Vec<Vec<Vec<Vector3<f64>>>> = parts.iter().map(|p| vec![p[f].clone()]).collect();
+                    assemble(plan, pca, &one).swap_remove(0)
                 }
             })
             .collect();
