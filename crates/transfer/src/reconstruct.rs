@@ -407,6 +407,38 @@ mod tests {
         }
     }
 
+    /// One correction feeding both outputs: beside the stitched frames, the corrected parts
+    /// averaged are what [`Surface::Correct`] gives, and the stitched frames what
+    /// [`Surface::CorrectStitch`] alone gives, bit for bit (predictions shrunk by 5 %, so the
+    /// correction has work to do).
+    #[test]
+    fn one_correction_gives_the_corrected_and_the_stitched_frames() {
+        let (mesh, seg, motion) = bending_capsule();
+        let (pca, _) = fit(&mesh.vertices, &seg, &[&motion], Components::Count(20), PartAlignment::Body).unwrap();
+        let decoded: Vec<Vec<Vec<Vector3<f64>>>> = pca
+            .part_rows(&motion)
+            .unwrap()
+            .iter()
+            .map(|rows| {
+                rows_to_meshes(rows)
+                    .into_iter()
+                    .map(|x| {
+                        let c = surface::centroid(&x);
+                        x.iter().map(|v| c + 0.95 * (v - c)).collect()
+                    })
+                    .collect()
+            })
+            .collect();
+        let new = |surface| Reconstructor::new(&pca, &seg, &mesh.faces, &[&motion], surface, 3, 1).unwrap();
+        let (stitched, corrected) = new(Surface::CorrectStitch)
+            .with_corrected_assembly(true)
+            .reconstruct_both(&pca, &decoded)
+            .unwrap();
+        assert!(corrected.unwrap() == new(Surface::Correct).reconstruct(&pca, &decoded).unwrap());
+        assert!(stitched == new(Surface::CorrectStitch).reconstruct(&pca, &decoded).unwrap());
+        assert!(new(Surface::CorrectStitch).reconstruct_both(&pca, &decoded).unwrap().1.is_none());
+    }
+
     /// The training part meshes read a frame at a time are those `new` cuts from the loaded
     /// motions, bit for bit: every `stride`-th frame of each motion in turn, on both part
     /// alignments.
