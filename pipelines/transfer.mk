@@ -1,5 +1,5 @@
-# Motion transfer (transfer paper, sections 4 to 7; gpr-nn also runs gpr-predict --surface correct and
-# correct-stitch, i.e. section 6, recorded as methods gpr-nn+correct and gpr-nn+correct+stitch):
+# Motion transfer (transfer paper, sections 4 to 7; gpr-nn also runs gpr-predict --surface correct-stitch
+# --corrected-out, i.e. section 6, recorded as methods gpr-nn+correct and gpr-nn+correct+stitch):
 #   make transfer SET=<capture set> OUT=<dir>     (defaults: SET=$(OUT)/demo/set, OUT=out)
 # Writes $(OUT)/transfer/<src>-to-<tgt>/<motion>/<method>/NNNNNN.ply, contact sheets under
 # $(OUT)/render/, learning curves under $(OUT)/learning-curves/ and $(OUT)/results.json.

@@ -368,39 +368,42 @@ impl<'a> Plan<'a> {
         }
     }
 
-    /// CVPR §6 after the regression: correction (M = 3), then stitching, of test motion `m`
-    /// with gpr-nn; their evaluations, the per-frame confidence figure and contact sheets.
+    /// CVPR §6 after the regression, of test motion `m` with gpr-nn: one `gpr-predict` that
+    /// corrects (M = 3) and writes both the corrected parts averaged (`gpr-nn+correct`) and
+    /// stitched (`gpr-nn+correct+stitch`); their evaluations, the per-frame confidence figure
+    /// and contact sheets.
     fn surface_methods(&mut self, d: &Direction, m: &str, model: &str, graph: &mut Graph) {
         let default_pl = self.opt.placement();
         let dn = d.name();
         let training: Vec<String> = self.train[d.tgt].iter().map(|t| self.aligned(d.tgt, t)).collect();
         let truth = self.truth(d.tgt, m);
-        for (surf, meth) in [("correct", "gpr-nn+correct"), ("correct-stitch", "gpr-nn+correct+stitch")] {
-            let seq = format!("{}/transfer/{dn}/{m}/{meth}", self.out);
-            let timing = format!("{}/predict/{dn}/{m}/{meth}-{}.json", self.work, default_pl.name());
-            // Per-frame confidence (docs/FORMATS.md) beside the full pipeline's output.
-            let conf_dir = format!("{}/confidence/{dn}", self.work);
-            let conf = format!("{conf_dir}/{m}.json");
-            let mut inputs = vec![s(model), self.aligned(d.src, m), self.seg(d.tgt)];
-            inputs.extend(training.iter().cloned());
-            let mut args = vec![
-                s("-q"), s("--model"), s(model), s("--source-pca"), self.pca(d.src, "pca"), s("--target-pca"),
-                self.pca(d.tgt, "pca"), s("--target-template"), self.template(d.tgt), s("--placement"),
-                default_pl.name().into(), s("--surface"), s(surf), s("--segmentation"), self.seg(d.tgt),
-            ];
-            args.extend(self.opt.predict_flags());
-            for t in &training {
-                args.extend([s("--target-training"), t.clone()]);
-            }
-            args.extend([s("-m"), s("3"), self.aligned(d.src, m), s("--out"), seq.clone(), s("--timing"), timing.clone()]);
-            if surf == "correct-stitch" {
-                args.extend([s("--confidence"), conf.clone()]);
-            }
-            self.stamps.push(graph.push(
-                Task::run("gpr-predict", timing.clone(), inputs, args).mkdir_target().mkdir(conf_dir),
-            ));
-            let rec = self.eval(d, m, &seq, meth, (meth, default_pl, "dense"), timing.clone(), graph);
-            if surf == "correct-stitch" {
+        let seq = |meth: &str| format!("{}/transfer/{dn}/{m}/{meth}", self.out);
+        let (corrected, stitched) = (seq("gpr-nn+correct"), seq("gpr-nn+correct+stitch"));
+        let timing = format!("{}/predict/{dn}/{m}/gpr-nn+correct+stitch-{}.json", self.work, default_pl.name());
+        // Per-frame confidence (docs/FORMATS.md) beside the full pipeline's output.
+        let conf_dir = format!("{}/confidence/{dn}", self.work);
+        let conf = format!("{conf_dir}/{m}.json");
+        let mut inputs = vec![s(model), self.aligned(d.src, m), self.seg(d.tgt)];
+        inputs.extend(training.iter().cloned());
+        let mut args = vec![
+            s("-q"), s("--model"), s(model), s("--source-pca"), self.pca(d.src, "pca"), s("--target-pca"),
+            self.pca(d.tgt, "pca"), s("--target-template"), self.template(d.tgt), s("--placement"),
+            default_pl.name().into(), s("--surface"), s("correct-stitch"), s("--segmentation"), self.seg(d.tgt),
+        ];
+        args.extend(self.opt.predict_flags());
+        for t in &training {
+            args.extend([s("--target-training"), t.clone()]);
+        }
+        args.extend([
+            s("-m"), s("3"), self.aligned(d.src, m), s("--corrected-out"), corrected.clone(), s("--out"), stitched.clone(),
+            s("--timing"), timing.clone(), s("--confidence"), conf.clone(),
+        ]);
+        self.stamps.push(graph.push(
+            Task::run("gpr-predict", timing.clone(), inputs, args).mkdir_target().mkdir(conf_dir),
+        ));
+        for (meth, seq) in [("gpr-nn+correct", &corrected), ("gpr-nn+correct+stitch", &stitched)] {
+            let rec = self.eval(d, m, seq, meth, (meth, default_pl, "dense"), timing.clone(), graph);
+            if meth == "gpr-nn+correct+stitch" {
                 // Per-frame confidence beside the error (where truth exists), for the report.
                 let plot = format!("{}/figures/confidence-{dn}-{m}.png", self.out);
                 let mut inputs = vec![timing.clone()];

@@ -171,9 +171,26 @@ fn benches(c: &mut Criterion) {
     c.bench_function("correct_and_stitch_frame_13k", |b| {
         b.iter(|| frame(&mut stitcher))
     });
+    // Step 1 of the correction for a sequence: 64 predictions of the root part (4,032
+    // vertices) against 600 training meshes, by blocked products and by brute force.
+    let rest: Vec<Vector3<f64>> = s.parts[0].vertices.iter().map(|&v| s.vertices[v as usize]).collect();
+    let many: Vec<_> = (0..600).map(|k| pose(&rest, 0.0005 * k as f64)).collect();
+    let queries: Vec<_> = (0..64).map(|k| pose(&rest, 0.0047 * k as f64)).collect();
+    let search = surface::nearest::MeshSearch::new(&many);
+    c.bench_function("nearest_3_of_600_meshes_64_predictions_blocked", |b| {
+        b.iter(|| search.nearest(&many, &queries, 3))
+    });
+    c.bench_function("nearest_3_of_600_meshes_64_predictions_brute_force", |b| {
+        b.iter(|| {
+            queries
+                .iter()
+                .map(|q| surface::nearest::brute_force(&many, q, 3))
+                .count()
+        })
+    });
+    drop(many);
     // Throughput over a sequence: two frames in flight, one Stitcher (factorisation) each.
-    let mut other =
-        Stitcher::new(PartLayout::new(s.vertices.len(), s.faces.clone(), s.parts.clone()).unwrap());
+    let mut other = stitcher.fork();
     frame(&mut other);
     c.bench_function("correct_and_stitch_2_frames_in_parallel_13k", |b| {
         b.iter(|| rayon::join(|| frame(&mut stitcher), || frame(&mut other)))

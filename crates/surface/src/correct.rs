@@ -15,11 +15,14 @@
 //!    centroid is the same piece's centroid in `P`;
 //! 5. result `Σ_k w_k X_k`.
 //!
-//! Each training mesh's operator and factorisation are built on first use and cached, so a
-//! sequence of predictions only pays for the polar decompositions and the solves.
+//! Each training mesh's operator and numeric factorisation are built on first use and cached,
+//! all on one symbolic analysis of the part's topology, so a sequence of predictions only pays
+//! for the polar decompositions and the solves. [`Corrector::nearest_all`] finds step 1's meshes
+//! for many predictions at once ([`crate::nearest::MeshSearch`]).
 
 use crate::deformation_gradient::GradientOperator;
-use crate::poisson::PoissonSolver;
+use crate::nearest::MeshSearch;
+use crate::poisson::{Factorisation, PoissonSolver, SymbolicPoisson};
 use crate::polar::triangle_rotation;
 use crate::{centroid, check_faces, check_vertices, Error, Result};
 use nalgebra::{Matrix3, Vector3};
@@ -43,6 +46,10 @@ pub struct Corrector {
     /// sorted list of its vertices.
     pieces: Vec<Vec<u32>>,
     training: Vec<Vec<Vector3<f64>>>,
+    search: MeshSearch,
+    /// The symbolic factorisation of the part's Poisson system (its pattern is the faces'),
+    /// made on the first training mesh prepared and shared by all.
+    symbolic: OnceLock<std::result::Result<SymbolicPoisson, String>>,
     prepared: Vec<OnceLock<std::result::Result<Prepared, String>>>,
 }
 
@@ -58,15 +65,7 @@ pub fn distance_weights(distances: &[f64], tol: f64) -> Vec<f64> {
     inv.iter().map(|w| w / s).collect()
 }
 
-/// Root-mean-square vertex distance.
-pub fn vertex_distance(a: &[Vector3<f64>], b: &[Vector3<f64>]) -> f64 {
-    (a.iter()
-        .zip(b)
-        .map(|(p, q)| (p - q).norm_squared())
-        .sum::<f64>()
-        / a.len().max(1) as f64)
-        .sqrt()
-}
+pub use crate::nearest::vertex_distance;
 
 impl Corrector {
     /// Checks the training meshes against `faces` (equal vertex counts, finite, valid indices).
@@ -84,7 +83,9 @@ impl Corrector {
         Ok(Corrector {
             faces,
             pieces,
+            search: MeshSearch::new(&training),
             training,
+            symbolic: OnceLock::new(),
             prepared,
         })
     }
@@ -98,15 +99,28 @@ impl Corrector {
 
     /// The `m` nearest training meshes to `prediction`: (index, distance), nearest first.
     pub fn nearest(&self, prediction: &[Vector3<f64>], m: usize) -> Vec<(usize, f64)> {
-        let mut d: Vec<(usize, f64)> = self
-            .training
-            .iter()
-            .enumerate()
-            .map(|(k, t)| (k, vertex_distance(prediction, t)))
-            .collect();
-        d.sort_by(|a, b| a.1.total_cmp(&b.1).then(a.0.cmp(&b.0)));
-        d.truncate(m.max(1));
-        d
+        crate::nearest::brute_force(&self.training, prediction, m)
+    }
+
+    /// [`Corrector::nearest`] of every prediction, by blocked matrix products (the same meshes
+    /// and distances, [`crate::nearest`]).
+    pub fn nearest_all(
+        &self,
+        predictions: &[Vec<Vector3<f64>>],
+        m: usize,
+    ) -> Vec<Vec<(usize, f64)>> {
+        self.search.nearest(&self.training, predictions, m)
+    }
+
+    /// The part's symbolic analysis, made from `laplacian` (any training mesh's: they share
+    /// the pattern) on first use.
+    fn symbolic(&self, laplacian: &faer::sparse::SparseColMat<usize, f64>) -> Result<&SymbolicPoisson> {
+        self.symbolic
+            .get_or_init(|| {
+                SymbolicPoisson::new(laplacian, Factorisation::Auto).map_err(|e| e.to_string())
+            })
+            .as_ref()
+            .map_err(|e| Error::invalid(format!("correct: {e}")))
     }
 
     fn prepared(&self, k: usize) -> Result<&Prepared> {
@@ -114,7 +128,10 @@ impl Corrector {
             .get_or_init(|| {
                 let n = &self.training[k];
                 let op = GradientOperator::new(n, &self.faces);
-                let solver = PoissonSolver::new(&op.stiffness(), &self.piece_roots())
+                let laplacian = op.stiffness();
+                let solver: PoissonSolver = self
+                    .symbolic(&laplacian)
+                    .and_then(|s| s.factorise(&laplacian, &self.piece_roots()))
                     .map_err(|e| e.to_string())?;
                 let own_gradient = op.gradient(n);
                 Ok(Prepared {
@@ -165,7 +182,23 @@ impl Corrector {
     /// Corrects one predicted part mesh with the `m` nearest training meshes.
     pub fn correct(&self, prediction: &[Vector3<f64>], m: usize) -> Result<Vec<Vector3<f64>>> {
         check_vertices(prediction, self.n_vertices(), "correct: prediction")?;
-        let near = self.nearest(prediction, m);
+        self.correct_with(prediction, &self.nearest(prediction, m))
+    }
+
+    /// [`Corrector::correct`] with its nearest training meshes given (from
+    /// [`Corrector::nearest_all`]).
+    pub fn correct_with(
+        &self,
+        prediction: &[Vector3<f64>],
+        near: &[(usize, f64)],
+    ) -> Result<Vec<Vector3<f64>>> {
+        check_vertices(prediction, self.n_vertices(), "correct: prediction")?;
+        if let Some(&(k, _)) = near.iter().find(|x| x.0 >= self.training.len()) {
+            return Err(Error::invalid(format!(
+                "correct: training mesh {k} asked for, there are {}",
+                self.training.len()
+            )));
+        }
         let size = prediction
             .iter()
             .map(|v| v.norm())

@@ -146,6 +146,7 @@ impl GradientOperator {
 /// The sparsity pattern of `Gᵀ A G` for one face list, with the 9 value slots of every face,
 /// so the matrix is refilled for a new geometry without sorting triplets again (stitching
 /// assembles a new mixed-geometry Laplacian every frame).
+#[derive(Clone)]
 pub struct StiffnessPattern {
     matrix: SparseColMat<usize, f64>,
     slots: Vec<[usize; 9]>,

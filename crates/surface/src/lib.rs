@@ -8,7 +8,7 @@
 //! * [`poisson`]: `L x = div J` with Dirichlet vertices, one sparse Cholesky factorisation
 //!   reused for the 3 coordinates and across frames.
 //! * [`polar`]: 3x3 polar decomposition `A = R S`, `det R = +1`.
-//! * [`correct`]: body part correction (§6.1).
+//! * [`correct`]: body part correction (§6.1); [`nearest`]: its nearest training meshes.
 //! * [`optimal_boundary`]: cheapest closed loop in an overlap band (§6.2, Huang et al. 2007).
 //! * [`stitch`]: Poisson merging of the parts along the optimal loops (§6.2).
 //! * [`feather`]: part weights ramping smoothly across the overlap bands, for merging by a
@@ -22,6 +22,7 @@ pub mod deformation_gradient;
 pub mod feather;
 pub mod frames;
 pub mod laplacian;
+pub mod nearest;
 pub mod optimal_boundary;
 pub mod poisson;
 pub mod polar;

@@ -23,6 +23,7 @@ use faer::sparse::linalg::SupernodalThreshold;
 use faer::sparse::SparseColMat;
 use faer::{Conj, Mat, Par, Side};
 use nalgebra::{Matrix3, Vector3};
+use std::sync::Arc;
 
 /// Which sparse Cholesky factorisation faer runs.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
@@ -37,7 +38,136 @@ pub enum Factorisation {
     Supernodal,
 }
 
-/// The numeric side of a factorisation, by [`Factorisation`].
+/// The symbolic side of a factorisation, by [`Factorisation`].
+enum SymbolicKind {
+    Auto(SymbolicLlt<usize>),
+    Supernodal(Arc<SymbolicCholesky<usize>>),
+}
+
+/// What a factorisation of one sparsity pattern keeps whatever the values are: the pattern,
+/// its symbolic Cholesky factorisation (fill-reducing ordering, elimination tree) and the
+/// connected components of its graph.
+struct Pattern {
+    n: usize,
+    col_ptr: Vec<usize>,
+    row_idx: Vec<usize>,
+    symbolic: SymbolicKind,
+    /// Connected component of every vertex in the matrix graph (a representative vertex),
+    /// checked against each fixed set.
+    component: Vec<usize>,
+}
+
+/// The symbolic factorisation of one sparsity pattern (one mesh topology), shared by the
+/// [`PoissonSolver`]s of every geometry of that topology: [`SymbolicPoisson::factorise`] runs
+/// only the numeric factorisation. A solver made this way is the one
+/// [`PoissonSolver::with_factorisation`] makes, bit for bit (the same ordering and the same
+/// numeric steps). Cloning shares the analysis.
+#[derive(Clone)]
+pub struct SymbolicPoisson {
+    pattern: Arc<Pattern>,
+}
+
+impl SymbolicPoisson {
+    /// Analyses `laplacian`'s pattern (its values are not read). Sets faer to sequential mode
+    /// (faster on 2 cores, STACK.md).
+    pub fn new(laplacian: &SparseColMat<usize, f64>, how: Factorisation) -> Result<Self> {
+        faer::set_global_parallelism(faer::Par::Seq);
+        let n = laplacian.nrows();
+        if laplacian.ncols() != n {
+            return Err(Error::invalid("poisson: system matrix is not square"));
+        }
+        let symbolic_failed =
+            |e| Error::invalid(format!("poisson: symbolic factorisation failed: {e:?}"));
+        let symbolic = match how {
+            Factorisation::Auto => SymbolicKind::Auto(
+                SymbolicLlt::try_new(laplacian.symbolic(), Side::Lower)
+                    .map_err(symbolic_failed)?,
+            ),
+            Factorisation::Supernodal => SymbolicKind::Supernodal(Arc::new(
+                factorize_symbolic_cholesky(
+                    laplacian.symbolic(),
+                    Side::Lower,
+                    SymmetricOrdering::Amd,
+                    CholeskySymbolicParams {
+                        supernodal_flop_ratio_threshold: SupernodalThreshold::FORCE_SUPERNODAL,
+                        ..Default::default()
+                    },
+                )
+                .map_err(symbolic_failed)?,
+            )),
+        };
+        let (cp, ri) = (laplacian.symbolic().col_ptr(), laplacian.symbolic().row_idx());
+        Ok(SymbolicPoisson {
+            pattern: Arc::new(Pattern {
+                n,
+                component: components(n, cp, ri),
+                col_ptr: cp.to_vec(),
+                row_idx: ri.to_vec(),
+                symbolic,
+            }),
+        })
+    }
+
+    /// The factorisation this analysis is for.
+    pub fn factorisation(&self) -> Factorisation {
+        match self.pattern.symbolic {
+            SymbolicKind::Auto(_) => Factorisation::Auto,
+            SymbolicKind::Supernodal(_) => Factorisation::Supernodal,
+        }
+    }
+
+    /// Whether `laplacian` has the analysed sparsity pattern.
+    pub fn matches(&self, laplacian: &SparseColMat<usize, f64>) -> bool {
+        let p = &self.pattern;
+        laplacian.nrows() == p.n
+            && laplacian.ncols() == p.n
+            && laplacian.symbolic().col_ptr() == p.col_ptr.as_slice()
+            && laplacian.symbolic().row_idx() == p.row_idx.as_slice()
+    }
+
+    /// The numeric factorisation of `laplacian` (the analysed pattern) with the vertices
+    /// `fixed` held.
+    pub fn factorise(
+        &self,
+        laplacian: &SparseColMat<usize, f64>,
+        fixed: &[usize],
+    ) -> Result<PoissonSolver> {
+        if !self.matches(laplacian) {
+            return Err(Error::invalid(
+                "poisson: the matrix's sparsity pattern is not the analysed one",
+            ));
+        }
+        let mut numeric = match &self.pattern.symbolic {
+            SymbolicKind::Auto(symbolic) => Numeric::Auto {
+                symbolic: symbolic.clone(),
+                llt: None,
+            },
+            SymbolicKind::Supernodal(symbolic) => {
+                let req = symbolic
+                    .factorize_numeric_llt_scratch::<f64>(Par::Seq, Default::default())
+                    .or(symbolic.solve_in_place_scratch::<f64>(3, Par::Seq));
+                let stack = MemBuffer::try_new(req)
+                    .map_err(|_| Error::invalid("poisson: out of memory"))?;
+                Numeric::Supernodal {
+                    values: vec![0.0; symbolic.len_val()],
+                    symbolic: symbolic.clone(),
+                    stack: std::sync::Mutex::new(stack),
+                }
+            }
+        };
+        let parts = factor(&self.pattern, &mut numeric, &mut laplacian.clone(), fixed)?;
+        Ok(PoissonSolver {
+            symbolic: self.clone(),
+            numeric,
+            fixed: fixed.to_vec(),
+            coupling: parts.coupling,
+            fixed_diag: parts.fixed_diag,
+            jitter: parts.jitter,
+        })
+    }
+}
+
+/// The numeric side of a factorisation, with a handle on its [`SymbolicPoisson`]'s analysis.
 enum Numeric {
     Auto {
         symbolic: SymbolicLlt<usize>,
@@ -45,7 +175,7 @@ enum Numeric {
         llt: Option<Llt<usize, f64>>,
     },
     Supernodal {
-        symbolic: SymbolicCholesky<usize>,
+        symbolic: Arc<SymbolicCholesky<usize>>,
         values: Vec<f64>,
         /// Work space of the numeric factorisation and of a 3-column solve.
         stack: std::sync::Mutex<MemBuffer>,
@@ -54,18 +184,13 @@ enum Numeric {
 
 /// A factorised Poisson system with Dirichlet vertices, reusable across right-hand sides.
 pub struct PoissonSolver {
-    n: usize,
-    col_ptr: Vec<usize>,
-    row_idx: Vec<usize>,
+    symbolic: SymbolicPoisson,
     numeric: Numeric,
     fixed: Vec<usize>,
     /// (free row, fixed slot, L value): the `L_FC x_C` coupling moved to the right-hand side.
     coupling: Vec<(usize, usize, f64)>,
     fixed_diag: Vec<f64>,
     jitter: f64,
-    /// Connected component of every vertex in the matrix graph (a representative vertex): a
-    /// property of the sparsity pattern, computed once, checked against each fixed set.
-    component: Vec<usize>,
 }
 
 impl PoissonSolver {
@@ -81,67 +206,17 @@ impl PoissonSolver {
         fixed: &[usize],
         how: Factorisation,
     ) -> Result<Self> {
-        faer::set_global_parallelism(faer::Par::Seq);
-        let n = laplacian.nrows();
-        if laplacian.ncols() != n {
-            return Err(Error::invalid("poisson: system matrix is not square"));
-        }
-        let symbolic_failed =
-            |e| Error::invalid(format!("poisson: symbolic factorisation failed: {e:?}"));
-        let mut numeric = match how {
-            Factorisation::Auto => {
-                let symbolic = SymbolicLlt::try_new(laplacian.symbolic(), Side::Lower)
-                    .map_err(symbolic_failed)?;
-                Numeric::Auto {
-                    symbolic,
-                    llt: None,
-                }
-            }
-            Factorisation::Supernodal => {
-                let symbolic = factorize_symbolic_cholesky(
-                    laplacian.symbolic(),
-                    Side::Lower,
-                    SymmetricOrdering::Amd,
-                    CholeskySymbolicParams {
-                        supernodal_flop_ratio_threshold: SupernodalThreshold::FORCE_SUPERNODAL,
-                        ..Default::default()
-                    },
-                )
-                .map_err(symbolic_failed)?;
-                let req = symbolic
-                    .factorize_numeric_llt_scratch::<f64>(Par::Seq, Default::default())
-                    .or(symbolic.solve_in_place_scratch::<f64>(3, Par::Seq));
-                let stack = MemBuffer::try_new(req)
-                    .map_err(|_| Error::invalid("poisson: out of memory"))?;
-                Numeric::Supernodal {
-                    values: vec![0.0; symbolic.len_val()],
-                    symbolic,
-                    stack: std::sync::Mutex::new(stack),
-                }
-            }
-        };
-        let (cp, ri) = (laplacian.symbolic().col_ptr(), laplacian.symbolic().row_idx());
-        let component = components(n, cp, ri);
-        let parts = factor(&mut numeric, &mut laplacian.clone(), fixed, &component)?;
-        Ok(PoissonSolver {
-            n,
-            col_ptr: cp.to_vec(),
-            row_idx: ri.to_vec(),
-            numeric,
-            fixed: fixed.to_vec(),
-            coupling: parts.coupling,
-            fixed_diag: parts.fixed_diag,
-            jitter: parts.jitter,
-            component,
-        })
+        SymbolicPoisson::new(laplacian, how)?.factorise(laplacian, fixed)
+    }
+
+    /// The symbolic analysis this solver's factorisation reuses.
+    pub fn symbolic(&self) -> &SymbolicPoisson {
+        &self.symbolic
     }
 
     /// The factorisation this solver runs.
     pub fn factorisation(&self) -> Factorisation {
-        match self.numeric {
-            Numeric::Auto { .. } => Factorisation::Auto,
-            Numeric::Supernodal { .. } => Factorisation::Supernodal,
-        }
+        self.symbolic.factorisation()
     }
 
     /// Refactorises for new values and/or a new fixed set. The symbolic factorisation is
@@ -151,7 +226,7 @@ impl PoissonSolver {
         laplacian: &SparseColMat<usize, f64>,
         fixed: &[usize],
     ) -> Result<()> {
-        if !self.same_pattern(laplacian) {
+        if !self.symbolic.matches(laplacian) {
             *self = PoissonSolver::with_factorisation(laplacian, fixed, self.factorisation())?;
             return Ok(());
         }
@@ -166,11 +241,11 @@ impl PoissonSolver {
         laplacian: &mut SparseColMat<usize, f64>,
         fixed: &[usize],
     ) -> Result<()> {
-        if !self.same_pattern(laplacian) {
+        if !self.symbolic.matches(laplacian) {
             *self = PoissonSolver::with_factorisation(laplacian, fixed, self.factorisation())?;
             return Ok(());
         }
-        let parts = factor(&mut self.numeric, laplacian, fixed, &self.component)?;
+        let parts = factor(&self.symbolic.pattern, &mut self.numeric, laplacian, fixed)?;
         self.fixed = fixed.to_vec();
         self.coupling = parts.coupling;
         self.fixed_diag = parts.fixed_diag;
@@ -178,16 +253,9 @@ impl PoissonSolver {
         Ok(())
     }
 
-    fn same_pattern(&self, laplacian: &SparseColMat<usize, f64>) -> bool {
-        laplacian.nrows() == self.n
-            && laplacian.ncols() == self.n
-            && laplacian.symbolic().col_ptr() == self.col_ptr.as_slice()
-            && laplacian.symbolic().row_idx() == self.row_idx.as_slice()
-    }
-
     /// Number of unknowns (vertices).
     pub fn n(&self) -> usize {
-        self.n
+        self.symbolic.pattern.n
     }
     /// The Dirichlet vertices.
     pub fn fixed(&self) -> &[usize] {
@@ -205,16 +273,17 @@ impl PoissonSolver {
         rhs: &[Vector3<f64>],
         values: &[Vector3<f64>],
     ) -> Result<Vec<Vector3<f64>>> {
-        if rhs.len() != self.n || values.len() != self.fixed.len() {
+        let n = self.n();
+        if rhs.len() != n || values.len() != self.fixed.len() {
             return Err(Error::invalid(format!(
                 "poisson: right-hand side has {} rows and {} fixed values, expected {} and {}",
                 rhs.len(),
                 values.len(),
-                self.n,
+                n,
                 self.fixed.len()
             )));
         }
-        let mut b = Mat::<f64>::zeros(self.n, 3);
+        let mut b = Mat::<f64>::zeros(n, 3);
         for (i, r) in rhs.iter().enumerate() {
             for d in 0..3 {
                 b[(i, d)] = r[d];
@@ -249,7 +318,7 @@ impl PoissonSolver {
                 );
             }
         }
-        let x: Vec<Vector3<f64>> = (0..self.n)
+        let x: Vec<Vector3<f64>> = (0..n)
             .map(|i| Vector3::new(b[(i, 0)], b[(i, 1)], b[(i, 2)]))
             .collect();
         if x.iter().any(|p| !p.iter().all(|c| c.is_finite())) {
@@ -267,13 +336,14 @@ struct Parts {
 
 /// Turns `a` (the Laplacian) into the Dirichlet-modified matrix in place and factorises it,
 /// retrying with a growing diagonal jitter (logged on stderr) if it is not numerically
-/// positive definite. `component` is [`components`] of `a`'s pattern.
+/// positive definite. `a` has `pattern`'s sparsity pattern.
 fn factor(
+    pattern: &Pattern,
     numeric: &mut Numeric,
     a: &mut SparseColMat<usize, f64>,
     fixed: &[usize],
-    component: &[usize],
 ) -> Result<Parts> {
+    let component = &pattern.component;
     let n = a.nrows();
     let mut slot = vec![usize::MAX; n];
     for (k, &v) in fixed.iter().enumerate() {

@@ -15,15 +15,17 @@
 //! the caller applies the predicted global rigid displacement.
 //!
 //! The sparsity pattern depends only on the template, so the symbolic factorisation is
-//! computed once and reused for every frame.
+//! computed once and reused for every frame, also by the [`Stitcher::fork`]s that stitch other
+//! frames on other threads.
 
 use crate::deformation_gradient::StiffnessPattern;
 use crate::optimal_boundary::{discrepancy, optimal_loop_in, BoundaryLoop};
-use crate::poisson::{Factorisation, PoissonSolver};
+use crate::poisson::{Factorisation, PoissonSolver, SymbolicPoisson};
 use crate::{check_faces, check_vertices, Error, Result};
 use mesh_core::rigid::{procrustes, RigidMotion};
 use mesh_core::topology::Topology;
 use nalgebra::Vector3;
+use std::sync::Arc;
 
 const ABSENT: u32 = u32::MAX;
 
@@ -160,9 +162,11 @@ pub struct Stitched {
 
 /// Stitches part meshes into one template mesh; keeps the factorisation between frames.
 pub struct Stitcher {
-    layout: PartLayout,
+    layout: Arc<PartLayout>,
     pattern: StiffnessPattern,
     solver: Option<PoissonSolver>,
+    /// The symbolic analysis to factorise on when there is no solver yet (a fork's).
+    symbolic: Option<SymbolicPoisson>,
     factorisation: Factorisation,
     align_children: bool,
 }
@@ -171,9 +175,10 @@ impl Stitcher {
     pub fn new(layout: PartLayout) -> Self {
         let pattern = StiffnessPattern::new(layout.n_vertices, &layout.faces);
         Stitcher {
-            layout,
+            layout: Arc::new(layout),
             pattern,
             solver: None,
+            symbolic: None,
             factorisation: Factorisation::Auto,
             align_children: true,
         }
@@ -185,7 +190,26 @@ impl Stitcher {
     pub fn with_factorisation(mut self, how: Factorisation) -> Self {
         self.factorisation = how;
         self.solver = None;
+        self.symbolic = None;
         self
+    }
+
+    /// A stitcher of the same layout and settings with a factorisation of its own, on the
+    /// symbolic analysis of this one's once made: it stitches other frames, on another thread,
+    /// to the same results bit for bit.
+    pub fn fork(&self) -> Stitcher {
+        Stitcher {
+            layout: Arc::clone(&self.layout),
+            pattern: self.pattern.clone(),
+            solver: None,
+            symbolic: self
+                .solver
+                .as_ref()
+                .map(|s| s.symbolic().clone())
+                .or_else(|| self.symbolic.clone()),
+            factorisation: self.factorisation,
+            align_children: self.align_children,
+        }
     }
 
     /// With `false`, children are taken as given (already in the root part's frame, e.g. parts
@@ -354,11 +378,12 @@ impl Stitcher {
         match self.solver.as_mut() {
             Some(s) => s.refactor_in_place(l, &fixed)?,
             None => {
-                self.solver = Some(PoissonSolver::with_factorisation(
-                    l,
-                    &fixed,
-                    self.factorisation,
-                )?)
+                self.solver = Some(match &self.symbolic {
+                    Some(s) if s.matches(l) && s.factorisation() == self.factorisation => {
+                        s.factorise(l, &fixed)?
+                    }
+                    _ => PoissonSolver::with_factorisation(l, &fixed, self.factorisation)?,
+                })
             }
         }
         let vertices = self

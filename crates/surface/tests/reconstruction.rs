@@ -488,3 +488,86 @@ fn a_part_of_separate_pieces_is_corrected_piece_by_piece() {
     let out = corrector.correct(&prediction, 1).unwrap();
     assert!(max_dist(&out, &prediction) < 1e-9, "{}", max_dist(&out, &prediction));
 }
+
+/// One symbolic analysis shared by the solvers of several geometries of one topology gives
+/// each the solution of a solver factorised from scratch on that geometry: bit for bit (the
+/// same ordering and numeric steps), so certainly within 1e-12, for both factorisations.
+#[test]
+fn a_shared_symbolic_analysis_solves_as_a_fresh_factorisation() {
+    use surface::deformation_gradient::GradientOperator;
+    use surface::poisson::{Factorisation, PoissonSolver, SymbolicPoisson};
+    let (v, f, _) = halves(12, 20, 8, 12);
+    for how in [Factorisation::Auto, Factorisation::Supernodal] {
+        let shared = SymbolicPoisson::new(&GradientOperator::new(&v, &f).stiffness(), how).unwrap();
+        assert_eq!(shared.factorisation(), how);
+        for frame in 0..4 {
+            let x = bend(&v, 2.0, 1.0, 0.25 * frame as f64);
+            let op = GradientOperator::new(&x, &f);
+            let l = op.stiffness();
+            let rhs = op.divergence(&op.gradient(&x));
+            let fixed = [frame, 100 + frame];
+            let values: Vec<_> = fixed.iter().map(|&i| x[i]).collect();
+            let want = PoissonSolver::with_factorisation(&l, &fixed, how).unwrap().solve(&rhs, &values).unwrap();
+            let got = shared.factorise(&l, &fixed).unwrap().solve(&rhs, &values).unwrap();
+            assert!(max_dist(&got, &want) <= 1e-12 * max_dist(&want, &vec![Vector3::zeros(); want.len()]));
+            assert_eq!(got, want, "{how:?} frame {frame}");
+        }
+        // A matrix of another pattern is refused, not factorised on the wrong analysis.
+        let (v2, f2, _) = halves(10, 20, 8, 12);
+        let other = GradientOperator::new(&v2, &f2).stiffness();
+        assert!(shared.factorise(&other, &[0]).is_err());
+    }
+}
+
+/// The correction of many predictions with their nearest meshes found together (blocked
+/// products, [`Corrector::nearest_all`]) is the correction of each alone, bit for bit, and its
+/// factorisations, made once per training mesh on one shared analysis, are reused: a second
+/// pass gives the same meshes.
+#[test]
+fn correcting_a_sequence_equals_correcting_each_frame_alone() {
+    let kappas: Vec<f64> = (0..40).map(|k| 0.05 * k as f64).collect();
+    let f = rolled_sheet(0.0).1;
+    let training: Vec<_> = kappas.iter().map(|&k| rolled_sheet(k).0).collect();
+    let corrector = Corrector::new(f, training.clone()).unwrap();
+    let predictions: Vec<Vec<Vector3<f64>>> = (0..45)
+        .map(|i| {
+            let (k, s) = (0.043 * i as f64, 0.9 + 0.002 * i as f64);
+            let x = rolled_sheet(k).0;
+            x.iter().map(|p| p * s).collect()
+        })
+        .chain([training[7].clone()])
+        .collect();
+    for m in [1, 3] {
+        let near = corrector.nearest_all(&predictions, m);
+        for (p, near) in predictions.iter().zip(&near) {
+            assert_eq!(near, &corrector.nearest(p, m));
+            let want = corrector.correct(p, m).unwrap();
+            assert_eq!(corrector.correct_with(p, near).unwrap(), want);
+            assert_eq!(corrector.correct_with(p, near).unwrap(), want, "cached factorisation");
+        }
+    }
+    assert!(corrector.correct_with(&predictions[0], &[(40, 1.0)]).is_err());
+}
+
+/// Stitchers forked from one another stitch a sequence's frames to the same meshes as one
+/// stitcher alone, bit for bit, in any order.
+#[test]
+fn forked_stitchers_stitch_as_one() {
+    let (v, f, parts) = halves(12, 20, 8, 12);
+    let frames: Vec<Vec<Vec<Vector3<f64>>>> = (0..4)
+        .map(|i| {
+            let x = bend(&v, 2.0, 1.0, 0.2 * i as f64);
+            parts.iter().map(|p| p.vertices.iter().map(|&k| x[k as usize]).collect()).collect()
+        })
+        .collect();
+    let mut one = Stitcher::new(PartLayout::new(v.len(), f.clone(), parts.clone()).unwrap());
+    let want: Vec<_> = frames.iter().map(|fr| one.stitch(fr).unwrap().vertices).collect();
+    let mut fresh = Stitcher::new(PartLayout::new(v.len(), f, parts).unwrap());
+    let mut fork = fresh.fork();
+    let mut late = one.fork();
+    for (i, fr) in frames.iter().enumerate().rev() {
+        let s = if i % 2 == 0 { &mut fork } else { &mut fresh };
+        assert_eq!(s.stitch(fr).unwrap().vertices, want[i], "frame {i}");
+        assert_eq!(late.stitch(fr).unwrap().vertices, want[i], "frame {i}, forked after use");
+    }
+}

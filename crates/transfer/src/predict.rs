@@ -92,6 +92,9 @@ pub struct Timing {
 #[derive(Clone, Debug)]
 pub struct Transferred {
     pub frames: Vec<Vec<nalgebra::Vector3<f64>>>,
+    /// The corrected parts merged by averaging, placed and cleaned up as `frames` are, when
+    /// the reconstructor was asked for them too (`Reconstructor::with_corrected_assembly`).
+    pub corrected_frames: Option<Vec<Vec<nalgebra::Vector3<f64>>>>,
     pub poses: Vec<mesh_core::rigid::RigidMotion>,
     /// Per-frame weight of the scaled source in the `blended` placement.
     pub blend_weights: Option<Vec<f64>>,
@@ -130,17 +133,18 @@ pub fn transfer_motion(
     let gp_s = t1.elapsed().as_secs_f64();
     let t2 = Instant::now();
     // The decoded parts are dropped once assembled, and the assembled frames are placed where
-    // they are: one copy of the target motion is held, besides the source.
-    let mut frames = {
+    // they are: one copy of the target motion is held, besides the source (two when the
+    // reconstructor also gives the corrected parts averaged).
+    let (mut frames, mut corrected_frames) = {
         let mut decoded = target_pca.decode(&pred.coeffs)?;
         if let Some(o) = &model.orientation {
             crate::limb_orientation::apply(o, source_pca, target_pca, &xs, &mut decoded)?;
         }
         match reconstructor {
-            Some(r) => r.reconstruct(target_pca, &decoded)?,
+            Some(r) => r.reconstruct_both(target_pca, &decoded)?,
             None => {
                 let plan = capture::assemble::plan(target_pca)?;
-                capture::assemble::assemble(&plan, target_pca, &decoded)
+                (capture::assemble::assemble(&plan, target_pca, &decoded), None)
             }
         }
     };
@@ -173,9 +177,14 @@ pub fn transfer_motion(
     let world_poses = world_poses(&poses(&start, &steps), &target_root);
     place_in_place(&world_poses, &mut frames);
     let planted = crate::feet::plant(&mut frames, source_pca, target_pca, motion, ratio, feet)?;
+    if let Some(c) = corrected_frames.as_mut() {
+        place_in_place(&world_poses, c);
+        crate::feet::plant(c, source_pca, target_pca, motion, ratio, feet)?;
+    }
     let decode_s = t2.elapsed().as_secs_f64();
     Ok(Transferred {
         frames,
+        corrected_frames,
         poses: world_poses,
         blend_weights: pred.variance_ratio,
         planted,

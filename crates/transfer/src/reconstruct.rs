@@ -20,6 +20,7 @@ use surface::correct::Corrector;
 use surface::stitch::Stitcher;
 
 use std::path::PathBuf;
+use std::time::Instant;
 
 use capture::align::AlignedMotion;
 use capture::assemble::{assemble, plan, AssemblyPlan};
@@ -61,9 +62,28 @@ pub struct Reconstructor {
     neighbours: usize,
     /// Stitcher and the PCA part index of each of its parts (tree order).
     stitcher: Option<(Stitcher, Vec<usize>)>,
+    /// Further stitchers, one per extra thread ([`Stitcher::fork`]).
+    forks: Vec<Stitcher>,
     /// Counts corrected parts and stitched frames (hidden unless set).
     progress: ProgressBar,
     unstitched_frames: usize,
+    /// Also merge the corrected parts by averaging ([`Reconstructor::with_corrected_assembly`]).
+    corrected_assembly: bool,
+    timing: SurfaceTiming,
+}
+
+/// Wall-clock seconds of the surface steps of every [`Reconstructor::reconstruct`] so far.
+#[derive(Clone, Copy, Debug, Default, PartialEq, serde::Serialize)]
+pub struct SurfaceTiming {
+    /// Frames reconstructed.
+    pub frames: usize,
+    /// §6.1: the nearest training meshes of every part of every frame.
+    pub nearest_s: f64,
+    /// §6.1: the corrections themselves (factorisations of the training meshes made on first
+    /// use included).
+    pub correct_s: f64,
+    /// §6.2 stitching, or the averaging merge.
+    pub merge_s: f64,
 }
 
 /// Every `stride`-th frame of the target's aligned training motions at `paths`, cut into `pca`'s
@@ -174,8 +194,11 @@ impl Reconstructor {
             correctors,
             neighbours,
             stitcher,
+            forks: Vec::new(),
             progress: ProgressBar::hidden(),
             unstitched_frames: 0,
+            corrected_assembly: false,
+            timing: SurfaceTiming::default(),
         })
     }
 
@@ -186,28 +209,60 @@ impl Reconstructor {
         self
     }
 
-    /// §6.1 on every part of every frame: `decoded[part][frame]` in, same shape out.
+    /// With `yes` and [`Surface::CorrectStitch`], [`Reconstructor::reconstruct_both`] also
+    /// merges the corrected parts by averaging, which is what [`Surface::Correct`] gives: both
+    /// outputs from one correction.
+    pub fn with_corrected_assembly(mut self, yes: bool) -> Self {
+        self.corrected_assembly = yes;
+        self
+    }
+
+    /// §6.1 on every part of every frame: `decoded[part][frame]` in, same shape out. The
+    /// nearest training meshes of a part's frames are found together
+    /// ([`Corrector::nearest_all`]).
     pub fn correct(
         &self,
         decoded: &[Vec<Vec<Vector3<f64>>>],
     ) -> Result<Vec<Vec<Vec<Vector3<f64>>>>> {
+        Ok(self.correct_timed(decoded)?.0)
+    }
+
+    /// [`Reconstructor::correct`] and the seconds its nearest-mesh searches took.
+    fn correct_timed(
+        &self,
+        decoded: &[Vec<Vec<Vector3<f64>>>],
+    ) -> Result<(Vec<Vec<Vec<Vector3<f64>>>>, f64)> {
         if self.correctors.is_empty() {
-            return Ok(decoded.to_vec());
+            return Ok((decoded.to_vec(), 0.0));
         }
-        decoded
+        let mut nearest_s = 0.0;
+        let corrected = decoded
             .iter()
             .zip(&self.correctors)
             .map(|(frames, c)| {
+                for p in frames {
+                    surface::check_vertices(p, c.n_vertices(), "correct: prediction")?;
+                }
+                let t = Instant::now();
+                let near = c.nearest_all(frames, self.neighbours);
+                nearest_s += t.elapsed().as_secs_f64();
                 frames
                     .par_iter()
-                    .map(|p| {
-                        let r = c.correct(p, self.neighbours);
+                    .zip(near.par_iter())
+                    .map(|(p, near)| {
+                        let r = c.correct_with(p, near);
                         self.progress.inc(1);
                         r
                     })
                     .collect()
             })
-            .collect()
+            .collect::<Result<_>>()?;
+        Ok((corrected, nearest_s))
+    }
+
+    /// Seconds of the surface steps of every reconstruction so far.
+    pub fn timing(&self) -> SurfaceTiming {
+        self.timing
     }
 
     /// One mesh per frame from `decoded[part][frame]` (after [`Reconstructor::correct`]).
@@ -220,22 +275,44 @@ impl Reconstructor {
             return Ok(assemble(&self.plan, pca, parts));
         };
         let n_frames = parts.first().map_or(0, |p| p.len());
+        // Contiguous runs of frames stitched side by side, one stitcher (factorisation) per
+        // thread: each frame's result does not depend on which stitcher made it.
+        let workers = rayon::current_num_threads().clamp(1, n_frames.max(1));
+        while self.forks.len() + 1 < workers {
+            self.forks.push(stitcher.fork());
+        }
+        let run = n_frames.div_ceil(workers).max(1);
+        let (plan, progress, order) = (&self.plan, &self.progress, &*order);
+        let mut stitchers: Vec<&mut Stitcher> =
+            std::iter::once(stitcher).chain(self.forks.iter_mut()).take(workers).collect();
+        let stitched: Vec<Vec<Result<Vec<Vector3<f64>>>>> = stitchers
+            .par_iter_mut()
+            .enumerate()
+            .map(|(w, stitcher)| {
+                (w * run..((w + 1) * run).min(n_frames))
+                    .map(|f| {
+                        let frame: Vec<Vec<Vector3<f64>>> =
+                            order.iter().map(|&k| parts[k][f].clone()).collect();
+                        progress.inc(1);
+                        stitcher.stitch(&frame).map(|s| plan.to_template_frame(&s.vertices))
+                    })
+                    .collect()
+            })
+            .collect();
         let mut unstitched = 0;
-        let merged = (0..n_frames)
-            .map(|f| {
-                let frame: Vec<Vec<Vector3<f64>>> =
-                    order.iter().map(|&k| parts[k][f].clone()).collect();
-                self.progress.inc(1);
-                match stitcher.stitch(&frame) {
-                    Ok(stitched) => self.plan.to_template_frame(&stitched.vertices),
-                    Err(e) => {
-                        if unstitched == 0 {
-                            mesh_core::warn!("stitch: frame {f}: {e}: such frames are assembled (overlaps averaged)");
-                        }
-                        unstitched += 1;
-                        let one: Vec<Vec<Vec<Vector3<f64>>>> = parts.iter().map(|p| vec![p[f].clone()]).collect();
-                        assemble(&self.plan, pca, &one).swap_remove(0)
+        let merged = stitched
+            .into_iter()
+            .flatten()
+            .enumerate()
+            .map(|(f, frame)| match frame {
+                Ok(frame) => frame,
+                Err(e) => {
+                    if unstitched == 0 {
+                        mesh_core::warn!("stitch: frame {f}: {e}: such frames are assembled (overlaps averaged)");
                     }
+                    unstitched += 1;
+                    let one: Vec<Vec<Vec<Vector3<f64>>>> = parts.iter().map(|p| vec![p[f].clone()]).collect();
+                    assemble(plan, pca, &one).swap_remove(0)
                 }
             })
             .collect();
@@ -258,14 +335,36 @@ impl Reconstructor {
         pca: &PcaModel,
         decoded: &[Vec<Vec<Vector3<f64>>>],
     ) -> Result<Vec<Vec<Vector3<f64>>>> {
+        Ok(self.reconstruct_both(pca, decoded)?.0)
+    }
+
+    /// [`Reconstructor::reconstruct`], and with [`Reconstructor::with_corrected_assembly`] on a
+    /// corrected and stitched reconstruction also the corrected parts merged by averaging.
+    #[allow(clippy::type_complexity)]
+    pub fn reconstruct_both(
+        &mut self,
+        pca: &PcaModel,
+        decoded: &[Vec<Vec<Vector3<f64>>>],
+    ) -> Result<(Vec<Vec<Vector3<f64>>>, Option<Vec<Vec<Vector3<f64>>>>)> {
         let n_frames = decoded.first().map_or(0, |p| p.len());
         let corrections = if self.correctors.is_empty() { 0 } else { decoded.len() * n_frames };
         let stitches = if self.stitcher.is_some() { n_frames } else { 0 };
         self.progress.set_length((corrections + stitches) as u64);
-        let corrected = self.correct(decoded)?;
+        let t = Instant::now();
+        let (corrected, nearest_s) = self.correct_timed(decoded)?;
+        let correct_s = t.elapsed().as_secs_f64() - nearest_s;
+        let t = Instant::now();
+        let assembled = (self.corrected_assembly
+            && !self.correctors.is_empty()
+            && self.stitcher.is_some())
+        .then(|| assemble(&self.plan, pca, &corrected));
         let merged = self.merge(pca, &corrected);
+        self.timing.frames += n_frames;
+        self.timing.nearest_s += nearest_s;
+        self.timing.correct_s += correct_s;
+        self.timing.merge_s += t.elapsed().as_secs_f64();
         self.progress.finish_and_clear();
-        merged
+        Ok((merged?, assembled))
     }
 }
 
@@ -306,6 +405,38 @@ mod tests {
                 assert!(e < 1e-8, "{alignment:?} {surface:?}: {e}");
             }
         }
+    }
+
+    /// One correction feeding both outputs: beside the stitched frames, the corrected parts
+    /// averaged are what [`Surface::Correct`] gives, and the stitched frames what
+    /// [`Surface::CorrectStitch`] alone gives, bit for bit (predictions shrunk by 5 %, so the
+    /// correction has work to do).
+    #[test]
+    fn one_correction_gives_the_corrected_and_the_stitched_frames() {
+        let (mesh, seg, motion) = bending_capsule();
+        let (pca, _) = fit(&mesh.vertices, &seg, &[&motion], Components::Count(20), PartAlignment::Body).unwrap();
+        let decoded: Vec<Vec<Vec<Vector3<f64>>>> = pca
+            .part_rows(&motion)
+            .unwrap()
+            .iter()
+            .map(|rows| {
+                rows_to_meshes(rows)
+                    .into_iter()
+                    .map(|x| {
+                        let c = surface::centroid(&x);
+                        x.iter().map(|v| c + 0.95 * (v - c)).collect()
+                    })
+                    .collect()
+            })
+            .collect();
+        let new = |surface| Reconstructor::new(&pca, &seg, &mesh.faces, &[&motion], surface, 3, 1).unwrap();
+        let (stitched, corrected) = new(Surface::CorrectStitch)
+            .with_corrected_assembly(true)
+            .reconstruct_both(&pca, &decoded)
+            .unwrap();
+        assert!(corrected.unwrap() == new(Surface::Correct).reconstruct(&pca, &decoded).unwrap());
+        assert!(stitched == new(Surface::CorrectStitch).reconstruct(&pca, &decoded).unwrap());
+        assert!(new(Surface::CorrectStitch).reconstruct_both(&pca, &decoded).unwrap().1.is_none());
     }
 
     /// The training part meshes read a frame at a time are those `new` cuts from the loaded

@@ -81,6 +81,10 @@ pub struct Params {
     /// Output folder of PLY frames 000000.ply, ... (the target's topology, one frame per source frame)
     #[arg(short, long)]
     pub out: PathBuf,
+    /// With --surface correct-stitch: also write the corrected parts merged by averaging (what
+    /// --surface correct writes) to this folder, from the same correction
+    #[arg(long)]
+    pub corrected_out: Option<PathBuf>,
     /// Also write timings (frames per second of the prediction) as JSON
     #[arg(long)]
     pub timing: Option<PathBuf>,
@@ -93,6 +97,9 @@ pub struct Params {
 /// Writes the frames (and the `--timing` and `--confidence` JSON when asked); the folder's
 /// `rate.json` is the source frame rate recorded in the model's header.
 pub fn run(p: &Params) -> anyhow::Result<()> {
+    if p.corrected_out.is_some() && p.surface != Surface::CorrectStitch {
+        bail!("--corrected-out needs --surface correct-stitch (the other outputs are one folder)");
+    }
     let model = GprModel::load(&p.model)?;
     let (src_pca, tgt_pca) = (
         PcaModel::load(&p.source_pca)?,
@@ -154,6 +161,7 @@ pub fn run(p: &Params) -> anyhow::Result<()> {
                     p.neighbours.into(),
                 )
                 .with_context(|| seg_path.display().to_string())?
+                .with_corrected_assembly(p.corrected_out.is_some())
                 .with_progress(mesh_core::cli::progress_bar(
                     0,
                     "gpr-predict: surface",
@@ -205,6 +213,9 @@ pub fn run(p: &Params) -> anyhow::Result<()> {
     // gpr-train records in the model's header.
     let (_, _, model_header) = mesh_core::artifact::read_header(&p.model)?;
     let fps = model_header.params.get("source_fps").and_then(|f| f.as_f64());
+    if let (Some(dir), Some(frames)) = (&p.corrected_out, result.corrected_frames) {
+        MeshSequence::new(faces.clone(), frames).write_dir_at(dir, fps)?;
+    }
     MeshSequence::new(faces, result.frames).write_dir_at(&p.out, fps)?;
     let write = t1.elapsed().as_secs_f64();
     let n = motion.n_frames() as f64;
@@ -218,13 +229,28 @@ pub fn run(p: &Params) -> anyhow::Result<()> {
         total,
         write
     );
+    let surface = recon.as_ref().map(|r| r.timing());
+    if let Some(t) = &surface {
+        let s = t.nearest_s + t.correct_s + t.merge_s;
+        mesh_core::info!(
+            "surface: {} frames in {s:.3} s ({:.1} frames/s): nearest meshes {:.3} s, correction {:.3} s, merge {:.3} s",
+            t.frames,
+            t.frames as f64 / s.max(1e-12),
+            t.nearest_s,
+            t.correct_s,
+            t.merge_s
+        );
+    }
     if let Some(path) = &p.timing {
-        let json = serde_json::json!({
+        let mut json = serde_json::json!({
             "frames": motion.n_frames(), "encode_s": result.timing.encode_s, "gp_s": result.timing.gp_s,
             "gp_frames_per_s": n / result.timing.gp_s.max(1e-12), "decode_assemble_s": result.timing.decode_s,
             "total_s": total, "frames_per_s_without_writing": n / total.max(1e-12), "ply_write_s": write,
             "unstitched_frames": recon.as_ref().map_or(0, |r| r.unstitched_frames()),
         });
+        if let Some(t) = surface {
+            json["surface_s"] = serde_json::to_value(t)?;
+        }
         mesh_core::atomic::write_bytes_atomic(
             path,
             serde_json::to_string_pretty(&json)?.as_bytes(),
