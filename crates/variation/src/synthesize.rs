@@ -33,7 +33,7 @@ use crate::motion_matching::MatchOptions;
 use crate::reconstruct::{Assembly, Decoder};
 use crate::reference::{Landmarks, Reference};
 use crate::sample::{
-    blend_entries, blend_variations, default_hmc, matched_blend_variations, matched_variations, mix,
+    blend_bounding, blend_entries, blend_variations, default_hmc, matched_blend_variations, matched_variations, mix,
     sequence_variations_len, ChainStats, HmcStart, Sampler, Variations,
 };
 use crate::train::VariationModel;
@@ -645,10 +645,9 @@ pub fn run_with_progress(
             if !(0.0..=1.0).contains(w) {
                 return Err(Error::invalid(format!("blend weight {w} outside [0, 1]")));
             }
-            let used = blend_entries(model, ia, ib)
-                .into_iter()
-                .map(|e| e.1)
-                .collect();
+            // Only the two learned weights bounding w are sampled (one at a learned weight).
+            let [lo, hi] = blend_bounding(model, ia, ib, *w);
+            let used = if lo.1 == hi.1 { vec![lo.1] } else { vec![lo.1, hi.1] };
             (used, vec![(ia, ib, *w)])
         }
     };
