@@ -10,6 +10,7 @@
 //! [`foot_lock`] (the rest of each planted sole's slide absorbed by its leg) -> [`metrics`],
 //! [`turns_and_tears`] (frames that spin or tear past the captures' own figures) and [`plots`].
 
+pub mod blend_guide;
 pub mod contacts;
 pub mod course;
 pub mod diversity;

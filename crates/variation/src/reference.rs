@@ -92,6 +92,34 @@ impl Reference {
         }
     }
 
+    /// The reference `(1 - t) x + t y` of two references of the same frames and vertices,
+    /// every trajectory interpolated linearly frame by frame (the matcher's rows vertex by
+    /// vertex); an error naming what differs when they do not match.
+    pub fn between(x: &Reference, y: &Reference, t: f64) -> std::result::Result<Reference, String> {
+        if x.heading.len() != y.heading.len()
+            || x.lowest.len() != y.lowest.len()
+            || x.leg_lowest.len() != y.leg_lowest.len()
+            || x.match_rows.len() != y.match_rows.len()
+        {
+            return Err(format!("references of {} and {} frames cannot be interpolated", x.len(), y.len()));
+        }
+        if x.match_rows.iter().zip(&y.match_rows).any(|(a, b)| a.len() != b.len()) {
+            return Err("references of different matcher rows cannot be interpolated".to_string());
+        }
+        let mix = |a: f64, b: f64| a + t * (b - a);
+        Ok(Reference {
+            heading: x.heading.iter().zip(&y.heading).map(|(&a, &b)| mix(a, b)).collect(),
+            lowest: x.lowest.iter().zip(&y.lowest).map(|(&a, &b)| mix(a, b)).collect(),
+            leg_lowest: x.leg_lowest.iter().zip(&y.leg_lowest).map(|(a, b)| [mix(a[0], b[0]), mix(a[1], b[1])]).collect(),
+            match_rows: x
+                .match_rows
+                .iter()
+                .zip(&y.match_rows)
+                .map(|(ra, rb)| ra.iter().zip(rb).map(|(p, q)| p + (q - p) * t).collect())
+                .collect(),
+        })
+    }
+
     /// Source frames covered.
     pub fn len(&self) -> usize {
         self.lowest.len()

@@ -5,15 +5,15 @@
 //! with the first point fixed (`gpdm::hmc::sample_trajectories`: burn-in with step-size
 //! adaptation toward the target acceptance, then thinning). Parts are sampled independently
 //! (one of the paper's sources of variation); variation `k` takes sample `k` of every part.
-//! For a blend weight `w*`, each part's `gpdm::blend::BlendSet` of sampled variants at
-//! `W ∪ {0, 1}` gives `X̃_{w*}` from random variants of the bounding trajectories.
+//! For a blend weight `w*`, `X̃_{w*}` is made from random variants of the bounding trajectories
+//! of `W ∪ {0, 1}` blended in proportion (`gpdm::blend::blend_pair`): only the two bounding
+//! sequences are sampled ([`blend_bounding`]).
 //! Every chain has its own seed derived from `(seed, sequence, part)`: same seed, same samples.
 //! A training-free baseline to both GPDM samplers, `Sampler::MotionMatching`, recombines the
 //! learned latent points of all parts jointly instead ([`matched_variations`],
 //! [`matched_blend_variations`]; the algorithm in [`crate::motion_matching`]).
 
 use gpdm::ancestral::sample_trajectories_on_data;
-use gpdm::blend::BlendSet;
 use gpdm::hmc::{sample_trajectories_scaled, ChainStart, HmcOptions};
 use mesh_core::{Error, Result};
 use nalgebra::DMatrix;
@@ -600,7 +600,7 @@ pub fn cycle_closes(x: &DMatrix<f64>) -> bool {
 /// (w = 1), as `(w, sequence index)` sorted by `w`: the endpoints, plus every pre-blended
 /// sequence of §7 between `a` and `b` (made in either order; weights flipped to `a`'s side).
 /// A weight between two of them blends the variants of the nearest learned weight on each side
-/// (`gpdm::blend::BlendSet`); a pair without pre-blends blends the endpoints' variants directly
+/// ([`blend_bounding`]); a pair without pre-blends blends the endpoints' variants directly
 /// (the paper's unguided interpolation).
 pub fn blend_entries(model: &VariationModel, a: usize, b: usize) -> Vec<(f64, usize)> {
     let mut entries = vec![(0.0, a), (1.0, b)];
@@ -627,27 +627,44 @@ pub fn blend_variations(
     seed: u64,
 ) -> Result<Variations> {
     let model = dec.model;
-    let entries_idx = blend_entries(model, a, b);
-    let sets = (0..model.parts.len())
-        .map(|k| {
-            let entries = entries_idx
-                .iter()
-                .map(|&(v, i)| (v, pools[i].iter().map(|var| var[k].clone()).collect()))
-                .collect();
-            BlendSet::new(entries).map_err(|e| Error::invalid(format!("blend: {e}")))
-        })
-        .collect::<Result<Vec<_>>>()?;
+    if !(0.0..=1.0).contains(&w) {
+        return Err(Error::invalid(format!("blend: blend weight {w} outside [0, 1]")));
+    }
+    let [(w1, i1), (w2, i2)] = blend_bounding(model, a, b, w);
+    let (p1, p2) = (&pools[i1], &pools[i2]);
+    if p1.is_empty() || p2.is_empty() {
+        return Err(Error::invalid(format!("blend: no trajectory for blend weight {}", if p1.is_empty() { w1 } else { w2 })));
+    }
     let mut rng = ChaCha8Rng::seed_from_u64(mix(seed, 0xB1E4D, (w * 1e6).round() as u64));
-    (0..n)
+    // Per variation and part: a variant of each bounding weight drawn uniformly, blended
+    // linearly in w* (3DV §7, `gpdm::blend::blend_pair`); a learned weight draws its own.
+    Ok((0..n)
         .map(|_| {
-            sets.iter()
-                .map(|set| {
-                    set.sample(w, &mut rng)
-                        .map_err(|e| Error::invalid(format!("blend: {e}")))
+            (0..model.parts.len())
+                .map(|k| {
+                    let x = &p1[rng.random_range(0..p1.len())][k];
+                    if i1 == i2 {
+                        return x.clone();
+                    }
+                    let y = &p2[rng.random_range(0..p2.len())][k];
+                    gpdm::blend::blend_pair(x, w1, y, w2, w)
                 })
                 .collect()
         })
-        .collect()
+        .collect())
+}
+
+/// The learned weights of [`blend_entries`] nearest to `w` ∈ [0, 1] on each side, as
+/// `(w, sequence index)` (the same twice when `w` is learned): the only sequences a blend at
+/// `w` draws variants of.
+pub fn blend_bounding(model: &VariationModel, a: usize, b: usize, w: f64) -> [(f64, usize); 2] {
+    let entries = blend_entries(model, a, b);
+    if let Some(&e) = entries.iter().find(|e| e.0 == w) {
+        return [e, e];
+    }
+    let lo = *entries.iter().rev().find(|e| e.0 <= w).unwrap_or(&entries[0]);
+    let hi = *entries.iter().find(|e| e.0 >= w).unwrap_or(&entries[entries.len() - 1]);
+    [lo, hi]
 }
 
 #[cfg(test)]

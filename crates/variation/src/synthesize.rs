@@ -18,6 +18,7 @@ use rand_chacha::ChaCha8Rng;
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 
+use crate::blend_guide::{self, BlendGuide};
 use crate::contacts::Contacts;
 use crate::diversity::{self, Diversity};
 use crate::foot_height;
@@ -32,7 +33,7 @@ use crate::motion_matching::MatchOptions;
 use crate::reconstruct::{Assembly, Decoder};
 use crate::reference::{Landmarks, Reference};
 use crate::sample::{
-    blend_entries, blend_variations, default_hmc, matched_blend_variations, matched_variations, mix,
+    blend_bounding, blend_entries, blend_variations, default_hmc, matched_blend_variations, matched_variations, mix,
     sequence_variations_len, ChainStats, HmcStart, Sampler, Variations,
 };
 use crate::train::VariationModel;
@@ -110,6 +111,10 @@ pub struct SynthConfig {
     /// How each variation is written (a folder of PLY frames by default).
     #[serde(default)]
     pub frame_format: VariationFormat,
+    /// What a blend's variations follow: the blend of the captures made per query, or the
+    /// model's references of the nearest learned weights interpolated ([`crate::blend_guide`]).
+    #[serde(default)]
+    pub blend_guide: BlendGuide,
 }
 
 /// One request against a trained model.
@@ -640,22 +645,22 @@ pub fn run_with_progress(
             if !(0.0..=1.0).contains(w) {
                 return Err(Error::invalid(format!("blend weight {w} outside [0, 1]")));
             }
-            let used = blend_entries(model, ia, ib)
-                .into_iter()
-                .map(|e| e.1)
-                .collect();
+            // Only the two learned weights bounding w are sampled (one at a learned weight).
+            let [lo, hi] = blend_bounding(model, ia, ib, *w);
+            let used = if lo.1 == hi.1 { vec![lo.1] } else { vec![lo.1, hi.1] };
             (used, vec![(ia, ib, *w)])
         }
     };
-    // A blend's source is the non-linear blend of the two motions' captured meshes: refused
-    // before any sampling without them.
-    let blend_group = match (blends.is_empty(), group) {
+    // The exact guide blends the two motions' captured meshes, and so do the statistics against
+    // a blend's source: refused before any sampling without them.
+    let exact = cfg.blend_guide == BlendGuide::Exact;
+    let blend_group = match (blends.is_empty() || !(exact || compare), group) {
         (true, _) => None,
         (false, Some(g)) => Some(g),
         (false, None) => {
             return Err(Error::invalid(match cfg.query {
-                Some(_) => "a blend's source is made from the captured meshes: give the group (--group)",
-                None => "blends are made from the captured meshes: give the group (--group), or no blends (--blends '')",
+                Some(_) => "the exact blend guide is made from the captured meshes: give the group (--group), or --blend-guide stored",
+                None => "the exact blend guide is made from the captured meshes: give the group (--group), --blend-guide stored, or no blends (--blends '')",
             }))
         }
     };
@@ -692,11 +697,16 @@ pub fn run_with_progress(
             ));
         }
     }
-    if let Some(group) = blend_group {
-        let blender = surface::blend::Blender::new(group.template.clone(), group.faces.clone())?;
-        // The blended sources, every weight of a pair from one decomposition of its frames.
+    if !blends.is_empty() {
+        // The blended sources (when the guide or the statistics need them), every weight of a
+        // pair from one decomposition of its frames.
         let mut truths: Vec<Option<GroupSequence>> = vec![None; blends.len()];
+        let blender = match blend_group {
+            Some(g) => Some(surface::blend::Blender::new(g.template.clone(), g.faces.clone())?),
+            None => None,
+        };
         for (i, &(a, b, _)) in blends.iter().enumerate() {
+            let (Some(group), Some(blender)) = (blend_group, &blender) else { break };
             if truths[i].is_some() {
                 continue;
             }
@@ -705,7 +715,7 @@ pub fn run_with_progress(
                 .collect();
             let weights: Vec<f64> = same.iter().map(|&j| blends[j].2).collect();
             let made = blend_sequences_at(
-                &blender,
+                blender,
                 &group.sequences[a],
                 &group.sequences[b],
                 &weights,
@@ -717,7 +727,6 @@ pub fn run_with_progress(
             }
         }
         for (&(a, b, w), truth) in blends.iter().zip(truths) {
-            let truth = truth.expect("every blend made above");
             let vars = match cfg.sampler {
                 Sampler::MotionMatching => matched_blend_variations(
                     &dec,
@@ -737,15 +746,19 @@ pub fn run_with_progress(
                     model.sequences[a].name, model.sequences[b].name
                 ),
             };
-            let frames = truth.motion.world_frames();
+            let frames = truth.as_ref().map(|t| t.motion.world_frames());
+            let (reference, contacts) = match (exact, &frames, truth) {
+                (true, Some(f), Some(t)) => (Reference::of(f, &model.template, &landmarks, &model.up), t.contacts),
+                _ => blend_guide::stored(model, a, b, w).map_err(Error::invalid)?,
+            };
             let mut job = Job::new(
                 label,
                 Some(w),
                 vars,
-                Reference::of(&frames, &model.template, &landmarks, &model.up),
-                compare.then_some(frames),
+                reference,
+                frames.filter(|_| compare),
                 model.sequences[a].start_pose,
-                truth.contacts,
+                contacts,
             );
             job.guided_from = bounding(&blend_entries(model, a, b), w);
             if let Some((lo, hi)) = job.guided_from {

@@ -130,6 +130,7 @@ fn tiny_set_end_to_end() {
         query: None,
         frames: None,
         frame_format: Default::default(),
+        blend_guide: Default::default(),
     };
     let out1 = dir.path().join("o1");
     let out2 = dir.path().join("o2");

@@ -1,6 +1,6 @@
 //! A trained model holds everything a query of a training sequence needs: `hmc-sample` without
-//! the group writes the same bytes as with it; the group stays needed for blends and for the
-//! statistics against the captures. Damaged and older model files are refused in one line.
+//! the group writes the same bytes as with it; the group stays needed for the exact blend guide
+//! and for the statistics against the captures. Damaged and older model files are refused in one line.
 
 mod common;
 
@@ -118,7 +118,7 @@ fn a_model_alone_answers_a_query_with_the_bytes_of_the_group_query() {
 }
 
 #[test]
-fn without_the_group_the_report_says_the_statistics_were_skipped_and_blends_are_refused() {
+fn without_the_group_the_report_says_the_statistics_were_skipped_and_exact_blends_are_refused() {
     let dir = tempfile::tempdir().unwrap();
     let (_, model) = common::tiny_model(dir.path());
     let (out, report) = (s(&dir.path().join("walk")), dir.path().join("walk.json"));
@@ -131,10 +131,10 @@ fn without_the_group_the_report_says_the_statistics_were_skipped_and_blends_are_
     let notes = json["notes"].to_string();
     assert!(notes.contains("statistics against the sources skipped"), "{notes}");
 
-    // A blend's source is made from the captured meshes: one line, nothing written.
+    // The exact blend guide is made from the captured meshes: one line, nothing written.
     for args in [
-        vec!["--blend", "walk:run", "--weight", "0.3"],
-        vec!["--blends", "0.25"],
+        vec!["--blend", "walk:run", "--weight", "0.3", "--blend-guide", "exact"],
+        vec!["--blends", "0.25", "--blend-guide", "exact"],
     ] {
         let o = dir.path().join("blend");
         let o_s = s(&o);

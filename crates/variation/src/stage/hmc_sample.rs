@@ -9,6 +9,7 @@ use mesh_core::artifact::Artifact;
 use mesh_core::cli::CommonArgs;
 use serde::Serialize;
 
+use crate::blend_guide::BlendGuide;
 use crate::frame_writer::VariationFormat;
 use crate::group::Group;
 use crate::memory_budget;
@@ -23,7 +24,7 @@ use crate::train::VariationModel;
 #[command(
     name = "hmc-sample",
     version,
-    after_help = "e.g.: hmc-sample --seed 0 -n 5 --blends 0.25,0.75 --group work/locomotion.group --model work/locomotion.model --out out/variation/locomotion --report work/locomotion-samples.json\n      hmc-sample --model work/locomotion.model --motion walk -n 20 --frame-count 300 --seed 7 --out out/walk20\n      hmc-sample --group work/locomotion.group --model work/locomotion.model --blend walk:run --weight 0.3 -n 10 --sampler ancestral --out out/blend03"
+    after_help = "e.g.: hmc-sample --seed 0 -n 5 --blends 0.25,0.75 --group work/locomotion.group --model work/locomotion.model --out out/variation/locomotion --report work/locomotion-samples.json\n      hmc-sample --model work/locomotion.model --motion walk -n 20 --frame-count 300 --seed 7 --out out/walk20\n      hmc-sample --model work/locomotion.model --blend walk:run --weight 0.3 -n 10 --sampler ancestral --out out/blend03"
 )]
 pub struct Params {
     #[command(flatten)]
@@ -33,8 +34,7 @@ pub struct Params {
     #[arg(long)]
     pub model: PathBuf,
     /// The prealigned group the model was trained on: the captures the statistics compare with
-    /// and blends are made from (without it: the variations of training sequences, from the
-    /// model alone)
+    /// and exact blend guides are made from (without it: every query from the model alone)
     #[arg(long)]
     pub group: Option<PathBuf>,
     /// Variations per sequence
@@ -53,6 +53,12 @@ pub struct Params {
     /// Weight w* in [0, 1] of the --blend (0: A, 1: B)
     #[arg(short, long, value_name = "W", requires = "blend")]
     pub weight: Option<f64>,
+    /// What a blend's variations follow (heading, heights, matched frames, contacts of its
+    /// source): exact (the two captures' meshes blended at --weight per query, which needs
+    /// --group) or stored (the model's references of the nearest learned weights on each side,
+    /// interpolated; docs/DEVIATIONS.md) [default: exact with --group, stored without]
+    #[arg(long, value_enum)]
+    pub blend_guide: Option<BlendGuide>,
     /// Frames per variation [default: the capture's length]; longer follows the dynamics on
     /// past the capture's end, shorter cuts
     #[arg(long, value_name = "N", value_parser = at_least(2))]
@@ -273,6 +279,10 @@ pub fn run(p: &Params) -> anyhow::Result<()> {
         },
         frames: p.frame_count,
         frame_format: p.frame_format,
+        blend_guide: p.blend_guide.unwrap_or(match group {
+            Some(_) => BlendGuide::Exact,
+            None => BlendGuide::Stored,
+        }),
     };
     // Sampling first (a spinner), then one step per synthesised sequence.
     let bar = mesh_core::cli::progress_bar(0, "hmc-sample: sampling", &p.common);
