@@ -64,6 +64,7 @@ pub const MOTIONS: &[MotionSpec] = &[
     MotionSpec { name: "run", about: "four run cycles", legs: &[clip("LEGS_RUN", Play::Cycles(4))], torso: STAND, lead: Lead::Legs },
     MotionSpec { name: "back", about: "four cycles of walking backwards", legs: &[clip("LEGS_BACK", Play::Cycles(4))], torso: STAND, lead: Lead::Legs },
     MotionSpec { name: "crouch", about: "four cycles of a crouched walk", legs: &[clip("LEGS_WALKCR", Play::Cycles(4))], torso: STAND, lead: Lead::Legs },
+    MotionSpec { name: "crouched", about: "two seconds of the crouched idle", legs: &[clip("LEGS_IDLECR", Play::Seconds(2.0))], torso: STAND, lead: Lead::Legs },
     MotionSpec {
         name: "jump",
         about: "a jump, its landing and a second standing",

@@ -12,7 +12,7 @@ use serde::Serialize;
 use crate::character::Character;
 use crate::set_writer::{write_set, SetPlan};
 
-/// The motions each pair trains on and tests on (all nine are in [`crate::motions::MOTIONS`]).
+/// The motions each pair trains on and tests on by default (every motion is in [`crate::motions::MOTIONS`]).
 pub const TRAIN: &[&str] = &["walk", "run", "jump", "death1"];
 pub const TEST: &[&str] = &["back", "crouch"];
 /// Where the players came from (recorded in each `set.json`).
@@ -35,6 +35,12 @@ pub struct Params {
     /// A pair of players SOURCE:TARGET (folder names under --assets); repeat for more sets
     #[arg(long, value_name = "SOURCE:TARGET", default_values_t = ["sarge:sorceress".to_string(), "major:liz".to_string()])]
     pub characters: Vec<String>,
+    /// Training motions of every pair, from: walk, run, back, crouch, crouched, jump, gesture, death1, death2, death3
+    #[arg(long, value_delimiter = ',', value_name = "A,B,...", default_values_t = TRAIN.iter().map(|m| m.to_string()))]
+    pub train: Vec<String>,
+    /// Test motions of every pair; the target's own performance of each is written as its reference
+    #[arg(long, value_delimiter = ',', value_name = "A,B,...", default_values_t = TEST.iter().map(|m| m.to_string()))]
+    pub test: Vec<String>,
     /// Frame rate of every motion written
     #[arg(long, value_name = "F", default_value_t = 25.0)]
     pub fps: f64,
@@ -80,6 +86,11 @@ pub fn run(p: &Params) -> anyhow::Result<()> {
     if !(p.fps.is_finite() && p.fps > 0.0) {
         anyhow::bail!("--fps {}: expected a positive number of frames per second", p.fps);
     }
+    let train: Vec<&str> = p.train.iter().map(String::as_str).collect();
+    let test: Vec<&str> = p.test.iter().map(String::as_str).collect();
+    if let Some(m) = train.iter().find(|m| test.contains(m)) {
+        anyhow::bail!("--train and --test both name '{m}': a motion is either trained on or tested on");
+    }
     let pairs = p.characters.iter().map(|c| parse_pair(c)).collect::<anyhow::Result<Vec<_>>>()?;
     let assets = assets_dir(p)?;
     let mut loaded: std::collections::BTreeMap<String, Character> = Default::default();
@@ -94,8 +105,8 @@ pub fn run(p: &Params) -> anyhow::Result<()> {
         let plan = SetPlan {
             source: &loaded[a],
             target: &loaded[b],
-            train: TRAIN,
-            test: TEST,
+            train: &train,
+            test: &test,
             fps: p.fps,
             provenance: PROVENANCE,
         };
@@ -125,6 +136,22 @@ mod tests {
     fn every_option_is_recorded_under_its_flag_name() {
         let argv = ["characters", "--out", "sets"];
         assert_eq!(mesh_core::cli::unrecorded_options::<Params>(&argv).unwrap(), Vec::<String>::new());
+    }
+
+    #[test]
+    fn the_help_names_every_motion() {
+        use clap::CommandFactory;
+        let help = Params::command().render_long_help().to_string();
+        for m in crate::motions::MOTIONS {
+            assert!(help.contains(&format!(" {},", m.name)) || help.contains(&format!(" {}\n", m.name)), "{}", m.name);
+        }
+    }
+
+    #[test]
+    fn a_motion_is_trained_on_or_tested_on_not_both() {
+        let p = Params::try_parse_from(["characters", "--train", "walk,back", "--out", "/nonexistent"]).unwrap();
+        let e = run(&p).unwrap_err().to_string();
+        assert!(e.contains("'back'"), "{e}");
     }
 
     #[test]
