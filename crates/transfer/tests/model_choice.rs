@@ -199,3 +199,49 @@ fn method_rows_are_different_models() {
         }
     }
 }
+
+/// `--cv-hyperparameters refit` learns every held-out model's hyperparameters on the other
+/// motions: its estimate does not depend on the hyperparameters handed to it (the full model's,
+/// here replaced by a noise variance ten times the learnt one), where `fixed` conditions with
+/// exactly those; and it is not the `fixed` estimate, for the zero-mean GP whose hyperparameters
+/// carry what the held-out motion taught the full model.
+#[test]
+fn refit_folds_learn_their_hyperparameters_without_the_held_out_motion() {
+    use capture::choices::{MeanFunction, Method};
+    use capture::part_pca::PcaModel;
+    use gp::gpr::{GprOptions, PAPER_NOISE_VAR};
+    use transfer::gpr_model::{train_rows, FixedHyperparameters, OrientationOptions, Regression, MEAN_RIDGE};
+    use transfer::leave_one_motion_out::{cross_validate, Candidate, Folds, HeldOut, Hyperparameters};
+    use transfer::training_rows::{PairFiles, TrainingRows};
+
+    let dir = tempfile::tempdir().unwrap();
+    let (_, work, _) = tiny_training(dir.path());
+    let (src, tgt) = (PcaModel::load(work.join("A/pca.model")).unwrap(), PcaModel::load(work.join("B/pca.model")).unwrap());
+    let names: Vec<String> = src.parts.iter().map(|p| p.name.clone()).collect();
+    let mut pairs = Vec::new();
+    let mut held_out = Vec::new();
+    for m in TRAIN {
+        let files = [work.join(format!("A/{m}.aligned")), work.join(format!("B/{m}.aligned")), work.join(format!("{m}.corr"))];
+        pairs.push(PairFiles::read_encoded(&files, &src, &tgt).unwrap().data);
+        held_out.push(HeldOut { motion: m.to_string(), truth: files[1].clone() });
+    }
+    let opts = GprOptions { noise_var: PAPER_NOISE_VAR, ..Default::default() };
+    let regression = |fixed| Regression { method: Method::GprNn, nn_bias: false, mean: MeanFunction::Zero, mean_ridge: MEAN_RIDGE, mean_priors: None, opts: &opts, fixed };
+    let rows = TrainingRows::new(Method::GprNn, &names, &pairs, 1.0, false).unwrap();
+    let full = FixedHyperparameters::of(&train_rows(&regression(None), &names, &rows).unwrap()).unwrap();
+    let mut noisy = full.clone();
+    for (_, noise) in noisy.parts.iter_mut().flatten().chain(noisy.displacement.as_mut()) {
+        *noise *= 10.0;
+    }
+    let estimate = |how, fixed| {
+        let folds = Folds { hyperparameters: how, pairs: &pairs, held_out: &held_out, frame_ratio: 1.0, keyposes_only: false, part_names: &names, source_pca: &src, target_pca: &tgt };
+        let candidate = Candidate { regression: regression(Some(fixed)), orientation: OrientationOptions { weight: 0.0, attached: &[] } };
+        cross_validate(&folds, &[candidate]).unwrap().remove(0).cv_rms_pose_m
+    };
+    let (fixed, fixed_noisy) = (estimate(Hyperparameters::Fixed, &full), estimate(Hyperparameters::Fixed, &noisy));
+    let (refit, refit_noisy) = (estimate(Hyperparameters::Refit, &full), estimate(Hyperparameters::Refit, &noisy));
+    assert_eq!(refit.to_bits(), refit_noisy.to_bits(), "refit: {refit} with the full model's hyperparameters, {refit_noisy} with others");
+    assert!((fixed - fixed_noisy).abs() > 1e-4 * fixed, "fixed conditions with the hyperparameters it is given: {fixed} and {fixed_noisy}");
+    assert!((refit - fixed).abs() > 1e-4 * fixed, "refit {refit} and fixed {fixed}");
+    assert!(refit > 1e-3 && refit < 0.3, "{refit} m");
+}

@@ -16,7 +16,7 @@ use crate::gpr_model::{
     train_orientation, train_piece, train_rows, FixedHyperparameters, GprModel, MeanFunction, MeanPrior, MeanPriors, Method,
     OrientationOptions, PairFiles, Regression, RegressorReport, Templates, TrainingRows, DISPLACEMENT, MEAN_RIDGE,
 };
-use crate::leave_one_motion_out::{cross_validate, Candidate, CrossValidation, Folds, HeldOut, MotionError};
+use crate::leave_one_motion_out::{cross_validate, Candidate, CrossValidation, Folds, HeldOut, Hyperparameters, MotionError};
 use crate::limb_orientation;
 use crate::model_config::{self, ConfigName, Overrides, Settings};
 use capture::part_pca::PcaModel;
@@ -66,6 +66,11 @@ pub struct Params {
     /// header and the report
     #[arg(long)]
     pub cross_validate: bool,
+    /// Hyperparameters of the models that leave a motion out: `fixed` keeps the full model's
+    /// (optimistic for the zero-mean GP); `refit` learns them again on the other motions (up to 3.3x
+    /// the cost; docs/studies/10-leave-one-motion-out.md)
+    #[arg(long, value_enum, default_value_t = Hyperparameters::Fixed, value_name = "HOW")]
+    pub cv_hyperparameters: Hyperparameters,
     /// JSON report: the leave-one-motion-out errors (pooled and per motion) of every
     /// configuration tried, and the one kept
     #[arg(long)]
@@ -353,6 +358,7 @@ pub fn run(p: &Params) -> anyhow::Result<()> {
             })
             .collect();
         let folds = Folds {
+            hyperparameters: p.cv_hyperparameters,
             pairs: &pairs,
             held_out: &held_out,
             frame_ratio: ratio,
