@@ -10,7 +10,7 @@
 
 PLAN_MK := $(OUT)/work/plan.mk
 PLAN_OPTIONS := $(OUT)/work/plan.options
-PLAN_GOALS := transfer-results transfer-report variation-results
+PLAN_GOALS := transfer-results transfer-report variation-results variation-report
 PLAN_ARGS := --set $(SET) --pipeline-out $(OUT) \
   $(if $(CONFIG),--config $(CONFIG)) $(if $(TRANSFER_METHODS),--methods $(TRANSFER_METHODS)) \
   $(if $(ALIGN_FRAME),--align-frame $(ALIGN_FRAME)) \
@@ -19,8 +19,9 @@ PLAN_ARGS := --set $(SET) --pipeline-out $(OUT) \
   $(if $(PCA_COMPONENTS),--pca-components $(PCA_COMPONENTS)) $(if $(VARIATION_SUBJECT),--variation-subject $(VARIATION_SUBJECT)) \
   $(foreach g,$(VARIATION_GROUPS),--variation-group $(g)=$(VARIATION_MOTIONS_$(g)) \
     $(if $(VARIATION_PREALIGN_FLAGS_$(g)),'--prealign-flags=$(g)=$(VARIATION_PREALIGN_FLAGS_$(g))')) \
-  --variation-w $(VARIATION_W) --variation-blends $(VARIATION_BLENDS) --variation-n $(VARIATION_N) \
-  --variation-seed $(VARIATION_SEED) $(if $(VARIATION_VARIANCE_SCALE),--variation-variance-scale $(VARIATION_VARIANCE_SCALE)) \
+  $(if $(VARIATION_W),--variation-w $(VARIATION_W)) $(if $(VARIATION_BLENDS),--variation-blends $(VARIATION_BLENDS)) \
+  $(if $(VARIATION_N),--variation-n $(VARIATION_N)) $(if $(VARIATION_SEED),--variation-seed $(VARIATION_SEED)) \
+  $(if $(VARIATION_VARIANCE_SCALE),--variation-variance-scale $(VARIATION_VARIANCE_SCALE)) \
   --variation-train-flags '$(VARIATION_TRAIN_FLAGS)' --variation-sample-flags '$(VARIATION_SAMPLE_FLAGS)'
 
 # PART_TASKS=1: make runs Slurm's split (one task per part of each model of several parts and
@@ -39,6 +40,9 @@ $(PLAN_MK): $(PLAN_OPTIONS) $(BIN)/plan $(BIN)/check-set $(SET)/set.json $(wildc
 	$(BIN)/plan make -q $(MAKE_PLAN_ARGS) --out $@
 
 include $(PLAN_MK)
+else ifneq ($(filter export,$(MAKECMDGOALS)),)
+# `make export` reads the plan of the run it exports (VARIATION_REPORT_VIEWS), never remakes it.
+-include $(PLAN_MK)
 endif
 
 SLURM_RESOURCES ?=

@@ -123,6 +123,7 @@ pub struct VariationOptions {
     #[arg(long)]
     pub variation_subject: Option<String>,
     /// A movement group and its motions, `NAME=M1,M2` (VARIATION_GROUPS, VARIATION_MOTIONS_<g>); repeat
+    /// [default: locomotion=walk,run, prealigned with --gait-cycles, and jump=jump,cmu_jump]
     #[serde(rename = "variation_group")]
     #[arg(long = "variation-group", value_name = "NAME=MOTIONS", value_parser = parse_group)]
     pub groups: Vec<(String, String)>,

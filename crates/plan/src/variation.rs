@@ -12,7 +12,8 @@ use crate::options::{words, VariationOptions};
 use crate::per_part;
 use crate::task::{s, Graph, Step, Task};
 
-/// Adds the variation pipeline's tasks and its `VARIATION_RECORDS` variable to `graph`.
+/// Adds the variation pipeline's tasks and its variables (`VARIATION_RECORDS`,
+/// `VARIATION_REPORT_VIEWS`) to `graph`.
 pub fn plan(set: &CaptureSet, out: &str, opt: &VariationOptions, graph: &mut Graph) -> Result<()> {
     let work = format!("{out}/work/variation");
     let vout = format!("{out}/variation");
@@ -109,6 +110,10 @@ pub fn plan(set: &CaptureSet, out: &str, opt: &VariationOptions, graph: &mut Gra
         names.push(g.clone());
     }
     graph.variable("VARIATION_RECORDS", records.clone());
+    // The report's 3D view: the first three variations of the first group's first motion.
+    let first = groups.first().and_then(|(g, motions)| motions.split(',').find(|m| !m.is_empty()).map(|m| (g, m)));
+    let views = first.map_or_else(Vec::new, |(g, m)| (0..opt.variation_n.min(3)).map(|k| format!("var{k}={vout}/{g}/{m}/var{k}")).collect());
+    graph.variable("VARIATION_REPORT_VIEWS", views);
     let table = format!("{out}/variation.json");
     let mut args = vec![s("collect"), s("variation"), s("--work"), work.clone(), s("--out"), table.clone()];
     args.extend(names);

@@ -51,6 +51,27 @@ fn make_fragment_of_the_tiny_set() {
     check("tiny-set.plan.mk", &std::fs::read_to_string(&frag).unwrap());
 }
 
+/// The variation report's 3D view shows the first variations of the first group the plan keeps:
+/// at most `--variation-n` of them, and on a set none of whose motions the named groups hold,
+/// the group of its own the first training motion becomes.
+#[test]
+fn the_variation_report_views_the_first_planned_group() {
+    let views = |args: &[&str]| {
+        let dir = tempfile::tempdir().unwrap();
+        let frag = dir.path().join("plan.mk");
+        let mut all = vec!["make", "--set", "fixtures/tiny-set", "--pipeline-out", "out", "--out", frag.to_str().unwrap()];
+        all.extend(args);
+        plan(&all);
+        let text = std::fs::read_to_string(&frag).unwrap();
+        text.lines().find_map(|l| l.strip_prefix("VARIATION_REPORT_VIEWS := ")).map(str::to_string).unwrap()
+    };
+    assert_eq!(views(&["--variation-group", "moves=kick,punch", "--variation-n", "2"]), "var0=out/variation/moves/kick/var0 var1=out/variation/moves/kick/var1");
+    assert_eq!(
+        views(&["--variation-group", "dances=salsa,tango"]),
+        "var0=out/variation/walk/walk/var0 var1=out/variation/walk/walk/var1 var2=out/variation/walk/walk/var2"
+    );
+}
+
 /// `plan make --part-tasks` writes Slurm's split for make: a `--part` task per part and the merges.
 #[test]
 fn make_fragment_with_part_tasks_has_the_pieces_and_merges() {
