@@ -5,7 +5,7 @@
 #   make slurm SET=<set> OUT=<dir>   both pipelines as Slurm job arrays: sbatch <dir>/run.sbatch
 #   make transfer SET=<set> OUT=<dir>   the transfer pipeline (CVPR 2017), results.json + report
 #   make variation SET=<set> OUT=<dir>  the variation pipeline (3DV 2017), variation.json + report
-#   make demo-data | holdout-data | outside-data   synthesise the demo / held-out / outside benchmark capture set (out/...)
+#   make demo-data | holdout-data | outside-data | turning-data   synthesise a benchmark capture set (out/...)
 #   make characters-data   capture sets from real animated game characters (out/characters/...)
 #   make demo-render   contact sheets and GIFs of the demo set
 #   make report OUT=<dir>   the HTML report of a run;  make assets   fetch the real bodies and mocap

@@ -5,14 +5,17 @@
 #   shows source / transfer / truth; the page lists the variation results too).
 # `make demo-data` / `make demo-render` stop earlier. `make holdout-data` builds the second
 # benchmark set (out/holdout/set: other bodies, styles, rates and test clips; nothing is tuned on it);
-# `make outside-data` a third (out/outside/set), measured with the defaults and never tuned on.
+# `make outside-data` a third (out/outside/set), measured with the defaults and never tuned on;
+# `make turning-data` the demo set with a left and a right turning walk (out/turning/set): the 3DV
+# paper's four-sequence locomotion group for `make variation SET=out/turning/set`.
 DEMO := $(OUT)/demo
 DEMO_SET := $(DEMO)/set
 SEED ?= 0
 
-.PHONY: demo demo-data demo-render holdout-data outside-data
+.PHONY: demo demo-data demo-render holdout-data outside-data turning-data
 HOLDOUT_SET := $(OUT)/holdout/set
 OUTSIDE_SET := $(OUT)/outside/set
+TURNING_SET := $(OUT)/turning/set
 
 demo: demo-render
 	@$(MAKE) --no-print-directory variation SET=$(DEMO_SET) OUT=$(OUT)
@@ -37,3 +40,8 @@ outside-data: $(OUTSIDE_SET)/set.json
 
 $(OUTSIDE_SET)/set.json: | build assets
 	$(BIN)/synth -q --preset outside --seed $(SEED) --out $(OUTSIDE_SET)
+
+turning-data: $(TURNING_SET)/set.json
+
+$(TURNING_SET)/set.json: | build assets
+	$(BIN)/synth -q --preset turning --seed $(SEED) --out $(TURNING_SET)

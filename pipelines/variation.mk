@@ -12,8 +12,8 @@ SET ?= $(OUT)/demo/set
 comma := ,
 VARIATION_OUT := $(OUT)/variation
 # Options (unset: crates/plan's defaults, `plan make --help`): VARIATION_SUBJECT (the set's
-# source), VARIATION_GROUPS (locomotion jump) with VARIATION_MOTIONS_<group> (walk,run;
-# jump,cmu_jump) and VARIATION_PREALIGN_FLAGS_<group> (locomotion: --gait-cycles, cut to whole
+# source), VARIATION_GROUPS (locomotion jump) with VARIATION_MOTIONS_<group>
+# (walk,run,turn_left,turn_right; jump,cmu_jump; a set's missing motions are left out) and VARIATION_PREALIGN_FLAGS_<group> (locomotion: --gait-cycles, cut to whole
 # gait cycles before the DTW), VARIATION_W (prealign --blend-weights, 0.5), VARIATION_BLENDS
 # (hmc-sample --blends, 0.25,0.75), VARIATION_N (variations per sequence, 5), VARIATION_SEED (0),
 # VARIATION_VARIANCE_SCALE (hmc-sample's own default), VARIATION_TRAIN_FLAGS and

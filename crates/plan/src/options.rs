@@ -123,7 +123,8 @@ pub struct VariationOptions {
     #[arg(long)]
     pub variation_subject: Option<String>,
     /// A movement group and its motions, `NAME=M1,M2` (VARIATION_GROUPS, VARIATION_MOTIONS_<g>); repeat
-    /// [default: locomotion=walk,run, prealigned with --gait-cycles, and jump=jump,cmu_jump]
+    /// [default: locomotion=walk,run,turn_left,turn_right, prealigned with --gait-cycles, and
+    /// jump=jump,cmu_jump; a set's missing motions are left out]
     #[serde(rename = "variation_group")]
     #[arg(long = "variation-group", value_name = "NAME=MOTIONS", value_parser = parse_group)]
     pub groups: Vec<(String, String)>,
@@ -164,7 +165,7 @@ impl VariationOptions {
     /// The groups the pipeline uses when none is given (pipelines/variation.mk's defaults).
     pub fn default_groups() -> Vec<(String, String)> {
         vec![
-            ("locomotion".into(), "walk,run".into()),
+            ("locomotion".into(), "walk,run,turn_left,turn_right".into()),
             ("jump".into(), "jump,cmu_jump".into()),
         ]
     }

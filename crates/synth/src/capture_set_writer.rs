@@ -34,10 +34,10 @@ pub struct Motion {
 /// Loads a motion's clip (looped / windowed, cut to `max_duration`).
 pub fn load_motion(dir: &Path, def: &MotionDef, max_duration: f64) -> Result<Motion> {
     let (clip, kind) = match &def.source {
-        MotionSource::DeepMimic { file, cycles } => {
+        MotionSource::DeepMimic { file, cycles, turn } => {
             let leg = mocap::deepmimic_leg_length(&dir.join(paths::HUMANOID_URDF))?;
             let c = mocap::parse_deepmimic(&dir.join(paths::MOTIONS).join(file), &def.name, leg)?;
-            (c.looped(*cycles), SourceKind::DeepMimic)
+            (c.looped(*cycles).turned(turn.to_radians()), SourceKind::DeepMimic)
         }
         MotionSource::Cmu { t0, t1 } => (
             mocap::parse_bvh(&dir.join(paths::CMU_BVH), &def.name)?.window(*t0, *t1),
@@ -224,8 +224,10 @@ fn write_all(
         sources.insert(
             name.clone(),
             json!(match &m.def.source {
-                MotionSource::DeepMimic { file, cycles } =>
+                MotionSource::DeepMimic { file, cycles, turn } if *turn == 0.0 =>
                     format!("pybullet_data/data/motions/{file} x{cycles}"),
+                MotionSource::DeepMimic { file, cycles, turn } =>
+                    format!("pybullet_data/data/motions/{file} x{cycles}, turned {turn} deg/s"),
                 MotionSource::Cmu { t0, t1 } => format!("CMU 01_01.bvh {t0}-{t1} s"),
             }),
         );

@@ -104,6 +104,28 @@ impl Clip {
         self
     }
 
+    /// The clip walked along a curve: its heading turned at `rate` radians per second about the
+    /// vertical (+y; positive turns +z, the body's forward, toward +x, its left). Frame `f`'s
+    /// segments are turned by `rate · t_f` about the root, and each frame's horizontal root step
+    /// by the same angle, so a straight walk follows an arc of radius `speed / rate`. 0 leaves
+    /// the clip as it is.
+    pub fn turned(mut self, rate: f64) -> Self {
+        if rate == 0.0 {
+            return self;
+        }
+        let mut prev = self.root.first().copied().unwrap_or_default();
+        for f in 1..self.times.len() {
+            let turn = UnitQuaternion::from_axis_angle(&Vector3::y_axis(), rate * self.times[f]);
+            let step = self.root[f] - prev;
+            prev = self.root[f];
+            self.root[f] = self.root[f - 1] + turn * step;
+            for g in &mut self.globals[f] {
+                *g = turn * *g;
+            }
+        }
+        self
+    }
+
     /// The part of the clip between `t0` and `t1` (seconds), times restarting at zero.
     pub fn window(mut self, t0: f64, t1: f64) -> Self {
         let keep: Vec<usize> = (0..self.times.len())
@@ -432,4 +454,41 @@ pub fn parse_bvh(path: &Path, name: &str) -> Result<Clip> {
         globals,
         leg_length: leg,
     })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A body walking straight ahead (+z) at 1 m/s for 2 s, turned at π/4 rad/s, follows the arc
+    /// of radius 4/π: it ends heading +x (a quarter turn to the left), its last chord from the
+    /// start is 2R sin(π/4), and its segments are turned by the heading.
+    #[test]
+    fn a_turned_straight_walk_follows_an_arc() {
+        let times: Vec<f64> = (0..=200).map(|i| i as f64 * 0.01).collect();
+        let clip = Clip {
+            name: "walk".into(),
+            segments: vec!["hips".into()],
+            rest_dirs: vec![Vector3::y()],
+            root: times.iter().map(|&t| Vector3::new(0.0, 0.9, t)).collect(),
+            globals: times.iter().map(|_| vec![UnitQuaternion::identity()]).collect(),
+            times,
+            leg_length: 0.8,
+        };
+        let rate = std::f64::consts::FRAC_PI_4;
+        let turned = clip.clone().turned(rate);
+        let n = turned.n_frames();
+        let last_step = turned.root[n - 1] - turned.root[n - 2];
+        let heading = last_step.x.atan2(last_step.z);
+        assert!((heading - std::f64::consts::FRAC_PI_2).abs() < 1e-9, "heading {heading}");
+        let radius = 1.0 / rate;
+        let chord = (turned.root[n - 1] - turned.root[0]).norm();
+        // The discrete path turns each 0.01 s step by the angle at its end: within a step's
+        // turn of the continuous arc.
+        assert!((chord - 2.0 * radius * std::f64::consts::FRAC_PI_4.sin()).abs() < 0.01, "chord {chord}");
+        assert!(turned.root.iter().all(|r| r.y == 0.9), "the height is kept");
+        let angle = turned.globals[n - 1][0].angle();
+        assert!((angle - std::f64::consts::FRAC_PI_2).abs() < 1e-9, "segment turned {angle}");
+        assert_eq!(clip.clone().turned(0.0).root, clip.root, "0 leaves the clip as it is");
+    }
 }

@@ -16,8 +16,10 @@ use crate::subject::{SubjectDef, Topology};
 /// Where a motion's frames come from.
 #[derive(Clone, Debug)]
 pub enum MotionSource {
-    /// A DeepMimic clip under `pybullet_data/data/motions/`, repeated `cycles` times if cyclic.
-    DeepMimic { file: String, cycles: usize },
+    /// A DeepMimic clip under `pybullet_data/data/motions/`, repeated `cycles` times if cyclic,
+    /// its heading turned at `turn` degrees per second about the vertical (positive: to the
+    /// left; 0: as captured; [`crate::mocap::Clip::turned`]).
+    DeepMimic { file: String, cycles: usize, turn: f64 },
     /// The CMU BVH `01_01.bvh` between two times (seconds).
     Cmu { t0: f64, t1: f64 },
 }
@@ -55,7 +57,19 @@ fn dm(name: &str, file: &str, cycles: usize) -> MotionDef {
         source: MotionSource::DeepMimic {
             file: format!("humanoid3d_{file}.txt"),
             cycles,
+            turn: 0.0,
         },
+    }
+}
+
+/// The turning walks of the `turning` preset: DeepMimic's walk, its heading turned at this many
+/// degrees per second to the left and to the right (about a quarter turn over its 2.4 s).
+pub const TURN_DEG_PER_S: f64 = 40.0;
+
+fn turning_walk(name: &str, turn: f64) -> MotionDef {
+    MotionDef {
+        name: name.to_string(),
+        source: MotionSource::DeepMimic { file: "humanoid3d_walk.txt".into(), cycles: 2, turn },
     }
 }
 
@@ -265,7 +279,7 @@ pub fn default_noise() -> NoiseLevel {
 }
 
 /// The preset names [`preset`] knows.
-pub const PRESETS: [&str; 5] = ["default", "tiny", "holdout", "outside", "long"];
+pub const PRESETS: [&str; 6] = ["default", "tiny", "holdout", "outside", "long", "turning"];
 
 /// A preset, as the command line names it (one of [`PRESETS`]).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, clap::ValueEnum, serde::Serialize)]
@@ -282,6 +296,9 @@ pub enum Preset {
     Outside,
     /// The tiny bodies with two-minute training motions (~15,000 pairs): the sparse GP's benchmark.
     Long,
+    /// The demo set with a left and a right turning walk among the training motions: the 3DV
+    /// paper's four-sequence locomotion group (walk, run, left turn, right turn).
+    Turning,
 }
 
 impl Preset {
@@ -293,6 +310,7 @@ impl Preset {
             Preset::Holdout => "holdout",
             Preset::Outside => "outside",
             Preset::Long => "long",
+            Preset::Turning => "turning",
         }
     }
 }
@@ -331,6 +349,12 @@ pub fn preset(name: &str, seed: u64, noise: bool) -> Option<Config> {
             keyposes: 5,
             more_training: false,
         }),
+        "turning" => {
+            let mut cfg = preset("default", seed, noise.is_some())?;
+            cfg.preset = name.into();
+            cfg.train.extend([turning_walk("turn_left", TURN_DEG_PER_S), turning_walk("turn_right", -TURN_DEG_PER_S)]);
+            Some(cfg)
+        }
         "holdout" => {
             let (test, target_test) = holdout_tests();
             Some(Config {
@@ -428,7 +452,7 @@ fn long_motions(train: &[MotionDef]) -> Vec<MotionDef> {
             MotionSource::DeepMimic { file, .. } => MotionDef {
                 name: m.name.clone(),
                 // The shortest clip (run) lasts ~0.7 s: 200 cycles always reach LONG_SECONDS.
-                source: MotionSource::DeepMimic { file: file.clone(), cycles: 200 },
+                source: MotionSource::DeepMimic { file: file.clone(), cycles: 200, turn: 0.0 },
             },
             MotionSource::Cmu { .. } => m.clone(),
         })
