@@ -239,6 +239,42 @@ fn long_preset_has_two_minute_training_motions() {
     assert!((25_000..35_000).contains(&frames), "{frames} training frames");
 }
 
+/// The `turning` preset is the demo set plus two turning walks: DeepMimic's walk whose root path
+/// and pelvis turn about the vertical by the preset's rate times its length, to the left (+z, the
+/// forward, toward +x, the body's left) for `turn_left` and to the right for `turn_right`; the
+/// walk itself goes straight. No frames are written (the demo bodies).
+#[test]
+fn turning_preset_adds_a_left_and_a_right_turning_walk() {
+    use synth::capture_set_writer::load_motion;
+    let (turning, default) = (preset("turning", 0, true).unwrap(), preset("default", 0, true).unwrap());
+    let names = |v: &[synth::preset::MotionDef]| v.iter().map(|m| m.name.clone()).collect::<Vec<_>>();
+    let mut want = names(&default.train);
+    want.extend(["turn_left".to_string(), "turn_right".to_string()]);
+    assert_eq!(names(&turning.train), want);
+    assert_eq!(names(&turning.test), names(&default.test));
+    let dir = synth::assets::asset_dir().expect("assets (run scripts/fetch-assets)");
+    // The heading of the root's travel over its first and last 0.3 s, and its change (degrees).
+    let turned = |name: &str| {
+        let def = turning.train.iter().find(|m| m.name == name).unwrap();
+        let clip = load_motion(&dir, def, turning.max_duration).unwrap().clip;
+        let heading = |a: f64, b: f64| {
+            let d = clip.sample(b).root - clip.sample(a).root;
+            d.x.atan2(d.z).to_degrees()
+        };
+        let end = clip.duration();
+        (heading(end - 0.3, end) - heading(0.0, 0.3), end)
+    };
+    let (walk, _) = turned("walk");
+    let (left, seconds) = turned("turn_left");
+    let (right, _) = turned("turn_right");
+    // The heading at the two windows' middles differs by the rate times (length - 0.3 s),
+    // plus whatever the walk's own path does.
+    let expected = synth::preset::TURN_DEG_PER_S * (seconds - 0.3);
+    assert!(walk.abs() < 10.0, "the walk turns {walk}°");
+    assert!((left - walk - expected).abs() < 5.0, "turn_left turns {left}° (expected {expected} + the walk's {walk})");
+    assert!((right - walk + expected).abs() < 5.0, "turn_right turns {right}° (expected -{expected} + the walk's {walk})");
+}
+
 /// The files under `root/rel` (a folder), as paths relative to `root`, sorted.
 fn files_under(root: &Path, rel: &Path) -> Vec<std::path::PathBuf> {
     let mut out: Vec<std::path::PathBuf> = std::fs::read_dir(root.join(rel))
