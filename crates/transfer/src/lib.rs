@@ -23,7 +23,6 @@ pub mod leave_one_motion_out;
 pub mod model_config;
 pub mod reference_score;
 pub mod learning_curves;
-pub mod figures;
 pub mod stage;
 #[cfg(test)]
 mod test_fixtures;

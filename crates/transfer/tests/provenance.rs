@@ -215,16 +215,6 @@ fn every_stage_params_record_every_option_under_its_flag_name() {
         ("learning-curves", missing::<transfer::stage::learning_curves::Params>(&[
             "learning-curves", "--source-pca", "s", "--target-pca", "t", "--pair", "a", "b", "c", "-o", "lc",
         ]).unwrap()),
-        ("paper-figure cost-matrix", missing::<transfer::stage::paper_figure::Params>(&[
-            "paper-figure", "cost-matrix", "--set", "set", "--motion", "walk", "--source-pca", "s", "--target-pca", "t", "a", "b", "-o", "f.png",
-        ]).unwrap()),
-        ("paper-figure correction", missing::<transfer::stage::paper_figure::Params>(&[
-            "paper-figure", "correction", "--model", "m", "--source-pca", "s", "--target-pca", "t", "--segmentation", "seg",
-            "--target-training", "x", "a.aligned", "-o", "f.png",
-        ]).unwrap()),
-        ("paper-figure confidence", missing::<transfer::stage::paper_figure::Params>(&[
-            "paper-figure", "confidence", "--confidence", "c.json", "-o", "f.png",
-        ]).unwrap()),
         ("correct", missing::<surface::stage::correct::Params>(&["correct", "--training", "tr", "pred", "-o", "out"]).unwrap()),
         ("stitch", missing::<surface::stage::stitch::Params>(&[
             "stitch", "parts", "--segmentation", "seg", "--template", "tpl", "-o", "out",
@@ -246,8 +236,6 @@ fn every_stage_params_record_every_option_under_its_flag_name() {
     assert_eq!(record["placement"], "scaled-source");
     assert_eq!(record["motion"], "a.aligned");
     assert_eq!(record["target_training"], serde_json::json!([]));
-    let p = transfer::stage::paper_figure::Params::try_parse_from(["paper-figure", "confidence", "--confidence", "c.json", "-o", "f.png"]).unwrap();
-    assert_eq!(serde_json::to_value(&p).unwrap()["figure"], "confidence");
 }
 
 /// `mesh_core::cli::unrecorded_options` without `part`: `--part` is left out of the Params record

@@ -6,7 +6,6 @@ pub mod dtw_densify;
 pub mod gpr_predict;
 pub mod gpr_train;
 pub mod learning_curves;
-pub mod paper_figure;
 pub mod representation_error;
 pub mod surface_quality;
 pub mod transfer_eval;

@@ -13,13 +13,13 @@ use mesh_core::segmentation::Segmentation;
 use mesh_core::sequence::MeshSequence;
 use serde::Serialize;
 
-use crate::densify::PAPER_SIGMA2;
-use crate::figures::{
+use transfer::densify::PAPER_SIGMA2;
+use crate::{
     correction_example, cost_and_path, load_confidence, load_eval, ConfidenceFigure, CostFigure,
     DEFAULT_EXTRAPOLATION_THRESHOLD,
 };
-use crate::gpr_model::GprModel;
-use crate::learning_curves::true_correspondences;
+use transfer::gpr_model::GprModel;
+use transfer::learning_curves::true_correspondences;
 use capture::align::AlignedMotion;
 use capture::part_pca::PcaModel;
 

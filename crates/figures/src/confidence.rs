@@ -5,15 +5,15 @@ use std::path::Path;
 
 use mesh_core::{Error, Result};
 
-use crate::learning_curves::{png_bytes, register_font};
+use transfer::learning_curves::{png_bytes, register_font};
 
 /// Default `--threshold` of the confidence figure: a frame is shaded as
 /// extrapolating when some body part's normalised nearest distance reaches
 /// 1, i.e. the part is as far from its nearest training pose as a typical
-/// training pose is from the mean pose (`crate::confidence`).
+/// training pose is from the mean pose (`transfer::confidence`).
 pub const DEFAULT_EXTRAPOLATION_THRESHOLD: f64 = 1.0;
 
-/// Name of the non-body-part entry of [`crate::confidence::Confidence`].
+/// Name of the non-body-part entry of [`transfer::confidence::Confidence`].
 pub const DISPLACEMENT: &str = "displacement";
 
 /// Colour of the extrapolating frames' background.
@@ -22,9 +22,9 @@ pub const EXTRAPOLATING_COLOUR: [u8; 3] = [255, 221, 170];
 /// Reads a `gpr-predict --confidence` JSON file and checks it: at least one
 /// frame, every listed part present in both maps, every non-null series
 /// `frames` long and finite. Errors name the file.
-pub fn load_confidence(path: &Path) -> Result<crate::confidence::Confidence> {
+pub fn load_confidence(path: &Path) -> Result<transfer::confidence::Confidence> {
     let text = std::fs::read_to_string(path).map_err(|e| Error::io(path, e))?;
-    let c: crate::confidence::Confidence = serde_json::from_str(&text).map_err(|e| {
+    let c: transfer::confidence::Confidence = serde_json::from_str(&text).map_err(|e| {
         Error::file(path, format!("not a confidence file (gpr-predict --confidence): {e}"))
     })?;
     if c.frames == 0 {
@@ -56,9 +56,9 @@ pub fn load_confidence(path: &Path) -> Result<crate::confidence::Confidence> {
 
 /// Reads an `transfer-eval` record and checks that its per-frame pose errors
 /// cover the `frames` frames of `confidence_path`. Errors name the file.
-pub fn load_eval(path: &Path, frames: usize, confidence_path: &Path) -> Result<crate::evaluate::EvalRecord> {
+pub fn load_eval(path: &Path, frames: usize, confidence_path: &Path) -> Result<transfer::evaluate::EvalRecord> {
     let text = std::fs::read_to_string(path).map_err(|e| Error::io(path, e))?;
-    let r: crate::evaluate::EvalRecord = serde_json::from_str(&text)
+    let r: transfer::evaluate::EvalRecord = serde_json::from_str(&text)
         .map_err(|e| Error::file(path, format!("not an evaluate record: {e}")))?;
     if r.frame_pose_m.len() != frames {
         return Err(Error::file(
@@ -80,7 +80,7 @@ pub fn load_eval(path: &Path, frames: usize, confidence_path: &Path) -> Result<c
 /// (the displacement left out: the pose error of `transfer-eval` is measured after
 /// a rigid alignment, which the displacement does not change). `None` when no
 /// body part has distances (the affine baseline).
-pub fn max_part_distance(c: &crate::confidence::Confidence) -> Option<Vec<f64>> {
+pub fn max_part_distance(c: &transfer::confidence::Confidence) -> Option<Vec<f64>> {
     let series: Vec<&Vec<f64>> = c
         .parts
         .iter()
@@ -179,8 +179,8 @@ impl ConfidenceFigure {
     /// The figure of a checked confidence (see [`load_confidence`]) and
     /// optionally its checked evaluate record ([`load_eval`]).
     pub fn new(
-        c: &crate::confidence::Confidence,
-        eval: Option<&crate::evaluate::EvalRecord>,
+        c: &transfer::confidence::Confidence,
+        eval: Option<&transfer::evaluate::EvalRecord>,
         title: Option<String>,
         threshold: f64,
     ) -> Self {

@@ -1,4 +1,5 @@
-//! The paper's illustrations that are not learning curves (`paper-figure`):
+//! The transfer paper's illustrations that are not learning curves, drawn by the `render` crate,
+//! and the `paper-figure` stage that writes them ([`paper_figure`]):
 //!
 //! - CVPR figure 3, [`CostFigure`]: the association cost matrix `-log P_ij`
 //!   of one training pair (CVPR eqs. 1-6, `gp::blr::cost_matrix`, summed over
@@ -14,7 +15,7 @@
 //!   aligned onto the corrected one.
 //! - The per-frame confidence figure, [`ConfidenceFigure`] (not in the
 //!   paper): for one transferred motion, the normalised nearest distance and
-//!   the GP variance ratio of every part (`crate::confidence`) and, with an
+//!   the GP variance ratio of every part (`transfer::confidence`) and, with an
 //!   `transfer-eval` record, the pose error, frame by frame; frames where a body
 //!   part is at least [`DEFAULT_EXTRAPOLATION_THRESHOLD`] from its training
 //!   inputs are shaded, and the Pearson correlation of the per-frame maximum
@@ -23,6 +24,7 @@
 mod confidence;
 mod correction;
 mod cost_matrix;
+pub mod paper_figure;
 
 pub use confidence::*;
 pub use correction::*;

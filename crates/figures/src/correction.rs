@@ -152,7 +152,7 @@ impl CorrectionFigure {
 /// of the same motion (whole meshes, any placement).
 #[allow(clippy::too_many_arguments)]
 pub fn correction_example(
-    model: &crate::gpr_model::GprModel,
+    model: &transfer::gpr_model::GprModel,
     source_pca: &capture::part_pca::PcaModel,
     target_pca: &capture::part_pca::PcaModel,
     seg: &mesh_core::segmentation::Segmentation,
@@ -179,8 +179,8 @@ pub fn correction_example(
         ));
     }
     let coeffs = source_pca.encode(source)?;
-    let disp = crate::predict::displacement_matrix(&source.displacements);
-    let pred = crate::predict::predict(model, &coeffs, &disp, false)?;
+    let disp = transfer::predict::displacement_matrix(&source.displacements);
+    let pred = transfer::predict::predict(model, &coeffs, &disp, false)?;
     let decoded = target_pca.decode(&pred.coeffs)?;
     let n_frames = source.n_frames();
     if let Some(f) = frame.filter(|&f| f >= n_frames) {
@@ -207,7 +207,7 @@ pub fn correction_example(
             let mut meshes = Vec::new();
             for t in training {
                 let rows = target_pca.part_rows(t)?;
-                meshes.extend(crate::reconstruct::rows_to_meshes(&rows[k]));
+                meshes.extend(transfer::reconstruct::rows_to_meshes(&rows[k]));
             }
             Ok((k, Corrector::new(seg.parts[k].faces.clone(), meshes)?))
         })
@@ -235,7 +235,7 @@ pub fn correction_example(
     let near = corrector.nearest(&before, m);
     let mut all_training = Vec::new();
     for t in training {
-        all_training.extend(crate::reconstruct::rows_to_meshes(
+        all_training.extend(transfer::reconstruct::rows_to_meshes(
             &target_pca.part_rows(t)?[*k],
         ));
     }
