@@ -39,3 +39,4 @@ pub mod synthesize;
 pub mod train;
 pub mod trained_on;
 pub mod turns_and_tears;
+pub mod variant_cache;
