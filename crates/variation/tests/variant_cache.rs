@@ -40,23 +40,31 @@ fn cached(model: &Path) -> Vec<PathBuf> {
 }
 
 /// A small blend query of `model` at 0.3 (between walk and the pre-blend at 0.5) into `out`,
-/// with `extra` flags; its stderr.
+/// with `extra` flags; its stderr, lines sorted.
 fn blend(model: &Path, out: &Path, extra: &[&str]) -> String {
+    blend_at("0.3", model, out, extra)
+}
+
+/// [`blend`] at weight `w`.
+fn blend_at(w: &str, model: &Path, out: &Path, extra: &[&str]) -> String {
     let (m, o) = (s(model), s(out));
     let mut args = vec![
-        "--model", &m, "--blend", "walk:run", "--weight", "0.3", "-n", "3", "--frame-count", "30",
+        "--model", &m, "--blend", "walk:run", "--weight", w, "-n", "3", "--frame-count", "30",
         "--burn-in", "20", "--thin", "2", "--frame-format", "pc2", "--out", &o,
     ];
     args.extend_from_slice(extra);
     let run = common::ok(env!("CARGO_BIN_EXE_hmc-sample"), &args);
-    String::from_utf8_lossy(&run.stderr).into_owned()
+    // The chains run in parallel: their messages in any order.
+    let mut lines: Vec<String> = String::from_utf8_lossy(&run.stderr).lines().map(str::to_string).collect();
+    lines.sort();
+    lines.join("\n")
 }
 
 #[test]
-fn a_cached_blend_query_writes_the_same_bytes_and_a_bad_cache_file_is_named_and_not_used() {
+fn a_cached_blend_query_writes_the_same_bytes_as_the_uncached_one() {
     let dir = tempfile::tempdir().unwrap();
     let d = dir.path();
-    let (group, model) = common::tiny_model(d);
+    let (_, model) = common::tiny_model(d);
 
     // Uncached, then the query that fills the cache, then the one that reads it: the same
     // bytes, and the same messages (no terminal: none on success beyond the sampler's).
@@ -78,11 +86,20 @@ fn a_cached_blend_query_writes_the_same_bytes_and_a_bad_cache_file_is_named_and_
     assert_eq!(verbose.matches("variants read from").count(), 2, "{verbose}");
     assert_eq!(cached(&model), kept, "a cache hit writes nothing");
     // Another weight between the same learned weights reads the same files.
-    let other = blend(&model, &d.join("other-w"), &["-v", "--weight", "0.4"]);
+    let other = blend_at("0.4", &model, &d.join("other-w"), &["-v"]);
     assert_eq!(other.matches("variants read from").count(), 2, "{other}");
 
-    // A corrupt file: named in one line, not used, sampled again and replaced.
-    let walk = kept[1].clone();
+}
+
+#[test]
+fn a_corrupt_cache_file_is_named_in_one_line_and_replaced() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let (_, model) = common::tiny_model(d);
+    let plain = blend(&model, &d.join("plain"), &["--no-variant-cache"]);
+    let want = files(&d.join("plain"));
+    blend(&model, &d.join("filled"), &[]);
+    let walk = cached(&model)[1].clone();
     let mut bytes = std::fs::read(&walk).unwrap();
     let mid = bytes.len() / 2;
     bytes[mid] ^= 0x40;
@@ -93,6 +110,17 @@ fn a_cached_blend_query_writes_the_same_bytes_and_a_bad_cache_file_is_named_and_
     assert!(lines[0].contains("not used, sampled again"), "{warned}");
     assert_eq!(files(&d.join("corrupt")), want, "after a corrupt cache file");
     assert_eq!(blend(&model, &d.join("repaired"), &[]), plain, "the file was replaced");
+
+}
+
+#[test]
+fn a_cache_file_of_another_model_or_setting_is_not_used() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let (group, model) = common::tiny_model(d);
+    blend(&model, &d.join("filled"), &[]);
+    let kept = cached(&model);
+    let walk = kept[1].clone();
 
     // Another setting's file under this setting's name: not used.
     blend(&model, &d.join("seed1"), &["--seed", "1"]);
