@@ -776,7 +776,7 @@ mod tests {
         let seeds = seed_corpus();
         let kinds: Vec<&str> =
             seeds.iter().filter(|(t, _)| *t == Target::Artifact).filter_map(|(_, b)| stored_kind(b)).collect();
-        assert_eq!(kinds, ["segmentation", "aligned-motion", "pca-model", "pca-model-part", "correspondences"]);
+        assert_eq!(kinds, ["segmentation", "aligned-motion", "pca-model", "pca-model-part", "correspondences", "variation-variants"]);
         assert_eq!(stored_kind(b"SURFCAP"), None);
     }
 }
