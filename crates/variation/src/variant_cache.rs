@@ -232,3 +232,69 @@ fn replay_notes(chains: &[ChainStats], sampler: Sampler) {
         }
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn key() -> VariantKey {
+        VariantKey {
+            model_sha256: "ab".repeat(32),
+            build: "1 bytes, modified 0.000000000".into(),
+            sequence: 2,
+            name: "blend-0.5".into(),
+            frames: 100,
+            sampler: Sampler::Hmc,
+            variance_scale: 0.3,
+            n: 10,
+            seed: 0,
+            hmc_start: HmcStart::Mean,
+            burn_in: 200,
+            thin: 10,
+            target_accept: 0.7,
+            leapfrog_steps: 20,
+            initial_step: 0.01,
+        }
+    }
+
+    #[test]
+    fn every_setting_and_identity_names_another_file_beside_the_model() {
+        let cache = VariantCache::beside(Path::new("work/loc.model"), "ab".repeat(32), "b".into());
+        let p = cache.path(&key());
+        assert_eq!(p.parent(), Some(Path::new("work/loc.model.variants")));
+        let name = p.file_name().unwrap().to_string_lossy().into_owned();
+        assert!(name.starts_with("blend-0.5-") && name.ends_with(".art") && name.len() == "blend-0.5-".len() + 16 + 4, "{name}");
+        let others = [
+            VariantKey { model_sha256: "cd".repeat(32), ..key() },
+            VariantKey { build: "2 bytes, modified 0.000000000".into(), ..key() },
+            VariantKey { frames: 101, ..key() },
+            VariantKey { sampler: Sampler::Ancestral, ..key() },
+            VariantKey { variance_scale: 1.0, ..key() },
+            VariantKey { n: 11, ..key() },
+            VariantKey { seed: 1, ..key() },
+            VariantKey { hmc_start: HmcStart::Ancestral, ..key() },
+            VariantKey { burn_in: 50, ..key() },
+            VariantKey { thin: 5, ..key() },
+            VariantKey { target_accept: 0.8, ..key() },
+        ];
+        for k in others {
+            assert_ne!(cache.path(&k), p, "{k:?}");
+        }
+        let odd = VariantKey { name: "a/b c".into(), ..key() };
+        assert!(cache.path(&odd).file_name().unwrap().to_string_lossy().starts_with("a_b_c-"));
+    }
+
+    #[test]
+    fn a_payload_of_the_wrong_shape_is_invalid() {
+        let x = nalgebra::DMatrix::zeros(100, 5);
+        let good = CachedVariants { key: VariantKey { n: 2, ..key() }, chains: Vec::new(), variations: vec![vec![x.clone()]; 2] };
+        assert_eq!(good.validate(), Ok(()));
+        let fewer = CachedVariants { variations: vec![vec![x.clone()]], ..good.clone() };
+        assert!(fewer.validate().unwrap_err().contains("1 variations"));
+        let short = CachedVariants { variations: vec![vec![x.clone()], vec![x.rows(0, 99).into_owned()]], ..good.clone() };
+        assert!(short.validate().is_err());
+        let mut nan = good.clone();
+        nan.variations[1][0][(3, 1)] = f64::NAN;
+        assert!(nan.validate().is_err());
+    }
+}
