@@ -7,7 +7,7 @@
 //! set's `set.json` and `subject.json` (with the subject's curves resolved on
 //! a template, as `segment` does), and artifacts: every kind's decoder and
 //! validator (segmentation, pca-model, aligned-motion, correspondences,
-//! gpr-model, variation-group, variation-model, and the per-part pieces of
+//! gpr-model, variation-group, variation-model, variation-variants, and the per-part pieces of
 //! pca-model, gpr-model and variation-model with their join), followed by the
 //! consumers that index with what validation let through.
 //!
@@ -199,6 +199,9 @@ fn exercise_artifact(bytes: &[u8]) {
         k if k == VariationModel::KIND => {
             let _ = VariationModel::decode(bytes);
         }
+        k if k == variation::variant_cache::CachedVariants::KIND => {
+            let _ = variation::variant_cache::CachedVariants::decode(bytes);
+        }
         k if k == PcaModel::PIECE_KIND => exercise_piece::<PcaModel>(bytes),
         k if k == GprModel::PIECE_KIND => exercise_piece::<GprModel>(bytes),
         k if k == VariationModel::PIECE_KIND => exercise_piece::<VariationModel>(bytes),
@@ -296,7 +299,33 @@ pub fn seed_corpus() -> Vec<(Target, Vec<u8>)> {
         pairs: (0..6).map(|i| [i, i]).collect(),
     };
     out.push((Target::Artifact, artifact_bytes(&corr, &header)));
+    out.push((Target::Artifact, artifact_bytes(&variants_seed(), &header)));
     out
+}
+
+/// A blend query's cached variants (`variation::variant_cache`): two variations of two parts.
+fn variants_seed() -> variation::variant_cache::CachedVariants {
+    use variation::sample::{HmcStart, Sampler};
+    use variation::variant_cache::{CachedVariants, VariantKey};
+    let key = VariantKey {
+        model_sha256: "0".repeat(64),
+        build: "1 bytes, modified 0.000000000".into(),
+        sequence: 0,
+        name: "walk".into(),
+        frames: 3,
+        sampler: Sampler::Hmc,
+        variance_scale: 0.3,
+        n: 2,
+        seed: 0,
+        hmc_start: HmcStart::Mean,
+        burn_in: 200,
+        thin: 10,
+        target_accept: 0.7,
+        leapfrog_steps: 20,
+        initial_step: 0.01,
+    };
+    let x = nalgebra::DMatrix::from_fn(3, 2, |t, c| t as f64 - 0.5 * c as f64);
+    CachedVariants { key, chains: Vec::new(), variations: vec![vec![x.clone(), x]; 2] }
 }
 
 /// A two-frame MD3 of `mesh` in two surfaces, with a tag (positions in
@@ -747,7 +776,7 @@ mod tests {
         let seeds = seed_corpus();
         let kinds: Vec<&str> =
             seeds.iter().filter(|(t, _)| *t == Target::Artifact).filter_map(|(_, b)| stored_kind(b)).collect();
-        assert_eq!(kinds, ["segmentation", "aligned-motion", "pca-model", "pca-model-part", "correspondences"]);
+        assert_eq!(kinds, ["segmentation", "aligned-motion", "pca-model", "pca-model-part", "correspondences", "variation-variants"]);
         assert_eq!(stored_kind(b"SURFCAP"), None);
     }
 }

@@ -23,6 +23,7 @@ fn seeds_are_valid_inputs_of_their_readers() {
                     || capture::align::AlignedMotion::decode(&bytes).is_ok()
                     || transfer::densify::Correspondences::decode(&bytes).is_ok()
                     || mesh_core::part_merge::Piece::<capture::part_pca::PcaModel>::decode(&bytes).is_ok()
+                    || variation::variant_cache::CachedVariants::decode(&bytes).is_ok()
             }
         };
         assert!(ok, "seed for {target:?} rejected by its own reader");

@@ -127,6 +127,21 @@ pub fn limit(d: &mut [Vector3<f64>], max: f64) {
     }
 }
 
+/// Per frame, the height of each leg's lowest point (`legs[f]`: the leg weights of
+/// [`mesh_core::feet::leg_weights`], whose vertices are the leg) above `floor`.
+pub fn legs_above_floor(
+    frames: &[Vec<Vector3<f64>>],
+    legs: &[Vec<(u32, f64)>; 2],
+    up: &Vector3<f64>,
+    floor: f64,
+) -> Vec<[f64; 2]> {
+    let lows: [Vec<f64>; 2] = [0, 1].map(|f| {
+        let leg: Vec<u32> = legs[f].iter().map(|p| p.0).collect();
+        crate::grounding::lowest(frames, &leg, up)
+    });
+    (0..frames.len()).map(|t| [lows[0][t] - floor, lows[1][t] - floor]).collect()
+}
+
 /// Contacts for the lock: each interval of `contacts[t][f]` grown on either side, by at most
 /// `max_frames`, to the farthest frame where that foot's lowest point `low[t][f]` is within
 /// `height` of the floor, the frames between included. A contact carried over from the source by

@@ -4,7 +4,8 @@
 //! Data flows one way: capture set -> [`prealign`] (contact-guided DTW of one movement group to a
 //! reference after cutting locomotion to whole [`gait`] cycles, [`contacts`] from the subject description, pre-blended `Y_w` sequences, §7) ->
 //! [`part_data`] (per-part pose vectors, §4) -> [`train`] (one GPDM per part, §5) -> [`sample`]
-//! (mean prediction + HMC over latent trajectories, §6; latent blending, §7) -> [`reconstruct`]
+//! (mean prediction + HMC over latent trajectories, §6; latent blending, §7, of variants a blend query
+//! keeps beside the model: [`variant_cache`]) -> [`reconstruct`]
 //! (3DV eqs. 11-13, stitching, displacement integration) -> [`grounding`] (feet on the source's floor, a
 //! post-process; the post-processes read the source's [`reference`] trajectories, stored in the model) -> [`footskate`] (planted feet kept in place by a root shift, a post-process) ->
 //! [`foot_lock`] (the rest of each planted sole's slide absorbed by its leg) -> [`metrics`],
@@ -39,3 +40,4 @@ pub mod synthesize;
 pub mod train;
 pub mod trained_on;
 pub mod turns_and_tears;
+pub mod variant_cache;

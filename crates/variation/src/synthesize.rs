@@ -33,11 +33,12 @@ use crate::motion_matching::MatchOptions;
 use crate::reconstruct::{Assembly, Decoder};
 use crate::reference::{Landmarks, Reference};
 use crate::sample::{
-    blend_bounding, blend_entries, blend_variations, default_hmc, matched_blend_variations, matched_variations, mix,
-    sequence_variations_len, ChainStats, HmcStart, Sampler, Variations,
+    blend_bounding, blend_entries, blend_variations, default_hmc, matched_blend_variations, mix, ChainStats, HmcStart,
+    Sampler, Variations,
 };
 use crate::train::VariationModel;
 use crate::turns_and_tears::{CaptureLimits, TurnsAndTears};
+use crate::variant_cache::VariantCache;
 
 /// Settings of [`run`].
 #[derive(Clone, Debug, Serialize, Deserialize)]
@@ -340,21 +341,6 @@ impl Job {
     }
 }
 
-/// Per frame, the height of each leg's lowest point (`legs[f]`: the leg weights of
-/// [`mesh_core::feet::leg_weights`], whose vertices are the leg) above `floor`.
-fn legs_above_floor(
-    frames: &[Vec<Vector3<f64>>],
-    legs: &[Vec<(u32, f64)>; 2],
-    up: &Vector3<f64>,
-    floor: f64,
-) -> Vec<[f64; 2]> {
-    let lows: [Vec<f64>; 2] = [0, 1].map(|f| {
-        let leg: Vec<u32> = legs[f].iter().map(|p| p.0).collect();
-        grounding::lowest(frames, &leg, up)
-    });
-    (0..frames.len()).map(|t| [lows[0][t] - floor, lows[1][t] - floor]).collect()
-}
-
 /// The learned weights of `entries` ([`blend_entries`], sorted) nearest to `w` on each side.
 fn bounding(entries: &[(f64, usize)], w: f64) -> Option<(f64, f64)> {
     let lo = entries.iter().rev().find(|e| e.0 <= w)?.0;
@@ -443,7 +429,7 @@ impl Post<'_> {
                     // The legs now follow the source's heights: extend each contact over the
                     // variation's own touches of the source's floor next to it.
                     true => {
-                        let low = legs_above_floor(&m, legs, &model.up, job.floor);
+                        let low = foot_lock::legs_above_floor(&m, legs, &model.up, job.floor);
                         foot_lock::grow_over_touches(c, &low, CONTACT_HEIGHT, foot_lock::EASE_FRAMES)
                     }
                     false => c.clone(),
@@ -563,16 +549,18 @@ pub fn run(
     cfg: &SynthConfig,
     out: &Path,
 ) -> Result<SynthReport> {
-    run_with_progress(model, group, cfg, out, &|_, _| {})
+    run_with_progress(model, group, cfg, out, None, &|_, _| {})
 }
 
 /// [`run`], calling `progress(done, total)` after the sampling (done = 0) and after each
-/// synthesised sequence is written.
+/// synthesised sequence is written; the sampled variants are read from and kept in `cache`
+/// when one is given ([`crate::variant_cache`]).
 pub fn run_with_progress(
     model: &VariationModel,
     group: Option<&Group>,
     cfg: &SynthConfig,
     out: &Path,
+    cache: Option<&VariantCache>,
     progress: &dyn Fn(usize, usize),
 ) -> Result<SynthReport> {
     if let Some(group) = group {
@@ -668,12 +656,7 @@ pub fn run_with_progress(
     // the samples do not depend on the scheduling).
     let sampled: Vec<(Variations, Vec<ChainStats>)> = wanted
         .par_iter()
-        .map(|&s| match cfg.sampler {
-            Sampler::MotionMatching => {
-                matched_variations(&dec, s, frames, hmc.n_samples, cfg.seed, &cfg.motion_matching)
-            }
-            _ => sequence_variations_len(&dec, s, frames, cfg.sampler, cfg.variance_scale, &hmc, 1),
-        })
+        .map(|&s| crate::variant_cache::variants(&dec, s, frames, cfg, &hmc, cache))
         .collect::<Result<_>>()?;
     let mut pools: Vec<Variations> = vec![Vec::new(); model.sequences.len()];
     let mut chains = Vec::new();

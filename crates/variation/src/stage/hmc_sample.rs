@@ -18,6 +18,7 @@ use crate::reconstruct::Assembly;
 use crate::sample::{HmcStart, Sampler};
 use crate::synthesize::{run_with_progress, Query, SynthConfig};
 use crate::train::VariationModel;
+use crate::variant_cache::VariantCache;
 
 /// Sample variations of every training motion and of blends by HMC in the GPDM latent spaces and write them as meshes
 #[derive(Parser, Debug, Serialize)]
@@ -186,6 +187,12 @@ pub struct Params {
     /// compare with the captures need --group: without it the report says they were skipped
     #[arg(long)]
     pub report: Option<PathBuf>,
+    /// Sample a --blend's guiding variants again instead of reading and keeping them beside
+    /// the model (by default the variants of the learned weights bounding --weight are sampled
+    /// once per setting and kept in <model>.variants/, which later blend queries read;
+    /// docs/FORMATS.md)
+    #[arg(long)]
+    pub no_variant_cache: bool,
 }
 
 /// A count of at least `min` (a smaller one means nothing: a usage error).
@@ -222,10 +229,10 @@ fn parse_weights(s: &str) -> Result<Weights, String> {
 pub fn run(p: &Params) -> anyhow::Result<()> {
     // The two inputs are read side by side, then checked against each other.
     let (model, group) = rayon::join(
-        || VariationModel::load(&p.model),
+        || VariationModel::load_hashed(&p.model),
         || p.group.as_ref().map(Group::load).transpose(),
     );
-    let (model, group) = (model?, group?);
+    let ((model, model_sha256), group) = (model?, group?);
     if let (Some(group), Some(path)) = (&group, &p.group) {
         crate::trained_on::check(&model, group)
             .with_context(|| format!("{} with {}", p.model.display(), path.display()))?;
@@ -284,10 +291,17 @@ pub fn run(p: &Params) -> anyhow::Result<()> {
             None => BlendGuide::Stored,
         }),
     };
+    // A blend query's guiding variants are kept beside the model, for this build's sampler.
+    let cache = match (&cfg.query, p.no_variant_cache, cfg.sampler) {
+        (Some(Query::Blend { .. }), false, Sampler::Hmc | Sampler::Ancestral) => {
+            Some(VariantCache::beside(&p.model, model_sha256, crate::variant_cache::this_build()?))
+        }
+        _ => None,
+    };
     // Sampling first (a spinner), then one step per synthesised sequence.
     let bar = mesh_core::cli::progress_bar(0, "hmc-sample: sampling", &p.common);
     bar.enable_steady_tick(std::time::Duration::from_millis(200));
-    let report = run_with_progress(&model, group.as_ref(), &cfg, &p.out, &|done, total| {
+    let report = run_with_progress(&model, group.as_ref(), &cfg, &p.out, cache.as_ref(), &|done, total| {
         if done == 0 {
             bar.set_length(total as u64);
             bar.set_message("hmc-sample: sequences");
