@@ -26,6 +26,7 @@ pub mod kernel;
 pub mod linalg;
 pub mod model;
 pub mod optim;
+pub mod pca;
 pub mod predict;
 pub mod vexp;
 

@@ -653,7 +653,7 @@ pub struct Gpdm {
 
 impl Gpdm {
     /// Stacks the sequences (each T_j × D), centres them and sets the paper's starting point:
-    /// X from PCA ([`crate::optim::pca_init`]), α_k = β_k = 1 and noise variances 0.1.
+    /// X from PCA ([`crate::pca::pca_init`]), α_k = β_k = 1 and noise variances 0.1.
     pub fn new(sequences: &[DMatrix<f64>], config: GpdmConfig) -> Result<Self> {
         if sequences.is_empty() {
             return invalid("no training sequences");
@@ -709,7 +709,7 @@ impl Gpdm {
         for mut row in y.row_iter_mut() {
             row -= y_mean.transpose();
         }
-        let x = crate::optim::pca_init(&y, config.latent_dim)?;
+        let x = crate::pca::pca_init(&y, config.latent_dim)?;
         Ok(Gpdm {
             config,
             seq_lens,

@@ -4,20 +4,7 @@
 //! "Per-part pieces"), so that one array task fits one part; under make one task per model,
 //! whose stage fits the parts in parallel on the machine's cores ([`PartTasks`]).
 
-use crate::task::{s, Task};
-
-/// How the plan splits the fit of a model of several parts into tasks.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
-pub enum PartTasks {
-    /// One task writes the whole model; the stage fits its parts in parallel (`plan make`: one
-    /// machine, where a process per part would read the inputs once per part and leave cores
-    /// idle while a serial make runs one part at a time).
-    #[default]
-    OnePerModel,
-    /// One task per part writing a piece, and their merge (`plan slurm`, `plan make
-    /// --part-tasks`: one array task fits one part).
-    OnePerPart,
-}
+use crate::task::{s, PartTasks, Task};
 
 /// The folder of a model's pieces: `work/A/pca.model` -> `work/A/pca.parts`.
 pub fn pieces_dir(model: &str) -> String {

@@ -11,8 +11,7 @@ use mesh_core::cli::CommonArgs;
 use serde::Serialize;
 
 use crate::options::PipelineOptions;
-use crate::per_part::PartTasks;
-use crate::task::Graph;
+use crate::task::{Graph, PartTasks};
 
 /// Write the pipelines' task graph (every stage invocation with its inputs and outputs) as a make fragment or Slurm job arrays
 #[derive(Parser, Debug, Serialize)]

@@ -93,12 +93,25 @@ pub fn parent(path: &str) -> String {
     }
 }
 
+/// How the plan splits the fit of a model of several parts into tasks.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum PartTasks {
+    /// One task writes the whole model; the stage fits its parts in parallel (`plan make`: one
+    /// machine, where a process per part would read the inputs once per part and leave cores
+    /// idle while a serial make runs one part at a time).
+    #[default]
+    OnePerModel,
+    /// One task per part writing a piece, and their merge (`plan slurm`, `plan make
+    /// --part-tasks`: one array task fits one part).
+    OnePerPart,
+}
+
 /// Both pipelines' tasks plus the variables the pipelines' make targets read.
 #[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
 pub struct Graph {
     /// How models of several parts are split into tasks (set before the pipelines plan).
     #[serde(skip)]
-    pub part_tasks: crate::per_part::PartTasks,
+    pub part_tasks: PartTasks,
     pub tasks: Vec<Task>,
     /// How many of the first tasks are the transfer pipeline's (the rest are the variation's):
     /// each pipeline's step lines count its own tasks.

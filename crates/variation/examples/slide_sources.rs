@@ -34,7 +34,7 @@ fn main() -> mesh_core::Result<()> {
     let group = Group::load(&a[1])?;
     let model = VariationModel::load(&a[2])?;
     let parts: Vec<_> = model.parts.iter().map(|p| p.part.clone()).collect();
-    let soles = variation::metrics::soles(&parts, &model.template, &model.up, mesh_core::feet::SOLE_TOLERANCE);
+    let soles = variation::group::soles(&parts, &model.template, &model.up, mesh_core::feet::SOLE_TOLERANCE);
     let up = model.up;
     let weights: Vec<f64> = std::env::var("BLENDS")
         .unwrap_or_default()

@@ -55,7 +55,7 @@ pub enum Ease {
     Offset,
 }
 
-/// Leg parts of a segmentation in the order of [`crate::metrics::soles`] (left first).
+/// Leg parts of a segmentation in the order of [`crate::group::soles`] (left first).
 pub fn leg_parts(parts: &[PartDef]) -> Vec<&PartDef> {
     let mut legs: Vec<&PartDef> = parts.iter().filter(|p| p.name.starts_with("leg")).collect();
     legs.sort_by_key(|p| !p.name.ends_with('l'));

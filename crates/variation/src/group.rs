@@ -310,7 +310,7 @@ pub fn build(set: &CaptureSet, spec: &GroupSpec) -> Result<(Group, Vec<String>)>
     let core = root_core(&parts, template.n_vertices());
     let root = capture::align::root_point(&template.vertices, &core);
     // Soles of the two leg parts, left first, for motions without contact annotations.
-    let soles = crate::metrics::soles(&parts, &template.vertices, &up, mesh_core::feet::SOLE_TOLERANCE);
+    let soles = soles(&parts, &template.vertices, &up, mesh_core::feet::SOLE_TOLERANCE);
     let has_legs = parts.iter().filter(|p| p.name.starts_with("leg")).count() == 2;
     // Steps: reading and aligning each motion, warping each, then each blend.
     let bar = mesh_core::cli::stage_progress(
@@ -486,6 +486,20 @@ pub fn root_core(parts: &[PartDef], n_vertices: usize) -> Vec<u32> {
     } else {
         core
     }
+}
+
+/// Sole vertices of the two legs ([`mesh_core::feet::soles`] on the parts named `leg*`).
+pub fn soles(
+    parts: &[PartDef],
+    template: &[Vector3<f64>],
+    up: &Vector3<f64>,
+    tol: f64,
+) -> Vec<Vec<u32>> {
+    let legs: Vec<(&str, &[u32])> = parts
+        .iter()
+        .map(|p| (p.name.as_str(), p.vertices.as_slice()))
+        .collect();
+    mesh_core::feet::soles(&legs, template, up, tol)
 }
 
 /// The pairs of [`GroupSpec::blend_pairs`] as indices into `present` (the motions found, in

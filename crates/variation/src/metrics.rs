@@ -6,8 +6,6 @@ use mesh_core::rigid::procrustes;
 use nalgebra::{DMatrix, Vector3};
 use serde::{Deserialize, Serialize};
 
-use crate::group::PartDef;
-
 /// Mean over frames and vertices of `‖a_t(v) − b_t(v)‖` (over the common frames).
 pub fn mean_vertex_distance(a: &[Vec<Vector3<f64>>], b: &[Vec<Vector3<f64>>]) -> f64 {
     let n = a.len().min(b.len());
@@ -189,20 +187,6 @@ pub fn edge_distortion(
     } else {
         s / n as f64
     }
-}
-
-/// Sole vertices of the two legs ([`mesh_core::feet::soles`] on the parts named `leg*`).
-pub fn soles(
-    parts: &[PartDef],
-    template: &[Vector3<f64>],
-    up: &Vector3<f64>,
-    tol: f64,
-) -> Vec<Vec<u32>> {
-    let legs: Vec<(&str, &[u32])> = parts
-        .iter()
-        .map(|p| (p.name.as_str(), p.vertices.as_slice()))
-        .collect();
-    mesh_core::feet::soles(&legs, template, up, tol)
 }
 
 /// Foot sliding (m per frame): mean horizontal motion of each sole's centroid between

@@ -23,7 +23,7 @@ use crate::group::{root_core, PartDef};
 pub struct Landmarks {
     /// The root part's core (`group::root_core`): headings are measured on it.
     pub core: Vec<u32>,
-    /// Sole vertices of both feet ([`crate::metrics::soles`]; empty where none are found).
+    /// Sole vertices of both feet ([`crate::group::soles`]; empty where none are found).
     pub soles: Vec<Vec<u32>>,
     /// The two soles when both are found.
     pub feet: Option<[Vec<u32>; 2]>,
@@ -35,7 +35,7 @@ pub struct Landmarks {
 impl Landmarks {
     /// The landmarks of a body: template vertices and faces, its parts, up axis.
     pub fn of(template: &[Vector3<f64>], faces: &[[u32; 3]], parts: &[PartDef], up: &Vector3<f64>) -> Landmarks {
-        let soles = crate::metrics::soles(parts, template, up, mesh_core::feet::SOLE_TOLERANCE);
+        let soles = crate::group::soles(parts, template, up, mesh_core::feet::SOLE_TOLERANCE);
         let feet: Option<[Vec<u32>; 2]> = match soles.as_slice() {
             [l, r] if !l.is_empty() && !r.is_empty() => Some([l.clone(), r.clone()]),
             _ => None,
