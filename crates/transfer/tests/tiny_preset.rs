@@ -117,4 +117,30 @@ fn defaults_on_the_tiny_preset_never_lose_to_raw_regression_or_the_papers_placem
             "{m}: default placement {default_placed} not below regressed {regressed_placed}"
         );
     }
+
+    // The transfer plays at the source motion's rate (one output frame per source frame): A's
+    // 20 fps in rate.json; a motion at another rate than the model's source motions keeps its
+    // own, with a warning.
+    let rate = |dir: PathBuf| -> f64 {
+        let text = std::fs::read_to_string(dir.join("rate.json")).unwrap();
+        serde_json::from_str::<serde_json::Value>(&text).unwrap()["fps"].as_f64().unwrap()
+    };
+    assert_eq!(rate(w("out/punch/gpr-nn".into())), cfg.source.fps);
+    let mut faster = capture::align::AlignedMotion::load(w("A/punch.aligned".into())).unwrap();
+    faster.capture.fps = 2.0 * cfg.source.fps;
+    faster.save(w("A/punch-faster.aligned".into()), &mesh_core::artifact::Header::new("test", "0")).unwrap();
+    let out = w("out/punch-faster".into());
+    let predicted = std::process::Command::new(common::bin("gpr-predict"))
+        .args([
+            "--model", &s(&w("model".into())), "--source-pca", &s(&w("A/pca.model".into())),
+            "--target-pca", &s(&w("B/pca.model".into())), "--target-template", &s(&tpl("B")),
+            &s(&w("A/punch-faster.aligned".into())), "--out", &s(&out),
+        ])
+        .env("OPENBLAS_NUM_THREADS", "1")
+        .output()
+        .unwrap();
+    let stderr = String::from_utf8_lossy(&predicted.stderr);
+    assert!(predicted.status.success(), "{stderr}");
+    assert_eq!(rate(out), 2.0 * cfg.source.fps);
+    assert!(stderr.contains("punch-faster.aligned") && stderr.contains("the model's source motions 20 fps"), "{stderr}");
 }

@@ -209,10 +209,19 @@ pub fn run(p: &Params) -> anyhow::Result<()> {
         mesh_core::atomic::write_bytes_atomic(path, serde_json::to_string(&c)?.as_bytes())?;
     }
     let t1 = Instant::now();
-    // One output frame per source frame: the sequence plays at the source's rate, which
-    // gpr-train records in the model's header.
+    // One output frame per source frame: the sequence plays at the source motion's rate. A
+    // model trained on source motions of another rate learnt displacements per frame of that
+    // rate, which the message says.
+    let fps = (motion.capture.fps > 0.0).then_some(motion.capture.fps);
     let (_, _, model_header) = mesh_core::artifact::read_header(&p.model)?;
-    let fps = model_header.params.get("source_fps").and_then(|f| f.as_f64());
+    if let (Some(fps), Some(trained)) = (fps, model_header.params.get("source_fps").and_then(|f| f.as_f64())) {
+        if fps != trained {
+            mesh_core::warn!(
+                "{}: {fps} fps, the model's source motions {trained} fps: its displacements are per frame of those",
+                p.motion.display()
+            );
+        }
+    }
     if let (Some(dir), Some(frames)) = (&p.corrected_out, result.corrected_frames) {
         MeshSequence::new(faces.clone(), frames).write_dir_at(dir, fps)?;
     }
