@@ -53,9 +53,6 @@ pub enum Ease {
     Position,
     /// Fade the contact's offset: the free path's velocity is kept up to the contact.
     Offset,
-    /// `position` into each contact and `offset` out of it: the foot comes to rest as it lands
-    /// and leaves at its free path's speed (a take-off is not held back).
-    Landing,
 }
 
 /// Leg parts of a segmentation in the order of [`crate::group::soles`] (left first).
@@ -72,9 +69,7 @@ pub fn leg_parts(parts: &[PartDef]) -> Vec<&PartDef> {
 ///   too short for both ramps (`s − p ≤ 2 (R + 1)`), the sole carried from anchor to anchor,
 ///   `a_p + (a_s − a_p) S((t − p) / (s − p)) − p_f(t)`;
 /// - [`Ease::Offset`]: `F(t − p) δ(p) + F(s − t) δ(s)`, or in a short gap the smoothstep
-///   interpolation `δ(p) + (δ(s) − δ(p)) S((t − p) / (s − p))`;
-/// - [`Ease::Landing`]: the position terms for the contact ahead (`s`), the offset terms for
-///   the one behind (`p`).
+///   interpolation `δ(p) + (δ(s) − δ(p)) S((t − p) / (s − p))`.
 ///
 /// Continuous at every contact end; all horizontal.
 pub fn displacements(
@@ -101,12 +96,10 @@ pub fn displacements(
         let before = a.checked_sub(1).map(|p| (p, d[p]));
         let after = (b < n).then(|| (b, d[b]));
         for t in a..b {
-            // The offset of frame t from the anchor reached at contact frame c with offset δ,
-            // eased by position toward a landing (c after t) or away from a lift-off.
+            // The offset of frame t from the anchor reached at contact frame c with offset δ.
             let to_anchor = |c: usize, delta: Vector3<f64>| match ease {
                 Ease::Position => delta + horizontal(track[c] - track[t]),
-                Ease::Landing if c > t => delta + horizontal(track[c] - track[t]),
-                Ease::Offset | Ease::Landing => delta,
+                Ease::Offset => delta,
             };
             d[t] = match (before, after) {
                 (Some((p, dp)), Some((s, ds))) if (s - p) as f64 <= 2.0 * ramp => {
@@ -417,27 +410,6 @@ mod tests {
         assert!(q[10..].iter().all(|x| x.abs() < 1e-12));
         let o = placed(Ease::Offset);
         assert!((o[10] - o[9] - 0.1).abs() < 1e-12);
-    }
-
-    #[test]
-    fn the_landing_ease_lands_as_position_and_lifts_off_as_offset() {
-        // Planted at x = 0 until frame 5, then leaving at 10 cm/frame; planted again from frame
-        // 17 on (a gap long enough for both ramps). Into the second contact the landing ease is the position ease, out of the first
-        // the offset ease: the lift-off keeps the free path's speed.
-        let up = Vector3::y();
-        let track: Vec<_> = (0..24)
-            .map(|t| Vector3::new(0.1 * (t.clamp(5, 17) as f64 - 5.0) + 0.004 * (t % 3) as f64, 0.0, 0.0))
-            .collect();
-        let contact: Vec<bool> = (0..24).map(|t| t <= 5 || t >= 17).collect();
-        let d = |ease| displacements(&track, &contact, &up, ease);
-        let (landing, position, offset) = (d(Ease::Landing), d(Ease::Position), d(Ease::Offset));
-        for t in 6..=11 {
-            assert_eq!(landing[t], offset[t], "lift-off frame {t}");
-        }
-        for t in 10..17 {
-            assert_eq!(landing[t], position[t], "landing frame {t}");
-        }
-        assert!((6..=9).any(|t| landing[t] != position[t]), "the two eases differ on the lift-off");
     }
 
     #[test]

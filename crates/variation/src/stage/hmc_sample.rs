@@ -159,8 +159,7 @@ pub struct Params {
     pub no_foot_lock: bool,
     /// How the foot lock eases in before and out after each contact: position (the sole's
     /// position blended from its free path to the planted spot, so it lands and lifts off from
-    /// rest), offset (the planted offset faded, the free path's speed kept up to the contact) or
-    /// landing (position into a contact, offset out of it)
+    /// rest) or offset (the planted offset faded, the free path's speed kept up to the contact)
     #[arg(long, value_enum, default_value_t = crate::foot_lock::Ease::Position)]
     pub foot_ease: crate::foot_lock::Ease,
     /// Do not set the feet's heights by deforming the legs (by default, after the root
