@@ -209,7 +209,8 @@ where
     };
     let parent = parent_of(dir);
     std::fs::create_dir_all(parent).map_err(|e| Error::io(parent, e))?;
-    if dir.exists() && !dir.is_dir() {
+    // One stat: a racing writer may move `dir` away between two.
+    if std::fs::metadata(dir).is_ok_and(|m| !m.is_dir()) {
         return Err(Error::file(dir, "exists and is not a folder"));
     }
     remove_stale_temporaries(parent);
@@ -233,18 +234,21 @@ where
     let mut installed = Err(std::io::Error::other("no attempt"));
     for _ in 0..64 {
         installed = std::fs::rename(&tmp, dir);
-        match &installed {
-            Ok(()) => break,
-            // `dir` exists and is not empty: move it aside, then try again
-            // (another writer may move it first, or install its own).
-            Err(_) if dir.is_dir() => {
+        if installed.is_ok() {
+            break;
+        }
+        // One stat of what stands at `dir` now (a racing writer may change it between two).
+        match std::fs::metadata(dir) {
+            // A folder (not empty): move it aside, then try again (another writer may move it
+            // first, or install its own).
+            Ok(m) if m.is_dir() => {
                 let old = sibling(parent, &name, "old");
                 if std::fs::rename(dir, &old).is_ok() {
                     retired.push(old);
                 }
             }
-            Err(_) if dir.exists() => break,
-            // `dir` vanished between the two calls: the next rename installs.
+            Ok(_) => break,
+            // `dir` vanished since the rename: the next rename installs.
             Err(_) => {}
         }
     }
