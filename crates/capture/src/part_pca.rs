@@ -514,10 +514,30 @@ const MIN_ENCODE_BLOCK: usize = 6;
 /// frames are more): a block of a 100,000-vertex body is 13 frames.
 const ENCODE_BLOCK_BYTES: usize = 32 << 20;
 
-/// The frames of `n_vertices` vertices a [`FrameEncoder`] encodes at a time.
-fn encode_block(n_vertices: usize) -> usize {
+/// The frames of `n_vertices` vertices a [`FrameEncoder`] encodes at a time: 32 MiB of
+/// frames, at least 6 and at most 256.
+pub fn frames_per_block(n_vertices: usize) -> usize {
     let frame_bytes = n_vertices.max(1).saturating_mul(std::mem::size_of::<Vector3<f64>>());
     (ENCODE_BLOCK_BYTES / frame_bytes).clamp(MIN_ENCODE_BLOCK, ENCODE_BLOCK)
+}
+
+/// `0..n_frames` cut as a [`FrameEncoder`] of `block` frames at a time cuts a motion: blocks
+/// of `b = max(block, 6)` frames while at least `2b` frames remain, then the rest (`b` to
+/// `2b - 1` frames, or the whole motion when it is shorter). No block has fewer than 6 frames
+/// unless the motion has, so a product of a block's rows takes the path the whole motion's
+/// would and gives every row's entries to the bit (see [`FrameEncoder`]).
+pub fn blocks_of(n_frames: usize, block: usize) -> Vec<std::ops::Range<usize>> {
+    let block = block.max(MIN_ENCODE_BLOCK);
+    let mut out = Vec::new();
+    let mut start = 0;
+    while n_frames - start >= 2 * block {
+        out.push(start..start + block);
+        start += block;
+    }
+    if start < n_frames || n_frames == 0 {
+        out.push(start..n_frames);
+    }
+    out
 }
 
 /// Encodes a motion's frames into per-part coefficients as they arrive (e.g. from
@@ -544,7 +564,7 @@ pub struct FrameEncoder<'a> {
 
 impl<'a> FrameEncoder<'a> {
     pub fn new(model: &'a PcaModel) -> Self {
-        Self::with_block(model, encode_block(model.n_vertices))
+        Self::with_block(model, frames_per_block(model.n_vertices))
     }
 
     /// An encoder of `block` frames at a time (at least [`MIN_ENCODE_BLOCK`]).
@@ -618,6 +638,20 @@ mod tests {
     use crate::align::align_motion;
     use mesh_core::sequence::MeshSequence;
     use mesh_core::shapes::cylinder;
+
+    #[test]
+    fn frame_blocks_cover_the_motion_in_order_with_no_short_block() {
+        for n in [0, 1, 5, 6, 11, 12, 13, 40, 1000] {
+            for block in [1, 6, 7, 256] {
+                let cut = blocks_of(n, block);
+                let starts_at_zero = cut.first().is_some_and(|r| r.start == 0);
+                assert!(starts_at_zero && cut.last().unwrap().end == n, "{n} {block}: {cut:?}");
+                assert!(cut.windows(2).all(|w| w[0].end == w[1].start), "{n} {block}: {cut:?}");
+                let b = block.max(MIN_ENCODE_BLOCK);
+                assert!(cut.iter().all(|r| r.len() >= b.min(n) && r.len() < 2 * b.max(1)), "{n} {block}: {cut:?}");
+            }
+        }
+    }
 
     /// A cylinder whose radius and bend vary with two hidden factors: with
     /// enough components, encode/decode reproduces every frame (round trip),
@@ -702,7 +736,7 @@ mod tests {
                 }
             }
         }
-        assert_eq!((encode_block(48), encode_block(100_000), encode_block(10_000_000)), (ENCODE_BLOCK, 13, MIN_ENCODE_BLOCK));
+        assert_eq!((frames_per_block(48), frames_per_block(100_000), frames_per_block(10_000_000)), (ENCODE_BLOCK, 13, MIN_ENCODE_BLOCK));
         let model = fit(&t.vertices, &seg, &[&aligned], Components::Count(3), PartAlignment::Body).unwrap().0;
         let mut enc = FrameEncoder::new(&model);
         enc.push(frame(0)).unwrap();

@@ -140,6 +140,20 @@ where
     Ok(())
 }
 
+/// A scratch file for a stage's intermediate data, in the folder `output` is written into (the
+/// same file system and the user's chosen place, not `/tmp`), named as this module's temporaries
+/// are: removed when dropped, or, after a kill, by the next atomic write in that folder.
+pub fn scratch_file(output: &Path) -> Result<tempfile::NamedTempFile> {
+    let dir = parent_of(output);
+    std::fs::create_dir_all(dir).map_err(|e| Error::io(dir, e))?;
+    remove_stale_temporaries(dir);
+    tempfile::Builder::new()
+        .prefix(&format!("{PREFIX}{}-", owner_tag()))
+        .suffix(".tmp")
+        .tempfile_in(dir)
+        .map_err(|e| Error::io(output, without_path(e)))
+}
+
 /// `e` without the temporary file's path `tempfile` adds to it: it wraps the OS error in a
 /// private error type whose message is `<OS error> at path ".surfcap-….tmp"`, so the OS error's
 /// code cannot be recovered and the message is cut before ` at path`. The line then names the
@@ -286,6 +300,17 @@ mod tests {
         assert!(err.starts_with("/proc/self/surfcap-out.bin: "), "{err}");
         assert!(!err.contains(".surfcap-") && !err.contains(" at path "), "{err}");
         assert!(!dest.exists());
+    }
+
+    #[test]
+    fn a_scratch_file_is_a_temporary_beside_the_output_and_goes_when_dropped() {
+        let dir = tempfile::tempdir().unwrap();
+        let scratch = scratch_file(&dir.path().join("out")).unwrap();
+        let name = scratch.path().file_name().unwrap().to_str().unwrap().to_string();
+        assert_eq!(scratch.path().parent(), Some(dir.path()));
+        assert_eq!(temp_owner(&name), Some(std::process::id()), "{name}");
+        drop(scratch);
+        assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 0);
     }
 
     #[test]

@@ -42,10 +42,11 @@
 //! floor the template stands on), so a planted foot stands on the floor and a lifted one eases
 //! back to its regressed height.
 
-use capture::align::AlignedMotion;
+use capture::align::{AlignedMotion, CaptureInfo};
 use capture::contact_detector::{self, Rule};
 use capture::part_pca::PcaModel;
 use gp::linalg::Cholesky;
+use mesh_core::rigid::RigidMotion;
 use mesh_core::{Error, Result};
 use nalgebra::{DMatrix, Vector3};
 
@@ -80,7 +81,7 @@ pub const RETURN: f64 = 0.1;
 /// foot's drop back toward zero within about 8 frames.
 pub const HEIGHT_RETURN: f64 = 0.01;
 
-/// What [`plant`] did: the number of frames with a planted foot, the largest horizontal root
+/// What [`solve`]'s moves do: the number of frames with a planted foot, the largest horizontal root
 /// shift, and how far a planted sole was moved onto the floor (median over planted frames, m).
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct Planted {
@@ -241,27 +242,51 @@ pub struct SourceContacts {
     pub contacts: Vec<[bool; 2]>,
 }
 
-/// The source's contacts, detected on its own placed soles ([`contact_detector::detect`], which
-/// reads the sole vertices only: the rest of the body is not placed); None when it has no two
-/// leg parts or no frame rate.
+/// The vertices of a source's two soles ([`soles`]), as read from each of its frames.
+#[derive(Clone, Debug, PartialEq)]
+pub struct SourceSoles {
+    /// The left sole's vertices, then the right's.
+    picked: Vec<u32>,
+    /// How many of `picked` are the left sole's.
+    left: usize,
+}
+
+impl SourceSoles {
+    /// None when the source has no two leg parts.
+    pub fn of(source_pca: &PcaModel, up: &Vector3<f64>) -> Option<SourceSoles> {
+        let body_soles = soles(source_pca, up)?;
+        Some(SourceSoles { left: body_soles[0].len(), picked: body_soles.concat() })
+    }
+
+    /// The sole vertices of `frame`; None when the frame has fewer vertices than a sole names.
+    pub fn pick(&self, frame: &[Vector3<f64>]) -> Option<Vec<Vector3<f64>>> {
+        self.picked.iter().map(|&v| frame.get(v as usize).copied()).collect()
+    }
+
+    /// The contacts detected on the sole vertices `sole_frames` (per frame, [`SourceSoles::pick`]
+    /// of the unplaced frame) placed by `poses` ([`contact_detector::detect`], which reads the
+    /// sole vertices only); None without a frame rate.
+    pub fn contacts(&self, sole_frames: &[Vec<Vector3<f64>>], poses: &[RigidMotion], capture: &CaptureInfo) -> Option<SourceContacts> {
+        if !(capture.fps > 0.0) {
+            return None;
+        }
+        let up = Vector3::from(capture.up);
+        let world = place(poses, sole_frames);
+        let soles = [(0..self.left as u32).collect(), (self.left as u32..self.picked.len() as u32).collect()];
+        let contacts = contact_detector::detect(&world, &soles, &up, capture.fps, &Rule::default())?;
+        Some(SourceContacts { world, soles, contacts })
+    }
+}
+
+/// The source's contacts, detected on its own placed soles ([`SourceSoles::contacts`]); None
+/// when it has no two leg parts or no frame rate.
 pub fn source_contacts(source_pca: &PcaModel, motion: &AlignedMotion) -> Option<SourceContacts> {
-    let up = Vector3::from(motion.capture.up);
-    let body_soles = soles(source_pca, &up)?;
-    if !(motion.capture.fps > 0.0) {
+    let soles = SourceSoles::of(source_pca, &Vector3::from(motion.capture.up))?;
+    let Some(sole_frames) = motion.frames.iter().map(|f| soles.pick(f)).collect::<Option<Vec<_>>>() else {
+        mesh_core::info!("a sole vertex is beyond the source motion's vertices: no contacts");
         return None;
-    }
-    let picked: Vec<u32> = body_soles.iter().flatten().copied().collect();
-    if let Some(&v) = picked.iter().find(|&&v| motion.frames.iter().any(|f| v as usize >= f.len())) {
-        mesh_core::info!("sole vertex {v} is beyond the source motion's vertices: no contacts");
-        return None;
-    }
-    let sole_frames: Vec<Vec<Vector3<f64>>> =
-        motion.frames.iter().map(|f| picked.iter().map(|&v| f[v as usize]).collect()).collect();
-    let world = place(&motion.poses, &sole_frames);
-    let left = body_soles[0].len() as u32;
-    let soles = [(0..left).collect(), (left..picked.len() as u32).collect()];
-    let contacts = contact_detector::detect(&world, &soles, &up, motion.capture.fps, &Rule::default())?;
-    Some(SourceContacts { world, soles, contacts })
+    };
+    soles.contacts(&sole_frames, &motion.poses, &motion.capture)
 }
 
 /// What a transfer's feet are measured and cleaned with on a target: its soles ([`soles`]),
@@ -284,7 +309,7 @@ impl TargetFeet {
     }
 }
 
-/// The feet clean-ups [`plant`] runs: the horizontal foot-skating shift and the vertical leg
+/// The feet clean-ups [`solve`] prepares: the horizontal foot-skating shift and the vertical leg
 /// deformation onto the floor (module doc), with smoothness `λ`; `faces` the target's (its
 /// legs' seams with the torso).
 #[derive(Clone, Copy, Debug)]
@@ -295,67 +320,144 @@ pub struct CleanUp<'a> {
     pub faces: &'a [[u32; 3]],
 }
 
-/// Cleans `frames` (the placed transfer of `motion`, one frame per source frame, the target
-/// `ratio` times the source's size) in place (module doc). None, and `frames` untouched, when
-/// neither clean-up is asked for, either subject has no two leg parts or the source no frame
-/// rate.
-pub fn plant(
-    frames: &mut [Vec<Vector3<f64>>],
-    source_pca: &PcaModel,
-    target_pca: &PcaModel,
-    motion: &AlignedMotion,
-    ratio: f64,
-    clean_up: &CleanUp,
-) -> Result<Option<Planted>> {
-    if !(clean_up.footskate || clean_up.foot_height) {
-        return Ok(None);
+/// Relative width of the band of a leg's lowest vertices [`FeetRecord`] keeps: a frame's shift
+/// is horizontal, so it moves a vertex's height by rounding only (a few machine epsilons of the
+/// coordinates and the shift), far inside this band.
+const LOWEST_BAND: f64 = 1e-9;
+
+/// What the clean-ups read of a placed transfer (module doc), recorded a block of frames at a
+/// time so that the frames need not be held: per frame, the centroid of each sole, and the
+/// vertices of each leg low enough to be its lowest point once the frame is shifted (those
+/// within [`LOWEST_BAND`] of the lowest, usually one).
+#[derive(Clone, Debug, Default)]
+pub struct FeetRecord {
+    soles: [Vec<Vector3<f64>>; 2],
+    /// `[leg][frame]`: the candidate vertices and the largest coordinate sum `|p|₁` of the leg.
+    lowest: [Vec<(Vec<Vector3<f64>>, f64)>; 2],
+}
+
+impl FeetRecord {
+    /// Records the placed, unshifted `frames` (the next ones of the motion).
+    pub fn push(&mut self, frames: &[Vec<Vector3<f64>>], target: &TargetFeet, up: &Vector3<f64>) {
+        for (all, new) in self.soles.iter_mut().zip(mesh_core::feet::feet_tracks(frames, &target.soles)) {
+            all.extend(new);
+        }
+        for (record, leg) in self.lowest.iter_mut().zip(&target.legs) {
+            record.extend(frames.iter().map(|f| {
+                let lowest = leg.iter().map(|&v| f[v as usize].dot(up)).fold(f64::INFINITY, f64::min);
+                let size = leg.iter().map(|&v| f[v as usize].abs().sum()).fold(0.0, f64::max);
+                let band = LOWEST_BAND * (1.0 + size);
+                let low = leg.iter().map(|&v| f[v as usize]).filter(|p| p.dot(up) <= lowest + band).collect();
+                (low, size)
+            }));
+        }
     }
+
+    /// Frames recorded.
+    pub fn len(&self) -> usize {
+        self.soles[0].len()
+    }
+
+    pub fn is_empty(&self) -> bool {
+        self.len() == 0
+    }
+
+    /// Per frame, the lowest point along `up` of each leg once frame `t` is shifted by
+    /// `shifts[t]` ([`lowest_points`] of the shifted frames, to the bit). Fails if a shift is so
+    /// large that its rounding could reorder heights beyond the recorded band.
+    fn lowest(&self, shifts: Option<&[Vector3<f64>]>, up: &Vector3<f64>) -> Result<[Vec<f64>; 2]> {
+        let mut out: [Vec<f64>; 2] = Default::default();
+        for (heights, record) in out.iter_mut().zip(&self.lowest) {
+            for (t, (low, size)) in record.iter().enumerate() {
+                let d = shifts.map_or_else(Vector3::zeros, |s| s[t]);
+                if 16.0 * f64::EPSILON * (size + d.abs().sum()) > LOWEST_BAND * (1.0 + size) {
+                    return Err(Error::invalid(format!("foot height: frame {t} shifted by {:.3e} m, beyond what the clean-up can place", d.norm())));
+                }
+                let shifted = |p: &Vector3<f64>| if shifts.is_some() { p + d } else { *p };
+                heights.push(low.iter().map(|p| shifted(p).dot(up)).fold(f64::INFINITY, f64::min));
+            }
+        }
+        Ok(out)
+    }
+}
+
+/// The moves of the feet clean-ups for every frame of a transfer ([`solve`]), applied a frame
+/// at a time ([`FeetMoves::apply`]).
+#[derive(Clone, Debug, Default)]
+pub struct FeetMoves {
+    up: Vector3<f64>,
+    /// The horizontal shift of each frame (foot skating).
+    shifts: Option<Vec<Vector3<f64>>>,
+    /// Per leg (left, right), the drop of each frame and the leg vertices' weights (foot height).
+    drops: Vec<(Vec<f64>, Vec<(u32, f64)>)>,
+}
+
+impl FeetMoves {
+    /// Frame `t` of the transfer, placed, moved: shifted, then each leg dropped.
+    pub fn apply(&self, t: usize, frame: &mut [Vector3<f64>]) {
+        if let Some(d) = self.shifts.as_ref().and_then(|s| s.get(t)) {
+            frame.iter_mut().for_each(|p| *p += d);
+        }
+        for (drops, weights) in &self.drops {
+            if let Some(e) = drops.get(t) {
+                for &(v, w) in weights {
+                    frame[v as usize] += self.up * (e * w);
+                }
+            }
+        }
+    }
+}
+
+/// The clean-ups of a transfer (module doc) solved from its `record` (every frame placed; the
+/// target `ratio` times the source's size) and the source's contacts: the moves to apply to each
+/// frame and what they do. No moves when neither clean-up is asked for.
+pub fn solve(
+    record: &FeetRecord,
+    source: &SourceContacts,
+    target: &TargetFeet,
+    target_pca: &PcaModel,
+    ratio: f64,
+    up: &Vector3<f64>,
+    clean_up: &CleanUp,
+) -> Result<(FeetMoves, Planted)> {
     mesh_core::feet::check_smoothness(clean_up.smoothness)?;
-    let up = Vector3::from(motion.capture.up);
-    let Some(target) = TargetFeet::of(target_pca, &up) else {
-        return Ok(None);
-    };
-    let Some(SourceContacts { world, soles: source_soles, contacts }) = source_contacts(source_pca, motion) else {
-        return Ok(None);
-    };
+    let contacts = &source.contacts;
+    if record.len() != contacts.len() {
+        return Err(Error::invalid(format!("feet clean-up: {} frames for {} source frames", record.len(), contacts.len())));
+    }
     let mut notes = Vec::new();
     let mut planted = Planted { planted_frames: contacts.iter().filter(|c| c[0] || c[1]).count(), ..Planted::default() };
+    let mut moves = FeetMoves { up: *up, ..FeetMoves::default() };
     if clean_up.footskate {
         let shifts = corrections(
-            &mesh_core::feet::feet_tracks(frames, &target.soles),
-            &mesh_core::feet::feet_tracks(&world, &source_soles),
-            &contacts,
+            &record.soles,
+            &mesh_core::feet::feet_tracks(&source.world, &source.soles),
+            contacts,
             ratio,
-            &up,
+            up,
             clean_up.smoothness,
             &mut notes,
         )?;
-        for (f, d) in frames.iter_mut().zip(&shifts) {
-            f.iter_mut().for_each(|p| *p += d);
-        }
         planted.max_shift_m = shifts.iter().map(|d| d.norm()).fold(0.0, f64::max);
+        moves.shifts = Some(shifts);
     }
     if clean_up.foot_height {
-        let lowest = lowest_points(frames, &target.legs, &up);
+        let lowest = record.lowest(moves.shifts.as_deref(), up)?;
         let template = target_pca.template_vertices();
         let mut moved = Vec::new();
         for side in 0..2 {
             let down: Vec<bool> = contacts.iter().map(|c| c[side]).collect();
             let drops = leg_drops(&lowest[side], &down, target.floor, clean_up.smoothness, &mut notes)?;
-            let weights = mesh_core::feet::leg_weights(&target.legs[side], &target.soles[side], &template, clean_up.faces, &up);
-            for (f, e) in frames.iter_mut().zip(&drops) {
-                for &(v, w) in &weights {
-                    f[v as usize] += up * (e * w);
-                }
-            }
+            let weights = mesh_core::feet::leg_weights(&target.legs[side], &target.soles[side], &template, clean_up.faces, up);
             moved.extend(down.iter().zip(&drops).filter(|(d, _)| **d).map(|(_, e)| e.abs()));
+            moves.drops.push((drops, weights));
         }
         planted.median_foot_move_m = median(&mut moved);
     }
     for note in notes {
         mesh_core::info!("{note}");
     }
-    Ok(Some(planted))
+    Ok((moves, planted))
 }
 
 #[cfg(test)]

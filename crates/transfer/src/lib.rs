@@ -18,6 +18,7 @@ pub mod representation;
 pub mod quality;
 pub mod placement;
 pub mod feet;
+pub mod placed_frames;
 pub mod evaluate;
 pub mod leave_one_motion_out;
 pub mod model_config;

@@ -8,6 +8,7 @@ use nalgebra::DMatrix;
 use rayon::prelude::*;
 
 use crate::gpr_model::{GprModel, Regressor};
+use crate::placed_frames::PlacedFrames;
 
 /// The model's output for a source sequence of `N` frames.
 #[derive(Clone, Debug)]
@@ -88,14 +89,65 @@ pub struct Timing {
     pub decode_s: f64,
 }
 
-/// A transferred sequence: target frames in world coordinates and the poses used.
-#[derive(Clone, Debug)]
+/// A source motion as a transfer reads it: its coefficients, its poses, displacements and
+/// capture record, and its soles' vertices in every frame; never its frames.
+pub struct SourceMotion {
+    /// Per part, the coefficients of every frame (`F x m_k`).
+    pub coefficients: Vec<DMatrix<f64>>,
+    pub info: capture::motion_stream::MotionInfo,
+    /// The source's soles and their vertices in each frame (None: no two leg parts, or a sole
+    /// vertex beyond the frames').
+    soles: Option<(crate::feet::SourceSoles, Vec<Vec<nalgebra::Vector3<f64>>>)>,
+}
+
+impl SourceMotion {
+    /// The aligned motion at `path` encoded with `source_pca`, a frame at a time. The soles
+    /// depend on the up axis, which the file stores after the frames, so it is read twice: once
+    /// for its capture record, once to encode the frames and pick the soles (the file must not
+    /// change in between).
+    pub fn read(path: &std::path::Path, source_pca: &capture::part_pca::PcaModel) -> Result<SourceMotion> {
+        let (first, sha256) = capture::motion_stream::read_frames(path, |_| Ok(()))?;
+        let soles = crate::feet::SourceSoles::of(source_pca, &first.capture.up.into());
+        let mut encoder = capture::part_pca::FrameEncoder::new(source_pca);
+        let mut picked = Vec::new();
+        let (info, again) = capture::motion_stream::read_frames(path, |f| {
+            if let Some(s) = &soles {
+                picked.push(s.pick(&f));
+            }
+            encoder.push(f)
+        })?;
+        if again != sha256 {
+            return Err(Error::file(path, "changed while it was read"));
+        }
+        let coefficients = encoder.finish(&info.capture.template_sha256).map_err(|e| Error::file(path, e.to_string()))?;
+        let soles = soles.and_then(|s| match picked.into_iter().collect::<Option<Vec<_>>>() {
+            Some(frames) => Some((s, frames)),
+            None => {
+                mesh_core::info!("a sole vertex is beyond the source motion's vertices: no contacts");
+                None
+            }
+        });
+        Ok(SourceMotion { coefficients, info, soles })
+    }
+
+    pub fn n_frames(&self) -> usize {
+        self.info.n_frames
+    }
+
+    /// The source's contacts ([`crate::feet::SourceSoles::contacts`]).
+    pub fn contacts(&self) -> Option<crate::feet::SourceContacts> {
+        let (soles, frames) = self.soles.as_ref()?;
+        soles.contacts(frames, &self.info.poses, &self.info.capture)
+    }
+}
+
+/// A transferred sequence: the target's frames in world coordinates, placed and cleaned up, on
+/// disk until they are written ([`PlacedFrames::for_each`]).
 pub struct Transferred {
-    pub frames: Vec<Vec<nalgebra::Vector3<f64>>>,
+    pub frames: PlacedFrames,
     /// The corrected parts merged by averaging, placed and cleaned up as `frames` are, when
     /// the reconstructor was asked for them too (`Reconstructor::with_corrected_assembly`).
-    pub corrected_frames: Option<Vec<Vec<nalgebra::Vector3<f64>>>>,
-    pub poses: Vec<mesh_core::rigid::RigidMotion>,
+    pub corrected_frames: Option<PlacedFrames>,
     /// Per-frame weight of the scaled source in the `blended` placement.
     pub blend_weights: Option<Vec<f64>>,
     /// What the feet clean-ups did (None: not asked for, or no two leg parts).
@@ -103,20 +155,25 @@ pub struct Transferred {
     pub timing: Timing,
 }
 
-/// The whole of `gpr-predict` but the file writing: source aligned motion ->
-/// source coefficients -> target coefficients (and displacements) -> target
-/// parts (limbs turned by the model's limb orientation, `crate::limb_orientation`) ->
-/// assembled target mesh (or `reconstructor`'s §6 correction and
-/// stitching) -> placed from the source's first world pose -> planted feet cleaned up as
-/// `feet` asks ([`crate::feet`]).
+/// The whole of `gpr-predict` but the file writing: source coefficients -> target coefficients
+/// (and displacements) -> target parts (limbs turned by the model's limb orientation,
+/// `crate::limb_orientation`) -> assembled target mesh (or `reconstructor`'s §6 correction and
+/// stitching) -> placed from the source's first world pose -> planted feet cleaned up as `feet`
+/// asks ([`crate::feet`]). The frames are made a block of `block` frames at a time
+/// ([`capture::part_pca::blocks_of`]; every frame is the same whatever the block) into
+/// [`PlacedFrames`] beside `output` (and `corrected_output`), so a motion of any length holds a
+/// block of frames.
+#[allow(clippy::too_many_arguments)]
 pub fn transfer_motion(
     model: &GprModel,
     source_pca: &capture::part_pca::PcaModel,
     target_pca: &capture::part_pca::PcaModel,
-    motion: &capture::align::AlignedMotion,
+    source: &SourceMotion,
     placement: crate::placement::Placement,
-    reconstructor: Option<&mut crate::reconstruct::Reconstructor>,
+    mut reconstructor: Option<&mut crate::reconstruct::Reconstructor>,
     feet: &crate::feet::CleanUp,
+    output: (&std::path::Path, Option<&std::path::Path>),
+    block: usize,
 ) -> Result<Transferred> {
     use capture::align::root_poses;
     use crate::placement::{
@@ -124,30 +181,13 @@ pub fn transfer_motion(
         world_poses, Placement,
     };
     use std::time::Instant;
-    let t0 = Instant::now();
-    let xs = source_pca.encode(motion)?;
+    let motion = &source.info;
+    let xs = &source.coefficients;
     let xd = displacement_matrix(&motion.displacements);
-    let encode_s = t0.elapsed().as_secs_f64();
     let t1 = Instant::now();
-    let pred = predict(model, &xs, &xd, placement == Placement::Blended)?;
+    let pred = predict(model, xs, &xd, placement == Placement::Blended)?;
     let gp_s = t1.elapsed().as_secs_f64();
     let t2 = Instant::now();
-    // The decoded parts are dropped once assembled, and the assembled frames are placed where
-    // they are: one copy of the target motion is held, besides the source (two when the
-    // reconstructor also gives the corrected parts averaged).
-    let (mut frames, mut corrected_frames) = {
-        let mut decoded = target_pca.decode(&pred.coeffs)?;
-        if let Some(o) = &model.orientation {
-            crate::limb_orientation::apply(o, source_pca, target_pca, &xs, &mut decoded)?;
-        }
-        match reconstructor {
-            Some(r) => r.reconstruct_both(target_pca, &decoded)?,
-            None => {
-                let plan = capture::assemble::plan(target_pca)?;
-                (capture::assemble::assemble(&plan, target_pca, &decoded), None)
-            }
-        }
-    };
     let (source_root, target_root) = (root_point(source_pca), root_point(target_pca));
     let regressed: Vec<[f64; 6]> = pred
         .displacement
@@ -175,21 +215,67 @@ pub fn transfer_motion(
     let source_start = root_poses(&motion.poses[..motion.poses.len().min(1)], &source_root);
     let start = scaled_start(&source_start.first().copied().unwrap_or_default(), ratio);
     let world_poses = world_poses(&poses(&start, &steps), &target_root);
-    place_in_place(&world_poses, &mut frames);
-    let planted = crate::feet::plant(&mut frames, source_pca, target_pca, motion, ratio, feet)?;
-    if let Some(c) = corrected_frames.as_mut() {
-        place_in_place(&world_poses, c);
-        crate::feet::plant(c, source_pca, target_pca, motion, ratio, feet)?;
+
+    // The clean-ups need the target's feet and the source's contacts; without either, the
+    // frames are left as placed.
+    let up = nalgebra::Vector3::from(motion.capture.up);
+    let cleaned = feet.footskate || feet.foot_height;
+    if cleaned {
+        mesh_core::feet::check_smoothness(feet.smoothness)?;
     }
+    let clean = cleaned
+        .then(|| crate::feet::TargetFeet::of(target_pca, &up))
+        .flatten()
+        .and_then(|target| Some((target, source.contacts()?)));
+    let recorded = clean.as_ref().map(|(target, _)| target);
+    let plan = capture::assemble::plan(target_pca)?;
+    let mut frames = PlacedFrames::new(output.0, target_pca.n_vertices)?;
+    let mut corrected_frames: Option<PlacedFrames> = None;
+    for range in capture::part_pca::blocks_of(source.n_frames(), block) {
+        let rows = |m: &[DMatrix<f64>]| -> Vec<DMatrix<f64>> { m.iter().map(|c| c.rows(range.start, range.len()).into_owned()).collect() };
+        // The decoded parts are dropped once assembled, and the assembled frames are placed
+        // where they are.
+        let (mut made, mut corrected) = {
+            let mut decoded = target_pca.decode(&rows(&pred.coeffs))?;
+            if let Some(o) = &model.orientation {
+                crate::limb_orientation::apply(o, source_pca, target_pca, &rows(xs), &mut decoded)?;
+            }
+            match reconstructor.as_deref_mut() {
+                Some(r) => r.reconstruct_both(target_pca, &decoded)?,
+                None => (capture::assemble::assemble(&plan, target_pca, &decoded), None),
+            }
+        };
+        place_in_place(&world_poses[range.clone()], &mut made);
+        frames.push(&made, recorded, &up)?;
+        if let Some(c) = corrected.as_mut() {
+            place_in_place(&world_poses[range.clone()], c);
+            let out = match (&mut corrected_frames, output.1) {
+                (Some(out), _) => out,
+                (None, Some(path)) => corrected_frames.insert(PlacedFrames::new(path, target_pca.n_vertices)?),
+                (None, None) => return Err(Error::invalid("corrected frames made with no output for them")),
+            };
+            out.push(c, recorded, &up)?;
+        }
+    }
+    let planted = match &clean {
+        Some((target, contacts)) => {
+            let (moves, planted) = crate::feet::solve(frames.feet(), contacts, target, target_pca, ratio, &up, feet)?;
+            frames.set_moves(moves);
+            if let Some(c) = corrected_frames.as_mut() {
+                c.set_moves(crate::feet::solve(c.feet(), contacts, target, target_pca, ratio, &up, feet)?.0);
+            }
+            Some(planted)
+        }
+        None => None,
+    };
     let decode_s = t2.elapsed().as_secs_f64();
     Ok(Transferred {
         frames,
         corrected_frames,
-        poses: world_poses,
         blend_weights: pred.variance_ratio,
         planted,
         timing: Timing {
-            encode_s,
+            encode_s: 0.0,
             gp_s,
             decode_s,
         },

@@ -203,7 +203,8 @@ impl Reconstructor {
     }
 
     /// Shows the work of [`Reconstructor::reconstruct`] on `bar`: one step per corrected part
-    /// of a frame and per stitched frame.
+    /// of a frame and per stitched frame, the bar's length growing with each call (cleared by
+    /// [`Reconstructor::finish`]).
     pub fn with_progress(mut self, bar: ProgressBar) -> Self {
         self.progress = bar;
         self
@@ -299,7 +300,7 @@ impl Reconstructor {
                     .collect()
             })
             .collect();
-        let mut unstitched = 0;
+        let (mut unstitched, before) = (0, self.timing.frames);
         let merged = stitched
             .into_iter()
             .flatten()
@@ -307,7 +308,8 @@ impl Reconstructor {
             .map(|(f, frame)| match frame {
                 Ok(frame) => frame,
                 Err(e) => {
-                    if unstitched == 0 {
+                    if unstitched == 0 && self.unstitched_frames == 0 {
+                        let f = before + f;
                         mesh_core::warn!("stitch: frame {f}: {e}: such frames are assembled (overlaps averaged)");
                     }
                     unstitched += 1;
@@ -316,11 +318,21 @@ impl Reconstructor {
                 }
             })
             .collect();
-        if unstitched > 0 {
-            mesh_core::warn!("stitch: {unstitched} of {n_frames} frames assembled instead of stitched");
-        }
         self.unstitched_frames += unstitched;
         Ok(merged)
+    }
+
+    /// Ends the work of the calls so far: clears the progress bar and says how many frames
+    /// could not be stitched, if any.
+    pub fn finish(&self) {
+        self.progress.finish_and_clear();
+        if self.unstitched_frames > 0 {
+            mesh_core::warn!(
+                "stitch: {} of {} frames assembled instead of stitched",
+                self.unstitched_frames,
+                self.timing.frames
+            );
+        }
     }
 
     /// Frames [`Reconstructor::merge`] could not stitch (a part's overlap band that is not one
@@ -349,7 +361,7 @@ impl Reconstructor {
         let n_frames = decoded.first().map_or(0, |p| p.len());
         let corrections = if self.correctors.is_empty() { 0 } else { decoded.len() * n_frames };
         let stitches = if self.stitcher.is_some() { n_frames } else { 0 };
-        self.progress.set_length((corrections + stitches) as u64);
+        self.progress.inc_length((corrections + stitches) as u64);
         let t = Instant::now();
         let (corrected, nearest_s) = self.correct_timed(decoded)?;
         let correct_s = t.elapsed().as_secs_f64() - nearest_s;
@@ -363,7 +375,6 @@ impl Reconstructor {
         self.timing.nearest_s += nearest_s;
         self.timing.correct_s += correct_s;
         self.timing.merge_s += t.elapsed().as_secs_f64();
-        self.progress.finish_and_clear();
         Ok((merged?, assembled))
     }
 }

@@ -118,6 +118,47 @@ fn defaults_on_the_tiny_preset_never_lose_to_raw_regression_or_the_papers_placem
         );
     }
 
+    // A transfer is made a block of frames at a time (a motion of any length holds one block):
+    // made 6 frames at a time, through correction, stitching and both feet clean-ups, every
+    // frame is the one `gpr-predict` wrote (one block on this body), to the bit.
+    let source_pca = capture::part_pca::PcaModel::load(w("A/pca.model".into())).unwrap();
+    let model = transfer::gpr_model::GprModel::load(w("model".into())).unwrap();
+    let source = transfer::predict::SourceMotion::read(&w("A/punch.aligned".into()), &source_pca).unwrap();
+    assert!(capture::part_pca::blocks_of(source.n_frames(), 6).len() >= 3, "{} frames", source.n_frames());
+    let seg = mesh_core::segmentation::Segmentation::load(w("B/parts.seg".into())).unwrap();
+    let training: Vec<PathBuf> = TRAIN.iter().map(|t| w(format!("B/{t}.aligned"))).collect();
+    let training = transfer::reconstruct::training_part_meshes(&target_pca, &training, 1).unwrap();
+    let mut recon = transfer::reconstruct::Reconstructor::with_training_meshes(
+        &target_pca, &seg, &template_b.faces, training, transfer::reconstruct::Surface::CorrectStitch,
+        surface::correct::DEFAULT_NEIGHBOURS,
+    )
+    .unwrap()
+    .with_corrected_assembly(true);
+    let clean_up = transfer::feet::CleanUp { footskate: true, foot_height: true, smoothness: transfer::feet::SMOOTHNESS, faces: &template_b.faces };
+    let (out, corrected_out) = (w("blocks/stitched".into()), w("blocks/corrected".into()));
+    let mut made = transfer::predict::transfer_motion(
+        &model, &source_pca, &target_pca, &source, transfer::placement::Placement::PREDICT_DEFAULT,
+        Some(&mut recon), &clean_up, (&out, Some(&corrected_out)), 6,
+    )
+    .unwrap();
+    assert!(made.planted.as_ref().is_some_and(|p| p.planted_frames > 0), "{:?}", made.planted);
+    let frames_of = |placed: &mut transfer::placed_frames::PlacedFrames| {
+        let mut all = Vec::new();
+        placed.for_each(&mut |f| Ok(all.push(f.to_vec()))).unwrap();
+        all
+    };
+    let written_corrected = s(&w("out/punch/gpr-nn+correct".into()));
+    let both: Vec<&str> = surface_args.iter().copied().chain(["--corrected-out", &written_corrected]).collect();
+    predict("punch", &both, "gpr-nn+correct+stitch");
+    let written = MeshSequence::load_dir(w("out/punch/gpr-nn+correct+stitch".into())).unwrap();
+    let written_corrected = MeshSequence::load_dir(&written_corrected).unwrap();
+    assert!(frames_of(&mut made.frames) == written.frames, "frames made in blocks of 6 differ");
+    let corrected = frames_of(made.corrected_frames.as_mut().expect("corrected frames"));
+    assert!(corrected == written_corrected.frames, "corrected frames made in blocks of 6 differ");
+    assert!(corrected != written.frames, "the corrected frames are the stitched ones");
+    drop(made);
+    assert!(!out.parent().unwrap().exists() || std::fs::read_dir(out.parent().unwrap()).unwrap().count() == 0, "scratch files left");
+
     // The transfer plays at the source motion's rate (one output frame per source frame): A's
     // 20 fps in rate.json; a motion at another rate than the model's source motions keeps its
     // own, with a warning.

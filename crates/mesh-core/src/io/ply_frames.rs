@@ -98,33 +98,49 @@ impl PlyFrames {
         on_frame: &dyn Fn(),
     ) -> Result<()> {
         if let Some(f) = frames.iter().find(|f| f.len() != self.n_vertices) {
-            return Err(Error::invalid(format!(
-                "{}: a frame of {} vertices, the body has {}",
-                dir.display(),
-                f.len(),
-                self.n_vertices
-            )));
+            return Err(self.wrong_size(dir, f.len()));
         }
+        self.write_dir_streamed(dir, fps, |push| {
+            frames.iter().try_for_each(|f| {
+                push(f)?;
+                on_frame();
+                Ok(())
+            })
+        })
+    }
+
+    /// Writes the folder `dir` as [`PlyFrames::write_dir`] does, from frames made one at a
+    /// time: `frames` hands each frame in order to the function it is given, so a sequence of
+    /// any length is written holding one frame. Files are written first and flushed once all
+    /// are written (each reopened for it: a long sequence holds no open file per frame). If
+    /// `frames` or a write fails, `dir` is left as it was.
+    pub fn write_dir_streamed<F>(&self, dir: &Path, fps: Option<f64>, frames: F) -> Result<()>
+    where
+        F: FnOnce(&mut dyn FnMut(&[Vector3<f64>]) -> Result<()>) -> Result<()>,
+    {
         if let Some(fps) = fps {
             crate::frame_rate::check_fps(fps).map_err(|e| Error::invalid(format!("{}: {e}", dir.display())))?;
         }
         let keep = |p: &Path| crate::sequence::frame_number(p).is_none() && !crate::sequence::is_rate_file(p);
         crate::atomic::write_dir_atomic(dir, &keep, |tmp| {
             let mut buf = Vec::new();
-            let mut files = Vec::with_capacity(frames.len());
-            for (i, frame) in frames.iter().enumerate() {
-                let path = tmp.join(format!("{i:06}.ply"));
+            let mut paths = Vec::new();
+            frames(&mut |frame: &[Vector3<f64>]| {
+                if frame.len() != self.n_vertices {
+                    return Err(self.wrong_size(dir, frame.len()));
+                }
+                let path = tmp.join(format!("{:06}.ply", paths.len()));
                 self.encode_head(frame, &mut buf);
                 let mut file = std::fs::File::create(&path).map_err(|e| Error::io(&path, e))?;
                 file.write_all(&buf)
                     .and_then(|()| file.write_all(&self.faces))
                     .map_err(|e| Error::io(&path, e))?;
-                files.push((file, path));
-                on_frame();
-            }
+                paths.push(path);
+                Ok(())
+            })?;
             // Written first, flushed after: the disk sees the whole folder's data at once.
-            for (file, path) in &files {
-                file.sync_all().map_err(|e| Error::io(path, e))?;
+            for path in &paths {
+                std::fs::File::open(path).and_then(|f| f.sync_all()).map_err(|e| Error::io(path, e))?;
             }
             if let Some(fps) = fps {
                 let path = tmp.join(RATE_FILE);
@@ -133,6 +149,10 @@ impl PlyFrames {
             }
             Ok(())
         })
+    }
+
+    fn wrong_size(&self, dir: &Path, n: usize) -> Error {
+        Error::invalid(format!("{}: a frame of {n} vertices, the body has {}", dir.display(), self.n_vertices))
     }
 }
 

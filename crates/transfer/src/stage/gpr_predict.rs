@@ -10,14 +10,12 @@ use clap::Parser;
 use mesh_core::artifact::Artifact;
 use mesh_core::cli::CommonArgs;
 use mesh_core::segmentation::Segmentation;
-use mesh_core::sequence::MeshSequence;
 use serde::Serialize;
 
 use crate::gpr_model::GprModel;
 use crate::placement::Placement;
-use crate::predict::transfer_motion;
+use crate::predict::{transfer_motion, SourceMotion};
 use crate::reconstruct::{training_part_meshes, Reconstructor, Surface};
-use capture::align::AlignedMotion;
 use capture::part_pca::PcaModel;
 
 /// Transfer an aligned source motion to the target subject with a trained model: PLY frames in world coordinates
@@ -124,7 +122,9 @@ pub fn run(p: &Params) -> anyhow::Result<()> {
         .templates
         .check(&src_pca, &tgt_pca)
         .with_context(|| format!("{} with {} and {}", p.model.display(), p.source_pca.display(), p.target_pca.display()))?;
-    let motion = AlignedMotion::load(&p.motion)?;
+    let t0 = Instant::now();
+    let motion = SourceMotion::read(&p.motion, &src_pca)?;
+    let encode_s = t0.elapsed().as_secs_f64();
     let template = mesh_core::io::read_mesh(&p.target_template)?;
     capture::part_pca::check_same_template(
         &mesh_core::artifact::sha256_file(&p.target_template)?,
@@ -170,8 +170,7 @@ pub fn run(p: &Params) -> anyhow::Result<()> {
             )
         }
     };
-    let t0 = Instant::now();
-    let result = transfer_motion(
+    let mut result = transfer_motion(
         &model,
         &src_pca,
         &tgt_pca,
@@ -184,8 +183,14 @@ pub fn run(p: &Params) -> anyhow::Result<()> {
             smoothness: p.footskate_smoothness,
             faces: &faces,
         },
+        (&p.out, p.corrected_out.as_deref()),
+        capture::part_pca::frames_per_block(tgt_pca.n_vertices),
     )
     .with_context(|| p.motion.display().to_string())?;
+    result.timing.encode_s = encode_s;
+    if let Some(r) = &recon {
+        r.finish();
+    }
     let total = t0.elapsed().as_secs_f64();
     if let Some(w) = &result.blend_weights {
         let mean = w.iter().sum::<f64>() / w.len().max(1) as f64;
@@ -202,9 +207,8 @@ pub fn run(p: &Params) -> anyhow::Result<()> {
         );
     }
     if let Some(path) = &p.confidence {
-        let xs = src_pca.encode(&motion)?;
-        let xd = crate::predict::displacement_matrix(&motion.displacements);
-        let c = crate::confidence::confidence(&model, &xs, &xd)
+        let xd = crate::predict::displacement_matrix(&motion.info.displacements);
+        let c = crate::confidence::confidence(&model, &motion.coefficients, &xd)
             .with_context(|| p.motion.display().to_string())?;
         mesh_core::atomic::write_bytes_atomic(path, serde_json::to_string(&c)?.as_bytes())?;
     }
@@ -212,7 +216,7 @@ pub fn run(p: &Params) -> anyhow::Result<()> {
     // One output frame per source frame: the sequence plays at the source motion's rate. A
     // model trained on source motions of another rate learnt displacements per frame of that
     // rate, which the message says.
-    let fps = (motion.capture.fps > 0.0).then_some(motion.capture.fps);
+    let fps = (motion.info.capture.fps > 0.0).then_some(motion.info.capture.fps);
     let (_, _, model_header) = mesh_core::artifact::read_header(&p.model)?;
     if let (Some(fps), Some(trained)) = (fps, model_header.params.get("source_fps").and_then(|f| f.as_f64())) {
         if fps != trained {
@@ -222,10 +226,17 @@ pub fn run(p: &Params) -> anyhow::Result<()> {
             );
         }
     }
-    if let (Some(dir), Some(frames)) = (&p.corrected_out, result.corrected_frames) {
-        MeshSequence::new(faces.clone(), frames).write_dir_at(dir, fps)?;
+    let writer = mesh_core::io::ply_frames::PlyFrames::new(tgt_pca.n_vertices, &faces);
+    let outputs = [(p.corrected_out.as_ref(), result.corrected_frames.as_mut()), (Some(&p.out), Some(&mut result.frames))];
+    for (dir, frames) in outputs {
+        let (Some(dir), Some(frames)) = (dir, frames) else { continue };
+        let bar = mesh_core::cli::stage_progress(frames.n_frames() as u64, "frames written");
+        writer.write_dir_streamed(dir, fps, |push| frames.for_each(&mut |f| {
+            bar.inc(1);
+            push(f)
+        }))?;
+        bar.finish_and_clear();
     }
-    MeshSequence::new(faces, result.frames).write_dir_at(&p.out, fps)?;
     let write = t1.elapsed().as_secs_f64();
     let n = motion.n_frames() as f64;
     mesh_core::info!(

@@ -107,6 +107,7 @@ pub fn run(p: &Params) -> anyhow::Result<()> {
                     rms_pose_m: e,
                 });
             }
+            recon.finish();
         }
     }
     bar.finish_and_clear();
