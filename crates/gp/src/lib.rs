@@ -24,6 +24,7 @@
 
 pub mod affine_keypose;
 pub mod affine_mean;
+pub mod band;
 pub mod blr;
 pub mod dtw;
 pub mod gpr;

@@ -11,7 +11,7 @@ use nalgebra::DMatrix;
 
 /// Jitter ladder, relative to the mean of the diagonal: tried in order after a plain
 /// factorisation fails.
-const JITTER_LADDER: [f64; 6] = [1e-10, 1e-8, 1e-6, 1e-5, 1e-4, 1e-3];
+pub(crate) const JITTER_LADDER: [f64; 6] = [1e-10, 1e-8, 1e-6, 1e-5, 1e-4, 1e-3];
 
 /// A Cholesky factorisation `A + jitter I = L Lᵀ`.
 pub struct Cholesky {

@@ -45,7 +45,7 @@
 use capture::align::{AlignedMotion, CaptureInfo};
 use capture::contact_detector::{self, Rule};
 use capture::part_pca::PcaModel;
-use gp::linalg::Cholesky;
+use gp::band::{BandCholesky, SymmetricBand};
 use mesh_core::rigid::RigidMotion;
 use mesh_core::{Error, Result};
 use nalgebra::{DMatrix, Vector3};
@@ -118,7 +118,9 @@ pub fn corrections(
     if pairs.is_empty() {
         return Ok(vec![Vector3::zeros(); n]);
     }
-    let mut a = DMatrix::<f64>::identity(dim, dim) * RETURN;
+    // Banded normal equations: every term couples frames at most two apart.
+    let mut a = SymmetricBand::zeros(dim, 2);
+    (0..dim).for_each(|i| a.add(i, i, RETURN));
     let mut b = DMatrix::<f64>::zeros(dim, 3);
     // Residual e = d(t) − d(t−1) − g with g = horizontal(r Δs − Δp); d(t) is unknown t − 1.
     for &(t, f) in &pairs {
@@ -126,14 +128,13 @@ pub fn corrections(
             (source[f][t] - source[f][t - 1]) * ratio - (target[f][t] - target[f][t - 1]),
         );
         let (i, prev) = (t - 1, t.checked_sub(2));
-        a[(i, i)] += 1.0;
+        a.add(i, i, 1.0);
         for c in 0..3 {
             b[(i, c)] += g[c];
         }
         if let Some(j) = prev {
-            a[(j, j)] += 1.0;
-            a[(i, j)] -= 1.0;
-            a[(j, i)] -= 1.0;
+            a.add(j, j, 1.0);
+            a.add(i, j, -1.0);
             for c in 0..3 {
                 b[(j, c)] -= g[c];
             }
@@ -143,14 +144,15 @@ pub fn corrections(
     let w = [1.0, -2.0, 1.0];
     for t in 1..n.saturating_sub(1) {
         for (u, wu) in w.iter().enumerate() {
-            for (v, wv) in w.iter().enumerate() {
+            // The lower triangle: each pair of the stencil once.
+            for (v, wv) in w.iter().enumerate().take(u + 1) {
                 if let (Some(i), Some(j)) = ((t + u).checked_sub(2), (t + v).checked_sub(2)) {
-                    a[(i, j)] += smoothness * wu * wv;
+                    a.add(i, j, smoothness * wu * wv);
                 }
             }
         }
     }
-    let chol = Cholesky::new(&a, "foot-skating normal equations", notes)
+    let chol = BandCholesky::new(&a, "foot-skating normal equations", notes)
         .map_err(|e| Error::invalid(format!("foot-skating clean-up: {e}")))?;
     let x = chol.solve(&b);
     Ok(std::iter::once(Vector3::zeros())
@@ -199,21 +201,22 @@ pub fn leg_drops(
     if !(0..n).any(|t| planted[t] && lowest[t].is_finite()) {
         return Ok(vec![0.0; n]);
     }
-    let mut a = DMatrix::<f64>::identity(n, n) * HEIGHT_RETURN;
+    let mut a = SymmetricBand::zeros(n, 2);
+    (0..n).for_each(|t| a.add(t, t, HEIGHT_RETURN));
     let mut b = DMatrix::<f64>::zeros(n, 1);
     for t in (0..n).filter(|&t| planted[t] && lowest[t].is_finite()) {
-        a[(t, t)] += 1.0;
+        a.add(t, t, 1.0);
         b[(t, 0)] += floor - lowest[t];
     }
     let w = [1.0, -2.0, 1.0];
     for t in 1..n.saturating_sub(1) {
         for (u, wu) in w.iter().enumerate() {
-            for (v, wv) in w.iter().enumerate() {
-                a[(t + u - 1, t + v - 1)] += smoothness * wu * wv;
+            for (v, wv) in w.iter().enumerate().take(u + 1) {
+                a.add(t + u - 1, t + v - 1, smoothness * wu * wv);
             }
         }
     }
-    let chol = Cholesky::new(&a, "foot-height normal equations", notes)
+    let chol = BandCholesky::new(&a, "foot-height normal equations", notes)
         .map_err(|e| Error::invalid(format!("foot height: {e}")))?;
     let x = chol.solve(&b);
     Ok((0..n).map(|t| x[(t, 0)]).collect())

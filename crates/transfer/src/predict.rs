@@ -101,22 +101,22 @@ pub struct SourceMotion {
 }
 
 impl SourceMotion {
-    /// The aligned motion at `path` encoded with `source_pca`, a frame at a time. The soles
-    /// depend on the up axis, which the file stores after the frames, so it is read twice: once
-    /// for its capture record, once to encode the frames and pick the soles (the file must not
-    /// change in between).
+    /// The aligned motion at `path` encoded with `source_pca`, a frame at a time. Which vertices
+    /// are the soles depends on the up axis, which the file stores after the frames, so the file
+    /// is read twice: once for its capture record, once to encode the frames and keep the soles'
+    /// vertices (it must not change in between).
     pub fn read(path: &std::path::Path, source_pca: &capture::part_pca::PcaModel) -> Result<SourceMotion> {
-        let (first, sha256) = capture::motion_stream::read_frames(path, |_| Ok(()))?;
+        let (first, first_sha256) = capture::motion_stream::read_frames(path, |_| Ok(()))?;
         let soles = crate::feet::SourceSoles::of(source_pca, &first.capture.up.into());
-        let mut encoder = capture::part_pca::FrameEncoder::new(source_pca);
         let mut picked = Vec::new();
-        let (info, again) = capture::motion_stream::read_frames(path, |f| {
+        let mut encoder = capture::part_pca::FrameEncoder::new(source_pca);
+        let (info, sha256) = capture::motion_stream::read_frames(path, |f| {
             if let Some(s) = &soles {
                 picked.push(s.pick(&f));
             }
             encoder.push(f)
         })?;
-        if again != sha256 {
+        if sha256 != first_sha256 || info != first {
             return Err(Error::file(path, "changed while it was read"));
         }
         let coefficients = encoder.finish(&info.capture.template_sha256).map_err(|e| Error::file(path, e.to_string()))?;
@@ -155,14 +155,26 @@ pub struct Transferred {
     pub timing: Timing,
 }
 
+/// How [`transfer_motion`] makes and keeps a transfer's frames.
+pub struct Streaming<'a> {
+    /// The output folder of the frames (and of the corrected frames, when the reconstructor
+    /// makes them): the kept frames' scratch files go beside them.
+    pub output: &'a std::path::Path,
+    pub corrected_output: Option<&'a std::path::Path>,
+    /// Frames made at a time ([`capture::part_pca::blocks_of`]: every frame is the same
+    /// whatever the block).
+    pub block: usize,
+    /// Bytes of placed frames held in memory per output; beyond it they are kept on disk
+    /// ([`PlacedFrames`]).
+    pub memory_budget: usize,
+}
+
 /// The whole of `gpr-predict` but the file writing: source coefficients -> target coefficients
 /// (and displacements) -> target parts (limbs turned by the model's limb orientation,
 /// `crate::limb_orientation`) -> assembled target mesh (or `reconstructor`'s §6 correction and
 /// stitching) -> placed from the source's first world pose -> planted feet cleaned up as `feet`
-/// asks ([`crate::feet`]). The frames are made a block of `block` frames at a time
-/// ([`capture::part_pca::blocks_of`]; every frame is the same whatever the block) into
-/// [`PlacedFrames`] beside `output` (and `corrected_output`), so a motion of any length holds a
-/// block of frames.
+/// asks ([`crate::feet`]). The frames are made a block at a time and kept as [`Streaming`] says,
+/// so a motion of any length holds a block of frames and the kept frames' budget.
 #[allow(clippy::too_many_arguments)]
 pub fn transfer_motion(
     model: &GprModel,
@@ -172,8 +184,7 @@ pub fn transfer_motion(
     placement: crate::placement::Placement,
     mut reconstructor: Option<&mut crate::reconstruct::Reconstructor>,
     feet: &crate::feet::CleanUp,
-    output: (&std::path::Path, Option<&std::path::Path>),
-    block: usize,
+    streaming: &Streaming,
 ) -> Result<Transferred> {
     use capture::align::root_poses;
     use crate::placement::{
@@ -229,9 +240,10 @@ pub fn transfer_motion(
         .and_then(|target| Some((target, source.contacts()?)));
     let recorded = clean.as_ref().map(|(target, _)| target);
     let plan = capture::assemble::plan(target_pca)?;
-    let mut frames = PlacedFrames::new(output.0, target_pca.n_vertices)?;
+    let keep = |path: &std::path::Path| PlacedFrames::new(path, target_pca.n_vertices, streaming.memory_budget);
+    let mut frames = keep(streaming.output);
     let mut corrected_frames: Option<PlacedFrames> = None;
-    for range in capture::part_pca::blocks_of(source.n_frames(), block) {
+    for range in capture::part_pca::blocks_of(source.n_frames(), streaming.block) {
         let rows = |m: &[DMatrix<f64>]| -> Vec<DMatrix<f64>> { m.iter().map(|c| c.rows(range.start, range.len()).into_owned()).collect() };
         // The decoded parts are dropped once assembled, and the assembled frames are placed
         // where they are.
@@ -249,9 +261,9 @@ pub fn transfer_motion(
         frames.push(&made, recorded, &up)?;
         if let Some(c) = corrected.as_mut() {
             place_in_place(&world_poses[range.clone()], c);
-            let out = match (&mut corrected_frames, output.1) {
+            let out = match (&mut corrected_frames, streaming.corrected_output) {
                 (Some(out), _) => out,
-                (None, Some(path)) => corrected_frames.insert(PlacedFrames::new(path, target_pca.n_vertices)?),
+                (None, Some(path)) => corrected_frames.insert(keep(path)),
                 (None, None) => return Err(Error::invalid("corrected frames made with no output for them")),
             };
             out.push(c, recorded, &up)?;

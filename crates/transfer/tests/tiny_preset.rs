@@ -119,8 +119,9 @@ fn defaults_on_the_tiny_preset_never_lose_to_raw_regression_or_the_papers_placem
     }
 
     // A transfer is made a block of frames at a time (a motion of any length holds one block):
-    // made 6 frames at a time, through correction, stitching and both feet clean-ups, every
-    // frame is the one `gpr-predict` wrote (one block on this body), to the bit.
+    // made 6 frames at a time and kept on disk, through correction, stitching and both feet
+    // clean-ups, every frame is the one `gpr-predict` wrote (one block, in memory, on this
+    // body), to the bit.
     let source_pca = capture::part_pca::PcaModel::load(w("A/pca.model".into())).unwrap();
     let model = transfer::gpr_model::GprModel::load(w("model".into())).unwrap();
     let source = transfer::predict::SourceMotion::read(&w("A/punch.aligned".into()), &source_pca).unwrap();
@@ -138,7 +139,8 @@ fn defaults_on_the_tiny_preset_never_lose_to_raw_regression_or_the_papers_placem
     let (out, corrected_out) = (w("blocks/stitched".into()), w("blocks/corrected".into()));
     let mut made = transfer::predict::transfer_motion(
         &model, &source_pca, &target_pca, &source, transfer::placement::Placement::PREDICT_DEFAULT,
-        Some(&mut recon), &clean_up, (&out, Some(&corrected_out)), 6,
+        Some(&mut recon), &clean_up,
+        &transfer::predict::Streaming { output: &out, corrected_output: Some(&corrected_out), block: 6, memory_budget: 0 },
     )
     .unwrap();
     assert!(made.planted.as_ref().is_some_and(|p| p.planted_frames > 0), "{:?}", made.planted);

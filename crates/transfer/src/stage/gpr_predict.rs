@@ -14,7 +14,7 @@ use serde::Serialize;
 
 use crate::gpr_model::GprModel;
 use crate::placement::Placement;
-use crate::predict::{transfer_motion, SourceMotion};
+use crate::predict::{transfer_motion, SourceMotion, Streaming};
 use crate::reconstruct::{training_part_meshes, Reconstructor, Surface};
 use capture::part_pca::PcaModel;
 
@@ -83,6 +83,11 @@ pub struct Params {
     /// --surface correct writes) to this folder, from the same correction
     #[arg(long)]
     pub corrected_out: Option<PathBuf>,
+    /// Memory for the transferred frames, in MiB: they are made a block at a time and held
+    /// until the feet clean-up is solved, in memory while they fit, beyond it in a scratch
+    /// file beside the output (the same frames either way)
+    #[arg(long, value_name = "MIB", default_value_t = 1024)]
+    pub memory_budget: usize,
     /// Also write timings (frames per second of the prediction) as JSON
     #[arg(long)]
     pub timing: Option<PathBuf>,
@@ -183,8 +188,12 @@ pub fn run(p: &Params) -> anyhow::Result<()> {
             smoothness: p.footskate_smoothness,
             faces: &faces,
         },
-        (&p.out, p.corrected_out.as_deref()),
-        capture::part_pca::frames_per_block(tgt_pca.n_vertices),
+        &Streaming {
+            output: &p.out,
+            corrected_output: p.corrected_out.as_deref(),
+            block: capture::part_pca::frames_per_block(tgt_pca.n_vertices),
+            memory_budget: p.memory_budget.saturating_mul(1 << 20),
+        },
     )
     .with_context(|| p.motion.display().to_string())?;
     result.timing.encode_s = encode_s;
