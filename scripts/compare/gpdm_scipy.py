@@ -147,7 +147,7 @@ def main():
     ap.add_argument("--workdir", default="/tmp/gpdm_compare")
     ap.add_argument("--skip-rust", action="store_true")
     ap.add_argument("--raw", action="store_true")
-    ap.add_argument("--bin", default=os.path.join(os.path.dirname(__file__), "../../target/release/examples/fit_compare"))
+    ap.add_argument("--bin", default=os.path.join(os.path.dirname(__file__), "../../target/release/fit_compare"))
     a = ap.parse_args()
     if not a.skip_rust:
         env = dict(os.environ, OPENBLAS_NUM_THREADS="1")
