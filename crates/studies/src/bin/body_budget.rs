@@ -1,4 +1,4 @@
-//! Issue-6 speed goal end to end: 100 variations of a 100-frame motion, decoded to whole-body
+//! The GPDM speed goal end to end (docs/PERFORMANCE.md): 100 variations of a 100-frame motion, decoded to whole-body
 //! meshes, on 2 cores. Loads a trained variation model (default: the demo's
 //! `out/work/variation/locomotion.model`), samples 100 latent trajectories of 100 frames for
 //! every body part (HMC, burn-in and step-size adaptation included), decodes every frame of

@@ -1,6 +1,6 @@
 //! Writes a Poisson problem and its solution for `scripts/compare/poisson_libigl.py`.
 //!
-//! `cargo test --release -p surface` builds it; run
+//! `cargo build --release -p studies --bin poisson_export` builds it; run
 //! `target/release/poisson_export <dir>`. Problem: rest mesh `V`, `F`
 //! (`mesh_core::shapes::capsule_body(170, 64, ...)`, 12 930 vertices); target gradients
 //! `J = G X` of a deformed pose `X` on the rest geometry; Dirichlet vertices `fixed` held at

@@ -14,7 +14,7 @@
 //! versions (`gram_h23`, `gradients_h23`: row-major, libm `exp`, scalar pair loops).
 //!
 //! `target/release/profile_objective [objective-only | old-new [PROBLEM_DIR...]]`
-//! (built by `cargo test --release -p gpdm`; `objective-only` runs just the 1-vs-2-thread
+//! (built by `cargo build --release -p studies`; `objective-only` runs just the 1-vs-2-thread
 //! part, longer, e.g. under `perf record`; `old-new` just the old-vs-new comparison on the
 //! synthetic problem, or with directories only on those exported problems, e.g. /tmp/problems/leg_l,
 //! see `fit_compare`).

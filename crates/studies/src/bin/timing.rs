@@ -1,5 +1,5 @@
-//! Wall-clock timings of the issue-6 speed items without criterion (which `cargo bench -p
-//! gpdm` runs): objective+gradient at N = 446, D = 15000, and HMC for 100 samples of a
+//! Wall-clock timings of the GPDM speed goals (docs/PERFORMANCE.md) without criterion (which
+//! `cargo bench -p gpdm` runs): objective+gradient at N = 446, D = 15000, and HMC for 100 samples of a
 //! 100-frame trajectory, plus decoding them to poses (3DV eq. 12).
 //!
 //! Usage: timing [D=15000]
