@@ -1,12 +1,23 @@
 //! The proposed curves against a capture set's own (docs/RESULTS.md): per subject, the
 //! fraction of template vertices given the same part, and each part's intersection over union.
 //!   cargo run --release -p studies --bin agreement -- out/demo/set A B
+use clap::Parser;
 use mesh_core::capture_set::{CaptureSet, SubjectSpec};
 
+/// The proposed curves against a capture set's own: per subject, the fraction of template
+/// vertices given the same part, and each part's intersection over union.
+#[derive(Parser)]
+struct Cli {
+    /// The capture set.
+    set: String,
+    /// The subjects.
+    subjects: Vec<String>,
+}
+
 fn main() -> anyhow::Result<()> {
-    let args: Vec<String> = std::env::args().skip(1).collect();
-    let set = CaptureSet::open(&args[0])?;
-    for x in &args[1..] {
+    let cli = Cli::parse();
+    let set = CaptureSet::open(&cli.set)?;
+    for x in &cli.subjects {
         let spec = SubjectSpec::load(set.subject_json(x))?;
         let tpl = set.template_path(x, &spec)?;
         let mesh = mesh_core::io::read_mesh(&tpl)?;

@@ -9,6 +9,7 @@
 //! cargo run --release -p studies --bin arm_reach -- SEGMENTATION SEQ_DIR...
 //! e.g. `arm_reach out/holdout-run/work/D/parts.seg out/holdout/set/D/walk out/holdout/set/truth/D/cmu_walkturn`
 
+use clap::Parser;
 use mesh_core::artifact::Artifact;
 use mesh_core::segmentation::Segmentation;
 use mesh_core::sequence::MeshSequence;
@@ -23,11 +24,18 @@ fn centroid(frame: &[Vector3<f64>], vs: &[u32]) -> Vector3<f64> {
     vs.iter().map(|&v| frame[v as usize]).sum::<Vector3<f64>>() / vs.len().max(1) as f64
 }
 
+/// How far each arm reaches out from the body in mesh sequences of one subject.
+#[derive(Parser)]
+struct Cli {
+    /// The subject's segmentation (parts.seg).
+    segmentation: String,
+    /// Mesh sequence folders of that subject.
+    seq_dirs: Vec<String>,
+}
+
 fn main() -> anyhow::Result<()> {
-    let args: Vec<String> = std::env::args().skip(1).collect();
-    let [seg_path, dirs @ ..] = args.as_slice() else {
-        anyhow::bail!("usage: arm_reach SEGMENTATION SEQ_DIR...");
-    };
+    let cli = Cli::parse();
+    let (seg_path, dirs) = (&cli.segmentation, &cli.seq_dirs);
     let seg = Segmentation::load(seg_path)?;
     let part = |name: &str| {
         seg.parts

@@ -3,15 +3,23 @@
 //!
 //! Usage: contact_check [capture set] (default out/demo/set; subjects A and B)
 
+use clap::Parser;
 use mesh_core::capture_set::{CaptureSet, SubjectSpec};
 use mesh_core::sequence::MeshSequence;
 use capture::contact_detector::{detect, precision_recall, Rule};
 use variation::contacts;
 
+/// Precision and recall of the contact detector against a capture set's contact annotations
+/// (subjects A and B).
+#[derive(Parser)]
+struct Cli {
+    /// The capture set.
+    #[arg(default_value = "out/demo/set")]
+    set: String,
+}
+
 fn main() -> mesh_core::Result<()> {
-    let dir = std::env::args()
-        .nth(1)
-        .unwrap_or_else(|| "out/demo/set".into());
+    let dir = Cli::parse().set;
     let set = CaptureSet::open(&dir)?;
     for subject in ["A".to_string(), "B".to_string()] {
         let spec = SubjectSpec::load(set.subject_json(&subject))?;

@@ -5,15 +5,25 @@
 //! Usage: export_part <group> <part> <out_dir>
 //! e.g.: target/release/export_part out/work/variation/locomotion.group leg_l /tmp/leg_l
 
+use clap::Parser;
 use mesh_core::artifact::Artifact;
 use variation::group::Group;
 use variation::train::training_data;
 
+/// Exports one body part's training matrix of a prealigned group as y.f64 and meta.json.
+#[derive(Parser)]
+struct Cli {
+    /// The prealigned group (prealign's output).
+    group: String,
+    /// The body part's name.
+    part: String,
+    /// The output folder.
+    out_dir: String,
+}
+
 fn main() -> Result<(), Box<dyn std::error::Error>> {
-    let args: Vec<String> = std::env::args().collect();
-    let [_, group, part, out] = args.as_slice() else {
-        return Err("usage: export_part <group> <part> <out_dir>".into());
-    };
+    let cli = Cli::parse();
+    let (group, part, out) = (&cli.group, &cli.part, &cli.out_dir);
     let group = Group::load(group)?;
     let k = group
         .parts

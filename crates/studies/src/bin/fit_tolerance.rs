@@ -8,17 +8,30 @@
 //! default iteration limit)
 //! e.g.: OPENBLAS_NUM_THREADS=1 target/release/fit_tolerance out/work/variation/locomotion.group
 
+use clap::Parser;
 use mesh_core::artifact::Artifact;
 use variation::group::Group;
 use variation::train::{train, TrainConfig};
 
+/// The group fitted with the default settings at several value tolerances, each part alone on
+/// one thread, then 3DV figs. 4 and 7b of each model.
+#[derive(Parser)]
+struct Cli {
+    /// The prealigned group (prealign's output).
+    group: String,
+    /// Value tolerances, each optionally with an iteration limit, `TOL[:MAX_ITER]` [default:
+    /// 1e-10 1e-8 1e-7 at the default iteration limit].
+    settings: Vec<String>,
+}
+
 fn main() {
-    let args: Vec<String> = std::env::args().skip(1).collect();
-    let group = Group::load(args.first().expect("GROUP")).unwrap_or_else(|e| panic!("{e}"));
+    let cli = Cli::parse();
+    let group = Group::load(&cli.group).unwrap_or_else(|e| panic!("{e}"));
     let max_iter = TrainConfig::default().options.lbfgs.max_iter;
-    let settings: Vec<(f64, usize)> = match args.len() {
-        0 | 1 => [1e-10, 1e-8, 1e-7].map(|t| (t, max_iter)).to_vec(),
-        _ => args[1..]
+    let settings: Vec<(f64, usize)> = match cli.settings.len() {
+        0 => [1e-10, 1e-8, 1e-7].map(|t| (t, max_iter)).to_vec(),
+        _ => cli
+            .settings
             .iter()
             .map(|a| match a.split_once(':') {
                 Some((t, n)) => (t.parse().expect("a tolerance"), n.parse().expect("an iteration limit")),

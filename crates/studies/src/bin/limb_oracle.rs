@@ -10,6 +10,7 @@
 //! cargo run --release -p studies --bin limb_oracle -- WORK SET SOURCE TARGET MOTION
 //! e.g. `limb_oracle out/demo-run/work out/demo/set A B punch` (after `make transfer`)
 
+use clap::Parser;
 use studies::limb_bend;
 
 use capture::align::{align_motion_on, AlignedMotion};
@@ -22,11 +23,25 @@ use transfer::gpr_model::GprModel;
 use transfer::limb_orientation::{apply, limbs, orientation, reference, turn_to};
 use transfer::reconstruct::rows_to_meshes;
 
+/// How much of a transfer's pose error is the limbs' orientation
+/// (docs/studies/06-limb-orientation.md).
+#[derive(Parser)]
+struct Cli {
+    /// The run's work folder (e.g. out/demo-run/work).
+    work: String,
+    /// The capture set (e.g. out/demo/set).
+    set: String,
+    /// The source subject.
+    source: String,
+    /// The target subject.
+    target: String,
+    /// The test motion.
+    motion: String,
+}
+
 fn main() -> anyhow::Result<()> {
-    let a: Vec<String> = std::env::args().collect();
-    let [_, work, set, s, t, m] = &a[..] else {
-        anyhow::bail!("usage: limb_oracle WORK SET SOURCE TARGET MOTION");
-    };
+    let cli = Cli::parse();
+    let (work, set, s, t, m) = (&cli.work, &cli.set, &cli.source, &cli.target, &cli.motion);
     let model = GprModel::load(format!("{work}/models/{s}-to-{t}/gpr-nn.model"))?;
     let (spca, tpca) = (PcaModel::load(format!("{work}/{s}/pca.model"))?, PcaModel::load(format!("{work}/{t}/pca.model"))?);
     let motion = AlignedMotion::load(format!("{work}/{s}/{m}.aligned"))?;

@@ -15,6 +15,7 @@
 //! Usage: mean_prediction_check <model> [ε...]
 //! e.g.: target/release/mean_prediction_check out/work/variation/locomotion.model 0.01 0.05
 
+use clap::Parser;
 use mesh_core::artifact::Artifact;
 use nalgebra::DMatrix;
 use rand::{RngExt, SeedableRng};
@@ -28,10 +29,21 @@ fn normal(rng: &mut ChaCha8Rng) -> f64 {
     (-2.0 * (1.0 - u).ln()).sqrt() * (std::f64::consts::TAU * v).cos()
 }
 
+/// Whether a trained model's mean predictions stay on the learned data, and how smooth the pose
+/// decoder is near the learned latents.
+#[derive(Parser)]
+struct Cli {
+    /// The variation model (gpdm-train's output).
+    model: String,
+    /// Latent perturbations ε, relative to the RMS spread of each part's latent points
+    /// [default: 0.01 0.05].
+    eps: Vec<f64>,
+}
+
 fn main() -> Result<(), Box<dyn std::error::Error>> {
-    let args: Vec<String> = std::env::args().skip(1).collect();
-    let path = args.first().ok_or("usage: mean_prediction_check <model> [eps...]")?;
-    let eps: Vec<f64> = if args.len() > 1 { args[1..].iter().map(|a| a.parse()).collect::<Result<_, _>>()? } else { vec![0.01, 0.05] };
+    let cli = Cli::parse();
+    let path = &cli.model;
+    let eps: Vec<f64> = if cli.eps.is_empty() { vec![0.01, 0.05] } else { cli.eps.clone() };
     let model = VariationModel::load(path)?;
     let mut notes = Vec::new();
     let dec = Decoder::new(&model, &mut notes)?;

@@ -5,6 +5,7 @@
 //!
 //! Usage: noise_floor [D=300] [single]   (`single`: train on the first sequence only)
 
+use clap::Parser;
 use studies::synthetic;
 
 use gpdm::kernel::RbfLinear;
@@ -13,12 +14,20 @@ use gpdm::predict::Predictor;
 use gpdm::{Gpdm, GpdmConfig};
 use std::time::Instant;
 
+/// Measures the pose-noise floor on noise-free and noisy synthetic cyclic data.
+#[derive(Parser)]
+struct Cli {
+    /// The synthetic capture's dimension D.
+    #[arg(default_value_t = 300)]
+    d: usize,
+    /// `single`: trains on the first sequence only.
+    single: Option<String>,
+}
+
 fn main() {
-    let d_obs: usize = std::env::args()
-        .nth(1)
-        .map(|s| s.parse().expect("D"))
-        .unwrap_or(300);
-    let single = std::env::args().nth(2).as_deref() == Some("single");
+    let cli = Cli::parse();
+    let d_obs = cli.d;
+    let single = cli.single.as_deref() == Some("single");
     let keep = if single { 1 } else { 4 };
     for noise in [0.0, 2e-3] {
         let clean = synthetic::synthetic(d_obs, 0.0);

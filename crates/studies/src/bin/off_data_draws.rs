@@ -10,16 +10,27 @@
 //! Usage: off_data_draws MODEL [κ] (default κ 0.3)
 //! e.g.: target/release/off_data_draws out/work/variation/jump.model 0.3
 
+use clap::Parser;
 use gpdm::ancestral::{sample_trajectories_ancestral, sample_trajectories_on_data};
 use gpdm::hmc::{leaves_the_data, OFF_DATA_VARIANCE};
 use gpdm::predict::Predictor;
 use mesh_core::artifact::Artifact;
 use variation::train::VariationModel;
 
+/// How often ancestral draws leave a trained model's learned data, free and with the redraws.
+#[derive(Parser)]
+struct Cli {
+    /// The variation model (gpdm-train's output).
+    model: String,
+    /// The variance scale κ.
+    #[arg(default_value_t = 0.3)]
+    kappa: f64,
+}
+
 fn main() -> anyhow::Result<()> {
-    let a: Vec<String> = std::env::args().collect();
-    let model = VariationModel::load(a.get(1).ok_or_else(|| anyhow::anyhow!("usage: off_data_draws MODEL [κ]"))?)?;
-    let kappa: f64 = a.get(2).map_or(Ok(0.3), |k| k.parse())?;
+    let cli = Cli::parse();
+    let model = VariationModel::load(&cli.model)?;
+    let kappa = cli.kappa;
     let n = 20;
     for (k, pm) in model.parts.iter().enumerate() {
         let pr = Predictor::new(&pm.gpdm)?;

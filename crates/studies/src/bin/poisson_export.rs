@@ -7,6 +7,7 @@
 //! `X`. Files (text, 17 significant digits): V.txt, F.txt, X.txt, fixed.txt, solution.txt,
 //! timing.json (seconds: symbolic+numeric factorisation, one 3-column solve).
 
+use clap::Parser;
 use mesh_core::shapes::capsule_body;
 use nalgebra::Vector3;
 use std::fmt::Write as _;
@@ -22,12 +23,15 @@ fn write_rows<const N: usize>(path: &std::path::Path, rows: impl Iterator<Item =
     std::fs::write(path, s).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
 }
 
+/// Writes a Poisson problem and its solution for scripts/compare/poisson_libigl.py.
+#[derive(Parser)]
+struct Cli {
+    /// The output folder.
+    dir: std::path::PathBuf,
+}
+
 fn main() {
-    let dir = std::path::PathBuf::from(
-        std::env::args()
-            .nth(1)
-            .expect("usage: poisson_export <dir>"),
-    );
+    let dir = Cli::parse().dir;
     std::fs::create_dir_all(&dir).expect("output directory");
     let (mesh, _) = capsule_body(170, 64, 1.0, 17.0);
     let (v, f) = (&mesh.vertices, &mesh.faces);

@@ -3,6 +3,7 @@
 //!
 //! Usage: profile_energy
 
+use clap::Parser;
 use studies::synthetic;
 
 use faer::Mat;
@@ -12,8 +13,16 @@ use gpdm::predict::Predictor;
 use gpdm::{Gpdm, GpdmConfig};
 use std::time::Instant;
 
+/// Splits the cost of one HMC energy+gradient evaluation into its two triangular solves and the
+/// rest.
+#[derive(Parser)]
+struct Cli {
+    /// `gemm`: the GEMM throughput of the bulk decoder's shape instead.
+    mode: Option<String>,
+}
+
 fn main() {
-    if std::env::args().nth(1).as_deref() == Some("gemm") {
+    if Cli::parse().mode.as_deref() == Some("gemm") {
         gemm_shapes();
         return;
     }

@@ -10,6 +10,7 @@
 //! Usage: seam_check GROUP MODEL DIR... (DIR = hmc-sample --out; one line per sequence and DIR,
 //! means over its variations)
 
+use clap::Parser;
 use std::collections::HashMap;
 
 use mesh_core::artifact::Artifact;
@@ -52,14 +53,23 @@ fn measure(
     std::array::from_fn(|i| s[i] / n[i].max(1) as f64)
 }
 
+/// Seams of written variations: edge log ratios to the template inside the bands and on their
+/// border, one line per sequence and folder.
+#[derive(Parser)]
+struct Cli {
+    /// The prealigned group (prealign's output).
+    group: String,
+    /// The variation model (gpdm-train's output).
+    model: String,
+    /// Variation folders (hmc-sample --out).
+    #[arg(required = true)]
+    dirs: Vec<String>,
+}
+
 fn main() -> mesh_core::Result<()> {
-    let a: Vec<String> = std::env::args().collect();
-    if a.len() < 4 {
-        eprintln!("Usage: seam_check GROUP MODEL DIR...");
-        std::process::exit(2);
-    }
-    let group = Group::load(&a[1])?;
-    let model = VariationModel::load(&a[2])?;
+    let cli = Cli::parse();
+    let group = Group::load(&cli.group)?;
+    let model = VariationModel::load(&cli.model)?;
     let mut count = vec![0u8; model.template.len()];
     for p in &model.parts {
         for &v in &p.part.vertices {
@@ -85,7 +95,7 @@ fn main() -> mesh_core::Result<()> {
         let q = measure(&s.motion.world_frames(), &model.template, &model.faces, &edges, &band);
         println!("{:<12} source {:.4} / {:.4} / {:.4}  {:.4} / {:.4} / {:.4}", s.name, q[0], q[1], q[2], q[3], q[4], q[5]);
     }
-    for dir in &a[3..] {
+    for dir in &cli.dirs {
         let mut seqs: Vec<_> = std::fs::read_dir(dir).expect("an hmc-sample --out folder").filter_map(|e| e.ok()).filter(|e| e.path().is_dir()).collect();
         seqs.sort_by_key(|e| e.file_name());
         for e in seqs {

@@ -4,6 +4,7 @@
 //!
 //! Usage: timing [D=15000]
 
+use clap::Parser;
 use studies::synthetic;
 
 use gpdm::hmc::{sample_trajectories, HmcOptions};
@@ -12,11 +13,16 @@ use gpdm::predict::Predictor;
 use gpdm::{Gpdm, GpdmConfig};
 use std::time::Instant;
 
+/// Wall-clock timings of the GPDM speed goals without criterion.
+#[derive(Parser)]
+struct Cli {
+    /// The synthetic capture's dimension D.
+    #[arg(default_value_t = 15000)]
+    d: usize,
+}
+
 fn main() {
-    let d_obs: usize = std::env::args()
-        .nth(1)
-        .map(|s| s.parse().expect("D"))
-        .unwrap_or(15000);
+    let d_obs = Cli::parse().d;
     let m = Gpdm::new(&synthetic::synthetic(d_obs, 1e-3), GpdmConfig::default()).unwrap();
     let obj = m.objective().unwrap();
     let th = m.theta();

@@ -5,6 +5,7 @@
 //!
 //! Usage: variation
 
+use clap::Parser;
 use studies::synthetic;
 
 use gpdm::hmc::{sample_trajectories, HmcOptions};
@@ -12,7 +13,13 @@ use gpdm::optim::{train, TrainOptions};
 use gpdm::predict::Predictor;
 use gpdm::{Gpdm, GpdmConfig};
 
+/// Variation vs plausibility of HMC samples as a function of the dynamics-noise floor.
+#[derive(Parser)]
+struct Cli {
+}
+
 fn main() {
+    Cli::parse();
     let data: Vec<_> = synthetic::synthetic(300, 0.0).into_iter().take(1).collect();
     let y = &data[0];
     let rms = |a: nalgebra::DMatrixView<f64>, b: nalgebra::DMatrixView<f64>| {

@@ -1,4 +1,4 @@
-//! Issue-6 speed goal: 100 variations of a 100-frame motion, decoded to poses, within 1 s on
+//! The GPDM speed goal (docs/PERFORMANCE.md): 100 variations of a 100-frame motion, decoded to poses, within 1 s on
 //! 2 cores. Trains once on the synthetic 446-frame problem (D = 15000, 200 L-BFGS iterations),
 //! then for each HMC setting times the sampler (`sample_trajectories_parallel`, 2 chains on a
 //! 2-thread pool) and, for pose dimensions D ∈ {3000, 6000, 15000} (a body part's share; the
@@ -13,6 +13,7 @@
 //! Usage: variations_budget [rel_tol=1e-6]
 //! e.g.: OPENBLAS_NUM_THREADS=1 target/release/variations_budget
 
+use clap::Parser;
 use studies::synthetic;
 
 use gpdm::ancestral::sample_trajectories_ancestral;
@@ -23,11 +24,16 @@ use gpdm::{Gpdm, GpdmConfig};
 use rayon::prelude::*;
 use std::time::Instant;
 
+/// 100 variations of a 100-frame motion, sampled and decoded to poses, on the synthetic capture.
+#[derive(Parser)]
+struct Cli {
+    /// The pose basis's relative tolerance (`Predictor::with_pose_basis`).
+    #[arg(default_value_t = 1e-6)]
+    rel_tol: f64,
+}
+
 fn main() {
-    let rel_tol: f64 = std::env::args()
-        .nth(1)
-        .map(|s| s.parse().expect("rel_tol"))
-        .unwrap_or(1e-6);
+    let rel_tol = Cli::parse().rel_tol;
     let pool = rayon::ThreadPoolBuilder::new()
         .num_threads(2)
         .build()
