@@ -44,7 +44,17 @@ fn max_dev(a: &[nalgebra::Vector3<f64>], b: &[Vec<nalgebra::Vector3<f64>>]) -> f
         .fold(0.0, f64::max)
 }
 
+/// `--help`: what the program does and its arguments.
+const USAGE: &str = "\
+100 variations of a 100-frame motion on a trained model, decoded to whole-body meshes.
+
+Usage: body_budget [MODEL] [--old-samples N] [--skip-old] [--ancestral] [--fast B,T,L,C]
+                   [--tol METRES] [--hmc B,T,L,C]... [--batch N] [--block N] [--fused-only N]
+  MODEL  default out/work/variation/locomotion.model; the options are described in
+         crates/studies/src/bin/body_budget.rs";
+
 fn main() {
+    studies::usage_on_help(USAGE);
     let args: Vec<String> = std::env::args().skip(1).collect();
     let path = args
         .iter()

@@ -36,7 +36,18 @@ fn rms(a: &DMatrix<f64>, b: &DMatrix<f64>) -> f64 {
     ((a - b).norm_squared() / a.nrows() as f64).sqrt()
 }
 
+/// `--help`: what the program does and its arguments.
+const USAGE: &str = "\
+Stationarity of the HMC chains for a given burn-in and chain start: kept samples against
+exact draws of the same density.
+
+Usage: burn_in_check [MODEL] [--seeds N] [--settings START:BURN,...]
+  MODEL       default out/work/variation/locomotion.model
+  --seeds     default 8
+  --settings  START is mean, ancestral, learned or training";
+
 fn main() {
+    studies::usage_on_help(USAGE);
     let args: Vec<String> = std::env::args().skip(1).collect();
     let path = args
         .iter()

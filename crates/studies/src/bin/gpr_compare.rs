@@ -13,7 +13,17 @@ use support::{cpu_seconds, l_sf, write_csv};
 use rayon::prelude::*;
 use std::time::Instant;
 
+/// `--help`: what the program does and its arguments.
+const USAGE: &str = "\
+Times GP training and prediction of the 12 transfer models on synthetic pairs; --dump
+writes every problem for scripts/compare/gpr_gpy.py.
+
+Usage: gpr_compare [--pairs N] [--kernel nn|se|linear] [--dump DIR] [--grad-tol X] [--c2 X]
+                   [--max-step X] [--warm-start N]
+  defaults: --pairs 350 --kernel nn";
+
 fn main() {
+    studies::usage_on_help(USAGE);
     let args: Vec<String> = std::env::args().collect();
     let get = |flag: &str| {
         args.iter()

@@ -24,7 +24,15 @@ fn median_ms(reps: usize, mut f: impl FnMut()) -> f64 {
     t[reps / 2]
 }
 
+/// `--help`: what the program does and its arguments.
+const USAGE: &str = "\
+Breakdown of one log-marginal-likelihood + gradient evaluation.
+
+Usage: gpr_profile [--pairs N] [--reps N]
+  defaults: --pairs 1100 --reps 9";
+
 fn main() {
+    studies::usage_on_help(USAGE);
     let args: Vec<String> = std::env::args().collect();
     let get = |flag: &str| {
         args.iter()

@@ -545,7 +545,17 @@ fn pieces(n: usize, d_obs: usize, reps: usize) {
     );
 }
 
+/// `--help`: what the program does and its arguments.
+const USAGE: &str = "\
+Times the pieces of one GPDM objective+gradient evaluation.
+
+Usage: profile_objective [objective-only | old-new [PROBLEM_DIR...]]
+  objective-only  just the 1-vs-2-thread part
+  old-new         just the old-vs-new comparison, on the synthetic problem or the exported
+                  problems given";
+
 fn main() {
+    studies::usage_on_help(USAGE);
     // SAFETY: plain FFI call; pins OpenBLAS to the calling thread's single core.
     unsafe { openblas_set_num_threads(1) };
     faer::set_global_parallelism(faer::Par::Seq);

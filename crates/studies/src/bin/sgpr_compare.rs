@@ -24,7 +24,17 @@ fn relative_difference(a: &Gpr, b: &Gpr, x: &nalgebra::DMatrix<f64>, y: &nalgebr
     (a.predict_mean(x).unwrap() - b.predict_mean(x).unwrap()).norm() / y.norm()
 }
 
+/// `--help`: what the program does and its arguments.
+const USAGE: &str = "\
+Times sparse GP training of the 12 transfer models on synthetic pairs; --dump writes
+every problem for scripts/compare/sgpr_gpy.py.
+
+Usage: sgpr_compare [--pairs N] [--inducing M] [--exact] [--dump DIR] [--models K]
+                    [--grad-tol X] [--c2 X] [--repeat R]
+  defaults: --pairs 1000 --inducing 256 --models 12 --repeat 3";
+
 fn main() {
+    studies::usage_on_help(USAGE);
     let args: Vec<String> = std::env::args().collect();
     let get = |flag: &str| args.iter().position(|a| a == flag).and_then(|i| args.get(i + 1)).cloned();
     let n: usize = get("--pairs").map_or(1000, |s| s.parse().expect("--pairs N"));

@@ -25,7 +25,15 @@ fn cpu() -> f64 {
     f.get(10).copied().unwrap_or(0.0) / 100.0 + f.get(11).copied().unwrap_or(0.0) / 100.0
 }
 
+/// `--help`: what the program does and its arguments.
+const USAGE: &str = "\
+Cost of the stitched assembly per frame for each factorisation of the Poisson merge.
+
+Usage: stitch_budget [MODEL] [--variations N]
+  MODEL  default out/work/variation/locomotion.model";
+
 fn main() {
+    studies::usage_on_help(USAGE);
     let args: Vec<String> = std::env::args().skip(1).collect();
     let path = args
         .iter()
