@@ -77,6 +77,14 @@ impl Study {
         })
     }
 
+    /// Parses the command line of a study with no switches of its own (`name` and `about` for
+    /// its `--help`) and reads its models.
+    pub fn from_command_line(name: &'static str, about: &'static str) -> anyhow::Result<Study> {
+        use clap::{Args, FromArgMatches};
+        let matches = StudyArgs::augment_args(clap::Command::new(name).about(about)).get_matches();
+        Study::open(&StudyArgs::from_arg_matches(&matches)?)
+    }
+
     /// Test motion `m`, read from WORK and SET.
     pub fn test_motion(&self, m: &str) -> anyhow::Result<TestMotion> {
         let (work, set, s, t) = (&self.work, &self.set, &self.s, &self.t);

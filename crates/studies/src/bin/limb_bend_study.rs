@@ -1,12 +1,11 @@
-//! A second, distal orientation map per limb (the elbow's and knee's bend, `common/limb_bend.rs`),
+//! A second, distal orientation map per limb (the elbow's and knee's bend, `studies::limb_bend`),
 //! scored on the raw transfer (parts assembled, no §6) after the default limb orientation, at
 //! bend weights 0 (the default model) to 1 (docs/studies/06-limb-orientation.md). `stitch_study`
 //! scores
-//! the full pipeline with it (`BEND_WEIGHT`).
+//! the full pipeline with it (`--bend-weight`).
 //!
 //! cargo run --release -p studies --bin limb_bend_study -- WORK SET SOURCE TARGET MOTION... -- TRAIN...
 
-use clap::Parser;
 use studies::study_pairs;
 use studies::limb_bend;
 
@@ -15,17 +14,11 @@ use mesh_core::sequence::MeshSequence;
 use transfer::gpr_model::training_set;
 use transfer::limb_orientation::apply;
 
-/// A distal (bend) map per limb scored on the raw transfer of every test motion, at bend
-/// weights 0 to 1 (docs/studies/06-limb-orientation.md).
-#[derive(Parser)]
-struct Cli {
-    #[command(flatten)]
-    study: study_pairs::StudyArgs,
-}
-
 fn main() -> anyhow::Result<()> {
-    let cli = Cli::parse();
-    let study = study_pairs::Study::open(&cli.study)?;
+    let study = study_pairs::Study::from_command_line(
+        env!("CARGO_BIN_NAME"),
+        "A distal (bend) map per limb scored on the raw transfer of every test motion, at bend weights 0 to 1 (docs/studies/06-limb-orientation.md)",
+    )?;
     let study_pairs::Study { work, set, s, t, tests, train, spca, tpca, model, template, true_pairs } = &study;
     let (pairs, _) = study_pairs::load(work, set, s, t, &spca, &tpca, train, *true_pairs)?;
     let bends = limb_bend::BendMaps::fit(&spca, &tpca, &training_set(&pairs, 1.0, false)?)?;

@@ -8,9 +8,8 @@
 //! is from the truth's.
 //!
 //! cargo run --release -p studies --bin limb_map_diag -- WORK SET SOURCE TARGET MOTION... -- TRAIN...
-//! (`TRUE_PAIRS=1`: trained on the set's true correspondences)
+//! (`--true-pairs`: trained on the set's true correspondences)
 
-use clap::Parser;
 use studies::study_pairs;
 
 use capture::align::align_motion_on;
@@ -28,17 +27,11 @@ fn ang(a: &Rotation3<f64>, b: &Rotation3<f64>) -> f64 {
     so3_log(&(a.inverse() * b)).norm().to_degrees()
 }
 
-/// How well the limb orientation map fits its training pairs and predicts each test motion
-/// (docs/studies/06-limb-orientation.md).
-#[derive(Parser)]
-struct Cli {
-    #[command(flatten)]
-    study: study_pairs::StudyArgs,
-}
-
 fn main() -> anyhow::Result<()> {
-    let cli = Cli::parse();
-    let study = study_pairs::Study::open(&cli.study)?;
+    let study = study_pairs::Study::from_command_line(
+        env!("CARGO_BIN_NAME"),
+        "How well the limb orientation map fits its training pairs and predicts each test motion (docs/studies/06-limb-orientation.md)",
+    )?;
     let study_pairs::Study { work, set, s, t, tests, train, spca, tpca, model, template, true_pairs } = &study;
     let (pairs, _) = study_pairs::load(work, set, s, t, spca, tpca, train, *true_pairs)?;
     let rows = training_set(&pairs, 1.0, false)?;

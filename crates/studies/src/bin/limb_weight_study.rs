@@ -8,7 +8,6 @@
 //! cargo run --release -p studies --bin limb_weight_study -- WORK SET SOURCE TARGET MOTION... -- TRAIN...
 //! e.g. `limb_weight_study out/demo-run/work out/demo/set A B punch spinkick cmu_jump -- walk run jump kick dance`
 
-use clap::Parser;
 use studies::study_pairs;
 
 use capture::assemble::{assemble, plan};
@@ -45,17 +44,11 @@ fn angle(a: &Rotation3<f64>, b: &Rotation3<f64>) -> f64 {
     so3_log(&(a.inverse() * b)).norm()
 }
 
-/// Per-limb turn weights chosen by leaving one training motion out, scored on the test motions
-/// beside the fixed default (docs/studies/06-limb-orientation.md).
-#[derive(Parser)]
-struct Cli {
-    #[command(flatten)]
-    study: study_pairs::StudyArgs,
-}
-
 fn main() -> anyhow::Result<()> {
-    let cli = Cli::parse();
-    let study = study_pairs::Study::open(&cli.study)?;
+    let study = study_pairs::Study::from_command_line(
+        env!("CARGO_BIN_NAME"),
+        "Per-limb turn weights chosen by leaving one training motion out, scored on the test motions beside the fixed default (docs/studies/06-limb-orientation.md)",
+    )?;
     let study_pairs::Study { work, set, s, t, tests, train: train_motions, spca, tpca, model, template, true_pairs } = &study;
     let (pairs, ratio) = study_pairs::load(work, set, s, t, &spca, &tpca, train_motions, *true_pairs)?;
     let names = model.part_names.clone();
