@@ -81,7 +81,7 @@ impl Study {
     /// its `--help`) and reads its models.
     pub fn from_command_line(name: &'static str, about: &'static str) -> anyhow::Result<Study> {
         use clap::{Args, FromArgMatches};
-        let matches = StudyArgs::augment_args(clap::Command::new(name).about(about)).get_matches();
+        let matches = StudyArgs::augment_args(clap::Command::new(name)).about(about).get_matches();
         Study::open(&StudyArgs::from_arg_matches(&matches)?)
     }
 
