@@ -42,8 +42,10 @@ man completions: build
 setup:
 	@scripts/setup-system
 
+# The research programs (crate studies) are left out: `cargo build --release -p studies` builds
+# them, and `make test` compiles them in test mode.
 build: setup
-	$(CARGO) build --release --workspace --quiet
+	$(CARGO) build --release --workspace --exclude studies --quiet
 	@touch $(BUILD_STAMP)
 
 # The pipelines build the stage binaries only when a source is newer than the last build;
@@ -51,7 +53,7 @@ build: setup
 BUILD_STAMP := $(BIN)/.build-stamp
 $(BUILD_STAMP): Cargo.toml Cargo.lock $(shell find crates -path '*/src/*' -name '*.rs' -o -name Cargo.toml) | setup
 	@echo "make: building the stage binaries (sources changed; NO_BUILD=1 skips this)" >&2
-	$(CARGO) build --release --workspace --quiet
+	$(CARGO) build --release --workspace --exclude studies --quiet
 	@touch $@
 STAGE_BINARIES := $(if $(NO_BUILD),,$(BUILD_STAMP))
 

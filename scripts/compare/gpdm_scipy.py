@@ -8,7 +8,7 @@ Usage: gpdm_scipy.py [--dim D | --problem DIR] [--maxiter K] [--workdir DIR] [--
                      [--skip-rust] [--raw]
 e.g.:  OPENBLAS_NUM_THREADS=1 python3 scripts/compare/gpdm_scipy.py --dim 15000
 
-Runs `fit_compare D DIR` (built by `cargo test --release -p gpdm`), which exports Y, theta0
+Runs `fit_compare D DIR` (built by `cargo build --release -p studies --bin fit_compare`), which exports Y, theta0
 and meta.json and writes the Rust traces; then minimises with scipy and reports both optima,
 iterations, evaluations and the time each needs to reach the scipy optimum. Needs numpy and
 scipy. --problem DIR: fit a problem exported as y.f64 + meta.json (a real body part, see
@@ -147,7 +147,7 @@ def main():
     ap.add_argument("--workdir", default="/tmp/gpdm_compare")
     ap.add_argument("--skip-rust", action="store_true")
     ap.add_argument("--raw", action="store_true")
-    ap.add_argument("--bin", default=os.path.join(os.path.dirname(__file__), "../../target/release/examples/fit_compare"))
+    ap.add_argument("--bin", default=os.path.join(os.path.dirname(__file__), "../../target/release/fit_compare"))
     a = ap.parse_args()
     if not a.skip_rust:
         env = dict(os.environ, OPENBLAS_NUM_THREADS="1")

@@ -2,10 +2,10 @@
 """Compare the `gp` crate's GP regression with GPy's MLP-kernel GP regression.
 
 Usage: gpr_gpy.py DIR [--models 0,1,...]
-  e.g.: OPENBLAS_NUM_THREADS=1 cargo run --release -p gp --example gpr_compare -- --pairs 1100 --dump /tmp/gpr1100
+  e.g.: OPENBLAS_NUM_THREADS=1 cargo run --release -p studies --bin gpr_compare -- --pairs 1100 --dump /tmp/gpr1100
         python3 scripts/compare/gpr_gpy.py /tmp/gpr1100
 
-DIR holds problem_XX_{x,y}.csv and rust.json written by the `gpr_compare` example. For each
+DIR holds problem_XX_{x,y}.csv and rust.json written by the `gpr_compare` binary (crates/studies). For each
 problem GPy fits GPRegression with the MLP kernel and the same fixed noise variance
 (sigma_n^2 = 0.1), starting from the same hyperparameters as the Rust run, optimised with
 GPy's default (L-BFGS-B). Prints both log marginal likelihoods, GPy's optimum converted to

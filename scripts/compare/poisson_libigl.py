@@ -2,12 +2,12 @@
 """Compare the `surface` crate's Poisson solve with libigl (Python bindings) and scipy.
 
 Usage: poisson_libigl.py DIR
-  e.g.: OPENBLAS_NUM_THREADS=1 cargo test --release -p surface --no-run
-        target/release/examples/poisson_export /tmp/poisson13k
+  e.g.: OPENBLAS_NUM_THREADS=1 cargo build --release -p studies --bin poisson_export
+        target/release/poisson_export /tmp/poisson13k
         python3 scripts/compare/poisson_libigl.py /tmp/poisson13k
 
 DIR holds V.txt, F.txt (rest mesh), X.txt (deformed pose), fixed.txt (Dirichlet vertices),
-solution.txt and timing.json written by crates/surface/examples/poisson_export.rs.
+solution.txt and timing.json written by crates/studies/src/bin/poisson_export.rs.
 The problem: minimise sum_f A_f |grad x - grad X|^2 on the rest mesh with x = X on the fixed
 vertices, i.e. L x = G^T A G X on the free vertices (L = G^T A G, cotangent Laplacian).
 Here L = -igl.cotmatrix (libigl's is negative semi-definite), G = igl.grad, A from

@@ -2,12 +2,12 @@
 """Compare the `gp` crate's sparse GP (Titsias' bound) with GPy's SparseGPRegression.
 
 Usage: sgpr_gpy.py DIR [--models 0,1,...] [--tol REL] [--out FILE]
-  Run through scripts/compare/sgpr-vs-gpy, which installs GPy in a venv, builds the example,
+  Run through scripts/compare/sgpr-vs-gpy, which installs GPy in a venv, builds the binary,
   dumps the problems and runs this script with the thread settings stated; by hand:
-        OPENBLAS_NUM_THREADS=1 RAYON_NUM_THREADS=1 target/release/examples/sgpr_compare --pairs 1100 --inducing 256 --dump /tmp/sgpr1100
+        OPENBLAS_NUM_THREADS=1 RAYON_NUM_THREADS=1 target/release/sgpr_compare --pairs 1100 --inducing 256 --dump /tmp/sgpr1100
         OPENBLAS_NUM_THREADS=1 OMP_NUM_THREADS=1 python3 scripts/compare/sgpr_gpy.py /tmp/sgpr1100
 
-DIR holds problem_XX_{x,y,z}.csv and rust.json written by the `sgpr_compare` example (z: the
+DIR holds problem_XX_{x,y,z}.csv and rust.json written by the `sgpr_compare` binary (crates/studies) (z: the
 inducing inputs our greedy variance selection chose). For each problem GPy builds
 SparseGPRegression with the MLP kernel, the same inducing inputs (fixed), the same fixed noise
 variance and the same K_uu jitter (ours is 1e-6 * mean(diag K_uu), set as GPy's absolute
@@ -22,7 +22,7 @@ Z, GPy's) minus `--tol` (default 1e-6) relative; each side's time is the CPU tim
 first evaluation at or above the target was known (GPy: that value-and-gradient call returned;
 ours: the *next* evaluation's value was known, or the run ended -- conservative for us by one
 evaluation). The ratio is GPy's CPU time to the target over ours, one thread each (our
-thread-CPU time, fastest of the example's --repeat runs; GPy's process CPU time); the ratio of
+thread-CPU time, fastest of the binary's --repeat runs; GPy's process CPU time); the ratio of
 the whole optimisations (each to its own stop) is printed too. The whole record is written
 to DIR/gpy.json (or --out).
 Kernel mapping as in gpr_gpy.py: w = 1/(2 l^2), b = 0, var = sigma_f^2 * pi / 2.

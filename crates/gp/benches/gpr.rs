@@ -79,7 +79,7 @@ fn predict(c: &mut Criterion) {
 }
 
 /// The sparse GP (targets: 12 models <= 10 s at 10⁴ pairs, <= 100 s at 10⁵; the 10⁵
-/// run is `examples/sgpr_compare.rs --pairs 100000`, too long for criterion's samples):
+/// run is `sgpr_compare --pairs 100000` (crates/studies), too long for criterion's samples):
 /// one bound + gradient evaluation at 10³ and 10⁴ pairs, and training the 12 models at 10³.
 fn sparse(c: &mut Criterion) {
     use gp::sparse_gpr::{sparse_bound_grad, Sparsity, KUU_JITTER};

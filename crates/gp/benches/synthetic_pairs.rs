@@ -1,5 +1,5 @@
 //! Synthetic training pairs shaped like the transfer problem (shared by the benchmark and the
-//! `gpr_compare` example): 5 body parts with 20 PCA coefficients in and out, plus the 6-D
+//! `gpr_compare` study binary): 5 body parts with 20 PCA coefficients in and out, plus the 6-D
 //! rigid displacement, for `n` dense pose pairs. Poses follow a few periodic "motions"; the
 //! target is a smooth non-linear function of the source plus small noise.
 #![allow(dead_code)]

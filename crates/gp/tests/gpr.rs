@@ -302,7 +302,7 @@ fn warm_start_on_a_subset_reaches_the_full_data_optimum() {
     // 300 pairs > 2 x 60: the optimiser first fits 60 evenly spaced pairs, then the full set
     // from there. The full-data optimum must be the one a cold start finds (same
     // likelihood, same hyperparameters, a stationary point). (Whether it saves evaluations is
-    // measured by the `gpr_compare` example, not asserted here.)
+    // measured by the `gpr_compare` study binary, not asserted here.)
     let mut rng = Rng::new(21);
     let x = rng.matrix(300, 3, 1.0);
     let mut y = target_fn(&x);

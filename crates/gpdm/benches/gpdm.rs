@@ -12,11 +12,11 @@ use gpdm::{Gpdm, GpdmConfig};
 use nalgebra::DMatrix;
 use std::hint::black_box;
 
-// The same synthetic "capture" as the examples (four cyclic sequences, 446 frames).
-#[path = "../examples/common/synthetic.rs"]
+// The same synthetic "capture" as the tests and the studies (four cyclic sequences, 446 frames).
+#[path = "../tests/common/synthetic.rs"]
 mod synthetic_capture;
 
-/// The examples' synthetic capture with 1 mm noise, at any dimension `d_obs`.
+/// The shared synthetic capture with 1 mm noise, at any dimension `d_obs`.
 fn synthetic(d_obs: usize) -> Vec<DMatrix<f64>> {
     synthetic_capture::synthetic(d_obs, 1e-3)
 }

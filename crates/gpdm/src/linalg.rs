@@ -234,7 +234,7 @@ pub fn recycle(m: Mat<f64>) {
 }
 
 /// Column-block width of [`Cholesky::half_solve_trapezoidal`] and the leaf size of
-/// `lower_back_solve`'s recursion (measured at N = 192 and 446, `examples/profile_objective`:
+/// `lower_back_solve`'s recursion (measured at N = 192 and 446, `profile_objective` in crates/studies:
 /// 32 fastest by 3-5 % over 64, 96, 128).
 pub const BLOCK: usize = 32;
 

@@ -62,7 +62,7 @@ pub struct GpdmConfig {
     /// the paper's unbounded β4). On clean data 1/β4 collapses to ~1e-9 and HMC returns copies
     /// of the source; the PCA start scales the latents to unit mean variance, so a floor of
     /// 1e-4..1e-3 keeps the one-step noise at ≥ 1-3 % of the latent spread (measured with
-    /// `examples/variation`: none → 0 mm variation, 1e-4 → 3 mm, 1e-3 → 12 mm with the mean
+    /// the `variation` study binary: none → 0 mm variation, 1e-4 → 3 mm, 1e-3 → 12 mm with the mean
     /// prediction within 0.3 mm, 1e-2 → 29 mm and 12 mm off the training poses). Not the
     /// default: on the 2-D rotation test model a 1e-4 floor already lets samples leave the
     /// data (tests/learning.rs), so callers choose it per data set.

@@ -2,7 +2,7 @@
 //! sandwiches) against the dense reference evaluation and against plain dense algebra.
 
 mod common;
-#[path = "../examples/common/synthetic.rs"]
+#[path = "common/synthetic.rs"]
 mod synthetic;
 
 use faer::Mat;

@@ -111,7 +111,7 @@ impl HmcStart {
     }
 
     /// Burn-in iterations by default: 200 from the mean prediction (the chain has to move away
-    /// from the centre of the density; `examples/burn_in_check` measures how far it gets), 50
+    /// from the centre of the density; `burn_in_check` in crates/studies measures how far it gets), 50
     /// from an exact draw (step-size adaptation only).
     pub fn default_burn_in(self) -> usize {
         match self {

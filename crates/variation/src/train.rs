@@ -321,7 +321,7 @@ pub const LBFGS_MEMORY: usize = 100;
 /// evaluations on the torso, 1e-8 takes 1809 (320-1248 → 161-762 on the limbs) for the same
 /// fig. 4 reconstruction (1.578 mm) and fig. 7b blend errors (1.724 / 1.972 mm) to 1 µm; 1e-7
 /// (905) moves fig. 7b by 0.08-0.13 mm (docs/studies/12-gpdm-stopping-rule.md,
-/// `examples/fit_tolerance`).
+/// `fit_tolerance` in crates/studies).
 pub const VALUE_TOLERANCE: f64 = 1e-8;
 
 /// Iteration limit of the joint fit: with at most `max_fit_frames` frames per part the cost of one

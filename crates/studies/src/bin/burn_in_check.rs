@@ -1,0 +1,175 @@
+//! Stationarity of the HMC chains of `hmc-sample` for a given burn-in and chain start.
+//!
+//! For every (training sequence, part) chain of a trained model, at the settings of `make
+//! variation` (κ = 0.3, 5 samples, thin 10, 20 leapfrog steps), the energy (negative log
+//! density, `gpdm::hmc::TrajectoryEnergy`) of the kept samples is compared with that of exact
+//! draws of the same density (`gpdm::ancestral`, the stationary distribution itself). A chain
+//! that has not reached stationarity keeps a lower energy than the exact draws (it starts at
+//! the mean prediction, the centre of the density). Per setting the table gives, over all
+//! chains, the mean of `z = (mean kept energy − mean exact energy) / sd of exact energy`, and
+//! the mean latent RMS distance of the kept samples from the mean prediction relative to that
+//! of the exact draws (the spread of the variations, 1 when it matches). Starts: `mean` (the
+//! paper's), `ancestral` (an exact draw), `training` (the sequence's learned latent trajectory).
+//!
+//! Usage: burn_in_check [model] [--seeds N] [--settings start:burn,...]
+//! e.g.: OPENBLAS_NUM_THREADS=1 target/release/burn_in_check out/work/variation/locomotion.model --seeds 8 --settings mean:200,mean:1000,ancestral:50
+
+use gpdm::ancestral::sample_trajectories_ancestral;
+use gpdm::hmc::{sample, sample_trajectories_scaled, ChainStart, Energy, TrajectoryEnergy};
+use mesh_core::artifact::Artifact;
+use nalgebra::DMatrix;
+use rayon::prelude::*;
+use variation::reconstruct::Decoder;
+use variation::sample::{default_hmc, mix};
+use variation::train::VariationModel;
+
+const KAPPA: f64 = 0.3;
+
+fn mean_sd(x: &[f64]) -> (f64, f64) {
+    let n = x.len() as f64;
+    let m = x.iter().sum::<f64>() / n;
+    let v = x.iter().map(|v| (v - m) * (v - m)).sum::<f64>() / (n - 1.0).max(1.0);
+    (m, v.sqrt())
+}
+
+fn rms(a: &DMatrix<f64>, b: &DMatrix<f64>) -> f64 {
+    ((a - b).norm_squared() / a.nrows() as f64).sqrt()
+}
+
+/// `--help`: what the program does and its arguments.
+const USAGE: &str = "\
+Stationarity of the HMC chains for a given burn-in and chain start: kept samples against
+exact draws of the same density.
+
+Usage: burn_in_check [MODEL] [--seeds N] [--settings START:BURN,...]
+  MODEL       default out/work/variation/locomotion.model
+  --seeds     default 8
+  --settings  START is mean, ancestral, learned or training";
+
+fn main() {
+    studies::usage_on_help(USAGE);
+    let args: Vec<String> = std::env::args().skip(1).collect();
+    let path = args
+        .iter()
+        .find(|a| !a.starts_with("--") && !a.contains(':') && a.parse::<usize>().is_err())
+        .cloned()
+        .unwrap_or_else(|| "out/work/variation/locomotion.model".into());
+    let opt = |name: &str| args.iter().position(|a| a == name).map(|i| args[i + 1].clone());
+    let seeds: u64 = opt("--seeds").map_or(8, |s| s.parse().expect("--seeds N"));
+    // None: the training trajectory.
+    let settings: Vec<(Option<ChainStart>, usize)> = opt("--settings")
+        .unwrap_or_else(|| "mean:200,mean:1000,ancestral:20,ancestral:50".into())
+        .split(',')
+        .map(|s| {
+            let (a, b) = s.split_once(':').expect("start:burn");
+            let start = match a {
+                "mean" => Some(ChainStart::MeanPrediction),
+                "ancestral" => Some(ChainStart::Ancestral),
+                "learned" => Some(ChainStart::Learned),
+                "training" => None,
+                _ => panic!("start is mean, ancestral or training"),
+            };
+            (start, b.parse().expect("burn-in"))
+        })
+        .collect();
+    let model = VariationModel::load(&path).expect("a trained variation model");
+    let dec = Decoder::new(&model, &mut Vec::new()).expect("decoder");
+    let len = variation::frame_stride::covering_count(model.n_frames(), model.stride);
+    let chains: Vec<(usize, usize)> = (0..model.sequences.len())
+        .flat_map(|s| (0..model.parts.len()).map(move |k| (s, k)))
+        .collect();
+    // Reference per chain: exact draws' energies and distances from the mean prediction.
+    struct Reference {
+        e: (f64, f64),
+        dist: f64,
+    }
+    let reference: Vec<Reference> = chains
+        .par_iter()
+        .map(|&(s, k)| {
+            let pr = &dec.predictors[k];
+            let x = model.parts[k].gpdm.sequence_latent(s).expect("sequence");
+            let x1: Vec<f64> = x.row(0).iter().copied().collect();
+            let energy = TrajectoryEnergy::new(pr, &x1, len)
+                .and_then(|e| e.with_variance_scale(KAPPA))
+                .expect("energy");
+            let mean = pr.mean_trajectory(&x1, len).expect("mean");
+            let draws =
+                sample_trajectories_ancestral(pr, &x1, len, 400, 0xE4AC7, KAPPA).expect("draws");
+            let mut g = vec![0.0; energy.dim()];
+            let es: Vec<f64> = draws
+                .iter()
+                .map(|d| energy.energy_grad(&energy.free_coords(d), &mut g).expect("finite"))
+                .collect();
+            let dist = draws.iter().map(|d| rms(d, &mean)).sum::<f64>() / draws.len() as f64;
+            Reference {
+                e: mean_sd(&es),
+                dist,
+            }
+        })
+        .collect();
+    println!(
+        "{path}: {} chains (sequences × parts), {len} latent points, {seeds} seeds, κ = {KAPPA}",
+        chains.len()
+    );
+    println!("setting | mean z (sd over chains) | max |z| | chains |z|>2 | spread ratio | accept | energy evals");
+    for &(start, burn_in) in &settings {
+        let runs: Vec<(f64, f64, f64, usize)> = chains
+            .par_iter()
+            .enumerate()
+            .map(|(c, &(s, k))| {
+                let pr = &dec.predictors[k];
+                let x = model.parts[k].gpdm.sequence_latent(s).expect("sequence");
+                let x1: Vec<f64> = x.row(0).iter().copied().collect();
+                let template = DMatrix::from_fn(len, x.ncols(), |t, j| x[(t.min(x.nrows() - 1), j)]);
+                let energy = TrajectoryEnergy::new(pr, &x1, len)
+                    .and_then(|e| e.with_variance_scale(KAPPA))
+                    .expect("energy");
+                let mean = pr.mean_trajectory(&x1, len).expect("mean");
+                let mut g = vec![0.0; energy.dim()];
+                let (mut es, mut dists, mut acc, mut evals) = (Vec::new(), Vec::new(), 0.0, 0);
+                for seed in 0..seeds {
+                    let mut o = default_hmc(5, mix(seed, s as u64 + 1, k as u64 + 1));
+                    o.burn_in = burn_in;
+                    let (trajs, res) = match start {
+                        Some(start) => {
+                            o.start = start;
+                            sample_trajectories_scaled(pr, &template, &o, KAPPA).expect("chain")
+                        }
+                        None => {
+                            let res = sample(&energy, &energy.free_coords(&template), &o)
+                                .expect("chain");
+                            (res.samples.iter().map(|q| energy.trajectory(q)).collect(), res)
+                        }
+                    };
+                    for t in &trajs {
+                        es.push(energy.energy_grad(&energy.free_coords(t), &mut g).expect("e"));
+                        dists.push(rms(t, &mean));
+                    }
+                    acc += res.accept_rate;
+                    evals += res.evaluations;
+                }
+                let r = &reference[c];
+                let z = (mean_sd(&es).0 - r.e.0) / r.e.1;
+                let spread = dists.iter().sum::<f64>() / dists.len() as f64 / r.dist;
+                (z, spread, acc / seeds as f64, evals)
+            })
+            .collect();
+        let zs: Vec<f64> = runs.iter().map(|r| r.0).collect();
+        let (zm, zsd) = mean_sd(&zs);
+        let zmax = zs.iter().fold(0.0f64, |m, z| m.max(z.abs()));
+        let over = zs.iter().filter(|z| z.abs() > 2.0).count();
+        let spread = runs.iter().map(|r| r.1).sum::<f64>() / runs.len() as f64;
+        let acc = runs.iter().map(|r| r.2).sum::<f64>() / runs.len() as f64;
+        let evals: usize = runs.iter().map(|r| r.3).sum();
+        let name = match start {
+            Some(ChainStart::MeanPrediction) => "mean",
+            Some(ChainStart::Ancestral) => "ancestral",
+            Some(ChainStart::Learned) => "learned",
+            None => "training",
+        };
+        println!(
+            "{name}:{burn_in} | {zm:+.2} ({zsd:.2}) | {zmax:.2} | {over}/{} | {spread:.3} | {acc:.2} | {evals}",
+            zs.len()
+        );
+    }
+}

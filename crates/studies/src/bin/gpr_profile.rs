@@ -1,0 +1,87 @@
+//! Breakdown of one log-marginal-likelihood + gradient evaluation at `--pairs N` (default
+//! 1100): kernel matrices, Cholesky (faer and LAPACK), the inverse's elements (faer and
+//! LAPACK `dpotri`), value-only and value+gradient evaluations. Median of `--reps` runs.
+//!
+//! `OPENBLAS_NUM_THREADS=1 target/release/gpr_profile --pairs 1100`
+use studies::synthetic_pairs;
+
+use gp::gpr::{log_marginal_likelihood, log_marginal_likelihood_grad};
+use gp::kernel::Kernel;
+use gp::linalg::Cholesky;
+use ndarray::{Array2, ShapeBuilder};
+use ndarray_linalg::{CholeskyFactorized, InverseCInto, UPLO};
+use std::time::Instant;
+
+fn median_ms(reps: usize, mut f: impl FnMut()) -> f64 {
+    let mut t: Vec<f64> = (0..reps)
+        .map(|_| {
+            let s = Instant::now();
+            f();
+            s.elapsed().as_secs_f64() * 1e3
+        })
+        .collect();
+    t.sort_by(f64::total_cmp);
+    t[reps / 2]
+}
+
+/// `--help`: what the program does and its arguments.
+const USAGE: &str = "\
+Breakdown of one log-marginal-likelihood + gradient evaluation.
+
+Usage: gpr_profile [--pairs N] [--reps N]
+  defaults: --pairs 1100 --reps 9";
+
+fn main() {
+    studies::usage_on_help(USAGE);
+    let args: Vec<String> = std::env::args().collect();
+    let get = |flag: &str| {
+        args.iter()
+            .position(|a| a == flag)
+            .and_then(|i| args.get(i + 1))
+            .cloned()
+    };
+    let n: usize = get("--pairs").map_or(1100, |s| s.parse().expect("--pairs N"));
+    let reps: usize = get("--reps").map_or(9, |s| s.parse().expect("--reps N"));
+    faer::set_global_parallelism(faer::Par::Seq);
+    let p = synthetic_pairs::pairs(n, 7);
+    let (x, y) = &p[0];
+    let k = Kernel::neural_network(3.0, 1.5);
+    let mut ky = k.gram(x);
+    for i in 0..n {
+        ky[(i, i)] += 0.1;
+    }
+    let gram = median_ms(reps, || {
+        std::hint::black_box(k.gram(x));
+    });
+    let grads = median_ms(reps, || {
+        std::hint::black_box(k.gram_with_grads(x));
+    });
+    let chol = median_ms(reps, || {
+        std::hint::black_box(Cholesky::new(&ky, "K", &mut Vec::new()).unwrap());
+    });
+    let c = Cholesky::new(&ky, "K", &mut Vec::new()).unwrap();
+    let inv = median_ms(reps, || {
+        std::hint::black_box(c.inverse_elements());
+    });
+    let lapack_chol = median_ms(reps, || {
+        let a = Array2::from_shape_vec((n, n).f(), ky.as_slice().to_vec()).unwrap();
+        std::hint::black_box(ndarray_linalg::CholeskyInto::cholesky_into(a, UPLO::Lower).unwrap());
+    });
+    let l = c.lower();
+    let lapack_inv = median_ms(reps, || {
+        let f = CholeskyFactorized {
+            factor: Array2::from_shape_vec((n, n).f(), l.as_slice().to_vec()).unwrap(),
+            uplo: UPLO::Lower,
+        };
+        std::hint::black_box(f.invc_into().unwrap());
+    });
+    let value = median_ms(reps, || {
+        std::hint::black_box(log_marginal_likelihood(&k, 0.1, x, y, &mut Vec::new()).unwrap());
+    });
+    let both = median_ms(reps, || {
+        std::hint::black_box(
+            log_marginal_likelihood_grad(&k, 0.1, false, x, y, &mut Vec::new()).unwrap(),
+        );
+    });
+    println!("pairs {n} (median of {reps}, ms): gram {gram:.2}, gram+grads(full) {grads:.2}, faer cholesky {chol:.2}, faer inverse {inv:.2}, lapack potrf {lapack_chol:.2}, lapack potri {lapack_inv:.2}, lml value {value:.2}, lml+grad {both:.2}");
+}
