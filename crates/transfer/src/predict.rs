@@ -78,11 +78,10 @@ pub fn predict(
     })
 }
 
-/// Wall-clock seconds of the steps of [`transfer_motion`].
+/// Wall-clock seconds of the steps of [`transfer_motion`] (the source's encoding is
+/// [`SourceMotion::read`]'s).
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct Timing {
-    /// Source PCA encoding of the aligned frames.
-    pub encode_s: f64,
     /// GP prediction (CVPR eq. 13) of all parts and of the displacement.
     pub gp_s: f64,
     /// Target PCA decoding, assembly and placement.
@@ -287,7 +286,6 @@ pub fn transfer_motion(
         blend_weights: pred.variance_ratio,
         planted,
         timing: Timing {
-            encode_s: 0.0,
             gp_s,
             decode_s,
         },
