@@ -19,7 +19,7 @@ fn bin_dir() -> PathBuf {
     Path::new(env!("CARGO_BIN_EXE_surfcap")).parent().unwrap().to_path_buf()
 }
 
-/// Every bin target of the workspace except `surfcap`, from `cargo metadata`.
+/// Every bin target of the workspace but `surfcap` and the studies crate's, from `cargo metadata`.
 fn workspace_bins() -> BTreeSet<String> {
     let out = Command::new(env!("CARGO"))
         .args(["metadata", "--no-deps", "--format-version", "1", "--offline"])
@@ -29,7 +29,8 @@ fn workspace_bins() -> BTreeSet<String> {
     assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
     let v: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
     let mut bins = BTreeSet::new();
-    for p in v["packages"].as_array().unwrap() {
+    // The studies crate's binaries are research programs, not stages.
+    for p in v["packages"].as_array().unwrap().iter().filter(|p| p["name"] != "studies") {
         for t in p["targets"].as_array().unwrap() {
             if t["kind"].as_array().unwrap().iter().any(|k| k == "bin") && t["name"] != "surfcap" {
                 bins.insert(t["name"].as_str().unwrap().to_string());
