@@ -17,9 +17,13 @@
 //!
 //! Each training mesh's operator and numeric factorisation are built on first use and cached,
 //! all on one symbolic analysis of the part's topology, so a sequence of predictions only pays
-//! for the polar decompositions and the solves. [`Corrector::nearest_all`] finds step 1's meshes
-//! for many predictions at once ([`crate::nearest::MeshSearch`]).
+//! for the polar decompositions and the solves. The cache is unbounded by default;
+//! [`Corrector::set_cache_limit`] bounds its bytes, the least recently used factorisations
+//! then being rebuilt when needed again (the same bits: [`crate::bounded_cache`]).
+//! [`Corrector::nearest_all`] finds step 1's meshes for many predictions at once
+//! ([`crate::nearest::MeshSearch`]).
 
+use crate::bounded_cache::BoundedCache;
 use crate::deformation_gradient::GradientOperator;
 use crate::nearest::MeshSearch;
 use crate::poisson::{Factorisation, PoissonSolver, SymbolicPoisson};
@@ -27,7 +31,7 @@ use crate::polar::triangle_rotation;
 use crate::{centroid, check_faces, check_vertices, Error, Result};
 use nalgebra::{Matrix3, Vector3};
 use rayon::prelude::*;
-use std::sync::OnceLock;
+use std::sync::{Arc, OnceLock};
 
 /// Default number of nearest training meshes (the paper's M = 3).
 pub const DEFAULT_NEIGHBOURS: usize = 3;
@@ -37,6 +41,12 @@ struct Prepared {
     solver: PoissonSolver,
     /// ∇N_k on its own geometry (tangent projectors).
     own_gradient: Vec<Matrix3<f64>>,
+}
+
+impl Prepared {
+    fn bytes(&self) -> usize {
+        self.op.bytes() + self.solver.bytes() + self.own_gradient.len() * 72
+    }
 }
 
 /// The training part meshes of one body part, ready to correct predictions of that part.
@@ -50,7 +60,7 @@ pub struct Corrector {
     /// The symbolic factorisation of the part's Poisson system (its pattern is the faces'),
     /// made on the first training mesh prepared and shared by all.
     symbolic: OnceLock<std::result::Result<SymbolicPoisson, String>>,
-    prepared: Vec<OnceLock<std::result::Result<Prepared, String>>>,
+    prepared: BoundedCache<Prepared>,
 }
 
 /// Weights `w_k ∝ 1/d_k`, normalised; an exact match (`d ≤ tol`) takes all the weight.
@@ -78,7 +88,7 @@ impl Corrector {
         for (k, t) in training.iter().enumerate() {
             check_vertices(t, n, &format!("correct: training mesh {k}"))?;
         }
-        let prepared = (0..training.len()).map(|_| OnceLock::new()).collect();
+        let prepared = BoundedCache::new(usize::MAX);
         let pieces = mesh_core::topology::Topology::new(n, &faces).connected_components();
         Ok(Corrector {
             faces,
@@ -92,6 +102,19 @@ impl Corrector {
 
     pub fn n_vertices(&self) -> usize {
         self.training[0].len()
+    }
+    /// Bounds the bytes of the cached training mesh operators and factorisations (module
+    /// docs). Results do not depend on it.
+    pub fn set_cache_limit(&mut self, bytes: usize) {
+        self.prepared.set_limit(bytes);
+    }
+    /// How many training meshes have been prepared (factorised) so far, rebuilds included.
+    pub fn factorisations(&self) -> usize {
+        self.prepared.builds()
+    }
+    /// The bytes of the training meshes held (each `Vec` of vertices).
+    pub fn training_bytes(&self) -> usize {
+        self.training.iter().map(|t| t.len() * 24).sum()
     }
     pub fn faces(&self) -> &[[u32; 3]] {
         &self.faces
@@ -123,24 +146,27 @@ impl Corrector {
             .map_err(|e| Error::invalid(format!("correct: {e}")))
     }
 
-    fn prepared(&self, k: usize) -> Result<&Prepared> {
-        self.prepared[k]
-            .get_or_init(|| {
-                let n = &self.training[k];
-                let op = GradientOperator::new(n, &self.faces);
-                let laplacian = op.stiffness();
-                let solver: PoissonSolver = self
-                    .symbolic(&laplacian)
-                    .and_then(|s| s.factorise(&laplacian, &self.piece_roots()))
-                    .map_err(|e| e.to_string())?;
-                let own_gradient = op.gradient(n);
-                Ok(Prepared {
-                    op,
-                    solver,
-                    own_gradient,
-                })
-            })
-            .as_ref()
+    fn prepared(&self, k: usize) -> Result<Arc<Prepared>> {
+        self.prepared
+            .get_or_build(
+                k,
+                || {
+                    let n = &self.training[k];
+                    let op = GradientOperator::new(n, &self.faces);
+                    let laplacian = op.stiffness();
+                    let solver: PoissonSolver = self
+                        .symbolic(&laplacian)
+                        .and_then(|s| s.factorise(&laplacian, &self.piece_roots()))
+                        .map_err(|e| e.to_string())?;
+                    let own_gradient = op.gradient(n);
+                    Ok(Prepared {
+                        op,
+                        solver,
+                        own_gradient,
+                    })
+                },
+                Prepared::bytes,
+            )
             .map_err(|e| Error::invalid(format!("correct: training mesh {k}: {e}")))
     }
 

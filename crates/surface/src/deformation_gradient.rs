@@ -66,6 +66,11 @@ impl GradientOperator {
         }
     }
 
+    /// The bytes the operator holds (faces, hat gradients, areas).
+    pub fn bytes(&self) -> usize {
+        self.faces.len() * (12 + 72 + 8)
+    }
+
     pub fn n_vertices(&self) -> usize {
         self.n_vertices
     }

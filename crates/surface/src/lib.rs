@@ -8,7 +8,8 @@
 //! * [`poisson`]: `L x = div J` with Dirichlet vertices, one sparse Cholesky factorisation
 //!   reused for the 3 coordinates and across frames.
 //! * [`polar`]: 3x3 polar decomposition `A = R S`, `det R = +1`.
-//! * [`correct`]: body part correction (§6.1); [`nearest`]: its nearest training meshes.
+//! * [`correct`]: body part correction (§6.1); [`nearest`]: its nearest training meshes;
+//!   [`bounded_cache`]: its factorisations kept up to a number of bytes.
 //! * [`optimal_boundary`]: cheapest closed loop in an overlap band (§6.2, Huang et al. 2007).
 //! * [`stitch`]: Poisson merging of the parts along the optimal loops (§6.2).
 //! * [`feather`]: part weights ramping smoothly across the overlap bands, for merging by a
@@ -17,6 +18,7 @@
 //! * [`frames`], [`segmentation`]: file plumbing for the `correct`, `stitch` and `blend` binaries.
 
 pub mod blend;
+pub mod bounded_cache;
 pub mod correct;
 pub mod deformation_gradient;
 pub mod feather;

@@ -52,6 +52,8 @@ struct Pattern {
     col_ptr: Vec<usize>,
     row_idx: Vec<usize>,
     symbolic: SymbolicKind,
+    /// Number of values of the numeric factor `L`.
+    factor_values: usize,
     /// Connected component of every vertex in the matrix graph (a representative vertex),
     /// checked against each fixed set.
     component: Vec<usize>,
@@ -78,13 +80,24 @@ impl SymbolicPoisson {
         }
         let symbolic_failed =
             |e| Error::invalid(format!("poisson: symbolic factorisation failed: {e:?}"));
-        let symbolic = match how {
-            Factorisation::Auto => SymbolicKind::Auto(
-                SymbolicLlt::try_new(laplacian.symbolic(), Side::Lower)
-                    .map_err(symbolic_failed)?,
-            ),
-            Factorisation::Supernodal => SymbolicKind::Supernodal(Arc::new(
-                factorize_symbolic_cholesky(
+        let (symbolic, factor_values) = match how {
+            Factorisation::Auto => {
+                // The same analysis again, for the factor's size: faer's solver keeps its own
+                // to itself.
+                let size = factorize_symbolic_cholesky(
+                    laplacian.symbolic(),
+                    Side::Lower,
+                    Default::default(),
+                    Default::default(),
+                )
+                .map_err(symbolic_failed)?
+                .len_val();
+                let llt = SymbolicLlt::try_new(laplacian.symbolic(), Side::Lower)
+                    .map_err(symbolic_failed)?;
+                (SymbolicKind::Auto(llt), size)
+            }
+            Factorisation::Supernodal => {
+                let s = factorize_symbolic_cholesky(
                     laplacian.symbolic(),
                     Side::Lower,
                     SymmetricOrdering::Amd,
@@ -93,8 +106,10 @@ impl SymbolicPoisson {
                         ..Default::default()
                     },
                 )
-                .map_err(symbolic_failed)?,
-            )),
+                .map_err(symbolic_failed)?;
+                let size = s.len_val();
+                (SymbolicKind::Supernodal(Arc::new(s)), size)
+            }
         };
         let (cp, ri) = (laplacian.symbolic().col_ptr(), laplacian.symbolic().row_idx());
         Ok(SymbolicPoisson {
@@ -104,6 +119,7 @@ impl SymbolicPoisson {
                 col_ptr: cp.to_vec(),
                 row_idx: ri.to_vec(),
                 symbolic,
+                factor_values,
             }),
         })
     }
@@ -256,6 +272,13 @@ impl PoissonSolver {
     /// Number of unknowns (vertices).
     pub fn n(&self) -> usize {
         self.symbolic.pattern.n
+    }
+    /// The bytes this solver holds of its own (its factor's values and the coupling to the
+    /// fixed vertices; the shared analysis not counted), an estimate to bound caches by.
+    pub fn bytes(&self) -> usize {
+        self.symbolic.pattern.factor_values * 8
+            + self.coupling.len() * std::mem::size_of::<(usize, usize, f64)>()
+            + self.fixed.len() * 16
     }
     /// The Dirichlet vertices.
     pub fn fixed(&self) -> &[usize] {

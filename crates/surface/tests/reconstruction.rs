@@ -549,6 +549,34 @@ fn correcting_a_sequence_equals_correcting_each_frame_alone() {
     assert!(corrector.correct_with(&predictions[0], &[(40, 1.0)]).is_err());
 }
 
+/// A corrector whose factorisation cache holds about one training mesh corrects a sequence,
+/// in parallel, to the same bits as one that keeps them all, rebuilding what it dropped.
+#[test]
+fn a_bounded_factorisation_cache_corrects_to_the_same_bits() {
+    use rayon::prelude::*;
+    let f = rolled_sheet(0.0).1;
+    let training: Vec<_> = (0..30).map(|k| rolled_sheet(0.07 * k as f64).0).collect();
+    let kept = Corrector::new(f.clone(), training.clone()).unwrap();
+    let mut bounded = Corrector::new(f, training).unwrap();
+    bounded.set_cache_limit(1);
+    let predictions: Vec<Vec<Vector3<f64>>> = (0..60)
+        .map(|i| rolled_sheet(0.031 * i as f64).0.iter().map(|p| p * 0.95).collect())
+        .collect();
+    let correct_all = |c: &Corrector| -> Vec<Vec<Vector3<f64>>> {
+        let near = c.nearest_all(&predictions, 3);
+        predictions.par_iter().zip(&near).map(|(p, n)| c.correct_with(p, n).unwrap()).collect()
+    };
+    let want = correct_all(&kept);
+    let (first, again) = (correct_all(&bounded), correct_all(&bounded));
+    assert_eq!(first, want);
+    assert_eq!(again, want);
+    let distinct = kept.factorisations();
+    assert!(distinct >= 10, "the sequence uses {distinct} training meshes");
+    assert!(bounded.factorisations() > distinct, "{} builds", bounded.factorisations());
+    assert_eq!(correct_all(&kept), want);
+    assert_eq!(kept.factorisations(), distinct, "an unbounded cache builds each mesh once");
+}
+
 /// Stitchers forked from one another stitch a sequence's frames to the same meshes as one
 /// stitcher alone, bit for bit, in any order.
 #[test]

@@ -88,9 +88,24 @@ pub struct SurfaceTiming {
 
 /// Every `stride`-th frame of the target's aligned training motions at `paths`, cut into `pca`'s
 /// parts: `[part][mesh]`, the training part meshes [`Reconstructor::new`] cuts from loaded
-/// motions, read a frame at a time so that no motion is held whole. Fails, naming the file, as
-/// [`PcaModel::check_motion`] fails on a motion of another vertex count or template.
-pub fn training_part_meshes(pca: &PcaModel, paths: &[PathBuf], stride: usize) -> Result<Vec<Vec<Vec<Vector3<f64>>>>> {
+/// motions, read a frame at a time so that no motion is held whole. With [`Stride::Within`] the
+/// stride is the smallest power of two whose meshes fit in the given bytes (1 when all fit; at
+/// least each motion's first frame is kept): the stride doubles, dropping every other mesh kept,
+/// each time they would exceed it. Returns the
+/// meshes and the stride. Fails, naming the file, as [`PcaModel::check_motion`] fails on a motion
+/// of another vertex count or template.
+pub fn training_part_meshes(
+    pca: &PcaModel,
+    paths: &[PathBuf],
+    stride: Stride,
+) -> Result<(Vec<Vec<Vec<Vector3<f64>>>>, usize)> {
+    let (mut stride, budget) = match stride {
+        Stride::Every(s) => (s.max(1), usize::MAX),
+        Stride::Within(bytes) => (1, bytes),
+    };
+    let frame_bytes: usize = pca.parts.iter().map(|p| p.vertices.len() * 24).sum();
+    // Each kept mesh's frame index within its motion, to thin them when the stride doubles.
+    let mut index: Vec<usize> = Vec::new();
     let mut per_part: Vec<Vec<Vec<Vector3<f64>>>> = vec![Vec::new(); pca.parts.len()];
     for path in paths {
         let mut i = 0usize;
@@ -103,9 +118,21 @@ pub fn training_part_meshes(pca: &PcaModel, paths: &[PathBuf], stride: usize) ->
                     pca.n_vertices
                 )));
             }
-            if i % stride.max(1) == 0 {
+            if i % stride == 0 {
                 for (meshes, part) in per_part.iter_mut().zip(pca.frame_parts(&frame)?) {
                     meshes.push(part);
+                }
+                index.push(i);
+                while index.len().saturating_mul(frame_bytes) > budget
+                    && index.iter().any(|&j| j % (2 * stride) != 0)
+                {
+                    stride *= 2;
+                    let keep: Vec<bool> = index.iter().map(|&j| j % stride == 0).collect();
+                    for meshes in per_part.iter_mut() {
+                        let mut k = keep.iter();
+                        meshes.retain(|_| *k.next().unwrap_or(&false));
+                    }
+                    index.retain(|&j| j % stride == 0);
                 }
             }
             i += 1;
@@ -114,7 +141,16 @@ pub fn training_part_meshes(pca: &PcaModel, paths: &[PathBuf], stride: usize) ->
         check_same_template(&info.capture.template_sha256, &pca.template_sha256, "the motion was aligned to", "the PCA model was fitted on")
             .map_err(|e| Error::file(path, e.to_string()))?;
     }
-    Ok(per_part)
+    Ok((per_part, stride))
+}
+
+/// Which training frames the correction uses (`training_part_meshes`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Stride {
+    /// Every n-th frame of each motion.
+    Every(usize),
+    /// Every 2^k-th frame, k the smallest whose part meshes fit in this many bytes.
+    Within(usize),
 }
 
 impl Reconstructor {
@@ -208,6 +244,22 @@ impl Reconstructor {
     pub fn with_progress(mut self, bar: ProgressBar) -> Self {
         self.progress = bar;
         self
+    }
+
+    /// Bounds the bytes of the correction's cached factorisations (shared among the parts by
+    /// their vertex counts); the results do not depend on it ([`Corrector::set_cache_limit`]).
+    pub fn with_correction_cache(mut self, bytes: usize) -> Self {
+        let total: usize = self.correctors.iter().map(Corrector::n_vertices).sum();
+        for c in &mut self.correctors {
+            let share = bytes as f64 * c.n_vertices() as f64 / total.max(1) as f64;
+            c.set_cache_limit(share as usize);
+        }
+        self
+    }
+
+    /// How many training meshes the correction has factorised so far (rebuilds included).
+    pub fn factorisations(&self) -> usize {
+        self.correctors.iter().map(Corrector::factorisations).sum()
     }
 
     /// With `yes` and [`Surface::CorrectStitch`], [`Reconstructor::reconstruct_both`] also
@@ -463,16 +515,32 @@ mod tests {
         for alignment in [PartAlignment::Body, PartAlignment::Part] {
             let (pca, _) = fit(&mesh.vertices, &seg, &[&motion], Components::Count(20), alignment).unwrap();
             let rows = pca.part_rows(&motion).unwrap();
-            for stride in [1, 2, 3] {
-                let read = training_part_meshes(&pca, &[path.clone(), path.clone()], stride).unwrap();
-                let want: Vec<Vec<Vec<Vector3<f64>>>> = rows
-                    .iter()
+            let every = |stride: usize| -> Vec<Vec<Vec<Vector3<f64>>>> {
+                rows.iter()
                     .map(|r| {
                         let once: Vec<Vec<Vector3<f64>>> = rows_to_meshes(r).into_iter().step_by(stride).collect();
                         [once.clone(), once].concat()
                     })
-                    .collect();
-                assert!(read == want, "{alignment:?}, stride {stride}: part meshes differ");
+                    .collect()
+            };
+            let paths = [path.clone(), path.clone()];
+            for stride in [1, 2, 3] {
+                let (read, used) = training_part_meshes(&pca, &paths, Stride::Every(stride)).unwrap();
+                assert_eq!(used, stride);
+                assert!(read == every(stride), "{alignment:?}, stride {stride}: part meshes differ");
+            }
+            // Within a budget: the smallest power of two whose meshes fit, the same meshes as
+            // that stride read directly.
+            let frame_bytes: usize = pca.parts.iter().map(|p| p.vertices.len() * 24).sum();
+            let n = motion.n_frames();
+            for fit_frames in [2 * n, 2 * n - 1, n, n - 1, 3, 1] {
+                let want_stride = (0..)
+                    .map(|k| 1usize << k)
+                    .find(|&s| 2 * n.div_ceil(s) <= fit_frames || s >= n)
+                    .unwrap();
+                let (read, used) = training_part_meshes(&pca, &paths, Stride::Within(fit_frames * frame_bytes)).unwrap();
+                assert_eq!(used, want_stride, "{fit_frames} of {n} frames fit");
+                assert!(read == every(used), "{alignment:?}, {fit_frames} frames fit: part meshes differ");
             }
         }
     }

@@ -128,7 +128,7 @@ fn defaults_on_the_tiny_preset_never_lose_to_raw_regression_or_the_papers_placem
     assert!(capture::part_pca::blocks_of(source.n_frames(), 6).len() >= 3, "{} frames", source.n_frames());
     let seg = mesh_core::segmentation::Segmentation::load(w("B/parts.seg".into())).unwrap();
     let training: Vec<PathBuf> = TRAIN.iter().map(|t| w(format!("B/{t}.aligned"))).collect();
-    let training = transfer::reconstruct::training_part_meshes(&target_pca, &training, 1).unwrap();
+    let training = transfer::reconstruct::training_part_meshes(&target_pca, &training, transfer::reconstruct::Stride::Every(1)).unwrap().0;
     let mut recon = transfer::reconstruct::Reconstructor::with_training_meshes(
         &target_pca, &seg, &template_b.faces, training, transfer::reconstruct::Surface::CorrectStitch,
         surface::correct::DEFAULT_NEIGHBOURS,

@@ -15,7 +15,7 @@ use serde::Serialize;
 use crate::gpr_model::GprModel;
 use crate::placement::Placement;
 use crate::predict::{transfer_motion, SourceMotion, Streaming};
-use crate::reconstruct::{training_part_meshes, Reconstructor, Surface};
+use crate::reconstruct::{training_part_meshes, Reconstructor, Stride, Surface};
 use capture::part_pca::PcaModel;
 
 /// Transfer an aligned source motion to the target subject with a trained model: PLY frames in world coordinates
@@ -57,9 +57,10 @@ pub struct Params {
     /// Nearest training part meshes blended by the correction (the paper's M)
     #[arg(short = 'm', long, default_value_t = surface::correct::DEFAULT_NEIGHBOURS as u16, value_parser = clap::value_parser!(u16).range(1..))]
     pub neighbours: u16,
-    /// Use every n-th training frame for the correction
-    #[arg(long, default_value_t = 1, value_parser = clap::value_parser!(u16).range(1..))]
-    pub correct_stride: u16,
+    /// Use every n-th training frame for the correction (default: every frame while their
+    /// part meshes fit in --memory-budget, else every 2nd, 4th, ...: the smallest that fits)
+    #[arg(long, value_parser = clap::value_parser!(u16).range(1..))]
+    pub correct_stride: Option<u16>,
     /// Do not clean up foot skating (by default each placed frame is shifted horizontally,
     /// smoothly in time, so that where the source has a foot down the target's sole moves as the
     /// source's does, scaled: planted feet stay planted; the pose is unchanged)
@@ -83,9 +84,11 @@ pub struct Params {
     /// --surface correct writes) to this folder, from the same correction
     #[arg(long)]
     pub corrected_out: Option<PathBuf>,
-    /// Memory for the transferred frames, in MiB: they are made a block at a time and held
-    /// until the feet clean-up is solved, in memory while they fit, beyond it in a scratch
-    /// file beside the output (the same frames either way)
+    /// Memory in MiB for each store that grows with the data: the transferred frames (made a
+    /// block at a time and held until the feet clean-up is solved: in memory while they fit,
+    /// beyond it in a scratch file beside the output), and with --surface correct*, the
+    /// correction's training part meshes (see --correct-stride) and its cached factorisations
+    /// (least recently used rebuilt when needed). Only the stride changes the output
     #[arg(long, value_name = "MIB", default_value_t = 1024)]
     pub memory_budget: usize,
     /// Also write timings (frames per second of the prediction) as JSON
@@ -147,6 +150,7 @@ pub fn run(p: &Params) -> anyhow::Result<()> {
         );
     }
     let faces = template.faces;
+    let mut correct_stride = None;
     let mut recon = match (&p.surface, &p.segmentation) {
         (Surface::Assemble, _) | (_, None) => None,
         (surface, Some(seg_path)) => {
@@ -155,7 +159,19 @@ pub fn run(p: &Params) -> anyhow::Result<()> {
             // motions are never held whole. Stitching alone uses none.
             let corrected = matches!(surface, Surface::Correct | Surface::CorrectStitch);
             let paths = if corrected { p.target_training.as_slice() } else { &[] };
-            let training = training_part_meshes(&tgt_pca, paths, p.correct_stride.into())?;
+            let budget = p.memory_budget.saturating_mul(1 << 20);
+            let stride = match p.correct_stride {
+                Some(n) => Stride::Every(n.into()),
+                None => Stride::Within(budget),
+            };
+            let (training, used) = training_part_meshes(&tgt_pca, paths, stride)?;
+            correct_stride = corrected.then_some(used);
+            if used > 1 && p.correct_stride.is_none() {
+                mesh_core::warn!(
+                    "the target's training part meshes do not fit in --memory-budget {} MiB: the correction uses every {used}th training frame (--correct-stride or a larger budget to choose)",
+                    p.memory_budget
+                );
+            }
             Some(
                 Reconstructor::with_training_meshes(
                     &tgt_pca,
@@ -167,6 +183,7 @@ pub fn run(p: &Params) -> anyhow::Result<()> {
                 )
                 .with_context(|| seg_path.display().to_string())?
                 .with_corrected_assembly(p.corrected_out.is_some())
+                .with_correction_cache(budget)
                 .with_progress(mesh_core::cli::progress_bar(
                     0,
                     "gpr-predict: surface",
@@ -277,6 +294,8 @@ pub fn run(p: &Params) -> anyhow::Result<()> {
             "gp_frames_per_s": n / result.timing.gp_s.max(1e-12), "decode_assemble_s": result.timing.decode_s,
             "total_s": total, "frames_per_s_without_writing": n / total.max(1e-12), "ply_write_s": write,
             "unstitched_frames": recon.as_ref().map_or(0, |r| r.unstitched_frames()),
+            "correct_stride": correct_stride,
+            "factorisations": recon.as_ref().map_or(0, |r| r.factorisations()),
         });
         if let Some(t) = surface {
             json["surface_s"] = serde_json::to_value(t)?;
