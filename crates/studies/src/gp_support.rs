@@ -68,3 +68,33 @@ pub fn peak_rss_mib() -> f64 {
         })
         .map_or(f64::NAN, |kb| kb / 1024.0)
 }
+
+/// The conjugate-gradient settings the GP timing programs can override (`gp::optim::CgOptions`;
+/// absent: the library's defaults).
+#[derive(clap::Args, Debug)]
+pub struct CgArgs {
+    /// Relative gradient tolerance of the stopping rule.
+    #[arg(long)]
+    pub grad_tol: Option<f64>,
+    /// Curvature constant of the line search's Wolfe conditions.
+    #[arg(long)]
+    pub c2: Option<f64>,
+    /// Largest step of the line search.
+    #[arg(long)]
+    pub max_step: Option<f64>,
+}
+
+impl CgArgs {
+    /// `cg` with the settings given on the command line.
+    pub fn apply(&self, cg: &mut gp::optim::CgOptions) {
+        if let Some(v) = self.grad_tol {
+            cg.grad_tol = v;
+        }
+        if let Some(v) = self.c2 {
+            cg.c2 = v;
+        }
+        if let Some(v) = self.max_step {
+            cg.max_step = v;
+        }
+    }
+}

@@ -11,12 +11,3 @@ pub mod synthetic;
 /// The gp benchmark's synthetic training pairs.
 #[path = "../../gp/benches/synthetic_pairs.rs"]
 pub mod synthetic_pairs;
-
-/// For the binaries that read their own `--flag value` pairs: with `-h` or `--help` among the
-/// arguments, prints `usage` and exits (the rest of the command line is not read).
-pub fn usage_on_help(usage: &str) {
-    if std::env::args().skip(1).any(|a| a == "-h" || a == "--help") {
-        println!("{usage}");
-        std::process::exit(0);
-    }
-}

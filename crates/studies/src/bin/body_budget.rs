@@ -6,12 +6,7 @@
 //! Prints the time of each step for the old path (one chain per part, exact decoding,
 //! per-variation `Decoder::decode`) and the fast path, measured back to back.
 //!
-//! Usage: body_budget [model] [--old-samples N] [--skip-old]
-//! Options: --ancestral (fast path samples by `Sampler::Ancestral` instead of HMC);
-//! --fast burn_in,thin,leapfrog,chains (default 30,1,5,2); --tol metres (kernel-basis
-//! bound at the training points, default 2e-7); --hmc burn_in,thin,leapfrog,chains (sweep);
-//! --batch N (variations per fused GEMM, default 1); --block N (vertices per fused block); --fused-only N (after sampling, only
-//! the fused decoding, N times: a profiling aid).
+//! Options: `--help`.
 //! e.g.: OPENBLAS_NUM_THREADS=1 target/release/body_budget out/work/variation/locomotion.model
 
 use std::time::Instant;
@@ -44,29 +39,50 @@ fn max_dev(a: &[nalgebra::Vector3<f64>], b: &[Vec<nalgebra::Vector3<f64>>]) -> f
         .fold(0.0, f64::max)
 }
 
-/// `--help`: what the program does and its arguments.
-const USAGE: &str = "\
-100 variations of a 100-frame motion on a trained model, decoded to whole-body meshes.
+/// 100 variations of a 100-frame motion on a trained model, decoded to whole-body meshes.
+#[derive(clap::Parser)]
+struct Cli {
+    /// A trained variation model.
+    #[arg(default_value = "out/work/variation/locomotion.model")]
+    model: String,
+    /// HMC samples the old path times (scaled to 100).
+    #[arg(long, default_value_t = 10)]
+    old_samples: usize,
+    /// Do not time the old path.
+    #[arg(long)]
+    skip_old: bool,
+    /// The fast path samples by `Sampler::Ancestral` instead of HMC.
+    #[arg(long)]
+    ancestral: bool,
+    /// The fast path's HMC: burn-in, thin, leapfrog steps, chains per part.
+    #[arg(long, value_parser = parse_hmc, default_value = "30,1,5,2")]
+    fast: [usize; 4],
+    /// Kernel-basis bound at the training points (m).
+    #[arg(long, default_value_t = 2e-7)]
+    tol: f64,
+    /// HMC settings to sweep (burn-in, thin, leapfrog steps, chains per part), repeatable.
+    #[arg(long, value_parser = parse_hmc)]
+    hmc: Vec<[usize; 4]>,
+    /// Variations per fused GEMM.
+    #[arg(long, default_value_t = 1)]
+    batch: usize,
+    /// Vertices per fused block.
+    #[arg(long, default_value_t = variation::reconstruct::FUSED_BLOCK_VERTICES)]
+    block: usize,
+    /// After sampling, only the fused decoding, this many times (a profiling aid).
+    #[arg(long)]
+    fused_only: Option<usize>,
+}
 
-Usage: body_budget [MODEL] [--old-samples N] [--skip-old] [--ancestral] [--fast B,T,L,C]
-                   [--tol METRES] [--hmc B,T,L,C]... [--batch N] [--block N] [--fused-only N]
-  MODEL  default out/work/variation/locomotion.model; the options are described in
-         crates/studies/src/bin/body_budget.rs";
+/// `B,T,L,C`: burn-in, thin, leapfrog steps, chains.
+fn parse_hmc(s: &str) -> Result<[usize; 4], String> {
+    let v: Vec<usize> = s.split(',').map(|x| x.parse().map_err(|_| format!("{x:?} is not a count"))).collect::<Result<_, _>>()?;
+    v.try_into().map_err(|_| "expected four counts B,T,L,C".to_string())
+}
 
 fn main() {
-    studies::usage_on_help(USAGE);
-    let args: Vec<String> = std::env::args().skip(1).collect();
-    let path = args
-        .iter()
-        .find(|a| !a.starts_with("--"))
-        .cloned()
-        .unwrap_or_else(|| "out/work/variation/locomotion.model".into());
-    let old_n: usize = args
-        .iter()
-        .position(|a| a == "--old-samples")
-        .map(|i| args[i + 1].parse().expect("--old-samples N"))
-        .unwrap_or(10);
-    let skip_old = args.iter().any(|a| a == "--skip-old");
+    let cli = <Cli as clap::Parser>::parse();
+    let (path, old_n, skip_old) = (cli.model.clone(), cli.old_samples, cli.skip_old);
     let pool = rayon::ThreadPoolBuilder::new()
         .num_threads(2)
         .build()
@@ -113,16 +129,7 @@ fn main() {
             println!("part {k}: energy+gradient {ms:.3} ms (M = {m}, T = {len})");
         }
     }
-    // HMC settings sweep: --hmc burn_in,thin,leapfrog,chains (repeatable).
-    let settings: Vec<[usize; 4]> = args
-        .iter()
-        .enumerate()
-        .filter(|(_, a)| *a == "--hmc")
-        .map(|(i, _)| {
-            let v: Vec<usize> = args[i + 1].split(',').map(|x| x.parse().unwrap()).collect();
-            [v[0], v[1], v[2], v[3]]
-        })
-        .collect();
+    let settings = cli.hmc.clone();
     if !settings.is_empty() {
         let dec = Decoder::new(&model, &mut Vec::new()).unwrap();
         let starts: Vec<DMatrix<f64>> = dec
@@ -159,30 +166,7 @@ fn main() {
             );
         }
     }
-    // Fast path: --fast burn_in,thin,leapfrog,chains ; --tol metres.
-    let fast: [usize; 4] = args
-        .iter()
-        .position(|a| a == "--fast")
-        .map(|i| {
-            let v: Vec<usize> = args[i + 1].split(',').map(|x| x.parse().unwrap()).collect();
-            [v[0], v[1], v[2], v[3]]
-        })
-        .unwrap_or([30, 1, 5, 2]);
-    let batch: usize = args
-        .iter()
-        .position(|a| a == "--batch")
-        .map(|i| args[i + 1].parse().expect("--batch N"))
-        .unwrap_or(1);
-    let block: usize = args
-        .iter()
-        .position(|a| a == "--block")
-        .map(|i| args[i + 1].parse().expect("--block N"))
-        .unwrap_or(variation::reconstruct::FUSED_BLOCK_VERTICES);
-    let tol: f64 = args
-        .iter()
-        .position(|a| a == "--tol")
-        .map(|i| args[i + 1].parse().unwrap())
-        .unwrap_or(2e-7);
+    let (fast, batch, block, tol) = (cli.fast, cli.batch, cli.block, cli.tol);
     {
         let t = Instant::now();
         let (dec, info) = pool
@@ -197,7 +181,7 @@ fn main() {
             leapfrog_steps: leapfrog,
             ..default_hmc(n, 0)
         };
-        let sampler = if args.iter().any(|a| a == "--ancestral") {
+        let sampler = if cli.ancestral {
             Sampler::Ancestral
         } else {
             Sampler::Hmc
@@ -233,9 +217,8 @@ fn main() {
                 first * 1e3
             );
         }
-        if let Some(i) = args.iter().position(|a| a == "--fused-only") {
+        if let Some(reps) = cli.fused_only {
             // Profiling aid (perf): only the fused decoding, repeated.
-            let reps: usize = args[i + 1].parse().expect("--fused-only N");
             let fused = pool
                 .install(|| dec.fused(Assembly::Average))
                 .unwrap()

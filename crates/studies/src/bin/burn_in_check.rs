@@ -11,7 +11,6 @@
 //! of the exact draws (the spread of the variations, 1 when it matches). Starts: `mean` (the
 //! paper's), `ancestral` (an exact draw), `training` (the sequence's learned latent trajectory).
 //!
-//! Usage: burn_in_check [model] [--seeds N] [--settings start:burn,...]
 //! e.g.: OPENBLAS_NUM_THREADS=1 target/release/burn_in_check out/work/variation/locomotion.model --seeds 8 --settings mean:200,mean:1000,ancestral:50
 
 use gpdm::ancestral::sample_trajectories_ancestral;
@@ -36,42 +35,39 @@ fn rms(a: &DMatrix<f64>, b: &DMatrix<f64>) -> f64 {
     ((a - b).norm_squared() / a.nrows() as f64).sqrt()
 }
 
-/// `--help`: what the program does and its arguments.
-const USAGE: &str = "\
-Stationarity of the HMC chains for a given burn-in and chain start: kept samples against
-exact draws of the same density.
+/// Stationarity of the HMC chains for a given burn-in and chain start: kept samples against
+/// exact draws of the same density.
+#[derive(clap::Parser)]
+struct Cli {
+    /// A trained variation model.
+    #[arg(default_value = "out/work/variation/locomotion.model")]
+    model: String,
+    /// Seeds per chain.
+    #[arg(long, default_value_t = 8)]
+    seeds: u64,
+    /// START:BURN settings, START one of mean, ancestral, learned or training (the sequence's
+    /// learned trajectory).
+    #[arg(long, value_delimiter = ',', value_parser = parse_setting,
+          default_value = "mean:200,mean:1000,ancestral:20,ancestral:50")]
+    settings: Vec<(Option<ChainStart>, usize)>,
+}
 
-Usage: burn_in_check [MODEL] [--seeds N] [--settings START:BURN,...]
-  MODEL       default out/work/variation/locomotion.model
-  --seeds     default 8
-  --settings  START is mean, ancestral, learned or training";
+/// `START:BURN`; a start of None: the training trajectory.
+fn parse_setting(s: &str) -> Result<(Option<ChainStart>, usize), String> {
+    let (a, b) = s.split_once(':').ok_or("expected START:BURN")?;
+    let start = match a {
+        "mean" => Some(ChainStart::MeanPrediction),
+        "ancestral" => Some(ChainStart::Ancestral),
+        "learned" => Some(ChainStart::Learned),
+        "training" => None,
+        _ => return Err(format!("start {a:?} is not mean, ancestral, learned or training")),
+    };
+    Ok((start, b.parse().map_err(|_| format!("burn-in {b:?} is not a count"))?))
+}
 
 fn main() {
-    studies::usage_on_help(USAGE);
-    let args: Vec<String> = std::env::args().skip(1).collect();
-    let path = args
-        .iter()
-        .find(|a| !a.starts_with("--") && !a.contains(':') && a.parse::<usize>().is_err())
-        .cloned()
-        .unwrap_or_else(|| "out/work/variation/locomotion.model".into());
-    let opt = |name: &str| args.iter().position(|a| a == name).map(|i| args[i + 1].clone());
-    let seeds: u64 = opt("--seeds").map_or(8, |s| s.parse().expect("--seeds N"));
-    // None: the training trajectory.
-    let settings: Vec<(Option<ChainStart>, usize)> = opt("--settings")
-        .unwrap_or_else(|| "mean:200,mean:1000,ancestral:20,ancestral:50".into())
-        .split(',')
-        .map(|s| {
-            let (a, b) = s.split_once(':').expect("start:burn");
-            let start = match a {
-                "mean" => Some(ChainStart::MeanPrediction),
-                "ancestral" => Some(ChainStart::Ancestral),
-                "learned" => Some(ChainStart::Learned),
-                "training" => None,
-                _ => panic!("start is mean, ancestral or training"),
-            };
-            (start, b.parse().expect("burn-in"))
-        })
-        .collect();
+    let cli = <Cli as clap::Parser>::parse();
+    let (path, seeds, settings) = (cli.model, cli.seeds, cli.settings);
     let model = VariationModel::load(&path).expect("a trained variation model");
     let dec = Decoder::new(&model, &mut Vec::new()).expect("decoder");
     let len = variation::frame_stride::covering_count(model.n_frames(), model.stride);

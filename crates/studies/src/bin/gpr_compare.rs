@@ -2,7 +2,6 @@
 //! prediction on synthetic pairs, and optionally dumps every problem as CSV with our results
 //! for `scripts/compare/gpr_gpy.py`.
 //!
-//! Usage: `gpr_compare [--pairs N] [--kernel nn|se|linear] [--dump DIR] [--grad-tol X] [--c2 X] [--max-step X] [--warm-start N]`
 //! e.g.: `OPENBLAS_NUM_THREADS=1 cargo run --release -p studies --bin gpr_compare -- --pairs 1100 --dump /tmp/gpr1100`
 use studies::synthetic_pairs;
 use studies::gp_support as support;
@@ -13,26 +12,30 @@ use support::{cpu_seconds, l_sf, write_csv};
 use rayon::prelude::*;
 use std::time::Instant;
 
-/// `--help`: what the program does and its arguments.
-const USAGE: &str = "\
-Times GP training and prediction of the 12 transfer models on synthetic pairs; --dump
-writes every problem for scripts/compare/gpr_gpy.py.
-
-Usage: gpr_compare [--pairs N] [--kernel nn|se|linear] [--dump DIR] [--grad-tol X] [--c2 X]
-                   [--max-step X] [--warm-start N]
-  defaults: --pairs 350 --kernel nn";
+/// Times GP training and prediction of the 12 transfer models on synthetic pairs; --dump
+/// writes every problem for scripts/compare/gpr_gpy.py.
+#[derive(clap::Parser)]
+struct Cli {
+    /// Training pairs per model.
+    #[arg(long, default_value_t = 350)]
+    pairs: usize,
+    /// The covariance function.
+    #[arg(long, value_parser = ["nn", "se", "linear"], default_value = "nn")]
+    kernel: String,
+    /// Write every problem and our results here (CSV and rust.json).
+    #[arg(long)]
+    dump: Option<std::path::PathBuf>,
+    /// Pairs of the warm start's sub-problem (`GprOptions::warm_start_pairs`).
+    #[arg(long)]
+    warm_start: Option<usize>,
+    #[command(flatten)]
+    cg: support::CgArgs,
+}
 
 fn main() {
-    studies::usage_on_help(USAGE);
-    let args: Vec<String> = std::env::args().collect();
-    let get = |flag: &str| {
-        args.iter()
-            .position(|a| a == flag)
-            .and_then(|i| args.get(i + 1))
-            .cloned()
-    };
-    let n: usize = get("--pairs").map_or(350, |s| s.parse().expect("--pairs N"));
-    let kernel = match get("--kernel").as_deref().unwrap_or("nn") {
+    let cli = <Cli as clap::Parser>::parse();
+    let n = cli.pairs;
+    let kernel = match cli.kernel.as_str() {
         "se" => Kernel::SquaredExponential {
             l: 1.0,
             sigma_f: 1.0,
@@ -41,17 +44,9 @@ fn main() {
         _ => Kernel::neural_network(1.0, 1.0),
     };
     let mut opts = GprOptions::default();
-    if let Some(v) = get("--grad-tol") {
-        opts.cg.grad_tol = v.parse().expect("--grad-tol X");
-    }
-    if let Some(v) = get("--c2") {
-        opts.cg.c2 = v.parse().expect("--c2 X");
-    }
-    if let Some(v) = get("--warm-start") {
-        opts.warm_start_pairs = v.parse().expect("--warm-start N");
-    }
-    if let Some(v) = get("--max-step") {
-        opts.cg.max_step = v.parse().expect("--max-step X");
+    cli.cg.apply(&mut opts.cg);
+    if let Some(v) = cli.warm_start {
+        opts.warm_start_pairs = v;
     }
     let problems = synthetic_pairs::both_directions(n, 7);
     let (t0, c0) = (Instant::now(), cpu_seconds());
@@ -102,8 +97,7 @@ fn main() {
         frames as f64 / pred_s
     );
     assert_eq!(preds.len(), 6);
-    if let Some(dir) = get("--dump") {
-        let dir = std::path::PathBuf::from(dir);
+    if let Some(dir) = cli.dump {
         std::fs::create_dir_all(&dir).unwrap();
         // Sequential single-thread timing per model, for a like-for-like ratio with GPy.
         let mut items = Vec::new();

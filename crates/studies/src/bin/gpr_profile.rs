@@ -24,24 +24,20 @@ fn median_ms(reps: usize, mut f: impl FnMut()) -> f64 {
     t[reps / 2]
 }
 
-/// `--help`: what the program does and its arguments.
-const USAGE: &str = "\
-Breakdown of one log-marginal-likelihood + gradient evaluation.
-
-Usage: gpr_profile [--pairs N] [--reps N]
-  defaults: --pairs 1100 --reps 9";
+/// Breakdown of one log-marginal-likelihood + gradient evaluation.
+#[derive(clap::Parser)]
+struct Cli {
+    /// Training pairs.
+    #[arg(long, default_value_t = 1100)]
+    pairs: usize,
+    /// Runs per timing (the median is reported).
+    #[arg(long, default_value_t = 9, value_parser = clap::value_parser!(u64).range(1..))]
+    reps: u64,
+}
 
 fn main() {
-    studies::usage_on_help(USAGE);
-    let args: Vec<String> = std::env::args().collect();
-    let get = |flag: &str| {
-        args.iter()
-            .position(|a| a == flag)
-            .and_then(|i| args.get(i + 1))
-            .cloned()
-    };
-    let n: usize = get("--pairs").map_or(1100, |s| s.parse().expect("--pairs N"));
-    let reps: usize = get("--reps").map_or(9, |s| s.parse().expect("--reps N"));
+    let cli = <Cli as clap::Parser>::parse();
+    let (n, reps) = (cli.pairs, cli.reps as usize);
     faer::set_global_parallelism(faer::Par::Seq);
     let p = synthetic_pairs::pairs(n, 7);
     let (x, y) = &p[0];

@@ -545,37 +545,45 @@ fn pieces(n: usize, d_obs: usize, reps: usize) {
     );
 }
 
-/// `--help`: what the program does and its arguments.
-const USAGE: &str = "\
-Times the pieces of one GPDM objective+gradient evaluation.
+/// Times the pieces of one GPDM objective+gradient evaluation (all of them without a command).
+#[derive(clap::Parser)]
+struct Cli {
+    #[command(subcommand)]
+    only: Option<Only>,
+}
 
-Usage: profile_objective [objective-only | old-new [PROBLEM_DIR...]]
-  objective-only  just the 1-vs-2-thread part
-  old-new         just the old-vs-new comparison, on the synthetic problem or the exported
-                  problems given";
+#[derive(clap::Subcommand)]
+enum Only {
+    /// Just the 1-vs-2-thread objective timing, longer (e.g. under `perf record`).
+    ObjectiveOnly,
+    /// Just the old-vs-new comparison: on the synthetic problem, or on the exported problems
+    /// given (see `fit_compare`).
+    OldNew { problems: Vec<String> },
+}
 
 fn main() {
-    studies::usage_on_help(USAGE);
+    let cli = <Cli as clap::Parser>::parse();
     // SAFETY: plain FFI call; pins OpenBLAS to the calling thread's single core.
     unsafe { openblas_set_num_threads(1) };
     faer::set_global_parallelism(faer::Par::Seq);
-    let args: Vec<String> = std::env::args().skip(1).collect();
-    if args.first().map(String::as_str) == Some("objective-only") {
-        // For `perf record`: only the interleaved objective timing.
-        objective_threads(201);
-        return;
-    }
-    if args.first().map(String::as_str) == Some("old-new") {
-        if args.len() == 1 {
-            for n in [192, 446] {
-                pieces(n, n + 7, if n < 300 { 101 } else { 41 });
+    match cli.only {
+        Some(Only::ObjectiveOnly) => {
+            objective_threads(201);
+            return;
+        }
+        Some(Only::OldNew { problems }) => {
+            if problems.is_empty() {
+                for n in [192, 446] {
+                    pieces(n, n + 7, if n < 300 { 101 } else { 41 });
+                }
+                old_new("synthetic", &synthetic::synthetic(15000, 1e-3), 41);
             }
-            old_new("synthetic", &synthetic::synthetic(15000, 1e-3), 41);
+            for dir in &problems {
+                old_new(dir, &problem::load_problem(std::path::Path::new(dir)), 101);
+            }
+            return;
         }
-        for dir in &args[1..] {
-            old_new(dir, &problem::load_problem(std::path::Path::new(dir)), 101);
-        }
-        return;
+        None => {}
     }
     let n = 446;
     let x = Mat::from_fn(n, 3, |i, j| ((i * 3 + j) as f64 * 0.37).sin() * 2.0);

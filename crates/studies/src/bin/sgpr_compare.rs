@@ -8,7 +8,6 @@
 //! start with the dumped inducing inputs (the problem GPy is given), `--repeat R` times
 //! (default 3): the fastest wall and thread-CPU time are recorded.
 //!
-//! Usage: `sgpr_compare [--pairs N] [--inducing M] [--exact] [--dump DIR] [--models K] [--grad-tol X] [--c2 X] [--repeat R]`
 //! e.g.: `OPENBLAS_NUM_THREADS=1 cargo run --release -p studies --bin sgpr_compare -- --pairs 10000 --inducing 256`
 use studies::synthetic_pairs;
 use studies::gp_support as support;
@@ -24,31 +23,38 @@ fn relative_difference(a: &Gpr, b: &Gpr, x: &nalgebra::DMatrix<f64>, y: &nalgebr
     (a.predict_mean(x).unwrap() - b.predict_mean(x).unwrap()).norm() / y.norm()
 }
 
-/// `--help`: what the program does and its arguments.
-const USAGE: &str = "\
-Times sparse GP training of the 12 transfer models on synthetic pairs; --dump writes
-every problem for scripts/compare/sgpr_gpy.py.
-
-Usage: sgpr_compare [--pairs N] [--inducing M] [--exact] [--dump DIR] [--models K]
-                    [--grad-tol X] [--c2 X] [--repeat R]
-  defaults: --pairs 1000 --inducing 256 --models 12 --repeat 3";
+/// Times sparse GP training of the 12 transfer models on synthetic pairs; --dump writes
+/// every problem for scripts/compare/sgpr_gpy.py.
+#[derive(clap::Parser)]
+struct Cli {
+    /// Training pairs per model.
+    #[arg(long, default_value_t = 1000)]
+    pairs: usize,
+    /// Inducing inputs.
+    #[arg(long, default_value_t = 256)]
+    inducing: usize,
+    /// Also train the exact GP on the same problems and compare.
+    #[arg(long)]
+    exact: bool,
+    /// Write every problem, its inducing inputs and our optimum here.
+    #[arg(long)]
+    dump: Option<std::path::PathBuf>,
+    /// How many of the 12 models to train.
+    #[arg(long, default_value_t = 12)]
+    models: usize,
+    /// Single-thread retrainings timed per model with --dump (the fastest is kept).
+    #[arg(long, default_value_t = 3, value_parser = clap::value_parser!(u64).range(1..))]
+    repeat: u64,
+    #[command(flatten)]
+    cg: support::CgArgs,
+}
 
 fn main() {
-    studies::usage_on_help(USAGE);
-    let args: Vec<String> = std::env::args().collect();
-    let get = |flag: &str| args.iter().position(|a| a == flag).and_then(|i| args.get(i + 1)).cloned();
-    let n: usize = get("--pairs").map_or(1000, |s| s.parse().expect("--pairs N"));
-    let m: usize = get("--inducing").map_or(256, |s| s.parse().expect("--inducing M"));
-    let count: usize = get("--models").map_or(12, |s| s.parse().expect("--models K"));
-    let repeat: usize = get("--repeat").map_or(3, |s| s.parse().expect("--repeat R")).max(1);
+    let cli = <Cli as clap::Parser>::parse();
+    let (n, m, count, repeat) = (cli.pairs, cli.inducing, cli.models, cli.repeat as usize);
     let kernel = Kernel::neural_network(1.0, 1.0);
     let mut opts = GprOptions { sparse: Sparsity::Inducing(m), ..Default::default() };
-    if let Some(v) = get("--c2") {
-        opts.cg.c2 = v.parse().expect("--c2 X");
-    }
-    if let Some(v) = get("--grad-tol") {
-        opts.cg.grad_tol = v.parse().expect("--grad-tol X");
-    }
+    cli.cg.apply(&mut opts.cg);
     let mut problems = synthetic_pairs::both_directions(n, 7);
     problems.truncate(count);
     let (t0, c0) = (Instant::now(), cpu_seconds());
@@ -69,7 +75,7 @@ fn main() {
             println!("    note: {note}");
         }
     }
-    if args.iter().any(|a| a == "--exact") {
+    if cli.exact {
         let t1 = Instant::now();
         let exact: Vec<(Gpr, _)> =
             train_many(kernel, &problems, &GprOptions::default()).into_iter().map(|r| r.expect("training")).collect();
@@ -83,8 +89,7 @@ fn main() {
             );
         }
     }
-    if let Some(dir) = get("--dump") {
-        let dir = std::path::PathBuf::from(dir);
+    if let Some(dir) = cli.dump {
         std::fs::create_dir_all(&dir).unwrap();
         let mut items = Vec::new();
         let (mut seq_total, mut seq_cpu_total) = (0.0, 0.0);

@@ -25,26 +25,20 @@ fn cpu() -> f64 {
     f.get(10).copied().unwrap_or(0.0) / 100.0 + f.get(11).copied().unwrap_or(0.0) / 100.0
 }
 
-/// `--help`: what the program does and its arguments.
-const USAGE: &str = "\
-Cost of the stitched assembly per frame for each factorisation of the Poisson merge.
-
-Usage: stitch_budget [MODEL] [--variations N]
-  MODEL  default out/work/variation/locomotion.model";
+/// Cost of the stitched assembly per frame for each factorisation of the Poisson merge.
+#[derive(clap::Parser)]
+struct Cli {
+    /// A trained variation model.
+    #[arg(default_value = "out/work/variation/locomotion.model")]
+    model: String,
+    /// Variations sampled.
+    #[arg(long, default_value_t = 2)]
+    variations: usize,
+}
 
 fn main() {
-    studies::usage_on_help(USAGE);
-    let args: Vec<String> = std::env::args().skip(1).collect();
-    let path = args
-        .iter()
-        .find(|a| !a.starts_with("--"))
-        .cloned()
-        .unwrap_or_else(|| "out/work/variation/locomotion.model".into());
-    let n: usize = args
-        .iter()
-        .position(|a| a == "--variations")
-        .map(|i| args[i + 1].parse().expect("--variations N"))
-        .unwrap_or(2);
+    let cli = <Cli as clap::Parser>::parse();
+    let (path, n) = (cli.model, cli.variations);
     let model = VariationModel::load(&path).expect("a trained variation model");
     let dec = Decoder::new(&model, &mut Vec::new()).expect("decoder");
     let opts = HmcOptions {
