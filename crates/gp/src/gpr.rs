@@ -32,75 +32,17 @@
 //! `K_** - K_* (K + σn² I)⁻¹ K_*ᵀ` (add `noise_var` for the variance of a noisy observation).
 
 use crate::kernel::Kernel;
+use crate::likelihood::{fit_exact, noisy_cholesky, noisy_gram, warm_start};
 use crate::linalg::Cholesky;
-use crate::optim::{minimize_lazy, CgOptions, ExitState};
-use crate::sparse_gpr::{train_sparse, SparsePosterior, Sparsity};
+use crate::sparse_gpr::{train_sparse, SparseFit, SparsePosterior};
+use crate::training::{check_xy, summarise_notes};
 use crate::{check_finite, invalid, Result};
 use nalgebra::{DMatrix, DVector};
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 
-/// The paper's fixed observation-noise variance (after CVPR eq. 8).
-pub const PAPER_NOISE_VAR: f64 = 0.1;
-
-/// Training settings.
-#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
-pub struct GprOptions {
-    /// Observation-noise variance `σn²` (the starting value when `learn_noise`).
-    pub noise_var: f64,
-    /// Also optimise `log σn²` (off by default: the paper fixes `σn² = 0.1`).
-    pub learn_noise: bool,
-    /// Optimise the kernel hyperparameters (otherwise the given kernel is used as is).
-    pub optimise: bool,
-    /// Start the optimiser from [`initial_kernel`] instead of the given hyperparameters.
-    pub data_init: bool,
-    /// Conjugate-gradient settings.
-    pub cg: CgOptions,
-    /// Warm start: first maximise the likelihood on `min(warm_start_pairs, F / 3)` evenly
-    /// spaced training pairs (cheap: the cost is cubic in the count; skipped below 32 pairs)
-    /// and start the full optimisation from there. 0 disables it. The full-data optimisation
-    /// then runs to the same tolerance, so only the path to the optimum changes. Measured on
-    /// the 12 benchmark models: 1100 pairs, 256 -> 167 to 90-139 full-size evaluations.
-    #[serde(default)]
-    pub warm_start_pairs: usize,
-    /// Exact GP or Titsias' sparse bound ([`crate::sparse_gpr`]); exact by default.
-    #[serde(default)]
-    pub sparse: Sparsity,
-}
-
-impl Default for GprOptions {
-    fn default() -> Self {
-        Self {
-            noise_var: PAPER_NOISE_VAR,
-            learn_noise: false,
-            optimise: true,
-            data_init: true,
-            cg: CgOptions::default(),
-            warm_start_pairs: 256,
-            sparse: Sparsity::Exact,
-        }
-    }
-}
-
-/// What training did: optimiser exit state, likelihoods, numerical notes (jitter retries).
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
-pub struct TrainReport {
-    /// `None` when hyperparameters were not optimised.
-    pub exit: Option<ExitState>,
-    pub iterations: usize,
-    /// Likelihood evaluations (one Cholesky each).
-    pub evaluations: usize,
-    /// Gradient evaluations (the inverse's elements each); fewer than `evaluations` because
-    /// rejected line-search trials need only the value.
-    #[serde(default)]
-    pub gradient_evaluations: usize,
-    /// Log marginal likelihood at the starting hyperparameters.
-    pub initial_lml: f64,
-    /// Log marginal likelihood of the returned model.
-    pub lml: f64,
-    /// One line per numerical event (jitter added), to be logged by the caller.
-    pub notes: Vec<String>,
-}
+pub use crate::likelihood::{log_marginal_likelihood, log_marginal_likelihood_grad};
+pub use crate::training::{initial_kernel, GprOptions, TrainReport, PAPER_NOISE_VAR};
 
 /// A trained GP regressor: hyperparameters, training inputs and `α = (K + σn² I)⁻¹ Y`; or,
 /// trained sparse ([`crate::sparse_gpr`]), the training inputs, `α = β / σn²` over the
@@ -117,319 +59,6 @@ pub struct Gpr {
     sparse: Option<SparsePosterior>,
 }
 
-pub(crate) fn check_xy(x: &DMatrix<f64>, y: &DMatrix<f64>) -> Result<()> {
-    if x.nrows() == 0 {
-        return invalid("GP regression needs at least one training pair");
-    }
-    if x.nrows() != y.nrows() {
-        return invalid(format!(
-            "GP regression: {} input rows but {} output rows",
-            x.nrows(),
-            y.nrows()
-        ));
-    }
-    check_finite("GP inputs", x)?;
-    check_finite("GP outputs", y)
-}
-
-fn noisy_gram(mut ky: DMatrix<f64>, noise_var: f64) -> DMatrix<f64> {
-    for i in 0..ky.nrows() {
-        ky[(i, i)] += noise_var;
-    }
-    ky
-}
-
-fn lml_value(chol: &Cholesky, y: &DMatrix<f64>, alpha: &DMatrix<f64>) -> f64 {
-    let (f, m) = (y.nrows() as f64, y.ncols() as f64);
-    -0.5 * y.dot(alpha) - 0.5 * m * chol.log_det() - 0.5 * m * f * (2.0 * std::f64::consts::PI).ln()
-}
-
-/// Log marginal likelihood of `Y` given `X` summed over the output columns.
-pub fn log_marginal_likelihood(
-    kernel: &Kernel,
-    noise_var: f64,
-    x: &DMatrix<f64>,
-    y: &DMatrix<f64>,
-    notes: &mut Vec<String>,
-) -> Result<f64> {
-    check_xy(x, y)?;
-    let chol = Cholesky::new(
-        &noisy_gram(kernel.gram_lower(x, false).0, noise_var),
-        "K + noise",
-        notes,
-    )?;
-    let alpha = chol.solve(y);
-    Ok(lml_value(&chol, y, &alpha))
-}
-
-/// The marginal likelihood at one hyperparameter setting, factorised: enough to return the
-/// value at once and the gradient later ([`Factored::gradient`]) without refactorising, so
-/// the optimiser's rejected line-search trials cost one Cholesky ([`crate::optim::minimize_lazy`]).
-struct Factored {
-    kernel: Kernel,
-    noise_var: f64,
-    /// Lower triangle of `K + σn² I`.
-    ky: DMatrix<f64>,
-    chol: Cholesky,
-    alpha: DMatrix<f64>,
-    value: f64,
-}
-
-impl Factored {
-    fn new(
-        kernel: &Kernel,
-        noise_var: f64,
-        x: &DMatrix<f64>,
-        y: &DMatrix<f64>,
-        notes: &mut Vec<String>,
-    ) -> Result<Self> {
-        // Lower triangles only: the Cholesky reads the lower triangle and the contractions
-        // of the gradient are over symmetric products.
-        let ky = noisy_gram(kernel.gram_lower(x, false).0, noise_var);
-        let chol = Cholesky::new(&ky, "K + noise", notes)?;
-        let alpha = chol.solve(y);
-        let value = lml_value(&chol, y, &alpha);
-        Ok(Self {
-            kernel: *kernel,
-            noise_var,
-            ky,
-            chol,
-            alpha,
-            value,
-        })
-    }
-
-    /// Gradient of the log marginal likelihood with respect to the kernel's log
-    /// hyperparameters, then `∂/∂ log σn²` when `with_noise` (R&W eq. 5.9 summed over outputs).
-    ///
-    /// `W = α αᵀ - m (K + σn² I)⁻¹` is never formed: one pass over the lower triangles of
-    /// `α αᵀ`, the inverse, `∂K/∂log l` and `K + σn² I` accumulates `tr(W ∂K/∂log l)`,
-    /// `tr(W (K + σn² I))` and `tr W` (with `∂K/∂log σf = 2K = 2(K + σn² I) - 2σn² I`: every
-    /// kernel's σf is a prefactor σf²). The inverse's elements are needed for the trace term.
-    fn gradient(&self, x: &DMatrix<f64>, with_noise: bool) -> Vec<f64> {
-        let n = self.ky.nrows();
-        let m = self.alpha.ncols() as f64;
-        let inv = self.chol.inverse_lower();
-        let aa = &self.alpha * self.alpha.transpose();
-        let dl = self.kernel.dgram_dlog_l_lower(x);
-        let (mut t_l, mut t_ky, mut t_w) = (0.0, 0.0, 0.0);
-        for j in 0..n {
-            let (ic, ac) = (inv.col_as_slice(j), &aa.as_slice()[j * n..(j + 1) * n]);
-            let kc = &self.ky.as_slice()[j * n..(j + 1) * n];
-            let wjj = ac[j] - m * ic[j];
-            t_w += wjj;
-            t_ky += wjj * kc[j];
-            let (mut off_ky, mut off_l) = (0.0, 0.0);
-            match &dl {
-                Some(dl) => {
-                    let dc = &dl.as_slice()[j * n..(j + 1) * n];
-                    t_l += wjj * dc[j];
-                    for i in j + 1..n {
-                        let w = ac[i] - m * ic[i];
-                        off_ky += w * kc[i];
-                        off_l += w * dc[i];
-                    }
-                }
-                None => {
-                    for i in j + 1..n {
-                        off_ky += (ac[i] - m * ic[i]) * kc[i];
-                    }
-                }
-            }
-            t_ky += 2.0 * off_ky;
-            t_l += 2.0 * off_l;
-        }
-        let mut grad = Vec::with_capacity(3);
-        if dl.is_some() {
-            grad.push(0.5 * t_l);
-        }
-        grad.push(t_ky - self.noise_var * t_w);
-        if with_noise {
-            grad.push(0.5 * self.noise_var * t_w);
-        }
-        grad
-    }
-}
-
-/// Log marginal likelihood and its gradient with respect to the kernel's log
-/// hyperparameters ([`Kernel::log_params`] order), followed by `∂/∂ log σn²` when
-/// `with_noise`.
-pub fn log_marginal_likelihood_grad(
-    kernel: &Kernel,
-    noise_var: f64,
-    with_noise: bool,
-    x: &DMatrix<f64>,
-    y: &DMatrix<f64>,
-    notes: &mut Vec<String>,
-) -> Result<(f64, Vec<f64>)> {
-    check_xy(x, y)?;
-    let f = Factored::new(kernel, noise_var, x, y, notes)?;
-    Ok((f.value, f.gradient(x, with_noise)))
-}
-
-/// A data-driven starting point: `l` = root-mean-square input norm (NN) or RMS distance to
-/// the input mean (SE), and `σf` such that the mean prior variance `mean k(x, x)` equals
-/// the mean squared output (the outputs are modelled with zero mean, as in the paper).
-pub fn initial_kernel(kernel: &Kernel, x: &DMatrix<f64>, y: &DMatrix<f64>) -> Kernel {
-    let f = x.nrows().max(1) as f64;
-    let rms_norm = (x.iter().map(|v| v * v).sum::<f64>() / f).sqrt().max(1e-3);
-    let mean = x.row_mean();
-    let rms_spread = (x
-        .row_iter()
-        .map(|r| (r - &mean).norm_squared())
-        .sum::<f64>()
-        / f)
-        .sqrt()
-        .max(1e-3);
-    let y2 = (y.iter().map(|v| v * v).sum::<f64>() / (y.len().max(1) as f64)).max(1e-6);
-    let unit = match *kernel {
-        Kernel::NeuralNetwork { bias, .. } => Kernel::NeuralNetwork {
-            l: rms_norm,
-            sigma_f: 1.0,
-            bias,
-        },
-        Kernel::SquaredExponential { .. } => Kernel::SquaredExponential {
-            l: rms_spread,
-            sigma_f: 1.0,
-        },
-        Kernel::Linear { .. } => Kernel::Linear { sigma_f: 1.0 },
-    };
-    let prior = unit.diag(x).mean().max(1e-12);
-    let sf = (y2 / prior).sqrt();
-    let mut p = unit.log_params();
-    *p.last_mut().unwrap() = sf.ln();
-    unit.with_log_params(&p)
-}
-
-/// Search coordinates of the optimiser. For the NN kernel, `(log l, log σf - log l)`: when
-/// the data are nearly linear the likelihood rises slowly along a valley `l, σf -> ∞` with
-/// `σf / l` fixed (CVPR eq. 10 tends to the linear kernel `σf²/(2l²) xᵀx'`); in these coordinates
-/// the valley is aligned with an axis and conjugate gradients need fewer steps. The optimum
-/// is the same (an invertible linear change of variables).
-pub(crate) fn to_search(theta: &[f64], valley: bool) -> Vec<f64> {
-    if valley {
-        vec![theta[0], theta[1] - theta[0]]
-    } else {
-        theta.to_vec()
-    }
-}
-
-pub(crate) fn from_search(phi: &[f64], valley: bool) -> Vec<f64> {
-    if valley {
-        vec![phi[0], phi[1] + phi[0]]
-    } else {
-        phi.to_vec()
-    }
-}
-
-/// The kernel hyperparameters maximising the likelihood on `opts.warm_start_pairs` evenly
-/// spaced training pairs (see [`GprOptions::warm_start_pairs`]), or `start` unchanged when
-/// the option is off, the data are small, or that fit fails.
-pub(crate) fn warm_start(start: Kernel, x: &DMatrix<f64>, y: &DMatrix<f64>, opts: &GprOptions) -> Kernel {
-    let n = x.nrows();
-    let s = opts.warm_start_pairs.min(n / 3);
-    if !opts.optimise || s < 32 {
-        return start;
-    }
-    let rows: Vec<usize> = (0..s).map(|i| i * n / s).collect();
-    let (xs, ys) = (x.select_rows(rows.iter()), y.select_rows(rows.iter()));
-    let sub = GprOptions {
-        learn_noise: false,
-        data_init: false,
-        warm_start_pairs: 0,
-        sparse: Sparsity::Exact,
-        ..*opts
-    };
-    match Gpr::train(start, &xs, &ys, &sub) {
-        Ok((m, rep)) if rep.lml.is_finite() => m.kernel,
-        _ => start,
-    }
-}
-
-pub(crate) fn summarise_notes(mut notes: Vec<String>) -> Vec<String> {
-    const KEEP: usize = 5;
-    if notes.len() > KEEP {
-        let extra = notes.len() - KEEP;
-        notes.truncate(KEEP);
-        notes.push(format!("... and {extra} more jitter retries"));
-    }
-    notes
-}
-
-/// Where [`maximise`] ended: the hyperparameters, how, and the factorisation at that point
-/// when the optimiser's last request was there.
-pub(crate) struct Maximised<F> {
-    pub kernel: Kernel,
-    pub noise_var: f64,
-    pub exit: ExitState,
-    pub iterations: usize,
-    pub evaluations: usize,
-    pub gradient_evaluations: usize,
-    pub at_optimum: Option<F>,
-}
-
-/// Maximises a likelihood (exact, or the sparse bound) over the kernel's log hyperparameters
-/// (and `log σn²` with `opts.learn_noise`) in the search coordinates of [`to_search`], with the
-/// lazy-gradient CG. `factor` factorises at one setting (`Err`: treated as `-∞`), `value` and
-/// `gradient` read a factorisation; the last one is kept, so the gradient that follows a value
-/// at the same point reuses it. `seed` is the factorisation at `start`, if already made.
-pub(crate) fn maximise<F>(
-    start: Kernel,
-    opts: &GprOptions,
-    seed: Option<F>,
-    mut factor: impl FnMut(&Kernel, f64) -> Result<F>,
-    value: impl Fn(&F) -> f64,
-    gradient: impl Fn(&F) -> Vec<f64>,
-) -> Maximised<F> {
-    let nk = start.param_names().len();
-    let valley = matches!(start, Kernel::NeuralNetwork { .. });
-    let mut phi0 = to_search(&start.log_params(), valley);
-    if opts.learn_noise {
-        phi0.push(opts.noise_var.ln());
-    }
-    let at = |phi: &[f64]| {
-        let kern = start.with_log_params(&from_search(&phi[..nk], valley));
-        let noise = if opts.learn_noise { phi[nk].exp() } else { opts.noise_var };
-        (kern, noise)
-    };
-    let mut last: Option<(Vec<f64>, Result<F>)> = seed.map(|f| (phi0.clone(), Ok(f)));
-    let r = minimize_lazy(
-        |phi: &[f64], need_grad: bool| {
-            if last.as_ref().is_none_or(|(p, _)| p.as_slice() != phi) {
-                let (kern, noise) = at(phi);
-                last = Some((phi.to_vec(), factor(&kern, noise)));
-            }
-            let Some((_, Ok(f))) = &last else {
-                return (f64::INFINITY, None);
-            };
-            if !need_grad {
-                return (-value(f), None);
-            }
-            let mut g = gradient(f);
-            if valley {
-                g[0] += g[1]; // chain rule for (log l, log σf) = (φ0, φ0 + φ1)
-            }
-            (-value(f), Some(g.into_iter().map(|d| -d).collect()))
-        },
-        &phi0,
-        &opts.cg,
-    );
-    let (kernel, noise_var) = at(&r.x);
-    let at_optimum = match last {
-        Some((p, Ok(f))) if p == r.x => Some(f),
-        _ => None,
-    };
-    Maximised {
-        kernel,
-        noise_var,
-        exit: r.exit,
-        iterations: r.iterations,
-        evaluations: r.evaluations,
-        gradient_evaluations: r.gradient_evaluations,
-        at_optimum,
-    }
-}
-
 impl Gpr {
     /// Conditions the GP on `(X, Y)` with fixed hyperparameters (no optimisation).
     pub fn fit(
@@ -443,11 +72,7 @@ impl Gpr {
         if !(noise_var >= 0.0 && noise_var.is_finite()) {
             return invalid(format!("noise variance must be >= 0, got {noise_var}"));
         }
-        let chol = Cholesky::new(
-            &noisy_gram(kernel.gram_lower(x, false).0, noise_var),
-            "K + noise",
-            notes,
-        )?;
+        let chol = noisy_cholesky(&kernel, noise_var, x, notes)?;
         let alpha = chol.solve(y);
         Ok(Self {
             kernel,
@@ -470,7 +95,7 @@ impl Gpr {
     ) -> Result<(Self, TrainReport)> {
         check_xy(x, y)?;
         if let Some(m) = opts.sparse.inducing_for(x.nrows()) {
-            return train_sparse(kernel, x, y, m, opts);
+            return train_sparse(kernel, x, y, m, opts).map(|(fit, r)| (Self::from_sparse(fit, x), r));
         }
         let mut notes = Vec::new();
         let start = if opts.data_init {
@@ -485,62 +110,32 @@ impl Gpr {
             ));
         }
         let start = warm_start(start, x, y, opts);
-        let mut first = Some(Factored::new(&start, opts.noise_var, x, y, &mut notes)?);
-        let initial_lml = first.as_ref().map_or(f64::NAN, |f| f.value);
-        let (kernel, noise_var, exit, iterations, evaluations) = if opts.optimise {
-            // Seeded with the starting point, where the optimiser begins (not with a learnt
-            // noise, whose start exp(ln σn²) may differ from σn² in the last bit).
-            let seed = if opts.learn_noise { None } else { first.take() };
-            let r = maximise(
-                start,
-                opts,
-                seed,
-                |kern, noise| Factored::new(kern, noise, x, y, &mut notes),
-                |f| f.value,
-                |f| f.gradient(x, opts.learn_noise),
-            );
-            let counts = (r.evaluations, r.gradient_evaluations);
-            (r.kernel, r.noise_var, Some(r.exit), r.iterations, counts)
-        } else {
-            (start, opts.noise_var, None, 0, (0, 0))
-        };
-        let (evaluations, gradient_evaluations) = evaluations;
-        // Condition on the data with the hyperparameters found (one more factorisation).
-        let fitted = match first {
-            Some(f) if !opts.optimise => f,
-            _ => Factored::new(&kernel, noise_var, x, y, &mut notes)?,
-        };
-        let lml = fitted.value;
-        let model = Self {
-            kernel,
-            noise_var,
-            jitter: fitted.chol.jitter,
-            x: x.clone(),
-            alpha: fitted.alpha,
-            sparse: None,
-        };
+        let fit = fit_exact(start, x, y, opts, &mut notes)?;
         let report = TrainReport {
-            exit,
-            iterations,
-            evaluations,
-            gradient_evaluations,
-            initial_lml,
-            lml,
+            exit: fit.exit,
+            iterations: fit.iterations,
+            evaluations: fit.evaluations,
+            gradient_evaluations: fit.gradient_evaluations,
+            initial_lml: fit.initial_lml,
+            lml: fit.fitted.value,
             notes: summarise_notes(notes),
+        };
+        let model = Self {
+            kernel: fit.kernel,
+            noise_var: fit.noise_var,
+            jitter: fit.fitted.chol.jitter,
+            x: x.clone(),
+            alpha: fit.fitted.alpha,
+            sparse: None,
         };
         Ok((model, report))
     }
 
-    /// A sparse model (built by [`crate::sparse_gpr`]): `alpha` weights the inducing inputs.
-    pub(crate) fn from_sparse(
-        kernel: Kernel,
-        noise_var: f64,
-        jitter: f64,
-        x: DMatrix<f64>,
-        alpha: DMatrix<f64>,
-        sparse: SparsePosterior,
-    ) -> Self {
-        Self { kernel, noise_var, jitter, x, alpha, sparse: Some(sparse) }
+    /// The regressor of a sparse GP conditioned on the training inputs `x`
+    /// ([`crate::sparse_gpr`]): its `alpha` weights the inducing inputs.
+    pub fn from_sparse(fit: SparseFit, x: &DMatrix<f64>) -> Self {
+        let SparseFit { kernel, noise_var, jitter, alpha, posterior } = fit;
+        Self { kernel, noise_var, jitter, x: x.clone(), alpha, sparse: Some(posterior) }
     }
 
     /// The sparse posterior (inducing inputs), `None` for the exact GP.

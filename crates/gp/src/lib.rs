@@ -15,7 +15,9 @@
 //! - [`blr`]: Bayesian linear regression association cost (CVPR eqs. 1-6);
 //! - [`dtw`]: constrained least-cost path through the cost matrix (CVPR eq. 7);
 //! - [`kernel`]: covariance functions, including the neural-network kernel (CVPR eq. 10);
-//! - [`gpr`]: multi-output GP regression and its marginal likelihood (CVPR eqs. 8-13);
+//! - [`gpr`]: multi-output GP regression (CVPR eqs. 8-13), trained exact or sparse;
+//!   [`likelihood`]: the exact GP's marginal likelihood and its maximisation; [`training`]:
+//!   what the exact and sparse trainings share (options, report, start, optimiser loop);
 //! - [`sparse_gpr`]: the same regression for large training sets, Titsias' (2009) bound with
 //!   inducing inputs chosen by [`inducing`] (greedy variance selection);
 //! - [`optim`]: non-linear conjugate gradients (Polak-Ribière+) with a strong-Wolfe line search;
@@ -30,10 +32,12 @@ pub mod dtw;
 pub mod gpr;
 pub mod inducing;
 pub mod kernel;
+pub mod likelihood;
 pub mod linalg;
 pub mod optim;
 pub mod pca;
 pub mod sparse_gpr;
+pub mod training;
 
 /// Errors of the numerics: bad shapes/values passed in, or a matrix that stays
 /// indefinite after the jitter retries.

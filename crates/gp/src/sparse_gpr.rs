@@ -37,7 +37,9 @@
 //! Cross-check: `scripts/compare/sgpr_gpy.py` against GPy's `SparseGPRegression` with the
 //! same inducing inputs.
 
-use crate::gpr::{check_xy, initial_kernel, maximise, summarise_notes, warm_start, Gpr, GprOptions, TrainReport};
+use crate::likelihood::warm_start;
+pub use crate::training::{Sparsity, AUTO_INDUCING};
+use crate::training::{check_xy, initial_kernel, maximise, summarise_notes, GprOptions, TrainReport};
 use crate::inducing::greedy_variance;
 use crate::kernel::Kernel;
 use crate::optim::{minimize_scalar, CgOptions, ExitState};
@@ -57,65 +59,7 @@ use serde::{Deserialize, Serialize};
 /// gives the bound exactly as written, e.g. to compare with the exact GP at `Z = X`).
 pub const KUU_JITTER: f64 = 1e-6;
 
-/// Inducing-input count used by [`Sparsity::Auto`].
-pub const AUTO_INDUCING: usize = 256;
-
-/// Exact or sparse training.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
-pub enum Sparsity {
-    /// The exact GP (CVPR eqs. 8-13).
-    #[default]
-    Exact,
-    /// Titsias' bound with at most this many inducing inputs (exact when `F` is not larger).
-    Inducing(usize),
-    /// Exact while it is faster than the sparse GP with [`AUTO_INDUCING`] inputs, sparse above
-    /// (see [`Sparsity::inducing_for`]).
-    Auto,
-}
-
-impl Sparsity {
-    /// The inducing-input count to train `pairs` pairs with, `None` for the exact GP. For
-    /// [`Sparsity::Auto`]: sparse when `F > 4 M`. Counting flops, an exact evaluation (`~F³`:
-    /// Cholesky and the inverse's elements) costs more than a sparse one (`~4 F M²`: `ΦᵀΦ`,
-    /// `Φᵀ∂Φ`, the kernel blocks) from `F ≈ 2 M`, but measured on the demo set (588 pairs,
-    /// M = 256) the exact GP still trained faster (5.8 s against 8.5 s for the two directions);
-    /// at 1100 pairs the sparse GP took half the exact time (docs/studies/08-sparse-gp.md).
-    pub fn inducing_for(&self, pairs: usize) -> Option<usize> {
-        match *self {
-            Sparsity::Exact => None,
-            Sparsity::Inducing(m) => (pairs > m).then_some(m),
-            Sparsity::Auto => (pairs > 4 * AUTO_INDUCING).then_some(AUTO_INDUCING),
-        }
-    }
-}
-
-impl std::str::FromStr for Sparsity {
-    type Err = String;
-
-    /// `exact`, `auto`, or an inducing-input count `M >= 1` (the command-line syntax).
-    fn from_str(s: &str) -> std::result::Result<Self, String> {
-        match s {
-            "exact" => Ok(Sparsity::Exact),
-            "auto" => Ok(Sparsity::Auto),
-            _ => match s.parse::<usize>() {
-                Ok(m) if m >= 1 => Ok(Sparsity::Inducing(m)),
-                _ => Err(format!("expected an inducing-input count >= 1, 'auto' or 'exact', got '{s}'")),
-            },
-        }
-    }
-}
-
-impl std::fmt::Display for Sparsity {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        match self {
-            Sparsity::Exact => write!(f, "exact"),
-            Sparsity::Inducing(m) => write!(f, "{m}"),
-            Sparsity::Auto => write!(f, "auto"),
-        }
-    }
-}
-
-/// What a sparse [`Gpr`] keeps for prediction: the inducing inputs and two `M x M` lower
+/// What a sparse regressor (`gpr::Gpr`) keeps for prediction: the inducing inputs and two `M x M` lower
 /// factors (`L` of `K_uu` and `L_P` of `K_uu + K_uf K_fu / s`); the model's `alpha` is `β / s`.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct SparsePosterior {
@@ -449,22 +393,34 @@ impl SparseFactored {
         grad
     }
 
-    fn into_model(self, x: &DMatrix<f64>, z: &DMatrix<f64>) -> Gpr {
+    fn into_fit(self, z: &DMatrix<f64>) -> SparseFit {
         let l_p = &self.l_uu * &self.l_b;
         let alpha = upper_solve(&self.l_uu, &self.gamma) / self.noise_var;
-        Gpr::from_sparse(
-            self.kernel,
-            self.noise_var,
-            self.jitter,
-            x.clone(),
+        SparseFit {
+            kernel: self.kernel,
+            noise_var: self.noise_var,
+            jitter: self.jitter,
             alpha,
-            SparsePosterior {
+            posterior: SparsePosterior {
                 inducing: z.clone(),
                 l_uu: self.l_uu,
                 l_p,
             },
-        )
+        }
     }
+}
+
+/// A sparse GP conditioned on its data, made a regressor by `gpr::Gpr::from_sparse`
+/// with its training inputs.
+#[derive(Clone, Debug, PartialEq)]
+pub struct SparseFit {
+    pub kernel: Kernel,
+    pub noise_var: f64,
+    /// Jitter added to `K_uu` beyond [`KUU_JITTER`] (0 normally).
+    pub jitter: f64,
+    /// `β / σn²`: the weights of the inducing inputs in the posterior mean.
+    pub alpha: DMatrix<f64>,
+    pub posterior: SparsePosterior,
 }
 
 /// Titsias' bound on the log marginal likelihood of `Y` given `X` with inducing inputs `Z`,
@@ -506,8 +462,8 @@ pub fn fit_sparse(
     y: &DMatrix<f64>,
     kuu_jitter: f64,
     notes: &mut Vec<String>,
-) -> Result<Gpr> {
-    Ok(SparseFactored::new(&kernel, noise_var, z, x, y, kuu_jitter, notes)?.into_model(x, z))
+) -> Result<SparseFit> {
+    Ok(SparseFactored::new(&kernel, noise_var, z, x, y, kuu_jitter, notes)?.into_fit(z))
 }
 
 /// Trains the sparse GP with at most `m` inducing inputs: starting hyperparameters as the
@@ -522,7 +478,7 @@ pub fn train_sparse(
     y: &DMatrix<f64>,
     m: usize,
     opts: &GprOptions,
-) -> Result<(Gpr, TrainReport)> {
+) -> Result<(SparseFit, TrainReport)> {
     check_xy(x, y)?;
     if m == 0 {
         return invalid("sparse GP: at least one inducing input is needed");
@@ -554,7 +510,7 @@ pub fn train_sparse_with_inducing(
     y: &DMatrix<f64>,
     z: &DMatrix<f64>,
     opts: &GprOptions,
-) -> Result<(Gpr, TrainReport)> {
+) -> Result<(SparseFit, TrainReport)> {
     train_sparse_observed(start, x, y, z, opts, &mut |_| {})
 }
 
@@ -567,7 +523,7 @@ pub fn train_sparse_observed(
     z: &DMatrix<f64>,
     opts: &GprOptions,
     observe: &mut dyn FnMut(f64),
-) -> Result<(Gpr, TrainReport)> {
+) -> Result<(SparseFit, TrainReport)> {
     check_xy(x, y)?;
     check_inducing(z, x)?;
     check_noise(opts.noise_var)?;
@@ -583,7 +539,7 @@ pub fn train_sparse_observed(
             lml: p.fitted.value,
             notes: summarise_notes(notes),
         };
-        return Ok((p.fitted.into_model(x, z), report));
+        return Ok((p.fitted.into_fit(z), report));
     }
     let first = SparseFactored::new(&start, opts.noise_var, z, x, y, KUU_JITTER, &mut notes)?;
     observe(first.value);
@@ -621,7 +577,7 @@ pub fn train_sparse_observed(
         lml,
         notes: summarise_notes(notes),
     };
-    Ok((fitted.into_model(x, z), report))
+    Ok((fitted.into_fit(z), report))
 }
 
 /// First step of the profiled search in `log l` (then secant steps). On the 12 benchmark

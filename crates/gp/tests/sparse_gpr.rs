@@ -43,7 +43,7 @@ fn inducing_at_every_input_equals_the_exact_gp() {
         assert!(notes.is_empty(), "{k:?}: {notes:?}");
         assert!((exact - bound).abs() < 1e-8, "{k:?}: exact {exact} bound {bound}");
         let e = Gpr::fit(k, 0.1, &x, &y, &mut notes).unwrap();
-        let s = fit_sparse(k, 0.1, &x, &x, &y, 0.0, &mut notes).unwrap();
+        let s = Gpr::from_sparse(fit_sparse(k, 0.1, &x, &x, &y, 0.0, &mut notes).unwrap(), &x);
         let (me, ve) = e.predict_with_variance(&xs, &mut notes).unwrap();
         let (ms, vs) = s.predict_with_variance(&xs, &mut notes).unwrap();
         assert!((&me - &ms).amax() < 1e-8, "{k:?}: mean {}", (&me - &ms).amax());
@@ -69,7 +69,7 @@ fn sparse_posterior_and_bound_match_dense_closed_forms() {
         let lu = sigma_inv.clone().lu();
         let mean = &ksu * lu.solve(&(&kuf * &y)).unwrap() / s;
         let kuu_lu = kuu.clone().lu();
-        let m = fit_sparse(k, s, &z, &x, &y, 0.0, &mut Vec::new()).unwrap();
+        let m = Gpr::from_sparse(fit_sparse(k, s, &z, &x, &y, 0.0, &mut Vec::new()).unwrap(), &x);
         let (got_mean, got_var) = m.predict_with_variance(&xs, &mut Vec::new()).unwrap();
         assert!((&got_mean - &mean).amax() < 1e-9, "{k:?}: {}", (&got_mean - &mean).amax());
         for i in 0..xs.nrows() {
