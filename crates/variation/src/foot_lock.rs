@@ -13,15 +13,19 @@
 //! [`mesh_core::feet::leg_weights`]: `w = 1` on the sole vertices (so the sole centroid lands
 //! exactly on `a_I`), `w = 0` at the hip seam, so the seam never opens. Between contacts the
 //! displacement is eased in and out over [`EASE_FRAMES`] `= R` frames with the smoothstep `S`
-//! ([`displacements`]), so nothing pops when a contact starts or ends. Two easings ([`Ease`]):
-//! `position` (the default) blends the sole's horizontal *position* from its free path to the
+//! ([`displacements`]), so nothing pops when a contact starts or ends. Three easings ([`Ease`]):
+//! `position` blends the sole's horizontal *position* from its free path to the
 //! anchor, `q(t) = a_I + S(u) (p_f(t) − a_I)` with `u` the distance to the contact in units of
 //! `R + 1` frames, so the foot slows to rest as it touches down and starts from rest as it lifts
 //! off (the constraint blending of Kovar et al. 2002, "Footskate cleanup for motion capture
 //! editing"), at the price of a faster sole early in the ramp, where it is usually in the air
 //! (up to about 1.6x a steady approach speed with `R = 4`); `offset` fades the contact's
 //! *offset* `δ` instead, which keeps the free path's velocity: a foot that lands at swing speed
-//! stops dead on the contact's first frame.
+//! stops dead on the contact's first frame. `flight` (the default) eases by offset a take-off or
+//! landing that both feet make together (the other foot's within `R` frames: a jump) and every
+//! other one by position: the position ease hurries a sole that lands from a jump at flight
+//! speed (0.15 m/frame on the outside set's jump, 0.2 in the ramp) early in its ramp, and the
+//! whole body's best rigid fit turns with both legs faster than the captures ever turn.
 //!
 //! The displacement is at most [`MAX_SHIFT`] long (shortened along its direction beyond it). The
 //! contacts are the source's at the DTW-matched frames, and the legs are sampled independently
@@ -49,10 +53,13 @@ pub const MAX_SHIFT: f64 = 0.1;
 pub enum Ease {
     /// Blend the sole's position from its free path to the contact's anchor: the foot comes
     /// to rest as it lands and leaves from rest.
-    #[default]
     Position,
     /// Fade the contact's offset: the free path's velocity is kept up to the contact.
     Offset,
+    /// `offset` where both feet take off or land together (within [`EASE_FRAMES`] frames: a
+    /// jump), `position` for any other lift-off and landing (a step, a run's stride).
+    #[default]
+    Flight,
 }
 
 /// Leg parts of a segmentation in the order of [`crate::group::soles`] (left first).
@@ -69,12 +76,17 @@ pub fn leg_parts(parts: &[PartDef]) -> Vec<&PartDef> {
 ///   too short for both ramps (`s − p ≤ 2 (R + 1)`), the sole carried from anchor to anchor,
 ///   `a_p + (a_s − a_p) S((t − p) / (s − p)) − p_f(t)`;
 /// - [`Ease::Offset`]: `F(t − p) δ(p) + F(s − t) δ(s)`, or in a short gap the smoothstep
-///   interpolation `δ(p) + (δ(s) − δ(p)) S((t − p) / (s − p))`.
+///   interpolation `δ(p) + (δ(s) − δ(p)) S((t − p) / (s − p))`;
+/// - [`Ease::Flight`]: each side of the gap eased by offset where `other` (the other foot's
+///   contacts) ends a contact within `R` frames of `p` (a take-off on both feet), or starts one
+///   within `R` frames of `s` (a landing on both feet), by position otherwise; in a short gap
+///   `(1 − S) A_p + S A_s` with `A_c` the side's own `to_anchor` term below.
 ///
 /// Continuous at every contact end; all horizontal.
 pub fn displacements(
     track: &[Vector3<f64>],
     contact: &[bool],
+    other: &[bool],
     up: &Vector3<f64>,
     ease: Ease,
 ) -> Vec<Vector3<f64>> {
@@ -95,20 +107,31 @@ pub fn displacements(
         // The neighbouring contact frames and their offsets `δ`; `track + δ` is the anchor.
         let before = a.checked_sub(1).map(|p| (p, d[p]));
         let after = (b < n).then(|| (b, d[b]));
+        // Whether each side is eased by position: the take-off from `a − 1`, the landing at `b`.
+        let by_position = |c: usize, edge: fn(&[bool], usize) -> bool| match ease {
+            Ease::Position => true,
+            Ease::Offset => false,
+            Ease::Flight => !(c.saturating_sub(EASE_FRAMES)..=(c + EASE_FRAMES).min(n))
+                .any(|k| edge(other, k)),
+        };
+        let takes_off = |o: &[bool], k: usize| o.get(k) == Some(&true) && o.get(k + 1) == Some(&false);
+        let lands = |o: &[bool], k: usize| o.get(k) == Some(&true) && (k == 0 || o.get(k - 1) == Some(&false));
+        let take_off = before.map(|(p, _)| by_position(p, takes_off)).unwrap_or(true);
+        let landing = after.map(|(s, _)| by_position(s, lands)).unwrap_or(true);
         for t in a..b {
             // The offset of frame t from the anchor reached at contact frame c with offset δ.
-            let to_anchor = |c: usize, delta: Vector3<f64>| match ease {
-                Ease::Position => delta + horizontal(track[c] - track[t]),
-                Ease::Offset => delta,
+            let to_anchor = |c: usize, delta: Vector3<f64>, position: bool| match position {
+                true => delta + horizontal(track[c] - track[t]),
+                false => delta,
             };
             d[t] = match (before, after) {
                 (Some((p, dp)), Some((s, ds))) if (s - p) as f64 <= 2.0 * ramp => {
                     let x = smoothstep((t - p) as f64 / (s - p) as f64);
-                    to_anchor(p, dp) * (1.0 - x) + to_anchor(s, ds) * x
+                    to_anchor(p, dp, take_off) * (1.0 - x) + to_anchor(s, ds, landing) * x
                 }
                 _ => {
-                    before.map_or(Vector3::zeros(), |(p, dp)| to_anchor(p, dp) * fade(t - p))
-                        + after.map_or(Vector3::zeros(), |(s, ds)| to_anchor(s, ds) * fade(s - t))
+                    before.map_or(Vector3::zeros(), |(p, dp)| to_anchor(p, dp, take_off) * fade(t - p))
+                        + after.map_or(Vector3::zeros(), |(s, ds)| to_anchor(s, ds, landing) * fade(s - t))
                 }
             };
         }
@@ -206,7 +229,8 @@ pub fn lock(
     let mut max: f64 = 0.0;
     for f in 0..2 {
         let flags: Vec<bool> = contacts.iter().map(|c| c[f]).collect();
-        let mut d = displacements(&tracks[f], &flags, up, ease);
+        let other: Vec<bool> = contacts.iter().map(|c| c[1 - f]).collect();
+        let mut d = displacements(&tracks[f], &flags, &other, up, ease);
         limit(&mut d, MAX_SHIFT);
         for (frame, dt) in frames.iter_mut().zip(&d) {
             max = max.max(dt.norm());
@@ -359,7 +383,7 @@ mod tests {
             .map(|t| Vector3::new(0.01 * t as f64, 0.0, 0.0))
             .collect();
         let contact: Vec<bool> = (0..12).map(|t| !(5..7).contains(&t)).collect();
-        let d = displacements(&track, &contact, &up, Ease::Offset);
+        let d = displacements(&track, &contact, &[], &up, Ease::Offset);
         let pinned: Vec<f64> = (0..12).map(|t| track[t].x + d[t].x).collect();
         for t in 0..5 {
             assert!((pinned[t] - 0.02).abs() < 1e-12, "frame {t}: {}", pinned[t]);
@@ -371,7 +395,7 @@ mod tests {
         assert!((d[5].x - (-0.02 + 0.04 * smoothstep(1.0 / 3.0))).abs() < 1e-12);
         assert!((d[6].x - (-0.02 + 0.04 * smoothstep(2.0 / 3.0))).abs() < 1e-12);
         // No contact at all: nothing moves.
-        assert!(displacements(&track, &[false; 12], &up, Ease::Position)
+        assert!(displacements(&track, &[false; 12], &[], &up, Ease::Position)
             .iter()
             .all(|v| v.norm() == 0.0));
     }
@@ -388,7 +412,7 @@ mod tests {
             .collect();
         let contact: Vec<bool> = (0..16).map(|t| t >= 10).collect();
         let placed = |ease| -> Vec<f64> {
-            let d = displacements(&track, &contact, &up, ease);
+            let d = displacements(&track, &contact, &[], &up, ease);
             (0..16).map(|t| track[t].x + d[t].x).collect()
         };
         let q = placed(Ease::Position);
@@ -422,7 +446,7 @@ mod tests {
             .map(|t| if t < 5 { Vector3::zeros() } else { Vector3::new(0.6, 0.0, 0.8) })
             .collect();
         let contact = vec![true; 10];
-        let mut d = displacements(&track, &contact, &up, Ease::Position);
+        let mut d = displacements(&track, &contact, &[], &up, Ease::Position);
         limit(&mut d, MAX_SHIFT);
         for (t, x) in d.iter().enumerate() {
             assert!(x.norm() <= MAX_SHIFT + 1e-12, "frame {t}: {x}");
@@ -448,12 +472,46 @@ mod tests {
             })
             .collect();
         let contact: Vec<bool> = (0..12).map(|t| !(4..7).contains(&t)).collect();
-        let d = displacements(&track, &contact, &up, Ease::Position);
+        let d = displacements(&track, &contact, &[], &up, Ease::Position);
         for t in 4..7 {
             let x = smoothstep((t - 3) as f64 / 4.0);
             let q = track[t] + d[t];
             assert!((q.x - 0.3 * x).abs() < 1e-12 && q.z.abs() < 1e-12, "frame {t}: {q}");
             assert_eq!(d[t].y, 0.0);
         }
+    }
+    #[test]
+    fn a_flight_is_eased_by_offset_and_a_step_by_position() {
+        // One foot leaves a contact in frames 0-1, lands at 10 cm/frame on frame 13 after a
+        // long gap, stands on frames 13-14, and steps in a short gap (frames 15-17, where the
+        // free sole wanders) to a contact from frame 18 on. The other foot is either off the
+        // ground in both gaps (a jump: flights) or planted throughout (steps).
+        let up = Vector3::y();
+        let track: Vec<_> = (0..24)
+            .map(|t| match t {
+                0..=14 => Vector3::new(0.1 * (t.clamp(2, 13) as f64 - 13.0), 0.0, 0.0),
+                15..=17 => Vector3::new(0.02 * t as f64, 0.1, -0.01 * t as f64),
+                _ => Vector3::new(0.3 + 0.001 * t as f64, 0.0, 0.0),
+            })
+            .collect();
+        let contact: Vec<bool> = (0..24).map(|t| t <= 1 || (13..15).contains(&t) || t >= 18).collect();
+        let eased = |other: &[bool], ease| displacements(&track, &contact, other, &up, ease);
+        let (jump, planted) = (contact.clone(), vec![true; 24]);
+        assert_eq!(eased(&jump, Ease::Flight), eased(&jump, Ease::Offset), "flights by offset");
+        assert_eq!(eased(&planted, Ease::Flight), eased(&planted, Ease::Position), "steps by position");
+        assert_ne!(eased(&jump, Ease::Offset), eased(&jump, Ease::Position));
+        // Known answers: out of the flight the sole lands at its 10 cm/frame (its offset is 0
+        // on the contact); across the short flight the offset is interpolated.
+        let d = eased(&jump, Ease::Flight);
+        let q: Vec<Vector3<f64>> = (0..24).map(|t| track[t] + d[t]).collect();
+        assert!((q[13].x - q[12].x - 0.1).abs() < 1e-12, "{}", q[13].x - q[12].x);
+        for t in 15..18 {
+            let want = d[14] + (d[18] - d[14]) * smoothstep((t - 14) as f64 / 4.0);
+            assert!((d[t] - want).norm() < 1e-12, "frame {t}: {}", d[t]);
+        }
+        // A run's other foot takes off and lands more than R frames from this foot's (here at
+        // least 6 frames apart): both gaps are steps.
+        let run: Vec<bool> = (0..24).map(|t| (5..9).contains(&t)).collect();
+        assert_eq!(eased(&run, Ease::Flight), eased(&run, Ease::Position));
     }
 }

@@ -157,10 +157,12 @@ pub struct Params {
     /// sole up to the hip, by 10 cm at most)
     #[arg(long)]
     pub no_foot_lock: bool,
-    /// How the foot lock eases in before and out after each contact: position (the sole's
-    /// position blended from its free path to the planted spot, so it lands and lifts off from
-    /// rest) or offset (the planted offset faded, the free path's speed kept up to the contact)
-    #[arg(long, value_enum, default_value_t = crate::foot_lock::Ease::Position)]
+    /// How the foot lock eases in before and out after each contact: flight (offset where both
+    /// feet take off or land together, within 4 frames: a jump; position for every other step),
+    /// position (the sole's position blended from its free path to the planted spot, so it
+    /// lands and lifts off from rest) or offset (the planted offset faded, the free path's
+    /// speed kept up to the contact)
+    #[arg(long, value_enum, default_value_t = crate::foot_lock::Ease::Flight)]
     pub foot_ease: crate::foot_lock::Ease,
     /// Do not set the feet's heights by deforming the legs (by default, after the root
     /// clean-up, each planted sole is brought to the source's height at the matched frame and
