@@ -14,6 +14,7 @@
 #   make man | completions   man pages / bash, zsh, fish completions of every stage: target/man, target/completions
 #   make clean-out   remove $(OUT);  make help   this list
 #   NO_BUILD=1   the pipelines use the binaries as built (no check that the sources are older)
+#   JOBS=N   stage invocations the pipelines run side by side (default: the machine's cores)
 
 SHELL := bash
 .SHELLFLAGS := -eu -o pipefail -c
@@ -27,12 +28,17 @@ SURFCAP_CACHE ?= $(HOME)/.cache/surfcap
 export SURFCAP_CACHE
 # rayon does the parallelism; OpenBLAS threads would fight it (see docs/PERFORMANCE.md).
 export OPENBLAS_NUM_THREADS := 1
+# The pipelines run JOBS stage invocations side by side (their task graph's independent steps;
+# each stage's own threads share the cores), unless make was given its own -j: JOBS=1 runs them
+# one at a time.
+JOBS ?= $(shell nproc 2>/dev/null || echo 1)
+PIPELINE_JOBS = $(if $(findstring jobserver,$(MAKEFLAGS)),,-j$(JOBS))
 
 .PHONY: all build test setup assets clean-out help man completions
 all: build
 
 help:
-	@sed -n '2,15p' Makefile
+	@sed -n '2,16p' Makefile
 	@echo "Stages: $(BIN)/surfcap help (after make build)"
 
 # Generated from every stage's clap definition (surfcap man / completions).

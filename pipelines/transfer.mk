@@ -32,7 +32,7 @@ PCA_COMPONENTS ?=
 .PHONY: transfer transfer-results transfer-report
 transfer: $(STAGE_BINARIES)
 	@test -f $(SET)/set.json || { echo "transfer: $(SET)/set.json: no capture set (run 'make demo' or pass SET=<dir>)" >&2; exit 1; }
-	@$(MAKE) --no-print-directory transfer-results SET=$(SET) OUT=$(OUT)
+	@$(MAKE) --no-print-directory $(PIPELINE_JOBS) transfer-results SET=$(SET) OUT=$(OUT)
 	@$(MAKE) --no-print-directory transfer-report SET=$(SET) OUT=$(OUT)
 	@$(MAKE) --no-print-directory export SET=$(SET) OUT=$(OUT)
 

@@ -37,7 +37,7 @@ VARIATION_SAMPLE_FLAGS ?=
 .PHONY: variation variation-results variation-report
 variation: $(STAGE_BINARIES)
 	@test -f $(SET)/set.json || { echo "variation: $(SET)/set.json: no capture set (run 'make demo-data' or pass SET=<dir>)" >&2; exit 1; }
-	@$(MAKE) --no-print-directory variation-results SET=$(SET) OUT=$(OUT)
+	@$(MAKE) --no-print-directory $(PIPELINE_JOBS) variation-results SET=$(SET) OUT=$(OUT)
 	@$(MAKE) --no-print-directory variation-report SET=$(SET) OUT=$(OUT)
 	@$(MAKE) --no-print-directory export SET=$(SET) OUT=$(OUT)
 
