@@ -108,9 +108,22 @@ fn correct_binary_processes_a_frame_directory() {
     );
     assert_eq!(code, 0, "{err}");
     let got = MeshSequence::load_dir(dir.path().join("out")).unwrap();
-    let c = Corrector::new(f.clone(), training).unwrap();
+    let c = Corrector::new(f.clone(), training.clone()).unwrap();
     for (g, pr) in got.frames.iter().zip(&preds) {
         assert!(max_dist(g, &c.correct(pr, 2).unwrap()) < 1e-9);
+    }
+    // A budget of 0 MiB holds no training mesh: the first alone is kept (every 8th of five),
+    // which a warning says; the corrections are those of that one mesh.
+    let (code, err) = run(
+        env!("CARGO_BIN_EXE_correct"),
+        &["--training", &p("train"), &p("pred"), "-m", "2", "-o", &p("strided"), "--memory-budget", "0"],
+    );
+    assert_eq!(code, 0, "{err}");
+    assert!(err.contains("every 8th"), "{err}");
+    let got = MeshSequence::load_dir(dir.path().join("strided")).unwrap();
+    let first_only = Corrector::new(f.clone(), vec![training[0].clone()]).unwrap();
+    for (g, pr) in got.frames.iter().zip(&preds) {
+        assert_eq!(g, &first_only.correct(pr, 2).unwrap());
     }
     let (code, err) = run(
         env!("CARGO_BIN_EXE_correct"),
@@ -213,6 +226,23 @@ fn stitch_binary_merges_parts_from_a_segmentation() {
         max_dist(&got.vertices, &v)
     );
     assert_eq!(got.faces, f);
+    // The same parts as frame directories of three frames: a folder of three stitched frames,
+    // each the single frame's; a part with another frame count is one line.
+    for (_, name, _) in &parts {
+        let m = read_mesh(dir.path().join(format!("p/{name}.ply"))).unwrap();
+        MeshSequence::new(vec![], vec![m.vertices; 3]).write_dir(dir.path().join(format!("q/{name}"))).unwrap();
+    }
+    let dir_args = ["--segmentation", &p("parts.seg"), "--template", &p("template.ply"), &p("q"), "-o", &p("out")];
+    let (code, err) = run(bin, &dir_args);
+    assert_eq!(code, 0, "{err}");
+    let frames = MeshSequence::load_dir(dir.path().join("out")).unwrap();
+    assert_eq!((frames.n_frames(), &frames.faces), (3, &f));
+    assert!(frames.frames.iter().all(|x| x == &got.vertices));
+    let (_, first, _) = &parts[0];
+    std::fs::remove_file(dir.path().join(format!("q/{first}/000002.ply"))).unwrap();
+    let (code, err) = run(bin, &dir_args);
+    assert_eq!((code, err.lines().count()), (1, 1), "{err}");
+    assert!(err.contains("disagree on the number of frames"), "{err}");
     std::fs::remove_file(dir.path().join("p/arm.ply")).unwrap();
     let (code, err) = run(bin, &args);
     assert_eq!((code, err.lines().count()), (1, 1), "{err}");

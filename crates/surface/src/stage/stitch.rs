@@ -11,7 +11,8 @@ use mesh_core::io::read_mesh;
 use mesh_core::segmentation::Segmentation;
 use serde::Serialize;
 
-use crate::frames::{read_frames, write_frames};
+use crate::frames::{frames_per_block, read_frames, write_frames, FrameBlocks};
+use nalgebra::Vector3;
 use crate::segmentation::part_layout;
 use crate::stitch::Stitcher;
 
@@ -58,46 +59,76 @@ pub fn run(p: &Params) -> anyhow::Result<()> {
         part_layout(&seg, template.faces.clone())
             .with_context(|| p.segmentation.display().to_string())?,
     );
+    // Each part's frames: a frame directory read a block at a time, or one mesh file.
+    enum Part {
+        Dir(FrameBlocks),
+        File(Vec<Vector3<f64>>),
+    }
     let mut parts = Vec::new();
     for &k in &order {
         let name = &seg.parts[k].name;
         let dir = p.parts.join(name);
-        let path = if dir.is_dir() {
-            dir
+        let (part, path, n_vertices) = if dir.is_dir() {
+            let b = FrameBlocks::open(&dir)?;
+            let n = b.n_vertices;
+            (Part::Dir(b), dir, n)
         } else {
-            p.parts.join(format!("{name}.ply"))
+            let path = p.parts.join(format!("{name}.ply"));
+            let mut f = read_frames(&path)?;
+            let n = f.frames[0].len();
+            (Part::File(f.frames.swap_remove(0)), path, n)
         };
-        let f = read_frames(&path)?;
-        if f.frames[0].len() != seg.parts[k].vertices.len() {
+        if n_vertices != seg.parts[k].vertices.len() {
             bail!(
-                "{}: {} vertices but part '{name}' has {}",
+                "{}: {n_vertices} vertices but part '{name}' has {}",
                 path.display(),
-                f.frames[0].len(),
                 seg.parts[k].vertices.len()
             );
         }
-        parts.push(f);
+        parts.push(part);
     }
-    let n_frames = parts[0].frames.len();
-    if let Some(part) = parts.iter().find(|part| part.frames.len() != n_frames) {
-        bail!(
-            "part inputs disagree on the number of frames ({} vs {n_frames})",
-            part.frames.len()
-        );
+    let count = |part: &Part| match part {
+        Part::Dir(b) => b.n_frames(),
+        Part::File(_) => 1,
+    };
+    let n_frames = count(&parts[0]);
+    if let Some(part) = parts.iter().find(|part| count(part) != n_frames) {
+        bail!("part inputs disagree on the number of frames ({} vs {n_frames})", count(part));
     }
-    let mut out = Vec::with_capacity(n_frames);
     let bar = mesh_core::cli::progress_bar(n_frames as u64, "stitch: frames", &p.common);
-    for i in 0..n_frames {
-        bar.inc(1);
-        let frame: Vec<_> = parts.iter().map(|part| part.frames[i].clone()).collect();
-        out.push(
-            stitcher
-                .stitch(&frame)
-                .with_context(|| format!("frame {i}"))?
-                .vertices,
-        );
+    let mut stitch_block = |range: std::ops::Range<usize>| -> anyhow::Result<Vec<Vec<Vector3<f64>>>> {
+        let frames: Vec<Vec<Vec<Vector3<f64>>>> = parts
+            .iter()
+            .map(|part| match part {
+                Part::Dir(b) => b.block(range.clone()),
+                Part::File(v) => Ok(vec![v.clone()]),
+            })
+            .collect::<Result<_, _>>()?;
+        range
+            .clone()
+            .enumerate()
+            .map(|(j, i)| {
+                bar.inc(1);
+                let frame: Vec<_> = frames.iter().map(|part| part[j].clone()).collect();
+                Ok(stitcher.stitch(&frame).with_context(|| format!("frame {i}"))?.vertices)
+            })
+            .collect()
+    };
+    if !matches!(parts[0], Part::Dir(_)) {
+        let out = stitch_block(0..1)?;
+        bar.finish_and_clear();
+        write_frames(&p.out, &template.faces, out, false)?;
+        return Ok(());
     }
+    let writer = mesh_core::io::ply_frames::PlyFrames::new(template.vertices.len(), &template.faces);
+    let block = frames_per_block(template.vertices.len());
+    writer.write_dir_streamed(&p.out, None, |push| {
+        for start in (0..n_frames).step_by(block) {
+            let stitched = stitch_block(start..(start + block).min(n_frames)).map_err(|e| mesh_core::Error::invalid(format!("{e:#}")))?;
+            stitched.iter().try_for_each(|f| push(f))?;
+        }
+        Ok(())
+    })?;
     bar.finish_and_clear();
-    write_frames(&p.out, &template.faces, out, parts[0].is_dir)?;
     Ok(())
 }
