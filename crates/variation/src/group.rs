@@ -248,6 +248,73 @@ pub fn build(set: &CaptureSet, spec: &GroupSpec) -> Result<(Group, Vec<String>)>
     let subject_json = spec.subject_json.clone().unwrap_or_else(|| set.subject_json(&spec.subject));
     let subject_spec = SubjectSpec::load(&subject_json)?;
     let template = &mesh_core::io::read_mesh(set.template_path(&spec.subject, &subject_spec)?)?;
+    let (present, reference, mut notes) = group_motions(set, spec)?;
+    let pairs = blend_pairs(spec, &present, &mut notes)?;
+    let parts = body_parts(spec, template, &subject_spec, &subject_json, &mut notes)?;
+    let up = subject_spec.up_vector().unwrap_or(Vector3::y());
+    let body = Body {
+        template,
+        core: root_core(&parts, template.n_vertices()),
+        // Soles of the two leg parts, left first, for motions without contact annotations.
+        soles: soles(&parts, &template.vertices, &up, mesh_core::feet::SOLE_TOLERANCE),
+        has_legs: parts.iter().filter(|p| p.name.starts_with("leg")).count() == 2,
+        up,
+    };
+    let root = capture::align::root_point(&template.vertices, &body.core);
+    // Steps: reading and aligning each motion, warping each, then each blend.
+    let bar = mesh_core::cli::stage_progress(
+        (2 * present.len() + pairs.len() * spec.blend_weights.len()) as u64,
+        "motions read, warped; blends",
+    );
+    let mut loaded = Vec::new();
+    for m in &present {
+        bar.inc(1);
+        loaded.push(load_motion(set, spec, &subject_spec, &subject_json, &body, m, &mut notes)?);
+    }
+    let r = present.iter().position(|m| *m == reference).expect("checked");
+    let (windows, cut_cycles) = gait_windows(spec, &loaded, &mut notes)?;
+    let ref_frames = loaded[r].1.frames[windows[r].0..windows[r].0 + windows[r].1].to_vec();
+    let ref_contacts = slice_contacts(&loaded[r].2, windows[r]);
+    let mut sequences = Vec::new();
+    for (q, (name, motion, c)) in loaded.into_iter().enumerate() {
+        bar.inc(1);
+        let (w0, len) = windows[q];
+        let map: Vec<usize> = if q == r {
+            (w0..w0 + len).collect()
+        } else {
+            warp_onto_reference(spec, &name, &motion, &c, len, cut_cycles, &ref_frames, ref_contacts.as_ref())?
+        };
+        let contacts = c.as_ref().map(|c| apply_contacts(c, &map));
+        sequences.push(GroupSequence {
+            name,
+            blend: None,
+            blend_of: None,
+            motion: apply(&motion, &map, &root),
+            contacts,
+            map,
+        });
+    }
+    let pair = pairs.first().copied();
+    let mut group = Group {
+        name: spec.name.clone(),
+        subject: spec.subject.clone(),
+        fps: subject_spec.fps,
+        up,
+        template: template.vertices.clone(),
+        faces: template.faces.clone(),
+        parts,
+        reference,
+        sequences,
+        pair,
+    };
+    add_blends(&mut group, spec, &pairs, &root, &bar)?;
+    bar.finish_and_clear();
+    Ok((group, notes))
+}
+
+/// The group's motions the set has (the others noted as skipped), its reference motion, and the
+/// notes so far; checks the reference and the blend weights.
+fn group_motions(set: &CaptureSet, spec: &GroupSpec) -> Result<(Vec<String>, String, Vec<String>)> {
     let available = set.motions(&spec.subject)?;
     let (present, skipped): (Vec<String>, Vec<String>) = spec
         .motions
@@ -274,15 +341,26 @@ pub fn build(set: &CaptureSet, spec: &GroupSpec) -> Result<(Group, Vec<String>)>
             )));
         }
     }
-    let mut notes: Vec<String> = skipped
+    let notes = skipped
         .iter()
         .map(|m| format!("motion '{m}' is not in the set: skipped"))
         .collect();
-    let pairs = blend_pairs(spec, &present, &mut notes)?;
+    Ok((present, reference, notes))
+}
+
+/// The body's parts: the subject's segmentation, or the whole body as one part (asked for, or,
+/// with `fallback_whole_body`, when the curves do not segment it: noted).
+fn body_parts(
+    spec: &GroupSpec,
+    template: &mesh_core::TriMesh,
+    subject_spec: &SubjectSpec,
+    subject_json: &std::path::Path,
+    notes: &mut Vec<String>,
+) -> Result<Vec<PartDef>> {
     let seg = if spec.whole_body {
         capture::part_pca::whole_body(template.n_vertices())
     } else {
-        match mesh_core::segmentation::segment(template, &subject_spec) {
+        match mesh_core::segmentation::segment(template, subject_spec) {
             Ok(s) => s,
             Err(e) if spec.fallback_whole_body => {
                 notes.push(format!(
@@ -291,10 +369,10 @@ pub fn build(set: &CaptureSet, spec: &GroupSpec) -> Result<(Group, Vec<String>)>
                 ));
                 capture::part_pca::whole_body(template.n_vertices())
             }
-            Err(e) => return Err(Error::file(&subject_json, e.to_string())),
+            Err(e) => return Err(Error::file(subject_json, e.to_string())),
         }
     };
-    let parts = seg
+    Ok(seg
         .parts
         .iter()
         .map(|p| PartDef {
@@ -305,50 +383,63 @@ pub fn build(set: &CaptureSet, spec: &GroupSpec) -> Result<(Group, Vec<String>)>
                 .and_then(|q| seg.parts.iter().position(|x| &x.name == q)),
             vertices: p.vertices.clone(),
         })
-        .collect::<Vec<PartDef>>();
-    let up = subject_spec.up_vector().unwrap_or(Vector3::y());
-    let core = root_core(&parts, template.n_vertices());
-    let root = capture::align::root_point(&template.vertices, &core);
-    // Soles of the two leg parts, left first, for motions without contact annotations.
-    let soles = soles(&parts, &template.vertices, &up, mesh_core::feet::SOLE_TOLERANCE);
-    let has_legs = parts.iter().filter(|p| p.name.starts_with("leg")).count() == 2;
-    // Steps: reading and aligning each motion, warping each, then each blend.
-    let bar = mesh_core::cli::stage_progress(
-        (2 * present.len() + pairs.len() * spec.blend_weights.len()) as u64,
-        "motions read, warped; blends",
-    );
-    let mut loaded = Vec::new();
-    for m in &present {
-        bar.inc(1);
-        let dir = set.motion_dir(&spec.subject, m);
-        let seq = MeshSequence::load_dir(&dir)?;
-        let aligned = align_motion_on(template, &seq, &core)
-            .map_err(|e| Error::invalid(format!("{}: {e}", dir.display())))?;
-        let mut c = contacts::from_subject(&subject_spec, m, aligned.n_frames())
-            .map_err(|e| Error::file(&subject_json, e.to_string()))?;
-        if c.is_none() && has_legs {
-            c = capture::contact_detector::detect(
-                &seq.frames,
-                &soles,
-                &up,
-                subject_spec.fps,
-                &capture::contact_detector::Rule::default(),
-            );
-            if c.is_some() {
-                notes.push(format!(
-                    "motion '{m}' has no contact annotations: contacts detected from its meshes"
-                ));
-            }
+        .collect())
+}
+
+/// What reading a motion of the group needs of its body.
+struct Body<'a> {
+    template: &'a mesh_core::TriMesh,
+    /// The vertices the rigid pose is fitted on ([`root_core`]).
+    core: Vec<u32>,
+    soles: Vec<Vec<u32>>,
+    /// Two leg parts: contacts can be detected on the soles.
+    has_legs: bool,
+    up: Vector3<f64>,
+}
+
+/// Motion `m` read and aligned on the body's core, with its contacts: the subject's
+/// annotations, or detected on its soles (noted).
+fn load_motion(
+    set: &CaptureSet,
+    spec: &GroupSpec,
+    subject_spec: &SubjectSpec,
+    subject_json: &std::path::Path,
+    body: &Body,
+    m: &str,
+    notes: &mut Vec<String>,
+) -> Result<(String, AlignedMotion, Option<Contacts>)> {
+    let dir = set.motion_dir(&spec.subject, m);
+    let seq = MeshSequence::load_dir(&dir)?;
+    let aligned = align_motion_on(body.template, &seq, &body.core)
+        .map_err(|e| Error::invalid(format!("{}: {e}", dir.display())))?;
+    let mut c = contacts::from_subject(subject_spec, m, aligned.n_frames())
+        .map_err(|e| Error::file(subject_json, e.to_string()))?;
+    if c.is_none() && body.has_legs {
+        c = capture::contact_detector::detect(
+            &seq.frames,
+            &body.soles,
+            &body.up,
+            subject_spec.fps,
+            &capture::contact_detector::Rule::default(),
+        );
+        if c.is_some() {
+            notes.push(format!(
+                "motion '{m}' has no contact annotations: contacts detected from its meshes"
+            ));
         }
-        loaded.push((m.clone(), aligned, c));
     }
-    let r = present
-        .iter()
-        .position(|m| *m == reference)
-        .expect("checked");
-    // Windows `[start, start + len)` kept of each motion: everything, or whole gait cycles.
+    Ok((m.to_string(), aligned, c))
+}
+
+/// The window `(start, length)` kept of each motion: everything, or (`gait_cycles`) the same
+/// whole number of gait cycles of each; and whether cycles were cut. A motion without a
+/// repeating gait leaves every motion whole (noted).
+fn gait_windows(
+    spec: &GroupSpec,
+    loaded: &[(String, AlignedMotion, Option<Contacts>)],
+    notes: &mut Vec<String>,
+) -> Result<(Vec<(usize, usize)>, bool)> {
     let mut windows: Vec<(usize, usize)> = loaded.iter().map(|l| (0, l.1.n_frames())).collect();
-    // A motion without a repeating gait leaves every motion whole (noted).
     let periods: Option<Vec<usize>> = match spec.gait_cycles {
         false => None,
         true => loaded
@@ -364,110 +455,94 @@ pub fn build(set: &CaptureSet, spec: &GroupSpec) -> Result<(Group, Vec<String>)>
             })
             .collect(),
     };
-    let cut_cycles = periods.is_some();
-    if let Some(periods) = periods {
-        let lp: Vec<(usize, usize)> = loaded
-            .iter()
-            .zip(&periods)
-            .map(|(l, &p)| (l.1.n_frames(), p))
-            .collect();
-        let k = gait::common_cycles(&lp)?;
-        for (w, &p) in windows.iter_mut().zip(&periods) {
-            w.1 = k * p;
-        }
-        for ((m, _, _), p) in loaded.iter().zip(&periods) {
-            mesh_core::info!("{m}: gait period {p} frames, {k} cycle(s) kept");
-        }
-    }
-    let slice =
-        |c: &Option<Contacts>, (s, n): (usize, usize)| c.as_ref().map(|c| c[s..s + n].to_vec());
-    let ref_frames = loaded[r].1.frames[windows[r].0..windows[r].0 + windows[r].1].to_vec();
-    let ref_contacts = slice(&loaded[r].2, windows[r]);
-    let mut sequences = Vec::new();
-    for (q, (name, motion, c)) in loaded.into_iter().enumerate() {
-        bar.inc(1);
-        let (w0, len) = windows[q];
-        let map: Vec<usize> = if q == r {
-            (w0..w0 + len).collect()
-        } else {
-            // Whole gait cycles: every start of the window is tried, the cheapest DTW kept,
-            // with one contact weight λ for all (that of the first window).
-            let starts = if cut_cycles {
-                0..=motion.n_frames() - len
-            } else {
-                0..=0
-            };
-            let mut opts = spec.prealign.clone();
-            let mut best: Option<(usize, Warp)> = None;
-            for s in starts {
-                let wp = warp(
-                    &motion.frames[s..s + len],
-                    slice(&c, (s, len)).as_ref(),
-                    &ref_frames,
-                    ref_contacts.as_ref(),
-                    &opts,
-                )
-                .map_err(|e| Error::invalid(format!("{name}: {e}")))?;
-                opts.contact_weight = Some(wp.contact_weight);
-                if best.as_ref().is_none_or(|b| wp.mean_cost < b.1.mean_cost) {
-                    best = Some((s, wp));
-                }
-            }
-            let (s, wp) = best.expect("at least one window");
-            mesh_core::info!(
-                "{name}: frames {s}..{} warped onto the reference (mean DTW cost {:.1} mm)",
-                s + len,
-                wp.mean_cost * 1e3
-            );
-            wp.map.iter().map(|&i| s + i).collect()
-        };
-        let contacts = c.as_ref().map(|c| apply_contacts(c, &map));
-        sequences.push(GroupSequence {
-            name,
-            blend: None,
-            blend_of: None,
-            motion: apply(&motion, &map, &root),
-            contacts,
-            map,
-        });
-    }
-    let pair = pairs.first().copied();
-    let mut group = Group {
-        name: spec.name.clone(),
-        subject: spec.subject.clone(),
-        fps: subject_spec.fps,
-        up,
-        template: template.vertices.clone(),
-        faces: template.faces.clone(),
-        parts,
-        reference,
-        sequences,
-        pair,
+    let Some(periods) = periods else {
+        return Ok((windows, false));
     };
-    // A group with one motion gets no blends (the caller warns).
-    if !(spec.blend_weights.is_empty() || pairs.is_empty()) {
-        let blender = surface::blend::Blender::new(group.template.clone(), group.faces.clone())?;
-        for (i, &(a, b)) in pairs.iter().enumerate() {
-            for &w in &spec.blend_weights {
-                bar.inc(1);
-                let mut s = blend_sequences(
-                    &blender,
-                    &group.sequences[a],
-                    &group.sequences[b],
-                    w,
-                    &group.up,
-                    &root,
-                )?;
-                s.blend_of = Some((a, b));
-                if i > 0 {
-                    s.name = pair_blend_name(&group.sequences[a].name, &group.sequences[b].name, w);
-                }
-                group.sequences.push(s);
-            }
+    let lp: Vec<(usize, usize)> = loaded
+        .iter()
+        .zip(&periods)
+        .map(|(l, &p)| (l.1.n_frames(), p))
+        .collect();
+    let k = gait::common_cycles(&lp)?;
+    for (w, &p) in windows.iter_mut().zip(&periods) {
+        w.1 = k * p;
+    }
+    for ((m, _, _), p) in loaded.iter().zip(&periods) {
+        mesh_core::info!("{m}: gait period {p} frames, {k} cycle(s) kept");
+    }
+    Ok((windows, true))
+}
+
+/// Contacts of the window `(start, length)`.
+fn slice_contacts(c: &Option<Contacts>, (s, n): (usize, usize)) -> Option<Contacts> {
+    c.as_ref().map(|c| c[s..s + n].to_vec())
+}
+
+/// The frames of `motion` (`len` of them) that the DTW puts on the reference's frames. With
+/// whole gait cycles (`cut_cycles`) every start of the window is tried and the cheapest DTW kept,
+/// with one contact weight λ for all (that of the first window).
+#[allow(clippy::too_many_arguments)]
+fn warp_onto_reference(
+    spec: &GroupSpec,
+    name: &str,
+    motion: &AlignedMotion,
+    c: &Option<Contacts>,
+    len: usize,
+    cut_cycles: bool,
+    ref_frames: &[Vec<Vector3<f64>>],
+    ref_contacts: Option<&Contacts>,
+) -> Result<Vec<usize>> {
+    let starts = if cut_cycles { 0..=motion.n_frames() - len } else { 0..=0 };
+    let mut opts = spec.prealign.clone();
+    let mut best: Option<(usize, Warp)> = None;
+    for s in starts {
+        let wp = warp(
+            &motion.frames[s..s + len],
+            slice_contacts(c, (s, len)).as_ref(),
+            ref_frames,
+            ref_contacts,
+            &opts,
+        )
+        .map_err(|e| Error::invalid(format!("{name}: {e}")))?;
+        opts.contact_weight = Some(wp.contact_weight);
+        if best.as_ref().is_none_or(|b| wp.mean_cost < b.1.mean_cost) {
+            best = Some((s, wp));
         }
     }
-    bar.finish_and_clear();
-    Ok((group, notes))
+    let (s, wp) = best.expect("at least one window");
+    mesh_core::info!(
+        "{name}: frames {s}..{} warped onto the reference (mean DTW cost {:.1} mm)",
+        s + len,
+        wp.mean_cost * 1e3
+    );
+    Ok(wp.map.iter().map(|&i| s + i).collect())
+}
+
+/// The blends of each pair at each weight, appended to the group's sequences (none for a group
+/// of one motion: the caller warns).
+fn add_blends(
+    group: &mut Group,
+    spec: &GroupSpec,
+    pairs: &[(usize, usize)],
+    root: &Vector3<f64>,
+    bar: &mesh_core::cli::ProgressBar,
+) -> Result<()> {
+    if spec.blend_weights.is_empty() || pairs.is_empty() {
+        return Ok(());
+    }
+    let blender = surface::blend::Blender::new(group.template.clone(), group.faces.clone())?;
+    for (i, &(a, b)) in pairs.iter().enumerate() {
+        for &w in &spec.blend_weights {
+            bar.inc(1);
+            let mut s = blend_sequences(&blender, &group.sequences[a], &group.sequences[b], w, &group.up, root)?;
+            s.blend_of = Some((a, b));
+            if i > 0 {
+                s.name = pair_blend_name(&group.sequences[a].name, &group.sequences[b].name, w);
+            }
+            group.sequences.push(s);
+        }
+    }
+    Ok(())
 }
 
 /// The vertices a body's rigid pose is fitted on: the root part's core, its vertices in no
