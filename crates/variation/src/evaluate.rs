@@ -119,13 +119,46 @@ pub fn evaluate(
     let mut notes = Vec::new();
     let dec = Decoder::new(model, &mut notes)?;
     let d = model.parts[0].gpdm.config.latent_dim;
-    // Fig. 4.
+    let reconstruction = reconstruction_errors(model, group, &dec, d)?;
+    let reconstruction_gpdm_m = weighted(
+        model,
+        &reconstruction.iter().map(|r| r.gpdm_m).collect::<Vec<_>>(),
+    );
+    let reconstruction_pca_m = weighted(
+        model,
+        &reconstruction.iter().map(|r| r.pca_m).collect::<Vec<_>>(),
+    );
+    // Fig. 7b (and the latent plots of figs. 6 and 7a, drawn below with the others).
+    let mut blend_figs = preblend_figures(model);
+    let latent_blend = latent_blend_errors(model, group, &dec, &mut blend_figs)?;
+    let mean_prediction = mean_prediction_errors(model, group, &dec)?;
+    let written = match plots {
+        Some(dir) => write_plots(dir, model, &dec, d, seed, &reconstruction, &latent_blend, &blend_figs)?,
+        None => Vec::new(),
+    };
+    Ok(EvalReport {
+        group: model.group.clone(),
+        latent_dim: d,
+        reconstruction,
+        reconstruction_gpdm_m,
+        reconstruction_pca_m,
+        latent_blend,
+        mean_prediction,
+        plots: written,
+    })
+}
+
+/// A latent plot: its file name, title and named trajectories.
+type LatentFigure = (String, String, Vec<(String, DMatrix<f64>)>);
+
+/// Fig. 4: per part, the training meshes reconstructed by the GPDM (3DV eq. 12 at the learned
+/// latent points, brought to the capture's rate, against every captured frame) and by a PCA of
+/// the same dimension `d` on the training rows.
+fn reconstruction_errors(model: &VariationModel, group: &Group, dec: &Decoder, d: usize) -> Result<Vec<ReconstructionError>> {
     let mut reconstruction = Vec::new();
     for (k, pm) in model.parts.iter().enumerate() {
         let g = &pm.gpdm;
         let nv = vertex_count(model, k);
-        // GPDM: 3DV eq. 12 at the learned latent points, brought to the capture's rate, against
-        // every captured frame.
         let mut sum = 0.0;
         for s in 0..model.sequences.len() {
             let rec = dec.predictors[k]
@@ -135,7 +168,6 @@ pub fn evaluate(
             sum += mean_row_distance(&rec, &truth, nv) * truth.nrows() as f64;
         }
         let frames = (model.sequences.len() * model.n_frames()).max(1) as f64;
-        // PCA with the same dimension on the training rows.
         let mut y = g.y.clone();
         for mut row in y.row_iter_mut() {
             row += g.y_mean.transpose();
@@ -151,116 +183,130 @@ pub fn evaluate(
             pca_m: mean_row_distance(&pr, &y, nv),
         });
     }
-    let reconstruction_gpdm_m = weighted(
-        model,
-        &reconstruction.iter().map(|r| r.gpdm_m).collect::<Vec<_>>(),
-    );
-    let reconstruction_pca_m = weighted(
-        model,
-        &reconstruction.iter().map(|r| r.pca_m).collect::<Vec<_>>(),
-    );
+    Ok(reconstruction)
+}
 
-    // Fig. 7b (and the latent plots of figs. 6 and 7a, drawn below with the others).
-    let mut latent_blend = Vec::new();
-    let mut blend_figs: Vec<(String, String, Vec<(String, DMatrix<f64>)>)> = Vec::new();
-    if let Some((a, b)) = model.pair {
-        // Fig. 6: the learned trajectory of each pre-blend against the linear interpolation of
-        // the pair's trajectories at the same weight, per part.
-        for (k, pm) in model.parts.iter().enumerate() {
-            let (xa, xb) = (&model.latents(a)[k], &model.latents(b)[k]);
-            let mut series = vec![
-                (model.sequences[a].name.clone(), xa.clone()),
-                (model.sequences[b].name.clone(), xb.clone()),
-            ];
-            for (i, info) in model.sequences.iter().enumerate() {
-                // The pre-blends of the pair (a group may pre-blend other pairs too).
-                if let (Some(w), true) = (info.blend, info.blend_of == Some((a, b))) {
-                    series.push((format!("linear w = {w}"), xa * (1.0 - w) + xb * w));
-                    series.push((format!("learned pre-blend w = {w}"), model.latents(i)[k].clone()));
-                }
-            }
-            if series.len() > 2 {
-                blend_figs.push((
-                    format!("fig6-preblend-{}.png", pm.part.name),
-                    format!("{}: pre-blended trajectory vs linear interpolation ({})", model.group, pm.part.name),
-                    series,
-                ));
+/// Fig. 6: the learned trajectory of each pre-blend of the model's pair against the linear
+/// interpolation of the pair's trajectories at the same weight, per part (none without a pair).
+fn preblend_figures(model: &VariationModel) -> Vec<LatentFigure> {
+    let mut blend_figs = Vec::new();
+    let Some((a, b)) = model.pair else {
+        return blend_figs;
+    };
+    for (k, pm) in model.parts.iter().enumerate() {
+        let (xa, xb) = (&model.latents(a)[k], &model.latents(b)[k]);
+        let mut series = vec![
+            (model.sequences[a].name.clone(), xa.clone()),
+            (model.sequences[b].name.clone(), xb.clone()),
+        ];
+        for (i, info) in model.sequences.iter().enumerate() {
+            // The pre-blends of the pair (a group may pre-blend other pairs too).
+            if let (Some(w), true) = (info.blend, info.blend_of == Some((a, b))) {
+                series.push((format!("linear w = {w}"), xa * (1.0 - w) + xb * w));
+                series.push((format!("learned pre-blend w = {w}"), model.latents(i)[k].clone()));
             }
         }
-        let learned = crate::sample::blend_entries(model, a, b);
-        let blender = surface::blend::Blender::new(group.template.clone(), group.faces.clone())?;
-        for w in [0.25, 0.75] {
-            let i2 = learned
-                .iter()
-                .position(|&(v, _)| v > w)
-                .unwrap_or(learned.len() - 1);
-            let (lo, hi) = (learned[i2 - 1], learned[i2]);
-            let truth = blend_sequences(
-                &blender,
-                &group.sequences[a],
-                &group.sequences[b],
-                w,
-                &group.up,
-                &group.root_point(),
-            )?;
-            let xa = model.latents(a);
-            let xb = model.latents(b);
-            let (xl, xh) = (model.latents(lo.1), model.latents(hi.1));
-            let guided: Vec<DMatrix<f64>> = (0..model.parts.len())
-                .map(|k| blend_pair(&xl[k], lo.0, &xh[k], hi.0, w))
-                .collect();
-            let unguided: Vec<DMatrix<f64>> = (0..model.parts.len())
-                .map(|k| &xa[k] * (1.0 - w) + &xb[k] * w)
-                .collect();
-            if w == 0.25 && (lo.1, hi.1) != (a, b) {
-                // Fig. 7a: the two interpolations at w of the first part.
-                let pm = &model.parts[0];
-                blend_figs.push((
-                    format!("fig7a-interpolation-{w}-{}.png", pm.part.name),
-                    format!("{}: X_{w} guided vs unguided ({})", model.group, pm.part.name),
-                    vec![
-                        (model.sequences[a].name.clone(), xa[0].clone()),
-                        (model.sequences[b].name.clone(), xb[0].clone()),
-                        (format!("learned w = {}", hi.0), xh[0].clone()),
-                        (format!("unguided w = {w} (from w = 0, 1)"), unguided[0].clone()),
-                        (format!("guided w = {w} (from w = {}, {})", lo.0, hi.0), guided[0].clone()),
-                    ],
-                ));
-            }
-            let (rg, ru) = (decode_rows(&dec, &guided)?, decode_rows(&dec, &unguided)?);
-            let t_n = truth.motion.n_frames();
-            let mut gpf = vec![0.0; t_n];
-            let mut upf = vec![0.0; t_n];
-            let total: usize = (0..model.parts.len()).map(|k| vertex_count(model, k)).sum();
-            for (k, pm) in model.parts.iter().enumerate() {
-                let r = part_data::reference(&model.template, &pm.part);
-                let yt = part_data::part_rows(&truth.motion, &pm.part, &r);
-                let nv = vertex_count(model, k);
-                for t in 0..t_n {
-                    let one = |m: &DMatrix<f64>| {
-                        mean_row_distance(
-                            &m.rows(t, 1).into_owned(),
-                            &yt.rows(t, 1).into_owned(),
-                            nv,
-                        )
-                    };
-                    gpf[t] += one(&rg[k]) * nv as f64 / total as f64;
-                    upf[t] += one(&ru[k]) * nv as f64 / total as f64;
-                }
-            }
-            let mean = |v: &[f64]| v.iter().sum::<f64>() / v.len().max(1) as f64;
-            latent_blend.push(LatentBlendError {
-                w,
-                guided_from: (lo.0, hi.0),
-                guided_m: mean(&gpf),
-                unguided_m: mean(&upf),
-                guided_per_frame_m: gpf,
-                unguided_per_frame_m: upf,
-            });
+        if series.len() > 2 {
+            blend_figs.push((
+                format!("fig6-preblend-{}.png", pm.part.name),
+                format!("{}: pre-blended trajectory vs linear interpolation ({})", model.group, pm.part.name),
+                series,
+            ));
         }
     }
+    blend_figs
+}
 
-    // Mean prediction.
+/// Fig. 7b: at w = 0.25 and 0.75, the latent interpolation guided by the learned pre-blends and
+/// the unguided one, decoded, against the non-linear mesh blend, per frame; fig. 7a's latent
+/// plot of the first part is added to `blend_figs`.
+fn latent_blend_errors(
+    model: &VariationModel,
+    group: &Group,
+    dec: &Decoder,
+    blend_figs: &mut Vec<LatentFigure>,
+) -> Result<Vec<LatentBlendError>> {
+    let mut latent_blend = Vec::new();
+    let Some((a, b)) = model.pair else {
+        return Ok(latent_blend);
+    };
+    let learned = crate::sample::blend_entries(model, a, b);
+    let blender = surface::blend::Blender::new(group.template.clone(), group.faces.clone())?;
+    for w in [0.25, 0.75] {
+        let i2 = learned
+            .iter()
+            .position(|&(v, _)| v > w)
+            .unwrap_or(learned.len() - 1);
+        let (lo, hi) = (learned[i2 - 1], learned[i2]);
+        let truth = blend_sequences(
+            &blender,
+            &group.sequences[a],
+            &group.sequences[b],
+            w,
+            &group.up,
+            &group.root_point(),
+        )?;
+        let xa = model.latents(a);
+        let xb = model.latents(b);
+        let (xl, xh) = (model.latents(lo.1), model.latents(hi.1));
+        let guided: Vec<DMatrix<f64>> = (0..model.parts.len())
+            .map(|k| blend_pair(&xl[k], lo.0, &xh[k], hi.0, w))
+            .collect();
+        let unguided: Vec<DMatrix<f64>> = (0..model.parts.len())
+            .map(|k| &xa[k] * (1.0 - w) + &xb[k] * w)
+            .collect();
+        if w == 0.25 && (lo.1, hi.1) != (a, b) {
+            // Fig. 7a: the two interpolations at w of the first part.
+            let pm = &model.parts[0];
+            blend_figs.push((
+                format!("fig7a-interpolation-{w}-{}.png", pm.part.name),
+                format!("{}: X_{w} guided vs unguided ({})", model.group, pm.part.name),
+                vec![
+                    (model.sequences[a].name.clone(), xa[0].clone()),
+                    (model.sequences[b].name.clone(), xb[0].clone()),
+                    (format!("learned w = {}", hi.0), xh[0].clone()),
+                    (format!("unguided w = {w} (from w = 0, 1)"), unguided[0].clone()),
+                    (format!("guided w = {w} (from w = {}, {})", lo.0, hi.0), guided[0].clone()),
+                ],
+            ));
+        }
+        let (rg, ru) = (decode_rows(&dec, &guided)?, decode_rows(&dec, &unguided)?);
+        let t_n = truth.motion.n_frames();
+        let mut gpf = vec![0.0; t_n];
+        let mut upf = vec![0.0; t_n];
+        let total: usize = (0..model.parts.len()).map(|k| vertex_count(model, k)).sum();
+        for (k, pm) in model.parts.iter().enumerate() {
+            let r = part_data::reference(&model.template, &pm.part);
+            let yt = part_data::part_rows(&truth.motion, &pm.part, &r);
+            let nv = vertex_count(model, k);
+            for t in 0..t_n {
+                let one = |m: &DMatrix<f64>| {
+                    mean_row_distance(
+                        &m.rows(t, 1).into_owned(),
+                        &yt.rows(t, 1).into_owned(),
+                        nv,
+                    )
+                };
+                gpf[t] += one(&rg[k]) * nv as f64 / total as f64;
+                upf[t] += one(&ru[k]) * nv as f64 / total as f64;
+            }
+        }
+        let mean = |v: &[f64]| v.iter().sum::<f64>() / v.len().max(1) as f64;
+        latent_blend.push(LatentBlendError {
+            w,
+            guided_from: (lo.0, hi.0),
+            guided_m: mean(&gpf),
+            unguided_m: mean(&upf),
+            guided_per_frame_m: gpf,
+            unguided_per_frame_m: upf,
+        });
+    }
+    Ok(latent_blend)
+}
+
+/// Per sequence: the mean prediction from its first latent point, decoded, against its
+/// captured frames.
+fn mean_prediction_errors(model: &VariationModel, group: &Group, dec: &Decoder) -> Result<Vec<MeanPrediction>> {
     let mut mean_prediction = Vec::new();
     for (s, info) in model.sequences.iter().enumerate() {
         let lat = model.model_latents(s);
@@ -283,95 +329,97 @@ pub fn evaluate(
             error_m: weighted(model, &per),
         });
     }
+    Ok(mean_prediction)
+}
 
-    // Figs. 3 and 5.
+/// Figs. 3, 4, 5, 6, 7a and 7b drawn into `dir`; returns the files written.
+#[allow(clippy::too_many_arguments)]
+fn write_plots(
+    dir: &Path,
+    model: &VariationModel,
+    dec: &Decoder,
+    d: usize,
+    seed: u64,
+    reconstruction: &[ReconstructionError],
+    latent_blend: &[LatentBlendError],
+    blend_figs: &[LatentFigure],
+) -> Result<Vec<String>> {
     let mut written = Vec::new();
-    if let Some(dir) = plots {
-        std::fs::create_dir_all(dir).map_err(|e| Error::io(dir, e))?;
-        for (k, pm) in model.parts.iter().enumerate() {
-            let series: Vec<(String, DMatrix<f64>)> = model
-                .sequences
-                .iter()
-                .enumerate()
-                .map(|(s, i)| (i.name.clone(), model.latents(s)[k].clone()))
-                .collect();
-            let p = dir.join(format!("fig3-latent-{}.png", pm.part.name));
-            crate::plots::latent_plot(
-                &p,
-                &format!(
-                    "{}: learned latent trajectories ({})",
-                    model.group, pm.part.name
-                ),
-                &series,
-            )?;
-            written.push(p.display().to_string());
-        }
-        for (file, title, series) in &blend_figs {
-            let p = dir.join(file);
-            crate::plots::latent_plot(&p, title, series)?;
-            written.push(p.display().to_string());
-        }
-        // Fig. 4: training-mesh reconstruction per part, GPDM against PCA of the same dimension.
-        let parts: Vec<String> = reconstruction.iter().map(|r| r.part.clone()).collect();
-        let mm = |f: &dyn Fn(&ReconstructionError) -> f64| reconstruction.iter().map(|r| 1e3 * f(r)).collect::<Vec<f64>>();
-        let p = dir.join("fig4-reconstruction.png");
-        crate::plots::series_plot(
-            &p,
-            &format!("{}: training-mesh reconstruction, mean per vertex (d = {d})", model.group),
-            ("part", "error (mm)"),
-            Some(&parts),
-            &[(format!("GPDM (d = {d})"), mm(&|r| r.gpdm_m)), (format!("PCA ({d} components)"), mm(&|r| r.pca_m))],
-        )?;
-        written.push(p.display().to_string());
-        // Fig. 7b: per frame, the latent interpolation guided by the learned pre-blends and the
-        // unguided one against the non-linear mesh blend.
-        for b in &latent_blend {
-            let p = dir.join(format!("fig7b-blend-{}.png", b.w));
-            let to_mm = |v: &[f64]| v.iter().map(|x| 1e3 * x).collect::<Vec<f64>>();
-            crate::plots::series_plot(
-                &p,
-                &format!("{}: interpolation at w = {} against the non-linear blend", model.group, b.w),
-                ("frame", "mean vertex distance (mm)"),
-                None,
-                &[("guided".to_string(), to_mm(&b.guided_per_frame_m)), ("unguided".to_string(), to_mm(&b.unguided_per_frame_m))],
-            )?;
-            written.push(p.display().to_string());
-        }
-        let hmc = HmcOptions {
-            n_samples: 20,
-            burn_in: 200,
-            thin: 10,
-            seed,
-            ..HmcOptions::default()
-        };
-        let (vars, _) = sequence_variations(&dec, 0, Sampler::Hmc, 1.0, &hmc)?;
-        let series: Vec<(String, DMatrix<f64>)> = vars
+    std::fs::create_dir_all(dir).map_err(|e| Error::io(dir, e))?;
+    for (k, pm) in model.parts.iter().enumerate() {
+        let series: Vec<(String, DMatrix<f64>)> = model
+            .sequences
             .iter()
             .enumerate()
-            .map(|(i, v)| (format!("var{i}"), v[0].clone()))
+            .map(|(s, i)| (i.name.clone(), model.latents(s)[k].clone()))
             .collect();
-        let p = dir.join(format!(
-            "fig5-variations-{}-{}.png",
-            model.sequences[0].name, model.parts[0].part.name
-        ));
+        let p = dir.join(format!("fig3-latent-{}.png", pm.part.name));
         crate::plots::latent_plot(
             &p,
             &format!(
-                "{}: 20 HMC variations of {} ({})",
-                model.group, model.sequences[0].name, model.parts[0].part.name
+                "{}: learned latent trajectories ({})",
+                model.group, pm.part.name
             ),
             &series,
         )?;
         written.push(p.display().to_string());
     }
-    Ok(EvalReport {
-        group: model.group.clone(),
-        latent_dim: d,
-        reconstruction,
-        reconstruction_gpdm_m,
-        reconstruction_pca_m,
-        latent_blend,
-        mean_prediction,
-        plots: written,
-    })
+    for (file, title, series) in blend_figs {
+        let p = dir.join(file);
+        crate::plots::latent_plot(&p, title, series)?;
+        written.push(p.display().to_string());
+    }
+    // Fig. 4: training-mesh reconstruction per part, GPDM against PCA of the same dimension.
+    let parts: Vec<String> = reconstruction.iter().map(|r| r.part.clone()).collect();
+    let mm = |f: &dyn Fn(&ReconstructionError) -> f64| reconstruction.iter().map(|r| 1e3 * f(r)).collect::<Vec<f64>>();
+    let p = dir.join("fig4-reconstruction.png");
+    crate::plots::series_plot(
+        &p,
+        &format!("{}: training-mesh reconstruction, mean per vertex (d = {d})", model.group),
+        ("part", "error (mm)"),
+        Some(&parts),
+        &[(format!("GPDM (d = {d})"), mm(&|r| r.gpdm_m)), (format!("PCA ({d} components)"), mm(&|r| r.pca_m))],
+    )?;
+    written.push(p.display().to_string());
+    // Fig. 7b: per frame, the latent interpolation guided by the learned pre-blends and the
+    // unguided one against the non-linear mesh blend.
+    for b in latent_blend {
+        let p = dir.join(format!("fig7b-blend-{}.png", b.w));
+        let to_mm = |v: &[f64]| v.iter().map(|x| 1e3 * x).collect::<Vec<f64>>();
+        crate::plots::series_plot(
+            &p,
+            &format!("{}: interpolation at w = {} against the non-linear blend", model.group, b.w),
+            ("frame", "mean vertex distance (mm)"),
+            None,
+            &[("guided".to_string(), to_mm(&b.guided_per_frame_m)), ("unguided".to_string(), to_mm(&b.unguided_per_frame_m))],
+        )?;
+        written.push(p.display().to_string());
+    }
+    let hmc = HmcOptions {
+        n_samples: 20,
+        burn_in: 200,
+        thin: 10,
+        seed,
+        ..HmcOptions::default()
+    };
+    let (vars, _) = sequence_variations(&dec, 0, Sampler::Hmc, 1.0, &hmc)?;
+    let series: Vec<(String, DMatrix<f64>)> = vars
+        .iter()
+        .enumerate()
+        .map(|(i, v)| (format!("var{i}"), v[0].clone()))
+        .collect();
+    let p = dir.join(format!(
+        "fig5-variations-{}-{}.png",
+        model.sequences[0].name, model.parts[0].part.name
+    ));
+    crate::plots::latent_plot(
+        &p,
+        &format!(
+            "{}: 20 HMC variations of {} ({})",
+            model.group, model.sequences[0].name, model.parts[0].part.name
+        ),
+        &series,
+    )?;
+    written.push(p.display().to_string());
+    Ok(written)
 }
