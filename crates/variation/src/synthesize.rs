@@ -563,19 +563,7 @@ pub fn run_with_progress(
     cache: Option<&VariantCache>,
     progress: &dyn Fn(usize, usize),
 ) -> Result<SynthReport> {
-    if let Some(group) = group {
-        if group.sequences.len() != model.sequences.len() || group.n_frames() != model.n_frames() {
-            return Err(Error::invalid(
-                "the group does not match the model (train the model from this group)",
-            ));
-        }
-    }
-    if !(cfg.latent_smoothing >= 0.0 && cfg.latent_smoothing.is_finite()) {
-        return Err(Error::invalid(format!(
-            "latent smoothing σ = {} frames: must be a finite number >= 0",
-            cfg.latent_smoothing
-        )));
-    }
+    check_inputs(model, group, cfg)?;
     let mut notes = Vec::new();
     // The statistics compare with the captured meshes, which only the group holds.
     let compare = cfg.statistics && group.is_some();
@@ -597,48 +585,7 @@ pub fn run_with_progress(
     hmc.thin = cfg.thin.max(1);
     hmc.target_accept = cfg.target_accept;
     let frames = cfg.frames.unwrap_or(model.n_frames());
-    let index = |name: &str| {
-        model.index(name).ok_or_else(|| {
-            let names: Vec<&str> = model.sequences.iter().map(|s| s.name.as_str()).collect();
-            Error::invalid(format!(
-                "no sequence '{name}' in the model (it has {})",
-                names.join(", ")
-            ))
-        })
-    };
-    // The training sequences to sample, and the blends to make: (a, b, w).
-    let (wanted, blends): (Vec<usize>, Vec<(usize, usize, f64)>) = match &cfg.query {
-        None => {
-            let blends = if cfg.blends.is_empty() {
-                Vec::new()
-            } else {
-                let (a, b) = model.pair.ok_or_else(|| {
-                    Error::invalid("blends requested but the group has a single motion")
-                })?;
-                cfg.blends.iter().map(|&w| (a, b, w)).collect()
-            };
-            ((0..model.sequences.len()).collect(), blends)
-        }
-        Some(Query::Motion(name)) => (vec![index(name)?], Vec::new()),
-        Some(Query::Blend { a, b, w }) => {
-            let (ia, ib) = (index(a)?, index(b)?);
-            if ia == ib
-                || model.sequences[ia].blend.is_some()
-                || model.sequences[ib].blend.is_some()
-            {
-                return Err(Error::invalid(format!(
-                    "blend '{a}:{b}': two different captured motions are needed"
-                )));
-            }
-            if !(0.0..=1.0).contains(w) {
-                return Err(Error::invalid(format!("blend weight {w} outside [0, 1]")));
-            }
-            // Only the two learned weights bounding w are sampled (one at a learned weight).
-            let [lo, hi] = blend_bounding(model, ia, ib, *w);
-            let used = if lo.1 == hi.1 { vec![lo.1] } else { vec![lo.1, hi.1] };
-            (used, vec![(ia, ib, *w)])
-        }
-    };
+    let (wanted, blends) = sequences_and_blends(model, cfg)?;
     // The exact guide blends the two motions' captured meshes, and so do the statistics against
     // a blend's source: refused before any sampling without them.
     let exact = cfg.blend_guide == BlendGuide::Exact;
@@ -681,74 +628,8 @@ pub fn run_with_progress(
         }
     }
     if !blends.is_empty() {
-        // The blended sources (when the guide or the statistics need them), every weight of a
-        // pair from one decomposition of its frames.
-        let mut truths: Vec<Option<GroupSequence>> = vec![None; blends.len()];
-        let blender = match blend_group {
-            Some(g) => Some(surface::blend::Blender::new(g.template.clone(), g.faces.clone())?),
-            None => None,
-        };
-        for (i, &(a, b, _)) in blends.iter().enumerate() {
-            let (Some(group), Some(blender)) = (blend_group, &blender) else { break };
-            if truths[i].is_some() {
-                continue;
-            }
-            let same: Vec<usize> = (i..blends.len())
-                .filter(|&j| (blends[j].0, blends[j].1) == (a, b))
-                .collect();
-            let weights: Vec<f64> = same.iter().map(|&j| blends[j].2).collect();
-            let made = blend_sequences_at(
-                blender,
-                &group.sequences[a],
-                &group.sequences[b],
-                &weights,
-                &group.up,
-                &group.root_point(),
-            )?;
-            for (j, t) in same.into_iter().zip(made) {
-                truths[j] = Some(t);
-            }
-        }
-        for (&(a, b, w), truth) in blends.iter().zip(truths) {
-            let vars = match cfg.sampler {
-                Sampler::MotionMatching => matched_blend_variations(
-                    &dec,
-                    (a, b),
-                    w,
-                    frames,
-                    cfg.n,
-                    cfg.seed,
-                    &cfg.motion_matching,
-                )?,
-                _ => blend_variations(&dec, &pools, (a, b), w, cfg.n, cfg.seed)?,
-            };
-            let label = match cfg.query {
-                None => blend_name(w),
-                Some(_) => format!(
-                    "{}-{}-{w}",
-                    model.sequences[a].name, model.sequences[b].name
-                ),
-            };
-            let frames = truth.as_ref().map(|t| t.motion.world_frames());
-            let (reference, contacts) = match (exact, &frames, truth) {
-                (true, Some(f), Some(t)) => (Reference::of(f, &model.template, &landmarks, &model.up), t.contacts),
-                _ => blend_guide::stored(model, a, b, w).map_err(Error::invalid)?,
-            };
-            let mut job = Job::new(
-                label,
-                Some(w),
-                vars,
-                reference,
-                frames.filter(|_| compare),
-                model.sequences[a].start_pose,
-                contacts,
-            );
-            job.guided_from = bounding(&blend_entries(model, a, b), w);
-            if let Some((lo, hi)) = job.guided_from {
-                mesh_core::info!("{}: variants of the learned weights {lo} and {hi} blended", job.label);
-            }
-            jobs.push(job);
-        }
+        let blend_sources = BlendSources { group: blend_group, exact, compare, frames, landmarks: &landmarks };
+        jobs.extend(blend_jobs(model, cfg, &dec, &pools, &blends, &blend_sources)?);
     }
     for job in &mut jobs {
         for parts in &mut job.vars {
@@ -795,6 +676,7 @@ pub fn run_with_progress(
     let (mut seconds_writing, mut seconds_statistics) = (0.0, 0.0);
     let capture_limits = group.filter(|_| compare).map(CaptureLimits::of_group);
     let mut decoding_bound: Option<f64> = None;
+    let output = Output { dec: &dec, fused: fused.as_ref(), writer: &writer, post: &post, out };
     for (j, job) in jobs.iter().enumerate() {
         if cfg.footskate && job.contacts.is_none() {
             notes.push(format!(
@@ -802,11 +684,216 @@ pub fn run_with_progress(
                 job.label
             ));
         }
+        let done = output.write_job(j, job)?;
+        let mut decoded = Vec::with_capacity(done.len());
+        for (k, (d, n, written)) in done.into_iter().enumerate() {
+            decoding_bound = match (decoding_bound, d.bound) {
+                (Some(a), Some(b)) => Some(f64::max(a, b)),
+                (a, b) => a.or(b),
+            };
+            notes.extend(n.into_iter().map(|n| format!("{} var{k}: {n}", job.label)));
+            seconds_writing += written;
+            decoded.push(d);
+        }
+        let stats_clock = std::time::Instant::now();
+        if let (Some(limits), Some(source)) = (&capture_limits, &job.source) {
+            sequences.push(measure(job, source, &decoded, model, &all_soles, limits));
+        }
+        seconds_statistics += stats_clock.elapsed().as_secs_f64();
+        progress(j + 1, jobs.len());
+    }
+    let rates: Vec<f64> = chains.iter().map(|c| c.accept_rate).collect();
+    Ok(SynthReport {
+        group: model.group.clone(),
+        config: cfg.clone(),
+        accept_rate: Stats::of(&rates),
+        chains,
+        sequences,
+        notes,
+        seconds_sampling,
+        seconds_decoding: clock.elapsed().as_secs_f64(),
+        seconds_writing,
+        seconds_statistics,
+        decoding_bound_m: decoding_bound,
+        capture_limits,
+    })
+}
+
+/// Refuses a group that is not the model's and a latent smoothing that is no width.
+fn check_inputs(model: &VariationModel, group: Option<&Group>, cfg: &SynthConfig) -> Result<()> {
+    if let Some(group) = group {
+        if group.sequences.len() != model.sequences.len() || group.n_frames() != model.n_frames() {
+            return Err(Error::invalid(
+                "the group does not match the model (train the model from this group)",
+            ));
+        }
+    }
+    if !(cfg.latent_smoothing >= 0.0 && cfg.latent_smoothing.is_finite()) {
+        return Err(Error::invalid(format!(
+            "latent smoothing σ = {} frames: must be a finite number >= 0",
+            cfg.latent_smoothing
+        )));
+    }
+    Ok(())
+}
+
+/// The model's sequences to sample and the blends `(a, b, w)` to make, for every sequence or
+/// for the query.
+#[allow(clippy::type_complexity)]
+fn sequences_and_blends(model: &VariationModel, cfg: &SynthConfig) -> Result<(Vec<usize>, Vec<(usize, usize, f64)>)> {
+    let index = |name: &str| {
+        model.index(name).ok_or_else(|| {
+            let names: Vec<&str> = model.sequences.iter().map(|s| s.name.as_str()).collect();
+            Error::invalid(format!(
+                "no sequence '{name}' in the model (it has {})",
+                names.join(", ")
+            ))
+        })
+    };
+    Ok(match &cfg.query {
+        None => {
+            let blends = if cfg.blends.is_empty() {
+                Vec::new()
+            } else {
+                let (a, b) = model.pair.ok_or_else(|| {
+                    Error::invalid("blends requested but the group has a single motion")
+                })?;
+                cfg.blends.iter().map(|&w| (a, b, w)).collect()
+            };
+            ((0..model.sequences.len()).collect(), blends)
+        }
+        Some(Query::Motion(name)) => (vec![index(name)?], Vec::new()),
+        Some(Query::Blend { a, b, w }) => {
+            let (ia, ib) = (index(a)?, index(b)?);
+            if ia == ib
+                || model.sequences[ia].blend.is_some()
+                || model.sequences[ib].blend.is_some()
+            {
+                return Err(Error::invalid(format!(
+                    "blend '{a}:{b}': two different captured motions are needed"
+                )));
+            }
+            if !(0.0..=1.0).contains(w) {
+                return Err(Error::invalid(format!("blend weight {w} outside [0, 1]")));
+            }
+            // Only the two learned weights bounding w are sampled (one at a learned weight).
+            let [lo, hi] = blend_bounding(model, ia, ib, *w);
+            let used = if lo.1 == hi.1 { vec![lo.1] } else { vec![lo.1, hi.1] };
+            (used, vec![(ia, ib, *w)])
+        }
+    })
+}
+
+/// What the blends' jobs are made from: the group whose meshes are blended into their sources
+/// (when the exact guide or the statistics need them), and the frames sampled.
+struct BlendSources<'a> {
+    group: Option<&'a Group>,
+    exact: bool,
+    compare: bool,
+    frames: usize,
+    landmarks: &'a Landmarks,
+}
+
+/// One job per blend `(a, b, w)`: its variations from the pools of the learned weights around
+/// w (or matched, with motion matching), guided by the captures blended at w (every weight of a
+/// pair from one decomposition of its frames) or by the model's stored references.
+fn blend_jobs(
+    model: &VariationModel,
+    cfg: &SynthConfig,
+    dec: &Decoder,
+    pools: &[Variations],
+    blends: &[(usize, usize, f64)],
+    sources: &BlendSources,
+) -> Result<Vec<Job>> {
+    let mut truths: Vec<Option<GroupSequence>> = vec![None; blends.len()];
+    let blender = match sources.group {
+        Some(g) => Some(surface::blend::Blender::new(g.template.clone(), g.faces.clone())?),
+        None => None,
+    };
+    for (i, &(a, b, _)) in blends.iter().enumerate() {
+        let (Some(group), Some(blender)) = (sources.group, &blender) else { break };
+        if truths[i].is_some() {
+            continue;
+        }
+        let same: Vec<usize> = (i..blends.len())
+            .filter(|&j| (blends[j].0, blends[j].1) == (a, b))
+            .collect();
+        let weights: Vec<f64> = same.iter().map(|&j| blends[j].2).collect();
+        let made = blend_sequences_at(
+            blender,
+            &group.sequences[a],
+            &group.sequences[b],
+            &weights,
+            &group.up,
+            &group.root_point(),
+        )?;
+        for (j, t) in same.into_iter().zip(made) {
+            truths[j] = Some(t);
+        }
+    }
+    let mut jobs = Vec::new();
+    for (&(a, b, w), truth) in blends.iter().zip(truths) {
+        let vars = match cfg.sampler {
+            Sampler::MotionMatching => matched_blend_variations(
+                dec,
+                (a, b),
+                w,
+                sources.frames,
+                cfg.n,
+                cfg.seed,
+                &cfg.motion_matching,
+            )?,
+            _ => blend_variations(dec, pools, (a, b), w, cfg.n, cfg.seed)?,
+        };
+        let label = match cfg.query {
+            None => blend_name(w),
+            Some(_) => format!(
+                "{}-{}-{w}",
+                model.sequences[a].name, model.sequences[b].name
+            ),
+        };
+        let frames = truth.as_ref().map(|t| t.motion.world_frames());
+        let (reference, contacts) = match (sources.exact, &frames, truth) {
+            (true, Some(f), Some(t)) => (Reference::of(f, &model.template, sources.landmarks, &model.up), t.contacts),
+            _ => blend_guide::stored(model, a, b, w).map_err(Error::invalid)?,
+        };
+        let mut job = Job::new(
+            label,
+            Some(w),
+            vars,
+            reference,
+            frames.filter(|_| sources.compare),
+            model.sequences[a].start_pose,
+            contacts,
+        );
+        job.guided_from = bounding(&blend_entries(model, a, b), w);
+        if let Some((lo, hi)) = job.guided_from {
+            mesh_core::info!("{}: variants of the learned weights {lo} and {hi} blended", job.label);
+        }
+        jobs.push(job);
+    }
+    Ok(jobs)
+}
+
+/// How a job's variations are decoded, cleaned up and written.
+struct Output<'a, 'm> {
+    dec: &'a Decoder<'m>,
+    fused: Option<&'a crate::reconstruct::FusedDecoder<'a, 'm>>,
+    writer: &'a VariationWriter,
+    post: &'a Post<'m>,
+    out: &'a Path,
+}
+
+impl Output<'_, '_> {
+    /// Job `j`'s variations, one task each: decoded, cleaned up and written to its folder; the
+    /// meshes are kept only for the statistics. Per variation: what it became, its notes and
+    /// the seconds its writing took.
+    fn write_job(&self, j: usize, job: &Job) -> Result<Vec<(Decoded, Vec<String>, f64)>> {
+        let Output { dec, fused, writer, post, out } = *self;
+        let (model, cfg) = (post.model, post.cfg);
         let matcher = job.reference.matcher(&model.template);
         let dir = out.join(&job.label);
-        // One task per variation: decode, clean up, write its folder; the meshes are kept
-        // only for the statistics.
-        let done: Vec<(Decoded, Vec<String>, f64)> = job
+        job
             .vars
             .par_iter()
             .enumerate()
@@ -815,7 +902,7 @@ pub fn run_with_progress(
                 |(scratch, flat, spare), (k, latents)| {
                     let mut rng =
                         ChaCha8Rng::seed_from_u64(mix(cfg.seed, 0xDEC0DE + j as u64, k as u64));
-                    let m = match &fused {
+                    let m = match fused {
                         // Mean poses merged by averaging: the fused kernel-basis decoder (one
                         // pass), its frames copied into the buffers of this thread's last
                         // variation when it kept none.
@@ -857,37 +944,6 @@ pub fn run_with_progress(
                     Ok((d, notes, written))
                 },
             )
-            .collect::<Result<_>>()?;
-        let mut decoded = Vec::with_capacity(done.len());
-        for (k, (d, n, written)) in done.into_iter().enumerate() {
-            decoding_bound = match (decoding_bound, d.bound) {
-                (Some(a), Some(b)) => Some(f64::max(a, b)),
-                (a, b) => a.or(b),
-            };
-            notes.extend(n.into_iter().map(|n| format!("{} var{k}: {n}", job.label)));
-            seconds_writing += written;
-            decoded.push(d);
-        }
-        let stats_clock = std::time::Instant::now();
-        if let (Some(limits), Some(source)) = (&capture_limits, &job.source) {
-            sequences.push(measure(job, source, &decoded, model, &all_soles, limits));
-        }
-        seconds_statistics += stats_clock.elapsed().as_secs_f64();
-        progress(j + 1, jobs.len());
+            .collect::<Result<_>>()
     }
-    let rates: Vec<f64> = chains.iter().map(|c| c.accept_rate).collect();
-    Ok(SynthReport {
-        group: model.group.clone(),
-        config: cfg.clone(),
-        accept_rate: Stats::of(&rates),
-        chains,
-        sequences,
-        notes,
-        seconds_sampling,
-        seconds_decoding: clock.elapsed().as_secs_f64(),
-        seconds_writing,
-        seconds_statistics,
-        decoding_bound_m: decoding_bound,
-        capture_limits,
-    })
 }
