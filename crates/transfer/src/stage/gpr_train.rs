@@ -19,6 +19,7 @@ use crate::gpr_model::{
 use crate::leave_one_motion_out::{cross_validate, Candidate, CrossValidation, Folds, HeldOut, Hyperparameters, MotionError};
 use crate::limb_orientation;
 use crate::model_config::{self, ConfigName, Overrides, Settings};
+use crate::training_rows::PairData;
 use capture::part_pca::PcaModel;
 
 /// Train the source-to-target GP regression per body part and for the rigid displacement (CVPR eqs. 8-13)
@@ -179,25 +180,8 @@ pub fn run(p: &Params) -> anyhow::Result<()> {
             names.len()
         );
     }
-    let overrides = Overrides { mean: p.mean, prior_weight: p.prior_weight, orientation_weight: p.orientation_weight };
-    if let Some(w) = p.prior_weight.filter(|w| !(0.0..=1.0).contains(w)) {
-        return Err(mesh_core::Error::invalid(format!("--prior-weight must be in [0, 1], got {w}")).into());
-    }
-    if let Some(w) = p.orientation_weight.filter(|w| !(0.0..=1.0).contains(w)) {
-        return Err(mesh_core::Error::invalid(format!("--orientation-weight must be in [0, 1], got {w}")).into());
-    }
-    // The key-pose baseline is Baran et al.'s model class throughout: no limb orientation.
-    if method == Method::KeyposeAffine && p.orientation_weight.is_some_and(|w| w > 0.0) {
-        mesh_core::warn!("method keypose-affine has no limb orientation: --orientation-weight is not used");
-    }
-    let configs: Vec<(ConfigName, Settings)> = model_config::candidates(p.config)
-        .into_iter()
-        .filter_map(|c| model_config::settings(c, &overrides).map(|s| (c, s)))
-        .map(|(c, s)| (c, if method == Method::KeyposeAffine { Settings { orientation_weight: 0.0, ..s } } else { s }))
-        .collect();
+    let configs = configurations(p)?;
     let cross_validated = p.cross_validate || p.report.is_some() || configs.len() > 1;
-    let mut pairs = Vec::new();
-    let mut held_out = Vec::new();
     // The files are in the set's order (set source, set target); the PCA models are in
     // the direction's order.
     let (set_source_pca, set_target_pca) = if p.reverse {
@@ -205,47 +189,8 @@ pub fn run(p: &Params) -> anyhow::Result<()> {
     } else {
         (&src_pca, &tgt_pca)
     };
-    // Frame rates of the set's source and target subjects, from the aligned motions.
-    let mut set_fps: Option<(f64, f64)> = None;
-    // Every pair read, hashed and encoded in one pass per file, frames encoded as they are
-    // decoded (no motion is ever held whole), in parallel (one file per thread), then checked
-    // in the command line's order, so that the first bad pair is the one reported.
-    let loaded: Vec<anyhow::Result<_>> = {
-        use rayon::prelude::*;
-        p.pair
-            .par_chunks(3)
-            .map(|files| {
-                let pair = PairFiles::read_encoded(files, set_source_pca, set_target_pca)?;
-                let fps = (
-                    pair.captures[0].require_fps().with_context(|| files[0].display().to_string())?,
-                    pair.captures[1].require_fps().with_context(|| files[1].display().to_string())?,
-                );
-                Ok((pair.data, fps, pair.sha256, pair.motion))
-            })
-            .collect()
-    };
-    let mut pair_hashes = Vec::new();
-    for (files, item) in p.pair.chunks(3).zip(loaded) {
-        let (data, fps, hashes, motion) = item?;
-        if let Some(first) = set_fps.filter(|f| *f != fps) {
-            bail!(
-                "{}: frame rates {} and {} differ from the first pair's {} and {}",
-                files[0].display(),
-                fps.0,
-                fps.1,
-                first.0,
-                first.1
-            );
-        }
-        set_fps = Some(fps);
-        pairs.push(if p.reverse { data.reversed() } else { data });
-        // The direction's target motion: the truth of the pair's frames when it is left out.
-        held_out.push(HeldOut { motion, truth: files[if p.reverse { 0 } else { 1 }].clone() });
-        pair_hashes.extend(files.iter().zip(hashes));
-    }
-    let Some((set_source_fps, set_target_fps)) = set_fps else {
-        bail!("no --pair given");
-    };
+    let LoadedPairs { mut pairs, held_out, pair_hashes, fps: (set_source_fps, set_target_fps) } =
+        load_pairs(p, set_source_pca, set_target_pca)?;
     if cross_validated && pairs.len() < 2 {
         return Err(mesh_core::Error::invalid(format!("leaving one motion out needs two or more --pair, got {}", pairs.len())).into());
     }
@@ -401,6 +346,85 @@ pub fn run(p: &Params) -> anyhow::Result<()> {
     }
     model.save(&p.out, &header)?;
     Ok(())
+}
+
+/// The configurations to train (`--config`, with the flags given explicitly applied; the
+/// key-pose baseline without limb orientation), the weights checked.
+fn configurations(p: &Params) -> anyhow::Result<Vec<(ConfigName, Settings)>> {
+    let method = p.method;
+    let overrides = Overrides { mean: p.mean, prior_weight: p.prior_weight, orientation_weight: p.orientation_weight };
+    if let Some(w) = p.prior_weight.filter(|w| !(0.0..=1.0).contains(w)) {
+        return Err(mesh_core::Error::invalid(format!("--prior-weight must be in [0, 1], got {w}")).into());
+    }
+    if let Some(w) = p.orientation_weight.filter(|w| !(0.0..=1.0).contains(w)) {
+        return Err(mesh_core::Error::invalid(format!("--orientation-weight must be in [0, 1], got {w}")).into());
+    }
+    // The key-pose baseline is Baran et al.'s model class throughout: no limb orientation.
+    if method == Method::KeyposeAffine && p.orientation_weight.is_some_and(|w| w > 0.0) {
+        mesh_core::warn!("method keypose-affine has no limb orientation: --orientation-weight is not used");
+    }
+    Ok(model_config::candidates(p.config)
+        .into_iter()
+        .filter_map(|c| model_config::settings(c, &overrides).map(|s| (c, s)))
+        .map(|(c, s)| (c, if method == Method::KeyposeAffine { Settings { orientation_weight: 0.0, ..s } } else { s }))
+        .collect())
+}
+
+/// The training pairs read: their coefficients, what leaving each out compares with, every
+/// file's hash, and the set's source and target frame rates.
+struct LoadedPairs<'a> {
+    pairs: Vec<PairData>,
+    held_out: Vec<HeldOut>,
+    pair_hashes: Vec<(&'a PathBuf, String)>,
+    fps: (f64, f64),
+}
+
+/// Every `--pair` read, hashed and encoded with the set's source and target PCA models.
+fn load_pairs<'a>(p: &'a Params, set_source_pca: &PcaModel, set_target_pca: &PcaModel) -> anyhow::Result<LoadedPairs<'a>> {
+    let mut pairs = Vec::new();
+    let mut held_out = Vec::new();
+    // Frame rates of the set's source and target subjects, from the aligned motions.
+    let mut set_fps: Option<(f64, f64)> = None;
+    // Every pair read, hashed and encoded in one pass per file, frames encoded as they are
+    // decoded (no motion is ever held whole), in parallel (one file per thread), then checked
+    // in the command line's order, so that the first bad pair is the one reported.
+    let loaded: Vec<anyhow::Result<_>> = {
+        use rayon::prelude::*;
+        p.pair
+            .par_chunks(3)
+            .map(|files| {
+                let pair = PairFiles::read_encoded(files, set_source_pca, set_target_pca)?;
+                let fps = (
+                    pair.captures[0].require_fps().with_context(|| files[0].display().to_string())?,
+                    pair.captures[1].require_fps().with_context(|| files[1].display().to_string())?,
+                );
+                Ok((pair.data, fps, pair.sha256, pair.motion))
+            })
+            .collect()
+    };
+    let mut pair_hashes = Vec::new();
+    for (files, item) in p.pair.chunks(3).zip(loaded) {
+        let (data, fps, hashes, motion) = item?;
+        if let Some(first) = set_fps.filter(|f| *f != fps) {
+            bail!(
+                "{}: frame rates {} and {} differ from the first pair's {} and {}",
+                files[0].display(),
+                fps.0,
+                fps.1,
+                first.0,
+                first.1
+            );
+        }
+        set_fps = Some(fps);
+        pairs.push(if p.reverse { data.reversed() } else { data });
+        // The direction's target motion: the truth of the pair's frames when it is left out.
+        held_out.push(HeldOut { motion, truth: files[if p.reverse { 0 } else { 1 }].clone() });
+        pair_hashes.extend(files.iter().zip(hashes));
+    }
+    let Some((set_source_fps, set_target_fps)) = set_fps else {
+        bail!("no --pair given");
+    };
+    Ok(LoadedPairs { pairs, held_out, pair_hashes, fps: (set_source_fps, set_target_fps) })
 }
 
 /// The leave-one-motion-out errors of every configuration tried and the one kept: the header's
