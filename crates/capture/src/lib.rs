@@ -4,7 +4,9 @@
 //! [`align`] (per motion) -> [`part_pca`] (PCA per part, or of the whole body) -> coefficients;
 //! [`assemble`] turns per-part meshes decoded from the coefficients back into one mesh.
 //! [`choices`] names the transfer stages' options, so that `plan` can write their command
-//! lines without depending on the stages' crate. `src/bin/<stage>.rs` parses arguments and
+//! lines without depending on the stages' crate. The feet's clean-up both pipelines share lives
+//! here too: [`contact_detector`] finds planted feet, [`footskate`] solves the root shifts that
+//! keep them from sliding. `src/bin/<stage>.rs` parses arguments and
 //! calls the library.
 
 pub mod align;
@@ -15,4 +17,5 @@ pub mod streamed_pca;
 pub mod assemble;
 pub mod choices;
 pub mod contact_detector;
+pub mod footskate;
 pub mod stage;

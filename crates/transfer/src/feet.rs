@@ -1,25 +1,21 @@
 //! Planted feet of a transfer: the foot-skating clean-up CVPR §6 mentions, applied to the placed
 //! target frames. A transfer travels as its source's root does, scaled by the height ratio `r`,
 //! and the target's legs need not step exactly that far, so its soles slide where the source's
-//! do not. The clean-up shifts each placed frame horizontally by `d(t)` so that, wherever the
-//! source has a foot down in two consecutive frames, the target's sole moves as the source's sole
-//! does, scaled:
+//! do not. The clean-up shifts each placed frame horizontally by `d(t)`, solved by
+//! [`capture::footskate`] (the objective is stated there) with one velocity term per foot `f`
+//! down in two consecutive frames `t − 1` and `t`: the shift moves by `r Δs_f(t) − Δp_f(t)`
+//! (`p_f`, `s_f` the target's and the source's sole centroids, horizontal parts), so the
+//! target's sole moves as the source's does, scaled.
 //!
-//! `min_d  Σ_{(t, f): foot f down at t−1 and t} ‖Δp_f(t) + d(t) − d(t−1) − r Δs_f(t)‖²
-//!        + λ Σ_t ‖d(t−1) − 2 d(t) + d(t+1)‖² + μ Σ_t ‖d(t)‖²   subject to d(0) = 0`
-//!
-//! (`p_f`, `s_f` the target's and the source's sole centroids, horizontal parts of the
-//! differences `Δ`). Matching the source's sole motion rather than pinning the sole at an anchor
-//! keeps what the source really does on the floor: a planted foot (Δs ≈ 0) is pinned, a foot that
-//! pivots or shuffles (a spin, a get-up) moves as the source's does, so the correction does not
-//! accumulate into drift. The second differences spread it smoothly over the frames between
-//! contacts (`λ` = [`SMOOTHNESS`]); `d(0) = 0` keeps the first placement; `μ` = [`RETURN`]
-//! makes it a local correction that returns to zero away from contacts. Without `μ` a pinned
-//! foot carries every error of the transferred leg into the root and the body drifts (placed
-//! error 6.9 -> 14.0 cm on the holdout benchmark); with it the placement is unchanged
-//! (holdout 6.91 -> 6.90 cm, demo 7.59 -> 7.63) and the sliding comes within 1.15x of the
-//! truth's on 7 of 9 benchmark motions (4 without the clean-up; docs/studies/04-placement.md). The
-//! source's
+//! Matching the source's sole motion rather than pinning the sole at an anchor keeps what the
+//! source really does on the floor: a planted foot (Δs ≈ 0) is pinned, a foot that pivots or
+//! shuffles (a spin, a get-up) moves as the source's does, so the correction does not
+//! accumulate into drift. The ridge `μ` = [`RETURN`] makes it a local correction that returns
+//! to zero away from contacts (smoothness `λ` = [`SMOOTHNESS`]). Without `μ` a pinned foot
+//! carries every error of the transferred leg into the root and the body drifts (placed error
+//! 6.9 -> 14.0 cm on the holdout benchmark); with it the placement is unchanged (holdout 6.91
+//! -> 6.90 cm, demo 7.59 -> 7.63) and the sliding comes within 1.15x of the truth's on 7 of 9
+//! benchmark motions (4 without the clean-up; docs/studies/04-placement.md). The source's
 //! contacts are detected on its own meshes ([`capture::contact_detector`]), never on the
 //! target's, whose sliding soles are what is being corrected.
 //!
@@ -44,6 +40,7 @@
 
 use capture::align::{AlignedMotion, CaptureInfo};
 use capture::contact_detector::{self, Rule};
+use capture::footskate::Problem;
 use capture::part_pca::PcaModel;
 use gp::band::{BandCholesky, SymmetricBand};
 use mesh_core::rigid::RigidMotion;
@@ -109,8 +106,6 @@ pub fn corrections(
         )));
     }
     let horizontal = |p: Vector3<f64>| p - up * up.dot(&p);
-    // Unknowns d(1..n); d(0) = 0 is left out.
-    let dim = n.saturating_sub(1);
     let pairs: Vec<(usize, usize)> = (1..n)
         .flat_map(|t| (0..2).map(move |f| (t, f)))
         .filter(|&(t, f)| contacts[t - 1][f] && contacts[t][f])
@@ -118,45 +113,17 @@ pub fn corrections(
     if pairs.is_empty() {
         return Ok(vec![Vector3::zeros(); n]);
     }
-    // Banded normal equations: every term couples frames at most two apart.
-    let mut a = SymmetricBand::zeros(dim, 2);
-    (0..dim).for_each(|i| a.add(i, i, RETURN));
-    let mut b = DMatrix::<f64>::zeros(dim, 3);
-    // Residual e = d(t) − d(t−1) − g with g = horizontal(r Δs − Δp); d(t) is unknown t − 1.
+    // One velocity term per pair: the shift moves by g = horizontal(r Δs − Δp).
+    let mut problem = Problem::<3>::new(n, smoothness, RETURN)?;
     for &(t, f) in &pairs {
         let g = horizontal(
             (source[f][t] - source[f][t - 1]) * ratio - (target[f][t] - target[f][t - 1]),
         );
-        let (i, prev) = (t - 1, t.checked_sub(2));
-        a.add(i, i, 1.0);
-        for c in 0..3 {
-            b[(i, c)] += g[c];
-        }
-        if let Some(j) = prev {
-            a.add(j, j, 1.0);
-            a.add(i, j, -1.0);
-            for c in 0..3 {
-                b[(j, c)] -= g[c];
-            }
-        }
+        problem.add_velocity(t, g.into());
     }
-    // Second differences d(t−1) − 2 d(t) + d(t+1), t = 1..n−2 (d(0) = 0 drops out).
-    let w = [1.0, -2.0, 1.0];
-    for t in 1..n.saturating_sub(1) {
-        for (u, wu) in w.iter().enumerate() {
-            // The lower triangle: each pair of the stencil once.
-            for (v, wv) in w.iter().enumerate().take(u + 1) {
-                if let (Some(i), Some(j)) = ((t + u).checked_sub(2), (t + v).checked_sub(2)) {
-                    a.add(i, j, smoothness * wu * wv);
-                }
-            }
-        }
-    }
-    let chol = BandCholesky::new(&a, "foot-skating normal equations", notes)
-        .map_err(|e| Error::invalid(format!("foot-skating clean-up: {e}")))?;
-    let x = chol.solve(&b);
+    let d = problem.solve(notes)?;
     Ok(std::iter::once(Vector3::zeros())
-        .chain((0..dim).map(|i| horizontal(Vector3::new(x[(i, 0)], x[(i, 1)], x[(i, 2)]))))
+        .chain(d[1..].iter().map(|&d| horizontal(Vector3::from(d))))
         .collect())
 }
 

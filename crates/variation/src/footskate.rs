@@ -1,45 +1,33 @@
-//! Foot-skating clean-up of synthesised variations: a post-process (the variation paper's
-//! "traditional post-processing such as foot-skating correction"; transfer paper §6), not part
-//! of the GPDM model. Applied after [`crate::grounding`].
+//! Foot-skating clean-up of synthesised variations: a post-process, not part of the GPDM model
+//! (the variation paper describes none; the transfer paper's §6 names foot-skating correction
+//! among the "traditional post-processing"). Applied after [`crate::grounding`].
 //!
 //! Sampled trajectories carry their own root travel (the torso's displacement values) which
 //! need not match the legs' strides, so planted feet slide. Per frame `t` the whole body is
-//! shifted horizontally by `d(t)` (a root correction, orthogonal to `up`) so that during each
-//! contact interval `I` of foot `f` its sole centroid `p_f(t)` stays at one anchor `a_I`:
-//!
-//! `min_{d, a}  Σ_{(t, f) in contact} ‖p_f(t) + d(t) − a_{I(f,t)}‖²
-//!            + λ Σ_t ‖d(t−1) − 2 d(t) + d(t+1)‖²   subject to d(0) = 0`
-//!
-//! * the anchors are free (each ends at the mean corrected position of its interval), so with
-//!   both feet planted the correction is the least-squares compromise of the two;
-//! * the second-difference term spreads the correction smoothly over the frames between
-//!   contacts (a cubic-spline-like blend, no popping) and low-passes it within them
-//!   (`λ` = [`SMOOTHNESS`]: drift slower than about 6 frames is removed, frame-to-frame
-//!   jitter of the foot is left on the foot rather than shaking the whole body);
-//! * `d(0) = 0` fixes the gauge (adding one vector to every `d(t)` and anchor changes nothing
-//!   else): the variation keeps its start, the source's first pose. A tiny ridge `μ ‖d‖²`
-//!   (1e-9) keeps the system definite when every contact lasts a single frame.
-//!
-//! The normal equations, without the fixed `d(0)`, are one symmetric positive-definite
-//! `(T − 1 + K)`-square system (`K` intervals), the same for each horizontal axis, solved by
-//! Cholesky. A sequence with planted
-//! feet that do not slide comes back unchanged (`d = 0`).
+//! shifted horizontally by `d(t)` (orthogonal to `up`), solved by [`capture::footskate`] (the
+//! objective is stated there) with one anchor term per contact interval of each foot: its sole
+//! centroids, once shifted, stay at one free anchor, so with both feet planted the correction is
+//! the least-squares compromise of the two. The smoothness `λ` = [`SMOOTHNESS`] removes drift
+//! slower than about 6 frames and leaves frame-to-frame jitter of the foot on the foot rather
+//! than shaking the whole body; `d(0) = 0` keeps the variation's start, the source's first
+//! pose; the ridge (1e-9) only keeps the system definite when every contact lasts a single
+//! frame. A sequence with planted feet that do not slide comes back unchanged (`d = 0`).
 //!
 //! Contacts of a variation come from its source's annotations at the DTW-matched frames
 //! ([`transfer_contacts`], the correspondence [`crate::grounding`] uses): the variation follows
 //! the source's phase, and its own sole speeds cannot say which foot is planted precisely
 //! because its feet slide (0.03-0.16 m per frame before the clean-up).
 
-use gp::linalg::Cholesky;
+use capture::footskate::Problem;
 use mesh_core::feet::feet_tracks;
 use mesh_core::{Error, Result};
-use nalgebra::{DMatrix, Vector3};
+use nalgebra::Vector3;
 
 /// Default weight `λ` of the second differences of the correction (per frame², against
 /// weight 1 per contact residual).
 pub const SMOOTHNESS: f64 = 1.0;
 
-/// Ridge weight `μ` (module doc).
+/// Ridge weight `μ` (module doc; [`capture::footskate`]).
 const RIDGE: f64 = 1e-9;
 
 /// Contacts of a variation's frames: the source's at the nearest DTW-matched frame `matches[t]`.
@@ -94,58 +82,22 @@ pub fn corrections(
     }
     let runs: [Vec<(usize, usize)>; 2] =
         [0, 1].map(|f| intervals(&contacts.iter().map(|c| c[f]).collect::<Vec<_>>()));
-    let k = runs[0].len() + runs[1].len();
-    if n == 0 || k == 0 {
+    if n == 0 || runs.iter().all(Vec::is_empty) {
         return Ok(vec![Vector3::zeros(); n]);
     }
     let horizontal = |p: &Vector3<f64>| p - up * up.dot(p);
-    let dim = n + k;
-    let mut a = DMatrix::<f64>::zeros(dim, dim);
-    let mut b = DMatrix::<f64>::zeros(dim, 3);
-    for t in 0..n {
-        a[(t, t)] += RIDGE;
-    }
-    // Contact residuals p + d_t − a_j: gradient rows for d_t and a_j.
-    let mut j = n;
+    let mut problem = Problem::<3>::new(n, smoothness, RIDGE)?;
     for (f, runs) in runs.iter().enumerate() {
         for &(s, e) in runs {
-            for t in s..e {
-                let p = horizontal(&feet[f][t]);
-                a[(t, t)] += 1.0;
-                a[(j, j)] += 1.0;
-                a[(t, j)] -= 1.0;
-                a[(j, t)] -= 1.0;
-                for c in 0..3 {
-                    b[(t, c)] -= p[c];
-                    b[(j, c)] += p[c];
-                }
-            }
-            j += 1;
+            let sole: Vec<[f64; 3]> = (s..e).map(|t| horizontal(&feet[f][t]).into()).collect();
+            problem.add_anchor(s, &sole);
         }
     }
-    // Second differences d_{t-1} − 2 d_t + d_{t+1}.
-    if n >= 3 {
-        let w = [1.0, -2.0, 1.0];
-        for t in 1..n - 1 {
-            for (u, wu) in w.iter().enumerate() {
-                for (v, wv) in w.iter().enumerate() {
-                    a[(t + u - 1, t + v - 1)] += smoothness * wu * wv;
-                }
-            }
-        }
-    }
-    // d(0) = 0: drop its row and column (its terms in the other rows vanish).
-    let a = a.view((1, 1), (dim - 1, dim - 1)).into_owned();
-    let b = b.view((1, 0), (dim - 1, 3)).into_owned();
-    let chol = Cholesky::new(&a, "foot-skating normal equations", notes)
-        .map_err(|e| Error::invalid(format!("foot-skating clean-up: {e}")))?;
-    let x = chol.solve(&b);
-    let d = |t: usize| horizontal(&Vector3::new(x[(t - 1, 0)], x[(t - 1, 1)], x[(t - 1, 2)]));
+    let d = problem.solve(notes)?;
     Ok(std::iter::once(Vector3::zeros())
-        .chain((1..n).map(d))
+        .chain(d[1..].iter().map(|d| horizontal(&Vector3::from(*d))))
         .collect())
 }
-
 
 /// Cleans `frames` in place (module doc): shifts every frame by its correction; returns the
 /// corrections. `soles` are the left and right sole vertices, `contacts` per frame
