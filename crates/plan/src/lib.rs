@@ -2,8 +2,11 @@
 //! stage invocation of `make transfer` (CVPR) and `make variation` (3DV) with its inputs, the
 //! directories it creates and the file that marks it complete; written as a make fragment
 //! ([`make_fragment`]) or as Slurm job arrays over task tables ([`slurm`], [`task_table`]).
+//! Every stage flag the plan writes is named through that stage's `Params` ([`flag`]), so a
+//! renamed field fails to compile here.
 
 pub mod collect;
+pub mod flag;
 pub mod json_text;
 pub mod make_fragment;
 pub mod options;

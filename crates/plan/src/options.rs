@@ -5,6 +5,7 @@
 use std::path::PathBuf;
 
 use clap::{Args, ValueEnum};
+use crate::flag::{flag, GprPredict};
 use serde::Serialize;
 pub use capture::align::AlignFrame;
 pub use capture::choices::{ConfigName, MeanFunction, Method};
@@ -112,7 +113,7 @@ impl TransferOptions {
 
     /// Flags of every `gpr-predict`: under `paper`, no foot-skating clean-up and no foot height.
     pub fn predict_flags(&self) -> Vec<String> {
-        if self.paper() { vec!["--no-footskate".into(), "--no-foot-height".into()] } else { Vec::new() }
+        if self.paper() { vec![flag!(GprPredict, no_footskate), flag!(GprPredict, no_foot_height)] } else { Vec::new() }
     }
 }
 

@@ -4,6 +4,7 @@
 //! "Per-part pieces"), so that one array task fits one part; under make one task per model,
 //! whose stage fits the parts in parallel on the machine's cores ([`PartTasks`]).
 
+use crate::flag::{flag, GpdmTrain, GprTrain, MergeParts, PcaFit};
 use crate::task::{s, PartTasks, Task};
 
 /// The folder of a model's pieces: `work/A/pca.model` -> `work/A/pca.parts`.
@@ -34,9 +35,9 @@ pub fn fit(
 ) -> Vec<Task> {
     let with_outputs = |out: &str, report: Option<&str>| {
         let mut a = args.clone();
-        a.extend([s("--out"), s(out)]);
+        a.extend([flag!(PcaFit | GprTrain | GpdmTrain, out), s(out)]);
         if let Some(r) = report {
-            a.extend([s("--report"), s(r)]);
+            a.extend([flag!(PcaFit | GpdmTrain, report), s(r)]);
         }
         a
     };
@@ -51,19 +52,19 @@ pub fn fit(
         let piece = format!("{dir}/{part}.piece");
         let piece_report = report.map(|_| format!("{dir}/{part}.json"));
         let mut a = with_outputs(&piece, piece_report.as_deref());
-        a.extend([s("--part"), part.clone()]);
+        a.extend([flag!(PcaFit | GprTrain | GpdmTrain, part), part.clone()]);
         tasks.push(Task::run(stage, piece.clone(), inputs.clone(), a).mkdir_target());
         pieces.push(piece);
         if let Some(r) = piece_report {
-            piece_reports.extend([s("--piece-report"), r]);
+            piece_reports.extend([flag!(MergeParts, piece_report), r]);
         }
     }
     let mut a = vec![s("-q")];
     a.extend(pieces.iter().cloned());
-    a.extend([s("--out"), s(model)]);
+    a.extend([flag!(MergeParts, out), s(model)]);
     if let Some(r) = report {
         a.extend(piece_reports);
-        a.extend([s("--report"), s(r)]);
+        a.extend([flag!(MergeParts, report), s(r)]);
     }
     let mut merge = Task::run("merge-parts", model, pieces, a).mkdir_target();
     merge.kind = merge_kind(stage);

@@ -6,6 +6,7 @@
 use anyhow::{Context, Result};
 use mesh_core::capture_set::{CaptureSet, SubjectSpec, PROPOSED_PART_TREE};
 
+use crate::flag::{flag, ProposeCurves};
 use crate::task::{s, Graph, Task};
 
 /// One subject as the pipelines' stages see it.
@@ -47,8 +48,8 @@ pub fn subject(set: &CaptureSet, work: &str, name: &str, graph: &mut Graph) -> R
     if graph.producer(&json).is_none() {
         let picture = format!("{work}/{name}/curves.png");
         let args = vec![
-            s("-q"), source_json.clone(), s("--template"), template.clone(), s("--render"), picture,
-            s("--out"), json.clone(),
+            s("-q"), source_json.clone(), flag!(ProposeCurves, template), template.clone(), flag!(ProposeCurves, render), picture,
+            flag!(ProposeCurves, out), json.clone(),
         ];
         graph.push(Task::run("propose-curves", json.clone(), vec![source_json.clone(), template.clone()], args).mkdir_target());
     }

@@ -17,6 +17,10 @@ use mesh_core::capture_set::CaptureSet;
 use crate::options::{value_name, Method, Placement, TransferOptions};
 use crate::per_part;
 use crate::subjects::{subject, Subject};
+use crate::flag::{
+    flag, Align, ConfidenceFigure, CorrectionFigure, CostMatrixFigure, DtwDensify, GprPredict, GprTrain, LearningCurves,
+    PcaFit, Render, Segment, TransferEval,
+};
 use crate::task::{s, Graph, Step, Task};
 
 /// Path strings joined as the command line shows them.
@@ -104,7 +108,7 @@ impl<'a> Plan<'a> {
     /// parts and its template.
     fn truth_feet(&self, x: &str) -> Vec<String> {
         vec![
-            s("--contacts"), self.subjects[x].json.clone(), s("--segmentation"), self.seg(x), s("--template"),
+            flag!(TransferEval, contacts), self.subjects[x].json.clone(), flag!(TransferEval, segmentation), self.seg(x), flag!(TransferEval, template),
             self.template(x),
         ]
     }
@@ -117,9 +121,9 @@ impl<'a> Plan<'a> {
             let mut inputs = vec![subject.clone(), self.template(x), self.seg(x)];
             inputs.extend(frames.iter().map(|f| f.to_string_lossy().into_owned()));
             let args = vec![
-                s("-q"), s("--frame"), value_name(self.opt.align_frame()), s("--segmentation"), self.seg(x),
-                s("--subject"), subject.clone(), s("--template"), self.template(x), join(&self.set.root, &[x, &m]),
-                s("--out"), self.aligned(x, &m),
+                s("-q"), flag!(Align, frame), value_name(self.opt.align_frame()), flag!(Align, segmentation), self.seg(x),
+                flag!(Align, subject), subject.clone(), flag!(Align, template), self.template(x), join(&self.set.root, &[x, &m]),
+                flag!(Align, out), self.aligned(x, &m),
             ];
             graph.push(Task::run("align", self.aligned(x, &m), inputs, args).mkdir_target());
         }
@@ -128,7 +132,7 @@ impl<'a> Plan<'a> {
                 "segment",
                 self.seg(x),
                 vec![subject.clone(), self.template(x)],
-                vec![s("-q"), subject, s("--template"), self.template(x), s("--out"), self.seg(x)],
+                vec![s("-q"), subject, flag!(Segment, template), self.template(x), flag!(Segment, out), self.seg(x)],
             )
             .mkdir_target(),
         );
@@ -136,8 +140,8 @@ impl<'a> Plan<'a> {
         let mut inputs = vec![self.seg(x)];
         inputs.extend(training.iter().cloned());
         let mut args = vec![
-            s("-q"), s("--components"), self.opt.pca_components().to_string(), s("--part-alignment"),
-            value_name(self.opt.part_alignment), s("--template"), self.template(x), s("--segmentation"),
+            s("-q"), flag!(PcaFit, components), self.opt.pca_components().to_string(), flag!(PcaFit, part_alignment),
+            value_name(self.opt.part_alignment), flag!(PcaFit, template), self.template(x), flag!(PcaFit, segmentation),
             self.seg(x),
         ];
         args.extend(training.iter().cloned());
@@ -150,11 +154,11 @@ impl<'a> Plan<'a> {
         // total number of input and output dimensions").
         let whole = self.opt.pca_components() * parts.len();
         let mut args = vec![
-            s("-q"), s("--whole-body"), s("--components"), whole.to_string(), s("--template"), self.template(x),
+            s("-q"), flag!(PcaFit, whole_body), flag!(PcaFit, components), whole.to_string(), flag!(PcaFit, template), self.template(x),
         ];
         args.extend(training.iter().cloned());
         args.extend([
-            s("--out"), self.pca(x, "pca-whole"), s("--report"), format!("{}/{x}/pca-whole.json", self.work),
+            flag!(PcaFit, out), self.pca(x, "pca-whole"), flag!(PcaFit, report), format!("{}/{x}/pca-whole.json", self.work),
         ]);
         graph.push(Task::run("pca-fit", self.pca(x, "pca-whole"), training, args));
         Ok(())
@@ -170,13 +174,13 @@ impl<'a> Plan<'a> {
             let c = format!("{}/pairs/{}.corr", self.work, p.source);
             let (sa, ta) = (self.aligned(sn, &p.source), self.aligned(tn, &p.target));
             let args = vec![
-                s("-q"), s("--set"), join(&self.set.root, &[]), s("--motion"), p.source.clone(), s("--source-pca"),
-                self.pca(sn, "pca"), s("--target-pca"), self.pca(tn, "pca"), sa.clone(), ta.clone(), s("--out"),
-                c.clone(), s("--report"), format!("{}/pairs/{}.json", self.work, p.source),
+                s("-q"), flag!(DtwDensify, set), join(&self.set.root, &[]), flag!(DtwDensify, motion), p.source.clone(), flag!(DtwDensify, source_pca),
+                self.pca(sn, "pca"), flag!(DtwDensify, target_pca), self.pca(tn, "pca"), sa.clone(), ta.clone(), flag!(DtwDensify, out),
+                c.clone(), flag!(DtwDensify, report), format!("{}/pairs/{}.json", self.work, p.source),
             ];
             let inputs = vec![set_json.clone(), sa.clone(), ta.clone(), self.pca(sn, "pca"), self.pca(tn, "pca")];
             graph.push(Task::run("dtw-densify", c.clone(), inputs, args).mkdir_target());
-            pair_args.extend([s("--pair"), sa.clone(), ta.clone(), c.clone()]);
+            pair_args.extend([flag!(GprTrain, pair), sa.clone(), ta.clone(), c.clone()]);
             files.extend([sa, ta, c]);
         }
         (pair_args, files)
@@ -217,9 +221,9 @@ impl<'a> Plan<'a> {
             inputs.push(self.subjects[d.tgt].json.clone());
         }
         args.extend([
-            s("--source-motion"), self.aligned(d.src, m), s("--source-pca"), self.pca(d.src, "pca"), s("--target-pca"),
-            self.pca(d.tgt, "pca"), s("--direction"), d.label(), s("--motion"), s(m), s("--method"), s(method),
-            s("--placement"), placement.name().into(), s("--correspondences"), s(training), s("--out"), rec.clone(),
+            flag!(TransferEval, source_motion), self.aligned(d.src, m), flag!(TransferEval, source_pca), self.pca(d.src, "pca"), flag!(TransferEval, target_pca),
+            self.pca(d.tgt, "pca"), flag!(TransferEval, direction), d.label(), flag!(TransferEval, motion), s(m), flag!(TransferEval, method), s(method),
+            flag!(TransferEval, placement), placement.name().into(), flag!(TransferEval, correspondences), s(training), flag!(TransferEval, out), rec.clone(),
         ]);
         let rec = graph.push(Task::run("transfer-eval", rec, inputs, args).mkdir_target());
         self.records.push(rec.clone());
@@ -239,20 +243,20 @@ impl<'a> Plan<'a> {
             inputs.extend(pairs.1.iter().cloned());
             let mut args = vec![s("-q")];
             if let Some(config) = self.opt.config {
-                args.extend([s("--config"), value_name(config)]);
+                args.extend([flag!(GprTrain, config), value_name(config)]);
             }
             if let Some(mean) = self.opt.gpr_mean {
-                args.extend([s("--mean"), value_name(mean)]);
+                args.extend([flag!(GprTrain, mean), value_name(mean)]);
             }
             args.extend(crate::options::words(&self.opt.gpr_train_flags));
-            args.extend([s("--method"), method.name().to_string()]);
+            args.extend([flag!(GprTrain, method), method.name().to_string()]);
             if *keys {
-                args.push(s("--keyposes-only"));
+                args.push(flag!(GprTrain, keyposes_only));
             }
             if d.reverse {
-                args.push(s("--reverse"));
+                args.push(flag!(GprTrain, reverse));
             }
-            args.extend([s("--source-pca"), self.pca(d.src, kind), s("--target-pca"), self.pca(d.tgt, kind)]);
+            args.extend([flag!(GprTrain, source_pca), self.pca(d.src, kind), flag!(GprTrain, target_pca), self.pca(d.tgt, kind)]);
             args.extend(pairs.0.iter().cloned());
             // One regressor per part of the PCA models, and the displacement's.
             let mut units: Vec<String> = match method {
@@ -315,7 +319,7 @@ impl<'a> Plan<'a> {
     fn cross_validation(&mut self, d: &Direction, model: &str, inputs: &[String], args: &[String], graph: &mut Graph) {
         let report = model.replace(".model", ".cv.json");
         let mut a = args.to_vec();
-        a.extend([s("--cross-validate"), s("--report"), report.clone(), s("--out"), model.replace(".model", ".cv.model")]);
+        a.extend([flag!(GprTrain, cross_validate), flag!(GprTrain, report), report.clone(), flag!(GprTrain, out), model.replace(".model", ".cv.model")]);
         graph.push(Task::run("gpr-train", report.clone(), inputs.to_vec(), a).mkdir_target());
         self.cross_validations.push((d.label(), report));
     }
@@ -339,12 +343,12 @@ impl<'a> Plan<'a> {
             };
             let timing = format!("{}/predict/{dn}/{m}/{name}-{}.json", self.work, pl.name());
             let mut args = vec![
-                s("-q"), s("--model"), s(model), s("--source-pca"), self.pca(d.src, kind), s("--target-pca"),
-                self.pca(d.tgt, kind), s("--target-template"), self.template(d.tgt), s("--placement"),
+                s("-q"), flag!(GprPredict, model), s(model), flag!(GprPredict, source_pca), self.pca(d.src, kind), flag!(GprPredict, target_pca),
+                self.pca(d.tgt, kind), flag!(GprPredict, target_template), self.template(d.tgt), flag!(GprPredict, placement),
                 pl.name().into(),
             ];
             args.extend(self.opt.predict_flags());
-            args.extend([self.aligned(d.src, m), s("--out"), seq.clone(), s("--timing"), timing.clone()]);
+            args.extend([self.aligned(d.src, m), flag!(GprPredict, out), seq.clone(), flag!(GprPredict, timing), timing.clone()]);
             let inputs = vec![s(model), self.aligned(d.src, m)];
             self.stamps.push(graph.push(Task::run("gpr-predict", timing.clone(), inputs, args).mkdir_target()));
             let training = if keys { "keyposes" } else { "dense" };
@@ -386,17 +390,17 @@ impl<'a> Plan<'a> {
         let mut inputs = vec![s(model), self.aligned(d.src, m), self.seg(d.tgt)];
         inputs.extend(training.iter().cloned());
         let mut args = vec![
-            s("-q"), s("--model"), s(model), s("--source-pca"), self.pca(d.src, "pca"), s("--target-pca"),
-            self.pca(d.tgt, "pca"), s("--target-template"), self.template(d.tgt), s("--placement"),
-            default_pl.name().into(), s("--surface"), s("correct-stitch"), s("--segmentation"), self.seg(d.tgt),
+            s("-q"), flag!(GprPredict, model), s(model), flag!(GprPredict, source_pca), self.pca(d.src, "pca"), flag!(GprPredict, target_pca),
+            self.pca(d.tgt, "pca"), flag!(GprPredict, target_template), self.template(d.tgt), flag!(GprPredict, placement),
+            default_pl.name().into(), flag!(GprPredict, surface), s("correct-stitch"), flag!(GprPredict, segmentation), self.seg(d.tgt),
         ];
         args.extend(self.opt.predict_flags());
         for t in &training {
-            args.extend([s("--target-training"), t.clone()]);
+            args.extend([flag!(GprPredict, target_training), t.clone()]);
         }
         args.extend([
-            s("-m"), s("3"), self.aligned(d.src, m), s("--corrected-out"), corrected.clone(), s("--out"), stitched.clone(),
-            s("--timing"), timing.clone(), s("--confidence"), conf.clone(),
+            flag!(GprPredict, neighbours), s("3"), self.aligned(d.src, m), flag!(GprPredict, corrected_out), corrected.clone(), flag!(GprPredict, out), stitched.clone(),
+            flag!(GprPredict, timing), timing.clone(), flag!(GprPredict, confidence), conf.clone(),
         ]);
         self.stamps.push(graph.push(
             Task::run("gpr-predict", timing.clone(), inputs, args).mkdir_target().mkdir(conf_dir),
@@ -407,13 +411,13 @@ impl<'a> Plan<'a> {
                 // Per-frame confidence beside the error (where truth exists), for the report.
                 let plot = format!("{}/figures/confidence-{dn}-{m}.png", self.out);
                 let mut inputs = vec![timing.clone()];
-                let mut args = vec![s("confidence"), s("-q"), s("--confidence"), conf.clone()];
+                let mut args = vec![s("confidence"), s("-q"), flag!(ConfidenceFigure, confidence), conf.clone()];
                 if truth.is_some() {
                     inputs.push(rec.clone());
-                    args.extend([s("--eval"), rec.clone()]);
+                    args.extend([flag!(ConfidenceFigure, eval), rec.clone()]);
                 }
                 args.extend([
-                    s("--title"), format!("{} {m}: confidence and error per frame", d.label()), s("--out"),
+                    flag!(ConfidenceFigure, title), format!("{} {m}: confidence and error per frame", d.label()), flag!(ConfidenceFigure, out),
                     plot.clone(),
                 ]);
                 self.stamps.push(graph.push(Task::run("paper-figure", plot, inputs, args).mkdir_target()));
@@ -435,14 +439,14 @@ impl<'a> Plan<'a> {
         let lc = format!("{}/learning-curves/learning_curves.csv", self.out);
         let mut inputs = vec![self.set.set_json().to_string_lossy().into_owned(), self.pca(sn, "pca"), self.pca(tn, "pca")];
         let mut args = vec![
-            s("-q"), s("--seed"), s("0"), s("--mean"), s("zero"), s("--set"), join(&self.set.root, &[]),
-            s("--source-pca"), self.pca(sn, "pca"), s("--target-pca"), self.pca(tn, "pca"), s("--source-name"), s(sn),
-            s("--target-name"), s(tn),
+            s("-q"), flag!(LearningCurves, common.seed), s("0"), flag!(LearningCurves, mean), s("zero"), flag!(LearningCurves, set), join(&self.set.root, &[]),
+            flag!(LearningCurves, source_pca), self.pca(sn, "pca"), flag!(LearningCurves, target_pca), self.pca(tn, "pca"), flag!(LearningCurves, source_name), s(sn),
+            flag!(LearningCurves, target_name), s(tn),
         ];
         let true_pairs = self.set.spec.train.iter().all(|p| p.extra.contains_key("correspondences"));
         if true_pairs {
             for p in &self.set.spec.train {
-                args.extend([s("--true-pair"), p.source.clone(), self.aligned(sn, &p.source), self.aligned(tn, &p.target)]);
+                args.extend([flag!(LearningCurves, true_pair), p.source.clone(), self.aligned(sn, &p.source), self.aligned(tn, &p.target)]);
             }
             for p in &self.set.spec.train {
                 inputs.extend([self.aligned(sn, &p.source), self.aligned(tn, &p.target)]);
@@ -451,7 +455,7 @@ impl<'a> Plan<'a> {
             args.extend(pairs.0.iter().cloned());
             inputs.extend(pairs.1.iter().cloned());
         }
-        args.extend([s("--out"), crate::task::parent(&lc)]);
+        args.extend([flag!(LearningCurves, out), crate::task::parent(&lc)]);
         self.stamps.push(graph.push(Task::run("learning-curves", lc, inputs, args).mkdir_target()));
     }
 
@@ -468,9 +472,9 @@ impl<'a> Plan<'a> {
             self.pca(sn, "pca"), self.pca(tn, "pca"), self.aligned(sn, &p0.source), self.aligned(tn, &p0.target),
         ];
         let args = vec![
-            s("cost-matrix"), s("-q"), s("--set"), join(&self.set.root, &[]), s("--motion"), p0.source.clone(),
-            s("--source-pca"), self.pca(sn, "pca"), s("--target-pca"), self.pca(tn, "pca"),
-            self.aligned(sn, &p0.source), self.aligned(tn, &p0.target), s("--out"), fig3.clone(),
+            s("cost-matrix"), s("-q"), flag!(CostMatrixFigure, set), join(&self.set.root, &[]), flag!(CostMatrixFigure, motion), p0.source.clone(),
+            flag!(CostMatrixFigure, source_pca), self.pca(sn, "pca"), flag!(CostMatrixFigure, target_pca), self.pca(tn, "pca"),
+            self.aligned(sn, &p0.source), self.aligned(tn, &p0.target), flag!(CostMatrixFigure, out), fig3.clone(),
         ];
         self.stamps.push(graph.push(Task::run("paper-figure", fig3, inputs, args).mkdir_target()));
 
@@ -483,17 +487,17 @@ impl<'a> Plan<'a> {
         let mut inputs = vec![model0.clone(), self.seg(tn), self.aligned(sn, m0)];
         inputs.extend(training.iter().cloned());
         let mut args = vec![
-            s("correction"), s("-q"), s("--model"), model0, s("--source-pca"), self.pca(sn, "pca"),
-            s("--target-pca"), self.pca(tn, "pca"), s("--segmentation"), self.seg(tn),
+            s("correction"), s("-q"), flag!(CorrectionFigure, model), model0, flag!(CorrectionFigure, source_pca), self.pca(sn, "pca"),
+            flag!(CorrectionFigure, target_pca), self.pca(tn, "pca"), flag!(CorrectionFigure, segmentation), self.seg(tn),
         ];
         for t in &training {
-            args.extend([s("--target-training"), t.clone()]);
+            args.extend([flag!(CorrectionFigure, target_training), t.clone()]);
         }
         if let Some(t) = &truth0 {
-            args.extend([s("--truth"), t.clone()]);
+            args.extend([flag!(CorrectionFigure, truth), t.clone()]);
         }
         args.extend([
-            s("--size"), s("300"), self.aligned(sn, m0), s("--out"), fig5.clone(), s("--report"),
+            flag!(CorrectionFigure, size), s("300"), self.aligned(sn, m0), flag!(CorrectionFigure, out), fig5.clone(), flag!(CorrectionFigure, report),
             format!("{}/figures/fig5-{m0}.json", self.out),
         ]);
         self.stamps.push(graph.push(Task::run("paper-figure", fig5, inputs, args).mkdir_target()));
@@ -561,11 +565,11 @@ pub fn plan(set: &CaptureSet, out: &str, opt: &TransferOptions, graph: &mut Grap
 /// A contact sheet of overlaid sequences, rows apart (`render --separate-rows`); its target is
 /// `<dir>/contact.png` and render writes into `<dir>`.
 fn render_sheet(sheet: &str, inputs: Vec<String>, labels: &str, follow: bool, seqs: Vec<String>) -> Task {
-    let mut args = vec![s("-q"), s("--separate-rows"), s("--no-frames"), s("--no-gif")];
+    let mut args = vec![s("-q"), flag!(Render, separate_rows), flag!(Render, no_frames), flag!(Render, no_gif)];
     if follow {
-        args.push(s("--follow"));
+        args.push(flag!(Render, follow));
     }
-    args.extend([s("--labels"), s(labels), s("--out"), crate::task::parent(sheet)]);
+    args.extend([flag!(Render, labels), s(labels), flag!(Render, out), crate::task::parent(sheet)]);
     args.extend(seqs);
     Task::run("render", sheet, inputs, args)
 }

@@ -10,6 +10,7 @@ use mesh_core::capture_set::CaptureSet;
 
 use crate::options::{words, VariationOptions};
 use crate::per_part;
+use crate::flag::{flag, GpdmTrain, HmcSample, Prealign, Render, VariationEval};
 use crate::task::{s, Graph, Step, Task};
 
 /// Adds the variation pipeline's tasks and its variables (`VARIATION_RECORDS`,
@@ -34,7 +35,7 @@ pub fn plan(set: &CaptureSet, out: &str, opt: &VariationOptions, graph: &mut Gra
         let mut inputs = vec![set.set_json().to_string_lossy().into_owned()];
         // The group's parts are the subject's, unless prealign models the whole body (then one
         // task fits it); a subject prealign cannot read fails in prealign, naming its file.
-        let whole_body = opt.prealign_words(g).iter().any(|w| w == "--whole-body" || w == "--fallback-whole-body");
+        let whole_body = opt.prealign_words(g).iter().any(|w| *w == flag!(Prealign, whole_body) || *w == flag!(Prealign, fallback_whole_body));
         let parts: Vec<String> = if whole_body { Vec::new() } else { described.parts.clone() };
         inputs.extend([described.json.clone(), described.template.clone()]);
         for m in motions.split(',').filter(|m| !m.is_empty()) {
@@ -43,25 +44,25 @@ pub fn plan(set: &CaptureSet, out: &str, opt: &VariationOptions, graph: &mut Gra
             }
         }
         let group = format!("{work}/{g}.group");
-        let mut args = vec![s("-q"), s("--set"), set_root.clone()];
+        let mut args = vec![s("-q"), flag!(Prealign, set), set_root.clone()];
         if let Some(sub) = &opt.variation_subject {
-            args.extend([s("--subject-name"), sub.clone()]);
+            args.extend([flag!(Prealign, subject_name), sub.clone()]);
         }
         if described.proposed() {
-            args.extend([s("--subject"), described.json.clone()]);
+            args.extend([flag!(Prealign, subject), described.json.clone()]);
         }
-        args.extend([s("--group-name"), g.clone(), s("--motions"), motions.clone()]);
+        args.extend([flag!(Prealign, group_name), g.clone(), flag!(Prealign, motions), motions.clone()]);
         if prealign_defaults && g == "locomotion" {
-            args.push(s("--gait-cycles"));
+            args.push(flag!(Prealign, gait_cycles));
         }
         args.extend(opt.prealign_words(g));
-        args.extend([s("--blend-weights"), opt.variation_w.clone(), s("--out"), group.clone()]);
+        args.extend([flag!(Prealign, blend_weights), opt.variation_w.clone(), flag!(Prealign, out), group.clone()]);
         graph.push(Task::run("prealign", group.clone(), inputs, args).mkdir_target());
 
         let model = format!("{work}/{g}.model");
         let mut args = vec![s("-q")];
         args.extend(words(&opt.variation_train_flags));
-        args.extend([s("--group"), group.clone()]);
+        args.extend([flag!(GpdmTrain, group), group.clone()]);
         let report = format!("{work}/{g}-train.json");
         for t in per_part::fit(graph.part_tasks, "gpdm-train", &model, Some(&report), vec![group.clone()], args, &parts) {
             graph.push(t);
@@ -76,13 +77,13 @@ pub fn plan(set: &CaptureSet, out: &str, opt: &VariationOptions, graph: &mut Gra
             _ => opt.variation_blends.clone(),
         };
         let tmp = format!("{samples}.tmp");
-        let mut args = vec![s("-q"), s("--seed"), opt.variation_seed.to_string(), s("-n"), opt.variation_n.to_string()];
+        let mut args = vec![s("-q"), flag!(HmcSample, common.seed), opt.variation_seed.to_string(), s("-n"), opt.variation_n.to_string()];
         if let Some(kappa) = &opt.variation_variance_scale {
-            args.extend([s("--variance-scale"), kappa.clone()]);
+            args.extend([flag!(HmcSample, variance_scale), kappa.clone()]);
         }
-        args.extend([s("--blends"), blends]);
+        args.extend([flag!(HmcSample, blends), blends]);
         args.extend(words(&opt.variation_sample_flags));
-        args.extend([s("--group"), group.clone(), s("--model"), model.clone(), s("--out"), format!("{vout}/{g}"), s("--report"), tmp.clone()]);
+        args.extend([flag!(HmcSample, group), group.clone(), flag!(HmcSample, model), model.clone(), flag!(HmcSample, out), format!("{vout}/{g}"), flag!(HmcSample, report), tmp.clone()]);
         graph.push(Task {
             kind: "hmc-sample".into(),
             target: samples.clone(),
@@ -94,7 +95,7 @@ pub fn plan(set: &CaptureSet, out: &str, opt: &VariationOptions, graph: &mut Gra
                 Step::RenderVariations {
                     dir: format!("{vout}/{g}"),
                     out_dir: format!("{vout}/render/{g}"),
-                    flags: vec![s("-q"), s("--no-frames"), s("--stride"), s("2"), s("--separate-rows"), s("--follow")],
+                    flags: vec![s("-q"), flag!(Render, no_frames), flag!(Render, stride), s("2"), flag!(Render, separate_rows), flag!(Render, follow)],
                 },
                 Step::Rename { from: tmp, to: samples.clone() },
             ],
@@ -102,8 +103,8 @@ pub fn plan(set: &CaptureSet, out: &str, opt: &VariationOptions, graph: &mut Gra
 
         let eval = format!("{work}/{g}-eval.json");
         let args = vec![
-            s("-q"), s("--seed"), opt.variation_seed.to_string(), s("--group"), group.clone(), s("--model"), model.clone(),
-            s("--plots"), format!("{vout}/plots/{g}"), s("--out"), eval.clone(),
+            s("-q"), flag!(VariationEval, common.seed), opt.variation_seed.to_string(), flag!(VariationEval, group), group.clone(), flag!(VariationEval, model), model.clone(),
+            flag!(VariationEval, plots), format!("{vout}/plots/{g}"), flag!(VariationEval, out), eval.clone(),
         ];
         graph.push(Task::run("variation-eval", eval.clone(), vec![model.clone()], args));
         records.extend([samples, eval]);
