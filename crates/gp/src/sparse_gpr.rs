@@ -267,7 +267,9 @@ impl Parts {
                 - 0.5 * f * m * (2.0 * std::f64::consts::PI * s).ln()
                 - 0.5 * self.yy / s
         };
-        let v = t.exp();
+        // Where the data hold no signal the root runs off toward v = 0 call after call; the
+        // smallest normal number keeps the kernel valid (a model that predicts its mean).
+        let v = t.exp().max(f64::MIN_POSITIVE);
         Ok((v, bound(v), bound(v0)))
     }
 
@@ -671,4 +673,24 @@ fn maximise_profiled(
     };
     let initial_lml = initial_lml.unwrap_or(fitted.value);
     Ok(Profiled { fitted, initial_lml, exit: r.exit, evaluations: r.evaluations })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Targets with no signal push the profiled signal variance down by up to `e^50` per
+    /// evaluation; from a start already near the bottom of the range the root would underflow to
+    /// 0, a kernel no reader accepts. It stays the smallest normal number, and the bound is finite.
+    #[test]
+    fn a_signal_variance_profiled_toward_zero_stays_positive() {
+        let x = DMatrix::from_fn(40, 2, |i, j| ((i * 7 + j * 3) % 11) as f64 / 11.0 - 0.5);
+        let y = DMatrix::zeros(40, 2);
+        let z = x.rows(0, 8).into_owned();
+        let kernel = Kernel::NeuralNetwork { l: 1.0, sigma_f: 1.0, bias: false };
+        let parts = Parts::new(&kernel, &z, &x, &y, 1e-6, DMatrix::zeros(0, 0), &mut Vec::new()).unwrap();
+        let (v, bound, _) = parts.profile_signal_variance(0.1, 40.0, 2.0, 1e-300).unwrap();
+        assert_eq!(v, f64::MIN_POSITIVE);
+        assert!(bound.is_finite(), "{bound}");
+    }
 }

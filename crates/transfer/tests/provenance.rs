@@ -125,7 +125,7 @@ fn every_artifact_header_lists_every_input_file_and_its_hash() {
         // Every option is recorded under its flag's name, defaults included (the stage's Params).
         assert_eq!(header.params["reverse"], reverse);
         assert_eq!(header.params["method"], "gpr-nn", "the command-line name");
-        assert_eq!(header.params["sparse"], "exact");
+        assert_eq!(header.params["sparse"], "auto", "the default: the exact GP up to 1024 pairs, sparse above");
         assert_eq!(header.params["pair"], serde_json::json!([s(&sa), s(&ta), s(&corr)]));
         assert_eq!(header.params["out"], s(&model));
         for key in ["prior_weight", "mean", "mean_prior", "mean_ridge", "noise_var", "learn_noise", "nn_bias", "keyposes_only", "source_pca", "target_pca"] {

@@ -112,9 +112,10 @@ pub struct Params {
     #[arg(long)]
     pub learn_noise: bool,
     /// Sparse GP (Titsias' bound) with at most M inducing inputs chosen by greedy variance
-    /// selection; `auto`: exact up to 1024 pairs (faster there), 256 inducing inputs above;
-    /// `exact` (default): the exact GP of CVPR eqs. 8-13
-    #[arg(long, value_name = "M|auto|exact", default_value_t = Sparsity::Exact)]
+    /// selection; `auto` (default): the exact GP of CVPR eqs. 8-13 up to 1024 pairs, 256
+    /// inducing inputs above (a lab's minutes of training motion train in minutes, not hours);
+    /// `exact`: the exact GP at any size
+    #[arg(long, value_name = "M|auto|exact", default_value_t = Sparsity::Auto)]
     #[serde(serialize_with = "as_text")]
     pub sparse: Sparsity,
     /// Maximum conjugate-gradient iterations per GP
