@@ -19,7 +19,7 @@ use nalgebra::{DMatrix, Vector3};
 use serde::de::{DeserializeSeed, Deserializer, Error as _, SeqAccess, Visitor};
 
 use crate::align::{check_besides_frames, AlignedMotion, CaptureInfo, FrameChecks};
-use crate::part_pca::{check_same_template, FrameEncoder, PcaModel};
+use crate::part_pca::{check_same_template, EncodedFrames, FrameEncoder, PcaModel};
 use crate::streamed_pca::TrainingFrames;
 
 /// An aligned motion without its frames' vertices, as [`read_frames`] returns it.
@@ -73,6 +73,31 @@ pub fn read_encoded(path: impl AsRef<Path>, pca: &PcaModel) -> Result<(Vec<DMatr
     let (info, sha256) = read_frames(path, |f| encoder.push(f))?;
     let coefficients = encoder.finish(&info.capture.template_sha256).map_err(|e| Error::file(path, e.to_string()))?;
     Ok((coefficients, info, sha256))
+}
+
+/// The aligned motion at `path` encoded with each of `models` in the one pass that reads it
+/// ([`read_frames`] into a [`FrameEncoder::with_truncation`] per model): per model, the
+/// coefficients of every frame (those of [`PcaModel::encode`], to the bit) and their truncation
+/// residuals (those of [`PcaModel::truncation`]); the rest of the motion and the file's SHA-256.
+/// Holds at most two encoder blocks of frames per model, never the motion. Fails, naming the
+/// file, as [`read_encoded`] fails.
+pub fn read_encoded_with_truncation(path: impl AsRef<Path>, models: &[&PcaModel]) -> Result<(Vec<EncodedFrames>, MotionInfo, String)> {
+    let path = path.as_ref();
+    let mut encoders: Vec<FrameEncoder> = models.iter().map(|m| FrameEncoder::with_truncation(m)).collect();
+    let (info, sha256) = read_frames(path, |f| {
+        if let Some((last, others)) = encoders.split_last_mut() {
+            for e in others {
+                e.push(f.clone())?;
+            }
+            last.push(f)?;
+        }
+        Ok(())
+    })?;
+    let encoded = encoders
+        .into_iter()
+        .map(|e| e.finish_with_truncation(&info.capture.template_sha256).map_err(|e| Error::file(path, e.to_string())))
+        .collect::<Result<Vec<_>>>()?;
+    Ok((encoded, info, sha256))
 }
 
 /// Aligned motion files as [`TrainingFrames`]: every pass reads them again with
@@ -287,6 +312,43 @@ mod tests {
         let bits = |c: &[DMatrix<f64>]| c.iter().flat_map(|x| x.iter().map(|v| v.to_bits())).collect::<Vec<_>>();
         assert!(bits(&coefficients) == bits(&model.encode(&m).unwrap()), "coefficients differ");
         assert_eq!((info.n_frames, sha), (40, mesh_core::artifact::sha256_file(&path).unwrap()));
+    }
+
+    /// A motion encoded with two models as it is read has, per model, the coefficients of
+    /// `encode` and the truncation residuals of `truncation` on the loaded motion, bit for bit,
+    /// whether the motion is shorter than an encoder block or several blocks long.
+    #[test]
+    fn read_encoded_with_truncation_is_that_of_the_loaded_motion() {
+        use crate::part_pca::{fit, whole_body, PartAlignment};
+        let dir = tempfile::tempdir().unwrap();
+        for frames in [9, 700] {
+            let mut m = motion(frames, 6);
+            m.faces = vec![[0, 1, 2], [2, 3, 4], [3, 4, 5]];
+            for (f, frame) in m.frames.iter_mut().enumerate() {
+                for (v, p) in frame.iter_mut().enumerate() {
+                    p.z += ((f * 7 + v * 3) as f64).sin();
+                    p.x += 0.3 * ((f * 5 + v) as f64).cos();
+                }
+            }
+            m.capture.template_sha256.clear();
+            let path = save(dir.path(), "m.aligned", &m);
+            let fitted = |k: usize| fit(&m.frames[0], &whole_body(6), &[&m], gp::pca::Components::Count(k), PartAlignment::Body).unwrap().0;
+            let (a, b) = (fitted(2), fitted(7));
+            let (encoded, info, _) = read_encoded_with_truncation(&path, &[&a, &b]).unwrap();
+            assert_eq!((encoded.len(), info.n_frames), (2, frames));
+            let bits = |c: &[DMatrix<f64>]| c.iter().flat_map(|x| x.iter().map(|v| v.to_bits())).collect::<Vec<_>>();
+            for (e, model) in encoded.iter().zip([&a, &b]) {
+                let rows = model.part_rows(&m).unwrap();
+                let coefficients = model.encode_rows(&rows).unwrap();
+                let truncation = model.truncation(&rows, &coefficients).unwrap();
+                assert!(bits(&e.coefficients) == bits(&coefficients), "coefficients differ at {frames} frames");
+                let flat = |t: &[Vec<f64>]| t.iter().flatten().map(|v| v.to_bits()).collect::<Vec<_>>();
+                assert!(flat(&e.truncation) == flat(&truncation), "truncation residuals differ at {frames} frames");
+                assert_eq!(e.truncation[0].len(), frames);
+            }
+            // Two components of a noisy 6-vertex body leave a residual; seven represent it exactly.
+            assert!(encoded[0].truncation[0].iter().all(|&r| r > 1e-6), "{:?}", &encoded[0].truncation[0][..3]);
+        }
     }
 
     /// A motion `validate` refuses is refused with the same message, and its bad frames never

@@ -475,6 +475,31 @@ impl PcaModel {
             .collect()
     }
 
+    /// The squared PCA truncation residual `|x - decode(c)|²` (m², summed over the part's
+    /// vertices) of every row `x` of part rows as from [`PcaModel::part_rows`], given their
+    /// coefficients `c` ([`PcaModel::encode_rows`]): `result[part][row]`.
+    pub fn truncation(&self, rows: &[DMatrix<f64>], coefficients: &[DMatrix<f64>]) -> Result<Vec<Vec<f64>>> {
+        if rows.len() != self.parts.len() || coefficients.len() != self.parts.len() {
+            return Err(Error::invalid(format!(
+                "{} row blocks and {} coefficient blocks for {} parts",
+                rows.len(),
+                coefficients.len(),
+                self.parts.len()
+            )));
+        }
+        self.parts
+            .par_iter()
+            .zip(rows.par_iter().zip(coefficients))
+            .map(|(p, (x, c))| {
+                let rec = p.pca.decode(c).map_err(|e| Error::invalid(format!("part '{}': {e}", p.name)))?;
+                if rec.shape() != x.shape() {
+                    return Err(Error::invalid(format!("part '{}': {} rows of {} values for {} coefficient rows", p.name, x.nrows(), x.ncols(), c.nrows())));
+                }
+                Ok((rec - x).row_iter().map(|r| r.norm_squared()).collect())
+            })
+            .collect()
+    }
+
     /// Part meshes (vertex positions in the reference frame) from per-part
     /// coefficient rows: `result[part][frame]`.
     pub fn decode(&self, coefficients: &[DMatrix<f64>]) -> Result<Vec<Vec<Vec<Vector3<f64>>>>> {
@@ -551,7 +576,9 @@ pub fn blocks_of(n_frames: usize, block: usize) -> Vec<std::ops::Range<usize>> {
 /// blocks of `b` frames (256, or fewer for a body above 16,000 vertices: 32 MiB of frames, at
 /// least 6), a block is encoded once `2b` frames wait, and [`FrameEncoder::finish`] encodes the
 /// last `b` or more (or the whole motion, when it is shorter). The encoder holds at most `2b`
-/// frames and their part rows, whatever the motion's length.
+/// frames and their part rows, whatever the motion's length. [`FrameEncoder::with_truncation`]
+/// also keeps every frame's PCA truncation residual ([`PcaModel::truncation`], the same values
+/// to the bit: the decoding product takes the path the whole motion's would, as the encoding's).
 pub struct FrameEncoder<'a> {
     model: &'a PcaModel,
     /// Frames encoded at a time.
@@ -559,7 +586,19 @@ pub struct FrameEncoder<'a> {
     waiting: Vec<Vec<Vector3<f64>>>,
     /// Coefficients of the blocks encoded so far: `[block][part]`.
     blocks: Vec<Vec<DMatrix<f64>>>,
+    /// The truncation residuals of the frames encoded so far, `[part][frame]`, when kept.
+    truncation: Option<Vec<Vec<f64>>>,
     n_frames: usize,
+}
+
+/// A motion's frames in a PCA model's coefficients, with their truncation residuals
+/// ([`FrameEncoder::with_truncation`]).
+#[derive(Clone, Debug)]
+pub struct EncodedFrames {
+    /// Per part, the coefficients of every frame (`F x m_k`).
+    pub coefficients: Vec<DMatrix<f64>>,
+    /// `truncation[part][frame]`: `|x - decode(encode(x))|²` (m², summed over the part's vertices).
+    pub truncation: Vec<Vec<f64>>,
 }
 
 impl<'a> FrameEncoder<'a> {
@@ -567,10 +606,18 @@ impl<'a> FrameEncoder<'a> {
         Self::with_block(model, frames_per_block(model.n_vertices))
     }
 
+    /// An encoder that also keeps every frame's truncation residual
+    /// ([`FrameEncoder::finish_with_truncation`]).
+    pub fn with_truncation(model: &'a PcaModel) -> Self {
+        let mut encoder = Self::new(model);
+        encoder.truncation = Some(vec![Vec::new(); model.parts.len()]);
+        encoder
+    }
+
     /// An encoder of `block` frames at a time (at least [`MIN_ENCODE_BLOCK`]).
     fn with_block(model: &'a PcaModel, block: usize) -> Self {
         let block = block.max(MIN_ENCODE_BLOCK);
-        FrameEncoder { model, block, waiting: Vec::new(), blocks: Vec::new(), n_frames: 0 }
+        FrameEncoder { model, block, waiting: Vec::new(), blocks: Vec::new(), truncation: None, n_frames: 0 }
     }
 
     /// Takes the next frame; fails unless it has the model's vertex count (the message of
@@ -589,7 +636,8 @@ impl<'a> FrameEncoder<'a> {
         self.waiting.push(frame);
         if self.waiting.len() >= 2 * self.block {
             let block: Vec<Vec<Vector3<f64>>> = self.waiting.drain(..self.block).collect();
-            self.blocks.push(self.encode_block(&block)?);
+            let coefficients = self.encode_block(&block)?;
+            self.blocks.push(coefficients);
         }
         Ok(())
     }
@@ -597,10 +645,24 @@ impl<'a> FrameEncoder<'a> {
     /// The coefficients of every frame pushed (`F x m_k` per part), after checking that the
     /// motion was aligned to the model's template (`template_sha256`, the motion's
     /// `capture.template_sha256`; as [`PcaModel::check_motion`]).
-    pub fn finish(mut self, template_sha256: &str) -> Result<Vec<DMatrix<f64>>> {
+    pub fn finish(self, template_sha256: &str) -> Result<Vec<DMatrix<f64>>> {
+        Ok(self.finish_with_truncation(template_sha256)?.coefficients)
+    }
+
+    /// As [`FrameEncoder::finish`], with the truncation residuals of every frame pushed (empty
+    /// unless the encoder was made [`FrameEncoder::with_truncation`]).
+    pub fn finish_with_truncation(mut self, template_sha256: &str) -> Result<EncodedFrames> {
         check_same_template(template_sha256, &self.model.template_sha256, "the motion was aligned to", "the PCA model was fitted on")?;
         let last = std::mem::take(&mut self.waiting);
-        self.blocks.push(self.encode_block(&last)?);
+        let coefficients = self.encode_block(&last)?;
+        self.blocks.push(coefficients);
+        let truncation = self.truncation.take().unwrap_or_default();
+        let coefficients = self.concatenate()?;
+        Ok(EncodedFrames { coefficients, truncation })
+    }
+
+    /// The coefficients of every block, one matrix per part.
+    fn concatenate(&self) -> Result<Vec<DMatrix<f64>>> {
         let n = self.n_frames;
         (0..self.model.parts.len())
             .map(|k| {
@@ -620,7 +682,7 @@ impl<'a> FrameEncoder<'a> {
             .collect()
     }
 
-    fn encode_block(&self, frames: &[Vec<Vector3<f64>>]) -> Result<Vec<DMatrix<f64>>> {
+    fn encode_block(&mut self, frames: &[Vec<Vector3<f64>>]) -> Result<Vec<DMatrix<f64>>> {
         let frames: Vec<&[Vector3<f64>]> = frames.iter().map(Vec::as_slice).collect();
         let rows: Vec<DMatrix<f64>> = self
             .model
@@ -628,7 +690,13 @@ impl<'a> FrameEncoder<'a> {
             .par_iter()
             .map(|p| frame_rows(&frames, &p.vertices, &p.reference, self.model.alignment))
             .collect();
-        self.model.encode_rows(&rows)
+        let coefficients = self.model.encode_rows(&rows)?;
+        if let Some(kept) = &mut self.truncation {
+            for (all, block) in kept.iter_mut().zip(self.model.truncation(&rows, &coefficients)?) {
+                all.extend(block);
+            }
+        }
+        Ok(coefficients)
     }
 }
 

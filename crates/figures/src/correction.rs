@@ -143,31 +143,32 @@ impl CorrectionFigure {
     }
 }
 
-/// Builds figure 5: `model` maps `source` (aligned, encoded with
-/// `source_pca`) onto the target; the part meshes decoded with `target_pca`
-/// are corrected against the target's `training` motions with the `m`
-/// nearest meshes (§6.1). `part` and `frame` choose the example; by default
-/// the (part, frame) whose prediction is farthest from every training mesh
-/// (where the correction has most to do). `truth`: the target's true frames
-/// of the same motion (whole meshes, any placement).
+/// Builds figure 5: `model` maps the source motion (`source_coeffs`, its frames encoded with
+/// the model's source PCA, and `source_disp`, its displacements) onto the target; the part
+/// meshes decoded with `target_pca` are corrected against the target's `training` part meshes
+/// (`[part][mesh]`, as `transfer::reconstruct::training_part_meshes` reads them) with the `m`
+/// nearest meshes (§6.1). `part` and `frame` choose the example; by default the (part, frame)
+/// whose prediction is farthest from every training mesh (where the correction has most to
+/// do). `truth`: the target's true frames of the same motion (whole meshes, any placement).
 #[allow(clippy::too_many_arguments)]
 pub fn correction_example(
     model: &transfer::gpr_model::GprModel,
-    source_pca: &capture::part_pca::PcaModel,
+    source_coeffs: &[nalgebra::DMatrix<f64>],
+    source_disp: &[[f64; 6]],
     target_pca: &capture::part_pca::PcaModel,
     seg: &mesh_core::segmentation::Segmentation,
-    training: &[&capture::align::AlignedMotion],
-    source: &capture::align::AlignedMotion,
+    training: Vec<Vec<Vec<Vector3<f64>>>>,
     part: Option<&str>,
     frame: Option<usize>,
     m: usize,
     truth: Option<&[Vec<Vector3<f64>>]>,
 ) -> Result<(CorrectionFigure, CorrectionReport)> {
     use surface::correct::Corrector;
-    if training.is_empty() {
+    if training.iter().all(Vec::is_empty) {
         return Err(Error::invalid("no target training motions for the correction"));
     }
     if seg.parts.len() != target_pca.parts.len()
+        || training.len() != seg.parts.len()
         || seg
             .parts
             .iter()
@@ -178,11 +179,10 @@ pub fn correction_example(
             "the segmentation's parts differ from the target PCA model's",
         ));
     }
-    let coeffs = source_pca.encode(source)?;
-    let disp = transfer::predict::displacement_matrix(&source.displacements);
-    let pred = transfer::predict::predict(model, &coeffs, &disp, false)?;
+    let disp = transfer::predict::displacement_matrix(source_disp);
+    let pred = transfer::predict::predict(model, source_coeffs, &disp, false)?;
     let decoded = target_pca.decode(&pred.coeffs)?;
-    let n_frames = source.n_frames();
+    let n_frames = source_disp.len();
     if let Some(f) = frame.filter(|&f| f >= n_frames) {
         return Err(Error::invalid(format!(
             "frame {f}: the source motion has {n_frames} frames"
@@ -201,16 +201,11 @@ pub fn correction_example(
             })?],
         None => (0..seg.parts.len()).collect(),
     };
-    let correctors: Vec<(usize, Corrector)> = parts
-        .iter()
-        .map(|&k| {
-            let mut meshes = Vec::new();
-            for t in training {
-                let rows = target_pca.part_rows(t)?;
-                meshes.extend(transfer::reconstruct::rows_to_meshes(&rows[k]));
-            }
-            Ok((k, Corrector::new(seg.parts[k].faces.clone(), meshes)?))
-        })
+    let correctors: Vec<(usize, Corrector)> = training
+        .into_iter()
+        .enumerate()
+        .filter(|(k, _)| parts.contains(k))
+        .map(|(k, meshes)| Ok((k, Corrector::new(seg.parts[k].faces.clone(), meshes)?)))
         .collect::<Result<_>>()?;
     let frames: Vec<usize> = match frame {
         Some(f) => vec![f],
@@ -233,15 +228,9 @@ pub fn correction_example(
     let before = decoded[*k][f].clone();
     let after = corrector.correct(&before, m)?;
     let near = corrector.nearest(&before, m);
-    let mut all_training = Vec::new();
-    for t in training {
-        all_training.extend(transfer::reconstruct::rows_to_meshes(
-            &target_pca.part_rows(t)?[*k],
-        ));
-    }
     let nearest: Vec<(Vec<Vector3<f64>>, f64)> = near
         .iter()
-        .map(|&(i, d)| (all_training[i].clone(), d))
+        .map(|&(i, d)| (corrector.training_mesh(i).to_vec(), d))
         .collect();
     let faces = seg.parts[*k].faces.clone();
     let name = seg.parts[*k].name.clone();

@@ -20,8 +20,9 @@ use crate::{
 };
 use transfer::gpr_model::GprModel;
 use transfer::learning_curves::true_correspondences;
-use capture::align::AlignedMotion;
+use capture::motion_stream::read_encoded;
 use capture::part_pca::PcaModel;
+use transfer::reconstruct::{training_part_meshes, Stride};
 
 /// The paper's figures 3 (BLR cost matrix with the DTW path) and 5 (a body part correction example), and the per-frame confidence of a transfer
 #[derive(Parser, Debug, Serialize)]
@@ -99,6 +100,9 @@ pub struct CorrectionArgs {
     /// Target's aligned training motions: the correction's training part meshes (repeat)
     #[arg(long = "target-training", required = true)]
     pub target_training: Vec<PathBuf>,
+    /// Memory for the training part meshes: every training frame while they fit, else every 2nd, 4th, ... (as gpr-predict)
+    #[arg(long, value_name = "MIB", default_value_t = mesh_core::cli::DEFAULT_MEMORY_BUDGET_MIB)]
+    pub memory_budget: usize,
     /// Nearest training part meshes blended by the correction (the paper's M)
     #[arg(short = 'm', long, default_value_t = surface::correct::DEFAULT_NEIGHBOURS)]
     pub neighbours: usize,
@@ -178,9 +182,8 @@ fn cost_matrix(a: &CostArgs) -> anyhow::Result<()> {
     };
     let truth = true_correspondences(&set, &set_json, &a.motion).ok().map(|t| t.1);
     let (sp, tp) = (PcaModel::load(&a.source_pca)?, PcaModel::load(&a.target_pca)?);
-    let (src, tgt) = (AlignedMotion::load(&a.source)?, AlignedMotion::load(&a.target)?);
-    let xs = sp.encode(&src).with_context(|| a.source.display().to_string())?;
-    let ys = tp.encode(&tgt).with_context(|| a.target.display().to_string())?;
+    let (xs, _, _) = read_encoded(&a.source, &sp)?;
+    let (ys, _, _) = read_encoded(&a.target, &tp)?;
     let (cost, path) = cost_and_path(&xs, &ys, &pair.keyposes, a.sigma2).with_context(|| set_json.display().to_string())?;
     let fig = CostFigure {
         title: format!("{} / {}: -log P_ij (eqs. 1-6), DTW path (eq. 7)", pair.source, pair.target),
@@ -201,17 +204,23 @@ fn correction(a: &CorrectionArgs) -> anyhow::Result<()> {
     let model = GprModel::load(&a.model)?;
     let (sp, tp) = (PcaModel::load(&a.source_pca)?, PcaModel::load(&a.target_pca)?);
     let seg = Segmentation::load(&a.segmentation)?;
-    let training: Vec<AlignedMotion> = a.target_training.iter().map(AlignedMotion::load).collect::<Result<_, _>>()?;
-    let refs: Vec<&AlignedMotion> = training.iter().collect();
-    let source = AlignedMotion::load(&a.motion)?;
+    let budget = Stride::Within(a.memory_budget.saturating_mul(1 << 20));
+    let (training, stride) = training_part_meshes(&tp, &a.target_training, budget)?;
+    if stride > 1 {
+        mesh_core::warn!(
+            "the target's training part meshes do not fit in --memory-budget {} MiB: the correction uses every {stride}th training frame",
+            a.memory_budget
+        );
+    }
+    let (coeffs, source, _) = read_encoded(&a.motion, &sp)?;
     let truth = a.truth.as_ref().map(MeshSequence::load_dir).transpose()?;
     let (fig, report) = correction_example(
         &model,
-        &sp,
+        &coeffs,
+        &source.displacements,
         &tp,
         &seg,
-        &refs,
-        &source,
+        training,
         a.part.as_deref(),
         a.source_frame,
         a.neighbours,

@@ -89,6 +89,9 @@ pub fn parse<A: clap::Parser>() -> A {
     A::parse()
 }
 
+/// The default `--memory-budget` (MiB) of the stages that bound what they hold.
+pub const DEFAULT_MEMORY_BUDGET_MIB: usize = 1024;
+
 /// Flags every stage accepts; `#[command(flatten)]` it into the stage's args.
 #[derive(clap::Args, Clone, Debug, Default, PartialEq, Eq)]
 pub struct CommonArgs {

@@ -432,16 +432,18 @@ impl<'a> Plan<'a> {
 
     /// Learning curves (CVPR figs. 7-9), errors against the true parts (PCA truncation
     /// included), the paper's zero-mean GPs; the whole body at the parts' total dimensions
-    /// (fitted by learning-curves itself). On the set's true correspondences when every training
-    /// pair has them, else on the DTW pairs (labelled `dtw` in the CSV and the figures).
+    /// (the `pca-whole` models). On the set's true correspondences when every training pair has
+    /// them, else on the DTW pairs (labelled `dtw` in the CSV and the figures).
     fn learning_curves(&mut self, pairs: &(Vec<String>, Vec<String>), graph: &mut Graph) {
         let (sn, tn) = (self.set.spec.source.as_str(), self.set.spec.target.as_str());
         let lc = format!("{}/learning-curves/learning_curves.csv", self.out);
-        let mut inputs = vec![self.set.set_json().to_string_lossy().into_owned(), self.pca(sn, "pca"), self.pca(tn, "pca")];
+        let mut inputs = vec![self.set.set_json().to_string_lossy().into_owned()];
+        inputs.extend([sn, tn].into_iter().flat_map(|x| [self.pca(x, "pca"), self.pca(x, "pca-whole")]));
         let mut args = vec![
             s("-q"), flag!(LearningCurves, common.seed), s("0"), flag!(LearningCurves, mean), s("zero"), flag!(LearningCurves, set), join(&self.set.root, &[]),
-            flag!(LearningCurves, source_pca), self.pca(sn, "pca"), flag!(LearningCurves, target_pca), self.pca(tn, "pca"), flag!(LearningCurves, source_name), s(sn),
-            flag!(LearningCurves, target_name), s(tn),
+            flag!(LearningCurves, source_pca), self.pca(sn, "pca"), flag!(LearningCurves, target_pca), self.pca(tn, "pca"),
+            flag!(LearningCurves, source_whole), self.pca(sn, "pca-whole"), flag!(LearningCurves, target_whole), self.pca(tn, "pca-whole"),
+            flag!(LearningCurves, source_name), s(sn), flag!(LearningCurves, target_name), s(tn),
         ];
         let true_pairs = self.set.spec.train.iter().all(|p| p.extra.contains_key("correspondences"));
         if true_pairs {

@@ -119,6 +119,10 @@ impl Corrector {
     pub fn faces(&self) -> &[[u32; 3]] {
         &self.faces
     }
+    /// Training mesh `i` (an index [`Corrector::nearest`] returns).
+    pub fn training_mesh(&self, i: usize) -> &[Vector3<f64>] {
+        &self.training[i]
+    }
 
     /// The `m` nearest training meshes to `prediction`: (index, distance), nearest first.
     pub fn nearest(&self, prediction: &[Vector3<f64>], m: usize) -> Vec<(usize, f64)> {

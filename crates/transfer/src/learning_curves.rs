@@ -48,9 +48,10 @@ use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
 use serde::{Deserialize, Serialize};
 
-use capture::align::AlignedMotion;
 use crate::gpr_model::{train, GprModel, MeanFunction, Method, PairData, TrainingSet, MEAN_RIDGE};
-use capture::part_pca::PcaModel;
+use capture::align::{AlignedMotion, CaptureInfo};
+use capture::motion_stream::read_encoded_with_truncation;
+use capture::part_pca::{EncodedFrames, PcaModel};
 
 /// Which frame pairs the curves learn from and are tested on.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
@@ -168,17 +169,18 @@ impl EncodedPair {
 pub fn truncation_residuals(pca: &PcaModel, motion: &AlignedMotion) -> Result<Vec<Vec<f64>>> {
     let rows = pca.part_rows(motion)?;
     let coeffs = pca.encode_rows(&rows)?;
-    pca.parts
-        .iter()
-        .zip(rows.iter().zip(&coeffs))
-        .map(|(p, (x, c))| {
-            let rec = p
-                .pca
-                .decode(c)
-                .map_err(|e| Error::invalid(format!("part '{}': {e}", p.name)))?;
-            Ok((rec - x).row_iter().map(|r| r.norm_squared()).collect())
-        })
-        .collect()
+    pca.truncation(&rows, &coeffs)
+}
+
+/// Fails unless every frame pair and key-pose lies within motions of `source_frames` and
+/// `target_frames` frames.
+fn check_frame_pairs(source_frames: usize, target_frames: usize, pairs: &[[usize; 2]], keyposes: &[[usize; 2]]) -> Result<()> {
+    match pairs.iter().chain(keyposes).find(|[i, j]| *i >= source_frames || *j >= target_frames) {
+        Some([i, j]) => Err(Error::invalid(format!(
+            "frame pair ({i}, {j}) outside the motions ({source_frames} and {target_frames} frames)"
+        ))),
+        None => Ok(()),
+    }
 }
 
 /// Encodes one training pair (set order: `source` of the set's source
@@ -191,16 +193,7 @@ pub fn encode_pair(
     source_pca: &PcaModel,
     target_pca: &PcaModel,
 ) -> Result<EncodedPair> {
-    let (fs, ft) = (source.n_frames(), target.n_frames());
-    if let Some([i, j]) = pairs
-        .iter()
-        .chain(keyposes)
-        .find(|[i, j]| *i >= fs || *j >= ft)
-    {
-        return Err(Error::invalid(format!(
-            "frame pair ({i}, {j}) outside the motions ({fs} and {ft} frames)"
-        )));
-    }
+    check_frame_pairs(source.n_frames(), target.n_frames(), pairs, keyposes)?;
     Ok(EncodedPair {
         data: PairData {
             source_coeffs: source_pca.encode(source)?,
@@ -213,6 +206,43 @@ pub fn encode_pair(
         source_residual: truncation_residuals(source_pca, source)?,
         target_residual: truncation_residuals(target_pca, target)?,
     })
+}
+
+/// One training pair read from its aligned motions' files (`source` of the set's source
+/// subject, `target` of its target), each in a single pass that encodes it with the subject's
+/// per-part (`parts`) and whole-body (`whole`) models, `[source, target]` each: the pair as
+/// [`encode_pair`] encodes it with the per-part and with the whole-body models (to the bit),
+/// and the two motions' capture records. Holds a few frame blocks of each motion, never a
+/// motion; a failure names the file.
+pub fn read_pair(
+    source: &Path,
+    target: &Path,
+    pairs: &[[usize; 2]],
+    keyposes: &[[usize; 2]],
+    parts: [&PcaModel; 2],
+    whole: [&PcaModel; 2],
+) -> Result<(EncodedPair, EncodedPair, [CaptureInfo; 2])> {
+    let read = |path: &Path, k: usize| read_encoded_with_truncation(path, &[parts[k], whole[k]]);
+    let (s, t) = rayon::join(|| read(source, 0), || read(target, 1));
+    let ((s_enc, s_info, _), (t_enc, t_info, _)) = (s?, t?);
+    check_frame_pairs(s_info.n_frames, t_info.n_frames, pairs, keyposes)?;
+    let [s_parts, s_whole]: [EncodedFrames; 2] =
+        s_enc.try_into().map_err(|_| Error::invalid("two encodings expected"))?;
+    let [t_parts, t_whole]: [EncodedFrames; 2] =
+        t_enc.try_into().map_err(|_| Error::invalid("two encodings expected"))?;
+    let pair = |s: EncodedFrames, t: EncodedFrames| EncodedPair {
+        data: PairData {
+            source_coeffs: s.coefficients,
+            target_coeffs: t.coefficients,
+            source_disp: s_info.displacements.clone(),
+            target_disp: t_info.displacements.clone(),
+            pairs: pairs.to_vec(),
+            keyposes: keyposes.to_vec(),
+        },
+        source_residual: s.truncation,
+        target_residual: t.truncation,
+    };
+    Ok((pair(s_parts, t_parts), pair(s_whole, t_whole), [s_info.capture.clone(), t_info.capture.clone()]))
 }
 
 /// The key-poses and the true dense correspondences of the training pair
@@ -251,24 +281,6 @@ pub fn true_correspondences(
         ));
     }
     Ok((pair.keyposes.clone(), corr))
-}
-
-/// Fits a whole-body PCA with `components` components on `motions` (all of
-/// one subject, aligned alike), as `pca-fit --whole-body --components N`.
-pub fn fit_whole_body(motions: &[&AlignedMotion], components: usize) -> Result<PcaModel> {
-    let first = motions
-        .first()
-        .and_then(|m| m.frames.first())
-        .ok_or_else(|| Error::invalid("no aligned frames to fit a whole-body PCA on"))?;
-    let seg = capture::part_pca::whole_body(first.len());
-    let (model, _) = capture::part_pca::fit(
-        first,
-        &seg,
-        motions,
-        gp::pca::Components::Count(components),
-        capture::part_pca::PartAlignment::Body,
-    )?;
-    Ok(model)
 }
 
 /// Total number of components of a PCA model (sum over parts).

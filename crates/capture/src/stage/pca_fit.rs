@@ -60,7 +60,7 @@ pub struct Params {
     /// Memory for the training frames' rows and the matrices they are reduced to, in MiB:
     /// the rows are held while they fit in half of it, otherwise the motions are read again
     /// pass by pass (the same PCA to rounding, components up to sign); the model comes on top
-    #[arg(long, value_name = "MIB", default_value_t = 1024)]
+    #[arg(long, value_name = "MIB", default_value_t = mesh_core::cli::DEFAULT_MEMORY_BUDGET_MIB)]
     pub memory_budget: usize,
     /// Aligned training motions (artifacts from `align`)
     #[arg(required = true)]

@@ -38,7 +38,7 @@ pub struct Params {
     /// 4th, ... frame when every frame would not fit) and their cached factorisations (least
     /// recently used rebuilt when needed: the same output). The prediction is read, corrected
     /// and written a block of frames at a time
-    #[arg(long, value_name = "MIB", default_value_t = 1024)]
+    #[arg(long, value_name = "MIB", default_value_t = mesh_core::cli::DEFAULT_MEMORY_BUDGET_MIB)]
     pub memory_budget: usize,
 }
 

@@ -89,7 +89,7 @@ pub struct Params {
     /// beyond it in a scratch file beside the output), and with --surface correct*, the
     /// correction's training part meshes (see --correct-stride) and its cached factorisations
     /// (least recently used rebuilt when needed). Only the stride changes the output
-    #[arg(long, value_name = "MIB", default_value_t = 1024)]
+    #[arg(long, value_name = "MIB", default_value_t = mesh_core::cli::DEFAULT_MEMORY_BUDGET_MIB)]
     pub memory_budget: usize,
     /// Also write timings (frames per second of the prediction) as JSON
     #[arg(long)]

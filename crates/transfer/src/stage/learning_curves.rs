@@ -4,7 +4,6 @@
 use std::path::PathBuf;
 
 use anyhow::{bail, Context};
-use capture::align::AlignedMotion;
 use capture::part_pca::PcaModel;
 use clap::Parser;
 use gp::gpr::{GprOptions, PAPER_NOISE_VAR};
@@ -16,8 +15,8 @@ use serde::Serialize;
 use crate::densify::Correspondences;
 use crate::gpr_model::MeanFunction;
 use crate::learning_curves::{
-    encode_pair, fit_whole_body, plot_all, run_direction, sizes, total_components,
-    train_side_len, true_correspondences, write_csv, Correspondence, DirectionData,
+    plot_all, read_pair, run_direction, sizes, total_components, train_side_len,
+    true_correspondences, write_csv, Correspondence, DirectionData,
 };
 
 /// Learning curves of the pose regression, both directions (paper figures 7-9): CSV, PNG and SVG plots
@@ -25,7 +24,7 @@ use crate::learning_curves::{
 #[command(
     name = "learning-curves",
     version,
-    after_help = "e.g.: learning-curves --source-pca work/A/pca.model --target-pca work/B/pca.model \\\n        --set set --true-pair walk work/A/walk.aligned work/B/walk.aligned --out out/learning-curves\n      learning-curves --source-pca work/A/pca.model --target-pca work/B/pca.model --source-whole work/A/pca-whole.model \\\n        --target-whole work/B/pca-whole.model \\\n        --pair work/A/walk.aligned work/B/walk.aligned work/pairs/walk.corr --out out/learning-curves-dtw"
+    after_help = "e.g.: learning-curves --source-pca work/A/pca.model --target-pca work/B/pca.model --source-whole work/A/pca-whole.model \\\n        --target-whole work/B/pca-whole.model --set set --true-pair walk work/A/walk.aligned work/B/walk.aligned --out out/learning-curves\n      learning-curves --source-pca work/A/pca.model --target-pca work/B/pca.model --source-whole work/A/pca-whole.model \\\n        --target-whole work/B/pca-whole.model \\\n        --pair work/A/walk.aligned work/B/walk.aligned work/pairs/walk.corr --out out/learning-curves-dtw"
 )]
 pub struct Params {
     #[command(flatten)]
@@ -37,15 +36,12 @@ pub struct Params {
     /// Per-part PCA model of the set's target subject
     #[arg(long)]
     pub target_pca: PathBuf,
-    /// Whole-body PCA model of the source subject (pca-fit --whole-body) [default: fitted here with --whole-components]
-    #[arg(long, requires = "target_whole", conflicts_with = "whole_components")]
-    pub source_whole: Option<PathBuf>,
-    /// Whole-body PCA model of the target subject
-    #[arg(long, requires = "source_whole")]
-    pub target_whole: Option<PathBuf>,
-    /// Components of the whole-body PCA fitted on the training motions [default: as many as the subject's parts together]
+    /// Whole-body PCA model of the source subject (pca-fit --whole-body; fig. 9 compares it at the parts' total components)
     #[arg(long)]
-    pub whole_components: Option<usize>,
+    pub source_whole: PathBuf,
+    /// Whole-body PCA model of the target subject
+    #[arg(long)]
+    pub target_whole: PathBuf,
     /// Source subject name (for the direction labels)
     #[arg(long, default_value = "A")]
     pub source_name: String,
@@ -85,17 +81,16 @@ pub struct Params {
     pub out: PathBuf,
 }
 
-/// One training pair as loaded: motions, frame pairs, key-poses.
-struct Loaded {
-    source: AlignedMotion,
-    target: AlignedMotion,
+/// One training pair as named on the command line: aligned motions, frame pairs, key-poses.
+struct PairInput {
+    source: PathBuf,
+    target: PathBuf,
     pairs: Vec<[usize; 2]>,
     keyposes: Vec<[usize; 2]>,
     what: String,
 }
 
-fn load_pairs(args: &Params) -> anyhow::Result<(Correspondence, Vec<Loaded>)> {
-    let load = |p: &str| AlignedMotion::load(p);
+fn pair_inputs(args: &Params) -> anyhow::Result<(Correspondence, Vec<PairInput>)> {
     if let Some(set_dir) = &args.set {
         let set_path = &set_dir.join("set.json");
         if !args.true_pair.is_empty() {
@@ -103,9 +98,9 @@ fn load_pairs(args: &Params) -> anyhow::Result<(Correspondence, Vec<Loaded>)> {
             let mut out = Vec::new();
             for t in args.true_pair.chunks(3) {
                 let (keyposes, pairs) = true_correspondences(&set, set_path, &t[0])?;
-                out.push(Loaded {
-                    source: load(&t[1])?,
-                    target: load(&t[2])?,
+                out.push(PairInput {
+                    source: PathBuf::from(&t[1]),
+                    target: PathBuf::from(&t[2]),
                     pairs,
                     keyposes,
                     what: format!("{} (true pairs of {})", t[1], t[0]),
@@ -117,9 +112,9 @@ fn load_pairs(args: &Params) -> anyhow::Result<(Correspondence, Vec<Loaded>)> {
     let mut out = Vec::new();
     for f in args.pair.chunks(3) {
         let corr = Correspondences::load(&f[2])?;
-        out.push(Loaded {
-            source: AlignedMotion::load(&f[0])?,
-            target: AlignedMotion::load(&f[1])?,
+        out.push(PairInput {
+            source: f[0].clone(),
+            target: f[1].clone(),
             pairs: corr.pairs,
             keyposes: corr.keyposes,
             what: f[2].display().to_string(),
@@ -131,35 +126,30 @@ fn load_pairs(args: &Params) -> anyhow::Result<(Correspondence, Vec<Loaded>)> {
 /// Writes `learning_curves.csv` and the plots into `--out`.
 pub fn run(p: &Params) -> anyhow::Result<()> {
     let (sp, tp) = (PcaModel::load(&p.source_pca)?, PcaModel::load(&p.target_pca)?);
+    let (sw, tw) = (PcaModel::load(&p.source_whole)?, PcaModel::load(&p.target_whole)?);
     let names: Vec<String> = sp.parts.iter().map(|p| p.name.clone()).collect();
     if tp.parts.iter().map(|p| &p.name).ne(names.iter()) {
         bail!("{}: the part names differ from the source's {:?}", p.target_pca.display(), names);
     }
-    let (correspondence, loaded) = load_pairs(p)?;
-    let Some(first) = loaded.first() else {
+    let (correspondence, inputs) = pair_inputs(p)?;
+    if inputs.is_empty() {
+        bail!("no training pair given (--pair or --true-pair)");
+    }
+    let (mut parts, mut whole, mut rates) = (Vec::new(), Vec::new(), None);
+    for input in &inputs {
+        let (pair_parts, pair_whole, captures) =
+            read_pair(&input.source, &input.target, &input.pairs, &input.keyposes, [&sp, &tp], [&sw, &tw])
+                .with_context(|| input.what.clone())?;
+        if rates.is_none() {
+            let fps = |c: &capture::align::CaptureInfo| c.require_fps().with_context(|| input.what.clone());
+            rates = Some((fps(&captures[0])?, fps(&captures[1])?));
+        }
+        parts.push(pair_parts);
+        whole.push(pair_whole);
+    }
+    let Some((source_fps, target_fps)) = rates else {
         bail!("no training pair given (--pair or --true-pair)");
     };
-    let source_fps = first.source.capture.require_fps().with_context(|| first.what.clone())?;
-    let target_fps = first.target.capture.require_fps().with_context(|| first.what.clone())?;
-    let (sw, tw) = match (&p.source_whole, &p.target_whole) {
-        (Some(s), Some(t)) => (PcaModel::load(s)?, PcaModel::load(t)?),
-        _ => {
-            let fit = |pick: &dyn Fn(&Loaded) -> &AlignedMotion, parts: &PcaModel| {
-                let motions: Vec<&AlignedMotion> = loaded.iter().map(pick).collect();
-                fit_whole_body(&motions, p.whole_components.unwrap_or(total_components(parts)))
-            };
-            (fit(&|l| &l.source, &sp)?, fit(&|l| &l.target, &tp)?)
-        }
-    };
-    let (mut parts, mut whole) = (Vec::new(), Vec::new());
-    for l in &loaded {
-        let enc = |s: &PcaModel, t: &PcaModel| {
-            encode_pair(&l.source, &l.target, &l.pairs, &l.keyposes, s, t).with_context(|| l.what.clone())
-        };
-        parts.push(enc(&sp, &tp)?);
-        whole.push(enc(&sw, &tw)?);
-    }
-    drop(loaded);
     mesh_core::info!(
         "components: source {} in parts, {} whole body; target {} in parts, {} whole body; {} pairs",
         total_components(&sp),
