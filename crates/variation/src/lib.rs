@@ -9,7 +9,8 @@
 //! (3DV eqs. 11-13, stitching, displacement integration) -> [`grounding`] (feet on the source's floor, a
 //! post-process; the post-processes read the source's [`reference`] trajectories, stored in the model) -> [`footskate`] (planted feet kept in place by a root shift, a post-process) ->
 //! [`foot_lock`] (the rest of each planted sole's slide absorbed by its leg) -> [`metrics`],
-//! [`turns_and_tears`] (frames that spin or tear past the captures' own figures) and [`plots`].
+//! [`turns_and_tears`] (frames that spin or tear past the captures' own figures) and [`plots`];
+//! [`synthesize`] runs the query end to end and [`synth_report`] holds what it reports.
 
 pub mod blend_guide;
 pub mod contacts;
@@ -36,6 +37,7 @@ pub mod reconstruct;
 pub mod reference;
 pub mod sample;
 pub mod stage;
+pub mod synth_report;
 pub mod synthesize;
 pub mod train;
 pub mod trained_on;
