@@ -5,7 +5,7 @@ use std::path::Path;
 
 use mesh_core::{Error, Result};
 
-use transfer::learning_curves::{png_bytes, register_font};
+use crate::plot::{png_bytes, register_font};
 
 /// Default `--threshold` of the confidence figure: a frame is shaded as
 /// extrapolating when some body part's normalised nearest distance reaches

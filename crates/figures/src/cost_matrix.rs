@@ -8,7 +8,7 @@ use gp::dtw::{dtw_path, DtwOptions};
 use mesh_core::{Error, Result};
 use nalgebra::DMatrix;
 
-use transfer::learning_curves::{png_bytes, register_font};
+use crate::plot::{png_bytes, register_font};
 
 /// Figure 3's data: the cost matrix (`F_s x F_t`), the DTW path, the
 /// key-poses and optionally the true correspondences.

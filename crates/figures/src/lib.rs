@@ -1,5 +1,7 @@
-//! The transfer paper's illustrations that are not learning curves, drawn by the `render` crate,
-//! and the `paper-figure` stage that writes them ([`paper_figure`]):
+//! The papers' figures and every plot of the project, in one font ([`plot`]): the transfer
+//! paper's illustrations, drawn by the `render` crate, and the `paper-figure` stage that writes
+//! them ([`paper_figure`]); the learning curves (CVPR figs. 7-9) and the `learning-curves` stage
+//! that computes and draws them ([`learning_curves`]):
 //!
 //! - CVPR figure 3, [`CostFigure`]: the association cost matrix `-log P_ij`
 //!   of one training pair (CVPR eqs. 1-6, `gp::blr::cost_matrix`, summed over
@@ -24,7 +26,12 @@
 mod confidence;
 mod correction;
 mod cost_matrix;
+mod learning_curve_plots;
+pub mod learning_curves;
 pub mod paper_figure;
+pub mod plot;
+pub mod variation_eval;
+mod variation_plots;
 
 pub use confidence::*;
 pub use correction::*;

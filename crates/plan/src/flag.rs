@@ -18,12 +18,12 @@ pub use render::stage::Params as Render;
 pub use transfer::stage::dtw_densify::Params as DtwDensify;
 pub use transfer::stage::gpr_predict::Params as GprPredict;
 pub use transfer::stage::gpr_train::Params as GprTrain;
-pub use transfer::stage::learning_curves::Params as LearningCurves;
+pub use figures::learning_curves::Params as LearningCurves;
 pub use transfer::stage::transfer_eval::Params as TransferEval;
 pub use variation::stage::gpdm_train::Params as GpdmTrain;
 pub use variation::stage::hmc_sample::Params as HmcSample;
 pub use variation::stage::prealign::Params as Prealign;
-pub use variation::stage::variation_eval::Params as VariationEval;
+pub use figures::variation_eval::Params as VariationEval;
 
 /// `--field-name` of a field of one or more stages' `Params` (checked at compile time); a
 /// field of a flattened group is named by its path, `flag!(HmcSample, common.seed)` (one stage).

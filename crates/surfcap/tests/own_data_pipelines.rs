@@ -269,6 +269,15 @@ fn a_labs_set_of_frames_rates_and_keyposes_runs_both_pipelines_to_a_report() {
     // Learning curves on the DTW pairs, labelled so.
     let csv = std::fs::read_to_string(out.join("learning-curves/learning_curves.csv")).unwrap();
     assert!(csv.lines().skip(1).all(|l| l.split(',').nth(1) == Some("dtw")), "{csv}");
+    assert!(csv.lines().count() > 10, "{csv}");
+    for d in ["A-to-B", "B-to-A"] {
+        for f in ["fig7-kernels", "fig8-dense-vs-keyposes", "fig9-parts-vs-whole"] {
+            for ext in ["png", "svg"] {
+                let plot = out.join(format!("learning-curves/{d}-{f}.{ext}"));
+                assert!(std::fs::metadata(&plot).is_ok_and(|m| m.len() > 1000), "{}", plot.display());
+            }
+        }
+    }
     // The variation ran (its groups' motions exist in this set) and the report opens.
     let variation: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(out.join("variation.json")).unwrap()).unwrap();
     assert!(variation.as_object().is_some_and(|g| !g.is_empty()), "{variation}");

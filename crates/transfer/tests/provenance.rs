@@ -212,9 +212,6 @@ fn every_stage_params_record_every_option_under_its_flag_name() {
         ("representation-error", missing::<transfer::stage::representation_error::Params>(&[
             "representation-error", "--template", "tpl", "--segmentation", "seg", "--truth", "t", "a.aligned", "-o", "r.json",
         ]).unwrap()),
-        ("learning-curves", missing::<transfer::stage::learning_curves::Params>(&[
-            "learning-curves", "--source-pca", "s", "--target-pca", "t", "--source-whole", "sw", "--target-whole", "tw", "--pair", "a", "b", "c", "-o", "lc",
-        ]).unwrap()),
         ("correct", missing::<surface::stage::correct::Params>(&["correct", "--training", "tr", "pred", "-o", "out"]).unwrap()),
         ("stitch", missing::<surface::stage::stitch::Params>(&[
             "stitch", "parts", "--segmentation", "seg", "--template", "tpl", "-o", "out",

@@ -11,11 +11,9 @@
 //! - **Mean prediction**: from each training sequence's first latent point, the mean
 //!   dynamics (3DV eqs. 8-10) over the sequence length, decoded, against the sequence: shows
 //!   whether the learned dynamics stay on the cycle (a test of the noise floor).
-//! - Latent plots via [`crate::plots`]: figs. 3 and 5; fig. 6 (each learned pre-blend `X_w` against
+//! - Latent plots' data ([`EvalFigures`], drawn by the `figures` crate): figs. 3 and 5; fig. 6 (each learned pre-blend `X_w` against
 //!   the linear interpolation `(1 − w) X₁ + w X₂`, per part) and fig. 7a (at w = 0.25, first part:
 //!   the unguided and the guided interpolations of fig. 7b with the trajectories they come from).
-
-use std::path::Path;
 
 use gp::pca::{Components, Pca};
 use gpdm::blend::blend_pair;
@@ -104,13 +102,24 @@ fn capture_rows(model: &VariationModel, group: &Group, k: usize, s: usize) -> DM
     part_data::part_rows(&group.sequences[s].motion, part, &r)
 }
 
-/// Runs the evaluation; plots go to `plots` (if given).
+/// The latent plots' data, drawn by the `figures` crate's `variation-eval` (figs. 4 and 7b are
+/// drawn from the [`EvalReport`]): file name, title and named trajectories of each.
+#[derive(Clone, Debug)]
+pub struct EvalFigures {
+    /// Fig. 3 per part, then fig. 6 per part and fig. 7a.
+    pub latent: Vec<LatentFigure>,
+    /// Fig. 5: HMC variations of the first sequence's first part.
+    pub variations: LatentFigure,
+}
+
+/// Runs the evaluation; with `figures`, also the latent plots' data (the report's `plots` stay
+/// empty: the files are named by whoever draws them).
 pub fn evaluate(
     model: &VariationModel,
     group: &Group,
-    plots: Option<&Path>,
+    figures: bool,
     seed: u64,
-) -> Result<EvalReport> {
+) -> Result<(EvalReport, Option<EvalFigures>)> {
     if group.sequences.len() != model.sequences.len() || group.n_frames() != model.n_frames() {
         return Err(Error::invalid(
             "the group does not match the model (train the model from this group)",
@@ -132,11 +141,11 @@ pub fn evaluate(
     let mut blend_figs = preblend_figures(model);
     let latent_blend = latent_blend_errors(model, group, &dec, &mut blend_figs)?;
     let mean_prediction = mean_prediction_errors(model, group, &dec)?;
-    let written = match plots {
-        Some(dir) => write_plots(dir, model, &dec, d, seed, &reconstruction, &latent_blend, &blend_figs)?,
-        None => Vec::new(),
+    let figures = match figures {
+        true => Some(latent_figures(model, &dec, seed, blend_figs)?),
+        false => None,
     };
-    Ok(EvalReport {
+    let report = EvalReport {
         group: model.group.clone(),
         latent_dim: d,
         reconstruction,
@@ -144,12 +153,13 @@ pub fn evaluate(
         reconstruction_pca_m,
         latent_blend,
         mean_prediction,
-        plots: written,
-    })
+        plots: Vec::new(),
+    };
+    Ok((report, figures))
 }
 
 /// A latent plot: its file name, title and named trajectories.
-type LatentFigure = (String, String, Vec<(String, DMatrix<f64>)>);
+pub type LatentFigure = (String, String, Vec<(String, DMatrix<f64>)>);
 
 /// Fig. 4: per part, the training meshes reconstructed by the GPDM (3DV eq. 12 at the learned
 /// latent points, brought to the capture's rate, against every captured frame) and by a PCA of
@@ -332,69 +342,20 @@ fn mean_prediction_errors(model: &VariationModel, group: &Group, dec: &Decoder) 
     Ok(mean_prediction)
 }
 
-/// Figs. 3, 4, 5, 6, 7a and 7b drawn into `dir`; returns the files written.
-#[allow(clippy::too_many_arguments)]
-fn write_plots(
-    dir: &Path,
-    model: &VariationModel,
-    dec: &Decoder,
-    d: usize,
-    seed: u64,
-    reconstruction: &[ReconstructionError],
-    latent_blend: &[LatentBlendError],
-    blend_figs: &[LatentFigure],
-) -> Result<Vec<String>> {
-    let mut written = Vec::new();
-    std::fs::create_dir_all(dir).map_err(|e| Error::io(dir, e))?;
-    for (k, pm) in model.parts.iter().enumerate() {
-        let series: Vec<(String, DMatrix<f64>)> = model
-            .sequences
-            .iter()
-            .enumerate()
-            .map(|(s, i)| (i.name.clone(), model.latents(s)[k].clone()))
-            .collect();
-        let p = dir.join(format!("fig3-latent-{}.png", pm.part.name));
-        crate::plots::latent_plot(
-            &p,
-            &format!(
-                "{}: learned latent trajectories ({})",
-                model.group, pm.part.name
-            ),
-            &series,
-        )?;
-        written.push(p.display().to_string());
-    }
-    for (file, title, series) in blend_figs {
-        let p = dir.join(file);
-        crate::plots::latent_plot(&p, title, series)?;
-        written.push(p.display().to_string());
-    }
-    // Fig. 4: training-mesh reconstruction per part, GPDM against PCA of the same dimension.
-    let parts: Vec<String> = reconstruction.iter().map(|r| r.part.clone()).collect();
-    let mm = |f: &dyn Fn(&ReconstructionError) -> f64| reconstruction.iter().map(|r| 1e3 * f(r)).collect::<Vec<f64>>();
-    let p = dir.join("fig4-reconstruction.png");
-    crate::plots::series_plot(
-        &p,
-        &format!("{}: training-mesh reconstruction, mean per vertex (d = {d})", model.group),
-        ("part", "error (mm)"),
-        Some(&parts),
-        &[(format!("GPDM (d = {d})"), mm(&|r| r.gpdm_m)), (format!("PCA ({d} components)"), mm(&|r| r.pca_m))],
-    )?;
-    written.push(p.display().to_string());
-    // Fig. 7b: per frame, the latent interpolation guided by the learned pre-blends and the
-    // unguided one against the non-linear mesh blend.
-    for b in latent_blend {
-        let p = dir.join(format!("fig7b-blend-{}.png", b.w));
-        let to_mm = |v: &[f64]| v.iter().map(|x| 1e3 * x).collect::<Vec<f64>>();
-        crate::plots::series_plot(
-            &p,
-            &format!("{}: interpolation at w = {} against the non-linear blend", model.group, b.w),
-            ("frame", "mean vertex distance (mm)"),
-            None,
-            &[("guided".to_string(), to_mm(&b.guided_per_frame_m)), ("unguided".to_string(), to_mm(&b.unguided_per_frame_m))],
-        )?;
-        written.push(p.display().to_string());
-    }
+/// The latent plots: fig. 3 (each part's learned trajectories), `blend_figs` (figs. 6 and 7a)
+/// and fig. 5 (20 HMC variations of the first sequence, first part).
+fn latent_figures(model: &VariationModel, dec: &Decoder, seed: u64, blend_figs: Vec<LatentFigure>) -> Result<EvalFigures> {
+    let mut latent: Vec<LatentFigure> = model
+        .parts
+        .iter()
+        .enumerate()
+        .map(|(k, pm)| {
+            let series = model.sequences.iter().enumerate().map(|(s, i)| (i.name.clone(), model.latents(s)[k].clone())).collect();
+            let title = format!("{}: learned latent trajectories ({})", model.group, pm.part.name);
+            (format!("fig3-latent-{}.png", pm.part.name), title, series)
+        })
+        .collect();
+    latent.extend(blend_figs);
     let hmc = HmcOptions {
         n_samples: 20,
         burn_in: 200,
@@ -402,24 +363,17 @@ fn write_plots(
         seed,
         ..HmcOptions::default()
     };
-    let (vars, _) = sequence_variations(&dec, 0, Sampler::Hmc, 1.0, &hmc)?;
+    let (vars, _) = sequence_variations(dec, 0, Sampler::Hmc, 1.0, &hmc)?;
     let series: Vec<(String, DMatrix<f64>)> = vars
         .iter()
         .enumerate()
         .map(|(i, v)| (format!("var{i}"), v[0].clone()))
         .collect();
-    let p = dir.join(format!(
-        "fig5-variations-{}-{}.png",
-        model.sequences[0].name, model.parts[0].part.name
-    ));
-    crate::plots::latent_plot(
-        &p,
-        &format!(
-            "{}: 20 HMC variations of {} ({})",
-            model.group, model.sequences[0].name, model.parts[0].part.name
-        ),
-        &series,
-    )?;
-    written.push(p.display().to_string());
-    Ok(written)
+    let (sequence, part) = (&model.sequences[0].name, &model.parts[0].part.name);
+    let variations = (
+        format!("fig5-variations-{sequence}-{part}.png"),
+        format!("{}: 20 HMC variations of {sequence} ({part})", model.group),
+        series,
+    );
+    Ok(EvalFigures { latent, variations })
 }

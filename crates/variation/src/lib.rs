@@ -9,7 +9,8 @@
 //! (3DV eqs. 11-13, stitching, displacement integration) -> [`grounding`] (feet on the source's floor, a
 //! post-process; the post-processes read the source's [`reference`] trajectories, stored in the model) -> [`footskate`] (planted feet kept in place by a root shift, a post-process) ->
 //! [`foot_lock`] (the rest of each planted sole's slide absorbed by its leg) -> [`metrics`],
-//! [`turns_and_tears`] (frames that spin or tear past the captures' own figures) and [`plots`];
+//! [`turns_and_tears`] (frames that spin or tear past the captures' own figures); [`evaluate`]
+//! measures a model (3DV figs. 4 and 7b, the plots' data);
 //! [`synthesize`] runs the query end to end and [`synth_report`] holds what it reports.
 
 pub mod blend_guide;
@@ -31,7 +32,6 @@ pub mod memory_budget;
 pub mod metrics;
 pub mod motion_matching;
 pub mod part_data;
-pub mod plots;
 pub mod prealign;
 pub mod reconstruct;
 pub mod reference;

@@ -308,19 +308,20 @@ fn tiny_set_end_to_end() {
             .n_frames(),
         t
     );
-    let plots = dir.path().join("plots");
-    let ev = variation::evaluate::evaluate(&m2, &group, Some(&plots), 0).unwrap();
+    let (ev, figures) = variation::evaluate::evaluate(&m2, &group, true, 0).unwrap();
     assert!(
         ev.reconstruction_gpdm_m < 0.05,
         "strided reconstruction {} m",
         ev.reconstruction_gpdm_m
     );
-    // Figs. 3-7b as PNG files: fig. 4 once per model, fig. 7b once per blend weight.
-    let names: Vec<String> = ev.plots.iter().map(|p| std::path::Path::new(p).file_name().unwrap().to_string_lossy().into_owned()).collect();
-    assert!(names.iter().any(|n| n == "fig4-reconstruction.png"), "{names:?}");
-    assert_eq!(names.iter().filter(|n| n.starts_with("fig7b-blend-")).count(), ev.latent_blend.len(), "{names:?}");
-    for p in &ev.plots {
-        let bytes = std::fs::read(p).unwrap();
-        assert!(bytes.starts_with(b"\x89PNG"), "{p}");
-    }
+    // The latent plots' data: fig. 3 per part, fig. 6 per part (the model has a pair and its
+    // pre-blend), fig. 7a, and fig. 5's twenty variations of the first sequence.
+    let figures = figures.unwrap();
+    let names: Vec<&str> = figures.latent.iter().map(|f| f.0.as_str()).collect();
+    let parts = m2.parts.len();
+    assert_eq!(names.iter().filter(|n| n.starts_with("fig3-latent-")).count(), parts, "{names:?}");
+    assert_eq!(names.iter().filter(|n| n.starts_with("fig6-preblend-")).count(), parts, "{names:?}");
+    assert!(names.iter().any(|n| n.starts_with("fig7a-")), "{names:?}");
+    assert_eq!(figures.variations.2.len(), 20);
+    assert!(ev.plots.is_empty());
 }

@@ -80,7 +80,6 @@ fn variation_stage_params_record_every_option_under_its_flag_name() {
         ("prealign", missing::<variation::stage::prealign::Params>(&["prealign", "--set", "s", "--group-name", "g", "--motions", "a,b", "-o", "g.group"])),
         ("gpdm-train", missing::<variation::stage::gpdm_train::Params>(&["gpdm-train", "--group", "g", "-o", "m"])),
         ("hmc-sample", missing::<variation::stage::hmc_sample::Params>(&["hmc-sample", "--model", "m", "--group", "g", "--blend", "walk:run", "--weight", "0.3", "-o", "out"])),
-        ("variation-eval", missing::<variation::stage::variation_eval::Params>(&["variation-eval", "--model", "m", "--group", "g", "-o", "e.json"])),
     ];
     for (stage, unrecorded) in cases {
         assert_eq!(unrecorded.unwrap(), Vec::<String>::new(), "{stage}");

@@ -56,7 +56,7 @@ fn main() {
                 r.report.final_value
             );
         }
-        let ev = variation::evaluate::evaluate(&model, &group, None, 0).unwrap_or_else(|e| panic!("{e}"));
+        let (ev, _) = variation::evaluate::evaluate(&model, &group, false, 0).unwrap_or_else(|e| panic!("{e}"));
         let blends: Vec<String> = ev
             .latent_blend
             .iter()

@@ -5,7 +5,6 @@
 pub mod dtw_densify;
 pub mod gpr_predict;
 pub mod gpr_train;
-pub mod learning_curves;
 pub mod representation_error;
 pub mod surface_quality;
 pub mod transfer_eval;

@@ -240,7 +240,6 @@ pub fn bin(name: &str) -> String {
         "gpr-train" => env!("CARGO_BIN_EXE_gpr-train"),
         "gpr-predict" => env!("CARGO_BIN_EXE_gpr-predict"),
         "transfer-eval" => env!("CARGO_BIN_EXE_transfer-eval"),
-        "learning-curves" => env!("CARGO_BIN_EXE_learning-curves"),
         _ => unreachable!(),
     }
     .to_string()

@@ -5,7 +5,6 @@
 pub mod gpdm_train;
 pub mod hmc_sample;
 pub mod prealign;
-pub mod variation_eval;
 
 /// Two motion names written `A:B` (`hmc-sample --blend`, `prealign --blend-pairs`).
 fn parse_pair(s: &str) -> Result<(String, String), String> {

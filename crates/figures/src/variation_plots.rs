@@ -1,21 +1,16 @@
-//! Plots, PNG written atomically: latent trajectories (the training sequences of one part, paper
-//! fig. 3; sampled variations of one sequence, fig. 5; projected on the first two latent
-//! coordinates) and values against an index (errors per part, fig. 4; per frame, fig. 7b).
+//! The 3DV paper's plots, PNG written atomically: latent trajectories (the training sequences of
+//! one part, paper fig. 3; sampled variations of one sequence, fig. 5; pre-blends, figs. 6 and
+//! 7a; projected on the first two latent coordinates) and values against an index (errors per
+//! part, fig. 4; per frame, fig. 7b), and all of `variation-eval`'s figures
+//! ([`write_eval_plots`]).
 
 use std::path::Path;
 
 use mesh_core::{Error, Result};
 use nalgebra::DMatrix;
+use variation::evaluate::{EvalFigures, EvalReport, ReconstructionError};
 
-use mesh_core::font::DEJAVU_SANS as FONT;
-
-fn register_font() {
-    static ONCE: std::sync::Once = std::sync::Once::new();
-    ONCE.call_once(|| {
-        let _ =
-            plotters::style::register_font("sans-serif", plotters::style::FontStyle::Normal, FONT);
-    });
-}
+use crate::plot::{png_bytes, register_font};
 
 /// Distinct colours (cycled).
 pub const COLOURS: [(u8, u8, u8); 8] = [
@@ -107,16 +102,7 @@ pub fn latent_plot(path: &Path, title: &str, series: &[(String, DMatrix<f64>)]) 
 
 /// Encodes RGB `pixels` (`w × h`) as PNG and writes it atomically.
 fn write_png(path: &Path, w: u32, h: u32, pixels: &[u8]) -> Result<()> {
-    let e = |x: &dyn std::fmt::Debug| Error::file(path, format!("plot: {x:?}"));
-    let mut bytes = Vec::new();
-    {
-        let mut enc = png::Encoder::new(&mut bytes, w, h);
-        enc.set_color(png::ColorType::Rgb);
-        enc.set_depth(png::BitDepth::Eight);
-        let mut writer = enc.write_header().map_err(|x| e(&x))?;
-        writer.write_image_data(pixels).map_err(|x| e(&x))?;
-    }
-    mesh_core::atomic::write_bytes_atomic(path, &bytes)
+    mesh_core::atomic::write_bytes_atomic(path, &png_bytes(path, pixels, w, h)?)
 }
 
 /// Plots each `(label, values)` against its index (0, 1, ...) as a polyline with a marker per
@@ -191,6 +177,50 @@ pub fn series_plot(
     write_png(path, w, h, &pixels)
 }
 
+/// `variation-eval`'s figures drawn into `dir`: the latent plots of `figures` (figs. 3, 6, 7a),
+/// fig. 4 and fig. 7b from `report`, then fig. 5; returns the files written, in that order.
+pub fn write_eval_plots(dir: &Path, report: &EvalReport, figures: &EvalFigures) -> Result<Vec<String>> {
+    let mut written = Vec::new();
+    std::fs::create_dir_all(dir).map_err(|e| Error::io(dir, e))?;
+    for (file, title, series) in &figures.latent {
+        let p = dir.join(file);
+        latent_plot(&p, title, series)?;
+        written.push(p.display().to_string());
+    }
+    // Fig. 4: training-mesh reconstruction per part, GPDM against PCA of the same dimension.
+    let (group, d) = (&report.group, report.latent_dim);
+    let parts: Vec<String> = report.reconstruction.iter().map(|r| r.part.clone()).collect();
+    let mm = |f: &dyn Fn(&ReconstructionError) -> f64| report.reconstruction.iter().map(|r| 1e3 * f(r)).collect::<Vec<f64>>();
+    let p = dir.join("fig4-reconstruction.png");
+    series_plot(
+        &p,
+        &format!("{group}: training-mesh reconstruction, mean per vertex (d = {d})"),
+        ("part", "error (mm)"),
+        Some(&parts),
+        &[(format!("GPDM (d = {d})"), mm(&|r| r.gpdm_m)), (format!("PCA ({d} components)"), mm(&|r| r.pca_m))],
+    )?;
+    written.push(p.display().to_string());
+    // Fig. 7b: per frame, the latent interpolation guided by the learned pre-blends and the
+    // unguided one against the non-linear mesh blend.
+    for b in &report.latent_blend {
+        let p = dir.join(format!("fig7b-blend-{}.png", b.w));
+        let to_mm = |v: &[f64]| v.iter().map(|x| 1e3 * x).collect::<Vec<f64>>();
+        series_plot(
+            &p,
+            &format!("{group}: interpolation at w = {} against the non-linear blend", b.w),
+            ("frame", "mean vertex distance (mm)"),
+            None,
+            &[("guided".to_string(), to_mm(&b.guided_per_frame_m)), ("unguided".to_string(), to_mm(&b.unguided_per_frame_m))],
+        )?;
+        written.push(p.display().to_string());
+    }
+    let (file, title, series) = &figures.variations;
+    let p = dir.join(file);
+    latent_plot(&p, title, series)?;
+    written.push(p.display().to_string());
+    Ok(written)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -202,6 +232,47 @@ mod tests {
         let mut buf = vec![0; reader.output_buffer_size().unwrap()];
         let info = reader.next_frame(&mut buf).unwrap();
         buf[..info.buffer_size()].chunks(3).filter(|p| (p[0], p[1], p[2]) == colour).count()
+    }
+
+    /// Every figure of `variation-eval` is written as a PNG, in the report's order: the latent
+    /// plots, fig. 4, fig. 7b per blend weight, fig. 5.
+    #[test]
+    fn the_evaluation_figures_are_written_in_order() {
+        use variation::evaluate::LatentBlendError;
+        let dir = tempfile::tempdir().unwrap();
+        let rec = |part: &str, g: f64| ReconstructionError { part: part.into(), vertices: 10, gpdm_m: g, pca_m: 2.0 * g };
+        let blend = |w: f64| LatentBlendError {
+            w,
+            guided_from: (0.0, 0.5),
+            guided_per_frame_m: vec![0.001, 0.002, 0.0015],
+            unguided_per_frame_m: vec![0.002, 0.003, 0.0025],
+            guided_m: 0.0015,
+            unguided_m: 0.0025,
+        };
+        let report = EvalReport {
+            group: "walk".into(),
+            latent_dim: 3,
+            reconstruction: vec![rec("torso", 0.001), rec("arm", 0.002)],
+            reconstruction_gpdm_m: 0.0015,
+            reconstruction_pca_m: 0.003,
+            latent_blend: vec![blend(0.25), blend(0.75)],
+            mean_prediction: Vec::new(),
+            plots: Vec::new(),
+        };
+        let circle = DMatrix::from_fn(30, 3, |t, c| ((t as f64) * 0.2 + c as f64).sin());
+        let figures = EvalFigures {
+            latent: vec![("fig3-latent-torso.png".into(), "fig 3".into(), vec![("walk".into(), circle.clone())])],
+            variations: ("fig5-variations-walk-torso.png".into(), "fig 5".into(), vec![("var0".into(), circle)]),
+        };
+        let written = write_eval_plots(dir.path(), &report, &figures).unwrap();
+        let names: Vec<String> = written.iter().map(|p| Path::new(p).file_name().unwrap().to_string_lossy().into_owned()).collect();
+        assert_eq!(
+            names,
+            ["fig3-latent-torso.png", "fig4-reconstruction.png", "fig7b-blend-0.25.png", "fig7b-blend-0.75.png", "fig5-variations-walk-torso.png"]
+        );
+        for p in &written {
+            assert!(count(Path::new(p), COLOURS[0]) > 100, "{p}: the first series is not drawn");
+        }
     }
 
     #[test]

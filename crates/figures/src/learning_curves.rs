@@ -12,12 +12,14 @@ use mesh_core::capture_set::SetSpec;
 use mesh_core::cli::CommonArgs;
 use serde::Serialize;
 
-use crate::densify::Correspondences;
-use crate::gpr_model::MeanFunction;
-use crate::learning_curves::{
-    plot_all, read_pair, run_direction, sizes, total_components, train_side_len,
-    true_correspondences, write_csv, Correspondence, DirectionData,
+use transfer::densify::Correspondences;
+use transfer::gpr_model::MeanFunction;
+use transfer::learning_curves::{
+    read_pair, run_direction, sizes, total_components, train_side_len, true_correspondences, write_csv,
+    Correspondence, DirectionData,
 };
+
+use crate::learning_curve_plots::plot_all;
 
 /// Learning curves of the pose regression, both directions (paper figures 7-9): CSV, PNG and SVG plots
 #[derive(Parser, Debug, Serialize)]

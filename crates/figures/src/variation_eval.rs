@@ -9,9 +9,11 @@ use mesh_core::artifact::Artifact;
 use mesh_core::cli::CommonArgs;
 use serde::Serialize;
 
-use crate::evaluate::evaluate;
-use crate::group::Group;
-use crate::train::VariationModel;
+use variation::evaluate::evaluate;
+use variation::group::Group;
+use variation::train::VariationModel;
+
+use crate::variation_plots::write_eval_plots;
 
 /// Measure a variation model: GPDM vs PCA reconstruction (fig. 4), guided vs unguided latent blending (fig. 7b), latent plots (figs. 3, 5)
 #[derive(Parser, Debug, Serialize)]
@@ -42,13 +44,16 @@ pub struct Params {
 pub fn run(p: &Params) -> anyhow::Result<()> {
     let model = VariationModel::load(&p.model)?;
     let group = Group::load(&p.group)?;
-    crate::trained_on::check(&model, &group)
+    variation::trained_on::check(&model, &group)
         .with_context(|| format!("{} with {}", p.model.display(), p.group.display()))?;
     let spin = mesh_core::cli::spinner(
         &format!("variation-eval: {} sequences x {} parts", model.sequences.len(), model.parts.len()),
         &p.common,
     );
-    let report = evaluate(&model, &group, p.plots.as_deref(), p.common.seed)?;
+    let (mut report, figures) = evaluate(&model, &group, p.plots.is_some(), p.common.seed)?;
+    if let (Some(dir), Some(figures)) = (&p.plots, &figures) {
+        report.plots = write_eval_plots(dir, &report, figures)?;
+    }
     spin.finish_and_clear();
     mesh_core::atomic::write_bytes_atomic(
         &p.out,
