@@ -148,33 +148,10 @@ pub fn run(p: &Params) -> anyhow::Result<()> {
         PcaModel::load(&p.source_pca)?,
         PcaModel::load(&p.target_pca)?,
     );
-    let names: Vec<String> = src_pca.parts.iter().map(|p| p.name.clone()).collect();
-    let tgt_names: Vec<String> = tgt_pca.parts.iter().map(|p| p.name.clone()).collect();
-    if names != tgt_names {
-        bail!(
-            "{}: parts {:?} differ from the target's {:?}",
-            p.source_pca.display(),
-            names,
-            tgt_names
-        );
-    }
+    let names = part_names(p, &src_pca, &tgt_pca)?;
     // The pieces of a model: its parts' regressors, then the displacement's.
     let units: Vec<String> = names.iter().cloned().chain([DISPLACEMENT.to_string()]).collect();
-    let unit = match &p.part {
-        Some(name) => {
-            if names.iter().any(|n| n == DISPLACEMENT) {
-                bail!("{}: a part is named '{DISPLACEMENT}', the name of the displacement regressor", p.source_pca.display());
-            }
-            if p.config == ConfigName::Auto || p.cross_validate || p.report.is_some() {
-                return Err(mesh_core::Error::invalid(
-                    "--config auto, --cross-validate and --report leave motions out of whole models: not with --part",
-                )
-                .into());
-            }
-            Some(part_merge::select(&units, name, &p.source_pca)?)
-        }
-        None => None,
-    };
+    let unit = selected_unit(p, &names, &units)?;
     if method == Method::WholeBody && names.len() != 1 {
         mesh_core::warn!(
             "method whole-body with a {}-part PCA model (expected pca-fit --whole-body)",
@@ -219,27 +196,8 @@ pub fn run(p: &Params) -> anyhow::Result<()> {
         .iter()
         .any(|(_, s)| s.mean == MeanFunction::Affine && (ridge_toward || s.prior_weight > 0.0))
         .then(|| crate::geometric_prior::part_priors(&src_pca, &tgt_pca));
-    let header = |chosen: &Settings, cv: Option<&CrossValidationReport>| -> anyhow::Result<Header> {
-        let mut params = serde_json::to_value(p)?;
-        params["mean"] = serde_json::to_value(chosen.mean)?;
-        params["prior_weight"] = chosen.prior_weight.into();
-        params["orientation_weight"] = chosen.orientation_weight.into();
-        params["source_fps"] = source_fps.into();
-        params["target_fps"] = target_fps.into();
-        if let Some(cv) = cv {
-            params["cross_validation"] = serde_json::to_value(cv)?;
-        }
-        let mut header = p
-            .common
-            .header("gpr-train", env!("CARGO_PKG_VERSION"))
-            .with_params(&params)?
-            .with_input(&p.source_pca)?
-            .with_input(&p.target_pca)?;
-        for (f, sha256) in &pair_hashes {
-            header.inputs.push(mesh_core::artifact::InputRecord { path: f.display().to_string(), sha256: sha256.clone() });
-        }
-        Ok(header)
-    };
+    let trainer = Trainer { p, names: &names, src_pca: &src_pca, tgt_pca: &tgt_pca, maps: maps.as_deref(), opts: &opts };
+    let provenance = Provenance { p, source_fps, target_fps, pair_hashes: &pair_hashes };
     // The rows are gathered once for the regressions and the limb orientation; the pairs'
     // coefficients are not needed after that unless motions are left out (at 10^5 pairs each
     // is hundreds of MB).
@@ -250,21 +208,14 @@ pub fn run(p: &Params) -> anyhow::Result<()> {
     }
     if let Some(unit) = unit {
         let (_, chosen) = configs[0];
-        let orientation = OrientationOptions { weight: chosen.orientation_weight, attached: &p.attached_limbs };
         let spin = mesh_core::cli::spinner(
             &format!("gpr-train: {}, {} pairs", units[unit], n_pairs),
             &p.common,
         );
-        let mut piece = train_piece(&regression_of(p, maps.as_deref(), &opts, &chosen, None), &names, &rows, unit)?;
-        if unit < names.len() {
-            let o = train_orientation(method, &names, &rows, &src_pca, &tgt_pca, &orientation, Some(unit))?;
-            piece.orientation = o.and_then(|mut o| o.maps.swap_remove(unit));
-        }
-        piece.orientation_weight = chosen.orientation_weight;
-        piece.templates = Templates::of(&src_pca, &tgt_pca);
+        let piece = trainer.piece(&rows, unit, &chosen)?;
         spin.finish_and_clear();
         log_report(&piece.report);
-        part_merge::save_piece::<GprModel>(&p.out, &header(&chosen, None)?, &units, unit, piece)?;
+        part_merge::save_piece::<GprModel>(&p.out, &provenance.header(&chosen, None)?, &units, unit, piece)?;
         return Ok(());
     }
     let spin = mesh_core::cli::spinner(
@@ -276,48 +227,12 @@ pub fn run(p: &Params) -> anyhow::Result<()> {
         ),
         &p.common,
     );
-    // Configurations that differ only in the prior's weight or the limb orientation have the
-    // same GPs (trained on the residuals of the same fitted mean): those are trained once and
-    // the others conditioned with their hyperparameters, which gives the same model.
-    let mut models: Vec<GprModel> = Vec::new();
-    for (_, s) in &configs {
-        let twin = configs.iter().zip(&models).find(|((_, t), _)| t.mean == s.mean).map(|(_, m)| m);
-        let fixed = twin.map(FixedHyperparameters::of).transpose()?;
-        let mut model: GprModel = train_rows(&regression_of(p, maps.as_deref(), &opts, s, fixed.as_ref()), &names, &rows)?;
-        if let Some(twin) = twin {
-            model.reports = twin.reports.clone();
-        }
-        let orientation = OrientationOptions { weight: s.orientation_weight, attached: &p.attached_limbs };
-        model.orientation = train_orientation(method, &names, &rows, &src_pca, &tgt_pca, &orientation, None)?;
-        model.templates = Templates::of(&src_pca, &tgt_pca);
-        models.push(model);
-    }
+    let mut models = trainer.models(&rows, &configs)?;
     drop(rows);
     let trained_s = start.elapsed().as_secs_f64();
-    let cv = if cross_validated {
-        let fixed = models.iter().map(FixedHyperparameters::of).collect::<mesh_core::Result<Vec<_>>>()?;
-        let candidates: Vec<Candidate> = configs
-            .iter()
-            .zip(&fixed)
-            .map(|((_, s), f)| Candidate {
-                regression: regression_of(p, maps.as_deref(), &opts, s, Some(f)),
-                orientation: OrientationOptions { weight: s.orientation_weight, attached: &p.attached_limbs },
-            })
-            .collect();
-        let folds = Folds {
-            hyperparameters: p.cv_hyperparameters,
-            pairs: &pairs,
-            held_out: &held_out,
-            frame_ratio: ratio,
-            keyposes_only: p.keyposes_only,
-            part_names: &names,
-            source_pca: &src_pca,
-            target_pca: &tgt_pca,
-        };
-        let errors = cross_validate(&folds, &candidates)?;
-        Some(CrossValidationReport::choose(configs.iter().map(|(c, _)| *c).zip(errors).collect()))
-    } else {
-        None
+    let cv = match cross_validated {
+        true => Some(trainer.cross_validation(&configs, &models, &pairs, &held_out, ratio)?),
+        false => None,
     };
     spin.finish_and_clear();
     let chosen = cv.as_ref().map_or(0, |cv| cv.chosen_index);
@@ -339,7 +254,7 @@ pub fn run(p: &Params) -> anyhow::Result<()> {
         }
     );
     model.reports.iter().for_each(log_report);
-    let header = header(&configs[chosen].1, cv.as_ref())?;
+    let header = provenance.header(&configs[chosen].1, cv.as_ref())?;
     // The report first: the model's presence says both are complete.
     if let (Some(r), Some(cv)) = (&p.report, &cv) {
         let text = serde_json::to_string_pretty(cv)? + "\n";
@@ -347,6 +262,156 @@ pub fn run(p: &Params) -> anyhow::Result<()> {
     }
     model.save(&p.out, &header)?;
     Ok(())
+}
+
+/// The source PCA model's part names, which the target's must equal.
+fn part_names(p: &Params, src_pca: &PcaModel, tgt_pca: &PcaModel) -> anyhow::Result<Vec<String>> {
+    let names: Vec<String> = src_pca.parts.iter().map(|p| p.name.clone()).collect();
+    let tgt_names: Vec<String> = tgt_pca.parts.iter().map(|p| p.name.clone()).collect();
+    if names != tgt_names {
+        bail!(
+            "{}: parts {:?} differ from the target's {:?}",
+            p.source_pca.display(),
+            names,
+            tgt_names
+        );
+    }
+    Ok(names)
+}
+
+/// The piece `--part` names among `units` (the parts, then the displacement), if given.
+fn selected_unit(p: &Params, names: &[String], units: &[String]) -> anyhow::Result<Option<usize>> {
+    let Some(name) = &p.part else {
+        return Ok(None);
+    };
+    if names.iter().any(|n| n == DISPLACEMENT) {
+        bail!("{}: a part is named '{DISPLACEMENT}', the name of the displacement regressor", p.source_pca.display());
+    }
+    if p.config == ConfigName::Auto || p.cross_validate || p.report.is_some() {
+        return Err(mesh_core::Error::invalid(
+            "--config auto, --cross-validate and --report leave motions out of whole models: not with --part",
+        )
+        .into());
+    }
+    Ok(Some(part_merge::select(units, name, &p.source_pca)?))
+}
+
+/// What the models are trained with: the stage's flags, the part names, both PCA models, the
+/// parts' geometric priors (when some configuration uses them) and the GP options.
+struct Trainer<'a> {
+    p: &'a Params,
+    names: &'a [String],
+    src_pca: &'a PcaModel,
+    tgt_pca: &'a PcaModel,
+    maps: Option<&'a [nalgebra::DMatrix<f64>]>,
+    opts: &'a GprOptions,
+}
+
+impl Trainer<'_> {
+    /// One piece of configuration `chosen`'s model (`gpr-train --part`): a part's regressor and
+    /// its limb orientation, or the displacement's.
+    fn piece(&self, rows: &TrainingRows, unit: usize, chosen: &Settings) -> anyhow::Result<crate::gpr_piece::GprPiece> {
+        let (p, names) = (self.p, self.names);
+        let orientation = OrientationOptions { weight: chosen.orientation_weight, attached: &p.attached_limbs };
+        let mut piece = train_piece(&regression_of(p, self.maps, self.opts, chosen, None), names, rows, unit)?;
+        if unit < names.len() {
+            let o = train_orientation(p.method, names, rows, self.src_pca, self.tgt_pca, &orientation, Some(unit))?;
+            piece.orientation = o.and_then(|mut o| o.maps.swap_remove(unit));
+        }
+        piece.orientation_weight = chosen.orientation_weight;
+        piece.templates = Templates::of(self.src_pca, self.tgt_pca);
+        Ok(piece)
+    }
+
+    /// Every configuration's model on all the rows. Configurations that differ only in the
+    /// prior's weight or the limb orientation have the same GPs (trained on the residuals of
+    /// the same fitted mean): those are trained once and the others conditioned with their
+    /// hyperparameters, which gives the same model.
+    fn models(&self, rows: &TrainingRows, configs: &[(ConfigName, Settings)]) -> anyhow::Result<Vec<GprModel>> {
+        let (p, names) = (self.p, self.names);
+        let mut models: Vec<GprModel> = Vec::new();
+        for (_, s) in configs {
+            let twin = configs.iter().zip(&models).find(|((_, t), _)| t.mean == s.mean).map(|(_, m)| m);
+            let fixed = twin.map(FixedHyperparameters::of).transpose()?;
+            let mut model: GprModel = train_rows(&regression_of(p, self.maps, self.opts, s, fixed.as_ref()), names, rows)?;
+            if let Some(twin) = twin {
+                model.reports = twin.reports.clone();
+            }
+            let orientation = OrientationOptions { weight: s.orientation_weight, attached: &p.attached_limbs };
+            model.orientation = train_orientation(p.method, names, rows, self.src_pca, self.tgt_pca, &orientation, None)?;
+            model.templates = Templates::of(self.src_pca, self.tgt_pca);
+            models.push(model);
+        }
+        Ok(models)
+    }
+
+    /// Leaves each motion of `pairs` out of every configuration (with its model's
+    /// hyperparameters, `models`) and keeps the configuration of lowest error.
+    fn cross_validation(
+        &self,
+        configs: &[(ConfigName, Settings)],
+        models: &[GprModel],
+        pairs: &[PairData],
+        held_out: &[HeldOut],
+        frame_ratio: f64,
+    ) -> anyhow::Result<CrossValidationReport> {
+        let p = self.p;
+        let fixed = models.iter().map(FixedHyperparameters::of).collect::<mesh_core::Result<Vec<_>>>()?;
+        let candidates: Vec<Candidate> = configs
+            .iter()
+            .zip(&fixed)
+            .map(|((_, s), f)| Candidate {
+                regression: regression_of(p, self.maps, self.opts, s, Some(f)),
+                orientation: OrientationOptions { weight: s.orientation_weight, attached: &p.attached_limbs },
+            })
+            .collect();
+        let folds = Folds {
+            hyperparameters: p.cv_hyperparameters,
+            pairs,
+            held_out,
+            frame_ratio,
+            keyposes_only: p.keyposes_only,
+            part_names: self.names,
+            source_pca: self.src_pca,
+            target_pca: self.tgt_pca,
+        };
+        let errors = cross_validate(&folds, &candidates)?;
+        Ok(CrossValidationReport::choose(configs.iter().map(|(c, _)| *c).zip(errors).collect()))
+    }
+}
+
+/// What a model's header records: the flags, the configuration kept and its cross-validation,
+/// the direction's frame rates and every input's hash.
+struct Provenance<'a> {
+    p: &'a Params,
+    source_fps: f64,
+    target_fps: f64,
+    pair_hashes: &'a [(&'a PathBuf, String)],
+}
+
+impl Provenance<'_> {
+    fn header(&self, chosen: &Settings, cv: Option<&CrossValidationReport>) -> anyhow::Result<Header> {
+        let p = self.p;
+        let mut params = serde_json::to_value(p)?;
+        params["mean"] = serde_json::to_value(chosen.mean)?;
+        params["prior_weight"] = chosen.prior_weight.into();
+        params["orientation_weight"] = chosen.orientation_weight.into();
+        params["source_fps"] = self.source_fps.into();
+        params["target_fps"] = self.target_fps.into();
+        if let Some(cv) = cv {
+            params["cross_validation"] = serde_json::to_value(cv)?;
+        }
+        let mut header = p
+            .common
+            .header("gpr-train", env!("CARGO_PKG_VERSION"))
+            .with_params(&params)?
+            .with_input(&p.source_pca)?
+            .with_input(&p.target_pca)?;
+        for (f, sha256) in self.pair_hashes {
+            header.inputs.push(mesh_core::artifact::InputRecord { path: f.display().to_string(), sha256: sha256.clone() });
+        }
+        Ok(header)
+    }
 }
 
 /// The configurations to train (`--config`, with the flags given explicitly applied; the
