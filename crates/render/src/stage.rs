@@ -159,25 +159,8 @@ pub fn follow(seqs: &mut [MeshSequence], up: &nalgebra::Vector3<f64>, each: bool
 
 /// Runs the stage (after `args.common.init()`).
 pub fn run(args: &Params) -> anyhow::Result<()> {
+    check(args)?;
     let n_seq = args.seq_dirs.len();
-    if let Some(l) = &args.labels {
-        if l.len() != n_seq {
-            bail!("--labels: {} labels for {n_seq} sequences", l.len());
-        }
-    }
-    if let Some(c) = &args.colours {
-        if c.len() != n_seq {
-            bail!("--colours: {} colours for {n_seq} sequences", c.len());
-        }
-    }
-    if !(args.gif_fps.is_finite() && args.gif_fps > 0.0) {
-        bail!("--gif-fps must be a positive number");
-    }
-    if let Some(f) = args.perspective {
-        if !(f.is_finite() && f > 1.0 && f < 170.0) {
-            bail!("--perspective: field of view must be between 1 and 170 degrees");
-        }
-    }
     // Everything is read and checked before anything is written.
     let mut seqs: Vec<MeshSequence> = args
         .seq_dirs
@@ -201,20 +184,7 @@ pub fn run(args: &Params) -> anyhow::Result<()> {
         Some(r) => r.start..r.end.unwrap_or(usize::MAX).min(longest),
         None => 0..longest,
     };
-    let part_colours: Vec<Option<Vec<Rgb>>> = match &args.subject {
-        None => vec![None; n_seq],
-        Some(path) => {
-            let spec = crate::parts::read_subject(path)?;
-            seqs.iter()
-                .zip(&args.seq_dirs)
-                .map(|(s, dir)| {
-                    crate::parts::part_colours(&spec, path, &s.frames[0], &s.faces)
-                        .map(Some)
-                        .with_context(|| format!("{}: with --subject", dir.display()))
-                })
-                .collect::<anyhow::Result<_>>()?
-        }
-    };
+    let part_colours = part_colours(args, &seqs)?;
     let colours: Vec<Rgb> = match &args.colours {
         Some(c) => c.clone(),
         None => (0..n_seq).map(colour::palette).collect(),
@@ -227,22 +197,7 @@ pub fn run(args: &Params) -> anyhow::Result<()> {
             None => SeqView::from(s),
         })
         .collect();
-
-    let style = Style {
-        shading: if args.flat {
-            Shading::Flat
-        } else {
-            Shading::Gouraud
-        },
-        supersample: if args.no_aa { 1 } else { 2 },
-        background: if args.grey {
-            colour::LIGHT_GREY
-        } else {
-            colour::WHITE
-        },
-        floor: !args.no_floor,
-        ..Style::default()
-    };
+    let style = style(args);
     let projection = match args.perspective {
         Some(fov_y_deg) => ProjectionKind::Perspective { fov_y_deg },
         None => ProjectionKind::Orthographic,
@@ -279,6 +234,104 @@ pub fn run(args: &Params) -> anyhow::Result<()> {
     std::fs::create_dir_all(out)
         .with_context(|| format!("{}: cannot create output folder", out.display()))?;
     let chosen: Vec<usize> = range.clone().step_by(args.stride as usize).collect();
+    write_frames_and_gif(args, &chosen, &draw)?;
+    if args.contact_columns > 0 {
+        let names: Vec<String> = match &args.labels {
+            Some(l) => l.clone(),
+            None => args.seq_dirs.iter().map(|d| short_name(d)).collect(),
+        };
+        let rows: Vec<Row> = if args.separate_rows || n_seq == 1 {
+            views
+                .iter()
+                .zip(&colours)
+                .zip(&names)
+                .map(|((v, &c), n)| Row {
+                    label: n.clone(),
+                    sequences: vec![(c, *v)],
+                })
+                .collect()
+        } else {
+            vec![Row {
+                label: names.join("\n"),
+                sequences: colours.iter().copied().zip(views.iter().copied()).collect(),
+            }]
+        };
+        let mut sheet = ContactSheet::new(rows);
+        sheet.n_columns = args.contact_columns;
+        sheet.cell_width = (w / 2).max(64);
+        sheet.cell_height = (h / 2).max(64);
+        sheet.frames = range.clone();
+        sheet.view = args.camera;
+        sheet.up = args.up;
+        sheet.projection = projection;
+        sheet.style = style;
+        sheet.render().write_png(&out.join("contact.png"))?;
+    }
+    mesh_core::info!(
+        "drew {} frames of {n_seq} sequence(s) into {}",
+        chosen.len(),
+        out.display()
+    );
+    Ok(())
+}
+
+/// The flags' own checks: one label and colour per sequence, a positive GIF rate, a field of
+/// view between 1 and 170 degrees.
+fn check(args: &Params) -> anyhow::Result<()> {
+    let n_seq = args.seq_dirs.len();
+    if let Some(l) = &args.labels {
+        if l.len() != n_seq {
+            bail!("--labels: {} labels for {n_seq} sequences", l.len());
+        }
+    }
+    if let Some(c) = &args.colours {
+        if c.len() != n_seq {
+            bail!("--colours: {} colours for {n_seq} sequences", c.len());
+        }
+    }
+    if !(args.gif_fps.is_finite() && args.gif_fps > 0.0) {
+        bail!("--gif-fps must be a positive number");
+    }
+    if let Some(f) = args.perspective {
+        if !(f.is_finite() && f > 1.0 && f < 170.0) {
+            bail!("--perspective: field of view must be between 1 and 170 degrees");
+        }
+    }
+    Ok(())
+}
+
+/// With `--subject`, every sequence's vertex colours by body part; else none.
+fn part_colours(args: &Params, seqs: &[MeshSequence]) -> anyhow::Result<Vec<Option<Vec<Rgb>>>> {
+    let Some(path) = &args.subject else {
+        return Ok(vec![None; seqs.len()]);
+    };
+    let spec = crate::parts::read_subject(path)?;
+    seqs.iter()
+        .zip(&args.seq_dirs)
+        .map(|(s, dir)| {
+            crate::parts::part_colours(&spec, path, &s.frames[0], &s.faces)
+                .map(Some)
+                .with_context(|| format!("{}: with --subject", dir.display()))
+        })
+        .collect()
+}
+
+/// The drawing style the flags ask for.
+fn style(args: &Params) -> Style {
+    Style {
+        shading: if args.flat { Shading::Flat } else { Shading::Gouraud },
+        supersample: if args.no_aa { 1 } else { 2 },
+        background: if args.grey { colour::LIGHT_GREY } else { colour::WHITE },
+        floor: !args.no_floor,
+        ..Style::default()
+    }
+}
+
+/// The `chosen` frames drawn by `draw` into `<out>/frames/NNNNNN.png` and `<out>/anim.gif`
+/// (unless `--no-frames` / `--no-gif`), 64 at a time.
+fn write_frames_and_gif(args: &Params, chosen: &[usize], draw: &(dyn Fn(usize) -> RgbImage + Sync)) -> anyhow::Result<()> {
+    let out = &args.out;
+    let (w, h) = args.size;
     let want_frames = !args.no_frames;
     let want_gif = !args.no_gif;
     let mut gif = if want_gif {
@@ -324,43 +377,6 @@ pub fn run(args: &Params) -> anyhow::Result<()> {
             .map_err(|e| anyhow::anyhow!("{}: {e}", path.display()))?;
         mesh_core::atomic::write_bytes_atomic(&path, &bytes)?;
     }
-    if args.contact_columns > 0 {
-        let names: Vec<String> = match &args.labels {
-            Some(l) => l.clone(),
-            None => args.seq_dirs.iter().map(|d| short_name(d)).collect(),
-        };
-        let rows: Vec<Row> = if args.separate_rows || n_seq == 1 {
-            views
-                .iter()
-                .zip(&colours)
-                .zip(&names)
-                .map(|((v, &c), n)| Row {
-                    label: n.clone(),
-                    sequences: vec![(c, *v)],
-                })
-                .collect()
-        } else {
-            vec![Row {
-                label: names.join("\n"),
-                sequences: colours.iter().copied().zip(views.iter().copied()).collect(),
-            }]
-        };
-        let mut sheet = ContactSheet::new(rows);
-        sheet.n_columns = args.contact_columns;
-        sheet.cell_width = (w / 2).max(64);
-        sheet.cell_height = (h / 2).max(64);
-        sheet.frames = range.clone();
-        sheet.view = args.camera;
-        sheet.up = args.up;
-        sheet.projection = projection;
-        sheet.style = style;
-        sheet.render().write_png(&out.join("contact.png"))?;
-    }
-    mesh_core::info!(
-        "drew {} frames of {n_seq} sequence(s) into {}",
-        chosen.len(),
-        out.display()
-    );
     Ok(())
 }
 

@@ -111,87 +111,12 @@ pub fn run(p: &Params) -> anyhow::Result<()> {
         PcaModel::load(&p.source_pca)?,
         PcaModel::load(&p.target_pca)?,
     );
-    for (pca, path) in [(&src_pca, &p.source_pca), (&tgt_pca, &p.target_pca)] {
-        let names: Vec<&String> = pca.parts.iter().map(|part| &part.name).collect();
-        if names
-            .iter()
-            .map(|s| s.as_str())
-            .ne(model.part_names.iter().map(|s| s.as_str()))
-        {
-            bail!(
-                "{}: parts {:?} differ from the model's {:?}",
-                path.display(),
-                names,
-                model.part_names
-            );
-        }
-    }
-    model
-        .templates
-        .check(&src_pca, &tgt_pca)
-        .with_context(|| format!("{} with {} and {}", p.model.display(), p.source_pca.display(), p.target_pca.display()))?;
+    check_models(p, &model, &src_pca, &tgt_pca)?;
     let t0 = Instant::now();
     let motion = SourceMotion::read(&p.motion, &src_pca)?;
     let encode_s = t0.elapsed().as_secs_f64();
-    let template = mesh_core::io::read_mesh(&p.target_template)?;
-    capture::part_pca::check_same_template(
-        &mesh_core::artifact::sha256_file(&p.target_template)?,
-        &tgt_pca.template_sha256,
-        "this file is",
-        "the target PCA model was fitted on",
-    )
-    .with_context(|| p.target_template.display().to_string())?;
-    if template.n_vertices() != tgt_pca.n_vertices {
-        bail!(
-            "{}: {} vertices but the target PCA model was fitted on {}",
-            p.target_template.display(),
-            template.n_vertices(),
-            tgt_pca.n_vertices
-        );
-    }
-    let faces = template.faces;
-    let mut correct_stride = None;
-    let mut recon = match (&p.surface, &p.segmentation) {
-        (Surface::Assemble, _) | (_, None) => None,
-        (surface, Some(seg_path)) => {
-            let seg = Segmentation::load(seg_path)?;
-            // The correction's training part meshes, read a frame at a time: the training
-            // motions are never held whole. Stitching alone uses none.
-            let corrected = matches!(surface, Surface::Correct | Surface::CorrectStitch);
-            let paths = if corrected { p.target_training.as_slice() } else { &[] };
-            let budget = p.memory_budget.saturating_mul(1 << 20);
-            let stride = match p.correct_stride {
-                Some(n) => Stride::Every(n.into()),
-                None => Stride::Within(budget),
-            };
-            let (training, used) = training_part_meshes(&tgt_pca, paths, stride)?;
-            correct_stride = corrected.then_some(used);
-            if used > 1 && p.correct_stride.is_none() {
-                mesh_core::warn!(
-                    "the target's training part meshes do not fit in --memory-budget {} MiB: the correction uses every {used}th training frame (--correct-stride or a larger budget to choose)",
-                    p.memory_budget
-                );
-            }
-            Some(
-                Reconstructor::with_training_meshes(
-                    &tgt_pca,
-                    &seg,
-                    &faces,
-                    training,
-                    *surface,
-                    p.neighbours.into(),
-                )
-                .with_context(|| seg_path.display().to_string())?
-                .with_corrected_assembly(p.corrected_out.is_some())
-                .with_correction_cache(budget)
-                .with_progress(mesh_core::cli::progress_bar(
-                    0,
-                    "gpr-predict: surface",
-                    &p.common,
-                )),
-            )
-        }
-    };
+    let faces = target_faces(p, &tgt_pca)?;
+    let (mut recon, correct_stride) = reconstructor(p, &tgt_pca, &faces)?;
     let transfer_start = Instant::now();
     let mut result = transfer_motion(
         &model,
@@ -240,19 +165,7 @@ pub fn run(p: &Params) -> anyhow::Result<()> {
         mesh_core::atomic::write_bytes_atomic(path, serde_json::to_string(&c)?.as_bytes())?;
     }
     let t1 = Instant::now();
-    // One output frame per source frame: the sequence plays at the source motion's rate. A
-    // model trained on source motions of another rate learnt displacements per frame of that
-    // rate, which the message says.
-    let fps = (motion.info.capture.fps > 0.0).then_some(motion.info.capture.fps);
-    let (_, _, model_header) = mesh_core::artifact::read_header(&p.model)?;
-    if let (Some(fps), Some(trained)) = (fps, model_header.params.get("source_fps").and_then(|f| f.as_f64())) {
-        if fps != trained {
-            mesh_core::warn!(
-                "{}: {fps} fps, the model's source motions {trained} fps: its displacements are per frame of those",
-                p.motion.display()
-            );
-        }
-    }
+    let fps = output_rate(p, &motion)?;
     let writer = mesh_core::io::ply_frames::PlyFrames::new(tgt_pca.n_vertices, &faces);
     let outputs = [(p.corrected_out.as_ref(), result.corrected_frames.as_mut()), (Some(&p.out), Some(&mut result.frames))];
     for (dir, frames) in outputs {
@@ -264,19 +177,133 @@ pub fn run(p: &Params) -> anyhow::Result<()> {
         }))?;
         bar.finish_and_clear();
     }
-    let write = t1.elapsed().as_secs_f64();
-    let n = motion.n_frames() as f64;
+    let seconds = Seconds { encode: encode_s, total, write: t1.elapsed().as_secs_f64() };
+    report_timing(p, motion.n_frames(), &seconds, &result.timing, recon.as_ref(), correct_stride)
+}
+
+/// Fails unless both PCA models have the model's parts and are the ones it was trained with.
+fn check_models(p: &Params, model: &GprModel, src_pca: &PcaModel, tgt_pca: &PcaModel) -> anyhow::Result<()> {
+    for (pca, path) in [(src_pca, &p.source_pca), (tgt_pca, &p.target_pca)] {
+        let names: Vec<&String> = pca.parts.iter().map(|part| &part.name).collect();
+        if names
+            .iter()
+            .map(|s| s.as_str())
+            .ne(model.part_names.iter().map(|s| s.as_str()))
+        {
+            bail!(
+                "{}: parts {:?} differ from the model's {:?}",
+                path.display(),
+                names,
+                model.part_names
+            );
+        }
+    }
+    model
+        .templates
+        .check(src_pca, tgt_pca)
+        .with_context(|| format!("{} with {} and {}", p.model.display(), p.source_pca.display(), p.target_pca.display()))?;
+    Ok(())
+}
+
+/// The faces of `--target-template`, once it is checked to be the target PCA model's template.
+fn target_faces(p: &Params, tgt_pca: &PcaModel) -> anyhow::Result<Vec<[u32; 3]>> {
+    let template = mesh_core::io::read_mesh(&p.target_template)?;
+    capture::part_pca::check_same_template(
+        &mesh_core::artifact::sha256_file(&p.target_template)?,
+        &tgt_pca.template_sha256,
+        "this file is",
+        "the target PCA model was fitted on",
+    )
+    .with_context(|| p.target_template.display().to_string())?;
+    if template.n_vertices() != tgt_pca.n_vertices {
+        bail!(
+            "{}: {} vertices but the target PCA model was fitted on {}",
+            p.target_template.display(),
+            template.n_vertices(),
+            tgt_pca.n_vertices
+        );
+    }
+    Ok(template.faces)
+}
+
+/// The surface step `--surface` asks for (none to assemble the parts), and with a correction
+/// the stride of the training frames it uses.
+fn reconstructor(p: &Params, tgt_pca: &PcaModel, faces: &[[u32; 3]]) -> anyhow::Result<(Option<Reconstructor>, Option<usize>)> {
+    let (surface, seg_path) = match (&p.surface, &p.segmentation) {
+        (Surface::Assemble, _) | (_, None) => return Ok((None, None)),
+        (surface, Some(seg_path)) => (*surface, seg_path),
+    };
+    let seg = Segmentation::load(seg_path)?;
+    // The correction's training part meshes, read a frame at a time: the training
+    // motions are never held whole. Stitching alone uses none.
+    let corrected = matches!(surface, Surface::Correct | Surface::CorrectStitch);
+    let paths = if corrected { p.target_training.as_slice() } else { &[] };
+    let budget = p.memory_budget.saturating_mul(1 << 20);
+    let stride = match p.correct_stride {
+        Some(n) => Stride::Every(n.into()),
+        None => Stride::Within(budget),
+    };
+    let (training, used) = training_part_meshes(tgt_pca, paths, stride)?;
+    if used > 1 && p.correct_stride.is_none() {
+        mesh_core::warn!(
+            "the target's training part meshes do not fit in --memory-budget {} MiB: the correction uses every {used}th training frame (--correct-stride or a larger budget to choose)",
+            p.memory_budget
+        );
+    }
+    let recon = Reconstructor::with_training_meshes(tgt_pca, &seg, faces, training, surface, p.neighbours.into())
+        .with_context(|| seg_path.display().to_string())?
+        .with_corrected_assembly(p.corrected_out.is_some())
+        .with_correction_cache(budget)
+        .with_progress(mesh_core::cli::progress_bar(0, "gpr-predict: surface", &p.common));
+    Ok((Some(recon), corrected.then_some(used)))
+}
+
+/// The output's frame rate: one output frame per source frame, so the sequence plays at the
+/// source motion's rate. A model trained on source motions of another rate learnt
+/// displacements per frame of that rate, which a warning says.
+fn output_rate(p: &Params, motion: &SourceMotion) -> anyhow::Result<Option<f64>> {
+    let fps = (motion.info.capture.fps > 0.0).then_some(motion.info.capture.fps);
+    let (_, _, model_header) = mesh_core::artifact::read_header(&p.model)?;
+    if let (Some(fps), Some(trained)) = (fps, model_header.params.get("source_fps").and_then(|f| f.as_f64())) {
+        if fps != trained {
+            mesh_core::warn!(
+                "{}: {fps} fps, the model's source motions {trained} fps: its displacements are per frame of those",
+                p.motion.display()
+            );
+        }
+    }
+    Ok(fps)
+}
+
+/// Wall times of a transfer (s): encoding the source, encoding to surface (`total`), writing.
+struct Seconds {
+    encode: f64,
+    total: f64,
+    write: f64,
+}
+
+/// Logs the transfer's timing (`-v`) and writes `--timing`.
+fn report_timing(
+    p: &Params,
+    frames: usize,
+    seconds: &Seconds,
+    timing: &crate::predict::Timing,
+    recon: Option<&Reconstructor>,
+    correct_stride: Option<usize>,
+) -> anyhow::Result<()> {
+    let (encode_s, total, write) = (seconds.encode, seconds.total, seconds.write);
+    let n = frames as f64;
     mesh_core::info!(
         "{} frames: encode {:.4} s, GP {:.4} s ({:.0} frames/s), decode+assemble {:.4} s, total {:.4} s, PLY writing {:.3} s",
         n,
         encode_s,
-        result.timing.gp_s,
-        n / result.timing.gp_s.max(1e-12),
-        result.timing.decode_s,
+        timing.gp_s,
+        n / timing.gp_s.max(1e-12),
+        timing.decode_s,
         total,
         write
     );
-    let surface = recon.as_ref().map(|r| r.timing());
+    let surface = recon.map(|r| r.timing());
     if let Some(t) = &surface {
         let s = t.nearest_s + t.correct_s + t.merge_s;
         mesh_core::info!(
@@ -290,12 +317,12 @@ pub fn run(p: &Params) -> anyhow::Result<()> {
     }
     if let Some(path) = &p.timing {
         let mut json = serde_json::json!({
-            "frames": motion.n_frames(), "encode_s": encode_s, "gp_s": result.timing.gp_s,
-            "gp_frames_per_s": n / result.timing.gp_s.max(1e-12), "decode_assemble_s": result.timing.decode_s,
+            "frames": frames, "encode_s": encode_s, "gp_s": timing.gp_s,
+            "gp_frames_per_s": n / timing.gp_s.max(1e-12), "decode_assemble_s": timing.decode_s,
             "total_s": total, "frames_per_s_without_writing": n / total.max(1e-12), "ply_write_s": write,
-            "unstitched_frames": recon.as_ref().map_or(0, |r| r.unstitched_frames()),
+            "unstitched_frames": recon.map_or(0, |r| r.unstitched_frames()),
             "correct_stride": correct_stride,
-            "factorisations": recon.as_ref().map_or(0, |r| r.factorisations()),
+            "factorisations": recon.map_or(0, |r| r.factorisations()),
         });
         if let Some(t) = surface {
             json["surface_s"] = serde_json::to_value(t)?;
