@@ -151,6 +151,8 @@ fn confidence_files(dir: &std::path::Path, frames: usize, eval_frames: usize) ->
         frame_pose_m,
         reference_frames: None,
         still_rms_pose_m: None,
+        dtw_rms_pose_m: None,
+        still_dtw_rms_pose_m: None,
     };
     let (cp, ep) = (dir.join("punch-confidence.json"), dir.join("punch-eval.json"));
     std::fs::write(&cp, serde_json::to_string(&c).unwrap()).unwrap();

@@ -62,6 +62,13 @@ pub struct EvalRecord {
     /// With `--time-normalise` and `--template`: the pose error of the template held still.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub still_rms_pose_m: Option<f64>,
+    /// With `--time-normalise`: the pose error along the timing-free alignment of the prediction's
+    /// frames with the reference's (`crate::reference_score::dtw_rms`).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub dtw_rms_pose_m: Option<f64>,
+    /// With `--time-normalise` and `--template`: the same for the template held still.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub still_dtw_rms_pose_m: Option<f64>,
 }
 
 /// What a transfer shows without truth, measured on the source's contacts.

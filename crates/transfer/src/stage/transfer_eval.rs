@@ -45,7 +45,9 @@ pub struct Params {
     pub truth: Option<PathBuf>,
     /// TRUTH is a reference performance: the target performing the motion its own way, timed
     /// differently. Each frame is compared with the reference at the same fraction of its
-    /// length; with --template, the template held still is scored too (`still_rms_pose_m`)
+    /// length, and along the frames' least-cost alignment (`dtw_rms_pose_m`, timing-free); with
+    /// --template, the template held still is scored too (`still_rms_pose_m`,
+    /// `still_dtw_rms_pose_m`)
     #[arg(long, conflicts_with = "contacts", requires = "truth")]
     pub time_normalise: bool,
     /// Direction label for the record, e.g. A->B
@@ -171,6 +173,8 @@ fn record(p: &Params, pred: &MeshSequence, pose: Option<f64>, placed: Option<f64
         frame_pose_m: frames,
         reference_frames: None,
         still_rms_pose_m: None,
+        dtw_rms_pose_m: None,
+        still_dtw_rms_pose_m: None,
     }
 }
 
@@ -185,6 +189,8 @@ fn reference_record(p: &Params, pred: &MeshSequence, reference: &MeshSequence) -
     Ok(EvalRecord {
         reference_frames: Some(reference.n_frames()),
         still_rms_pose_m: s.still_rms_pose_m,
+        dtw_rms_pose_m: s.dtw_rms_pose_m,
+        still_dtw_rms_pose_m: s.still_dtw_rms_pose_m,
         ..record(p, pred, Some(s.rms_pose_m), Some(s.rms_placed_m), s.frame_pose_m)
     })
 }
