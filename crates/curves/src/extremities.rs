@@ -157,28 +157,129 @@ struct Tip {
 /// Chooses the five extremities of the body in `graph` (`up`: the subject's up axis, unit),
 /// taking the `hints` (name to vertex) as given.
 pub fn find(graph: &BodyGraph, up: &Vector3<f64>, hints: &BTreeMap<String, u32>) -> Result<Extremities> {
-    let pos = &graph.mesh.vertices;
-    let n = pos.len();
-    let h = |v: u32| pos[v as usize].dot(up);
-    let heights: Vec<f64> = pos.iter().map(|p| p.dot(up)).collect();
-    let base = heights.iter().copied().fold(f64::INFINITY, f64::min);
-    let extent = heights.iter().copied().fold(f64::NEG_INFINITY, f64::max) - base;
-    if !(extent > 0.0) {
-        bail!("the template is flat along the up axis");
+    let body = Body::new(graph, up)?;
+    let mut c = Candidates::find(&body, hints);
+    let free = free_candidates(&body, &c);
+    let head = choose_head(&body, &mut c, &free, hints)?;
+    let hint = |name: &str| c.hinted(hints, name);
+    let (hanging, limbs) = split_hanging(&body, &c, &free, head);
+    let feet = choose_feet(&body, &c, &limbs, [hint("foot_l"), hint("foot_r")])?;
+    let arms = Arms::new(&body, &c, head, feet);
+    if mesh_core::cli::verbosity() >= 2 {
+        arms.log(&free, &hanging);
     }
-    // A start for the sampling: the vertex nearest the per-axis median of the positions.
+    let hands = choose_hands(&arms, &limbs, [hint("hand_l"), hint("hand_r")])?;
+    let hands = left_first(hands, hint("hand_l"), hint("hand_r"), &|k: usize| arms.root_side(k));
+    let feet = left_first(feet, hint("foot_l"), hint("foot_r"), &|k: usize| graph.position(c.v(k)).dot(&arms.left));
+    let missing_side = arms.left.norm() == 0.0 && (hint("hand_l").or(hint("hand_r")).is_none() || hint("foot_l").or(hint("foot_r")).is_none());
+    Ok(Extremities {
+        vertices: [c.v(head), c.v(hands[0]), c.v(hands[1]), c.v(feet[0]), c.v(feet[1])],
+        height: arms.height,
+        left: arms.left,
+        hanging: hanging.iter().map(|&k| c.v(k)).collect(),
+        centre: c.centre,
+        sided: !missing_side,
+    })
+}
+
+/// The body's graph with its up axis and its span along it.
+struct Body<'a> {
+    graph: &'a BodyGraph<'a>,
+    up: &'a Vector3<f64>,
+    /// The lowest height of a vertex along `up`.
+    base: f64,
+    /// The highest height of a vertex along `up` less the lowest.
+    extent: f64,
+}
+
+impl<'a> Body<'a> {
+    /// The span of `graph`'s vertices along `up`; an error when it is none.
+    fn new(graph: &'a BodyGraph<'a>, up: &'a Vector3<f64>) -> Result<Self> {
+        let heights: Vec<f64> = graph.mesh.vertices.iter().map(|p| p.dot(up)).collect();
+        let base = heights.iter().copied().fold(f64::INFINITY, f64::min);
+        let extent = heights.iter().copied().fold(f64::NEG_INFINITY, f64::max) - base;
+        if !(extent > 0.0) {
+            bail!("the template is flat along the up axis");
+        }
+        Ok(Body { graph, up, base, extent })
+    }
+
+    /// The height of vertex `v` along the up axis.
+    fn h(&self, v: u32) -> f64 {
+        self.graph.mesh.vertices[v as usize].dot(self.up)
+    }
+
+    /// The least distance between two candidates: [`MIN_SEPARATION`] body heights.
+    fn separation(&self) -> f64 {
+        MIN_SEPARATION * self.extent
+    }
+}
+
+/// The candidate tips (step 1) and the body's centre.
+struct Candidates {
+    tips: Vec<Tip>,
+    /// How many of `tips`, the first ones, are hinted vertices.
+    hinted: usize,
+    /// The vertex whose largest distance to the first five sampled tips is least.
+    centre: u32,
+    /// Distances from the centre, with their shortest paths.
+    from_centre: Distances,
+}
+
+impl Candidates {
+    /// The hinted vertices, then the sampled tips moved to the ends of their limbs, and the
+    /// centre found from the sampled tips.
+    fn find(body: &Body, hints: &BTreeMap<String, u32>) -> Candidates {
+        let start = median_vertex(&body.graph.mesh.vertices);
+        let (mut tips, hinted) = sample_tips(body, hints, start);
+        let centre = body_centre(&tips, body.graph.n_vertices(), start);
+        let from_centre = body.graph.distances(&[centre]);
+        snap_to_tips(body, &mut tips, hinted, &from_centre.d);
+        Candidates { tips, hinted, centre, from_centre }
+    }
+
+    /// The vertex of tip `k`.
+    fn v(&self, k: usize) -> u32 {
+        self.tips[k].v
+    }
+
+    /// The distance of tip `k` from the centre.
+    fn to_centre(&self, k: usize) -> f64 {
+        self.from_centre.d[self.tips[k].v as usize]
+    }
+
+    /// The distance between tips `a` and `b`.
+    fn between(&self, a: usize, b: usize) -> f64 {
+        self.tips[a].d[self.tips[b].v as usize]
+    }
+
+    /// The tip of the extremity `name` when it is hinted (the first tip when the hinted vertex
+    /// is no tip).
+    fn hinted(&self, hints: &BTreeMap<String, u32>, name: &str) -> Option<usize> {
+        hints.get(name).map(|&v| self.tips.iter().position(|t| t.v == v).unwrap_or(0))
+    }
+}
+
+/// The vertex nearest the per-axis median of the positions (the first when there are several,
+/// 0 when there is none): where the sampling starts.
+fn median_vertex(pos: &[Vector3<f64>]) -> u32 {
     let median = |k: usize| {
         let mut c: Vec<f64> = pos.iter().map(|p| p[k]).collect();
         c.sort_by(f64::total_cmp);
         c[c.len() / 2]
     };
     let m = Vector3::new(median(0), median(1), median(2));
-    let start = (0..n as u32).min_by(|&a, &b| (pos[a as usize] - m).norm().total_cmp(&(pos[b as usize] - m).norm())).unwrap_or(0);
-    let d_start = graph.distances(&[start]).d;
+    (0..pos.len() as u32).min_by(|&a, &b| (pos[a as usize] - m).norm().total_cmp(&(pos[b as usize] - m).norm())).unwrap_or(0)
+}
 
-    // 1. Candidates: the hints, then farthest-point sampling.
+/// Farthest-point sampling in geodesic distance: the hinted vertices first (their count is
+/// returned with the tips), else the vertex farthest from `start`; then the vertex farthest from
+/// every tip so far, while that distance exceeds the separation, until [`MAX_CANDIDATES`] are
+/// sampled.
+fn sample_tips(body: &Body, hints: &BTreeMap<String, u32>, start: u32) -> (Vec<Tip>, usize) {
+    let graph = body.graph;
     let mut tips: Vec<Tip> = Vec::new();
-    let mut dmin = vec![f64::INFINITY; n];
+    let mut dmin = vec![f64::INFINITY; graph.n_vertices()];
     let add = |tips: &mut Vec<Tip>, dmin: &mut Vec<f64>, v: u32| {
         let d = graph.distances(&[v]).d;
         for (m, x) in dmin.iter_mut().zip(&d) {
@@ -191,30 +292,38 @@ pub fn find(graph: &BodyGraph, up: &Vector3<f64>, hints: &BTreeMap<String, u32>)
     }
     let hinted = tips.len();
     if tips.is_empty() {
-        add(&mut tips, &mut dmin, argmax(&d_start));
+        add(&mut tips, &mut dmin, argmax(&graph.distances(&[start]).d));
     }
     while tips.len() < MAX_CANDIDATES + hinted {
         let next = argmax(&dmin);
-        if !(dmin[next as usize] > MIN_SEPARATION * extent) {
+        if !(dmin[next as usize] > body.separation()) {
             break;
         }
         add(&mut tips, &mut dmin, next);
     }
-    // The centre: the vertex whose farthest distance to the first five tips is least (the
-    // middle of the body between head, hands and feet).
+    (tips, hinted)
+}
+
+/// The body's centre: of the `n` vertices, the one whose farthest distance to the first five
+/// tips is least (the middle of the body between head, hands and feet; the lowest index of
+/// equals); `start` when there are no vertices.
+fn body_centre(tips: &[Tip], n: usize, start: u32) -> u32 {
     let first = &tips[..tips.len().min(5)];
-    let centre = (0..n as u32)
+    (0..n as u32)
         .min_by(|&a, &b| {
             let far = |v: u32| first.iter().map(|t| t.d[v as usize]).fold(0.0, f64::max);
             far(a).total_cmp(&far(b)).then(a.cmp(&b))
         })
-        .unwrap_or(start);
-    let from_centre = graph.distances(&[centre]);
-    let dc = &from_centre.d;
-    // Each sampled candidate moved up the distance from the centre to the tip it lies on
-    // (a point half-way down a leg becomes the toe); of tips nearer each other than
-    // MIN_SEPARATION the one farthest from the centre is kept (the top of the head, not the end
-    // of a braid hidden inside it).
+        .unwrap_or(start)
+}
+
+/// Replaces the sampled tips (those after the `hinted` ones) by the ends they lie on: each is
+/// moved up the distance from the centre (`dc`) until no neighbour lies farther (a point
+/// half-way down a leg becomes the toe). Ends that coincide or are a hinted vertex are dropped;
+/// the others are kept farthest from the centre first, each unless it lies within the separation
+/// of a tip already kept (the top of the head is kept, not the end of a braid hidden inside it).
+fn snap_to_tips(body: &Body, tips: &mut Vec<Tip>, hinted: usize, dc: &[f64]) {
+    let graph = body.graph;
     let mut snapped: Vec<u32> = Vec::new();
     for t in &tips[hinted..] {
         let mut v = t.v;
@@ -229,135 +338,205 @@ pub fn find(graph: &BodyGraph, up: &Vector3<f64>, hints: &BTreeMap<String, u32>)
     snapped.sort_by(|&a, &b| dc[b as usize].total_cmp(&dc[a as usize]).then(a.cmp(&b)));
     for v in snapped {
         let d = graph.distances(&[v]).d;
-        if tips.iter().all(|t| d[t.v as usize] > MIN_SEPARATION * extent) {
+        if tips.iter().all(|t| d[t.v as usize] > body.separation()) {
             tips.push(Tip { v, d });
         }
     }
-    let free: Vec<usize> = (hinted..tips.len()).filter(|&k| (0..hinted).all(|j| tips[j].d[tips[k].v as usize] > MIN_SEPARATION * extent)).collect();
+}
 
-    // 2. Head: high and over the centre, at the top of the blob its tip lies on (the tip is
-    // where the blob is farthest from the centre, which on a head modelled as a piece of its
-    // own is opposite where it is joined, not its top).
+/// The sampled tips farther than the separation from every hinted vertex: those the extremities
+/// that are not hinted are chosen among.
+fn free_candidates(body: &Body, c: &Candidates) -> Vec<usize> {
+    (c.hinted..c.tips.len()).filter(|&k| (0..c.hinted).all(|j| c.between(j, k) > body.separation())).collect()
+}
+
+/// Step 2, the head's tip: the hinted one, else the free tip whose blob's top (its highest vertex
+/// within the separation) is highest along the up axis less [`HEAD_OFFSET_WEIGHT`] times the
+/// top's horizontal distance from the centre; that tip is then replaced by its top (the tip is
+/// where the blob is farthest from the centre, which on a head modelled as a piece of its own is
+/// opposite where it is joined, not its top).
+fn choose_head(body: &Body, c: &mut Candidates, free: &[usize], hints: &BTreeMap<String, u32>) -> Result<usize> {
+    if let Some(k) = c.hinted(hints, "head") {
+        return Ok(k);
+    }
+    let (pos, up) = (&body.graph.mesh.vertices, body.up);
+    let tips = &c.tips;
     let top = |k: usize| {
-        (0..n as u32).filter(|&v| tips[k].d[v as usize] < MIN_SEPARATION * extent).max_by(|&a, &b| h(a).total_cmp(&h(b))).unwrap_or(tips[k].v)
+        (0..pos.len() as u32).filter(|&v| tips[k].d[v as usize] < body.separation()).max_by(|&a, &b| body.h(a).total_cmp(&body.h(b))).unwrap_or(tips[k].v)
     };
     let over_centre = |k: usize| {
-        let off = pos[top(k) as usize] - pos[centre as usize];
-        h(top(k)) - HEAD_OFFSET_WEIGHT * (off - up * off.dot(up)).norm()
+        let off = pos[top(k) as usize] - pos[c.centre as usize];
+        body.h(top(k)) - HEAD_OFFSET_WEIGHT * (off - up * off.dot(up)).norm()
     };
-    let hinted_head = hints.get("head").map(|&v| tips.iter().position(|t| t.v == v).unwrap_or(0));
-    let head = match hinted_head {
-        Some(k) => k,
-        None => {
-            let k = free
-                .iter()
-                .copied()
-                .max_by(|&a, &b| over_centre(a).total_cmp(&over_centre(b)))
-                .ok_or_else(|| anyhow::anyhow!("no candidate for the head"))?;
-            let v = top(k);
-            tips[k] = Tip { v, d: graph.distances(&[v]).d };
-            k
-        }
-    };
-    let hint = |name: &str| hints.get(name).map(|&v| tips.iter().position(|t| t.v == v).unwrap_or(0));
-    let hv = tips[head].v;
-    let dh = &tips[head].d;
-    let to_head = dc[hv as usize];
-    // 3. Tips hanging from the head.
-    let excess = |k: usize| dh[tips[k].v as usize] + to_head - dc[tips[k].v as usize];
-    let near_head = |k: usize| tips[k].d[hv as usize] <= MIN_SEPARATION * extent;
-    let hanging: Vec<usize> = free.iter().copied().filter(|&k| k != head && !near_head(k) && excess(k) < HANGING_EXCESS * to_head).collect();
-    let limbs: Vec<usize> = free.iter().copied().filter(|&k| k != head && !near_head(k) && !hanging.contains(&k)).collect();
+    let k = free
+        .iter()
+        .copied()
+        .max_by(|&a, &b| over_centre(a).total_cmp(&over_centre(b)))
+        .ok_or_else(|| anyhow::anyhow!("no candidate for the head"))?;
+    let v = top(k);
+    c.tips[k] = Tip { v, d: body.graph.distances(&[v]).d };
+    Ok(k)
+}
 
-    // 4. Feet, then hands: symmetric pairs far apart.
-    let dck = |k: usize| dc[tips[k].v as usize];
-    let apart = |a: usize, b: usize| tips[a].d[tips[b].v as usize] > 0.8 * dck(a).min(dck(b));
-    let asymmetry = |a: usize, b: usize| (dck(a) - dck(b)).abs() / extent;
-    let pair = |pool: &[usize], fixed: [Option<usize>; 2], cost: &dyn Fn(usize, usize) -> f64| -> Option<[usize; 2]> {
-        let by_cost = |x: &(usize, usize), y: &(usize, usize)| cost(x.0, x.1).total_cmp(&cost(y.0, y.1));
-        match fixed {
-            [Some(a), Some(b)] => Some([a, b]),
-            [Some(f), None] | [None, Some(f)] => {
-                pool.iter().map(|&a| (f, a)).filter(|&(f, a)| a != f && apart(f, a)).min_by(by_cost).map(|(f, a)| [f, a])
-            }
-            [None, None] => pool
-                .iter()
-                .enumerate()
-                .flat_map(|(i, &a)| pool[i + 1..].iter().map(move |&b| (a, b)))
-                .filter(|&(a, b)| apart(a, b))
-                .min_by(by_cost)
-                .map(|(a, b)| [a, b]),
-        }
-    };
-    let feet_cost = |a: usize, b: usize| (h(tips[a].v) + h(tips[b].v) - 2.0 * base) / extent + 2.0 * asymmetry(a, b);
-    let feet = pair(&limbs, [hint("foot_l"), hint("foot_r")], &feet_cost)
-        .ok_or_else(|| anyhow::anyhow!("no pair of tips for the feet"))?;
-    // The hands lie far from the feet (not a heel or an ankle of a foot modelled in pieces) and,
-    // when the toes tell left from right, one on each side of the plane half-way between the feet.
-    let height = h(hv) - h(tips[feet[0]].v).min(h(tips[feet[1]].v));
-    let left = body_left(graph, up, [tips[feet[0]].v, tips[feet[1]].v], height);
-    let off_feet = |k: &usize| feet.iter().all(|&f| tips[f].d[tips[*k].v as usize] > LIMB_SEPARATION * extent);
-    // Where each tip's branch leaves the path from the head to the nearer foot, and how long it is.
-    let branch = Branches::new(graph, hv, [&tips[feet[0]].d, &tips[feet[1]].d]);
-    // An arm leaves the body at the shoulder, high up; a tail at the hip.
-    let root_height = |k: usize| (branch.root(tips[k].v, &tips[k].d).dot(up) - (h(hv) - height)) / height;
-    let upper = |k: &usize| root_height(*k) > UPPER_BODY && (h(tips[*k].v) - (h(hv) - height)) / height > HAND_LOWEST;
-    let thick = |k: &usize| tip_width(graph, tips[*k].v, &tips[*k].d, extent) > HAND_WIDTH * extent;
-    let rest: Vec<usize> = limbs.iter().copied().filter(|k| !feet.contains(k)).filter(off_feet).filter(upper).filter(thick).collect();
-    let o = SIDE_OFFSET * extent;
-    let root_side = |k: usize| branch.root(tips[k].v, &tips[k].d).dot(&left);
-    let sides = |a: usize, b: usize| left.norm() == 0.0 || (root_side(a) - root_side(b)).abs() > o;
-    // A branch counts up to where it enters the body's piece: a limb modelled as a piece of its
-    // own is joined where it is pushed into the body, at its root, a prop anywhere along it.
-    let body = graph.component[centre as usize];
-    let to_body = |k: usize| {
-        let path = from_centre.path_from(tips[k].v);
-        path.iter().find(|&&v| graph.component[v as usize] == body).map_or(0.0, |&v| tips[k].d[v as usize])
-    };
-    let length = |k: usize| branch.of(tips[k].v).0.min(if graph.component[tips[k].v as usize] == body { f64::INFINITY } else { to_body(k) });
-    let hands_cost = |a: usize, b: usize| {
-        // Two arms, not two ends of one: their branches share no way to each other.
-        let own_branches = tips[a].d[tips[b].v as usize] > 0.9 * (length(a) + length(b));
-        if sides(a, b) && own_branches { (ARM_ASYMMETRY * (length(a) - length(b)).abs() - length(a) - length(b)) / extent } else { f64::INFINITY }
-    };
-    if mesh_core::cli::verbosity() >= 2 {
-        mesh_core::info!("the legs part {:.3} from the head along the spine", branch.crotch);
-        for &k in &free {
-            let p = pos[tips[k].v as usize];
+/// The head excess of tip `k`: `d(x, head) + d(head, centre) - d(x, centre)`, twice the way
+/// from the head to where `x`'s path to the centre leaves it, or the detour over the head.
+fn head_excess(c: &Candidates, head: usize, k: usize) -> f64 {
+    c.between(head, k) + c.to_centre(head) - c.to_centre(k)
+}
+
+/// Whether tip `k` lies on the head: within the separation of its vertex.
+fn on_head(body: &Body, c: &Candidates, head: usize, k: usize) -> bool {
+    c.between(k, head) <= body.separation()
+}
+
+/// Step 3: of the free tips other than the head and not on it, those hanging from the head
+/// (head excess below [`HANGING_EXCESS`] times the head's distance to the centre) and the
+/// others, among which the limbs are chosen.
+fn split_hanging(body: &Body, c: &Candidates, free: &[usize], head: usize) -> (Vec<usize>, Vec<usize>) {
+    let to_head = c.to_centre(head);
+    let off_head: Vec<usize> = free.iter().copied().filter(|&k| k != head && !on_head(body, c, head, k)).collect();
+    off_head.iter().copied().partition(|&k| head_excess(c, head, k) < HANGING_EXCESS * to_head)
+}
+
+/// The pair of tips of `pool` of least `cost` (the first of equals) whose tips lie apart on the
+/// body (farther from each other than 0.8 times the nearer one's distance to the centre: not two
+/// toes of one foot), `fixed` (hinted) tips taken as they are.
+fn best_pair(c: &Candidates, pool: &[usize], fixed: [Option<usize>; 2], cost: &dyn Fn(usize, usize) -> f64) -> Option<[usize; 2]> {
+    let apart = |a: usize, b: usize| c.between(a, b) > 0.8 * c.to_centre(a).min(c.to_centre(b));
+    let by_cost = |x: &(usize, usize), y: &(usize, usize)| cost(x.0, x.1).total_cmp(&cost(y.0, y.1));
+    match fixed {
+        [Some(a), Some(b)] => Some([a, b]),
+        [Some(f), None] | [None, Some(f)] => pool.iter().map(|&a| (f, a)).filter(|&(f, a)| a != f && apart(f, a)).min_by(by_cost).map(|(f, a)| [f, a]),
+        [None, None] => pool
+            .iter()
+            .enumerate()
+            .flat_map(|(i, &a)| pool[i + 1..].iter().map(move |&b| (a, b)))
+            .filter(|&(a, b)| apart(a, b))
+            .min_by(by_cost)
+            .map(|(a, b)| [a, b]),
+    }
+}
+
+/// Step 4, the feet: the pair of `limbs` lowest along the up axis together plus twice the
+/// difference of their distances to the centre (in extents), `hinted` feet taken as they are.
+fn choose_feet(body: &Body, c: &Candidates, limbs: &[usize], hinted: [Option<usize>; 2]) -> Result<[usize; 2]> {
+    let asymmetry = |a: usize, b: usize| (c.to_centre(a) - c.to_centre(b)).abs() / body.extent;
+    let cost = |a: usize, b: usize| (body.h(c.v(a)) + body.h(c.v(b)) - 2.0 * body.base) / body.extent + 2.0 * asymmetry(a, b);
+    best_pair(c, limbs, hinted, &cost).ok_or_else(|| anyhow::anyhow!("no pair of tips for the feet"))
+}
+
+/// What tells the arms once head and feet are known: the branches off the spine, the body's
+/// height and its left.
+struct Arms<'a> {
+    body: &'a Body<'a>,
+    c: &'a Candidates,
+    /// The head's tip and the feet's.
+    head: usize,
+    feet: [usize; 2],
+    branch: Branches<'a>,
+    /// The head's height above the lower foot.
+    height: f64,
+    /// Towards the body's left ([`body_left`]).
+    left: Vector3<f64>,
+}
+
+impl<'a> Arms<'a> {
+    fn new(body: &'a Body<'a>, c: &'a Candidates, head: usize, feet: [usize; 2]) -> Self {
+        let hv = c.v(head);
+        let height = body.h(hv) - body.h(c.v(feet[0])).min(body.h(c.v(feet[1])));
+        let left = body_left(body.graph, body.up, [c.v(feet[0]), c.v(feet[1])], height);
+        let branch = Branches::new(body.graph, hv, [&c.tips[feet[0]].d, &c.tips[feet[1]].d]);
+        Arms { body, c, head, feet, branch, height, left }
+    }
+
+    /// The height of tip `k`'s branch root above the lower foot, in body heights.
+    fn root_height(&self, k: usize) -> f64 {
+        let t = &self.c.tips[k];
+        (self.branch.root(t.v, &t.d).dot(self.body.up) - (self.body.h(self.c.v(self.head)) - self.height)) / self.height
+    }
+
+    /// How far tip `k`'s branch root lies towards the left.
+    fn root_side(&self, k: usize) -> f64 {
+        let t = &self.c.tips[k];
+        self.branch.root(t.v, &t.d).dot(&self.left)
+    }
+
+    /// The body's width round tip `k` ([`tip_width`]).
+    fn width(&self, k: usize) -> f64 {
+        tip_width(self.body.graph, self.c.v(k), &self.c.tips[k].d, self.body.extent)
+    }
+
+    /// Whether tip `k` can be a hand: at least [`LIMB_SEPARATION`] from both feet (not a heel or
+    /// an ankle of a foot modelled in pieces), its branch's root higher than [`UPPER_BODY`] (an
+    /// arm leaves the body at the shoulder, high up; a tail at the hip), itself higher than
+    /// [`HAND_LOWEST`] and wider than [`HAND_WIDTH`].
+    fn can_be_hand(&self, k: usize) -> bool {
+        let (body, c, height) = (self.body, self.c, self.height);
+        let off_feet = self.feet.iter().all(|&f| c.between(f, k) > LIMB_SEPARATION * body.extent);
+        let upper = || self.root_height(k) > UPPER_BODY && (body.h(c.v(k)) - (body.h(c.v(self.head)) - height)) / height > HAND_LOWEST;
+        let thick = || self.width(k) > HAND_WIDTH * body.extent;
+        off_feet && upper() && thick()
+    }
+
+    /// The length of tip `k`'s branch, counted up to where it enters the body's piece (the
+    /// centre's): a limb modelled as a piece of its own is joined where it is pushed into the
+    /// body, at its root, a prop anywhere along it.
+    fn length(&self, k: usize) -> f64 {
+        let (graph, c) = (self.body.graph, self.c);
+        let piece = graph.component[c.centre as usize];
+        let to_body = || {
+            let path = c.from_centre.path_from(c.v(k));
+            path.iter().find(|&&v| graph.component[v as usize] == piece).map_or(0.0, |&v| c.tips[k].d[v as usize])
+        };
+        self.branch.of(c.v(k)).0.min(if graph.component[c.v(k) as usize] == piece { f64::INFINITY } else { to_body() })
+    }
+
+    /// The cost of tips `a` and `b` as the hands: [`ARM_ASYMMETRY`] times the difference of
+    /// their branches' lengths less the two lengths (in extents); infinite unless their roots lie
+    /// more than [`SIDE_OFFSET`] apart across the body (when it has a left) and their branches
+    /// share no way to each other (two arms, not two ends of one).
+    fn hands_cost(&self, a: usize, b: usize) -> f64 {
+        let (la, lb) = (self.length(a), self.length(b));
+        let sides = self.left.norm() == 0.0 || (self.root_side(a) - self.root_side(b)).abs() > SIDE_OFFSET * self.body.extent;
+        let own_branches = self.c.between(a, b) > 0.9 * (la + lb);
+        if sides && own_branches { (ARM_ASYMMETRY * (la - lb).abs() - la - lb) / self.body.extent } else { f64::INFINITY }
+    }
+
+    /// Logs where the legs part and, for each free tip, what the choices measure of it.
+    fn log(&self, free: &[usize], hanging: &[usize]) {
+        let (c, head) = (self.c, self.head);
+        mesh_core::info!("the legs part {:.3} from the head along the spine", self.branch.crotch);
+        for &k in free {
+            let p = self.body.graph.position(c.v(k));
             mesh_core::info!(
                 "candidate {} ({:.3}, {:.3}, {:.3}): to the centre {:.3}, head excess {:.3}, branch {:.3} leaving the spine {:.3} from the head, root side {:.3} height {:.3} width {:.3}{}",
-                tips[k].v, p.x, p.y, p.z, dc[tips[k].v as usize], excess(k), branch.of(tips[k].v).0, branch.of(tips[k].v).1, root_side(k), root_height(k), tip_width(graph, tips[k].v, &tips[k].d, extent) / extent,
-                if k == head { " (head)" } else if hanging.contains(&k) { " (hangs from the head)" } else if near_head(k) { " (on the head)" } else { "" }
+                c.v(k), p.x, p.y, p.z, c.to_centre(k), head_excess(c, head, k), self.branch.of(c.v(k)).0, self.branch.of(c.v(k)).1, self.root_side(k), self.root_height(k), self.width(k) / self.body.extent,
+                if k == head { " (head)" } else if hanging.contains(&k) { " (hangs from the head)" } else if on_head(self.body, c, head, k) { " (on the head)" } else { "" }
             );
         }
     }
-    let hands = pair(&rest, [hint("hand_l"), hint("hand_r")], &hands_cost)
-        .filter(|p| hands_cost(p[0], p[1]).is_finite() || (hint("hand_l").is_some() && hint("hand_r").is_some()))
-        .ok_or_else(|| anyhow::anyhow!("no pair of tips for the hands (head at vertex {hv})"))?;
+}
 
-    // 5. Left and right.
-    let side = |k: usize| pos[tips[k].v as usize].dot(&left);
-    let order_by = |p: [usize; 2], l: Option<usize>, r: Option<usize>, side: &dyn Fn(usize) -> f64| -> [usize; 2] {
-        match (l, r) {
-            (Some(l), _) => [l, if p[0] == l { p[1] } else { p[0] }],
-            (None, Some(r)) => [if p[0] == r { p[1] } else { p[0] }, r],
-            _ if side(p[0]) >= side(p[1]) => p,
-            _ => [p[1], p[0]],
-        }
-    };
-    let order = |p: [usize; 2], l: Option<usize>, r: Option<usize>| order_by(p, l, r, &side);
-    let hands = order_by(hands, hint("hand_l"), hint("hand_r"), &root_side);
-    let feet = order(feet, hint("foot_l"), hint("foot_r"));
-    let missing_side = left.norm() == 0.0 && (hint("hand_l").or(hint("hand_r")).is_none() || hint("foot_l").or(hint("foot_r")).is_none());
-    let ext = Extremities {
-        vertices: [hv, tips[hands[0]].v, tips[hands[1]].v, tips[feet[0]].v, tips[feet[1]].v],
-        height,
-        left,
-        hanging: hanging.iter().map(|&k| tips[k].v).collect(),
-        centre,
-        sided: !missing_side,
-    };
-    Ok(ext)
+/// Step 5, the hands: of the `limbs` other than the feet that can be hands, the pair of least
+/// [`Arms::hands_cost`], `hinted` hands taken as they are; an error when no pair has a finite
+/// cost and the two are not both hinted.
+fn choose_hands(arms: &Arms, limbs: &[usize], hinted: [Option<usize>; 2]) -> Result<[usize; 2]> {
+    let rest: Vec<usize> = limbs.iter().copied().filter(|k| !arms.feet.contains(k)).filter(|&k| arms.can_be_hand(k)).collect();
+    let cost = |a: usize, b: usize| arms.hands_cost(a, b);
+    best_pair(arms.c, &rest, hinted, &cost)
+        .filter(|p| cost(p[0], p[1]).is_finite() || (hinted[0].is_some() && hinted[1].is_some()))
+        .ok_or_else(|| anyhow::anyhow!("no pair of tips for the hands (head at vertex {})", arms.c.v(arms.head)))
+}
+
+/// Step 6: the pair `p` as `[left, right]`: a hinted left (`l`) or right (`r`) tip in its place,
+/// else the one of greater `side` (towards the left) first.
+fn left_first(p: [usize; 2], l: Option<usize>, r: Option<usize>, side: &dyn Fn(usize) -> f64) -> [usize; 2] {
+    match (l, r) {
+        (Some(l), _) => [l, if p[0] == l { p[1] } else { p[0] }],
+        (None, Some(r)) => [if p[0] == r { p[1] } else { p[0] }, r],
+        _ if side(p[0]) >= side(p[1]) => p,
+        _ => [p[1], p[0]],
+    }
 }
 
 /// The branches of the body off its spine, the shortest path from the head to the nearer foot:

@@ -8,7 +8,7 @@ use gp::dtw::{dtw_path, DtwOptions};
 use mesh_core::{Error, Result};
 use nalgebra::DMatrix;
 
-use crate::plot::{png_bytes, register_font};
+use crate::plot::{draw_legend, legend_line, png_bytes, register_font};
 
 /// Figure 3's data: the cost matrix (`F_s x F_t`), the DTW path, the
 /// key-poses and optionally the true correspondences.
@@ -156,9 +156,7 @@ impl CostFigure {
                 ))
                 .map_err(|x| e(&x))?
                 .label("true correspondences")
-                .legend(move |(x, y)| {
-                    PathElement::new(vec![(x, y), (x + 18, y)], rgb(TRUTH_COLOUR).stroke_width(2))
-                });
+                .legend(legend_line(rgb(TRUTH_COLOUR).stroke_width(2), 18));
         }
         chart
             .draw_series(LineSeries::new(
@@ -167,9 +165,7 @@ impl CostFigure {
             ))
             .map_err(|x| e(&x))?
             .label("DTW path (eq. 7)")
-            .legend(move |(x, y)| {
-                PathElement::new(vec![(x, y), (x + 18, y)], BLACK.stroke_width(2))
-            });
+            .legend(legend_line(BLACK.stroke_width(2), 18));
         chart
             .draw_series(
                 self.keyposes
@@ -179,14 +175,7 @@ impl CostFigure {
             .map_err(|x| e(&x))?
             .label("key-poses")
             .legend(move |(x, y)| Circle::new((x + 9, y), 5, rgb(KEY_COLOUR).stroke_width(2)));
-        chart
-            .configure_series_labels()
-            .background_style(WHITE.mix(0.85))
-            .border_style(BLACK)
-            .label_font(("sans-serif", 12))
-            .position(SeriesLabelPosition::LowerRight)
-            .draw()
-            .map_err(|x| e(&x))?;
+        draw_legend(&mut chart, SeriesLabelPosition::LowerRight, 0.85).map_err(|x| e(&x))?;
         let (a, b) = (
             chart.backend_coord(&(0.0, 0.0)),
             chart.backend_coord(&(fs as f64, ft as f64)),

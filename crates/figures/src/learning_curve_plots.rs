@@ -7,7 +7,7 @@ use std::path::Path;
 use mesh_core::{Error, Result};
 use transfer::learning_curves::{truncation_label, CurvePoint, CURVES};
 
-use crate::plot::{png_bytes, register_font};
+use crate::plot::{draw_legend, legend_line, png_bytes, register_font};
 
 /// The figures: `(file stem, title, curve labels)`; the PCA truncation floor
 /// of the figure's representation(s) is drawn too.
@@ -113,9 +113,7 @@ fn draw<DB: plotters::prelude::DrawingBackend>(
                 .draw_series(dashes)
                 .map_err(|x| e(&x))?
                 .label(name.clone())
-                .legend(move |(x, y)| {
-                    PathElement::new(vec![(x, y), (x + 6, y)], c.stroke_width(1))
-                });
+                .legend(legend_line(c.stroke_width(1), 6));
             continue;
         }
         let c = COLOURS[colour_index % COLOURS.len()];
@@ -126,28 +124,19 @@ fn draw<DB: plotters::prelude::DrawingBackend>(
             .draw_series(LineSeries::new(pts.iter().map(|p| (p.0, clip(p.2))), c.stroke_width(2)))
             .map_err(|x| e(&x))?
             .label(format!("{name} (held out{mark})"))
-            .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 18, y)], c.stroke_width(2)));
+            .legend(legend_line(c.stroke_width(2), 18));
         chart
             .draw_series(LineSeries::new(pts.iter().map(|p| (p.0, clip(p.1))), c.mix(0.5).stroke_width(1)))
             .map_err(|x| e(&x))?
             .label(format!("{name} (training)"))
-            .legend(move |(x, y)| {
-                PathElement::new(vec![(x, y), (x + 18, y)], c.mix(0.5).stroke_width(1))
-            });
+            .legend(legend_line(c.mix(0.5).stroke_width(1), 18));
         chart
             .draw_series(
                 pts.iter().map(|p| Circle::new((p.0, clip(p.1)), 3, c.mix(0.5).filled())),
             )
             .map_err(|x| e(&x))?;
     }
-    chart
-        .configure_series_labels()
-        .background_style(WHITE.mix(0.8))
-        .border_style(BLACK)
-        .label_font(("sans-serif", 12))
-        .position(SeriesLabelPosition::UpperRight)
-        .draw()
-        .map_err(|x| e(&x))?;
+    draw_legend(&mut chart, SeriesLabelPosition::UpperRight, 0.8).map_err(|x| e(&x))?;
     root.present().map_err(|x| e(&x))?;
     Ok(())
 }

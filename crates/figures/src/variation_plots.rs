@@ -10,7 +10,7 @@ use mesh_core::{Error, Result};
 use nalgebra::DMatrix;
 use variation::evaluate::{EvalFigures, EvalReport, ReconstructionError};
 
-use crate::plot::{png_bytes, register_font};
+use crate::plot::{draw_legend, legend_line, png_bytes, register_font};
 
 /// Distinct colours (cycled).
 pub const COLOURS: [(u8, u8, u8); 8] = [
@@ -77,9 +77,7 @@ pub fn latent_plot(path: &Path, title: &str, series: &[(String, DMatrix<f64>)]) 
                 .draw_series(LineSeries::new(line.clone(), c.stroke_width(2)))
                 .map_err(|x| e(&x))?
                 .label(label.clone())
-                .legend(move |(x, y)| {
-                    PathElement::new(vec![(x, y), (x + 18, y)], c.stroke_width(2))
-                });
+                .legend(legend_line(c.stroke_width(2), 18));
             if let Some(&p) = line.first() {
                 chart
                     .draw_series(std::iter::once(Circle::new(p, 4, c.filled())))
@@ -87,13 +85,7 @@ pub fn latent_plot(path: &Path, title: &str, series: &[(String, DMatrix<f64>)]) 
             }
         }
         if series.len() <= 8 {
-            chart
-                .configure_series_labels()
-                .background_style(WHITE.mix(0.8))
-                .border_style(BLACK)
-                .label_font(("sans-serif", 12))
-                .draw()
-                .map_err(|x| e(&x))?;
+            draw_legend(&mut chart, SeriesLabelPosition::MiddleRight, 0.8).map_err(|x| e(&x))?;
         }
         root.present().map_err(|x| e(&x))?;
     }
@@ -160,18 +152,12 @@ pub fn series_plot(
                 .draw_series(LineSeries::new(pts.clone(), c.stroke_width(2)))
                 .map_err(|x| e(&x))?
                 .label(label.clone())
-                .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 18, y)], c.stroke_width(2)));
+                .legend(legend_line(c.stroke_width(2), 18));
             if ticks.is_some() || pts.len() <= 40 {
                 chart.draw_series(pts.iter().map(|&p| Circle::new(p, 4, c.filled()))).map_err(|x| e(&x))?;
             }
         }
-        chart
-            .configure_series_labels()
-            .background_style(WHITE.mix(0.8))
-            .border_style(BLACK)
-            .label_font(("sans-serif", 12))
-            .draw()
-            .map_err(|x| e(&x))?;
+        draw_legend(&mut chart, SeriesLabelPosition::MiddleRight, 0.8).map_err(|x| e(&x))?;
         root.present().map_err(|x| e(&x))?;
     }
     write_png(path, w, h, &pixels)

@@ -67,59 +67,97 @@ fn parse_setting(s: &str) -> Result<(Option<ChainStart>, usize), String> {
 
 fn main() {
     let cli = <Cli as clap::Parser>::parse();
-    let (path, seeds, settings) = (cli.model, cli.seeds, cli.settings);
-    let model = VariationModel::load(&path).expect("a trained variation model");
-    let dec = Decoder::new(&model, &mut Vec::new()).expect("decoder");
-    let len = variation::frame_stride::covering_count(model.n_frames(), model.stride);
-    let chains: Vec<(usize, usize)> = (0..model.sequences.len())
-        .flat_map(|s| (0..model.parts.len()).map(move |k| (s, k)))
-        .collect();
-    // Reference per chain: exact draws' energies and distances from the mean prediction.
-    struct Reference {
-        e: (f64, f64),
-        dist: f64,
-    }
-    let reference: Vec<Reference> = chains
-        .par_iter()
-        .map(|&(s, k)| {
-            let pr = &dec.predictors[k];
-            let x = model.parts[k].gpdm.sequence_latent(s).expect("sequence");
-            let x1: Vec<f64> = x.row(0).iter().copied().collect();
-            let energy = TrajectoryEnergy::new(pr, &x1, len)
-                .and_then(|e| e.with_variance_scale(KAPPA))
-                .expect("energy");
-            let mean = pr.mean_trajectory(&x1, len).expect("mean");
-            let draws =
-                sample_trajectories_ancestral(pr, &x1, len, 400, 0xE4AC7, KAPPA).expect("draws");
-            let mut g = vec![0.0; energy.dim()];
-            let es: Vec<f64> = draws
-                .iter()
-                .map(|d| energy.energy_grad(&energy.free_coords(d), &mut g).expect("finite"))
-                .collect();
-            let dist = draws.iter().map(|d| rms(d, &mean)).sum::<f64>() / draws.len() as f64;
-            Reference {
-                e: mean_sd(&es),
-                dist,
-            }
-        })
-        .collect();
+    let model = VariationModel::load(&cli.model).expect("a trained variation model");
+    let chains = Chains::new(&model);
+    let reference = chains.references();
     println!(
-        "{path}: {} chains (sequences × parts), {len} latent points, {seeds} seeds, κ = {KAPPA}",
-        chains.len()
+        "{}: {} chains (sequences × parts), {} latent points, {} seeds, κ = {KAPPA}",
+        cli.model,
+        chains.chains.len(),
+        chains.len,
+        cli.seeds
     );
     println!("setting | mean z (sd over chains) | max |z| | chains |z|>2 | spread ratio | accept | energy evals");
-    for &(start, burn_in) in &settings {
-        let runs: Vec<(f64, f64, f64, usize)> = chains
+    for &(start, burn_in) in &cli.settings {
+        let runs = chains.run(start, burn_in, cli.seeds, &reference);
+        report(start, burn_in, &runs);
+    }
+}
+
+/// The chains `hmc-sample` runs on a trained model, one per training sequence and part.
+struct Chains<'a> {
+    model: &'a VariationModel,
+    dec: Decoder<'a>,
+    /// Latent points per chain (the model's frames at its stride).
+    len: usize,
+    /// `(sequence, part)` of each chain.
+    chains: Vec<(usize, usize)>,
+}
+
+/// A chain's exact draws: mean and standard deviation of their energies, and their mean latent
+/// RMS distance from the mean prediction.
+struct Reference {
+    e: (f64, f64),
+    dist: f64,
+}
+
+/// One chain's kept samples at one setting over every seed: `z` of their mean energy against
+/// the exact draws', their spread relative to the draws', the mean acceptance rate, and the
+/// energy evaluations.
+struct Run {
+    z: f64,
+    spread: f64,
+    accept: f64,
+    evaluations: usize,
+}
+
+impl<'a> Chains<'a> {
+    fn new(model: &'a VariationModel) -> Self {
+        let dec = Decoder::new(model, &mut Vec::new()).expect("decoder");
+        let len = variation::frame_stride::covering_count(model.n_frames(), model.stride);
+        let chains = (0..model.sequences.len()).flat_map(|s| (0..model.parts.len()).map(move |k| (s, k))).collect();
+        Chains { model, dec, len, chains }
+    }
+
+    /// The first latent point of sequence `s` of part `k`, and the energy of its trajectories at
+    /// [`KAPPA`].
+    fn energy(&self, s: usize, k: usize) -> (DMatrix<f64>, Vec<f64>, TrajectoryEnergy<'_>) {
+        let pr = &self.dec.predictors[k];
+        let x = self.model.parts[k].gpdm.sequence_latent(s).expect("sequence");
+        let x1: Vec<f64> = x.row(0).iter().copied().collect();
+        let energy = TrajectoryEnergy::new(pr, &x1, self.len).and_then(|e| e.with_variance_scale(KAPPA)).expect("energy");
+        (x, x1, energy)
+    }
+
+    /// Each chain's reference: 400 exact draws of its density.
+    fn references(&self) -> Vec<Reference> {
+        let len = self.len;
+        self.chains
+            .par_iter()
+            .map(|&(s, k)| {
+                let pr = &self.dec.predictors[k];
+                let (_, x1, energy) = self.energy(s, k);
+                let mean = pr.mean_trajectory(&x1, len).expect("mean");
+                let draws = sample_trajectories_ancestral(pr, &x1, len, 400, 0xE4AC7, KAPPA).expect("draws");
+                let mut g = vec![0.0; energy.dim()];
+                let es: Vec<f64> = draws.iter().map(|d| energy.energy_grad(&energy.free_coords(d), &mut g).expect("finite")).collect();
+                let dist = draws.iter().map(|d| rms(d, &mean)).sum::<f64>() / draws.len() as f64;
+                Reference { e: mean_sd(&es), dist }
+            })
+            .collect()
+    }
+
+    /// Every chain run `seeds` times at `make variation`'s settings from `start` (None: the
+    /// sequence's training trajectory) with `burn_in` iterations, against its `reference`.
+    fn run(&self, start: Option<ChainStart>, burn_in: usize, seeds: u64, reference: &[Reference]) -> Vec<Run> {
+        let len = self.len;
+        self.chains
             .par_iter()
             .enumerate()
             .map(|(c, &(s, k))| {
-                let pr = &dec.predictors[k];
-                let x = model.parts[k].gpdm.sequence_latent(s).expect("sequence");
-                let x1: Vec<f64> = x.row(0).iter().copied().collect();
+                let pr = &self.dec.predictors[k];
+                let (x, x1, energy) = self.energy(s, k);
                 let template = DMatrix::from_fn(len, x.ncols(), |t, j| x[(t.min(x.nrows() - 1), j)]);
-                let energy = TrajectoryEnergy::new(pr, &x1, len)
-                    .and_then(|e| e.with_variance_scale(KAPPA))
-                    .expect("energy");
                 let mean = pr.mean_trajectory(&x1, len).expect("mean");
                 let mut g = vec![0.0; energy.dim()];
                 let (mut es, mut dists, mut acc, mut evals) = (Vec::new(), Vec::new(), 0.0, 0);
@@ -132,8 +170,7 @@ fn main() {
                             sample_trajectories_scaled(pr, &template, &o, KAPPA).expect("chain")
                         }
                         None => {
-                            let res = sample(&energy, &energy.free_coords(&template), &o)
-                                .expect("chain");
+                            let res = sample(&energy, &energy.free_coords(&template), &o).expect("chain");
                             (res.samples.iter().map(|q| energy.trajectory(q)).collect(), res)
                         }
                     };
@@ -145,27 +182,34 @@ fn main() {
                     evals += res.evaluations;
                 }
                 let r = &reference[c];
-                let z = (mean_sd(&es).0 - r.e.0) / r.e.1;
-                let spread = dists.iter().sum::<f64>() / dists.len() as f64 / r.dist;
-                (z, spread, acc / seeds as f64, evals)
+                Run {
+                    z: (mean_sd(&es).0 - r.e.0) / r.e.1,
+                    spread: dists.iter().sum::<f64>() / dists.len() as f64 / r.dist,
+                    accept: acc / seeds as f64,
+                    evaluations: evals,
+                }
             })
-            .collect();
-        let zs: Vec<f64> = runs.iter().map(|r| r.0).collect();
-        let (zm, zsd) = mean_sd(&zs);
-        let zmax = zs.iter().fold(0.0f64, |m, z| m.max(z.abs()));
-        let over = zs.iter().filter(|z| z.abs() > 2.0).count();
-        let spread = runs.iter().map(|r| r.1).sum::<f64>() / runs.len() as f64;
-        let acc = runs.iter().map(|r| r.2).sum::<f64>() / runs.len() as f64;
-        let evals: usize = runs.iter().map(|r| r.3).sum();
-        let name = match start {
-            Some(ChainStart::MeanPrediction) => "mean",
-            Some(ChainStart::Ancestral) => "ancestral",
-            Some(ChainStart::Learned) => "learned",
-            None => "training",
-        };
-        println!(
-            "{name}:{burn_in} | {zm:+.2} ({zsd:.2}) | {zmax:.2} | {over}/{} | {spread:.3} | {acc:.2} | {evals}",
-            zs.len()
-        );
+            .collect()
     }
+}
+
+/// Prints the table's row of one setting.
+fn report(start: Option<ChainStart>, burn_in: usize, runs: &[Run]) {
+    let zs: Vec<f64> = runs.iter().map(|r| r.z).collect();
+    let (zm, zsd) = mean_sd(&zs);
+    let zmax = zs.iter().fold(0.0f64, |m, z| m.max(z.abs()));
+    let over = zs.iter().filter(|z| z.abs() > 2.0).count();
+    let spread = runs.iter().map(|r| r.spread).sum::<f64>() / runs.len() as f64;
+    let acc = runs.iter().map(|r| r.accept).sum::<f64>() / runs.len() as f64;
+    let evals: usize = runs.iter().map(|r| r.evaluations).sum();
+    let name = match start {
+        Some(ChainStart::MeanPrediction) => "mean",
+        Some(ChainStart::Ancestral) => "ancestral",
+        Some(ChainStart::Learned) => "learned",
+        None => "training",
+    };
+    println!(
+        "{name}:{burn_in} | {zm:+.2} ({zsd:.2}) | {zmax:.2} | {over}/{} | {spread:.3} | {acc:.2} | {evals}",
+        zs.len()
+    );
 }

@@ -6,10 +6,11 @@
 use studies::synthetic_pairs;
 use studies::gp_support as support;
 
-use gp::gpr::{initial_kernel, train_many, Gpr, GprOptions};
+use gp::gpr::{initial_kernel, train_many, Gpr, GprOptions, TrainReport};
 use gp::kernel::Kernel;
 use support::{cpu_seconds, l_sf, write_csv};
 use rayon::prelude::*;
+use nalgebra::DMatrix;
 use std::time::Instant;
 
 /// Times GP training and prediction of the 12 transfer models on synthetic pairs; --dump
@@ -34,7 +35,6 @@ struct Cli {
 
 fn main() {
     let cli = <Cli as clap::Parser>::parse();
-    let n = cli.pairs;
     let kernel = match cli.kernel.as_str() {
         "se" => Kernel::SquaredExponential {
             l: 1.0,
@@ -48,9 +48,26 @@ fn main() {
     if let Some(v) = cli.warm_start {
         opts.warm_start_pairs = v;
     }
-    let problems = synthetic_pairs::both_directions(n, 7);
+    let problems = synthetic_pairs::both_directions(cli.pairs, 7);
+    let trained = train(kernel, &problems, &opts, cli.pairs);
+    let frames_per_s = time_prediction(&trained.models);
+    if let Some(dir) = &cli.dump {
+        dump(dir, kernel, &problems, &opts, &trained, frames_per_s, cli.pairs);
+    }
+}
+
+/// The models trained side by side, their reports and the wall seconds they took.
+struct Trained {
+    models: Vec<Gpr>,
+    reports: Vec<(TrainReport, Kernel)>,
+    train_s: f64,
+}
+
+/// Trains the GP of every problem (`n` pairs) side by side and prints the time and each
+/// model's likelihood, then the evaluations of all.
+fn train(kernel: Kernel, problems: &[(DMatrix<f64>, DMatrix<f64>)], opts: &GprOptions, n: usize) -> Trained {
     let (t0, c0) = (Instant::now(), cpu_seconds());
-    let models = train_many(kernel, &problems, &opts);
+    let models = train_many(kernel, problems, opts);
     let (train_s, train_cpu) = (t0.elapsed().as_secs_f64(), cpu_seconds() - c0);
     println!(
         "pairs {n}: trained {} models ({}) in {train_s:.3} s wall, {train_cpu:.2} s CPU (rayon, {} threads)",
@@ -82,11 +99,16 @@ fn main() {
         trained.push(model);
     }
     println!("total evaluations {total_evals}, gradients {total_grads}");
-    // Prediction throughput: one direction (5 parts + displacement), many frames at once.
+    Trained { models: trained, reports: records, train_s }
+}
+
+/// Prints the prediction throughput of one direction's six models (5 parts + displacement),
+/// many frames at once, and returns it in frames per second.
+fn time_prediction(models: &[Gpr]) -> f64 {
     let frames = 5000;
     let test = synthetic_pairs::pairs(frames, 99);
     let t1 = Instant::now();
-    let preds: Vec<_> = trained[..6]
+    let preds: Vec<_> = models[..6]
         .par_iter()
         .zip(&test)
         .map(|(m, (x, _))| m.predict_mean(x).unwrap())
@@ -97,34 +119,38 @@ fn main() {
         frames as f64 / pred_s
     );
     assert_eq!(preds.len(), 6);
-    if let Some(dir) = cli.dump {
-        std::fs::create_dir_all(&dir).unwrap();
-        // Sequential single-thread timing per model, for a like-for-like ratio with GPy.
-        let mut items = Vec::new();
-        let mut seq_total = 0.0;
-        for (i, ((x, y), (rep, k))) in problems.iter().zip(&records).enumerate() {
-            write_csv(&dir.join(format!("problem_{i:02}_x.csv")), x).unwrap();
-            write_csv(&dir.join(format!("problem_{i:02}_y.csv")), y).unwrap();
-            let t = Instant::now();
-            let _ = Gpr::train(kernel, x, y, &opts).unwrap();
-            let secs = t.elapsed().as_secs_f64();
-            seq_total += secs;
-            let (l0, sf0) = l_sf(&initial_kernel(&kernel, x, y));
-            let (l, sf) = l_sf(k);
-            items.push(format!(
-                "{{\"index\": {i}, \"lml\": {:.10}, \"l\": {l:.10e}, \"sigma_f\": {sf:.10e}, \"l0\": {l0:.10e}, \"sigma_f0\": {sf0:.10e}, \"train_s\": {secs:.6}, \"exit\": \"{:?}\"}}",
-                rep.lml, rep.exit
-            ));
-        }
-        let json = format!(
-            "{{\"pairs\": {n}, \"kernel\": \"{}\", \"noise_var\": {}, \"parallel_train_s\": {train_s:.6}, \"sequential_train_s\": {seq_total:.6}, \"predict_frames_per_s\": {:.1}, \"models\": [\n  {}\n]}}\n",
-            kernel.name(), opts.noise_var, frames as f64 / pred_s, items.join(",\n  ")
-        );
-        std::fs::write(dir.join("rust.json"), json).unwrap();
-        println!(
-            "dumped {} problems to {} (sequential total {seq_total:.3} s)",
-            problems.len(),
-            dir.display()
-        );
+    frames as f64 / pred_s
+}
+
+/// Writes every problem as CSV into `dir` with our results in `rust.json`, after timing each
+/// model's training again on this thread alone (a like-for-like time against GPy).
+fn dump(dir: &std::path::Path, kernel: Kernel, problems: &[(DMatrix<f64>, DMatrix<f64>)], opts: &GprOptions, trained: &Trained, frames_per_s: f64, n: usize) {
+    let train_s = trained.train_s;
+    std::fs::create_dir_all(dir).unwrap();
+    let mut items = Vec::new();
+    let mut seq_total = 0.0;
+    for (i, ((x, y), (rep, k))) in problems.iter().zip(&trained.reports).enumerate() {
+        write_csv(&dir.join(format!("problem_{i:02}_x.csv")), x).unwrap();
+        write_csv(&dir.join(format!("problem_{i:02}_y.csv")), y).unwrap();
+        let t = Instant::now();
+        let _ = Gpr::train(kernel, x, y, opts).unwrap();
+        let secs = t.elapsed().as_secs_f64();
+        seq_total += secs;
+        let (l0, sf0) = l_sf(&initial_kernel(&kernel, x, y));
+        let (l, sf) = l_sf(k);
+        items.push(format!(
+            "{{\"index\": {i}, \"lml\": {:.10}, \"l\": {l:.10e}, \"sigma_f\": {sf:.10e}, \"l0\": {l0:.10e}, \"sigma_f0\": {sf0:.10e}, \"train_s\": {secs:.6}, \"exit\": \"{:?}\"}}",
+            rep.lml, rep.exit
+        ));
     }
+    let json = format!(
+        "{{\"pairs\": {n}, \"kernel\": \"{}\", \"noise_var\": {}, \"parallel_train_s\": {train_s:.6}, \"sequential_train_s\": {seq_total:.6}, \"predict_frames_per_s\": {:.1}, \"models\": [\n  {}\n]}}\n",
+        kernel.name(), opts.noise_var, frames_per_s, items.join(",\n  ")
+    );
+    std::fs::write(dir.join("rust.json"), json).unwrap();
+    println!(
+        "dumped {} problems to {} (sequential total {seq_total:.3} s)",
+        problems.len(),
+        dir.display()
+    );
 }

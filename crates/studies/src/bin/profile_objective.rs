@@ -585,7 +585,23 @@ fn main() {
         }
         None => {}
     }
-    let n = 446;
+    objective_pieces(446);
+    println!();
+    for n in [192, 446] {
+        compare(n, if n < 300 { 101 } else { 41 });
+    }
+    objective_threads(41);
+    println!();
+    for n in [192, 446] {
+        pieces(n, n + 7, if n < 300 { 101 } else { 41 });
+    }
+    old_new("synthetic", &synthetic::synthetic(15000, 1e-3), 41);
+}
+
+/// Times the pieces of one objective+gradient evaluation at `n` latent points (the pose
+/// kernel on a fixed 3-D latent layout): the Gram matrix, its Cholesky factor, `L⁻¹ S` for
+/// `S = X Xᵀ`, the sandwich, the kernel's gradients, and an N×N `gemm` for reference.
+fn objective_pieces(n: usize) {
     let x = Mat::from_fn(n, 3, |i, j| ((i * 3 + j) as f64 * 0.37).sin() * 2.0);
     let k = gpdm::kernel::RbfLinear::pose([1.0, 1.0, 10.0]);
     let g = time("gram", || k.gram(x.as_ref()));
@@ -599,16 +615,6 @@ fn main() {
     let q = time("sandwich", || c.sandwich(b.as_ref()));
     time("gradients", || k.gradients(&g, x.as_ref(), q.as_ref()));
     time("gemm NxN", || gpdm::linalg::mul(q.as_ref(), b.as_ref()));
-    println!();
-    for n in [192, 446] {
-        compare(n, if n < 300 { 101 } else { 41 });
-    }
-    objective_threads(41);
-    println!();
-    for n in [192, 446] {
-        pieces(n, n + 7, if n < 300 { 101 } else { 41 });
-    }
-    old_new("synthetic", &synthetic::synthetic(15000, 1e-3), 41);
 }
 
 fn objective_threads(reps: usize) {

@@ -12,7 +12,7 @@ use gpdm::hmc::HmcOptions;
 use mesh_core::artifact::Artifact;
 use rand_chacha::ChaCha8Rng;
 use surface::poisson::Factorisation;
-use variation::reconstruct::{Assembly, Decoder};
+use variation::reconstruct::{Assembly, DecodedParts, Decoder};
 use variation::sample::{default_hmc, sequence_variations_len, Sampler};
 use variation::train::VariationModel;
 
@@ -38,15 +38,28 @@ struct Cli {
 
 fn main() {
     let cli = <Cli as clap::Parser>::parse();
-    let (path, n) = (cli.model, cli.variations);
-    let model = VariationModel::load(&path).expect("a trained variation model");
+    let model = VariationModel::load(&cli.model).expect("a trained variation model");
     let dec = Decoder::new(&model, &mut Vec::new()).expect("decoder");
+    let decoded = decoded_variations(&model, &dec, cli.variations);
+    let frames: usize = decoded.iter().map(|d| d.displacements.len()).sum();
+    println!(
+        "{}: {} variations, {frames} frames, {} vertices",
+        cli.model,
+        decoded.len(),
+        model.template.len()
+    );
+    time_factorisations(&dec, &decoded, frames);
+}
+
+/// `n` exact ancestral draws of the first training sequence (up to 100 frames, κ = 0.3),
+/// decoded exactly to part poses.
+fn decoded_variations(model: &VariationModel, dec: &Decoder, n: usize) -> Vec<DecodedParts> {
     let opts = HmcOptions {
         n_samples: n,
         ..default_hmc(n, 0)
     };
     let (vars, _) = sequence_variations_len(
-        &dec,
+        dec,
         0,
         model.n_frames().min(100),
         Sampler::Ancestral,
@@ -55,16 +68,14 @@ fn main() {
         1,
     )
     .expect("samples");
-    let decoded: Vec<_> = vars
-        .iter()
+    vars.iter()
         .map(|x| dec.part_poses::<ChaCha8Rng>(x, None).expect("decoded"))
-        .collect();
-    let frames: usize = decoded.iter().map(|d| d.displacements.len()).sum();
-    println!(
-        "{path}: {} variations, {frames} frames, {} vertices",
-        decoded.len(),
-        model.template.len()
-    );
+        .collect()
+}
+
+/// Prints the stitched assembly's time per frame (of `frames` in `decoded`) for each
+/// factorisation, twice each, and the largest distance of its vertices from the first's.
+fn time_factorisations(dec: &Decoder, decoded: &[DecodedParts], frames: usize) {
     let mut reference: Option<Vec<Vec<Vec<nalgebra::Vector3<f64>>>>> = None;
     for how in [Factorisation::Auto, Factorisation::Supernodal] {
         for round in 0..2 {
