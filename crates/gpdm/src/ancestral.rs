@@ -44,9 +44,17 @@ pub fn sample_trajectories_ancestral(
 /// nearest the data.
 pub const MAX_REDRAWS: usize = 20;
 
+/// The threshold `hmc-sample --sampler ancestral` gives [`sample_trajectories_on_data`]: a
+/// point whose pose variance passes this share of the prior's is redrawn. Far below
+/// [`crate::hmc::OFF_DATA_VARIANCE`], which says where a point has left the data: a draw kept
+/// up to half the prior's variance already decodes to torn and spinning bodies (four capture
+/// sets, seeds 0-2: 129 torn and 193 spinning frames at 0.5, none and 49 at 0.02;
+/// docs/studies/45-ancestral-redraw-threshold.md).
+pub const REDRAW_VARIANCE: f64 = 0.02;
+
 /// [`sample_trajectories_ancestral`] restricted to the learned data: a drawn point whose pose
 /// variance (3DV eq. 13) passes `off_data` of the prior's (`Predictor::pose_variance_ratio`;
-/// the samplers use [`crate::hmc::OFF_DATA_VARIANCE`]) is redrawn from the same one-step
+/// `hmc-sample` uses [`REDRAW_VARIANCE`]) is redrawn from the same one-step
 /// predictive, up to [`MAX_REDRAWS`] times, after which the candidate with the smallest ratio
 /// is kept. Each accepted point is a draw of the one-step predictive truncated to the points
 /// on the data, so a trajectory cannot run away from the data into the prior's mean pose.

@@ -307,7 +307,7 @@ pub fn sequence_variations_len(
                         per,
                         o.seed,
                         variance_scale,
-                        gpdm::hmc::OFF_DATA_VARIANCE,
+                        gpdm::ancestral::REDRAW_VARIANCE,
                     )
                     .map_err(fail)?;
                     if off.iter().all(|&n| n == 0) {
