@@ -280,7 +280,7 @@ impl Gpr {
 
 /// Trains one GP per `(X, Y)` problem (body parts, displacement) in parallel with rayon,
 /// all with the same kernel family and options. Sets faer to sequential mode (its own
-/// threading is slower than one job per core; STACK.md); run with `OPENBLAS_NUM_THREADS=1`.
+/// threading was measured slower than one job per core on 2 cores); run with `OPENBLAS_NUM_THREADS=1`.
 pub fn train_many(
     kernel: Kernel,
     problems: &[(DMatrix<f64>, DMatrix<f64>)],

@@ -1,21 +1,29 @@
-//! Dense symmetric positive-definite solves: Cholesky (faer) with a logged jitter retry.
+//! Dense symmetric positive-definite solves: the one Cholesky factorisation of the project
+//! (faer, sequential) with a logged jitter retry, and the products around it.
 //!
-//! faer's dense Cholesky was the fastest option measured on this machine (STACK.md:
-//! 1.6 ms for 500 x 500 versus 4.7 ms nalgebra). Matrices cross the boundary as
-//! column-major slices, so no copies are made for the factorisation input.
+//! faer's dense Cholesky was the fastest option measured on this machine (1.6 ms for
+//! 500 x 500 versus 4.7 ms nalgebra). Matrices cross the boundary as column-major slices, so
+//! no copies are made for the factorisation input. The factorisation and its solves always run
+//! on the calling thread: parallelism, where any, lives above them (one GP, one chain or one
+//! body part per thread).
 
 use crate::{GpError, Result};
-use faer::linalg::solvers::{DenseSolveCore, Solve};
-use faer::{Mat, MatMut, MatRef, Side};
+use faer::dyn_stack::{MemBuffer, MemStack};
+use faer::linalg::cholesky::llt::factor::{cholesky_in_place, cholesky_in_place_scratch};
+use faer::linalg::triangular_solve::{solve_lower_triangular_in_place, solve_upper_triangular_in_place};
+use faer::reborrow::ReborrowMut;
+use faer::{Mat, MatMut, MatRef, Par, Side};
 use nalgebra::DMatrix;
 
-/// Jitter ladder, relative to the mean of the diagonal: tried in order after a plain
-/// factorisation fails.
-pub(crate) const JITTER_LADDER: [f64; 6] = [1e-10, 1e-8, 1e-6, 1e-5, 1e-4, 1e-3];
+/// Jitter ladder: after a plain factorisation fails, `c · mean |diag|` is added to the diagonal
+/// for `c` = 1e-10, 1e-9, ..., 1e-3 in turn.
+pub const JITTER_LADDER: [f64; 8] = [1e-10, 1e-9, 1e-8, 1e-7, 1e-6, 1e-5, 1e-4, 1e-3];
 
 /// A Cholesky factorisation `A + jitter I = L Lᵀ`.
+#[derive(Clone, Debug)]
 pub struct Cholesky {
-    llt: faer::linalg::solvers::Llt<f64>,
+    /// The lower-triangular factor `L` (its strict upper triangle is zero).
+    pub l: Mat<f64>,
     /// Absolute jitter that was added to the diagonal (0 when none was needed).
     pub jitter: f64,
 }
@@ -29,104 +37,151 @@ fn view_mut(a: &mut DMatrix<f64>) -> MatMut<'_, f64> {
     MatMut::from_column_major_slice_mut(a.as_mut_slice(), r, c)
 }
 
+/// Factors the lower triangle of `l` in place (faer uses the strict upper triangle as scratch,
+/// zeroed afterwards). False when a pivot is not positive or an entry is not finite.
+fn factor_in_place(l: &mut Mat<f64>) -> bool {
+    let n = l.nrows();
+    if !(0..n).all(|j| l.col_as_slice(j)[j..].iter().all(|v| v.is_finite())) {
+        return false;
+    }
+    let mut mem = MemBuffer::new(cholesky_in_place_scratch::<f64>(n, Par::Seq, Default::default()));
+    if cholesky_in_place(l.as_mut(), Default::default(), Par::Seq, MemStack::new(&mut mem), Default::default()).is_err() {
+        return false;
+    }
+    for j in 1..n {
+        l.col_as_slice_mut(j)[..j].fill(0.0);
+    }
+    true
+}
+
 impl Cholesky {
-    /// Factorises the symmetric matrix `a` (only its lower triangle is read). If the plain
-    /// factorisation fails, retries with `jitter = c * mean(diag a)` for `c` in 1e-10..1e-3,
-    /// pushing one line per retry into `notes` (`what` names the matrix in the note).
-    pub fn new(a: &DMatrix<f64>, what: &str, notes: &mut Vec<String>) -> Result<Self> {
-        let n = a.nrows();
-        if n != a.ncols() {
-            return crate::invalid(format!(
-                "{what}: Cholesky of a non-square {n}x{} matrix",
-                a.ncols()
-            ));
+    /// Factorises the symmetric matrix `k` (only its lower triangle is read). If the plain
+    /// factorisation fails, retries with `jitter = c · mean |diag k|` along [`JITTER_LADDER`];
+    /// the jitter used is returned in [`Cholesky::jitter`] for the caller to log. `what` names
+    /// the matrix in the error.
+    pub fn factor(k: MatRef<'_, f64>, what: &str) -> Result<Self> {
+        let n = k.nrows();
+        if n != k.ncols() {
+            return crate::invalid(format!("{what}: Cholesky of a non-square {n}x{} matrix", k.ncols()));
         }
-        if let Ok(llt) = view(a).llt(Side::Lower) {
-            return Ok(Self { llt, jitter: 0.0 });
+        let mut l = k.to_owned();
+        if factor_in_place(&mut l) {
+            return Ok(Self { l, jitter: 0.0 });
         }
-        let mean_diag = (0..n).map(|i| a[(i, i)].abs()).sum::<f64>() / n.max(1) as f64;
-        let scale = if mean_diag > 0.0 && mean_diag.is_finite() {
-            mean_diag
-        } else {
-            1.0
-        };
-        let mut jittered = a.clone();
+        let mean_diag = (0..n).map(|i| k[(i, i)].abs()).sum::<f64>() / n.max(1) as f64;
+        let scale = if mean_diag > 0.0 && mean_diag.is_finite() { mean_diag } else { 1.0 };
         let mut last = 0.0;
         for c in JITTER_LADDER {
             let jitter = c * scale;
+            let mut l = k.to_owned();
             for i in 0..n {
-                jittered[(i, i)] = a[(i, i)] + jitter;
+                l[(i, i)] += jitter;
             }
             last = jitter;
-            match view(&jittered).llt(Side::Lower) {
-                Ok(llt) => {
-                    notes.push(format!(
-                        "{what}: not positive definite, added jitter {jitter:.3e} to the diagonal"
-                    ));
-                    return Ok(Self { llt, jitter });
-                }
-                Err(_) => continue,
+            if factor_in_place(&mut l) {
+                return Ok(Self { l, jitter });
             }
         }
-        Err(GpError::NotPositiveDefinite {
-            what: what.to_string(),
-            jitter: last,
-        })
+        Err(GpError::NotPositiveDefinite { what: what.to_string(), jitter: last })
+    }
+
+    /// [`Cholesky::factor`] of an nalgebra matrix, pushing one line into `notes` when jitter
+    /// was needed.
+    pub fn new(a: &DMatrix<f64>, what: &str, notes: &mut Vec<String>) -> Result<Self> {
+        let c = Self::factor(view(a), what)?;
+        if c.jitter > 0.0 {
+            notes.push(format!("{what}: not positive definite, added jitter {:.3e} to the diagonal", c.jitter));
+        }
+        Ok(c)
+    }
+
+    /// [`Cholesky::factor`] without the copy: factors `k` (only its lower triangle is read)
+    /// in place, taking ownership. If the plain factorisation fails, the destroyed `k` is
+    /// rebuilt by `original` and [`Cholesky::factor`]'s jitter retries run on it.
+    pub fn factor_owned(mut k: Mat<f64>, what: &str, original: impl FnOnce() -> Mat<f64>) -> Result<Self> {
+        if k.nrows() == k.ncols() && factor_in_place(&mut k) {
+            return Ok(Self { l: k, jitter: 0.0 });
+        }
+        drop(k);
+        Self::factor(original().as_ref(), what)
     }
 
     /// Dimension of the factorised matrix.
     pub fn dim(&self) -> usize {
-        self.llt.L().nrows()
-    }
-
-    /// Solves `A X = B` for all columns of `B` at once (two triangular solves).
-    pub fn solve(&self, b: &DMatrix<f64>) -> DMatrix<f64> {
-        let mut x = b.clone();
-        self.llt.solve_in_place(view_mut(&mut x));
-        x
+        self.l.nrows()
     }
 
     /// `log |A| = 2 Σ log L_ii`.
     pub fn log_det(&self) -> f64 {
-        let l = self.llt.L();
-        (0..l.nrows()).map(|i| l[(i, i)].ln()).sum::<f64>() * 2.0
+        2.0 * (0..self.l.nrows()).map(|i| self.l[(i, i)].ln()).sum::<f64>()
     }
 
-    /// The lower-triangular factor `L` as an nalgebra matrix.
+    /// `rhs ← L⁻¹ rhs`.
+    pub fn half_solve_in_place(&self, rhs: MatMut<'_, f64>) {
+        solve_lower_triangular_in_place(self.l.as_ref(), rhs, Par::Seq);
+    }
+
+    /// `rhs ← L⁻ᵀ rhs`.
+    pub fn half_solve_t_in_place(&self, rhs: MatMut<'_, f64>) {
+        solve_upper_triangular_in_place(self.l.as_ref().transpose(), rhs, Par::Seq);
+    }
+
+    /// `rhs ← A⁻¹ rhs` by two triangular solves.
+    pub fn solve_in_place(&self, mut rhs: MatMut<'_, f64>) {
+        self.half_solve_in_place(rhs.rb_mut());
+        self.half_solve_t_in_place(rhs);
+    }
+
+    /// Solves `A X = B` for all columns of `B` at once.
+    pub fn solve(&self, b: &DMatrix<f64>) -> DMatrix<f64> {
+        let mut x = b.clone();
+        self.solve_in_place(view_mut(&mut x));
+        x
+    }
+
+    /// [`Cholesky::solve`] on a faer matrix.
+    pub fn solve_mat(&self, rhs: MatRef<'_, f64>) -> Mat<f64> {
+        let mut out = rhs.to_owned();
+        self.solve_in_place(out.as_mut());
+        out
+    }
+
+    /// `L⁻ᵀ Q L⁻¹` for a symmetric `Q`, by two triangular solves with n right-hand sides.
+    /// This is how `A⁻¹ (·) A⁻¹`-type gradient matrices are formed without an inverse. The
+    /// result is symmetric up to rounding; callers read its lower triangle.
+    pub fn sandwich(&self, q: MatRef<'_, f64>) -> Mat<f64> {
+        // E = L⁻ᵀ Q ; result = E L⁻¹ = (L⁻ᵀ Eᵀ)ᵀ, solved in place on the transposed view.
+        let mut e = q.to_owned();
+        self.half_solve_t_in_place(e.as_mut());
+        self.half_solve_t_in_place(e.as_mut().transpose_mut());
+        e
+    }
+
+    /// The factor `L` as an nalgebra matrix.
     pub fn lower(&self) -> DMatrix<f64> {
-        let l = self.llt.L();
-        DMatrix::from_fn(
-            l.nrows(),
-            l.ncols(),
-            |i, j| if i >= j { l[(i, j)] } else { 0.0 },
-        )
+        let l = &self.l;
+        DMatrix::from_fn(l.nrows(), l.ncols(), |i, j| l[(i, j)])
     }
 
     /// `A⁻¹` from the factor (`L⁻ᵀ L⁻¹`, LAPACK `potri`). Only used where the *elements* of
     /// the inverse are needed (the trace term of the marginal-likelihood gradient,
     /// `tr(A⁻¹ ∂A/∂θ)`), never to solve a system.
     pub fn inverse_elements(&self) -> DMatrix<f64> {
-        let inv: Mat<f64> = self.llt.inverse();
-        let n = inv.nrows();
-        let mut out = DMatrix::zeros(n, n);
-        for (j, col) in out.as_mut_slice().chunks_exact_mut(n.max(1)).enumerate() {
-            col.copy_from_slice(inv.col_as_slice(j));
-        }
-        out
+        let lower = self.inverse_lower();
+        let n = lower.nrows();
+        DMatrix::from_fn(n, n, |i, j| if i >= j { lower[(i, j)] } else { lower[(j, i)] })
     }
 
     /// Lower triangle (diagonal included) of `A⁻¹` from the factor (`L⁻ᵀ L⁻¹`: triangular
     /// inverse then triangular product, LAPACK `potri`); the strict upper triangle is 0. For
     /// contractions with symmetric matrices that read lower triangles only: skips the
     /// mirroring and the copy of [`Cholesky::inverse_elements`].
-    pub(crate) fn inverse_lower(&self) -> Mat<f64> {
-        use faer::dyn_stack::{MemBuffer, MemStack};
+    pub fn inverse_lower(&self) -> Mat<f64> {
         use faer::linalg::cholesky::llt::inverse;
-        let par = faer::get_global_parallelism();
         let n = self.dim();
         let mut out = Mat::zeros(n, n);
-        let mut mem = MemBuffer::new(inverse::inverse_scratch::<f64>(n, par));
-        inverse::inverse(out.as_mut(), self.llt.L(), par, MemStack::new(&mut mem));
+        let mut mem = MemBuffer::new(inverse::inverse_scratch::<f64>(n, Par::Seq));
+        inverse::inverse(out.as_mut(), self.l.as_ref(), Par::Seq, MemStack::new(&mut mem));
         out
     }
 }

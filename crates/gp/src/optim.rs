@@ -3,7 +3,7 @@
 //! interpolation in the zoom phase). Used to maximise the log marginal likelihood over the
 //! GP hyperparameters (the paper's "conjugate gradients [18]", after CVPR eq. 10).
 //!
-//! Written here rather than taken from argmin (STACK.md): argmin's CG has no gradient stop
+//! Written here rather than taken from argmin: argmin's CG has no gradient stop
 //! and drops its result when the line search fails. This one always returns the best point
 //! seen and says why it stopped ([`ExitState`]).
 //!

@@ -3,15 +3,10 @@
 /// Everything that can go wrong in this crate; messages are one line.
 #[derive(Debug, thiserror::Error)]
 pub enum GpdmError {
-    /// A kernel matrix stayed non-positive-definite after all jitter retries.
-    #[error(
-        "{what}: kernel matrix not positive definite (pivot {pivot}) even with jitter {jitter:e}"
-    )]
-    NotPositiveDefinite {
-        what: &'static str,
-        pivot: usize,
-        jitter: f64,
-    },
+    /// A kernel matrix stayed non-positive-definite after all jitter retries (or another
+    /// failure of the shared linear algebra).
+    #[error(transparent)]
+    Linalg(#[from] gp::GpError),
     /// Inconsistent shapes or invalid parameters supplied by the caller.
     #[error("invalid input: {0}")]
     Invalid(String),

@@ -3,9 +3,6 @@
 //!
 //! Only Cholesky factorisations and triangular solves: no explicit inverse is formed.
 
-use crate::error::{GpdmError, Result};
-use dyn_stack::{MemBuffer, MemStack};
-use faer::linalg::cholesky::llt::factor::{cholesky_in_place, cholesky_in_place_scratch};
 use faer::linalg::matmul::matmul;
 use faer::linalg::triangular_solve::{
     solve_lower_triangular_in_place, solve_upper_triangular_in_place,
@@ -14,155 +11,11 @@ use faer::reborrow::ReborrowMut;
 use faer::{Accum, Mat, MatMut, MatRef, Par};
 use std::sync::Mutex;
 
-/// Number of jitter retries after the plain factorisation fails.
-const JITTER_RETRIES: usize = 6;
+/// The project's one Cholesky factorisation (with its jitter ladder), shared with the GP
+/// regression; the GPDM objective's structured products with it are [`CholeskyProducts`].
+pub use gp::linalg::Cholesky;
 
-/// Cholesky factor `K + jitter I = L Lᵀ` of a symmetric positive definite matrix.
-#[derive(Clone, Debug)]
-pub struct Cholesky {
-    /// Lower-triangular factor (the strict upper triangle is zero).
-    pub l: Mat<f64>,
-    /// Diagonal jitter that had to be added (0 when the plain factorisation succeeded).
-    pub jitter: f64,
-}
-
-impl Cholesky {
-    /// Factors `k`; on failure retries with jitter `1e-10·mean(diag)·10^i`, i = 0..6.
-    /// The jitter used is returned in [`Cholesky::jitter`] so that callers can log it.
-    pub fn factor(k: MatRef<'_, f64>, what: &'static str) -> Result<Self> {
-        let n = k.nrows();
-        let mean_diag = (0..n).map(|i| k[(i, i)]).sum::<f64>() / n.max(1) as f64;
-        let base = 1e-10 * mean_diag.abs().max(f64::MIN_POSITIVE);
-        let mut mem = MemBuffer::new(cholesky_in_place_scratch::<f64>(
-            n,
-            Par::Seq,
-            Default::default(),
-        ));
-        let mut last_pivot = 0;
-        let mut jitter = 0.0;
-        for attempt in 0..=JITTER_RETRIES {
-            jitter = if attempt == 0 {
-                0.0
-            } else {
-                base * 10f64.powi(attempt as i32 - 1)
-            };
-            let mut l = k.to_owned();
-            for i in 0..n {
-                l[(i, i)] += jitter;
-            }
-            let ok = if l.as_ref().is_all_finite() {
-                cholesky_in_place(
-                    l.as_mut(),
-                    Default::default(),
-                    Par::Seq,
-                    MemStack::new(&mut mem),
-                    Default::default(),
-                )
-                .map_err(|e| match e {
-                    faer::linalg::cholesky::llt::factor::LltError::NonPositivePivot { index } => {
-                        index
-                    }
-                })
-            } else {
-                Err(0)
-            };
-            match ok {
-                Ok(_) => {
-                    for j in 0..n {
-                        for i in 0..j {
-                            l[(i, j)] = 0.0;
-                        }
-                    }
-                    return Ok(Cholesky { l, jitter });
-                }
-                Err(p) => last_pivot = p,
-            }
-        }
-        Err(GpdmError::NotPositiveDefinite {
-            what,
-            pivot: last_pivot,
-            jitter,
-        })
-    }
-
-    /// [`Cholesky::factor`] without the copy: factors `k` (only its lower triangle is read)
-    /// in place, taking ownership (e.g. [`crate::kernel::Gram::k`]). faer uses the strict
-    /// upper triangle as scratch, so it is zeroed afterwards (the [`Cholesky::l`] contract;
-    /// n²/2 stores). If the plain factorisation fails, the destroyed `k` is rebuilt by
-    /// `original` and [`Cholesky::factor`]'s logged jitter retries run on it.
-    pub fn factor_owned(
-        mut k: Mat<f64>,
-        what: &'static str,
-        original: impl FnOnce() -> Mat<f64>,
-    ) -> Result<Self> {
-        let n = k.nrows();
-        let mut mem = MemBuffer::new(cholesky_in_place_scratch::<f64>(
-            n,
-            Par::Seq,
-            Default::default(),
-        ));
-        let ok = (0..n).all(|j| k.col_as_slice(j)[j..].iter().all(|v| v.is_finite()))
-            && cholesky_in_place(
-                k.as_mut(),
-                Default::default(),
-                Par::Seq,
-                MemStack::new(&mut mem),
-                Default::default(),
-            )
-            .is_ok();
-        if ok {
-            for j in 1..n {
-                k.col_as_slice_mut(j)[..j].fill(0.0);
-            }
-            return Ok(Cholesky { l: k, jitter: 0.0 });
-        }
-        drop(k);
-        Self::factor(original().as_ref(), what)
-    }
-
-    /// `ln |K| = 2 Σ ln L_ii`.
-    pub fn logdet(&self) -> f64 {
-        2.0 * (0..self.l.nrows())
-            .map(|i| self.l[(i, i)].ln())
-            .sum::<f64>()
-    }
-
-    /// `rhs ← L⁻¹ rhs`.
-    pub fn half_solve_in_place(&self, rhs: MatMut<'_, f64>) {
-        solve_lower_triangular_in_place(self.l.as_ref(), rhs, Par::Seq);
-    }
-
-    /// `rhs ← L⁻ᵀ rhs`.
-    pub fn half_solve_t_in_place(&self, rhs: MatMut<'_, f64>) {
-        solve_upper_triangular_in_place(self.l.as_ref().transpose(), rhs, Par::Seq);
-    }
-
-    /// `rhs ← K⁻¹ rhs` by two triangular solves.
-    pub fn solve_in_place(&self, mut rhs: MatMut<'_, f64>) {
-        self.half_solve_in_place(rhs.rb_mut());
-        self.half_solve_t_in_place(rhs);
-    }
-
-    /// `K⁻¹ rhs`.
-    pub fn solve(&self, rhs: MatRef<'_, f64>) -> Mat<f64> {
-        let mut out = rhs.to_owned();
-        self.solve_in_place(out.as_mut());
-        out
-    }
-
-    /// `L⁻ᵀ Q L⁻¹` for a symmetric `Q`, by two triangular solves with n right-hand sides.
-    /// This is how `K⁻¹ (·) K⁻¹`-type gradient matrices are formed without an inverse. The
-    /// result is symmetric up to rounding; callers read its lower triangle.
-    pub fn sandwich(&self, q: MatRef<'_, f64>) -> Mat<f64> {
-        // E = L⁻ᵀ Q ; result = E L⁻¹ = (L⁻ᵀ Eᵀ)ᵀ, solved in place on the transposed view.
-        let mut e = q.to_owned();
-        self.half_solve_t_in_place(e.as_mut());
-        self.half_solve_t_in_place(e.as_mut().transpose_mut());
-        e
-    }
-}
-
-/// How [`Cholesky::sandwich_lower_split`] runs its first solve.
+/// How [`CholeskyProducts::sandwich_lower_split`] runs its first solve.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Split {
     /// One solve with all right-hand sides, on this thread.
@@ -233,23 +86,43 @@ pub fn recycle(m: Mat<f64>) {
     }
 }
 
-/// Column-block width of [`Cholesky::half_solve_trapezoidal`] and the leaf size of
+/// Column-block width of [`CholeskyProducts::half_solve_trapezoidal`] and the leaf size of
 /// `lower_back_solve`'s recursion (measured at N = 192 and 446, `profile_objective` in crates/studies:
 /// 32 fastest by 3-5 % over 64, 96, 128).
 pub const BLOCK: usize = 32;
 
-impl Cholesky {
+/// The GPDM objective's products with a Cholesky factor: solves against lower-trapezoidal
+/// right-hand sides and the lower triangle of `L⁻ᵀ Q L⁻¹`, on recycled buffers.
+pub trait CholeskyProducts {
     /// `Z = L⁻¹ R` for a lower-trapezoidal `R` (n × r, `R_ij = 0` for `i < j`, r ≤ n), e.g. the
     /// factor of [`PivotedCholesky`]. `Z` is lower-trapezoidal too; each column block
     /// `[j0, j1)` is solved against the trailing block `L[j0.., j0..]` only (rows above `j0`
     /// are zero in `R` and stay zero in `Z`): ~n³/6 multiply-adds for r = n instead of n³/2.
-    pub fn half_solve_trapezoidal(&self, r: MatRef<'_, f64>) -> Mat<f64> {
+    fn half_solve_trapezoidal(&self, r: MatRef<'_, f64>) -> Mat<f64>;
+    /// [`CholeskyProducts::half_solve_trapezoidal`] with column blocks of width `bs` (benchmarks).
+    fn half_solve_trapezoidal_blocked(&self, r: MatRef<'_, f64>, bs: usize) -> Mat<f64>;
+    /// Lower triangle of `L⁻ᵀ Q L⁻¹` for a symmetric `Q` of which only the lower triangle is
+    /// read (the buffer is reused; its strict upper triangle is overwritten). The strict
+    /// upper triangle of the result is unspecified: [`crate::kernel::RbfLinear::gradients`]
+    /// reads the lower one. `F = Q L⁻¹` by one full solve (n³/2; on a rayon worker its
+    /// right-hand sides in two `rayon::join`ed halves, [`Split::Join`], so that an idle thread,
+    /// e.g. the one whose objective term finished first, takes one: 5-9 % less time per evaluation
+    /// at N = 446 on 2 threads, neutral at N = 192), then the lower triangle of
+    /// `L⁻ᵀ F` by `lower_back_solve` (n³/6 instead of n³/2). Same result as
+    /// [`Cholesky::sandwich`] up to rounding. The strict upper triangle of `Q` is filled from
+    /// the lower one in cache-sized tiles first.
+    fn sandwich_lower(&self, q: Mat<f64>) -> Mat<f64>;
+    /// [`CholeskyProducts::sandwich_lower`] with the first solve's two halves of right-hand sides run
+    /// as chosen by `split` (see [`Split`]). Same result for every choice.
+    fn sandwich_lower_split(&self, q: Mat<f64>, split: Split) -> Mat<f64>;
+}
+
+impl CholeskyProducts for Cholesky {
+    fn half_solve_trapezoidal(&self, r: MatRef<'_, f64>) -> Mat<f64> {
         self.half_solve_trapezoidal_blocked(r, BLOCK)
     }
 
-    /// [`Cholesky::half_solve_trapezoidal`] with column blocks of width `bs` (benchmarks).
-    #[doc(hidden)]
-    pub fn half_solve_trapezoidal_blocked(&self, r: MatRef<'_, f64>, bs: usize) -> Mat<f64> {
+    fn half_solve_trapezoidal_blocked(&self, r: MatRef<'_, f64>, bs: usize) -> Mat<f64> {
         let n = self.l.nrows();
         assert_eq!(r.nrows(), n, "R must have as many rows as L");
         let mut z = unspecified_recycled(n, r.ncols());
@@ -267,17 +140,7 @@ impl Cholesky {
         z
     }
 
-    /// Lower triangle of `L⁻ᵀ Q L⁻¹` for a symmetric `Q` of which only the lower triangle is
-    /// read (the buffer is reused; its strict upper triangle is overwritten). The strict
-    /// upper triangle of the result is unspecified: [`crate::kernel::RbfLinear::gradients`]
-    /// reads the lower one. `F = Q L⁻¹` by one full solve (n³/2; on a rayon worker its
-    /// right-hand sides in two `rayon::join`ed halves, [`Split::Join`], so that an idle thread,
-    /// e.g. the one whose objective term finished first, takes one: 5-9 % less time per evaluation
-    /// at N = 446 on 2 threads, neutral at N = 192), then the lower triangle of
-    /// `L⁻ᵀ F` by `lower_back_solve` (n³/6 instead of n³/2). Same result as
-    /// [`Cholesky::sandwich`] up to rounding. The strict upper triangle of `Q` is filled from
-    /// the lower one in cache-sized tiles first.
-    pub fn sandwich_lower(&self, q: Mat<f64>) -> Mat<f64> {
+    fn sandwich_lower(&self, q: Mat<f64>) -> Mat<f64> {
         let split = if rayon::current_thread_index().is_some() {
             Split::Join
         } else {
@@ -286,9 +149,7 @@ impl Cholesky {
         self.sandwich_lower_split(q, split)
     }
 
-    /// [`Cholesky::sandwich_lower`] with the first solve's two halves of right-hand sides run
-    /// as chosen by `split` (see [`Split`]). Same result for every choice.
-    pub fn sandwich_lower_split(&self, mut q: Mat<f64>, split: Split) -> Mat<f64> {
+    fn sandwich_lower_split(&self, mut q: Mat<f64>, split: Split) -> Mat<f64> {
         let n = self.l.nrows();
         mirror_lower(q.as_mut());
         // Fᵀ = L⁻ᵀ Q (Q symmetric), so F = Q L⁻¹, stored in q.
@@ -454,7 +315,7 @@ pub fn lower_zzt_scaled(z: MatRef<'_, f64>, alpha: f64) -> Mat<f64> {
 }
 
 /// [`lower_zzt_scaled`] with the strict upper triangle unspecified (not written: for
-/// [`Cholesky::sandwich_lower`], which reads the lower one).
+/// [`CholeskyProducts::sandwich_lower`], which reads the lower one).
 pub(crate) fn lower_zzt_scaled_only(z: MatRef<'_, f64>, alpha: f64) -> Mat<f64> {
     use faer::linalg::matmul::triangular::{matmul as tri_matmul, BlockStructure as B};
     let (n, r) = (z.nrows(), z.ncols());

@@ -41,7 +41,7 @@
 use crate::error::{invalid, Result};
 use crate::kernel::RbfLinear;
 use crate::linalg::{
-    lower_wwt_scaled_only, lower_zzt_scaled_only, mul_abt, recycle, view, Cholesky,
+    lower_wwt_scaled_only, lower_zzt_scaled_only, mul_abt, recycle, view, Cholesky, CholeskyProducts,
     PivotedCholesky, Split,
 };
 use faer::{Mat, MatRef};
@@ -443,7 +443,7 @@ impl Objective {
         let z = cy.half_solve_trapezoidal(self.s_factor.r.as_ref());
         let tr_y: f64 = z.col_iter().map(|c| c.squared_norm_l2()).sum();
         let dd = self.d_obs as f64;
-        let value = 0.5 * dd * cy.logdet() + 0.5 * tr_y;
+        let value = 0.5 * dd * cy.log_det() + 0.5 * tr_y;
         let mut term = Term::new(value, cy.jitter);
         if want {
             let mut q = lower_zzt_scaled_only(z.as_ref(), -0.5);
@@ -481,7 +481,7 @@ impl Objective {
         cy.half_solve_in_place(c.as_mut().transpose_mut()); // C = L⁻¹ Bᵀ = L⁻¹ S L⁻ᵀ (Cᵀ stored; C symmetric)
         let tr_y: f64 = (0..n).map(|i| c[(i, i)]).sum();
         let dd = self.d_obs as f64;
-        let value = 0.5 * dd * cy.logdet() + 0.5 * tr_y;
+        let value = 0.5 * dd * cy.log_det() + 0.5 * tr_y;
         let mut term = Term::new(value, cy.jitter);
         if want {
             let mut q = -c;
@@ -538,7 +538,7 @@ impl Objective {
             .map(|&f| (0..d).map(|j| x[(f, j)] * x[(f, j)]).sum::<f64>())
             .sum::<f64>()
             / (2.0 * sigma0);
-        let value = 0.5 * d as f64 * cx.logdet() + 0.5 * quad_x + first;
+        let value = 0.5 * d as f64 * cx.log_det() + 0.5 * quad_x + first;
         let mut term = Term::new(value, cx.jitter);
         if want {
             let g = if dense {

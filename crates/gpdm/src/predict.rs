@@ -65,7 +65,7 @@ impl Predictor {
                 notes.push(format!("{name}: Cholesky needed jitter {:e}", c.jitter));
             }
         }
-        let a_x = chol_x.solve(x_out.as_ref());
+        let a_x = chol_x.solve_mat(x_out.as_ref());
         let a_y = view(&model.y).to_owned();
         Ok(Predictor {
             kx,
@@ -117,7 +117,7 @@ impl Predictor {
             mul(ut.as_ref(), view(&model.y)).transpose(),
             &model.y_mean,
         ));
-        p.a_y = p.chol_y.solve(us.as_ref());
+        p.a_y = p.chol_y.solve_mat(us.as_ref());
         let rms = (discarded.max(0.0) / (n * model.y.ncols()) as f64).sqrt();
         Ok((p, r, rms))
     }

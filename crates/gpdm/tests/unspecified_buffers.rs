@@ -10,7 +10,7 @@ mod common;
 use faer::Mat;
 use gpdm::kernel::RbfLinear;
 use gpdm::linalg::{
-    lower_wwt_scaled, lower_zzt, recycle, zeros_recycled, Cholesky, PivotedCholesky,
+    lower_wwt_scaled, lower_zzt, recycle, zeros_recycled, Cholesky, CholeskyProducts, PivotedCholesky,
 };
 use gpdm::{Gpdm, GpdmConfig};
 

@@ -49,7 +49,7 @@
 //!   either is complete or does not exist; deciding what is stale is the
 //!   Makefile's job.
 //! - **Threads**: rayon does the parallelism; BLAS is kept single-threaded
-//!   (OpenBLAS threads fight rayon's, see `STACK.md`).
+//!   (OpenBLAS threads fight rayon's).
 
 use std::fmt;
 use std::io::IsTerminal;
@@ -142,7 +142,7 @@ impl CommonArgs {
         // faer's own parallel kernels split reductions by thread count, so
         // results would differ in the last digits between `--threads 1` and
         // `2`; sequential faer keeps every output independent of the core
-        // count (and is faster on 2 cores, STACK.md).
+        // count (and is faster on 2 cores).
         faer::set_global_parallelism(faer::Par::Seq);
         if let Some(n) = self.threads {
             rayon::ThreadPoolBuilder::new()

@@ -71,7 +71,7 @@ pub struct SymbolicPoisson {
 
 impl SymbolicPoisson {
     /// Analyses `laplacian`'s pattern (its values are not read). Sets faer to sequential mode
-    /// (faster on 2 cores, STACK.md).
+    /// (faster on 2 cores).
     pub fn new(laplacian: &SparseColMat<usize, f64>, how: Factorisation) -> Result<Self> {
         faer::set_global_parallelism(faer::Par::Seq);
         let n = laplacian.nrows();
@@ -211,7 +211,7 @@ pub struct PoissonSolver {
 
 impl PoissonSolver {
     /// Factorises `laplacian` (PSD cotangent form, all diagonal entries in the pattern) with
-    /// the vertices `fixed` held. Sets faer to sequential mode (faster on 2 cores, STACK.md).
+    /// the vertices `fixed` held. Sets faer to sequential mode (faster on 2 cores).
     pub fn new(laplacian: &SparseColMat<usize, f64>, fixed: &[usize]) -> Result<Self> {
         Self::with_factorisation(laplacian, fixed, Factorisation::Auto)
     }

@@ -23,7 +23,7 @@ use studies::synthetic;
 
 use faer::{Mat, MatRef};
 use gpdm::kernel::{Gram, RbfLinear};
-use gpdm::linalg::Cholesky;
+use gpdm::linalg::{Cholesky, CholeskyProducts};
 use gpdm::{Gpdm, GpdmConfig};
 use std::os::raw::{c_char, c_int};
 use std::time::Instant;
