@@ -169,13 +169,7 @@ fn sweep_hmc(model: &VariationModel, pool: &rayon::ThreadPool, settings: &[[usiz
         })
         .collect();
     for &[burn_in, thin, leapfrog, chains] in settings {
-        let opts = HmcOptions {
-            n_samples: n,
-            burn_in,
-            thin,
-            leapfrog_steps: leapfrog,
-            ..default_hmc(n, 0)
-        };
+        let opts = hmc_options(n, burn_in, thin, leapfrog);
         let t = Instant::now();
         let (vars, stats) = pool
             .install(|| sequence_variations_len(&dec, s, len, Sampler::Hmc, 1.0, &opts, chains))
@@ -194,6 +188,11 @@ fn sweep_hmc(model: &VariationModel, pool: &rayon::ThreadPool, settings: &[[usiz
     }
 }
 
+/// The default HMC settings for `n` samples with the burn-in, thinning and leapfrog steps given.
+fn hmc_options(n: usize, burn_in: usize, thin: usize, leapfrog: usize) -> HmcOptions {
+    HmcOptions { n_samples: n, burn_in, thin, leapfrog_steps: leapfrog, ..default_hmc(n, 0) }
+}
+
 /// The fast path: kernel-basis decoder, sampling by `--fast` HMC (or ancestral), then decoding
 /// and assembling every variation, bulk and fused, checked against exact decoding; prints each
 /// step's time; with `--fused-only`, only the fused decoding after the sampling.
@@ -206,13 +205,7 @@ fn fast_path(model: &VariationModel, pool: &rayon::ThreadPool, cli: &Cli, start:
         .unwrap();
     let setup = t.elapsed().as_secs_f64();
     let [burn_in, thin, leapfrog, chains] = fast;
-    let opts = HmcOptions {
-        n_samples: n,
-        burn_in,
-        thin,
-        leapfrog_steps: leapfrog,
-        ..default_hmc(n, 0)
-    };
+    let opts = hmc_options(n, burn_in, thin, leapfrog);
     let sampler = if cli.ancestral {
         Sampler::Ancestral
     } else {
