@@ -146,17 +146,17 @@ pub struct CurvePoint {
 /// One training pair in coefficients, with the PCA truncation residuals of
 /// both motions' frames.
 #[derive(Clone, Debug)]
-pub struct EncodedPair {
+pub struct ResidualPair {
     pub data: PairData,
     /// `source_residual[part][frame]`: `|r|²` (m², summed over the part's vertices).
     pub source_residual: Vec<Vec<f64>>,
     pub target_residual: Vec<Vec<f64>>,
 }
 
-impl EncodedPair {
+impl ResidualPair {
     /// Swaps source and target (the reverse direction).
-    pub fn reversed(self) -> EncodedPair {
-        EncodedPair {
+    pub fn reversed(self) -> ResidualPair {
+        ResidualPair {
             data: self.data.reversed(),
             source_residual: self.target_residual,
             target_residual: self.source_residual,
@@ -192,9 +192,9 @@ pub fn encode_pair(
     keyposes: &[[usize; 2]],
     source_pca: &PcaModel,
     target_pca: &PcaModel,
-) -> Result<EncodedPair> {
+) -> Result<ResidualPair> {
     check_frame_pairs(source.n_frames(), target.n_frames(), pairs, keyposes)?;
-    Ok(EncodedPair {
+    Ok(ResidualPair {
         data: PairData {
             source_coeffs: source_pca.encode(source)?,
             target_coeffs: target_pca.encode(target)?,
@@ -221,7 +221,7 @@ pub fn read_pair(
     keyposes: &[[usize; 2]],
     parts: [&PcaModel; 2],
     whole: [&PcaModel; 2],
-) -> Result<(EncodedPair, EncodedPair, [CaptureInfo; 2])> {
+) -> Result<(ResidualPair, ResidualPair, [CaptureInfo; 2])> {
     let read = |path: &Path, k: usize| read_encoded_with_truncation(path, &[parts[k], whole[k]]);
     let (s, t) = rayon::join(|| read(source, 0), || read(target, 1));
     let ((s_enc, s_info, _), (t_enc, t_info, _)) = (s?, t?);
@@ -230,7 +230,7 @@ pub fn read_pair(
         s_enc.try_into().map_err(|_| Error::invalid("two encodings expected"))?;
     let [t_parts, t_whole]: [EncodedFrames; 2] =
         t_enc.try_into().map_err(|_| Error::invalid("two encodings expected"))?;
-    let pair = |s: EncodedFrames, t: EncodedFrames| EncodedPair {
+    let pair = |s: EncodedFrames, t: EncodedFrames| ResidualPair {
         data: PairData {
             source_coeffs: s.coefficients,
             target_coeffs: t.coefficients,
@@ -292,8 +292,8 @@ pub fn total_components(pca: &PcaModel) -> usize {
 pub struct DirectionData {
     pub label: String,
     pub correspondence: Correspondence,
-    pub parts: Vec<EncodedPair>,
-    pub whole: Vec<EncodedPair>,
+    pub parts: Vec<ResidualPair>,
+    pub whole: Vec<ResidualPair>,
     /// Target vertex count of each part, and of the whole body.
     pub part_vertices: Vec<usize>,
     pub whole_vertices: usize,
@@ -354,7 +354,7 @@ pub fn sizes(min: usize, max: usize, count: usize) -> Vec<usize> {
 /// Per training row (in [`crate::gpr_model::training_set`] order, dense
 /// pairs) the target's squared truncation residual of every part:
 /// `result[part][row]`.
-pub fn row_residuals(pairs: &[EncodedPair]) -> Vec<Vec<f64>> {
+pub fn row_residuals(pairs: &[ResidualPair]) -> Vec<Vec<f64>> {
     let n_parts = pairs.first().map_or(0, |p| p.target_residual.len());
     (0..n_parts)
         .map(|k| {
@@ -420,7 +420,7 @@ pub fn run_direction(
     opts: &GprOptions,
     seed: u64,
 ) -> Result<Vec<CurvePoint>> {
-    let plain = |v: &[EncodedPair]| v.iter().map(|p| p.data.clone()).collect::<Vec<_>>();
+    let plain = |v: &[ResidualPair]| v.iter().map(|p| p.data.clone()).collect::<Vec<_>>();
     let (parts_data, whole_data) = (plain(&dir.parts), plain(&dir.whole));
     let parts_set = crate::gpr_model::training_set(&parts_data, dir.frame_ratio, false)?;
     let whole_set = crate::gpr_model::training_set(&whole_data, dir.frame_ratio, false)?;
