@@ -15,7 +15,7 @@ use nalgebra::Vector3;
 use surface::correct::Corrector;
 use surface::deformation_gradient::GradientOperator;
 use surface::poisson::PoissonSolver;
-use surface::stitch::{Part, PartLayout, Stitcher};
+use surface::stitch::{LayoutPart, PartLayout, Stitcher};
 
 fn hash01(i: u64) -> f64 {
     let mut x = i
@@ -41,7 +41,7 @@ fn pose(v: &[Vector3<f64>], a: f64) -> Vec<Vector3<f64>> {
 struct Setup {
     faces: Vec<[u32; 3]>,
     vertices: Vec<Vector3<f64>>,
-    parts: Vec<Part>,
+    parts: Vec<LayoutPart>,
     correctors: Vec<Corrector>,
     predictions: Vec<Vec<Vector3<f64>>>,
 }
@@ -55,23 +55,23 @@ fn setup() -> Setup {
     let mut p4 = rings(161, last);
     p4.push(layout.top_pole());
     let parts = vec![
-        Part {
+        LayoutPart {
             vertices: rings(70, 132),
             parent: None,
         },
-        Part {
+        LayoutPart {
             vertices: rings(36, 75),
             parent: Some(0),
         },
-        Part {
+        LayoutPart {
             vertices: p2,
             parent: Some(1),
         },
-        Part {
+        LayoutPart {
             vertices: rings(127, 166),
             parent: Some(0),
         },
-        Part {
+        LayoutPart {
             vertices: p4,
             parent: Some(3),
         },

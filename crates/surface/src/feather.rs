@@ -12,9 +12,9 @@
 use mesh_core::topology::Topology;
 use nalgebra::Vector3;
 
-use crate::stitch::Part;
+use crate::stitch::LayoutPart;
 
-/// Per part, per vertex of the part (in `Part::vertices` order): its weight in the merged
+/// Per part, per vertex of the part (in `LayoutPart::vertices` order): its weight in the merged
 /// position. The weights of every template vertex sum to 1 over the parts that hold it.
 /// Vertices held by one part get 1; vertices of a child's band with its parent get the ramp
 /// of the module doc; any other shared vertex (held by more than two parts, or by two parts
@@ -22,7 +22,7 @@ use crate::stitch::Part;
 pub fn band_weights(
     template: &[Vector3<f64>],
     faces: &[[u32; 3]],
-    parts: &[Part],
+    parts: &[LayoutPart],
 ) -> Vec<Vec<f64>> {
     let n = template.len();
     let topo = Topology::new(n, faces);
@@ -136,8 +136,8 @@ mod tests {
     fn weights_ramp_smoothly_across_the_band_and_sum_to_one() {
         // Parent: columns 0..=6, child: columns 4..=10, band: columns 4..=6.
         let (pos, faces) = strip(10);
-        let parent = Part { parent: None, vertices: columns(0, 6) };
-        let child = Part { parent: Some(0), vertices: columns(4, 10) };
+        let parent = LayoutPart { parent: None, vertices: columns(0, 6) };
+        let child = LayoutPart { parent: Some(0), vertices: columns(4, 10) };
         let w = band_weights(&pos, &faces, &[parent.clone(), child.clone()]);
         let child_w = |col: usize| w[1][child.vertices.iter().position(|&v| v == 2 * col as u32).unwrap()];
         let parent_w = |col: usize| w[0][parent.vertices.iter().position(|&v| v == 2 * col as u32).unwrap()];
@@ -155,8 +155,8 @@ mod tests {
     #[test]
     fn unrelated_sharing_parts_get_the_uniform_average() {
         let (pos, faces) = strip(4);
-        let a = Part { parent: None, vertices: columns(0, 3) };
-        let b = Part { parent: None, vertices: columns(2, 4) };
+        let a = LayoutPart { parent: None, vertices: columns(0, 3) };
+        let b = LayoutPart { parent: None, vertices: columns(2, 4) };
         let w = band_weights(&pos, &faces, &[a.clone(), b]);
         let shared = a.vertices.iter().position(|&v| v == 4).unwrap();
         assert_eq!(w[0][shared], 0.5);

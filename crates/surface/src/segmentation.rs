@@ -1,7 +1,7 @@
 //! The stitching layout of a subject's part decomposition
 //! ([`mesh_core::segmentation::Segmentation`], written by the `segment` stage).
 
-use crate::stitch::{Part, PartLayout};
+use crate::stitch::{LayoutPart, PartLayout};
 use crate::{Error, Result};
 use mesh_core::segmentation::Segmentation;
 
@@ -20,7 +20,7 @@ pub fn part_layout(seg: &Segmentation, template_faces: Vec<[u32; 3]>) -> Result<
                     pos(n).ok_or_else(|| Error::invalid(format!("part '{}': unknown parent '{n}'", p.name)))?,
                 ),
             };
-            Ok(Part { vertices: p.vertices.clone(), parent })
+            Ok(LayoutPart { vertices: p.vertices.clone(), parent })
         })
         .collect::<Result<Vec<_>>>()?;
     PartLayout::new(seg.n_vertices, template_faces, parts)

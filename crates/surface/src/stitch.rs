@@ -29,9 +29,11 @@ use std::sync::Arc;
 
 const ABSENT: u32 = u32::MAX;
 
-/// One body part: its vertices as indices into the template, and its parent part.
+/// One part of a [`PartLayout`]: its vertices as indices into the template, and its parent
+/// part (an index into the layout). The segment stage's full record is
+/// `mesh_core::segmentation::Part`.
 #[derive(Clone, Debug)]
-pub struct Part {
+pub struct LayoutPart {
     pub vertices: Vec<u32>,
     pub parent: Option<usize>,
 }
@@ -47,7 +49,7 @@ struct Band {
 pub struct PartLayout {
     n_vertices: usize,
     faces: Vec<[u32; 3]>,
-    parts: Vec<Part>,
+    parts: Vec<LayoutPart>,
     /// Per part: template index -> part-local index (ABSENT if not in the part).
     local: Vec<Vec<u32>>,
     bands: Vec<Option<Band>>,
@@ -56,7 +58,7 @@ pub struct PartLayout {
 }
 
 impl PartLayout {
-    pub fn new(n_vertices: usize, faces: Vec<[u32; 3]>, parts: Vec<Part>) -> Result<Self> {
+    pub fn new(n_vertices: usize, faces: Vec<[u32; 3]>, parts: Vec<LayoutPart>) -> Result<Self> {
         check_faces(n_vertices, &faces, "stitch: template")?;
         if parts.is_empty() || parts[0].parent.is_some() {
             return Err(Error::invalid(
@@ -143,7 +145,7 @@ impl PartLayout {
     pub fn faces(&self) -> &[[u32; 3]] {
         &self.faces
     }
-    pub fn parts(&self) -> &[Part] {
+    pub fn parts(&self) -> &[LayoutPart] {
         &self.parts
     }
 }
@@ -226,7 +228,7 @@ impl Stitcher {
         &self.layout
     }
 
-    /// `parts[k]` holds part `k`'s vertex positions in the order of `Part::vertices`.
+    /// `parts[k]` holds part `k`'s vertex positions in the order of `LayoutPart::vertices`.
     /// Loop vertices are fixed at the mean of their parent's and child's instantiations.
     pub fn stitch(&mut self, parts: &[Vec<Vector3<f64>>]) -> Result<Stitched> {
         let half = vec![0.5; parts.len()];

@@ -5,7 +5,7 @@ use nalgebra::Vector3;
 use surface::blend::{linear_blend, Blender};
 use surface::correct::{distance_weights, Corrector};
 use surface::optimal_boundary::optimal_loop;
-use surface::stitch::{Part, PartLayout, Stitcher};
+use surface::stitch::{LayoutPart, PartLayout, Stitcher};
 
 /// A flat sheet of width 2 and height 1 rolled with curvature `kappa` (an isometric family).
 fn rolled_sheet(kappa: f64) -> (Vec<Vector3<f64>>, Vec<[u32; 3]>) {
@@ -152,7 +152,7 @@ fn halves(
     rings: usize,
     lo: usize,
     hi: usize,
-) -> (Vec<Vector3<f64>>, Vec<[u32; 3]>, Vec<Part>) {
+) -> (Vec<Vector3<f64>>, Vec<[u32; 3]>, Vec<LayoutPart>) {
     let (v, f) = tube(around, rings, 1.0, 0.2, true);
     let (bot, top) = ((rings * around) as u32, (rings * around + 1) as u32);
     let ring = |a: usize, b: usize| (a * around..(b + 1) * around).map(|i| i as u32);
@@ -162,11 +162,11 @@ fn halves(
         v,
         f,
         vec![
-            Part {
+            LayoutPart {
                 vertices: root,
                 parent: None,
             },
-            Part {
+            LayoutPart {
                 vertices: child,
                 parent: Some(0),
             },

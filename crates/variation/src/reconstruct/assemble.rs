@@ -129,7 +129,7 @@ impl Decoder<'_> {
                     .model
                     .parts
                     .iter()
-                    .map(|p| surface::stitch::Part {
+                    .map(|p| surface::stitch::LayoutPart {
                         vertices: p.part.vertices.clone(),
                         parent: p.part.parent,
                     })

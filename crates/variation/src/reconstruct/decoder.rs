@@ -150,9 +150,9 @@ impl<'a> Decoder<'a> {
             .iter()
             .map(|p| p.vertices.iter().map(|&v| 1.0 / coverage[v as usize] as f64).collect())
             .collect();
-        let layout: Vec<surface::stitch::Part> = parts
+        let layout: Vec<surface::stitch::LayoutPart> = parts
             .iter()
-            .map(|p| surface::stitch::Part { vertices: p.vertices.clone(), parent: p.parent })
+            .map(|p| surface::stitch::LayoutPart { vertices: p.vertices.clone(), parent: p.parent })
             .collect();
         let feathered = surface::feather::band_weights(&model.template, &model.faces, &layout);
         let defs: Vec<PartDef> = parts.iter().map(|&p| p.clone()).collect();
