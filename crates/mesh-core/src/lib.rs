@@ -23,6 +23,7 @@ pub mod artifact;
 pub mod part_merge;
 pub mod atomic;
 pub mod rigid;
+pub mod point_tree;
 pub mod cli;
 pub mod stage;
 pub mod clap_docs;

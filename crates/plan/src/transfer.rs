@@ -14,7 +14,7 @@ use std::path::Path;
 use anyhow::{Context, Result};
 use mesh_core::capture_set::CaptureSet;
 
-use crate::options::{value_name, Method, Placement, TransferOptions};
+use crate::options::{value_name, ConfigName, Method, Placement, TransferOptions};
 use crate::per_part;
 use crate::subjects::{subject, Subject};
 use crate::flag::{
@@ -314,13 +314,24 @@ impl<'a> Plan<'a> {
 
     /// The leave-one-motion-out estimate of direction `d`'s pose error: the gpr-nn model trained
     /// whole once more (`--cross-validate` needs every part in one task, whatever the cluster
-    /// split) with its report, whose `cv_rms_pose_m` results.json carries beside the direction's
-    /// records.
+    /// split) with the hyperparameters `model` learnt, and its report, whose `cv_rms_pose_m`
+    /// results.json carries beside the direction's records.
     fn cross_validation(&mut self, d: &Direction, model: &str, inputs: &[String], args: &[String], graph: &mut Graph) {
         let report = model.replace(".model", ".cv.json");
         let mut a = args.to_vec();
+        let mut inputs = inputs.to_vec();
+        // `--config auto` learns every configuration's hyperparameters; one model holds one's.
+        let auto = args.windows(2).any(|w| w[0] == flag!(GprTrain, config) && w[1] == value_name(ConfigName::Auto))
+            || args.iter().any(|w| *w == format!("{}={}", flag!(GprTrain, config), value_name(ConfigName::Auto)));
+        if !auto {
+            a.extend([flag!(GprTrain, hyperparameters_from), model.to_string()]);
+            inputs.push(model.to_string());
+        }
         a.extend([flag!(GprTrain, cross_validate), flag!(GprTrain, report), report.clone(), flag!(GprTrain, out), model.replace(".model", ".cv.model")]);
-        graph.push(Task::run("gpr-train", report.clone(), inputs.to_vec(), a).mkdir_target());
+        let mut task = Task::run("gpr-train", report.clone(), inputs, a).mkdir_target();
+        // Its own job array on a cluster: it waits for the models of the `gpr-train` array.
+        task.kind = s("cross-validate");
+        graph.push(task);
         self.cross_validations.push((d.label(), report));
     }
 

@@ -289,14 +289,21 @@ fn multi_part_models_are_fitted_part_by_part() {
     assert_eq!(merged.get("gpr-train"), Some(&8));
     assert_eq!(merged.get("gpdm-train"), Some(&2));
     // Nothing reads a piece but its merge, and no whole-model task of these stages is left but
-    // the leave-one-motion-out estimate of each direction, which needs every part at once.
+    // the leave-one-motion-out estimate of each direction, which needs every part at once (and
+    // reads the merged model's hyperparameters).
     let mut cross_validations = 0;
     for t in &g.tasks {
         for i in t.inputs.iter().filter(|i| i.ends_with(".piece")) {
             assert!(t.kind.starts_with("merge-"), "{} reads the piece {i}", t.target);
         }
-        if ["gpr-train", "gpdm-train"].contains(&t.kind.as_str()) && !args(t).contains(&"--part".to_string()) {
-            assert!(args(t).contains(&"--cross-validate".to_string()), "{}: a whole-model task", t.target);
+        if ["gpr-train", "gpdm-train"].contains(&t.kind.as_str()) {
+            assert!(args(t).contains(&"--part".to_string()), "{}: a whole-model task", t.target);
+        }
+        if t.kind == "cross-validate" {
+            let a = args(t);
+            assert!(a.contains(&"--cross-validate".to_string()) && !a.contains(&"--part".to_string()), "{}", t.target);
+            let model = &a[a.iter().position(|x| x == "--hyperparameters-from").expect("--hyperparameters-from") + 1];
+            assert!(t.inputs.contains(model) && g.tasks.iter().any(|m| m.kind == "merge-gpr-train" && &m.target == model), "{}: {model}", t.target);
             cross_validations += 1;
         }
     }

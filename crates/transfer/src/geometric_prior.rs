@@ -19,6 +19,7 @@
 //! templates face the same way, as `align` expresses every frame in its template's frame).
 
 use gp::pca::Pca;
+use mesh_core::point_tree::PointTree;
 use mesh_core::rigid::procrustes;
 use nalgebra::{DMatrix, Matrix3, Vector3};
 use rayon::prelude::*;
@@ -40,21 +41,10 @@ fn rms_radius(p: &[Vector3<f64>], c: &Vector3<f64>) -> f64 {
     (p.iter().map(|v| (v - c).norm_squared()).sum::<f64>() / p.len().max(1) as f64).sqrt()
 }
 
-/// Index of the nearest point of `cloud` to each of `queries`.
+/// Index of the nearest point of `cloud` to each of `queries` (the lowest of equally near ones).
 fn nearest(queries: &[Vector3<f64>], cloud: &[Vector3<f64>]) -> Vec<usize> {
-    queries
-        .par_iter()
-        .map(|q| {
-            let mut best = (f64::INFINITY, 0);
-            for (i, p) in cloud.iter().enumerate() {
-                let d = (p - q).norm_squared();
-                if d < best.0 {
-                    best = (d, i);
-                }
-            }
-            best.1
-        })
-        .collect()
+    let tree = PointTree::new(cloud);
+    queries.par_iter().map(|q| tree.nearest(q).unwrap_or(0)).collect()
 }
 
 /// The similarity and correspondence that carry part A's mean shape onto part B's:

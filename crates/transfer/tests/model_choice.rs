@@ -4,6 +4,7 @@
 //!   by name, and its leave-one-motion-out error measured there; the automatic choice is the one
 //!   of lowest error among those independent runs, the auto run reports the same errors, and
 //!   the model it writes is the one `--config NAME` trains for the chosen name.
+//! - `--hyperparameters-from` a trained model gives that model and its estimate again.
 //! - The method rows `make transfer` writes, at the default configuration and at `paper`, are
 //!   different models: no two transfer a test motion to the same meshes.
 
@@ -138,6 +139,43 @@ fn auto_keeps_the_configuration_of_lowest_leave_one_motion_out_error_among_the_f
     let out = Command::new(common::bin("gpr-train")).args(&args).env("OPENBLAS_NUM_THREADS", "1").output().unwrap();
     assert_eq!(out.status.code(), Some(1));
     assert!(String::from_utf8_lossy(&out.stderr).contains("not with --part"));
+}
+
+/// `--hyperparameters-from` a model trained on the same pairs gives that model again (every GP,
+/// mean and limb orientation equal, without learning the hyperparameters) and the same
+/// leave-one-motion-out estimate, as the pipeline's estimate task relies on; it refuses
+/// `--config auto` and a model of another method.
+#[test]
+fn hyperparameters_from_a_trained_model_give_that_model_and_its_estimate() {
+    let dir = tempfile::tempdir().unwrap();
+    let (_, work, pair_args) = tiny_training(dir.path());
+    let w = |rel: &str| -> PathBuf { work.join(rel) };
+    let mut base = vec!["--source-pca".into(), s(&w("A/pca.model")), "--target-pca".into(), s(&w("B/pca.model"))];
+    base.extend(pair_args);
+    let train = |extra: &[String]| -> std::process::Output {
+        let mut args = base.clone();
+        args.extend(extra.iter().cloned());
+        Command::new(common::bin("gpr-train")).args(&args).env("OPENBLAS_NUM_THREADS", "1").output().unwrap()
+    };
+    let (learnt, given) = (w("learnt.model"), w("given.model"));
+    assert!(train(&["--cross-validate".into(), "--out".into(), s(&learnt)]).status.success());
+    let out = train(&["-v".into(), "--cross-validate".into(), "--hyperparameters-from".into(), s(&learnt), "--out".into(), s(&given)]);
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let (a, b) = (GprModel::load(&learnt).unwrap(), GprModel::load(&given).unwrap());
+    assert_eq!((&a.parts, &a.displacement, &a.orientation), (&b.parts, &b.displacement, &b.orientation));
+    assert_eq!(cross_validation(&learnt), cross_validation(&given));
+    // Nothing was optimised: every GP's report shows no iteration.
+    assert!(b.reports.iter().all(|r| r.iterations == 0), "{:?}", b.reports);
+    assert!(a.reports.iter().any(|r| r.iterations > 0));
+
+    let refused = train(&["--config".into(), "auto".into(), "--hyperparameters-from".into(), s(&learnt), "--out".into(), s(&w("auto.model"))]);
+    assert_eq!(refused.status.code(), Some(1));
+    assert!(String::from_utf8_lossy(&refused.stderr).contains("not with --config auto"));
+    let other = train(&["--method".into(), "keypose-affine".into(), "--hyperparameters-from".into(), s(&learnt), "--out".into(), s(&w("k.model"))]);
+    assert_eq!(other.status.code(), Some(1));
+    let err = String::from_utf8_lossy(&other.stderr);
+    assert!(err.contains("learnt.model") && err.contains("a gpr-nn model"), "{err}");
+    assert!(!w("auto.model").exists() && !w("k.model").exists());
 }
 
 /// Every method row of `make transfer` at the default configuration (gpr-nn, the key-pose

@@ -73,6 +73,12 @@ pub struct Params {
     /// the cost; docs/studies/10-leave-one-motion-out.md)
     #[arg(long, value_enum, default_value_t = Hyperparameters::Fixed, value_name = "HOW")]
     pub cv_hyperparameters: Hyperparameters,
+    /// A model already trained on these pairs with this configuration: its GPs' hyperparameters
+    /// are kept, not learnt again (the same model, without the optimisation; the pipeline's
+    /// leave-one-motion-out task reuses the model it trained). Not with `--config auto`
+    #[arg(long, value_name = "MODEL")]
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub hyperparameters_from: Option<PathBuf>,
     /// JSON report: the leave-one-motion-out errors (pooled and per motion) of every
     /// configuration tried, and the one kept
     #[arg(long)]
@@ -160,6 +166,7 @@ pub fn run(p: &Params) -> anyhow::Result<()> {
     }
     let configs = configurations(p)?;
     let cross_validated = p.cross_validate || p.report.is_some() || configs.len() > 1;
+    let given = given_hyperparameters(p, &names, configs.len())?;
     // The files are in the set's order (set source, set target); the PCA models are in
     // the direction's order.
     let (set_source_pca, set_target_pca) = if p.reverse {
@@ -196,7 +203,7 @@ pub fn run(p: &Params) -> anyhow::Result<()> {
         .iter()
         .any(|(_, s)| s.mean == MeanFunction::Affine && (ridge_toward || s.prior_weight > 0.0))
         .then(|| crate::geometric_prior::part_priors(&src_pca, &tgt_pca));
-    let trainer = Trainer { p, names: &names, src_pca: &src_pca, tgt_pca: &tgt_pca, maps: maps.as_deref(), opts: &opts };
+    let trainer = Trainer { p, names: &names, src_pca: &src_pca, tgt_pca: &tgt_pca, maps: maps.as_deref(), opts: &opts, given: given.as_ref() };
     let provenance = Provenance { p, source_fps, target_fps, pair_hashes: &pair_hashes };
     // The rows are gathered once for the regressions and the limb orientation; the pairs'
     // coefficients are not needed after that unless motions are left out (at 10^5 pairs each
@@ -264,6 +271,26 @@ pub fn run(p: &Params) -> anyhow::Result<()> {
     Ok(())
 }
 
+/// The hyperparameters of `--hyperparameters-from`'s model, checked against this training: one
+/// configuration, the same method and part names.
+fn given_hyperparameters(p: &Params, names: &[String], n_configs: usize) -> anyhow::Result<Option<FixedHyperparameters>> {
+    let Some(path) = &p.hyperparameters_from else {
+        return Ok(None);
+    };
+    if n_configs != 1 {
+        return Err(mesh_core::Error::invalid("--hyperparameters-from fixes one configuration's GPs: not with --config auto").into());
+    }
+    let model = GprModel::load(path)?;
+    if model.method != p.method || model.part_names != names {
+        return Err(mesh_core::Error::file(
+            path,
+            format!("a {} model of parts {:?}, not {} of {:?}", model.method.name(), model.part_names, p.method.name(), names),
+        )
+        .into());
+    }
+    Ok(Some(FixedHyperparameters::of(&model)?))
+}
+
 /// The source PCA model's part names, which the target's must equal.
 fn part_names(p: &Params, src_pca: &PcaModel, tgt_pca: &PcaModel) -> anyhow::Result<Vec<String>> {
     let names: Vec<String> = src_pca.parts.iter().map(|p| p.name.clone()).collect();
@@ -305,6 +332,8 @@ struct Trainer<'a> {
     tgt_pca: &'a PcaModel,
     maps: Option<&'a [nalgebra::DMatrix<f64>]>,
     opts: &'a GprOptions,
+    /// `--hyperparameters-from`'s: the (one) configuration's GPs are conditioned with these.
+    given: Option<&'a FixedHyperparameters>,
 }
 
 impl Trainer<'_> {
@@ -313,7 +342,7 @@ impl Trainer<'_> {
     fn piece(&self, rows: &TrainingRows, unit: usize, chosen: &Settings) -> anyhow::Result<crate::gpr_piece::GprPiece> {
         let (p, names) = (self.p, self.names);
         let orientation = OrientationOptions { weight: chosen.orientation_weight, attached: &p.attached_limbs };
-        let mut piece = train_piece(&regression_of(p, self.maps, self.opts, chosen, None), names, rows, unit)?;
+        let mut piece = train_piece(&regression_of(p, self.maps, self.opts, chosen, self.given), names, rows, unit)?;
         if unit < names.len() {
             let o = train_orientation(p.method, names, rows, self.src_pca, self.tgt_pca, &orientation, Some(unit))?;
             piece.orientation = o.and_then(|mut o| o.maps.swap_remove(unit));
@@ -333,7 +362,8 @@ impl Trainer<'_> {
         for (_, s) in configs {
             let twin = configs.iter().zip(&models).find(|((_, t), _)| t.mean == s.mean).map(|(_, m)| m);
             let fixed = twin.map(FixedHyperparameters::of).transpose()?;
-            let mut model: GprModel = train_rows(&regression_of(p, self.maps, self.opts, s, fixed.as_ref()), names, rows)?;
+            let fixed = fixed.as_ref().or(self.given);
+            let mut model: GprModel = train_rows(&regression_of(p, self.maps, self.opts, s, fixed), names, rows)?;
             if let Some(twin) = twin {
                 model.reports = twin.reports.clone();
             }
@@ -407,6 +437,9 @@ impl Provenance<'_> {
             .with_params(&params)?
             .with_input(&p.source_pca)?
             .with_input(&p.target_pca)?;
+        if let Some(m) = &p.hyperparameters_from {
+            header = header.with_input(m)?;
+        }
         for (f, sha256) in self.pair_hashes {
             header.inputs.push(mesh_core::artifact::InputRecord { path: f.display().to_string(), sha256: sha256.clone() });
         }
