@@ -14,7 +14,7 @@
 use std::path::PathBuf;
 
 use mesh_core::artifact::{encoded_len, encoded_seq_len, write_artifact_streamed, Artifact, Header};
-use mesh_core::io::read_mesh;
+use mesh_core::io::{read_first_frame, read_mesh_like};
 use mesh_core::rigid::RigidMotion;
 use mesh_core::sequence::check_like_first;
 use mesh_core::{Error, Result, TriMesh};
@@ -63,6 +63,10 @@ impl<'a> FrameFiles<'a> {
             + per_frame_seq(encoded_len(&[0.0f64; 6])?)
             + encoded_len(self.anchor)?
             + encoded_len(capture)?;
+        // Frame 0 first: its topology must be the template's, and the later frames are read
+        // like it.
+        let first = read_first_frame(first_path)?;
+        check_topology(self.template, first.mesh().n_vertices(), &first.mesh().faces)?;
         let bar = mesh_core::cli::stage_progress(n_frames as u64, "frames aligned");
         let written = write_artifact_streamed(out, AlignedMotion::KIND, AlignedMotion::VERSION, header, payload_len, |w| {
             w.encode(faces)?;
@@ -73,12 +77,14 @@ impl<'a> FrameFiles<'a> {
                     .par_iter()
                     .enumerate()
                     .map(|(i, path)| {
-                        let mesh = read_mesh(path)?;
-                        if b == 0 && i == 0 {
-                            check_topology(self.template, mesh.n_vertices(), &mesh.faces)?;
+                        let read;
+                        let mesh = if b == 0 && i == 0 {
+                            first.mesh()
                         } else {
-                            check_like_first(first_path, self.template.n_vertices(), faces, path, &mesh)?;
-                        }
+                            read = read_mesh_like(path, &first)?;
+                            check_like_first(first_path, self.template.n_vertices(), faces, path, &read)?;
+                            &read
+                        };
                         let a = align_frame(self.template, &mesh.vertices, self.anchor);
                         bar.inc(1);
                         Ok(a)

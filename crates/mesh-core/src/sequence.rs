@@ -8,7 +8,7 @@ use nalgebra::Vector3;
 use rayon::prelude::*;
 
 use crate::error::{Error, Result};
-use crate::io::{read_mesh, MeshFormat};
+use crate::io::MeshFormat;
 use crate::mesh::TriMesh;
 use crate::topology::Topology;
 
@@ -204,17 +204,15 @@ impl MeshSequence {
             return Ok(Self::default());
         };
         let bar = crate::cli::stage_progress(files.len() as u64, "frames read");
-        let meshes: Vec<Result<TriMesh>> = files.par_iter().map(read_mesh).inspect(|_| bar.inc(1)).collect();
+        let first = crate::io::read_first_frame(first_path)?;
+        bar.inc(1);
+        let meshes: Vec<Result<TriMesh>> = files[1..].par_iter().map(|f| crate::io::read_mesh_like(f, &first)).inspect(|_| bar.inc(1)).collect();
         bar.finish_and_clear();
-        let mut faces = Vec::new();
+        let TriMesh { vertices, faces } = first.into_mesh();
         let mut frames: Vec<Vec<Vector3<f64>>> = Vec::with_capacity(files.len());
-        for (i, (mesh, path)) in meshes.into_iter().zip(files).enumerate() {
+        frames.push(vertices);
+        for (mesh, path) in meshes.into_iter().zip(&files[1..]) {
             let mesh = mesh?;
-            if i == 0 {
-                faces = mesh.faces;
-                frames.push(mesh.vertices);
-                continue;
-            }
             check_like_first(first_path, frames[0].len(), &faces, path, &mesh)?;
             frames.push(mesh.vertices);
         }

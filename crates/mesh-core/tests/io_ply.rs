@@ -411,3 +411,51 @@ fn measure_13k_vertex_binary_load() {
         );
     }
 }
+
+/// A later frame of a sequence read like its first frame (`read_mesh_like`) is the mesh
+/// `read_mesh` reads, whether it shares the first frame's header and faces (only its vertices
+/// decoded) or not (ascii, other faces, another vertex count, polygons), and its errors name it
+/// as `read_mesh`'s do.
+#[test]
+fn frames_read_like_the_first_are_the_meshes_read_alone() {
+    use mesh_core::io::{read_first_frame, read_mesh_like};
+    let dir = tempfile::tempdir().unwrap();
+    let first_mesh = awkward_mesh();
+    let first_path = dir.path().join("000000.ply");
+    write_ply(&first_path, &first_mesh).unwrap();
+    let first = read_first_frame(&first_path).unwrap();
+    assert_eq!(first.mesh(), &read_mesh(&first_path).unwrap());
+
+    let mut moved = first_mesh.clone();
+    for v in moved.vertices.iter_mut() {
+        *v = v.yzx() * 0.5 - Vector3::new(0.25, 1e-7, 3.0);
+    }
+    let mut other_faces = moved.clone();
+    other_faces.faces.swap(0, 1);
+    let mut candidates = vec![("moved", moved.clone(), PlyOptions::default()), ("other faces", other_faces, PlyOptions::default())];
+    for o in all_options() {
+        candidates.push(("moved, other encoding", moved.clone(), o));
+    }
+    candidates.push(("another body", icosphere(1), PlyOptions::default()));
+    for (what, mesh, opts) in candidates {
+        let path = dir.path().join("000001.ply");
+        write_ply_with(&path, &mesh, opts).unwrap();
+        assert_eq!(read_mesh_like(&path, &first).unwrap(), read_mesh(&path).unwrap(), "{what} {opts:?}");
+    }
+    // Polygons and an OBJ frame go the whole way.
+    let path = write(dir.path(), "poly.ply", &poly_binary(true, "uchar", "int"));
+    assert_eq!(read_mesh_like(&path, &first).unwrap(), read_mesh(&path).unwrap());
+    let obj = dir.path().join("000002.obj");
+    mesh_core::io::write_obj(&obj, &moved).unwrap();
+    assert_eq!(read_mesh_like(&obj, &first).unwrap(), read_mesh(&obj).unwrap());
+
+    // Same header and faces, a non-finite coordinate: refused, naming the file.
+    let mut bad = moved.clone();
+    bad.vertices[5].y = f64::NAN;
+    let mut bytes = Vec::new();
+    encode_ply(&mut bytes, &bad, PlyOptions::default()).unwrap();
+    let path = write(dir.path(), "000003.ply", &bytes);
+    let e = read_mesh_like(&path, &first).unwrap_err().to_string();
+    assert_eq!(e, read_mesh(&path).unwrap_err().to_string());
+    assert!(e.contains("000003.ply") && e.contains("non-finite"), "{e}");
+}

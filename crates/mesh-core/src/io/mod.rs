@@ -98,6 +98,49 @@ pub fn read_mesh(path: impl AsRef<Path>) -> Result<TriMesh> {
     }
 }
 
+/// A sequence's first frame, read by [`read_first_frame`]; its later frames are read with
+/// [`read_mesh_like`].
+pub enum FirstFrame {
+    Ply(ply::PlyFirstFrame),
+    Obj(TriMesh),
+}
+
+impl FirstFrame {
+    pub fn mesh(&self) -> &TriMesh {
+        match self {
+            FirstFrame::Ply(f) => &f.mesh,
+            FirstFrame::Obj(m) => m,
+        }
+    }
+
+    pub fn into_mesh(self) -> TriMesh {
+        match self {
+            FirstFrame::Ply(f) => f.mesh,
+            FirstFrame::Obj(m) => m,
+        }
+    }
+}
+
+/// Reads a sequence's first frame as [`read_mesh`] does.
+pub fn read_first_frame(path: impl AsRef<Path>) -> Result<FirstFrame> {
+    let path = path.as_ref();
+    match format_of(path)? {
+        MeshFormat::Ply => ply::read_ply_first(path).map(FirstFrame::Ply),
+        MeshFormat::Obj => read_obj(path).map(FirstFrame::Obj),
+    }
+}
+
+/// Reads a later frame of the sequence that starts with `first`, as [`read_mesh`] does (the
+/// same mesh); a binary PLY frame with the first's header and face bytes takes its faces
+/// without parsing them again ([`ply::read_ply_like`]).
+pub fn read_mesh_like(path: impl AsRef<Path>, first: &FirstFrame) -> Result<TriMesh> {
+    let path = path.as_ref();
+    match (format_of(path)?, first) {
+        (MeshFormat::Ply, FirstFrame::Ply(f)) => ply::read_ply_like(path, f),
+        _ => read_mesh(path),
+    }
+}
+
 /// Writes a mesh as binary PLY or OBJ, dispatching on the extension.
 pub fn write_mesh(path: impl AsRef<Path>, mesh: &TriMesh) -> Result<()> {
     let path = path.as_ref();

@@ -159,6 +159,12 @@ const INDEX_NAMES: [&str; 2] = ["vertex_indices", "vertex_index"];
 
 /// The validated mesh and the number of degenerate faces skipped.
 fn parse(bytes: &[u8], allow_fast: bool) -> std::result::Result<(TriMesh, usize), String> {
+    parse_keeping_records(bytes, allow_fast).map(|(mesh, skipped, _)| (mesh, skipped))
+}
+
+/// [`parse`], with where the vertex records lie when the fast reader took the file (their
+/// first byte in `bytes` and their layout).
+fn parse_keeping_records(bytes: &[u8], allow_fast: bool) -> std::result::Result<(TriMesh, usize, Option<(usize, VertexRecords)>), String> {
     let mut reader = Reader::new(bytes);
     let header = Parser::<Skip>::new()
         .read_header(&mut reader)
@@ -166,8 +172,10 @@ fn parse(bytes: &[u8], allow_fast: bool) -> std::result::Result<(TriMesh, usize)
     let payload_len = reader.get_ref().len();
     check_counts(&header, payload_len)?;
     let layout = Layout::of(&header)?;
+    let mut records = None;
     let (mesh, skipped) = if allow_fast && header.encoding != Encoding::Ascii && layout.fast {
         let payload: &[u8] = reader.get_ref();
+        records = Some((bytes.len() - payload_len, VertexRecords::of(&header, &layout)));
         read_binary_fast(payload, &header, &layout)?
     } else {
         read_generic(&mut reader, &header, &layout)?
@@ -176,7 +184,47 @@ fn parse(bytes: &[u8], allow_fast: bool) -> std::result::Result<(TriMesh, usize)
         return Err("no vertices (element vertex is empty)".into());
     }
     mesh.validate().map_err(|e| e.to_string())?;
-    Ok((mesh, skipped))
+    Ok((mesh, skipped, records))
+}
+
+/// A sequence's first frame as [`read_ply_like`] compares its later frames with: its mesh, the
+/// degenerate faces skipped, and for a binary file of the fast reader's layout its bytes and
+/// where its vertex records lie in them.
+pub struct PlyFirstFrame {
+    pub mesh: TriMesh,
+    skipped: usize,
+    bytes: Option<(Vec<u8>, usize, VertexRecords)>,
+}
+
+/// Reads a sequence's first frame as [`read_ply`] does, keeping what [`read_ply_like`] needs.
+pub fn read_ply_first(path: impl AsRef<Path>) -> Result<PlyFirstFrame> {
+    let path = path.as_ref();
+    let bytes = crate::input::read_regular_file(path)?;
+    let (mesh, skipped, records) = parse_keeping_records(&bytes, true).map_err(|msg| Error::file(path, msg))?;
+    super::warn_skipped_faces(path, skipped);
+    Ok(PlyFirstFrame { mesh, skipped, bytes: records.map(|(start, r)| (bytes, start, r)) })
+}
+
+/// Reads a later frame of the sequence that starts with `first`, as [`read_ply`] does. A file
+/// whose bytes before and after its vertex records equal the first frame's (the same header,
+/// so the same layout and counts, and the same face records) has the first frame's faces:
+/// only its vertex records are decoded.
+pub fn read_ply_like(path: impl AsRef<Path>, first: &PlyFirstFrame) -> Result<TriMesh> {
+    let path = path.as_ref();
+    let bytes = crate::input::read_regular_file(path)?;
+    if let Some((first_bytes, start, records)) = &first.bytes {
+        let end = start + records.len();
+        if bytes.len() == first_bytes.len() && bytes[..*start] == first_bytes[..*start] && bytes[end..] == first_bytes[end..] {
+            let vertices = records.decode(&bytes[*start..]).map_err(|msg| Error::file(path, msg))?;
+            let mesh = TriMesh { vertices, faces: first.mesh.faces.clone() };
+            mesh.validate().map_err(|e| Error::file(path, e.to_string()))?;
+            super::warn_skipped_faces(path, first.skipped);
+            return Ok(mesh);
+        }
+    }
+    let (mesh, skipped) = parse(&bytes, true).map_err(|msg| Error::file(path, msg))?;
+    super::warn_skipped_faces(path, skipped);
+    Ok(mesh)
 }
 
 /// Where the vertex coordinates and face indices live in the header.
@@ -405,6 +453,53 @@ impl Bin<'_> {
     }
 }
 
+/// Where `x y z` lie in the fixed-size vertex records of a binary file the fast reader takes.
+#[derive(Clone)]
+struct VertexRecords {
+    /// Byte offset and type of x, y, z within a record.
+    coord: [(usize, ScalarType); 3],
+    stride: usize,
+    count: usize,
+    le: bool,
+}
+
+impl VertexRecords {
+    fn of(header: &Header, layout: &Layout) -> VertexRecords {
+        let elements: Vec<&ElementDef> = header.elements.values().collect();
+        let vdef = elements[layout.vertex];
+        let mut stride = 0;
+        let mut coord = [(0usize, ScalarType::Float), (0, ScalarType::Float), (0, ScalarType::Float)];
+        for p in vdef.properties.values() {
+            let PropertyType::Scalar(t) = &p.data_type else {
+                unreachable!("checked by Layout")
+            };
+            if let Some(k) = ["x", "y", "z"].iter().position(|c| *c == p.name) {
+                coord[k] = (stride, t.clone());
+            }
+            stride += scalar_size(t);
+        }
+        VertexRecords { coord, stride, count: vdef.count, le: header.encoding == Encoding::BinaryLittleEndian }
+    }
+
+    fn len(&self) -> usize {
+        self.count * self.stride
+    }
+
+    /// The vertices of the records at the start of `payload`.
+    fn decode(&self, payload: &[u8]) -> std::result::Result<Vec<Vector3<f64>>, String> {
+        let vbytes = payload.get(..self.len()).ok_or("file is truncated (vertex data ends early)")?;
+        let mut vertices = Vec::with_capacity(self.count);
+        for rec in vbytes.chunks_exact(self.stride) {
+            let mut xyz = [0.0; 3];
+            for (k, (off, t)) in self.coord.iter().enumerate() {
+                xyz[k] = Bin { data: rec, pos: *off, le: self.le }.float(t)?;
+            }
+            vertices.push(Vector3::new(xyz[0], xyz[1], xyz[2]));
+        }
+        Ok(vertices)
+    }
+}
+
 fn read_binary_fast(
     payload: &[u8],
     header: &Header,
@@ -413,40 +508,9 @@ fn read_binary_fast(
     let mut skipped = 0;
     let le = header.encoding == Encoding::BinaryLittleEndian;
     let elements: Vec<&ElementDef> = header.elements.values().collect();
-    let vdef = elements[layout.vertex];
-    // Byte offset and type of x, y, z within a vertex record of fixed stride.
-    let mut stride = 0;
-    let mut coord = [
-        (0usize, ScalarType::Float),
-        (0, ScalarType::Float),
-        (0, ScalarType::Float),
-    ];
-    for p in vdef.properties.values() {
-        let PropertyType::Scalar(t) = &p.data_type else {
-            unreachable!("checked by Layout")
-        };
-        if let Some(k) = ["x", "y", "z"].iter().position(|c| *c == p.name) {
-            coord[k] = (stride, t.clone());
-        }
-        stride += scalar_size(t);
-    }
-    let n = vdef.count;
-    let vbytes = payload
-        .get(..n * stride)
-        .ok_or("file is truncated (vertex data ends early)")?;
-    let mut vertices = Vec::with_capacity(n);
-    for rec in vbytes.chunks_exact(stride) {
-        let mut xyz = [0.0; 3];
-        for (k, (off, t)) in coord.iter().enumerate() {
-            xyz[k] = Bin {
-                data: rec,
-                pos: *off,
-                le,
-            }
-            .float(t)?;
-        }
-        vertices.push(Vector3::new(xyz[0], xyz[1], xyz[2]));
-    }
+    let records = VertexRecords::of(header, layout);
+    let (n, stride) = (records.count, records.stride);
+    let vertices = records.decode(payload)?;
     let mut faces = Vec::new();
     if let Some(f) = layout.face {
         let fdef = elements[f];
