@@ -122,12 +122,13 @@ fn figures(groups: &[(&String, &Value)]) -> String {
         }
     });
     s += &row(
-        "captures' fastest turn, longest edge and largest turn from the start (a variation frame spins, tears, goes off course past 1.25×, 1.5×, 1.25×)",
+        "captures' fastest turn (about the vertical), longest edge and largest turn from the start (a variation frame spins, tears, goes off course past 1.25×, 1.5×, 1.25×)",
         &|v| {
             let c = &v["samples"]["capture_limits"];
             let course = c["max_course_turn_deg"].as_f64().map_or(String::new(), |d| format!(", {d:.1}°"));
+            let heading = c["max_heading_turn_deg"].as_f64().map_or(String::new(), |d| format!(" ({d:.1}°)"));
             match (c["max_turn_deg"].as_f64(), c["max_edge_m"].as_f64()) {
-                (Some(t), Some(e)) => format!("{t:.1}°/frame, {:.1} mm{course}", 1e3 * e),
+                (Some(t), Some(e)) => format!("{t:.1}°{heading}/frame, {:.1} mm{course}", 1e3 * e),
                 _ => "-".into(),
             }
         },
@@ -167,10 +168,10 @@ pub const SEQUENCE_COLUMNS: [&str; 14] = [
     "distance between variations, m",
     "coverage",
     "diversity global / local, mm",
-    "frames spinning / torn / off course, of all",
+    "frames spinning (about the vertical) / torn / off course, of all",
 ];
 
-/// `spinning / torn / off course, of all` frames summed over a sequence's variations (`-`
+/// `spinning (about the vertical) / torn / off course, of all` frames summed over a sequence's variations (`-`
 /// without the measure).
 fn spins_and_tears(seq: &Value) -> String {
     let Some(vars) = seq["turns_and_tears"].as_array().filter(|a| !a.is_empty()) else {
@@ -178,7 +179,13 @@ fn spins_and_tears(seq: &Value) -> String {
     };
     let count = |k: &str| -> usize { vars.iter().map(|v| v[k].as_array().map_or(0, Vec::len)).sum() };
     let all = seq["frames"].as_u64().map_or(String::new(), |f| format!(", of {}", f as usize * vars.len()));
-    format!("{} / {} / {}{all}", count("spinning_frames"), count("torn_frames"), count("off_course_frames"))
+    format!(
+        "{} ({} about the vertical) / {} / {}{all}",
+        count("spinning_frames"),
+        count("heading_spinning_frames"),
+        count("torn_frames"),
+        count("off_course_frames")
+    )
 }
 
 fn sequences(groups: &[(&String, &Value)]) -> String {
@@ -301,12 +308,12 @@ mod tests {
                      "latent_blend": [{"w": 0.25, "guided_m": 0.00179, "unguided_m": 0.00206}],
                      "mean_prediction": [{"sequence": "walk", "error_m": 0.0089}]},
             "samples": {"accept_rate": {"mean": 0.7, "min": 0.54, "max": 0.82}, "notes": [],
-                "capture_limits": {"max_turn_deg": 6.96, "max_edge_m": 0.0412, "max_course_turn_deg": 12.04},
+                "capture_limits": {"max_turn_deg": 6.96, "max_edge_m": 0.0412, "max_course_turn_deg": 12.04, "max_heading_turn_deg": 3.14},
                 "sequences": [{"label": "walk", "frames": 25, "pose_distance_to_source_m": [0.094, 0.124],
                     "raw_contact_sliding_m": [0.061, 0.079], "contact_sliding_m": [0.0, 1e-17],
                     "source_contact_sliding_m": 0.005, "pairwise_distance_m": {"mean": 0.4},
                     "diversity": {"coverage": 0.5, "global_m": 0.1, "local_m": 0.05},
-                    "turns_and_tears": [{"spinning_frames": [3, 4], "torn_frames": [4], "off_course_frames": [20, 21]},
+                    "turns_and_tears": [{"spinning_frames": [3, 4], "heading_spinning_frames": [3], "torn_frames": [4], "off_course_frames": [20, 21]},
                                         {"spinning_frames": [9], "torn_frames": []}]}]}}});
         assert!(is_variation_table(&v));
         let h = section_html(&v).unwrap();
@@ -317,8 +324,8 @@ mod tests {
             "<td>0.70 (0.54-0.82)</td>",
             "<td>walk (25)</td><td>94-124</td>",
             "<td>0.061-0.079 → 0.000 (0.005)</td>",
-            "<td>0.40</td><td>0.50</td><td>100 / 50</td><td>3 / 1 / 2, of 50</td>",
-            "goes off course past 1.25×, 1.5×, 1.25×)</th><td>7.0°/frame, 41.2 mm, 12.0°</td>",
+            "<td>0.40</td><td>0.50</td><td>100 / 50</td><td>3 (1 about the vertical) / 1 / 2, of 50</td>",
+            "goes off course past 1.25×, 1.5×, 1.25×)</th><td>7.0° (3.1°)/frame, 41.2 mm, 12.0°</td>",
             "<td>torso, leg_l</td><td>75</td><td>1</td><td>0.50-1.50</td><td>100-300</td><td>ValueTolerance, GradientTolerance</td>",
         ] {
             assert!(h.contains(needle), "{needle} not in {h}");

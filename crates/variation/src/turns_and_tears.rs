@@ -10,6 +10,11 @@
 //! when it turns faster than [`SPIN_FACTOR`] times that rate, and tears when its longest edge
 //! exceeds [`TEAR_FACTOR`] times the longest edge of any captured frame.
 //!
+//! A whole-body turn is also what a limb swinging fast does to the fit, and a landing's pitch;
+//! what a viewer calls a spin is a turn about the vertical. A frame **spins about the vertical**
+//! when the heading of the root part's core (below) changes from the frame before by more than
+//! [`SPIN_FACTOR`] times the captures' fastest such change (step-normalised as above).
+//!
 //! A slow turn passes that bound frame by frame and still takes a body off its course: a
 //! variation frame is **off course** when its torso has turned from the variation's first frame
 //! by more than [`SPIN_FACTOR`] times the most any captured sequence of the group turns from its
@@ -44,6 +49,12 @@ pub fn course_degrees(frames: &[Vec<Vector3<f64>>], core: &[u32], up: &Vector3<f
     crate::course::headings(frames, core, up).into_iter().map(|h| h.to_degrees().abs()).collect()
 }
 
+/// Change of heading (degrees, unsigned) about `up` of the vertices `core` from each frame to
+/// the next ([`course_degrees`]' heading): one fewer than the frames.
+pub fn heading_turn_degrees(frames: &[Vec<Vector3<f64>>], core: &[u32], up: &Vector3<f64>) -> Vec<f64> {
+    crate::course::headings(frames, core, up).windows(2).map(|w| (w[1] - w[0]).to_degrees().abs()).collect()
+}
+
 /// Length of the longest edge of each frame (model units, metres).
 pub fn longest_edges(frames: &[Vec<Vector3<f64>>], edges: &[[u32; 2]]) -> Vec<f64> {
     frames
@@ -67,6 +78,9 @@ pub struct CaptureLimits {
     /// The most any captured sequence turns from its first frame (degrees).
     #[serde(default)]
     pub max_course_turn_deg: f64,
+    /// Fastest change of heading about the vertical of any captured frame (degrees per frame).
+    #[serde(default)]
+    pub max_heading_turn_deg: f64,
 }
 
 impl CaptureLimits {
@@ -74,16 +88,18 @@ impl CaptureLimits {
     pub fn of_group(group: &Group) -> CaptureLimits {
         let edges = crate::metrics::edges(&group.faces);
         let core = crate::group::root_core(&group.parts, group.template.len());
-        let mut limits = CaptureLimits { max_turn_deg: 0.0, max_edge_m: 0.0, max_course_turn_deg: 0.0 };
+        let mut limits = CaptureLimits { max_turn_deg: 0.0, max_edge_m: 0.0, max_course_turn_deg: 0.0, max_heading_turn_deg: 0.0 };
         for s in group.sequences.iter().filter(|s| s.blend.is_none()) {
             let frames = s.motion.world_frames();
-            for (t, turn) in turn_degrees(&frames).into_iter().enumerate() {
+            let headings = heading_turn_degrees(&frames, &core, &group.up);
+            for (t, (turn, heading)) in turn_degrees(&frames).into_iter().zip(headings).enumerate() {
                 let step = match (s.map.get(t), s.map.get(t + 1)) {
                     (Some(&a), Some(&b)) => b.saturating_sub(a),
                     _ => 1,
                 };
                 if step > 0 {
                     limits.max_turn_deg = limits.max_turn_deg.max(turn / step as f64);
+                    limits.max_heading_turn_deg = limits.max_heading_turn_deg.max(heading / step as f64);
                 }
             }
             let longest = longest_edges(&frames, &edges).into_iter().fold(0.0, f64::max);
@@ -97,6 +113,11 @@ impl CaptureLimits {
     /// Turns faster than this spin (degrees per frame).
     pub fn spin_bound_deg(&self) -> f64 {
         SPIN_FACTOR * self.max_turn_deg
+    }
+
+    /// Heading changes faster than this spin about the vertical (degrees per frame).
+    pub fn heading_spin_bound_deg(&self) -> f64 {
+        SPIN_FACTOR * self.max_heading_turn_deg
     }
 
     /// Edges longer than this tear (m).
@@ -115,6 +136,9 @@ impl CaptureLimits {
 pub struct TurnsAndTears {
     /// Frames that turn faster than the spin bound (a frame `t ≥ 1` turns from `t − 1`).
     pub spinning_frames: Vec<usize>,
+    /// Frames whose heading changes faster than the heading bound: spins about the vertical.
+    #[serde(default)]
+    pub heading_spinning_frames: Vec<usize>,
     /// Frames holding an edge longer than the tear bound.
     pub torn_frames: Vec<usize>,
     /// Frames turned from the first further than the course bound.
@@ -126,6 +150,9 @@ pub struct TurnsAndTears {
     /// Fastest turn of the variation (degrees per frame) and its longest edge (m).
     pub max_turn_deg: f64,
     pub max_edge_m: f64,
+    /// Fastest change of heading of the variation (degrees per frame).
+    #[serde(default)]
+    pub max_heading_turn_deg: f64,
 }
 
 impl TurnsAndTears {
@@ -135,7 +162,10 @@ impl TurnsAndTears {
         let turns = turn_degrees(frames);
         let longest = longest_edges(frames, edges);
         let course = course_degrees(frames, core, up);
+        let headings = heading_turn_degrees(frames, core, up);
         TurnsAndTears {
+            heading_spinning_frames: (0..headings.len()).filter(|&t| headings[t] > limits.heading_spin_bound_deg()).map(|t| t + 1).collect(),
+            max_heading_turn_deg: headings.iter().copied().fold(0.0, f64::max),
             off_course_frames: (0..course.len()).filter(|&t| course[t] > limits.course_bound_deg()).collect(),
             max_course_turn_deg: course.iter().copied().fold(0.0, f64::max),
             spinning_frames: (0..turns.len())
@@ -183,7 +213,7 @@ mod tests {
 
     #[test]
     fn frames_past_the_bounds_are_named_and_frames_within_them_are_not() {
-        let limits = CaptureLimits { max_turn_deg: 8.0, max_edge_m: 1.0, max_course_turn_deg: 20.0 };
+        let limits = CaptureLimits { max_turn_deg: 8.0, max_edge_m: 1.0, max_course_turn_deg: 20.0, max_heading_turn_deg: 8.0 };
         let mut frames = vec![turned(0.0), turned(9.0), turned(30.0), turned(31.0)];
         // Frame 3 also has a stretched point: its edge 0-1 grows past 1.5 m.
         frames[3][1] += Vector3::new(0.0, 0.0, 2.0);
@@ -197,11 +227,34 @@ mod tests {
         assert!((r.max_edge_m - longest_edges(&frames, &edges)[3]).abs() < 1e-12);
     }
 
+    fn pitched(deg: f64) -> Vec<Vector3<f64>> {
+        let r = Rotation3::from_axis_angle(&Vector3::x_axis(), deg.to_radians());
+        body().iter().map(|p| r * p).collect()
+    }
+
+    /// A body turned about the vertical spins about it at the turn's rate; one pitched forward
+    /// (a landing's crouch) turns as a whole body and does not change its heading.
+    #[test]
+    fn a_turn_about_the_vertical_changes_the_heading_and_a_pitch_does_not() {
+        let limits = CaptureLimits { max_turn_deg: 4.0, max_edge_m: 10.0, max_course_turn_deg: 90.0, max_heading_turn_deg: 4.0 };
+        let turning: Vec<_> = [0.0, 3.0, 12.0, 13.0].iter().map(|&d| turned(d)).collect();
+        let heading = heading_turn_degrees(&turning, &[], &Vector3::y());
+        for (got, want) in heading.iter().zip([3.0, 9.0, 1.0]) {
+            assert!((got - want).abs() < 1e-9, "{got} vs {want}");
+        }
+        let r = TurnsAndTears::of(&turning, &[[0, 1]], &[], &Vector3::y(), &limits);
+        assert_eq!((r.spinning_frames.clone(), r.heading_spinning_frames.clone()), (vec![2], vec![2]));
+        let pitching: Vec<_> = [0.0, 3.0, 12.0, 13.0].iter().map(|&d| pitched(d)).collect();
+        let r = TurnsAndTears::of(&pitching, &[[0, 1]], &[], &Vector3::y(), &limits);
+        assert_eq!(r.spinning_frames, vec![2]);
+        assert!(r.heading_spinning_frames.is_empty() && r.max_heading_turn_deg < 1e-9, "{r:?}");
+    }
+
     #[test]
     fn a_slow_steady_turn_spins_nowhere_but_goes_off_course() {
         // 6° a frame for 20 frames: under an 8°/frame capture rate at every step, 114° from the
         // start by the end, against captures that turn at most 15° from their first frame.
-        let limits = CaptureLimits { max_turn_deg: 8.0, max_edge_m: 10.0, max_course_turn_deg: 15.0 };
+        let limits = CaptureLimits { max_turn_deg: 8.0, max_edge_m: 10.0, max_course_turn_deg: 15.0, max_heading_turn_deg: 8.0 };
         let frames: Vec<_> = (0..20).map(|t| turned(6.0 * t as f64)).collect();
         let r = TurnsAndTears::of(&frames, &[[0, 1]], &[], &Vector3::y(), &limits);
         assert!(r.spinning_frames.is_empty(), "{:?}", r.spinning_frames);
