@@ -1,5 +1,6 @@
 //! Variations a viewer accepts, on the tiny preset through the stage binaries: no frame turns
-//! the whole body faster than 1.25 × the captures' fastest frame-to-frame turn, and none holds
+//! the whole body (or its heading about the vertical) faster than 1.25 × the captures' fastest
+//! frame-to-frame turn, and none holds
 //! an edge longer than 1.5 × the captures' longest (`variation::turns_and_tears`), under the
 //! default sampler, `--sampler ancestral` and for blends. Also: a query the machine cannot hold
 //! is refused in one line before sampling.
@@ -20,7 +21,7 @@ fn spins_and_tears(report: &Path) -> Vec<String> {
         let per = s["turns_and_tears"].as_array().unwrap();
         assert!(!per.is_empty(), "{}: no turns_and_tears", s["label"]);
         for (k, v) in per.iter().enumerate() {
-            for kind in ["spinning_frames", "torn_frames"] {
+            for kind in ["spinning_frames", "heading_spinning_frames", "torn_frames"] {
                 let frames = v[kind].as_array().unwrap();
                 if !frames.is_empty() {
                     bad.push(format!("{} var{k}: {kind} {frames:?} (max turn {} deg, captures' {limits})", s["label"], v["max_turn_deg"]));
