@@ -13,7 +13,9 @@
 //! file justifies. Binary files with the common layout (`vertex` with scalar
 //! properties, then `face` with the index list and possibly scalars) are
 //! decoded by a direct fast path; everything else goes through ply-rs-bw's
-//! generic payload reader.
+//! generic payload reader. A sequence's later frames ([`read_ply_like`]) whose
+//! bytes outside the vertex records equal its first frame's take the first
+//! frame's faces without decoding them again.
 //!
 //! Writing produces binary little-endian (double `x y z`, `list uchar int
 //! vertex_indices`) by default, ascii on request, always atomically.
