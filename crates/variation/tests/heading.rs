@@ -1,5 +1,5 @@
 //! The placement of decoded frames keeps a capture's heading: integrating a captured sequence's
-//! own root displacements with its own gravity values (`reconstruct::world_poses`) gives back
+//! own root displacements with its own gravity values (`capture::root_placement`) gives back
 //! its root poses, so whatever turns a variation is in what is decoded, not in the placement.
 
 use std::path::Path;
@@ -26,7 +26,8 @@ fn integrating_a_captures_own_displacements_and_gravity_gives_back_its_poses() {
     for seq in &group.sequences {
         let m = &seq.motion;
         let gravity = variation::part_data::gravity(m, &group.up, &root);
-        let placed = variation::reconstruct::world_poses(m.n_frames(), &m.displacements, &gravity, &group.up, &m.poses[0], &root);
+        let g = capture::root_placement::Gravity { targets: &gravity, up: &group.up };
+        let placed = capture::root_placement::world_poses_from(&m.poses[0], &root, &m.displacements, m.n_frames(), Some(&g));
         let worst = placed
             .iter()
             .zip(&m.poses)
