@@ -5,6 +5,8 @@
 use std::path::Path;
 use std::process::Command;
 
+mod common;
+
 use mesh_core::artifact::Artifact;
 use variation::group::Group;
 
@@ -17,7 +19,8 @@ fn integrating_a_captures_own_displacements_and_gravity_gives_back_its_poses() {
     let group_path = dir.path().join("g.group");
     let s = |p: &Path| p.to_string_lossy().into_owned();
     let out = Command::new(env!("CARGO_BIN_EXE_prealign"))
-        .args(["-q", "--set", &s(&set), "--group-name", "locomotion", "--motions", "walk,run", "--blend-weights", "0.5", "--out", &s(&group_path)])
+        .args(["-q", "--set", &s(&set), "--group-name", "locomotion", "--blend-weights", "0.5", "--out", &s(&group_path)])
+        .args(common::front_end(&set, "A", &["walk", "run"], dir.path()))
         .output()
         .unwrap();
     assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
