@@ -265,7 +265,8 @@ fn parts_fitted_alone_and_merged_are_the_whole_run() {
     // gpdm-train, on a prealigned group of subject A.
     let group = w("locomotion.group");
     run("prealign", &strings(&[
-        "-q", "--set", &s(&set), "--group-name", "locomotion", "--motions", "walk,run", "--blend-weights", "0.5", "--out", &s(&group),
+        "-q", "--set", &s(&set), "--segmentation", &s(&seg_a), "--group-name", "locomotion", "--blend-weights", "0.5", &s(&w("A/walk.aligned")),
+        &s(&w("A/run.aligned")), "--out", &s(&group),
     ]));
     let args = strings(&["-q", "--group", &s(&group), "--max-iter", "20"]);
     let gpdm_pieces = split_and_merge("gpdm-train", &args, &w("locomotion.model"), &known, true);
@@ -286,7 +287,8 @@ fn parts_fitted_alone_and_merged_are_the_whole_run() {
     merge_errors(&gpr_pieces, &foreign, &gpdm_pieces[0], &out);
     let other_group = w("other.group");
     run("prealign", &strings(&[
-        "-q", "--set", &s(&set), "--group-name", "locomotion", "--motions", "walk,run", "--blend-weights", "0.25", "--out", &s(&other_group),
+        "-q", "--set", &s(&set), "--segmentation", &s(&seg_a), "--group-name", "locomotion", "--blend-weights", "0.25", &s(&w("A/walk.aligned")),
+        &s(&w("A/run.aligned")), "--out", &s(&other_group),
     ]));
     let foreign = w("other.model.piece");
     run("gpdm-train", &strings(&["-q", "--group", &s(&other_group), "--max-iter", "20", "--part", &known[0], "--out", &s(&foreign)]));

@@ -7,6 +7,7 @@
 
 pub mod collect;
 pub mod flag;
+pub mod front_end;
 pub mod json_text;
 pub mod make_fragment;
 pub mod options;

@@ -161,7 +161,7 @@ pub fn graph(options: &PipelineOptions, part_tasks: PartTasks) -> Result<Graph> 
     let mut graph = Graph { part_tasks, ..Graph::default() };
     crate::transfer::plan(&set, &out, &options.transfer, &mut graph)?;
     graph.transfer_tasks = graph.tasks.len();
-    crate::variation::plan(&set, &out, &options.variation, &mut graph)?;
+    crate::variation::plan(&set, &out, &options.variation, options.transfer.align_frame(), &mut graph)?;
     Ok(graph)
 }
 

@@ -1,6 +1,6 @@
 //! The transfer pipeline's tasks (CVPR sections 4 to 7), from a capture set:
 //! per subject `propose-curves` when its description has no curves ([`crate::subjects`]),
-//! `segment`, `align` of every motion, `pca-fit` (per part and whole body); per training pair
+//! `segment`, `align` of every motion ([`crate::front_end`]), `pca-fit` (per part and whole body); per training pair
 //! `dtw-densify`; per direction and method `gpr-train` (the part models and the regressors part
 //! by part, joined by `merge-parts`: [`per_part`]); per test motion `gpr-predict` (every
 //! placement for gpr-nn, plus correction and stitching, CVPR §6), `transfer-eval` (against the
@@ -11,15 +11,16 @@
 use std::collections::BTreeMap;
 use std::path::Path;
 
-use anyhow::{Context, Result};
+use anyhow::Result;
 use mesh_core::capture_set::CaptureSet;
 
+use crate::front_end;
 use crate::options::{value_name, ConfigName, Method, Placement, TransferOptions};
 use crate::per_part;
 use crate::subjects::{subject, Subject};
 use crate::flag::{
-    flag, Align, ConfidenceFigure, CorrectionFigure, CostMatrixFigure, DtwDensify, GprPredict, GprTrain, LearningCurves,
-    PcaFit, Render, Segment, TransferEval,
+    flag, ConfidenceFigure, CorrectionFigure, CostMatrixFigure, DtwDensify, GprPredict, GprTrain, LearningCurves, PcaFit,
+    Render, TransferEval,
 };
 use crate::task::{s, Graph, Step, Task};
 
@@ -90,10 +91,10 @@ impl Direction<'_> {
 
 impl<'a> Plan<'a> {
     fn seg(&self, x: &str) -> String {
-        format!("{}/{x}/parts.seg", self.work)
+        front_end::seg(&self.work, x)
     }
     fn aligned(&self, x: &str, m: &str) -> String {
-        format!("{}/{x}/{m}.aligned", self.work)
+        front_end::aligned(&self.work, x, m)
     }
     fn pca(&self, x: &str, kind: &str) -> String {
         format!("{}/{x}/{kind}.model", self.work)
@@ -115,27 +116,10 @@ impl<'a> Plan<'a> {
 
     /// `align` of every motion, `segment`, and the per-part and whole-body `pca-fit` of subject `x`.
     fn front_end(&mut self, x: &str, graph: &mut Graph) -> Result<()> {
-        let subject = self.subjects[x].json.clone();
         for m in self.set.motions(x)? {
-            let frames = self.set.frames(x, &m).with_context(|| format!("subject {x}, motion {m}"))?;
-            let mut inputs = vec![subject.clone(), self.template(x), self.seg(x)];
-            inputs.extend(frames.iter().map(|f| f.to_string_lossy().into_owned()));
-            let args = vec![
-                s("-q"), flag!(Align, frame), value_name(self.opt.align_frame()), flag!(Align, segmentation), self.seg(x),
-                flag!(Align, subject), subject.clone(), flag!(Align, template), self.template(x), join(&self.set.root, &[x, &m]),
-                flag!(Align, out), self.aligned(x, &m),
-            ];
-            graph.push(Task::run("align", self.aligned(x, &m), inputs, args).mkdir_target());
+            front_end::align(self.set, &self.work, x, &m, &self.subjects[x], self.opt.align_frame(), graph)?;
         }
-        graph.push(
-            Task::run(
-                "segment",
-                self.seg(x),
-                vec![subject.clone(), self.template(x)],
-                vec![s("-q"), subject, flag!(Segment, template), self.template(x), flag!(Segment, out), self.seg(x)],
-            )
-            .mkdir_target(),
-        );
+        front_end::segment(&self.work, x, &self.subjects[x], graph);
         let training: Vec<String> = self.train[x].iter().map(|m| self.aligned(x, m)).collect();
         let mut inputs = vec![self.seg(x)];
         inputs.extend(training.iter().cloned());

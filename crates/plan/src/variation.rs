@@ -1,13 +1,15 @@
-//! The variation pipeline's tasks (3DV): per movement group `prealign` (time-aligned motions and
-//! pre-blends), `gpdm-train` (one GPDM per part, one task per part joined by `merge-parts`:
+//! The variation pipeline's tasks (3DV): per movement group `prealign` (the front end's aligned
+//! motions time-aligned, and pre-blends; [`front_end`]'s tasks, shared with the transfer), `gpdm-train` (one GPDM per part, one task per part joined by `merge-parts`:
 //! [`per_part`]), `hmc-sample` (variations, then their contact sheets), `variation-eval`; and
 //! the merge of every group's records into `variation.json`. A group none of whose motions the
 //! subject has is left out; when no group is left (a lab's own set, whose motions have other
 //! names), each of the subject's training motions is a group of its own.
 
 use anyhow::Result;
+use capture::align::AlignFrame;
 use mesh_core::capture_set::CaptureSet;
 
+use crate::front_end;
 use crate::options::{words, VariationOptions};
 use crate::per_part;
 use crate::flag::{flag, GpdmTrain, HmcSample, Prealign, Render, VariationEval};
@@ -15,7 +17,8 @@ use crate::task::{s, Graph, Step, Task};
 
 /// Adds the variation pipeline's tasks and its variables (`VARIATION_RECORDS`,
 /// `VARIATION_REPORT_VIEWS`) to `graph`.
-pub fn plan(set: &CaptureSet, out: &str, opt: &VariationOptions, graph: &mut Graph) -> Result<()> {
+pub fn plan(set: &CaptureSet, out: &str, opt: &VariationOptions, align_frame: AlignFrame, graph: &mut Graph) -> Result<()> {
+    let front = format!("{out}/work");
     let work = format!("{out}/work/variation");
     let vout = format!("{out}/variation");
     let (groups, prealign_defaults) = if opt.groups.is_empty() {
@@ -24,25 +27,30 @@ pub fn plan(set: &CaptureSet, out: &str, opt: &VariationOptions, graph: &mut Gra
         (opt.groups.clone(), false)
     };
     let subject = opt.variation_subject.clone().unwrap_or_else(|| set.spec.source.clone());
-    let described = crate::subjects::subject(set, &format!("{out}/work"), &subject, graph)?;
+    let described = crate::subjects::subject(set, &front, &subject, graph)?;
     let groups = groups_present(set, &subject, groups)?;
     let set_root = set.root.to_string_lossy().into_owned();
     let mut records = Vec::new();
     let mut names = Vec::new();
     for (g, motions) in &groups {
-        // prealign reads the set, the subject's description and template, and the frames of
-        // the group's motions (those the subject has, `groups_present`).
-        let mut inputs = vec![set.set_json().to_string_lossy().into_owned()];
-        // The group's parts are the subject's, unless prealign models the whole body (then one
-        // task fits it); a subject prealign cannot read fails in prealign, naming its file.
+        // prealign reads the set, the subject's description and template, and the front end's
+        // segmentation and aligned motions (`front_end`: those of the transfer when it has the
+        // subject) of the group's motions (those the subject has, `groups_present`). A group
+        // modelled as one part reads motions aligned on the whole body and no segmentation, so
+        // that a subject whose curves do not segment still runs (then one task fits it).
         let whole_body = opt.prealign_words(g).iter().any(|w| *w == flag!(Prealign, whole_body) || *w == flag!(Prealign, fallback_whole_body));
         let parts: Vec<String> = if whole_body { Vec::new() } else { described.parts.clone() };
-        inputs.extend([described.json.clone(), described.template.clone()]);
+        let mut inputs = vec![set.set_json().to_string_lossy().into_owned(), described.json.clone(), described.template.clone()];
+        let segmentation = (!whole_body).then(|| front_end::segment(&front, &subject, &described, graph));
+        inputs.extend(segmentation.clone());
+        let mut aligned = Vec::new();
         for m in motions.split(',').filter(|m| !m.is_empty()) {
-            if let Ok(frames) = set.frames(&subject, m) {
-                inputs.extend(frames.iter().map(|f| f.to_string_lossy().into_owned()));
-            }
+            aligned.push(match whole_body {
+                true => front_end::align_whole_body(set, &front, &subject, m, &described, graph)?,
+                false => front_end::align(set, &front, &subject, m, &described, align_frame, graph)?,
+            });
         }
+        inputs.extend(aligned.iter().cloned());
         let group = format!("{work}/{g}.group");
         let mut args = vec![s("-q"), flag!(Prealign, set), set_root.clone()];
         if let Some(sub) = &opt.variation_subject {
@@ -51,12 +59,17 @@ pub fn plan(set: &CaptureSet, out: &str, opt: &VariationOptions, graph: &mut Gra
         if described.proposed() {
             args.extend([flag!(Prealign, subject), described.json.clone()]);
         }
-        args.extend([flag!(Prealign, group_name), g.clone(), flag!(Prealign, motions), motions.clone()]);
+        if let Some(seg) = segmentation {
+            args.extend([flag!(Prealign, segmentation), seg]);
+        }
+        args.extend([flag!(Prealign, group_name), g.clone()]);
         if prealign_defaults && g == "locomotion" {
             args.push(flag!(Prealign, gait_cycles));
         }
         args.extend(opt.prealign_words(g));
-        args.extend([flag!(Prealign, blend_weights), opt.variation_w.clone(), flag!(Prealign, out), group.clone()]);
+        args.extend([flag!(Prealign, blend_weights), opt.variation_w.clone()]);
+        args.extend(aligned);
+        args.extend([flag!(Prealign, out), group.clone()]);
         graph.push(Task::run("prealign", group.clone(), inputs, args).mkdir_target());
 
         let model = format!("{work}/{g}.model");

@@ -310,9 +310,9 @@ fn multi_part_models_are_fitted_part_by_part() {
     assert_eq!(cross_validations, 2, "one per direction");
 }
 
-/// A group of three motions pre-blended on two pairs at three weights: `prealign` gets every
-/// motion (in the frames it reads too), the weights and the pairs as given, and the group's
-/// GPDMs, samples and evaluation follow as for any group.
+/// A group of three motions pre-blended on two pairs at three weights: `prealign` gets the
+/// subject's segmentation and every motion aligned (among its inputs too), the weights and the
+/// pairs as given, and the group's GPDMs, samples and evaluation follow as for any group.
 #[test]
 fn a_group_of_three_motions_blends_the_pairs_asked() {
     let g = tiny_graph_with(&[
@@ -329,11 +329,13 @@ fn a_group_of_three_motions_blends_the_pairs_asked() {
         _ => panic!("prealign: not one stage run"),
     };
     let after = |flag: &str| args[args.iter().position(|a| a == flag).unwrap_or_else(|| panic!("{flag} missing: {args:?}")) + 1].clone();
-    assert_eq!(after("--motions"), "walk,run,kick");
+    let aligned: Vec<&String> = args.iter().filter(|a| a.ends_with(".aligned")).collect();
+    assert_eq!(aligned, ["out/work/A/walk.aligned", "out/work/A/run.aligned", "out/work/A/kick.aligned"]);
+    assert_eq!(after("--segmentation"), "out/work/A/parts.seg");
     assert_eq!(after("--blend-pairs"), "walk:run,run:kick");
     assert_eq!(after("--blend-weights"), "0.25,0.5,0.75");
-    for m in ["walk", "run", "kick"] {
-        assert!(pre.inputs.iter().any(|i| i.contains(&format!("/A/{m}/"))), "{m}: frames not among the inputs");
+    for i in aligned.into_iter().chain([&after("--segmentation")]) {
+        assert!(pre.inputs.contains(i), "{i}: not among the inputs");
     }
     for target in ["out/work/variation/moves.model", "out/work/variation/moves-samples.json", "out/work/variation/moves-eval.json"] {
         assert!(g.producer(target).is_some(), "{target}: no task");
@@ -397,9 +399,51 @@ fn a_variation_group_keeps_the_motions_the_subject_has() {
     let prealigns: Vec<&plan::task::Task> = g.tasks.iter().filter(|t| t.kind == "prealign").collect();
     assert_eq!(prealigns.len(), 1, "{:?}", prealigns.iter().map(|t| &t.target).collect::<Vec<_>>());
     let plan::task::Step::Run { args, .. } = &prealigns[0].steps[0] else { panic!("prealign is not one stage run") };
-    let motions = args.iter().position(|a| a == "--motions").map(|i| args[i + 1].as_str());
-    assert_eq!(motions, Some("jump"));
+    let motions: Vec<&String> = args.iter().filter(|a| a.ends_with(".aligned")).collect();
+    assert_eq!(motions, ["out/work/A/jump.aligned"]);
     assert!(prealigns[0].target.ends_with("jumps.group"));
+}
+
+/// The variation reads the front end the transfer runs: each group's `prealign` reads the
+/// `segment` and `align` tasks' outputs of its subject (one task per file, whichever pipeline
+/// asked first, B's too with `--variation-subject B`); a group modelled as one part reads
+/// motions aligned on the whole body (`align --frame body`, no segmentation), so that a subject
+/// whose curves do not segment still runs.
+#[test]
+fn the_variation_reads_the_front_ends_segmentation_and_aligned_motions() {
+    let g = tiny_graph_with(&["--variation-subject", "B", "--variation-group", "loco=walk,run", "--variation-group", "hop=jump", "--prealign-flags", "hop=--fallback-whole-body"]);
+    let mut targets: Vec<&str> = g.tasks.iter().map(|t| t.target.as_str()).collect();
+    let n = targets.len();
+    targets.sort();
+    targets.dedup();
+    assert_eq!(targets.len(), n, "a target made by two tasks");
+    let prealign = |group: &str| {
+        let t = g.producer(&format!("out/work/variation/{group}.group")).expect("a prealign task");
+        let [plan::task::Step::Run { args, .. }] = &t.steps[..] else { panic!("prealign: not one stage run") };
+        (t.inputs.clone(), args.clone())
+    };
+    let kind_of = |target: &str| g.producer(target).map(|t| t.kind.clone());
+    let (inputs, args) = prealign("loco");
+    assert_eq!(after(&args, "--segmentation"), Some("out/work/B/parts.seg"));
+    assert_eq!(kind_of("out/work/B/parts.seg").as_deref(), Some("segment"));
+    for m in ["walk", "run"] {
+        let f = format!("out/work/B/{m}.aligned");
+        assert!(args.contains(&f) && inputs.contains(&f), "{f}");
+        let align = g.producer(&f).expect("an align task");
+        let [plan::task::Step::Run { args, .. }] = &align.steps[..] else { panic!("align: not one stage run") };
+        assert_eq!(after(args, "--frame"), Some("root"));
+        assert!(g.tasks.iter().position(|t| t.target == f) < g.tasks.iter().position(|t| t.kind == "prealign"), "the transfer's task");
+    }
+    let (inputs, args) = prealign("hop");
+    assert_eq!(after(&args, "--segmentation"), None);
+    assert!(!inputs.iter().any(|i| i.ends_with(".seg")), "{inputs:?}");
+    let f = "out/work/B/body/jump.aligned".to_string();
+    assert!(args.contains(&f) && inputs.contains(&f), "{args:?}");
+    let align = g.producer(&f).expect("an align task");
+    let [plan::task::Step::Run { args, .. }] = &align.steps[..] else { panic!("align: not one stage run") };
+    assert_eq!(after(args, "--frame"), Some("body"));
+    assert_eq!(after(args, "--segmentation"), None);
+    assert!(!align.inputs.iter().any(|i| i.ends_with(".seg")), "{:?}", align.inputs);
 }
 
 /// The stage arguments of every task of `kind`.

@@ -67,7 +67,7 @@ fn stage_script(set: &str, work: &str) -> (String, Vec<&'static str>) {
         format!("{} $1 --segmentation {work}/parts.seg --subject {set}/B/subject.json --template {tpl} {set}/B/walk --out {work}/walk.aligned", b("align")),
         format!("{} $1 --segmentation {work}/parts.seg --subject {set}/B/subject.json --template {tpl} {set}/B/run --out {work}/run.aligned", b("align")),
         format!("{} $1 --components 5 --template {tpl} --segmentation {work}/parts.seg {work}/walk.aligned {work}/run.aligned --out {work}/pca.model", b("pca-fit")),
-        format!("{} $1 --set {set} --subject-name B --group-name loc --motions walk,run --blend-weights 0.5 --out {work}/loc.group", b("prealign")),
+        format!("{} $1 --set {set} --subject-name B --segmentation {work}/parts.seg --group-name loc --blend-weights 0.5 {work}/walk.aligned {work}/run.aligned --out {work}/loc.group", b("prealign")),
         format!("{} $1 {set}/B/walk --out {work}/objs", b("mesh-export")),
         format!("{} $1 {work}/objs --out {work}/imported", b("mesh-import")),
         format!("{} $1 --segmentation {work}/parts.seg --truth {set}/truth/B/punch {set}/truth/B/punch {set}/truth/B/punch --out {work}/quality.json", b("surface-quality")),

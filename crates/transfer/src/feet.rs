@@ -47,7 +47,7 @@ use mesh_core::rigid::RigidMotion;
 use mesh_core::{Error, Result};
 use nalgebra::{DMatrix, Vector3};
 
-use crate::placement::place;
+use capture::root_placement::place;
 
 /// The two soles (left, right) of a subject's template, from its PCA model's leg parts
 /// ([`mesh_core::feet::soles`]); None without two non-empty soles.

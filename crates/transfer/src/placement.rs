@@ -1,6 +1,6 @@
-//! Placing the transferred poses in the world: per-frame rigid displacements
-//! integrated from a start pose (paper §4, "Rigid Transformation":
-//! `P_i = P_{i-1} ∘ (dT_i, dR_i)`).
+//! Where the transferred poses start and which displacements move them: the per-frame rigid
+//! displacements are integrated from a start pose by [`capture::root_placement`] (CVPR §4,
+//! "Rigid Transformation": `P_i = P_{i-1} ∘ (dT_i, dR_i)`).
 //!
 //! Everything is integrated as *root poses* `Q_i = P_i ∘ T(c)`: the pose of the
 //! subject's root point `c` (the centroid of the template's alignment anchor,
@@ -23,8 +23,8 @@
 //!   the GP extrapolates (its mean falls back to the prior mean, 0, which
 //!   integrates to a standing body, while the scaled source keeps moving).
 
-use mesh_core::rigid::{integrate, RigidMotion};
-use nalgebra::{Vector3, Vector6};
+use mesh_core::rigid::RigidMotion;
+use nalgebra::Vector3;
 
 pub use capture::choices::Placement;
 use capture::part_pca::PcaModel;
@@ -49,12 +49,6 @@ pub fn template_height(pca: &PcaModel) -> f64 {
 /// The template's root point (see [`capture::align::root_point`]).
 pub fn root_point(pca: &PcaModel) -> Vector3<f64> {
     capture::align::root_point(&pca.template_vertices(), &pca.anchor)
-}
-
-/// World poses `P_i = Q_i ∘ T(-c)` of root poses `Q_i`.
-pub fn world_poses(root_poses: &[RigidMotion], root: &Vector3<f64>) -> Vec<RigidMotion> {
-    let back = RigidMotion::new(nalgebra::Rotation3::identity(), -root);
-    root_poses.iter().map(|q| q.compose(&back)).collect()
 }
 
 /// The target's first root pose: the source's first root pose `source_root_start` with
@@ -84,62 +78,9 @@ pub fn blend(regressed: &[[f64; 6]], scaled: &[[f64; 6]], weights: &[f64]) -> Ve
         .collect()
 }
 
-/// World poses: `P_0 = start`, `P_i = P_{i-1} ∘ D_i` (the first displacement,
-/// `D_0`, is not used: frame 0 stands at `start`).
-pub fn poses(start: &RigidMotion, steps: &[[f64; 6]]) -> Vec<RigidMotion> {
-    if steps.is_empty() {
-        return Vec::new();
-    }
-    let rel: Vec<RigidMotion> = steps[1..]
-        .iter()
-        .map(|d| RigidMotion::from_6vec(&Vector6::from_column_slice(d)))
-        .collect();
-    integrate(start, &rel)
-}
-
-/// Applies each frame's pose to its (template-frame) vertices.
-pub fn place(poses: &[RigidMotion], frames: &[Vec<Vector3<f64>>]) -> Vec<Vec<Vector3<f64>>> {
-    frames
-        .iter()
-        .zip(poses)
-        .map(|(f, p)| p.apply_all(f))
-        .collect()
-}
-
-/// [`place`] without a second copy of the frames: each frame is replaced by its placed self.
-pub fn place_in_place(poses: &[RigidMotion], frames: &mut Vec<Vec<Vector3<f64>>>) {
-    frames.truncate(poses.len());
-    for (f, p) in frames.iter_mut().zip(poses) {
-        for v in f.iter_mut() {
-            *v = p.apply(v);
-        }
-    }
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
-    use mesh_core::rigid::so3_exp;
-
-    /// Constant body-frame steps of 0.1 m forward and a quarter turn per
-    /// frame trace a square: after 4 steps the body is back at the start.
-    #[test]
-    fn integrates_a_square_path() {
-        let start = RigidMotion::new(
-            so3_exp(&Vector3::new(0.0, 0.3, 0.0)),
-            Vector3::new(1.0, 0.0, 2.0),
-        );
-        let step = [0.0, 0.0, 0.1, 0.0, std::f64::consts::FRAC_PI_2, 0.0];
-        let p = poses(&start, &[[9.0; 6], step, step, step, step]);
-        assert_eq!(p.len(), 5);
-        assert!(
-            (p[0].translation - start.translation).norm() < 1e-12,
-            "D_0 is ignored"
-        );
-        assert!((p[4].translation - start.translation).norm() < 1e-12);
-        assert!((p[1].translation - p[0].translation).norm() - 0.1 < 1e-12);
-        assert!((p[2].translation - p[0].translation).norm() - 0.1 * 2f64.sqrt() < 1e-12);
-    }
 
     #[test]
     fn scaling_and_blending() {

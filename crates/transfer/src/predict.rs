@@ -186,10 +186,8 @@ pub fn transfer_motion(
     streaming: &Streaming,
 ) -> Result<Transferred> {
     use capture::align::root_poses;
-    use crate::placement::{
-        blend, place_in_place, poses, root_point, scaled_source, scaled_start, template_height,
-        world_poses, Placement,
-    };
+    use crate::placement::{blend, root_point, scaled_source, scaled_start, template_height, Placement};
+    use capture::root_placement::{integrate, place_in_place, world_poses};
     use std::time::Instant;
     let motion = &source.info;
     let xs = &source.coefficients;
@@ -224,7 +222,7 @@ pub fn transfer_motion(
     };
     let source_start = root_poses(&motion.poses[..motion.poses.len().min(1)], &source_root);
     let start = scaled_start(&source_start.first().copied().unwrap_or_default(), ratio);
-    let world_poses = world_poses(&poses(&start, &steps), &target_root);
+    let world_poses = world_poses(&integrate(&start, &steps, steps.len(), None), &target_root);
 
     // The clean-ups need the target's feet and the source's contacts; without either, the
     // frames are left as placed.

@@ -1,5 +1,5 @@
-//! A movement group ready for modelling: the subject's template and body parts, its motions
-//! rigidly aligned (each frame's pose fitted on the root part's core, [`root_core`]) and time-warped onto a reference motion ([`crate::prealign`]), plus the
+//! A movement group ready for modelling: the subject's template and body parts (`segment`'s),
+//! its motions as `align` aligned them ([`FrontEnd`]) and time-warped onto a reference motion ([`crate::prealign`]), plus the
 //! pre-blended sequences `Y_w = blend(Y_1, Y_2, w)` for `w ∈ W` (paper §7), made with the
 //! non-linear mesh interpolation `surface::blend::Blender` on the aligned frames. A group may
 //! hold any number of motions and pre-blend any pairs of them (by default the first two); the
@@ -22,11 +22,11 @@
 use mesh_core::artifact::Artifact;
 use mesh_core::capture_set::{CaptureSet, SubjectSpec};
 use mesh_core::rigid::{relative_in_body_frame, so3_exp, so3_log, RigidMotion};
-use mesh_core::sequence::MeshSequence;
+use mesh_core::segmentation::Segmentation;
 use mesh_core::{Error, Result};
 use nalgebra::{Rotation3, Unit, Vector3};
 use serde::{Deserialize, Serialize};
-use capture::align::{align_motion_on, AlignedMotion};
+use capture::align::{check_topology, AlignedMotion};
 
 use crate::contacts::{self, Contacts};
 use crate::gait;
@@ -223,7 +223,8 @@ pub struct GroupSpec {
     /// The subject's description in place of the set's `subject.json` (e.g. the one
     /// `propose-curves` wrote for a set without curves).
     pub subject_json: Option<std::path::PathBuf>,
-    /// Motions of the group, in order; missing ones are skipped (reported by [`build`]).
+    /// Motions of the group, in order; those the front end did not align are skipped (reported
+    /// by [`build`]).
     pub motions: Vec<String>,
     /// Reference motion (default: the first present).
     pub reference: Option<String>,
@@ -235,41 +236,50 @@ pub struct GroupSpec {
     pub prealign: PrealignOptions,
     /// Model the whole body as one part instead of the subject's segmentation.
     pub whole_body: bool,
-    /// When the segmentation fails, model the whole body (reported in the notes) instead of failing.
+    /// Without a segmentation, model the whole body (reported in the notes) instead of failing.
     pub fallback_whole_body: bool,
     /// Cut every motion to the same number of whole gait cycles before the DTW ([`crate::gait`]).
     pub gait_cycles: bool,
 }
 
-/// Loads, aligns, prealigns and blends the group. Returns the group and notes (skipped
-/// motions, segmentation fallback).
-pub fn build(set: &CaptureSet, spec: &GroupSpec) -> Result<(Group, Vec<String>)> {
-    // Spec and template without curve validation: `segment` validates them (or we fall back).
+/// What the front end made of the group's subject: its segmentation (`segment`; None: none
+/// given) and its motions aligned to its template (`align`), by name.
+#[derive(Clone, Debug, Default)]
+pub struct FrontEnd {
+    pub segmentation: Option<Segmentation>,
+    pub motions: Vec<(String, AlignedMotion)>,
+}
+
+/// Prealigns and blends the group's motions of `front`. Returns the group and notes (skipped
+/// motions, whole-body fallback).
+pub fn build(set: &CaptureSet, spec: &GroupSpec, front: FrontEnd) -> Result<(Group, Vec<String>)> {
     let subject_json = spec.subject_json.clone().unwrap_or_else(|| set.subject_json(&spec.subject));
     let subject_spec = SubjectSpec::load(&subject_json)?;
     let template = &mesh_core::io::read_mesh(set.template_path(&spec.subject, &subject_spec)?)?;
-    let (present, reference, mut notes) = group_motions(set, spec)?;
+    let (present, reference, mut notes) = group_motions(spec, &front)?;
     let pairs = blend_pairs(spec, &present, &mut notes)?;
-    let parts = body_parts(spec, template, &subject_spec, &subject_json, &mut notes)?;
+    let parts = body_parts(spec, template, front.segmentation.as_ref(), &mut notes)?;
     let up = subject_spec.up_vector().unwrap_or(Vector3::y());
     let body = Body {
         template,
-        core: root_core(&parts, template.n_vertices()),
         // Soles of the two leg parts, left first, for motions without contact annotations.
         soles: soles(&parts, &template.vertices, &up, mesh_core::feet::SOLE_TOLERANCE),
         has_legs: parts.iter().filter(|p| p.name.starts_with("leg")).count() == 2,
         up,
     };
-    let root = capture::align::root_point(&template.vertices, &body.core);
-    // Steps: reading and aligning each motion, warping each, then each blend.
+    let root = capture::align::root_point(&template.vertices, &root_core(&parts, template.n_vertices()));
+    // Steps: taking each motion, warping each, then each blend.
     let bar = mesh_core::cli::stage_progress(
         (2 * present.len() + pairs.len() * spec.blend_weights.len()) as u64,
         "motions read, warped; blends",
     );
+    let mut motions = front.motions;
     let mut loaded = Vec::new();
     for m in &present {
         bar.inc(1);
-        loaded.push(load_motion(set, spec, &subject_spec, &subject_json, &body, m, &mut notes)?);
+        let k = motions.iter().position(|(n, _)| n == m).expect("present motions are the front end's");
+        let aligned = motions.swap_remove(k).1;
+        loaded.push(motion_contacts(&subject_spec, &subject_json, &body, m, aligned, &mut notes)?);
     }
     let r = present.iter().position(|m| *m == reference).expect("checked");
     let (windows, cut_cycles) = gait_windows(spec, &loaded, &mut notes)?;
@@ -312,15 +322,14 @@ pub fn build(set: &CaptureSet, spec: &GroupSpec) -> Result<(Group, Vec<String>)>
     Ok((group, notes))
 }
 
-/// The group's motions the set has (the others noted as skipped), its reference motion, and the
-/// notes so far; checks the reference and the blend weights.
-fn group_motions(set: &CaptureSet, spec: &GroupSpec) -> Result<(Vec<String>, String, Vec<String>)> {
-    let available = set.motions(&spec.subject)?;
+/// The group's motions the front end aligned (the others noted as skipped), its reference
+/// motion, and the notes so far; checks the reference and the blend weights.
+fn group_motions(spec: &GroupSpec, front: &FrontEnd) -> Result<(Vec<String>, String, Vec<String>)> {
     let (present, skipped): (Vec<String>, Vec<String>) = spec
         .motions
         .iter()
         .cloned()
-        .partition(|m| available.contains(m));
+        .partition(|m| front.motions.iter().any(|(n, _)| n == m));
     if present.is_empty() {
         return Err(Error::invalid(format!(
             "group '{}': none of the motions {:?} exists for subject {}",
@@ -343,33 +352,38 @@ fn group_motions(set: &CaptureSet, spec: &GroupSpec) -> Result<(Vec<String>, Str
     }
     let notes = skipped
         .iter()
-        .map(|m| format!("motion '{m}' is not in the set: skipped"))
+        .map(|m| format!("motion '{m}' was not aligned: skipped"))
         .collect();
     Ok((present, reference, notes))
 }
 
 /// The body's parts: the subject's segmentation, or the whole body as one part (asked for, or,
-/// with `fallback_whole_body`, when the curves do not segment it: noted).
+/// with `fallback_whole_body`, without a segmentation: noted).
 fn body_parts(
     spec: &GroupSpec,
     template: &mesh_core::TriMesh,
-    subject_spec: &SubjectSpec,
-    subject_json: &std::path::Path,
+    segmentation: Option<&Segmentation>,
     notes: &mut Vec<String>,
 ) -> Result<Vec<PartDef>> {
-    let seg = if spec.whole_body {
-        capture::part_pca::whole_body(template.n_vertices())
-    } else {
-        match mesh_core::segmentation::segment(template, subject_spec) {
-            Ok(s) => s,
-            Err(e) if spec.fallback_whole_body => {
-                notes.push(format!(
-                    "{}: {e}: body parts unusable, modelling the whole body as one part",
-                    subject_json.display()
-                ));
-                capture::part_pca::whole_body(template.n_vertices())
-            }
-            Err(e) => return Err(Error::file(subject_json, e.to_string())),
+    let whole = capture::part_pca::whole_body(template.n_vertices());
+    let seg = match segmentation {
+        _ if spec.whole_body => &whole,
+        Some(s) if s.n_vertices != template.n_vertices() => {
+            return Err(Error::invalid(format!(
+                "the segmentation is of {} vertices, the template has {}",
+                s.n_vertices,
+                template.n_vertices()
+            )))
+        }
+        Some(s) => s,
+        None if spec.fallback_whole_body => {
+            notes.push("no segmentation of the subject: modelling the whole body as one part".into());
+            &whole
+        }
+        None => {
+            return Err(Error::invalid(
+                "the group's body parts need the subject's segmentation (from `segment`), or model the whole body",
+            ))
         }
     };
     Ok(seg
@@ -386,37 +400,32 @@ fn body_parts(
         .collect())
 }
 
-/// What reading a motion of the group needs of its body.
+/// What taking a motion into the group needs of its body.
 struct Body<'a> {
     template: &'a mesh_core::TriMesh,
-    /// The vertices the rigid pose is fitted on ([`root_core`]).
-    core: Vec<u32>,
     soles: Vec<Vec<u32>>,
     /// Two leg parts: contacts can be detected on the soles.
     has_legs: bool,
     up: Vector3<f64>,
 }
 
-/// Motion `m` read and aligned on the body's core, with its contacts: the subject's
-/// annotations, or detected on its soles (noted).
-fn load_motion(
-    set: &CaptureSet,
-    spec: &GroupSpec,
+/// Motion `m`, aligned to the body's template, with its contacts: the subject's annotations, or
+/// detected on its soles in world coordinates (noted).
+fn motion_contacts(
     subject_spec: &SubjectSpec,
     subject_json: &std::path::Path,
     body: &Body,
     m: &str,
+    aligned: AlignedMotion,
     notes: &mut Vec<String>,
 ) -> Result<(String, AlignedMotion, Option<Contacts>)> {
-    let dir = set.motion_dir(&spec.subject, m);
-    let seq = MeshSequence::load_dir(&dir)?;
-    let aligned = align_motion_on(body.template, &seq, &body.core)
-        .map_err(|e| Error::invalid(format!("{}: {e}", dir.display())))?;
+    check_topology(body.template, aligned.frames[0].len(), &aligned.faces)
+        .map_err(|e| Error::invalid(format!("motion '{m}': {e}")))?;
     let mut c = contacts::from_subject(subject_spec, m, aligned.n_frames())
         .map_err(|e| Error::file(subject_json, e.to_string()))?;
     if c.is_none() && body.has_legs {
         c = capture::contact_detector::detect(
-            &seq.frames,
+            &aligned.world_frames(),
             &body.soles,
             &body.up,
             subject_spec.fps,

@@ -17,7 +17,7 @@
 //! therefore also carries 4 absolute values per frame: the height of the frame's root point
 //! (`up · Q_i(0)`, the root pose of `crate::group::root_displacements`; scaled like
 //! translations) and the world up axis in body coordinates
-//! (`R_iᵀ up`, scaled like rotations). [`crate::reconstruct::place`] keeps the integrated
+//! (`R_iᵀ up`, scaled like rotations). `capture::root_placement::Gravity` keeps the integrated
 //! heading and horizontal travel but takes height and tilt from these.
 
 use mesh_core::rigid::procrustes;

@@ -5,12 +5,29 @@
 
 use mesh_core::capture_set::CaptureSet;
 use mesh_core::sequence::MeshSequence;
-use variation::group::{build, GroupSpec};
+use variation::group::{build, FrontEnd, GroupSpec};
 use variation::prealign::PrealignOptions;
 use variation::reconstruct::Assembly;
 use variation::sample::{blend_entries, Sampler};
 use variation::synthesize::{run, Query, SynthConfig};
 use variation::train::{train, TrainConfig};
+
+/// The front end of subject A's `motions`, in memory as `segment` and `align` write them: its
+/// segmentation and each motion aligned on the root part's core.
+fn front_end(set: &CaptureSet, motions: &[&str]) -> FrontEnd {
+    let spec = mesh_core::capture_set::SubjectSpec::load(set.subject_json("A")).unwrap();
+    let template = mesh_core::io::read_mesh(set.template_path("A", &spec).unwrap()).unwrap();
+    let seg = mesh_core::segmentation::segment(&template, &spec).unwrap();
+    let anchor = capture::align::anchor_vertices(capture::align::AlignFrame::Root, Some(&seg)).unwrap();
+    let motions = motions
+        .iter()
+        .map(|m| {
+            let seq = MeshSequence::load_dir(set.motion_dir("A", m)).unwrap();
+            (m.to_string(), capture::align::align_motion_on(&template, &seq, &anchor).unwrap())
+        })
+        .collect();
+    FrontEnd { segmentation: Some(seg), motions }
+}
 
 #[test]
 fn tiny_set_end_to_end() {
@@ -19,6 +36,7 @@ fn tiny_set_end_to_end() {
     let cfg = synth::preset::preset("tiny", 0, true).unwrap();
     synth::capture_set_writer::synthesise(&cfg, &set_dir, false, &|_| {}, &|| {}).unwrap();
     let set = CaptureSet::open(&set_dir).unwrap();
+    let front = front_end(&set, &["walk", "run"]);
     let spec = GroupSpec {
         name: "locomotion".into(),
         subject: "A".into(),
@@ -40,10 +58,11 @@ fn tiny_set_end_to_end() {
             gait_cycles: true,
             ..spec.clone()
         },
+        front.clone(),
     )
     .unwrap();
     assert!(cut_notes.iter().any(|n| n.contains("no gait cycle")), "{cut_notes:?}");
-    let (group, notes) = build(&set, &spec).unwrap();
+    let (group, notes) = build(&set, &spec, front.clone()).unwrap();
     assert_eq!(
         cut.sequences.iter().map(|s| s.map.clone()).collect::<Vec<_>>(),
         group.sequences.iter().map(|s| s.map.clone()).collect::<Vec<_>>()
@@ -63,7 +82,7 @@ fn tiny_set_end_to_end() {
         let mut v: serde_json::Value = serde_json::from_str(&text).unwrap();
         v.as_object_mut().unwrap().remove("contacts");
         std::fs::write(&json, serde_json::to_string(&v).unwrap()).unwrap();
-        let (detected, notes) = build(&CaptureSet::open(&set_dir).unwrap(), &spec).unwrap();
+        let (detected, notes) = build(&CaptureSet::open(&set_dir).unwrap(), &spec, front.clone()).unwrap();
         std::fs::write(&json, text).unwrap();
         assert!(
             notes.iter().any(|n| n.contains("contacts detected")),

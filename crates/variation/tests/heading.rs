@@ -1,9 +1,11 @@
 //! The placement of decoded frames keeps a capture's heading: integrating a captured sequence's
-//! own root displacements with its own gravity values (`reconstruct::world_poses`) gives back
+//! own root displacements with its own gravity values (`capture::root_placement`) gives back
 //! its root poses, so whatever turns a variation is in what is decoded, not in the placement.
 
 use std::path::Path;
 use std::process::Command;
+
+mod common;
 
 use mesh_core::artifact::Artifact;
 use variation::group::Group;
@@ -17,7 +19,8 @@ fn integrating_a_captures_own_displacements_and_gravity_gives_back_its_poses() {
     let group_path = dir.path().join("g.group");
     let s = |p: &Path| p.to_string_lossy().into_owned();
     let out = Command::new(env!("CARGO_BIN_EXE_prealign"))
-        .args(["-q", "--set", &s(&set), "--group-name", "locomotion", "--motions", "walk,run", "--blend-weights", "0.5", "--out", &s(&group_path)])
+        .args(["-q", "--set", &s(&set), "--group-name", "locomotion", "--blend-weights", "0.5", "--out", &s(&group_path)])
+        .args(common::front_end(&set, "A", &["walk", "run"], dir.path()))
         .output()
         .unwrap();
     assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
@@ -26,7 +29,8 @@ fn integrating_a_captures_own_displacements_and_gravity_gives_back_its_poses() {
     for seq in &group.sequences {
         let m = &seq.motion;
         let gravity = variation::part_data::gravity(m, &group.up, &root);
-        let placed = variation::reconstruct::world_poses(m.n_frames(), &m.displacements, &gravity, &group.up, &m.poses[0], &root);
+        let g = capture::root_placement::Gravity { targets: &gravity, up: &group.up };
+        let placed = capture::root_placement::world_poses_from(&m.poses[0], &root, &m.displacements, m.n_frames(), Some(&g));
         let worst = placed
             .iter()
             .zip(&m.poses)

@@ -8,6 +8,8 @@
 use std::path::Path;
 use std::process::Command;
 
+mod common;
+
 use mesh_core::artifact::Artifact;
 use mesh_core::sequence::MeshSequence;
 use nalgebra::Vector3;
@@ -33,9 +35,11 @@ fn three_motion_group_blends_every_pair() {
     synth::capture_set_writer::synthesise(&cfg, &set, false, &|_| {}, &|| {}).unwrap();
     let p = |name: &str| dir.path().join(name).to_string_lossy().into_owned();
     let set_s = set.to_string_lossy().into_owned();
+    let front = common::front_end(&set, "A", &["walk", "run", "kick"], dir.path());
     let prealign = |pairs: &str, out: &str| {
         Command::new(env!("CARGO_BIN_EXE_prealign"))
-            .args(["-q", "--set", &set_s, "--group-name", "moves", "--motions", "walk,run,kick"])
+            .args(["-q", "--set", &set_s, "--group-name", "moves"])
+            .args(&front)
             .args(["--blend-weights", "0.25,0.75", "--blend-pairs", pairs, "--out", out])
             .env("OPENBLAS_NUM_THREADS", "1")
             .output()

@@ -5,7 +5,7 @@ use mesh_core::rigid::{procrustes, rigid_from_moments, RigidMotion};
 use mesh_core::{Error, Result};
 use nalgebra::{DMatrix, Vector3};
 
-use super::world::world_poses;
+use capture::root_placement::{world_poses_from, Gravity};
 use super::{variation_frames, Decoder};
 use crate::part_data::{extra_scale, TORSO_EXTRA};
 
@@ -72,7 +72,8 @@ impl Decoder<'_> {
         let grav: Vec<[f64; 4]> = (0..t_len)
             .map(|t| std::array::from_fn(|k| extra(t, 6 + k)))
             .collect();
-        let world = world_poses(t_len, &disp, &grav, &self.model.up, start, &self.root);
+        let gravity = Gravity { targets: &grav, up: &self.model.up };
+        let world = world_poses_from(start, &self.root, &disp, t_len, Some(&gravity));
         let tpl = &self.model.template;
         let (cd, n_core) = self.core_centroid();
         scratch.sum.resize(3 * nv, 0.0);

@@ -11,7 +11,7 @@ use mesh_core::{Error, Result};
 use nalgebra::{DMatrix, Vector3};
 use rand::Rng;
 
-use super::world::place;
+use capture::root_placement::{place, world_poses_from, Gravity};
 use super::{Assembly, DecodedParts};
 use crate::group::{root_core, PartDef};
 use crate::part_data::{split_torso, unflatten, TORSO_EXTRA};
@@ -229,14 +229,9 @@ impl<'a> Decoder<'a> {
     ) -> Result<Vec<Vec<Vector3<f64>>>> {
         let decoded = self.part_poses(latents, rng)?;
         let body = self.assemble(&decoded, how)?;
-        Ok(place(
-            &body,
-            &decoded.displacements,
-            &decoded.gravity,
-            &self.model.up,
-            start,
-            &self.root,
-        ))
+        let gravity = Gravity { targets: &decoded.gravity, up: &self.model.up };
+        let poses = world_poses_from(start, &self.root, &decoded.displacements, body.len(), Some(&gravity));
+        Ok(place(&poses, &body))
     }
 }
 

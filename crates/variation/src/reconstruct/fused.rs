@@ -9,7 +9,7 @@ use nalgebra::{DMatrix, Vector3};
 use super::fused_plan::PartMap;
 use super::pool::Pooled;
 use super::simd::place_singles;
-use super::world::world_poses;
+use capture::root_placement::{world_poses_from, Gravity};
 use super::{variation_frames, Decoder};
 use crate::part_data::{extra_scale, TORSO_EXTRA};
 
@@ -174,7 +174,8 @@ impl FusedDecoder<'_, '_> {
         let grav: Vec<[f64; 4]> = (0..t_len)
             .map(|t| std::array::from_fn(|k| extra(t, 6 + k)))
             .collect();
-        let world = world_poses(t_len, &disp, &grav, &dec.model.up, start, &dec.root);
+        let gravity = Gravity { targets: &grav, up: &dec.model.up };
+        let world = world_poses_from(start, &dec.root, &disp, t_len, Some(&gravity));
         // Band rows and moments of every frame.
         let small = |m: &faer::Mat<f64>, c: &faer::Mat<f64>| {
             let mut o = faer::Mat::<f64>::zeros(m.nrows(), c.ncols());

@@ -17,7 +17,8 @@
 //! Files: [`decoder`] (the per-part predictors and full decoding), [`assemble`] (parts merged
 //! into one body), [`average`] (the exact bulk decoder), [`fused`] and [`fused_plan`] (the
 //! vertex-blocked bulk decoder and its precomputed plan), [`pool`] (per-thread buffers lent by
-//! a pool), [`simd`] (the placement of one-part vertices), [`world`] (world placement).
+//! a pool), [`simd`] (the placement of one-part vertices); the world placement is
+//! `capture::root_placement`'s, with the decoded gravity values.
 
 use mesh_core::{Error, Result};
 use nalgebra::{DMatrix, Vector3};
@@ -30,13 +31,11 @@ mod fused;
 mod fused_plan;
 mod pool;
 mod simd;
-mod world;
 
 pub use average::DecodeScratch;
 pub use decoder::Decoder;
 pub use fused::{FusedDecoder, FusedScratch};
 pub use fused_plan::FUSED_BLOCK_VERTICES;
-pub use world::{place, world_poses};
 
 /// How parts are merged into one mesh.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize, clap::ValueEnum)]

@@ -5,12 +5,16 @@
 use std::path::PathBuf;
 
 use clap::Parser;
-use mesh_core::artifact::Artifact;
+use anyhow::bail;
+use capture::align::AlignedMotion;
+use mesh_core::artifact::{sha256_file, Artifact};
 use mesh_core::capture_set::{CaptureSet, SubjectSpec};
+use mesh_core::io::read_mesh;
+use mesh_core::segmentation::Segmentation;
 use mesh_core::cli::CommonArgs;
 use serde::Serialize;
 
-use crate::group::{build, GroupSpec};
+use crate::group::{build, FrontEnd, GroupSpec};
 use crate::prealign::PrealignOptions;
 
 /// Time-align the motions of one movement group to a reference by contact-guided DTW and add pre-blended sequences
@@ -18,7 +22,7 @@ use crate::prealign::PrealignOptions;
 #[command(
     name = "prealign",
     version,
-    after_help = "e.g.: prealign --set out/demo/set --subject-name A --group-name locomotion --motions walk,run --gait-cycles --blend-weights 0.5 --out out/work/variation/locomotion.group\n      prealign --set out/demo/set --group-name moves --motions walk,run,kick --blend-weights 0.25,0.5,0.75 --blend-pairs walk:run,walk:kick --out out/work/variation/moves.group"
+    after_help = "e.g.: prealign --set out/demo/set --subject-name A --segmentation out/work/A/parts.seg --group-name locomotion --gait-cycles --blend-weights 0.5 out/work/A/walk.aligned out/work/A/run.aligned --out out/work/variation/locomotion.group\n      prealign --set out/demo/set --segmentation out/work/A/parts.seg --group-name moves --blend-weights 0.25,0.5,0.75 --blend-pairs walk:run,walk:kick out/work/A/walk.aligned out/work/A/run.aligned out/work/A/kick.aligned --out out/work/variation/moves.group"
 )]
 pub struct Params {
     #[command(flatten)]
@@ -34,12 +38,17 @@ pub struct Params {
     /// propose-curves for a set without curves)
     #[arg(long, value_name = "SUBJECT_JSON")]
     pub subject: Option<PathBuf>,
+    /// Segmentation artifact of the subject (from `segment`): the group's body parts
+    /// [required unless --whole-body or --fallback-whole-body]
+    #[arg(long)]
+    pub segmentation: Option<PathBuf>,
     /// Name of the group written (e.g. locomotion)
     #[arg(long, value_name = "NAME")]
     pub group_name: String,
-    /// Motions of the group, comma-separated; missing motions are skipped with a warning
-    #[arg(long, value_delimiter = ',', required = true)]
-    pub motions: Vec<String>,
+    /// Aligned motions of the group (artifacts from `align`, of the subject's template), in
+    /// order; each named by its file name, `<motion>.aligned`
+    #[arg(required = true)]
+    pub motions: Vec<PathBuf>,
     /// Reference motion [default: the first present]
     #[arg(long)]
     pub reference: Option<String>,
@@ -57,8 +66,8 @@ pub struct Params {
     /// Model the whole body as one part (no segmentation)
     #[arg(long)]
     pub whole_body: bool,
-    /// When the subject's curves do not give usable body parts, warn and model the whole body
-    /// [default: fail naming subject.json]
+    /// Without --segmentation (a subject whose curves do not give usable body parts), warn and
+    /// model the whole body [default: fail]
     #[arg(long)]
     pub fallback_whole_body: bool,
     /// Cut every motion to the same number of whole gait cycles (period from the poses) before
@@ -80,18 +89,22 @@ fn pairs_as_text<S: serde::Serializer>(pairs: &[(String, String)], ser: S) -> Re
 }
 
 /// Writes the group; the header records `p` with the subject it resolved to (`subject_name`), set.json,
-/// the subject's subject.json and template and every frame of the grouped motions.
+/// the subject's subject.json and template, the segmentation and every aligned motion.
 pub fn run(p: &Params) -> anyhow::Result<()> {
     let set = CaptureSet::open(&p.set)?;
     let subject = p
         .subject_name
         .clone()
         .unwrap_or_else(|| set.spec.source.clone());
+    let subject_json = p.subject.clone().unwrap_or_else(|| set.subject_json(&subject));
+    let subject_spec = SubjectSpec::load(&subject_json)?;
+    let template = set.template_path(&subject, &subject_spec)?;
+    let front = front_end(p, &template)?;
     let spec = GroupSpec {
         name: p.group_name.clone(),
         subject,
         subject_json: p.subject.clone(),
-        motions: p.motions.clone(),
+        motions: front.motions.iter().map(|(m, _)| m.clone()).collect(),
         reference: p.reference.clone(),
         blend_weights: p.blend_weights.clone(),
         blend_pairs: p.blend_pairs.clone(),
@@ -103,7 +116,7 @@ pub fn run(p: &Params) -> anyhow::Result<()> {
         fallback_whole_body: p.fallback_whole_body,
         gait_cycles: p.gait_cycles,
     };
-    let (group, notes) = build(&set, &spec)?;
+    let (group, notes) = build(&set, &spec, front)?;
     for n in notes {
         mesh_core::warn!("{n}");
     }
@@ -112,8 +125,6 @@ pub fn run(p: &Params) -> anyhow::Result<()> {
     {
         mesh_core::warn!("group '{}' has one motion: no blends", group.name);
     }
-    let subject_json = p.subject.clone().unwrap_or_else(|| set.subject_json(&spec.subject));
-    let subject_spec = SubjectSpec::load(&subject_json)?;
     let mut params = serde_json::to_value(p)?;
     params["subject_name"] = spec.subject.clone().into();
     let mut header = p
@@ -122,11 +133,12 @@ pub fn run(p: &Params) -> anyhow::Result<()> {
         .with_params(&params)?
         .with_input(set.set_json())?
         .with_input(&subject_json)?
-        .with_input(set.template_path(&spec.subject, &subject_spec)?)?;
-    for m in &spec.motions {
-        for f in set.frames(&spec.subject, m)? {
-            header = header.with_input(f)?;
-        }
+        .with_input(&template)?;
+    if let Some(seg) = &p.segmentation {
+        header = header.with_input(seg)?;
+    }
+    for f in &p.motions {
+        header = header.with_input(f)?;
     }
     group.save(&p.out, &header)?;
     if let Some(dir) = &p.export {
@@ -139,4 +151,53 @@ pub fn run(p: &Params) -> anyhow::Result<()> {
         }
     }
     Ok(())
+}
+
+/// The segmentation and the aligned motions of `p`, each named by its file name; a motion named
+/// twice, or aligned to another template than `template`, is an error naming its file.
+fn front_end(p: &Params, template: &std::path::Path) -> anyhow::Result<FrontEnd> {
+    if p.segmentation.is_none() && !p.whole_body && !p.fallback_whole_body {
+        bail!("the group's body parts need --segmentation (the subject's parts from `segment`), or --whole-body");
+    }
+    let segmentation = match (&p.segmentation, p.whole_body) {
+        (Some(path), false) => {
+            let seg = Segmentation::load(path)?;
+            let n = read_mesh(template)?.n_vertices();
+            if seg.n_vertices != n {
+                bail!("{}: made for {} vertices but the template {} has {n}", path.display(), seg.n_vertices, template.display());
+            }
+            Some(seg)
+        }
+        _ => None,
+    };
+    let template_sha = sha256_file(template)?;
+    let mut motions: Vec<(String, AlignedMotion)> = Vec::new();
+    for f in &p.motions {
+        let name = f
+            .file_name()
+            .and_then(|n| n.to_str())
+            .and_then(|n| n.strip_suffix(".aligned"))
+            .filter(|n| !n.is_empty())
+            .ok_or_else(|| anyhow::anyhow!("{}: not named <motion>.aligned", f.display()))?;
+        if motions.iter().any(|(m, _)| m == name) {
+            bail!("{}: motion '{name}' is given twice", f.display());
+        }
+        let m = AlignedMotion::load(f)?;
+        if !m.capture.template_sha256.is_empty() && m.capture.template_sha256 != template_sha {
+            bail!(
+                "{}: aligned to template {} but the subject's template {} is {}",
+                f.display(),
+                short(&m.capture.template_sha256),
+                template.display(),
+                short(&template_sha)
+            );
+        }
+        motions.push((name.to_string(), m));
+    }
+    Ok(FrontEnd { segmentation, motions })
+}
+
+/// The first 12 hex digits of a SHA-256, as messages show it.
+fn short(sha: &str) -> &str {
+    &sha[..sha.len().min(12)]
 }
