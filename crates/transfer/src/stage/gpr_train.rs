@@ -77,7 +77,6 @@ pub struct Params {
     /// are kept, not learnt again (the same model, without the optimisation; the pipeline's
     /// leave-one-motion-out task reuses the model it trained). Not with `--config auto`
     #[arg(long, value_name = "MODEL")]
-    #[serde(skip_serializing_if = "Option::is_none")]
     pub hyperparameters_from: Option<PathBuf>,
     /// JSON report: the leave-one-motion-out errors (pooled and per motion) of every
     /// configuration tried, and the one kept
