@@ -3,6 +3,8 @@
 //! identical meshes, another seed different ones; variations are neither copies of their source
 //! nor degenerate.
 
+mod common;
+
 use mesh_core::capture_set::CaptureSet;
 use mesh_core::sequence::MeshSequence;
 use variation::group::{build, FrontEnd, GroupSpec};
@@ -32,9 +34,7 @@ fn front_end(set: &CaptureSet, motions: &[&str]) -> FrontEnd {
 #[test]
 fn tiny_set_end_to_end() {
     let dir = tempfile::tempdir().unwrap();
-    let set_dir = dir.path().join("set");
-    let cfg = synth::preset::preset("tiny", 0, true).unwrap();
-    synth::capture_set_writer::synthesise(&cfg, &set_dir, false, &|_| {}, &|| {}).unwrap();
+    let set_dir = common::tiny_set(dir.path());
     let set = CaptureSet::open(&set_dir).unwrap();
     let front = front_end(&set, &["walk", "run"]);
     let spec = GroupSpec {

@@ -13,9 +13,7 @@ use variation::group::Group;
 #[test]
 fn integrating_a_captures_own_displacements_and_gravity_gives_back_its_poses() {
     let dir = tempfile::tempdir().unwrap();
-    let set = dir.path().join("set");
-    let cfg = synth::preset::preset("tiny", 0, true).unwrap();
-    synth::capture_set_writer::synthesise(&cfg, &set, false, &|_| {}, &|| {}).unwrap();
+    let set = common::tiny_set(dir.path());
     let group_path = dir.path().join("g.group");
     let s = |p: &Path| p.to_string_lossy().into_owned();
     let out = Command::new(env!("CARGO_BIN_EXE_prealign"))

@@ -30,9 +30,7 @@ fn dist(a: &[Vector3<f64>], b: &[Vector3<f64>]) -> f64 {
 #[test]
 fn three_motion_group_blends_every_pair() {
     let dir = tempfile::tempdir().unwrap();
-    let set = dir.path().join("set");
-    let cfg = synth::preset::preset("tiny", 0, true).unwrap();
-    synth::capture_set_writer::synthesise(&cfg, &set, false, &|_| {}, &|| {}).unwrap();
+    let set = common::tiny_set(dir.path());
     let p = |name: &str| dir.path().join(name).to_string_lossy().into_owned();
     let set_s = set.to_string_lossy().into_owned();
     let front = common::front_end(&set, "A", &["walk", "run", "kick"], dir.path());

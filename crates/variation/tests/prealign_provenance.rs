@@ -17,9 +17,7 @@ fn sha256(path: &Path) -> String {
 #[test]
 fn prealign_records_every_input_file_and_parameter() {
     let dir = tempfile::tempdir().unwrap();
-    let set = dir.path().join("set");
-    let cfg = synth::preset::preset("tiny", 0, true).unwrap();
-    synth::capture_set_writer::synthesise(&cfg, &set, false, &|_| {}, &|| {}).unwrap();
+    let set = common::tiny_set(dir.path());
     let out = dir.path().join("loco.group");
     let front = common::front_end(&set, "A", &["walk", "run"], dir.path());
     let st = Command::new(env!("CARGO_BIN_EXE_prealign"))
@@ -108,9 +106,7 @@ fn recorded_but_part<P: clap::Parser + serde::Serialize>(args: &[&str]) -> Resul
 #[test]
 fn prealign_refuses_bad_front_end_inputs_in_one_line() {
     let dir = tempfile::tempdir().unwrap();
-    let set = dir.path().join("set");
-    let cfg = synth::preset::preset("tiny", 0, true).unwrap();
-    synth::capture_set_writer::synthesise(&cfg, &set, false, &|_| {}, &|| {}).unwrap();
+    let set = common::tiny_set(dir.path());
     let a = common::front_end(&set, "A", &["walk"], dir.path());
     let b = common::front_end(&set, "B", &["run"], dir.path());
     let renamed = dir.path().join("walk.motion");

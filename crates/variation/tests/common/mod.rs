@@ -1,4 +1,4 @@
-//! What the stage-binary tests share: running a stage, and the tiny preset's locomotion model.
+//! What the stage-binary tests share: running a stage, the tiny preset's capture set and its locomotion model.
 #![allow(dead_code)] // each test crate uses a part
 
 use std::path::{Path, PathBuf};
@@ -42,11 +42,17 @@ pub fn front_end(set: &Path, x: &str, motions: &[&str], dir: &Path) -> Vec<Strin
     args
 }
 
-/// The tiny preset's walk and run prealigned (one pre-blend) and a GPDM trained on them, in `dir`.
-pub fn tiny_model(dir: &Path) -> (PathBuf, PathBuf) {
+/// The tiny preset's capture set (seed 0), synthesised into `dir/set`.
+pub fn tiny_set(dir: &Path) -> PathBuf {
     let set = dir.join("set");
     let cfg = synth::preset::preset("tiny", 0, true).unwrap();
     synth::capture_set_writer::synthesise(&cfg, &set, false, &|_| {}, &|| {}).unwrap();
+    set
+}
+
+/// The tiny preset's walk and run prealigned (one pre-blend) and a GPDM trained on them, in `dir`.
+pub fn tiny_model(dir: &Path) -> (PathBuf, PathBuf) {
+    let set = tiny_set(dir);
     let (group, model) = (dir.join("locomotion.group"), dir.join("locomotion.model"));
     let s = |p: &Path| p.to_string_lossy().into_owned();
     let mut args: Vec<String> = ["-q", "--set", &s(&set), "--group-name", "locomotion", "--blend-weights", "0.5", "--out", &s(&group)].map(String::from).to_vec();
