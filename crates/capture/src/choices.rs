@@ -103,7 +103,7 @@ impl Correspondences {
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, PartialOrd, Ord, Serialize, Deserialize, ValueEnum)]
 #[serde(rename_all = "kebab-case")]
 pub enum ConfigName {
-    /// Try the candidates and keep the one with the lowest leave-one-motion-out error.
+    /// Try the candidates and keep the one with the lowest cross-validated error.
     Auto,
     /// The defaults: affine mean with the geometric prior mixed in, limb orientation.
     #[default]

@@ -281,7 +281,7 @@ pub fn records_html(results: &Value) -> String {
     json_to_html(&Value::Array(slim))
 }
 
-/// Per direction, in order of first appearance, the leave-one-motion-out estimate its records
+/// Per direction, in order of first appearance, the cross-validated estimate its records
 /// carry (`cv_rms_pose_m`, m).
 pub fn cross_validation_estimates(results: &Value) -> Vec<(String, f64)> {
     let mut out: Vec<(String, f64)> = Vec::new();
@@ -318,8 +318,8 @@ pub fn section_html(results: &Value) -> Option<String> {
     if !estimates.is_empty() {
         let items: Vec<String> = estimates.iter().map(|(d, cv)| format!("{} {:.1} cm", escape(d), cv * 100.0)).collect();
         s += &format!(
-            "<p class=\"cv-estimate\">Pose error to expect on an unseen motion, estimated from the training \
-             motions alone (leave-one-motion-out, gpr-nn): {}.</p>",
+            "<p class=\"cv-estimate\">Pose error to expect on a new motion, estimated from the training \
+             motions alone (cross-validated, gpr-nn): {}.</p>",
             items.join(", ")
         );
     }
@@ -390,7 +390,7 @@ mod tests {
         assert_eq!(nice_step(0.9, 5.0), 0.2);
     }
 
-    /// The leave-one-motion-out estimate of each direction, once per direction, shown in the
+    /// The cross-validated estimate of each direction, once per direction, shown in the
     /// section as cm; none without it.
     #[test]
     fn the_estimate_from_the_training_motions_is_shown_once_per_direction() {

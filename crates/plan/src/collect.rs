@@ -85,7 +85,7 @@ pub fn variation(work: &Path, groups: &[String], out: &Path) -> Result<()> {
 mod tests {
     use super::*;
 
-    /// Records of two directions, a leave-one-motion-out report for one: its records get the
+    /// Records of two directions, a cross-validation report for one: its records get the
     /// report's `cv_rms_pose_m`, the other direction's none; a report without it, or an argument
     /// without `=`, is an error naming it.
     #[test]

@@ -128,7 +128,7 @@ pub enum Collect {
         /// Output table (results.json)
         #[arg(short, long)]
         out: PathBuf,
-        /// DIRECTION=REPORT: the direction's leave-one-motion-out report (gpr-train
+        /// DIRECTION=REPORT: the direction's cross-validation report (gpr-train
         /// --cross-validate --report); its `cv_rms_pose_m` goes into each of the direction's
         /// records (repeat per direction)
         #[arg(long, value_name = "DIRECTION=REPORT")]

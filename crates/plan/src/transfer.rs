@@ -67,7 +67,7 @@ struct Plan<'a> {
     /// Every evaluation record (results.json's rows) and every other product of the run.
     records: Vec<String>,
     stamps: Vec<String>,
-    /// Per direction label, its leave-one-motion-out report (`gpr-train --cross-validate`).
+    /// Per direction label, its cross-validation report (`gpr-train --cross-validate`).
     cross_validations: Vec<(String, String)>,
 }
 
@@ -296,7 +296,7 @@ impl<'a> Plan<'a> {
         self.stamps.push(graph.push(render_sheet(&sheet, inputs, &labels, true, seqs)));
     }
 
-    /// The leave-one-motion-out estimate of direction `d`'s pose error: the gpr-nn model trained
+    /// The cross-validated estimate of direction `d`'s pose error: the gpr-nn model trained
     /// whole once more (`--cross-validate` needs every part in one task, whatever the cluster
     /// split) with the hyperparameters `model` learnt, and its report, whose `cv_rms_pose_m`
     /// results.json carries beside the direction's records.

@@ -289,7 +289,7 @@ fn multi_part_models_are_fitted_part_by_part() {
     assert_eq!(merged.get("gpr-train"), Some(&8));
     assert_eq!(merged.get("gpdm-train"), Some(&2));
     // Nothing reads a piece but its merge, and no whole-model task of these stages is left but
-    // the leave-one-motion-out estimate of each direction, which needs every part at once (and
+    // the cross-validated estimate of each direction, which needs every part at once (and
     // reads the merged model's hyperparameters).
     let mut cross_validations = 0;
     for t in &g.tasks {

@@ -469,7 +469,7 @@ pub struct Regression<'a> {
     pub mean_priors: Option<MeanPriors<'a>>,
     pub opts: &'a GprOptions,
     /// Condition every GP on its rows with these hyperparameters instead of optimising them
-    /// (`crate::leave_one_motion_out` refits a model's GPs on fewer motions this way).
+    /// (`crate::cross_validation` refits a model's GPs on fewer motions this way).
     pub fixed: Option<&'a FixedHyperparameters>,
 }
 

@@ -20,7 +20,7 @@ pub mod placement;
 pub mod feet;
 pub mod placed_frames;
 pub mod evaluate;
-pub mod leave_one_motion_out;
+pub mod cross_validation;
 pub mod model_config;
 pub mod reference_score;
 pub mod learning_curves;

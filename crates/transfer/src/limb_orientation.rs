@@ -278,6 +278,46 @@ pub fn fit_part(source: &PcaModel, target: &PcaModel, k: usize, frame: LimbFrame
     Ok(Some(LimbMap { frame, ..LimbMap::fit(&xs, &ys, RIDGE)? }))
 }
 
+/// The limb log-orientations of every frame of a list of training pairs, measured once, so that
+/// the maps of many subsets of their rows (cross-validation folds) are fitted without decoding
+/// a frame again. Fitting from them gives the map [`fit_part`] fits on the same rows.
+pub struct PairLogs {
+    /// Per part (`None`: the root): its frame and, per pair, the source and the target frames'
+    /// log-orientations.
+    parts: Vec<Option<(LimbFrame, Vec<[Vec<Vector3<f64>>; 2]>)>>,
+}
+
+impl PairLogs {
+    /// The log-orientations of each pair's frames, `pairs` giving each pair's source and target
+    /// coefficients (one matrix per part), each part measured in `frames[k]`.
+    pub fn new(source: &PcaModel, target: &PcaModel, frames: &[LimbFrame], pairs: &[(&[DMatrix<f64>], &[DMatrix<f64>])]) -> Result<PairLogs> {
+        let (ls, lt) = (limbs(source)?, limbs(target)?);
+        let parts = (0..frames.len())
+            .map(|k| {
+                let Some((s, t)) = limb_pair(&ls, &lt, k) else { return Ok(None) };
+                let per_pair = pairs
+                    .iter()
+                    .map(|(x, y)| Ok([log_orientations(source, s, frames[k], x)?, log_orientations(target, t, frames[k], y)?]))
+                    .collect::<Result<_>>()?;
+                Ok(Some((frames[k], per_pair)))
+            })
+            .collect::<Result<_>>()?;
+        Ok(PairLogs { parts })
+    }
+
+    /// The map of part `k` fitted on the rows `origin` (`[pair, source frame, target frame]`),
+    /// `pair_of` turning a row's pair index into an index of the pairs given to [`PairLogs::new`].
+    pub fn fit(&self, k: usize, origin: &[[usize; 3]], pair_of: &dyn Fn(usize) -> usize) -> Result<Option<LimbMap>> {
+        let Some((frame, per_pair)) = &self.parts[k] else { return Ok(None) };
+        let lookup = |side: usize, p: usize, f: usize| {
+            per_pair.get(pair_of(p)).and_then(|logs| logs[side].get(f)).copied().ok_or_else(|| Error::invalid(format!("limb orientation: no frame {f} in training pair {p}")))
+        };
+        let xs = origin.iter().map(|&[p, i, _]| lookup(0, p, i)).collect::<Result<Vec<_>>>()?;
+        let ys = origin.iter().map(|&[p, _, j]| lookup(1, p, j)).collect::<Result<Vec<_>>>()?;
+        Ok(Some(LimbMap { frame: *frame, ..LimbMap::fit(&xs, &ys, RIDGE)? }))
+    }
+}
+
 /// Turns every limb of the decoded target parts (`decoded[part][frame]`, predicted from the
 /// source coefficients `source_coeffs`) about its joint, as the module documentation says.
 pub fn apply(
@@ -461,6 +501,40 @@ mod tests {
         // A share outside (0, 1] is refused.
         let bad = LimbMap { frame: LimbFrame::Attachment { share: 0.0 }, ..model.maps[1].clone().unwrap() };
         assert!(LimbOrientation { weight: 1.0, maps: vec![None, Some(bad)] }.validate(2).is_err());
+    }
+
+    /// The maps fitted from the pairs' log-orientations are the maps `fit_part` fits on the same
+    /// rows' coefficients, for rows drawn from two pairs in any order (a pair's frames repeated,
+    /// skipped, matched out of order), in the root's and the attachment's frame; a row naming a
+    /// frame a pair does not have is an error.
+    #[test]
+    fn maps_from_the_pairs_log_orientations_are_the_maps_of_the_rows() {
+        let (pca, motion) = turning_limb();
+        let xs = pca.encode(&motion).unwrap();
+        let f = xs[0].nrows();
+        let reversed: Vec<DMatrix<f64>> = xs.iter().map(|m| DMatrix::from_fn(f, m.ncols(), |r, c| m[(f - 1 - r, c)])).collect();
+        let pairs: [(&[DMatrix<f64>], &[DMatrix<f64>]); 2] = [(&xs, &reversed), (&reversed, &xs)];
+        let origin: Vec<[usize; 3]> = vec![[1, 0, 2], [0, 3, 3], [0, 3, 4], [1, 7, 0], [0, 1, 6], [1, 2, 2], [0, 6, 1]];
+        let rows = |side: usize| -> Vec<DMatrix<f64>> {
+            (0..xs.len())
+                .map(|k| DMatrix::from_fn(origin.len(), xs[k].ncols(), |r, c| {
+                    let [p, i, j] = origin[r];
+                    let m = if side == 0 { pairs[p].0 } else { pairs[p].1 };
+                    m[k][(if side == 0 { i } else { j }, c)]
+                }))
+                .collect()
+        };
+        let (x, y) = (rows(0), rows(1));
+        for attached in [vec![], vec!["limb".to_string()]] {
+            let frames = frames(&pca, &attached).unwrap();
+            let logs = PairLogs::new(&pca, &pca, &frames, &pairs).unwrap();
+            for k in 0..2 {
+                let want = fit_part(&pca, &pca, k, frames[k], &x, &y).unwrap();
+                assert_eq!(logs.fit(k, &origin, &|p| p).unwrap(), want, "part {k}, {attached:?}");
+            }
+            assert!(logs.fit(1, &origin, &|p| 1 - p).unwrap() != fit_part(&pca, &pca, 1, frames[1], &x, &y).unwrap(), "the pairs as named");
+            assert!(logs.fit(1, &[[0, f, 0]], &|p| p).unwrap_err().to_string().contains("no frame 8 in training pair 0"));
+        }
     }
 
     /// Named limbs get the attachment's frame, the others the root's; a name that is not a limb

@@ -138,6 +138,9 @@ pub struct TrainingSet {
     pub y_parts: Vec<DMatrix<f64>>,
     pub x_disp: DMatrix<f64>,
     pub y_disp: DMatrix<f64>,
+    /// Where each row comes from: `[pair, source frame, target frame]`, the pair indexed in the
+    /// pairs the set was made from.
+    pub origin: Vec<[usize; 3]>,
 }
 
 impl TrainingSet {
@@ -157,6 +160,7 @@ impl TrainingSet {
             y_parts: self.y_parts.iter().map(pick).collect(),
             x_disp: pick(&self.x_disp),
             y_disp: pick(&self.y_disp),
+            origin: rows.iter().map(|&r| self.origin[r]).collect(),
         }
     }
 }
@@ -246,6 +250,7 @@ pub fn training_set(
         y_parts,
         x_disp,
         y_disp,
+        origin: rows.iter().map(|&(p, i, j)| [p, i, j]).collect(),
     })
 }
 
@@ -315,6 +320,7 @@ impl TrainingSet {
             y_parts: vec![self.y_parts[k].clone()],
             x_disp: self.x_disp.clone(),
             y_disp: self.y_disp.clone(),
+            origin: self.origin.clone(),
         }
     }
 }

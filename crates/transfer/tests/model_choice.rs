@@ -1,7 +1,7 @@
 //! The transfer model's configurations and methods on the `tiny` preset of `synth` (real bodies
 //! and mocap; needs the synth assets, as `make test` does):
 //! - `gpr-train --config auto`: every candidate configuration is also trained on its own, fixed
-//!   by name, and its leave-one-motion-out error measured there; the automatic choice is the one
+//!   by name, and its cross-validated error measured there; the automatic choice is the one
 //!   of lowest error among those independent runs, the auto run reports the same errors, and
 //!   the model it writes is the one `--config NAME` trains for the chosen name.
 //! - `--hyperparameters-from` a trained model gives that model and its estimate again.
@@ -73,7 +73,7 @@ fn tiny_training(dir: &Path) -> (PathBuf, PathBuf, Vec<String>) {
 }
 
 #[test]
-fn auto_keeps_the_configuration_of_lowest_leave_one_motion_out_error_among_the_fixed_runs() {
+fn auto_keeps_the_configuration_of_lowest_cross_validated_error_among_the_fixed_runs() {
     let dir = tempfile::tempdir().unwrap();
     let (_, work, pair_args) = tiny_training(dir.path());
     let w = |rel: String| -> PathBuf { work.join(rel) };
@@ -105,8 +105,20 @@ fn auto_keeps_the_configuration_of_lowest_leave_one_motion_out_error_among_the_f
         // A transfer error of a few centimetres on bodies of 1.6-1.9 m: neither zero nor a
         // different body.
         assert!(e > 1e-3 && e < 0.3, "{name}: {e} m");
+        assert_eq!(cv["folds"], "halves", "the default folds");
         fixed.push((name, e));
     }
+
+    // Whole motions held out: the same frames compared, another estimate.
+    let whole = w("default-motions.model".into());
+    train(&["--cross-validate", "--cv-folds", "motions"], &whole);
+    let (halves, motions) = (cross_validation(&w("default.model".into())), cross_validation(&whole));
+    assert_eq!(motions["folds"], "motions");
+    for (h, m) in halves["motions"].as_array().unwrap().iter().zip(motions["motions"].as_array().unwrap()) {
+        assert_eq!((&h["motion"], &h["frames"]), (&m["motion"], &m["frames"]));
+    }
+    let (eh, em) = (halves["cv_rms_pose_m"].as_f64().unwrap(), motions["cv_rms_pose_m"].as_f64().unwrap());
+    assert!((eh - em).abs() > 1e-4 * em && em > 1e-3 && em < 0.3, "halves {eh} m, motions {em} m");
 
     let auto = w("auto.model".into());
     let report = w("auto.json".into());
@@ -143,7 +155,7 @@ fn auto_keeps_the_configuration_of_lowest_leave_one_motion_out_error_among_the_f
 
 /// `--hyperparameters-from` a model trained on the same pairs gives that model again (every GP,
 /// mean and limb orientation equal, without learning the hyperparameters) and the same
-/// leave-one-motion-out estimate, as the pipeline's estimate task relies on; it refuses
+/// cross-validated estimate, as the pipeline's estimate task relies on; it refuses
 /// `--config auto` and a model of another method.
 #[test]
 fn hyperparameters_from_a_trained_model_give_that_model_and_its_estimate() {
@@ -249,7 +261,7 @@ fn refit_folds_learn_their_hyperparameters_without_the_held_out_motion() {
     use capture::part_pca::PcaModel;
     use gp::gpr::{GprOptions, PAPER_NOISE_VAR};
     use transfer::gpr_model::{train_rows, FixedHyperparameters, OrientationOptions, Regression, MEAN_RIDGE};
-    use transfer::leave_one_motion_out::{cross_validate, Candidate, Folds, HeldOut, Hyperparameters};
+    use transfer::cross_validation::{cross_validate, Candidate, FoldUnit, Folds, HeldOut, Hyperparameters};
     use transfer::training_rows::{PairFiles, TrainingRows};
 
     let dir = tempfile::tempdir().unwrap();
@@ -272,7 +284,7 @@ fn refit_folds_learn_their_hyperparameters_without_the_held_out_motion() {
         *noise *= 10.0;
     }
     let estimate = |how, fixed| {
-        let folds = Folds { hyperparameters: how, pairs: &pairs, held_out: &held_out, frame_ratio: 1.0, keyposes_only: false, part_names: &names, source_pca: &src, target_pca: &tgt };
+        let folds = Folds { unit: FoldUnit::Motions, hyperparameters: how, pairs: &pairs, held_out: &held_out, frame_ratio: 1.0, keyposes_only: false, part_names: &names, source_pca: &src, target_pca: &tgt };
         let candidate = Candidate { regression: regression(Some(fixed)), orientation: OrientationOptions { weight: 0.0, attached: &[] } };
         cross_validate(&folds, &[candidate]).unwrap().remove(0).cv_rms_pose_m
     };

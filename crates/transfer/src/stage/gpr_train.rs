@@ -16,7 +16,7 @@ use crate::gpr_model::{
     train_orientation, train_piece, train_rows, FixedHyperparameters, GprModel, MeanFunction, MeanPrior, MeanPriors, Method,
     OrientationOptions, PairFiles, Regression, RegressorReport, Templates, TrainingRows, DISPLACEMENT, MEAN_RIDGE,
 };
-use crate::leave_one_motion_out::{cross_validate, Candidate, CrossValidation, Folds, HeldOut, Hyperparameters, MotionError};
+use crate::cross_validation::{cross_validate, Candidate, CrossValidation, FoldUnit, Folds, HeldOut, Hyperparameters, MotionError};
 use crate::limb_orientation;
 use crate::model_config::{self, ConfigName, Overrides, Settings};
 use crate::training_rows::PairData;
@@ -55,30 +55,35 @@ pub struct Params {
     /// Neural-network kernel with the bias input (R&W eq. 4.29); eq. 10 as printed has none, which limits the GP to odd functions
     #[arg(long)]
     pub nn_bias: bool,
-    /// Named configuration (docs/studies/10-leave-one-motion-out.md): `default` (affine mean,
+    /// Named configuration (docs/studies/10-cross-validation.md): `default` (affine mean,
     /// prior weight 0.25, limb orientation 0.5), `no-prior` (--prior-weight 0), `affine-only`
     /// (no prior, no limb orientation), `zero-mean` (--mean zero), `paper` (zero mean, no limb
     /// orientation: CVPR's model); `auto` trains those five and keeps the one with the lowest
-    /// leave-one-motion-out error (measured better than `default` with a dozen training
-    /// motions, worse with five). Explicit flags override the configuration's values
+    /// cross-validated error (measured better than `default` with a dozen training motions,
+    /// worse with five). Explicit flags override the configuration's values
     #[arg(long, value_enum, default_value_t = ConfigName::Default, value_name = "NAME")]
     pub config: ConfigName,
-    /// Estimate the pose error on an unseen motion by leaving one training motion out at a
-    /// time (needs two or more pairs; `--config auto` always does): `cross_validation` in the
-    /// header and the report
+    /// Estimate the pose error on a new motion by cross-validation on the training motions
+    /// (needs two or more pairs; `--config auto` always does): `cross_validation` in the header
+    /// and the report
     #[arg(long)]
     pub cross_validate: bool,
+    /// What each cross-validation fold holds out: `halves` (each half of each motion, the other
+    /// half trained on) or `motions` (each whole motion: a pessimistic estimate, far above the
+    /// error measured on new motions; docs/studies/10-cross-validation.md)
+    #[arg(long, value_enum, default_value_t = FoldUnit::Halves, value_name = "UNIT")]
+    pub cv_folds: FoldUnit,
     /// Hyperparameters of the models that leave a motion out: `fixed` keeps the full model's
     /// (optimistic for the zero-mean GP); `refit` learns them again on the other motions (up to 3.3x
-    /// the cost; docs/studies/10-leave-one-motion-out.md)
+    /// the cost; docs/studies/10-cross-validation.md)
     #[arg(long, value_enum, default_value_t = Hyperparameters::Fixed, value_name = "HOW")]
     pub cv_hyperparameters: Hyperparameters,
     /// A model already trained on these pairs with this configuration: its GPs' hyperparameters
     /// are kept, not learnt again (the same model, without the optimisation; the pipeline's
-    /// leave-one-motion-out task reuses the model it trained). Not with `--config auto`
+    /// cross-validation task reuses the model it trained). Not with `--config auto`
     #[arg(long, value_name = "MODEL")]
     pub hyperparameters_from: Option<PathBuf>,
-    /// JSON report: the leave-one-motion-out errors (pooled and per motion) of every
+    /// JSON report: the cross-validated errors (pooled and per motion) of every
     /// configuration tried, and the one kept
     #[arg(long)]
     pub report: Option<PathBuf>,
@@ -176,7 +181,7 @@ pub fn run(p: &Params) -> anyhow::Result<()> {
     let LoadedPairs { mut pairs, held_out, pair_hashes, fps: (set_source_fps, set_target_fps) } =
         load_pairs(p, set_source_pca, set_target_pca)?;
     if cross_validated && pairs.len() < 2 {
-        return Err(mesh_core::Error::invalid(format!("leaving one motion out needs two or more --pair, got {}", pairs.len())).into());
+        return Err(mesh_core::Error::invalid(format!("cross-validation needs two or more --pair, got {}", pairs.len())).into());
     }
     let (source_fps, target_fps) = if p.reverse {
         (set_target_fps, set_source_fps)
@@ -250,8 +255,9 @@ pub fn run(p: &Params) -> anyhow::Result<()> {
         trained_s,
         match &cv {
             Some(cv) => format!(
-                ", left each of {} motions out in {:.3} s: configuration {}, leave-one-motion-out pose error {:.4} m",
+                ", cross-validated on {} motions ({}) in {:.3} s: configuration {}, cross-validated pose error {:.4} m",
                 n_pairs,
+                cv.folds.name(),
                 start.elapsed().as_secs_f64() - trained_s,
                 cv.config.name(),
                 cv.cv_rms_pose_m
@@ -315,7 +321,7 @@ fn selected_unit(p: &Params, names: &[String], units: &[String]) -> anyhow::Resu
     }
     if p.config == ConfigName::Auto || p.cross_validate || p.report.is_some() {
         return Err(mesh_core::Error::invalid(
-            "--config auto, --cross-validate and --report leave motions out of whole models: not with --part",
+            "--config auto, --cross-validate and --report cross-validate whole models: not with --part",
         )
         .into());
     }
@@ -395,6 +401,7 @@ impl Trainer<'_> {
             })
             .collect();
         let folds = Folds {
+            unit: p.cv_folds,
             hyperparameters: p.cv_hyperparameters,
             pairs,
             held_out,
@@ -405,7 +412,7 @@ impl Trainer<'_> {
             target_pca: self.tgt_pca,
         };
         let errors = cross_validate(&folds, &candidates)?;
-        Ok(CrossValidationReport::choose(configs.iter().map(|(c, _)| *c).zip(errors).collect()))
+        Ok(CrossValidationReport::choose(p.cv_folds, configs.iter().map(|(c, _)| *c).zip(errors).collect()))
     }
 }
 
@@ -525,15 +532,17 @@ fn load_pairs<'a>(p: &'a Params, set_source_pca: &PcaModel, set_target_pca: &Pca
     Ok(LoadedPairs { pairs, held_out, pair_hashes, fps: (set_source_fps, set_target_fps) })
 }
 
-/// The leave-one-motion-out errors of every configuration tried and the one kept: the header's
+/// The cross-validated errors of every configuration tried and the one kept: the header's
 /// `cross_validation` and the `--report`.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct CrossValidationReport {
     /// The configuration kept: the lowest `cv_rms_pose_m` (the first in `--config auto`'s order
     /// on a tie).
     pub config: ConfigName,
-    /// Its error pooled over every held-out motion's frames (metres).
+    /// Its error pooled over every held-out frame (metres).
     pub cv_rms_pose_m: f64,
+    /// What each fold held out.
+    pub folds: FoldUnit,
     /// Its error per held-out motion.
     pub motions: Vec<MotionError>,
     /// Every configuration tried, in order, with its errors.
@@ -542,7 +551,7 @@ pub struct CrossValidationReport {
     chosen_index: usize,
 }
 
-/// One configuration's leave-one-motion-out errors.
+/// One configuration's cross-validated errors.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct CandidateError {
     pub config: ConfigName,
@@ -552,7 +561,7 @@ pub struct CandidateError {
 
 impl CrossValidationReport {
     /// Keeps the configuration of lowest pooled error (the first on a tie).
-    fn choose(candidates: Vec<(ConfigName, CrossValidation)>) -> Self {
+    fn choose(folds: FoldUnit, candidates: Vec<(ConfigName, CrossValidation)>) -> Self {
         let chosen_index = (0..candidates.len())
             .min_by(|&a, &b| candidates[a].1.cv_rms_pose_m.total_cmp(&candidates[b].1.cv_rms_pose_m).then(a.cmp(&b)))
             .expect("at least one configuration");
@@ -560,6 +569,7 @@ impl CrossValidationReport {
         CrossValidationReport {
             config,
             cv_rms_pose_m: best.cv_rms_pose_m,
+            folds,
             motions: best.motions,
             candidates: candidates.into_iter().map(|(config, errors)| CandidateError { config, errors }).collect(),
             chosen_index,
