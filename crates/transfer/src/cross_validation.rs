@@ -44,7 +44,7 @@ use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 
 use crate::evaluate::pose_sq_error;
-use crate::gpr_model::{train_orientation, train_rows, FixedHyperparameters, GprModel, Method, OrientationOptions, Regression};
+use crate::gpr_model::{train_rows, FixedHyperparameters, GprModel, Method, OrientationOptions, Regression};
 use crate::limb_orientation::{self, LimbOrientation, PairLogs};
 use crate::predict::{displacement_matrix, predict};
 use crate::training_rows::{PairData, TrainingRows};
@@ -254,18 +254,15 @@ fn orientation_logs(folds: &Folds, candidates: &[Candidate]) -> Result<Option<Pa
 
 /// A candidate's model trained on a fold's remaining `rows`, made from the pairs `order` names
 /// (indices of `folds.pairs`); its limb orientation fitted from `logs`, the pairs'
-/// log-orientations ([`train_orientation`]'s map on the same rows).
+/// log-orientations (the map [`crate::gpr_model::train_orientation`] fits on the same rows).
 fn train_held_out(folds: &Folds, regression: &Regression, orientation: &OrientationOptions, rows: &TrainingRows, logs: Option<&PairLogs>, order: &[usize]) -> Result<GprModel> {
     let mut model: GprModel = train_rows(regression, folds.part_names, rows)?;
-    model.orientation = match (orientation.weight, logs) {
-        (w, _) if w == 0.0 => None,
-        (_, None) => train_orientation(regression.method, folds.part_names, rows, folds.source_pca, folds.target_pca, orientation, None)?,
-        (weight, Some(logs)) => {
-            let set = if regression.method == Method::KeyposeAffine { rows.keys() } else { &rows.data };
-            let maps = (0..folds.part_names.len()).map(|k| logs.fit(k, &set.origin, &|q| order[q])).collect::<Result<_>>()?;
-            Some(LimbOrientation { weight, maps })
-        }
-    };
+    if orientation.weight != 0.0 {
+        let logs = logs.ok_or_else(|| Error::invalid("limb orientation without the pairs' log-orientations"))?;
+        let set = if regression.method == Method::KeyposeAffine { rows.keys() } else { &rows.data };
+        let maps = (0..folds.part_names.len()).map(|k| logs.fit(k, &set.origin, &|q| order[q])).collect::<Result<_>>()?;
+        model.orientation = Some(LimbOrientation { weight: orientation.weight, maps });
+    }
     Ok(model)
 }
 
