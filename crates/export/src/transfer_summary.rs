@@ -281,17 +281,39 @@ pub fn records_html(results: &Value) -> String {
     json_to_html(&Value::Array(slim))
 }
 
+/// One direction's cross-validated estimate (m): pooled, and per training motion where the
+/// records carry it (`cv_motions`).
+#[derive(Clone, Debug, PartialEq)]
+pub struct Estimate {
+    pub direction: String,
+    pub rms_pose_m: f64,
+    pub motions: Vec<(String, f64)>,
+}
+
 /// Per direction, in order of first appearance, the cross-validated estimate its records
-/// carry (`cv_rms_pose_m`, m).
-pub fn cross_validation_estimates(results: &Value) -> Vec<(String, f64)> {
-    let mut out: Vec<(String, f64)> = Vec::new();
+/// carry (`cv_rms_pose_m`, `cv_motions`).
+pub fn cross_validation_estimates(results: &Value) -> Vec<Estimate> {
+    let mut out: Vec<Estimate> = Vec::new();
     for r in results.as_array().into_iter().flatten() {
         let (Some(d), Some(cv)) = (r["direction"].as_str(), r["cv_rms_pose_m"].as_f64()) else { continue };
-        if !out.iter().any(|(x, _)| x == d) {
-            out.push((d.to_string(), cv));
+        if !out.iter().any(|e| e.direction == d) {
+            let motions = r["cv_motions"]
+                .as_array()
+                .into_iter()
+                .flatten()
+                .filter_map(|m| Some((m["motion"].as_str()?.to_string(), m["rms_pose_m"].as_f64()?)))
+                .collect();
+            out.push(Estimate { direction: d.to_string(), rms_pose_m: cv, motions });
         }
     }
     out
+}
+
+/// An estimate as the report shows it: `A->B 4.3 cm (walk 3.2, run 5.6, ...)`, escaped.
+fn estimate_html(e: &Estimate) -> String {
+    let motions: Vec<String> = e.motions.iter().map(|(m, v)| format!("{} {:.1}", escape(m), v * 100.0)).collect();
+    let detail = if motions.is_empty() { String::new() } else { format!(" ({})", motions.join(", ")) };
+    format!("{} {:.1} cm{detail}", escape(&e.direction), e.rms_pose_m * 100.0)
 }
 
 /// The whole transfer section's content: the pose-error table and plot where the run had
@@ -316,11 +338,11 @@ pub fn section_html(results: &Value) -> Option<String> {
     };
     let estimates = cross_validation_estimates(results);
     if !estimates.is_empty() {
-        let items: Vec<String> = estimates.iter().map(|(d, cv)| format!("{} {:.1} cm", escape(d), cv * 100.0)).collect();
+        let items: Vec<String> = estimates.iter().map(estimate_html).collect();
         s += &format!(
             "<p class=\"cv-estimate\">Pose error to expect on a new motion, estimated from the training \
-             motions alone (cross-validated, gpr-nn): {}.</p>",
-            items.join(", ")
+             motions alone (cross-validated, gpr-nn; in brackets each training motion's, held out): {}.</p>",
+            items.join("; ")
         );
     }
     if let Some(t) = floor {
@@ -391,18 +413,25 @@ mod tests {
     }
 
     /// The cross-validated estimate of each direction, once per direction, shown in the
-    /// section as cm; none without it.
+    /// section as cm with each training motion's; without the per-motion errors the pooled one
+    /// alone; none without it.
     #[test]
     fn the_estimate_from_the_training_motions_is_shown_once_per_direction() {
         let mut a = rec("A->B", "punch", "gpr-nn", "scaled-source", "dense", 0.05, 10);
         let mut b = rec("A->B", "kick", "gpr-nn", "scaled-source", "dense", 0.06, 10);
-        a["cv_rms_pose_m"] = serde_json::json!(0.0571);
-        b["cv_rms_pose_m"] = serde_json::json!(0.0571);
-        let c = rec("B->A", "dance", "gpr-nn", "scaled-source", "dense", 0.02, 30);
-        let v = Value::Array(vec![a, b, c.clone()]);
-        assert_eq!(cross_validation_estimates(&v), vec![("A->B".to_string(), 0.0571)]);
+        let motions = serde_json::json!([{"motion": "walk", "frames": 9, "rms_pose_m": 0.032}, {"motion": "dance<1>", "frames": 4, "rms_pose_m": 1.2}]);
+        for r in [&mut a, &mut b] {
+            r["cv_rms_pose_m"] = serde_json::json!(0.0571);
+            r["cv_motions"] = motions.clone();
+        }
+        let mut c = rec("B->A", "dance", "gpr-nn", "scaled-source", "dense", 0.02, 30);
+        let v = Value::Array(vec![a.clone(), b, c.clone()]);
+        let want = Estimate { direction: "A->B".into(), rms_pose_m: 0.0571, motions: vec![("walk".into(), 0.032), ("dance<1>".into(), 1.2)] };
+        assert_eq!(cross_validation_estimates(&v), vec![want]);
         let html = section_html(&v).unwrap();
-        assert!(html.contains("A-&gt;B 5.7 cm") && html.matches("cv-estimate").count() == 1, "{html}");
-        assert!(!section_html(&Value::Array(vec![c])).unwrap().contains("cv-estimate"));
+        assert!(html.contains("A-&gt;B 5.7 cm (walk 3.2, dance&lt;1&gt; 120.0)") && html.matches("cv-estimate").count() == 1, "{html}");
+        assert!(!section_html(&Value::Array(vec![c.clone()])).unwrap().contains("cv-estimate"));
+        c["cv_rms_pose_m"] = serde_json::json!(0.03);
+        assert!(section_html(&Value::Array(vec![c])).unwrap().contains("B-&gt;A 3.0 cm.</p>"));
     }
 }

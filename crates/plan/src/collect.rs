@@ -29,20 +29,25 @@ fn record_key(v: &Value) -> [String; 5] {
         .map(|k| v.get(k).and_then(Value::as_str).unwrap_or("").to_string())
 }
 
+/// The keys a cross-validation report gives each record of its direction: the pooled estimate
+/// and the estimate per training motion.
+const ESTIMATE_KEYS: [(&str, &str); 2] = [("cv_rms_pose_m", "cv_rms_pose_m"), ("motions", "cv_motions")];
+
 /// Merges transfer evaluation records into one sorted list at `out`; each record of a direction
-/// named in `cross_validations` (`DIRECTION=REPORT`) gets the report's `cv_rms_pose_m`.
+/// named in `cross_validations` (`DIRECTION=REPORT`) gets the report's `cv_rms_pose_m` and its
+/// per-motion errors as `cv_motions`.
 pub fn transfer(records: &[PathBuf], cross_validations: &[String], out: &Path) -> Result<()> {
-    let mut estimates: Vec<(String, Value)> = Vec::new();
+    let mut estimates: Vec<(String, Vec<(&str, Value)>)> = Vec::new();
     for cv in cross_validations {
         let Some((direction, report)) = cv.split_once('=') else {
             anyhow::bail!("--cross-validation {cv}: expected DIRECTION=REPORT");
         };
-        let path = Path::new(report);
-        let value = load(path)?
-            .get("cv_rms_pose_m")
-            .cloned()
-            .with_context(|| format!("{report}: no cv_rms_pose_m"))?;
-        estimates.push((direction.to_string(), value));
+        let value = load(Path::new(report))?;
+        let fields = ESTIMATE_KEYS
+            .iter()
+            .map(|&(from, to)| value.get(from).cloned().map(|v| (to, v)).with_context(|| format!("{report}: no {from}")))
+            .collect::<Result<Vec<_>>>()?;
+        estimates.push((direction.to_string(), fields));
     }
     let mut recs = records
         .iter()
@@ -57,8 +62,8 @@ pub fn transfer(records: &[PathBuf], cross_validations: &[String], out: &Path) -
     for r in &mut recs {
         let direction = r.get("direction").and_then(Value::as_str).unwrap_or("").to_string();
         if let (Some((_, cv)), Value::Object(fields)) = (estimates.iter().find(|(d, _)| *d == direction), r) {
-            fields.retain(|(k, _)| k != "cv_rms_pose_m");
-            fields.push(("cv_rms_pose_m".to_string(), cv.clone()));
+            fields.retain(|(k, _)| !cv.iter().any(|(key, _)| k == key));
+            fields.extend(cv.iter().map(|(k, v)| (k.to_string(), v.clone())));
         }
     }
     recs.sort_by_cached_key(record_key);
@@ -86,8 +91,8 @@ mod tests {
     use super::*;
 
     /// Records of two directions, a cross-validation report for one: its records get the
-    /// report's `cv_rms_pose_m`, the other direction's none; a report without it, or an argument
-    /// without `=`, is an error naming it.
+    /// report's `cv_rms_pose_m` and its `motions` as `cv_motions`, the other direction's none; a
+    /// report without either, or an argument without `=`, is an error naming it.
     #[test]
     fn each_record_of_a_cross_validated_direction_gets_its_estimate() {
         let dir = tempfile::tempdir().unwrap();
@@ -101,16 +106,24 @@ mod tests {
             file("b.json", r#"{"direction": "A->B", "motion": "m", "method": "gpr-nn"}"#),
             file("c.json", r#"{"direction": "A->B", "motion": "n", "method": "gpr-nn"}"#),
         ];
-        let cv = file("cv.json", r#"{"config": "default", "cv_rms_pose_m": 0.0512}"#);
+        let cv = file("cv.json", r#"{"config": "default", "cv_rms_pose_m": 0.0512, "motions": [{"motion": "walk", "frames": 9, "rms_pose_m": 0.04}]}"#);
         let out = dir.path().join("results.json");
         transfer(&records, &[format!("A->B={}", cv.display())], &out).unwrap();
         let table = load(&out).unwrap();
         let Value::Array(rows) = table else { panic!("{table:?}") };
         let estimates: Vec<Option<&Value>> = rows.iter().map(|r| r.get("cv_rms_pose_m")).collect();
         assert_eq!(estimates, vec![Some(&Value::Number("0.0512".into())), Some(&Value::Number("0.0512".into())), None]);
-        let bad = file("bad.json", r#"{"config": "default"}"#);
-        let e = transfer(&records, &[format!("A->B={}", bad.display())], &out).unwrap_err();
-        assert!(format!("{e:#}").contains("bad.json"), "{e:#}");
+        let per_motion: Vec<Option<&Value>> = rows.iter().map(|r| r.get("cv_motions")).collect();
+        let walk = load(&cv).unwrap().get("motions").cloned().unwrap();
+        assert_eq!(per_motion, vec![Some(&walk), Some(&walk), None]);
+        for (name, text, missing) in [
+            ("bad.json", r#"{"config": "default", "motions": []}"#, "cv_rms_pose_m"),
+            ("old.json", r#"{"config": "default", "cv_rms_pose_m": 0.05}"#, "motions"),
+        ] {
+            let bad = file(name, text);
+            let e = transfer(&records, &[format!("A->B={}", bad.display())], &out).unwrap_err();
+            assert!(format!("{e:#}").contains(name) && format!("{e:#}").contains(missing), "{e:#}");
+        }
         assert!(transfer(&records, &["A->B".into()], &out).is_err());
     }
 }
