@@ -41,5 +41,6 @@ pub mod synth_report;
 pub mod synthesize;
 pub mod train;
 pub mod trained_on;
+pub mod turn_limit;
 pub mod turns_and_tears;
 pub mod variant_cache;

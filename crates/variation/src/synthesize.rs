@@ -93,6 +93,10 @@ pub struct SynthConfig {
     /// ([`crate::foot_height`]); on by default.
     #[serde(default = "yes")]
     pub foot_height: bool,
+    /// Last, slow every variation where it turns faster than the captures' spin bounds
+    /// ([`crate::turn_limit`], the model's capture limits); on by default.
+    #[serde(default = "yes")]
+    pub turn_limit: bool,
     /// Measure every sequence against its source ([`SequenceReport`]); off, the report's
     /// `sequences` is empty (a query that only wants meshes skips most of the cost).
     #[serde(default = "yes")]
@@ -187,6 +191,28 @@ struct Decoded {
     footskate_max: f64,
     /// Certified bound on the basis decoding's error at this variation's latent points (m).
     bound: Option<f64>,
+    /// Steps the turn limit spread over more than one frame ([`crate::turn_limit`]).
+    slowed_steps: usize,
+}
+
+impl Decoded {
+    /// Slows the meshes where they turn faster than `limits` allow ([`crate::turn_limit`]),
+    /// the per-frame matches and contacts following the frames' new times.
+    fn limit_turns(&mut self, core: &[u32], up: &Vector3<f64>, limits: &CaptureLimits) {
+        let Some(times) = crate::turn_limit::limit(&mut self.meshes, core, up, limits) else { return };
+        self.slowed_steps = times
+            .windows(2)
+            .filter(|w| w[1] - w[0] < 1.0 - 1e-9)
+            .map(|w| w[0].floor() as usize)
+            .collect::<std::collections::BTreeSet<_>>()
+            .len();
+        if !self.matches.is_empty() {
+            self.matches = times.iter().map(|&u| crate::turn_limit::value_at(&self.matches, u)).collect();
+        }
+        if let Some(c) = self.contacts.as_mut().filter(|c| !c.is_empty()) {
+            *c = times.iter().map(|&u| crate::turn_limit::nearest(c, u)).collect();
+        }
+    }
 }
 
 /// A sequence to synthesise: label, blend weight, latent variations, the source's reference
@@ -343,6 +369,7 @@ impl Post<'_> {
                 contacts,
                 footskate_max,
                 bound: None,
+                slowed_steps: 0,
             },
             notes,
         ))
@@ -431,7 +458,10 @@ fn measure(
         turns_and_tears: {
             let defs: Vec<crate::group::PartDef> = model.parts.iter().map(|p| p.part.clone()).collect();
             let core = crate::group::root_core(&defs, model.template.len());
-            vars.par_iter().map(|v| TurnsAndTears::of(v, &edges, &core, &model.up, limits)).collect()
+            decoded
+                .par_iter()
+                .map(|d| TurnsAndTears { slowed_steps: d.slowed_steps, ..TurnsAndTears::of(&d.meshes, &edges, &core, &model.up, limits) })
+                .collect()
         },
     }
 }
@@ -571,7 +601,7 @@ pub fn run_with_progress(
         core: &core,
     };
     let (mut seconds_writing, mut seconds_statistics) = (0.0, 0.0);
-    let capture_limits = group.filter(|_| compare).map(CaptureLimits::of_group);
+    let capture_limits = group.filter(|_| compare).map(|_| model.capture_limits);
     let mut decoding_bound: Option<f64> = None;
     let output = Output { dec: &dec, fused: fused.as_ref(), writer: &writer, post: &post, out };
     for (j, job) in jobs.iter().enumerate() {
@@ -824,6 +854,9 @@ impl Output<'_, '_> {
                         )?,
                     };
                     let (mut d, notes) = post.run(m, job, &matcher)?;
+                    if cfg.turn_limit {
+                        d.limit_turns(post.core, &model.up, &model.capture_limits);
+                    }
                     if fused.is_some() && cfg.statistics {
                         d.bound = dec
                             .predictors

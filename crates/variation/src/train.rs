@@ -25,6 +25,7 @@ use crate::frame_stride;
 use crate::group::{Group, PartDef};
 use crate::part_data::{self, DisplacementScale};
 use crate::reference::{Landmarks, Reference};
+use crate::turns_and_tears::CaptureLimits;
 
 /// One part's model.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
@@ -69,11 +70,14 @@ pub struct VariationModel {
     /// Capture frames per training sequence (the GPDMs hold
     /// `frame_stride::kept_count(frames, stride)` of them).
     pub frames: usize,
+    /// How fast the captures turn and how long their edges get, which the variations are held
+    /// to ([`crate::turns_and_tears`], [`crate::turn_limit`]).
+    pub capture_limits: CaptureLimits,
 }
 
 impl Artifact for VariationModel {
     const KIND: &'static str = "variation-model";
-    const VERSION: u32 = 5;
+    const VERSION: u32 = 6;
 
     /// A valid body (`group::check_body`); per part a reference of its vertex count and a
     /// valid GPDM with one latent trajectory per training sequence, each of the
@@ -189,6 +193,10 @@ impl VariationModel {
         crate::group::check_body(&self.template, &self.faces, &self.up, self.fps, defs)?;
         if self.stride == 0 || self.frames == 0 || self.sequences.is_empty() {
             return Err(format!("stride {}, {} frames, {} sequences", self.stride, self.frames, self.sequences.len()));
+        }
+        let c = &self.capture_limits;
+        if ![c.max_turn_deg, c.max_edge_m, c.max_course_turn_deg, c.max_heading_turn_deg].iter().all(|v| v.is_finite() && *v >= 0.0) {
+            return Err(format!("capture limits {c:?}: every figure must be a finite number >= 0"));
         }
         let steps = frame_stride::kept_count(self.frames, self.stride);
         for p in &self.parts {
@@ -569,6 +577,7 @@ pub fn train_selected(
         pair: group.pair,
         stride,
         frames: group.n_frames(),
+        capture_limits: CaptureLimits::of_group(group),
     };
     Ok((model, reports))
 }

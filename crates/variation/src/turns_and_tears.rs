@@ -153,6 +153,9 @@ pub struct TurnsAndTears {
     /// Fastest change of heading of the variation (degrees per frame).
     #[serde(default)]
     pub max_heading_turn_deg: f64,
+    /// Steps between frames the turn limit slowed ([`crate::turn_limit`]; 0 without it).
+    #[serde(default)]
+    pub slowed_steps: usize,
 }
 
 impl TurnsAndTears {
@@ -177,6 +180,7 @@ impl TurnsAndTears {
                 .collect(),
             max_turn_deg: turns.iter().copied().fold(0.0, f64::max),
             max_edge_m: longest.iter().copied().fold(0.0, f64::max),
+            slowed_steps: 0,
         }
     }
 }

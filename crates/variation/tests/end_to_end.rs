@@ -144,6 +144,7 @@ fn tiny_set_end_to_end() {
         foot_lock: true,
         foot_ease: Default::default(),
         foot_height: true,
+        turn_limit: true,
         statistics: true,
         latent_smoothing: 0.0,
         query: None,

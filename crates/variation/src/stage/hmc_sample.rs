@@ -169,6 +169,12 @@ pub struct Params {
     /// each swing foot raised to at least the source's clearance, by 5 cm at most)
     #[arg(long)]
     pub no_foot_height: bool,
+    /// Do not slow the variations where they turn faster than the captures (by default, last,
+    /// each step between frames that turns the whole body or its heading faster than 1.25x the
+    /// captures' fastest is spread over more frames, interpolated; the variation keeps its
+    /// frame count and ends a little earlier in the motion)
+    #[arg(long)]
+    pub no_turn_limit: bool,
     /// Smooth every sampled latent trajectory in time with a Gaussian of SIGMA frames before
     /// decoding (first point kept; 0 = off: the trajectories as sampled). Two frames by
     /// default with hmc and ancestral: the sampled trajectories jitter frame to frame, which
@@ -271,6 +277,7 @@ pub fn run(p: &Params) -> anyhow::Result<()> {
         foot_lock: !p.no_foot_lock,
         foot_ease: p.foot_ease,
         foot_height: !p.no_foot_height,
+        turn_limit: !p.no_turn_limit,
         // The statistics against the sources are the report's content: skipped without one.
         statistics: p.report.is_some(),
         latent_smoothing: p.latent_smoothing.unwrap_or(match p.sampler {
