@@ -168,19 +168,21 @@ pub const SEQUENCE_COLUMNS: [&str; 14] = [
     "distance between variations, m",
     "coverage",
     "diversity global / local, mm",
-    "frames spinning (about the vertical) / torn / off course, of all",
+    "frames spinning (about the vertical) / torn / off course, of all; steps slowed by the turn limit",
 ];
 
-/// `spinning (about the vertical) / torn / off course, of all` frames summed over a sequence's variations (`-`
-/// without the measure).
+/// `spinning (about the vertical) / torn / off course, of all` frames summed over a sequence's
+/// variations, and the steps the turn limit slowed where it slowed any (`-` without the measure).
 fn spins_and_tears(seq: &Value) -> String {
     let Some(vars) = seq["turns_and_tears"].as_array().filter(|a| !a.is_empty()) else {
         return "-".into();
     };
     let count = |k: &str| -> usize { vars.iter().map(|v| v[k].as_array().map_or(0, Vec::len)).sum() };
     let all = seq["frames"].as_u64().map_or(String::new(), |f| format!(", of {}", f as usize * vars.len()));
+    let slowed: u64 = vars.iter().filter_map(|v| v["slowed_steps"].as_u64()).sum();
+    let slowed = if slowed > 0 { format!("; {slowed} slowed") } else { String::new() };
     format!(
-        "{} ({} about the vertical) / {} / {}{all}",
+        "{} ({} about the vertical) / {} / {}{all}{slowed}",
         count("spinning_frames"),
         count("heading_spinning_frames"),
         count("torn_frames"),
@@ -314,7 +316,7 @@ mod tests {
                     "source_contact_sliding_m": 0.005, "pairwise_distance_m": {"mean": 0.4},
                     "diversity": {"coverage": 0.5, "global_m": 0.1, "local_m": 0.05},
                     "turns_and_tears": [{"spinning_frames": [3, 4], "heading_spinning_frames": [3], "torn_frames": [4], "off_course_frames": [20, 21]},
-                                        {"spinning_frames": [9], "torn_frames": []}]}]}}});
+                                        {"spinning_frames": [9], "torn_frames": [], "slowed_steps": 2}]}]}}});
         assert!(is_variation_table(&v));
         let h = section_html(&v).unwrap();
         for needle in [
@@ -324,7 +326,7 @@ mod tests {
             "<td>0.70 (0.54-0.82)</td>",
             "<td>walk (25)</td><td>94-124</td>",
             "<td>0.061-0.079 → 0.000 (0.005)</td>",
-            "<td>0.40</td><td>0.50</td><td>100 / 50</td><td>3 (1 about the vertical) / 1 / 2, of 50</td>",
+            "<td>0.40</td><td>0.50</td><td>100 / 50</td><td>3 (1 about the vertical) / 1 / 2, of 50; 2 slowed</td>",
             "goes off course past 1.25×, 1.5×, 1.25×)</th><td>7.0° (3.1°)/frame, 41.2 mm, 12.0°</td>",
             "<td>torso, leg_l</td><td>75</td><td>1</td><td>0.50-1.50</td><td>100-300</td><td>ValueTolerance, GradientTolerance</td>",
         ] {

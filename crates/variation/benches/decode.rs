@@ -68,7 +68,7 @@ fn model(level: usize) -> VariationModel {
         pair: Some((0, 1)),
         stride: 1,
         frames: 0,
-        capture_limits: variation::turns_and_tears::CaptureLimits { max_turn_deg: 0.0, max_edge_m: 0.0, max_course_turn_deg: 0.0, max_heading_turn_deg: 0.0 },
+        capture_limits: Default::default(),
     };
     m.frames = m.parts[0].gpdm.seq_lens[0];
     m

@@ -200,12 +200,7 @@ impl Decoded {
     /// the per-frame matches and contacts following the frames' new times.
     fn limit_turns(&mut self, core: &[u32], up: &Vector3<f64>, limits: &CaptureLimits) {
         let Some(times) = crate::turn_limit::limit(&mut self.meshes, core, up, limits) else { return };
-        self.slowed_steps = times
-            .windows(2)
-            .filter(|w| w[1] - w[0] < 1.0 - 1e-9)
-            .map(|w| w[0].floor() as usize)
-            .collect::<std::collections::BTreeSet<_>>()
-            .len();
+        self.slowed_steps = crate::turn_limit::slowed_steps(&times);
         if !self.matches.is_empty() {
             self.matches = times.iter().map(|&u| crate::turn_limit::value_at(&self.matches, u)).collect();
         }
@@ -854,6 +849,7 @@ impl Output<'_, '_> {
                         )?,
                     };
                     let (mut d, notes) = post.run(m, job, &matcher)?;
+                    // Last: the clean-ups turn the decoded frames less than they were sampled.
                     if cfg.turn_limit {
                         d.limit_turns(post.core, &model.up, &model.capture_limits);
                     }

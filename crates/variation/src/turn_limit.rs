@@ -3,13 +3,14 @@
 //! A sampled trajectory can pass through a stretch of the learned motion (a jump's landing, a
 //! fast swing of a leg) faster than any capture passed through it, and decoded, the body turns
 //! faster from one frame to the next than a viewer accepts
-//! ([`crate::turns_and_tears`]). The limit re-times the finished variation: each step from
-//! frame `t` to `t + 1` whose whole-body turn or heading change passes
-//! [`MARGIN`] × the spin bound ([`CaptureLimits::spin_bound_deg`],
-//! [`CaptureLimits::heading_spin_bound_deg`]) is spread over as many output frames as bring it
-//! under that share, the frames in between interpolated linearly. Steps under the bound keep
-//! one frame each, so a variation that never turns too fast is left bit for bit, and the
-//! variation keeps its frame count (it ends a little earlier in the motion).
+//! ([`crate::turns_and_tears`]). The limit re-times a variation where any of its steps passes a
+//! spin bound ([`CaptureLimits::spin_bound_deg`], [`CaptureLimits::heading_spin_bound_deg`]):
+//! each step from frame `t` to `t + 1` whose whole-body turn or heading change passes
+//! [`MARGIN`] × the bound is spread over as many output frames as bring it under that share,
+//! the frames in between interpolated linearly. Steps under it keep one frame each, so a
+//! variation that never turns too fast is left bit for bit, and the variation keeps its frame
+//! count (it ends a little earlier in the motion). `hmc-sample` limits each variation last, after
+//! the clean-ups, which turn the decoded frames less than they were sampled.
 
 use nalgebra::Vector3;
 
@@ -88,6 +89,13 @@ fn frame_at(frames: &[Vec<Vector3<f64>>], u: f64) -> Vec<Vector3<f64>> {
         return frames[t].clone();
     }
     frames[t].iter().zip(&frames[t + 1]).map(|(a, b)| a + (b - a) * f).collect()
+}
+
+/// How many input steps `times` ([`limit`]) spread over more than one output frame.
+pub fn slowed_steps(times: &[f64]) -> usize {
+    let mut steps: Vec<usize> = times.windows(2).filter(|w| w[1] - w[0] < 1.0 - 1e-9).map(|w| w[0].floor() as usize).collect();
+    steps.dedup();
+    steps.len()
 }
 
 /// `values` at time `u`, interpolated linearly.
@@ -171,5 +179,6 @@ mod tests {
         assert_eq!(value_at(&[0.0, 10.0, 20.0], 1.5), 15.0);
         assert_eq!(value_at(&[0.0, 10.0], 1.0), 10.0);
         assert_eq!(nearest(&[1, 2, 3], 1.6), 3);
+        assert_eq!(slowed_steps(&t), 1);
     }
 }

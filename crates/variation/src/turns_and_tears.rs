@@ -69,7 +69,7 @@ pub fn longest_edges(frames: &[Vec<Vector3<f64>>], edges: &[[u32; 2]]) -> Vec<f6
 }
 
 /// The captures' own figures, which the variations are held to.
-#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize, Deserialize)]
 pub struct CaptureLimits {
     /// Fastest whole-body turn of any captured frame (degrees per frame).
     pub max_turn_deg: f64,

@@ -87,6 +87,7 @@ fn model() -> VariationModel {
         pair: Some((0, 1)),
         stride: 1,
         frames: FRAMES,
+        capture_limits: variation::turns_and_tears::CaptureLimits::of_group(&g),
     }
 }
 
@@ -161,6 +162,9 @@ fn a_variation_model_is_validated_after_decoding() {
     let mut bad = good.clone();
     bad.stride = 0;
     refused(&bad, "stride 0");
+    let mut bad = good.clone();
+    bad.capture_limits.max_turn_deg = f64::NAN;
+    refused(&bad, "capture limits");
     let mut bad = good.clone();
     bad.up = Vector3::new(0.0, 2.0, 0.0);
     refused(&bad, "up axis");

@@ -96,6 +96,7 @@ fn model_on(mesh: mesh_core::mesh::TriMesh, upper_min: f64, lower_max: f64) -> V
         pair: Some((0, 1)),
         stride: 1,
         frames: 0,
+        capture_limits: Default::default(),
     };
     m.frames = m.parts[0].gpdm.seq_lens[0];
     m

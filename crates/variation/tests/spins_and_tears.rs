@@ -52,6 +52,33 @@ fn no_variation_of_the_tiny_preset_spins_or_tears_under_either_sampler_or_in_a_b
         bad.extend(spins_and_tears(&report).into_iter().map(|l| format!("{name}: {l}")));
     }
     assert!(bad.is_empty(), "{} variations spin or tear:\n{}", bad.len(), bad.join("\n"));
+
+    // The turn limit touches only the variations it slows: every other one is the same bytes
+    // as without it, and a slowed one keeps its frame count.
+    let (free, report) = (dir.path().join("free"), dir.path().join("free.json"));
+    let (o, r) = (free.to_string_lossy().into_owned(), report.to_string_lossy().into_owned());
+    let args = ["-q", "--seed", "0", "-n", "5", "--variance-scale", "0.3", "--group", &g, "--model", &m];
+    ok(env!("CARGO_BIN_EXE_hmc-sample"), &[&args[..], &["--sampler", "ancestral", "--blends", "0.25,0.75", "--no-turn-limit", "--out", &o, "--report", &r]].concat());
+    let limited: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(dir.path().join("ancestral.json")).unwrap()).unwrap();
+    let mut compared = 0;
+    for s in limited["sequences"].as_array().unwrap() {
+        let label = s["label"].as_str().unwrap();
+        for (k, v) in s["turns_and_tears"].as_array().unwrap().iter().enumerate() {
+            let (a, b) = (dir.path().join("ancestral").join(label).join(format!("var{k}")), free.join(label).join(format!("var{k}")));
+            let files = |d: &Path| -> Vec<Vec<u8>> {
+                let mut names: Vec<_> = std::fs::read_dir(d).unwrap().map(|e| e.unwrap().path()).collect();
+                names.sort();
+                names.iter().map(|n| std::fs::read(n).unwrap()).collect()
+            };
+            let (fa, fb) = (files(&a), files(&b));
+            assert_eq!(fa.len(), fb.len(), "{label} var{k}: frame count changed by the turn limit");
+            if v["slowed_steps"].as_u64() == Some(0) {
+                assert!(fa == fb, "{label} var{k}: not slowed, yet not the same bytes as without the turn limit");
+                compared += 1;
+            }
+        }
+    }
+    assert!(compared > 0, "no variation left as sampled to compare");
 }
 
 /// The largest turn from the first frame of every variation of an `hmc-sample --report` and
