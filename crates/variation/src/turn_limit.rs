@@ -156,12 +156,12 @@ mod tests {
         assert_eq!(frames.len(), angles.len());
         let turns = turn_degrees(&frames);
         assert!(turns.iter().all(|&a| a <= 2.5 + 1e-9), "{turns:?}");
-        // The steps before the fast one are untouched; the fast one takes 10 / (0.95 × 2.5)
-        // ≈ 4.2 output frames, so the last of the eight frames is input time 3 + 4 / 4.2.
-        assert_eq!(&times[..4], &[0.0, 1.0, 2.0, 3.0]);
-        assert_eq!(&frames[..4], &turned(&angles)[..4]);
+        // The steps before the fast one (frame 2 to 3) are untouched; it takes 10 / (0.95 × 2.5)
+        // ≈ 4.2 of the 5 output frames left, the rest at the input's rate after frame 3.
+        assert_eq!(&times[..3], &[0.0, 1.0, 2.0]);
+        assert_eq!(&frames[..3], &turned(&angles)[..3]);
         let end = times[angles.len() - 1];
-        assert!((end - (3.0 + 4.0 * 2.375 / 10.0)).abs() < 1e-9, "{times:?}");
+        assert!((end - (3.0 + 5.0 - 10.0 / 2.375)).abs() < 1e-9, "{times:?}");
         // Time runs forward and never faster than the input's.
         assert!(times.windows(2).all(|w| w[1] > w[0] && w[1] - w[0] <= 1.0 + 1e-12));
     }
