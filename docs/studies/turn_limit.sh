@@ -7,6 +7,7 @@
 # (reports only), then prints the counts per set.
 set -euo pipefail
 out=$1; shift
+mkdir -p "$out"
 for set in "$@"; do
   name=$(basename "$(dirname "$set")")
   make -s NO_BUILD=1 variation SET="$set" OUT="$out/$name" > "$out/$name.log" 2>&1
