@@ -5,14 +5,16 @@
 //! polar-decomposed, `D_f^k = R_f^k S_f^k`. At weight `w`:
 //! `R_f(w) = R_f^0 exp(w log(R_f^0ᵀ R_f^1))` (quaternion power along the shorter arc) and
 //! `S_f(w) = (1-w) S_f^0 + w S_f^1`; the target gradients `J_f = R_f(w) S_f(w) ∇rest` go into a
-//! Poisson solve on the rest mesh (one factorisation for all weights and frames); the
-//! translation is anchored so the centroid is `(1-w) c^0 + w c^1`. `w = 0` and `w = 1`
-//! reproduce the poses up to round-off.
+//! Poisson solve on the rest mesh (one factorisation for all weights and frames); each connected
+//! part of the mesh (a character's eyes, teeth or clothing are often their own) is anchored at
+//! its first vertex and translated so that its centroid is `(1-w) c^0 + w c^1`, the blend of its
+//! centroids in the two poses. `w = 0` and `w = 1` reproduce the poses up to round-off.
 
 use crate::deformation_gradient::{triangle_deformation, GradientOperator};
 use crate::poisson::PoissonSolver;
 use crate::polar::{polar, triangle_rotation};
-use crate::{centroid, check_faces, check_vertices, Error, Result};
+use crate::{check_faces, check_vertices, Error, Result};
+use mesh_core::topology::Topology;
 use nalgebra::{Matrix3, Rotation3, UnitQuaternion, Vector3};
 
 /// A pose split into per-face rotations and stretches relative to the rest mesh.
@@ -20,7 +22,8 @@ use nalgebra::{Matrix3, Rotation3, UnitQuaternion, Vector3};
 pub struct PoseGradients {
     pub rotations: Vec<UnitQuaternion<f64>>,
     pub stretches: Vec<Matrix3<f64>>,
-    pub centroid: Vector3<f64>,
+    /// Centroid of each connected part of the mesh in this pose, in [`Blender`]'s order.
+    pub centroids: Vec<Vector3<f64>>,
 }
 
 /// Rest mesh, its gradient operator and factorised Laplacian.
@@ -29,7 +32,15 @@ pub struct Blender {
     faces: Vec<[u32; 3]>,
     op: GradientOperator,
     rest_gradient: Vec<Matrix3<f64>>,
+    /// The mesh's connected parts (through edges; a vertex in no face is its own), each sorted,
+    /// ordered by their first vertex, which anchors the part in the Poisson solve.
+    parts: Vec<Vec<u32>>,
     solver: PoissonSolver,
+}
+
+/// Mean of the vertices `part` of `pose`.
+fn part_centroid(pose: &[Vector3<f64>], part: &[u32]) -> Vector3<f64> {
+    part.iter().map(|&v| pose[v as usize]).sum::<Vector3<f64>>() / part.len() as f64
 }
 
 /// Linear vertex blending, the baseline: `(1-w) a + w b`.
@@ -48,13 +59,16 @@ impl Blender {
         check_vertices(&rest, rest.len(), "blend: rest mesh")?;
         check_faces(rest.len(), &faces, "blend: rest mesh")?;
         let op = GradientOperator::new(&rest, &faces);
-        let solver = PoissonSolver::new(&op.stiffness(), &[0])?;
+        let parts = Topology::new(rest.len(), &faces).connected_components();
+        let anchors: Vec<usize> = parts.iter().map(|p| p[0] as usize).collect();
+        let solver = PoissonSolver::new(&op.stiffness(), &anchors)?;
         let rest_gradient = op.gradient(&rest);
         Ok(Blender {
             rest,
             faces,
             op,
             rest_gradient,
+            parts,
             solver,
         })
     }
@@ -88,7 +102,7 @@ impl Blender {
         Ok(PoseGradients {
             rotations,
             stretches,
-            centroid: centroid(pose),
+            centroids: self.parts.iter().map(|p| part_centroid(pose, p)).collect(),
         })
     }
 
@@ -99,6 +113,16 @@ impl Blender {
         b: &PoseGradients,
         w: f64,
     ) -> Result<Vec<Vector3<f64>>> {
+        let (nf, np) = (self.faces.len(), self.parts.len());
+        for g in [a, b] {
+            if g.rotations.len() != nf || g.stretches.len() != nf || g.centroids.len() != np {
+                return Err(Error::invalid(format!(
+                    "blend: a pose of {} faces and {} parts, the rest mesh has {nf} and {np}",
+                    g.rotations.len(),
+                    g.centroids.len()
+                )));
+            }
+        }
         let field: Vec<Matrix3<f64>> = (0..self.faces.len())
             .map(|f| {
                 let (q0, mut q1) = (a.rotations[f], b.rotations[f]);
@@ -110,11 +134,12 @@ impl Blender {
                 q.to_rotation_matrix().into_inner() * s * self.rest_gradient[f]
             })
             .collect();
-        let mut x = self
-            .solver
-            .solve(&self.op.divergence(&field), &[self.rest[0]])?;
-        let shift = a.centroid * (1.0 - w) + b.centroid * w - centroid(&x);
-        x.iter_mut().for_each(|v| *v += shift);
+        let anchors: Vec<Vector3<f64>> = self.parts.iter().map(|p| self.rest[p[0] as usize]).collect();
+        let mut x = self.solver.solve(&self.op.divergence(&field), &anchors)?;
+        for (k, part) in self.parts.iter().enumerate() {
+            let shift = a.centroids[k] * (1.0 - w) + b.centroids[k] * w - part_centroid(&x, part);
+            part.iter().for_each(|&v| x[v as usize] += shift);
+        }
         Ok(x)
     }
 

@@ -324,3 +324,41 @@ fn supernodal_poisson_equals_the_default_factorisation() {
     }
     assert_eq!(sn.factorisation(), Factorisation::Supernodal);
 }
+
+#[test]
+fn a_mesh_of_several_parts_blends_each_part_as_it_would_alone() {
+    // Two tubes side by side (a body and its separate eye or jacket) and a vertex in no face.
+    let (v1, f1) = tube(12, 10, 1.0, 0.25, true);
+    let n1 = v1.len() as u32;
+    let (v2, f2) = tube(8, 6, 0.5, 0.1, true);
+    let mut rest: Vec<Vector3<f64>> = v1.clone();
+    rest.extend(v2.iter().map(|p| p + Vector3::new(3.0, 0.0, 0.0)));
+    rest.push(Vector3::new(-2.0, 0.0, 0.0));
+    let mut faces = f1.clone();
+    faces.extend(f2.iter().map(|f| f.map(|i| i + n1)));
+    let pose = |s: f64| -> Vec<Vector3<f64>> {
+        rest.iter()
+            .map(|p| {
+                let a = s * p.y;
+                Vector3::new(p.x * a.cos() + 0.3 * s, p.x * a.sin() + p.y, (1.0 + 0.2 * s) * p.z)
+            })
+            .collect()
+    };
+    let (a, b) = (pose(0.4), pose(1.3));
+    let whole = surface::blend::Blender::new(rest.clone(), faces.clone()).unwrap();
+    assert!(max_dist(&whole.blend(&a, &b, 0.0).unwrap(), &a) < 1e-9);
+    assert!(max_dist(&whole.blend(&a, &b, 1.0).unwrap(), &b) < 1e-9);
+    let mid = whole.blend(&a, &b, 0.35).unwrap();
+    // Each tube alone, through a blender of its own mesh.
+    let n2 = v2.len();
+    for (range, f) in [(0..n1 as usize, f1.clone()), (n1 as usize..n1 as usize + n2, f2.clone())] {
+        let part = |m: &[Vector3<f64>]| m[range.clone()].to_vec();
+        let alone = surface::blend::Blender::new(part(&rest), f).unwrap();
+        let want = alone.blend(&part(&a), &part(&b), 0.35).unwrap();
+        let d = max_dist(&part(&mid), &want);
+        assert!(d < 1e-9, "part {range:?}: {d} from its blend alone");
+    }
+    // The loose vertex follows the linear blend.
+    let last = rest.len() - 1;
+    assert!((mid[last] - (a[last] * 0.65 + b[last] * 0.35)).norm() < 1e-12);
+}
