@@ -9,7 +9,7 @@
 
 SET ?= $(OUT)/demo/set
 # Empty: the stage's own default (`<stage> --help`; docs/DEFAULTS.md).
-# gpr-train --config of every model (default, no-prior, affine-only, zero-mean, auto, paper);
+# gpr-train --config of every model (default, affine-mean, no-prior, affine-only, zero-mean, auto, paper);
 # paper also aligns on the whole body, places by the regressed displacement, drops the foot
 # clean-ups and runs every method of the paper's comparison (CVPR §4-7)
 CONFIG ?=
@@ -21,8 +21,8 @@ ALIGN_FRAME ?=
 PART_ALIGNMENT ?=
 # gpr-predict --placement of every method's output (gpr-nn is also placed the other two ways)
 PLACEMENT ?=
-# gpr-train --mean: affine (least-squares affine map, GP on the residuals) or zero (the paper);
-# empty: the configuration's (gpr-train --config in GPR_TRAIN_FLAGS; the default's is affine)
+# gpr-train --mean: affine (least-squares affine map, GP on the residuals), zero (the paper) or
+# both (the two GPs' average); empty: the configuration's (CONFIG; the default's is both)
 GPR_MEAN ?=
 # Further gpr-train flags for every model (e.g. --learn-noise, --nn-bias), and pca-fit --components
 # per part (the whole body gets the parts' total)

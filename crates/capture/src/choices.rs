@@ -51,6 +51,11 @@ pub enum MeanFunction {
     Affine,
     /// Zero mean (the paper): far from the data the prediction falls back to the PCA mean.
     Zero,
+    /// Both: each part's GP trained twice, on the affine mean's residuals and with zero mean,
+    /// and the two predictions averaged (an ensemble of the two models; the displacement is
+    /// the affine mean's): far from the data the prediction falls back halfway from the
+    /// linear mapping toward the PCA mean.
+    Both,
 }
 
 /// Which per-frame displacement places the transferred poses.
@@ -105,10 +110,12 @@ impl Correspondences {
 pub enum ConfigName {
     /// Try the candidates and keep the one with the lowest cross-validated error.
     Auto,
-    /// The defaults: affine mean with the geometric prior mixed in, limb orientation.
+    /// The defaults: the average of `affine-mean` and `zero-mean` (`--mean both`).
     #[default]
     Default,
-    /// The defaults without the geometric prior (`--prior-weight 0`).
+    /// The affine mean with the geometric prior mixed in, limb orientation.
+    AffineMean,
+    /// `affine-mean` without the geometric prior (`--prior-weight 0`).
     NoPrior,
     /// The affine mean and its GP alone: no prior, no limb orientation.
     AffineOnly,
@@ -124,6 +131,7 @@ impl ConfigName {
         match self {
             ConfigName::Auto => "auto",
             ConfigName::Default => "default",
+            ConfigName::AffineMean => "affine-mean",
             ConfigName::NoPrior => "no-prior",
             ConfigName::AffineOnly => "affine-only",
             ConfigName::ZeroMean => "zero-mean",

@@ -61,7 +61,7 @@ pub struct TransferOptions {
     #[arg(long, value_enum)]
     pub placement: Option<Placement>,
     /// gpr-train --mean of every model (GPR_MEAN); unset: the configuration's (the default
-    /// configuration's is affine)
+    /// configuration's is both)
     #[arg(long, value_enum)]
     pub gpr_mean: Option<MeanFunction>,
     /// Further gpr-train flags for every model, one string (GPR_TRAIN_FLAGS)

@@ -36,7 +36,7 @@ type Series = Option<Vec<f64>>;
 
 /// `(variance ratio, normalised nearest distance)` per row of `xs` for one regressor.
 fn of_regressor(reg: &Regressor, xs: &DMatrix<f64>) -> Result<(Series, Series)> {
-    let Regressor::Gp { gpr, .. } = reg else {
+    let Some(gpr) = reg.gp() else {
         return Ok((None, None));
     };
     let mut notes = Vec::new();

@@ -240,6 +240,41 @@ pub fn cross_validate(folds: &Folds, candidates: &[Candidate]) -> Result<Vec<Cro
         .collect())
 }
 
+/// The candidate `--config auto` keeps, an index of `errors` (cross-validated errors of the
+/// same folds): the first (the default configuration) unless another one is clearly better,
+/// its error lower than the first's on the held-out motions by more than one standard error:
+/// the mean over motions of the paired differences of their errors plus its standard error is
+/// below zero. Of the clearly better ones, the lowest pooled error (the earliest on a tie).
+///
+/// The one-standard-error rule of model selection (Hastie, Tibshirani and Friedman, *The
+/// Elements of Statistical Learning*, 2nd ed., section 7.10), paired by motion: the estimates of
+/// the configurations lie within a few per cent of each other and the held-out frames of a
+/// motion are near its other half, so the lowest estimate alone picks a configuration that
+/// does worse on new motions as often as not (docs/studies/10-cross-validation.md).
+pub fn keep(errors: &[CrossValidation]) -> usize {
+    let Some(first) = errors.first() else { return 0 };
+    let clearly_better = |e: &CrossValidation| {
+        let d: Vec<f64> = e
+            .motions
+            .iter()
+            .zip(&first.motions)
+            .filter(|(a, b)| a.frames > 0 && b.frames > 0)
+            .map(|(a, b)| a.rms_pose_m - b.rms_pose_m)
+            .collect();
+        let m = d.len() as f64;
+        if d.len() < 2 {
+            return false;
+        }
+        let mean = d.iter().sum::<f64>() / m;
+        let sd = (d.iter().map(|x| (x - mean).powi(2)).sum::<f64>() / (m - 1.0)).sqrt();
+        mean + sd / m.sqrt() < 0.0
+    };
+    (1..errors.len())
+        .filter(|&c| clearly_better(&errors[c]))
+        .min_by(|&a, &b| errors[a].cv_rms_pose_m.total_cmp(&errors[b].cv_rms_pose_m).then(a.cmp(&b)))
+        .unwrap_or(0)
+}
+
 /// The limb log-orientations of every training pair's frames, when a candidate fits a limb
 /// orientation (the candidates share the limbs measured in their attachment's frame).
 fn orientation_logs(folds: &Folds, candidates: &[Candidate]) -> Result<Option<PairLogs>> {
@@ -326,6 +361,35 @@ mod tests {
     fn each_source_frame_is_compared_once_with_its_median_target_frame() {
         let path = [[0, 0], [0, 1], [1, 2], [1, 3], [2, 4], [3, 4], [4, 5], [4, 6], [4, 7]];
         assert_eq!(compared_frames(&path), vec![[0, 1], [1, 3], [2, 4], [3, 4], [4, 6]]);
+    }
+
+    fn errors(per_motion: &[f64]) -> CrossValidation {
+        let motions: Vec<MotionError> = per_motion.iter().enumerate().map(|(m, &e)| MotionError { motion: format!("m{m}"), frames: 10, rms_pose_m: e }).collect();
+        let pooled = (per_motion.iter().map(|e| e * e).sum::<f64>() / per_motion.len() as f64).sqrt();
+        CrossValidation { cv_rms_pose_m: pooled, motions }
+    }
+
+    /// `keep`: the first candidate unless another's per-motion errors are lower by more than
+    /// one standard error of their mean difference; of those, the lowest pooled error.
+    #[test]
+    fn auto_keeps_the_first_candidate_unless_another_is_better_by_a_standard_error() {
+        let first = errors(&[0.030, 0.040, 0.050, 0.020]);
+        // Lower pooled error, but one motion much worse: differences -0.004, -0.004, -0.004,
+        // +0.008 (mean -0.001, standard error 0.003).
+        let mixed = errors(&[0.026, 0.036, 0.046, 0.028]);
+        assert!(mixed.cv_rms_pose_m < first.cv_rms_pose_m);
+        assert_eq!(keep(&[first.clone(), mixed.clone()]), 0);
+        // Lower on every motion by 2-4 mm: differences mean -0.003, standard error 0.0004.
+        let better = errors(&[0.027, 0.037, 0.046, 0.018]);
+        assert_eq!(keep(&[first.clone(), mixed.clone(), better.clone()]), 2);
+        // Two clearly better: the lower pooled error; a tie goes to the earlier.
+        let best = errors(&[0.020, 0.030, 0.040, 0.015]);
+        assert_eq!(keep(&[first.clone(), better.clone(), best.clone()]), 2);
+        assert_eq!(keep(&[first.clone(), best.clone(), best.clone()]), 1);
+        // Equal errors are not better; one candidate is kept; one motion gives no standard error.
+        assert_eq!(keep(&[first.clone(), first.clone()]), 0);
+        assert_eq!(keep(std::slice::from_ref(&first)), 0);
+        assert_eq!(keep(&[errors(&[0.05]), errors(&[0.01])]), 0);
     }
 
     fn pair(pairs: Vec<[usize; 2]>, keyposes: Vec<[usize; 2]>) -> PairData {

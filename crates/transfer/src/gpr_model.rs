@@ -97,6 +97,11 @@ pub const PRIOR_WEIGHT: f64 = 0.25;
 /// both benchmark sets; 1e-5 lowers the pose error on both).
 pub const MEAN_RIDGE: f64 = 1e-5;
 
+/// Weight of the zero-mean GP in `--mean both`'s average of the affine-mean and zero-mean GPs
+/// (docs/DEVIATIONS.md: the equal average measured within 2 % of the better of the two, or
+/// below both, on the three benchmark sets).
+pub const ZERO_MEAN_SHARE: f64 = 0.5;
+
 /// The mapping of one part's coefficients (or of the displacement).
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub enum Regressor {
@@ -108,6 +113,9 @@ pub enum Regressor {
         mean: Option<AffineMean>,
     },
     Affine(AffineKeypose),
+    /// The weighted average of the members' predictions (`--mean both`: the affine-mean GP,
+    /// then the zero-mean GP): same inputs and outputs, positive weights summing to 1.
+    Average(Vec<(f64, Regressor)>),
 }
 
 impl Regressor {
@@ -115,6 +123,11 @@ impl Regressor {
     /// agree in dimensions, every number finite), with `dims` = (inputs, outputs) when they
     /// are known. The error is the problem.
     pub(crate) fn validate(&self, dims: Option<(usize, usize)>) -> std::result::Result<(), String> {
+        self.checked_dims(dims).map(|_| ())
+    }
+
+    /// [`Regressor::validate`], returning the regressor's (inputs, outputs).
+    fn checked_dims(&self, dims: Option<(usize, usize)>) -> std::result::Result<(usize, usize), String> {
         let (d, p) = match self {
             Regressor::Gp { gpr, y_scale, mean } => {
                 gpr.validate()?;
@@ -131,10 +144,42 @@ impl Regressor {
                 a.validate()?;
                 (a.source_keys.ncols(), a.target_keys.ncols())
             }
+            Regressor::Average(members) => {
+                let Some((_, first)) = members.first() else { return Err("an average of no regressors".into()) };
+                let dims = match first {
+                    Regressor::Average(_) => return Err("an average of averages".into()),
+                    r => r.checked_dims(dims)?,
+                };
+                for (w, m) in members {
+                    if !(w.is_finite() && *w > 0.0) {
+                        return Err(format!("average weight {w} is not a finite positive number"));
+                    }
+                    if matches!(m, Regressor::Average(_)) {
+                        return Err("an average of averages".into());
+                    }
+                    m.checked_dims(Some(dims))?;
+                }
+                let total: f64 = members.iter().map(|(w, _)| w).sum();
+                if (total - 1.0).abs() > 1e-9 {
+                    return Err(format!("average weights sum to {total}, not 1"));
+                }
+                dims
+            }
         };
         match dims {
             Some(want) if want != (d, p) => Err(format!("maps {d} inputs to {p} outputs, expected {} to {}", want.0, want.1)),
-            _ => Ok(()),
+            _ => Ok((d, p)),
+        }
+    }
+
+    /// The GP whose predictive variance and training inputs stand for the regressor's
+    /// (`crate::confidence`): its own, or an average's zero-mean member's (the last), whose
+    /// variance is the pose's rather than a residual's. `None` for the key-pose map.
+    pub fn gp(&self) -> Option<&Gpr> {
+        match self {
+            Regressor::Gp { gpr, .. } => Some(gpr),
+            Regressor::Affine(_) => None,
+            Regressor::Average(members) => members.iter().rev().find_map(|(_, m)| m.gp()),
         }
     }
 
@@ -149,6 +194,14 @@ impl Regressor {
                 }
             }),
             Regressor::Affine(a) => a.predict(xs),
+            Regressor::Average(members) => {
+                let mut sum = DMatrix::zeros(xs.nrows(), 0);
+                for (w, m) in members {
+                    let y = m.predict(xs)? * *w;
+                    sum = if sum.ncols() == 0 { y } else { sum + y };
+                }
+                return Ok(sum);
+            }
         };
         out.map_err(|e| Error::invalid(e.to_string()))
     }
@@ -166,7 +219,8 @@ fn fit_mean(
 ) -> Result<(Option<AffineMean>, DMatrix<f64>)> {
     match mean_fn {
         MeanFunction::Zero => Ok((None, y.clone())),
-        MeanFunction::Affine => {
+        // `both` trains each part's GP twice ([`train_parts`]); its displacement is the affine mean's.
+        MeanFunction::Affine | MeanFunction::Both => {
             let m = AffineMean::fit_toward(x, y, ridge, prior, notes)
                 .map_err(|e| Error::invalid(e.to_string()))?;
             let r = y - m.predict(x).map_err(|e| Error::invalid(e.to_string()))?;
@@ -191,6 +245,8 @@ pub struct RegressorReport {
     pub inducing: Option<usize>,
     /// Numerical notes (Cholesky jitter retries).
     pub notes: Vec<String>,
+    /// An average's members' reports, in its order (the fields above then describe no GP).
+    pub members: Vec<RegressorReport>,
 }
 
 impl RegressorReport {
@@ -205,7 +261,16 @@ impl RegressorReport {
             lml: f64::NAN,
             inducing: None,
             notes: Vec::new(),
+            members: Vec::new(),
         }
+    }
+
+    /// The report of part `name`'s average (`--mean both`) of its affine-mean GP, reported by
+    /// `affine`, and its zero-mean GP, by `zero`.
+    pub fn average(name: &str, mut affine: RegressorReport, mut zero: RegressorReport) -> Self {
+        affine.name = format!("{name} (affine mean)");
+        zero.name = format!("{name} (zero mean)");
+        RegressorReport { iterations: affine.iterations + zero.iterations, members: vec![affine, zero], ..RegressorReport::affine(name) }
     }
 
     fn from_train(name: &str, gpr: &Gpr, r: &TrainReport) -> Self {
@@ -218,11 +283,16 @@ impl RegressorReport {
             lml: r.lml,
             inducing: gpr.sparse().map(|s| s.inducing().nrows()),
             notes: r.notes.clone(),
+            members: Vec::new(),
         }
     }
 
     /// One line for logs.
     pub fn line(&self) -> String {
+        if !self.members.is_empty() {
+            let lines: Vec<String> = self.members.iter().map(|m| m.line()).collect();
+            return format!("{}: average of [{}]", self.name, lines.join("; "));
+        }
         match (&self.kernel, &self.exit) {
             (Some(k), exit) => format!(
                 "{}: kernel {:?}, {} {:.3} -> {:.3}, {} iterations, exit: {}",
@@ -300,7 +370,7 @@ impl Templates {
 
 impl Artifact for GprModel {
     const KIND: &'static str = "gpr-model";
-    const VERSION: u32 = 6;
+    const VERSION: u32 = 7;
 
     /// One regressor per part name, each internally consistent (GP weights, inducing inputs,
     /// affine mean and key-poses agree in dimensions; finite positive kernel parameters), a
@@ -342,8 +412,23 @@ pub(crate) fn train_parts(
     data: &TrainingSet,
     keys: &TrainingSet,
     opts: &GprOptions,
-    fixed: Option<&[Option<Hyperparameters>]>,
+    fixed: Option<&[Vec<Hyperparameters>]>,
 ) -> Result<(Vec<Regressor>, Vec<RegressorReport>)> {
+    if mean_fn == MeanFunction::Both && method_kernel(method, nn_bias).is_some() {
+        // The members' hyperparameters, per part: the affine-mean GP's, then the zero-mean GP's.
+        let member = |i: usize| fixed.map(|f| f.iter().map(|h| h.get(i).into_iter().copied().collect()).collect::<Vec<Vec<_>>>());
+        let (fa, fz) = (member(0), member(1));
+        let (affine, ra) = train_parts(method, nn_bias, MeanFunction::Affine, mean_ridge, mean_priors, names, data, keys, opts, fa.as_deref())?;
+        let (zero, rz) = train_parts(method, nn_bias, MeanFunction::Zero, mean_ridge, None, names, data, keys, opts, fz.as_deref())?;
+        let share = ZERO_MEAN_SHARE;
+        let regs = affine.into_iter().zip(zero).map(|(a, z)| Regressor::Average(vec![(1.0 - share, a), (share, z)])).collect();
+        let reports = names
+            .iter()
+            .zip(ra.into_iter().zip(rz))
+            .map(|(name, (a, z))| RegressorReport::average(name, a, z))
+            .collect();
+        return Ok((regs, reports));
+    }
     match method_kernel(method, nn_bias) {
         Some(kernel) => {
             let mut means = Vec::new();
@@ -374,7 +459,7 @@ pub(crate) fn train_parts(
                 None => gp::gpr::train_many(kernel, &problems, opts),
                 Some(fixed) => {
                     use rayon::prelude::*;
-                    problems.par_iter().zip(fixed).map(|((x, y), h)| train_gp(kernel, *h, x, y, opts)).collect()
+                    problems.par_iter().zip(fixed).map(|((x, y), h)| train_gp(kernel, h.first().copied(), x, y, opts)).collect()
                 }
             };
             let mut regs = Vec::new();
@@ -476,22 +561,31 @@ pub struct Regression<'a> {
 /// A kernel with its observation-noise variance `σn²`.
 pub type Hyperparameters = (Kernel, f64);
 
-/// The hyperparameters of every GP of a model: per part, then the displacement's (`None`: no
-/// GP, the affine key-pose baseline).
+/// The hyperparameters of every GP of a model: per part, those of its GPs (none: the affine
+/// key-pose baseline; two: `--mean both`'s affine-mean then zero-mean GP), then the
+/// displacement's.
 #[derive(Clone, Debug, PartialEq)]
 pub struct FixedHyperparameters {
-    pub parts: Vec<Option<Hyperparameters>>,
+    pub parts: Vec<Vec<Hyperparameters>>,
     pub displacement: Option<Hyperparameters>,
 }
 
 impl FixedHyperparameters {
     /// The hyperparameters `model`'s GPs were trained to.
     pub fn of(model: &GprModel) -> Result<FixedHyperparameters> {
-        let of = |r: &Regressor| match r {
-            Regressor::Gp { gpr, .. } => Some((gpr.kernel, gpr.noise_var)),
-            Regressor::Affine(_) => None,
-        };
-        Ok(FixedHyperparameters { parts: model.parts.iter().map(of).collect(), displacement: of(&model.displacement) })
+        Ok(FixedHyperparameters {
+            parts: model.parts.iter().map(gp_hyperparameters).collect(),
+            displacement: gp_hyperparameters(&model.displacement).first().copied(),
+        })
+    }
+}
+
+/// The hyperparameters of `r`'s GPs, in order.
+fn gp_hyperparameters(r: &Regressor) -> Vec<Hyperparameters> {
+    match r {
+        Regressor::Gp { gpr, .. } => vec![(gpr.kernel, gpr.noise_var)],
+        Regressor::Affine(_) => Vec::new(),
+        Regressor::Average(members) => members.iter().flat_map(|(_, m)| gp_hyperparameters(m)).collect(),
     }
 }
 
@@ -654,6 +748,46 @@ mod tests {
         assert!(train(Method::GprNn, false, MeanFunction::Affine, MEAN_RIDGE, Some(p), &names, &[data], 1.0, false, &opts).is_err());
     }
 
+    /// `--mean both`: each part's regressor is the affine-mean model's and the zero-mean model's
+    /// (the same GPs, trained on the same rows) weighted `1 - ZERO_MEAN_SHARE` and
+    /// `ZERO_MEAN_SHARE`, so it predicts their weighted average (to rounding) and lies between
+    /// them; the displacement is the affine-mean model's. The key-pose baseline has no GP to
+    /// average: `both` trains it as the others do. The model survives a save / load.
+    #[test]
+    fn both_averages_the_affine_mean_and_zero_mean_models() {
+        let names = vec!["p".to_string()];
+        let data = pair(50, &|x| 0.8 * x + 0.1 * x * x);
+        let opts = GprOptions { noise_var: 1e-2, ..Default::default() };
+        let prior = vec![DMatrix::from_fn(3, 3, |r, c| 0.1 * (r + 2 * c) as f64 - 0.3)];
+        let priors = MeanPriors { maps: &prior, ridge_toward: false, weight: 0.25 };
+        let with = |mean, priors| train(Method::GprNn, false, mean, MEAN_RIDGE, priors, &names, &[data.clone()], 1.0, false, &opts).unwrap();
+        let (both, affine, zero) = (with(MeanFunction::Both, Some(priors)), with(MeanFunction::Affine, Some(priors)), with(MeanFunction::Zero, None));
+        assert_eq!(both.parts[0], Regressor::Average(vec![(1.0 - ZERO_MEAN_SHARE, affine.parts[0].clone()), (ZERO_MEAN_SHARE, zero.parts[0].clone())]));
+        assert_eq!(both.displacement, affine.displacement);
+        assert_eq!(both.mean, MeanFunction::Both);
+        // Inputs beyond the training ones, where the two models disagree.
+        let xs = DMatrix::from_fn(7, 2, |i, c| 1.5 * ((i as f64) * 0.9 + c as f64).cos());
+        let (pb, pa, pz) = (both.parts[0].predict(&xs).unwrap(), affine.parts[0].predict(&xs).unwrap(), zero.parts[0].predict(&xs).unwrap());
+        assert!((&pa - &pz).abs().max() > 1e-2, "the two models should disagree away from the data");
+        let want = &pa * (1.0 - ZERO_MEAN_SHARE) + &pz * ZERO_MEAN_SHARE;
+        assert!((&pb - &want).abs().max() < 1e-12, "{pb} vs {want}");
+        for ((b, a), z) in pb.iter().zip(pa.iter()).zip(pz.iter()) {
+            assert!(b >= &a.min(*z) && b <= &a.max(*z));
+        }
+        // Its report holds both GPs' reports; its hyperparameters are both GPs', in order.
+        assert_eq!(both.reports[0].members.len(), 2);
+        assert!(both.reports[0].line().contains("p (affine mean)") && both.reports[0].line().contains("p (zero mean)"));
+        let (hb, ha, hz) = (FixedHyperparameters::of(&both).unwrap(), FixedHyperparameters::of(&affine).unwrap(), FixedHyperparameters::of(&zero).unwrap());
+        assert_eq!(hb.parts[0], [ha.parts[0].clone(), hz.parts[0].clone()].concat());
+        assert_eq!(hb.displacement, ha.displacement);
+        let keyposes = |mean| train(Method::KeyposeAffine, false, mean, MEAN_RIDGE, None, &names, &[data.clone()], 1.0, false, &opts).unwrap().parts;
+        assert_eq!(keyposes(MeanFunction::Both), keyposes(MeanFunction::Affine));
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("both.model");
+        both.save(&path, &mesh_core::artifact::Header::new("test", "0")).unwrap();
+        assert_eq!(GprModel::load(&path).unwrap().parts, both.parts);
+    }
+
     /// A trained model is valid and survives a save / load; each broken invariant of a model
     /// rewritten with a valid checksum is refused on load with its problem named.
     #[test]
@@ -710,6 +844,22 @@ mod tests {
             (
                 GprModel { orientation: Some(LimbOrientation { weight: 0.5, maps: vec![None, None] }), ..model.clone() },
                 "2 limb orientation maps for 1 parts",
+            ),
+            (
+                GprModel { parts: vec![Regressor::Average(vec![(0.5, model.parts[0].clone()), (0.6, model.parts[0].clone())])], ..model.clone() },
+                "part 'p': average weights sum to 1.1",
+            ),
+            (
+                GprModel { parts: vec![Regressor::Average(vec![(0.5, model.parts[0].clone()), (0.5, model.displacement.clone())])], ..model.clone() },
+                "part 'p': maps 6 inputs to 6 outputs, expected 2 to 3",
+            ),
+            (
+                GprModel { parts: vec![Regressor::Average(vec![(1.0, Regressor::Average(vec![(1.0, model.parts[0].clone())]))])], ..model.clone() },
+                "an average of averages",
+            ),
+            (
+                GprModel { parts: vec![Regressor::Average(vec![])], ..model.clone() },
+                "an average of no regressors",
             ),
             (
                 GprModel { orientation: Some(LimbOrientation { weight: 1.5, maps: vec![None] }), ..model.clone() },

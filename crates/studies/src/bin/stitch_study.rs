@@ -137,9 +137,9 @@ fn main() -> anyhow::Result<()> {
         .parts
         .iter()
         .zip(&xs)
-        .map(|(r, x)| match r {
-            transfer::gpr_model::Regressor::Gp { gpr, .. } => transfer::confidence::nearest_distances(gpr.inputs(), x),
-            _ => vec![1.0; x.nrows()],
+        .map(|(r, x)| match r.gp() {
+            Some(gpr) => transfer::confidence::nearest_distances(gpr.inputs(), x),
+            None => vec![1.0; x.nrows()],
         })
         .collect();
     let n = corrected[0].len();

@@ -55,12 +55,12 @@ pub struct Params {
     /// Neural-network kernel with the bias input (R&W eq. 4.29); eq. 10 as printed has none, which limits the GP to odd functions
     #[arg(long)]
     pub nn_bias: bool,
-    /// Named configuration (docs/studies/10-cross-validation.md): `default` (affine mean,
-    /// prior weight 0.25, limb orientation 0.5), `no-prior` (--prior-weight 0), `affine-only`
-    /// (no prior, no limb orientation), `zero-mean` (--mean zero), `paper` (zero mean, no limb
-    /// orientation: CVPR's model); `auto` trains those five and keeps the one with the lowest
-    /// cross-validated error (measured better than `default` with a dozen training motions,
-    /// worse with five). Explicit flags override the configuration's values
+    /// Named configuration (docs/studies/10-cross-validation.md): `default` (--mean both: the
+    /// average of `affine-mean` and `zero-mean`), `affine-mean` (affine mean, prior weight 0.25,
+    /// limb orientation 0.5), `no-prior` (--prior-weight 0), `affine-only` (no prior, no limb
+    /// orientation), `zero-mean` (--mean zero, limb orientation), `paper` (zero mean, no limb
+    /// orientation: CVPR's model); `auto` trains those six and keeps the one with the lowest
+    /// cross-validated error. Explicit flags override the configuration's values
     #[arg(long, value_enum, default_value_t = ConfigName::Default, value_name = "NAME")]
     pub config: ConfigName,
     /// Estimate the pose error on a new motion by cross-validation on the training motions
@@ -88,7 +88,8 @@ pub struct Params {
     #[arg(long)]
     pub report: Option<PathBuf>,
     /// Mean function of the GPs: `affine` = least-squares affine map, GP on the residuals;
-    /// `zero` = the paper's zero-mean GP (CVPR eq. 11) [default: the configuration's, affine]
+    /// `zero` = the paper's zero-mean GP (CVPR eq. 11); `both` = each part's GP trained both
+    /// ways and the two predictions averaged [default: the configuration's, both]
     #[arg(long, value_enum)]
     pub mean: Option<MeanFunction>,
     /// Relative ridge of the affine mean (shrinks the map along input directions the training
@@ -205,7 +206,7 @@ pub fn run(p: &Params) -> anyhow::Result<()> {
     let ridge_toward = p.mean_prior == MeanPrior::Geometric;
     let maps = configs
         .iter()
-        .any(|(_, s)| s.mean == MeanFunction::Affine && (ridge_toward || s.prior_weight > 0.0))
+        .any(|(_, s)| s.mean != MeanFunction::Zero && (ridge_toward || s.prior_weight > 0.0))
         .then(|| crate::geometric_prior::part_priors(&src_pca, &tgt_pca));
     let trainer = Trainer { p, names: &names, src_pca: &src_pca, tgt_pca: &tgt_pca, maps: maps.as_deref(), opts: &opts, given: given.as_ref() };
     let provenance = Provenance { p, source_fps, target_fps, pair_hashes: &pair_hashes };
@@ -357,27 +358,40 @@ impl Trainer<'_> {
         Ok(piece)
     }
 
-    /// Every configuration's model on all the rows. Configurations that differ only in the
-    /// prior's weight or the limb orientation have the same GPs (trained on the residuals of
-    /// the same fitted mean): those are trained once and the others conditioned with their
-    /// hyperparameters, which gives the same model.
+    /// Every configuration's model on all the rows, in their order. Configurations that differ
+    /// only in the prior's weight or the limb orientation have the same GPs (trained on the
+    /// residuals of the same fitted mean): those are trained once and the others conditioned
+    /// with their hyperparameters, which gives the same model. A `--mean both` configuration
+    /// trained beside an affine-mean and a zero-mean one is conditioned with theirs.
     fn models(&self, rows: &TrainingRows, configs: &[(ConfigName, Settings)]) -> anyhow::Result<Vec<GprModel>> {
         let (p, names) = (self.p, self.names);
-        let mut models: Vec<GprModel> = Vec::new();
-        for (_, s) in configs {
-            let twin = configs.iter().zip(&models).find(|((_, t), _)| t.mean == s.mean).map(|(_, m)| m);
-            let fixed = twin.map(FixedHyperparameters::of).transpose()?;
+        // Averages last, so that the GPs they average are trained first.
+        let mut order: Vec<usize> = (0..configs.len()).collect();
+        order.sort_by_key(|&c| configs[c].1.mean == MeanFunction::Both);
+        let mut models: Vec<Option<GprModel>> = vec![None; configs.len()];
+        for c in order {
+            let s = &configs[c].1;
+            let twin = |mean: MeanFunction| configs.iter().zip(&models).find(|((_, t), m)| t.mean == mean && m.is_some()).and_then(|(_, m)| m.as_ref());
+            let (fixed, reports) = match (s.mean, twin(s.mean), twin(MeanFunction::Affine), twin(MeanFunction::Zero)) {
+                (_, Some(t), _, _) => (Some(FixedHyperparameters::of(t)?), Some(t.reports.clone())),
+                (MeanFunction::Both, None, Some(a), Some(z)) => {
+                    let (fa, fz) = (FixedHyperparameters::of(a)?, FixedHyperparameters::of(z)?);
+                    let parts = fa.parts.into_iter().zip(fz.parts).map(|(a, z)| a.into_iter().chain(z).collect()).collect();
+                    (Some(FixedHyperparameters { parts, displacement: fa.displacement }), Some(average_reports(names, a, z)))
+                }
+                _ => (None, None),
+            };
             let fixed = fixed.as_ref().or(self.given);
             let mut model: GprModel = train_rows(&regression_of(p, self.maps, self.opts, s, fixed), names, rows)?;
-            if let Some(twin) = twin {
-                model.reports = twin.reports.clone();
+            if let Some(reports) = reports {
+                model.reports = reports;
             }
             let orientation = OrientationOptions { weight: s.orientation_weight, attached: &p.attached_limbs };
             model.orientation = train_orientation(p.method, names, rows, self.src_pca, self.tgt_pca, &orientation, None)?;
             model.templates = Templates::of(self.src_pca, self.tgt_pca);
-            models.push(model);
+            models[c] = Some(model);
         }
-        Ok(models)
+        Ok(models.into_iter().flatten().collect())
     }
 
     /// Leaves each motion of `pairs` out of every configuration (with its model's
@@ -536,8 +550,9 @@ fn load_pairs<'a>(p: &'a Params, set_source_pca: &PcaModel, set_target_pca: &Pca
 /// `cross_validation` and the `--report`.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct CrossValidationReport {
-    /// The configuration kept: the lowest `cv_rms_pose_m` (the first in `--config auto`'s order
-    /// on a tie).
+    /// The configuration kept: the first of `--config auto`'s order (`default`) unless another
+    /// has a lower error on the held-out motions by more than a standard error
+    /// ([`crate::cross_validation::keep`]).
     pub config: ConfigName,
     /// Its error pooled over every held-out frame (metres).
     pub cv_rms_pose_m: f64,
@@ -560,11 +575,10 @@ pub struct CandidateError {
 }
 
 impl CrossValidationReport {
-    /// Keeps the configuration of lowest pooled error (the first on a tie).
+    /// Keeps the configuration [`crate::cross_validation::keep`] chooses.
     fn choose(folds: FoldUnit, candidates: Vec<(ConfigName, CrossValidation)>) -> Self {
-        let chosen_index = (0..candidates.len())
-            .min_by(|&a, &b| candidates[a].1.cv_rms_pose_m.total_cmp(&candidates[b].1.cv_rms_pose_m).then(a.cmp(&b)))
-            .expect("at least one configuration");
+        let errors: Vec<CrossValidation> = candidates.iter().map(|(_, e)| e.clone()).collect();
+        let chosen_index = crate::cross_validation::keep(&errors);
         let (config, best) = candidates[chosen_index].clone();
         CrossValidationReport {
             config,
@@ -588,9 +602,21 @@ fn regression_of<'a>(
 ) -> Regression<'a> {
     let ridge_toward = p.mean_prior == MeanPrior::Geometric;
     let priors = maps
-        .filter(|_| s.mean == MeanFunction::Affine && (ridge_toward || s.prior_weight > 0.0))
+        .filter(|_| s.mean != MeanFunction::Zero && (ridge_toward || s.prior_weight > 0.0))
         .map(|maps| MeanPriors { maps, ridge_toward, weight: s.prior_weight });
     Regression { method: p.method, nn_bias: p.nn_bias, mean: s.mean, mean_ridge: p.mean_ridge, mean_priors: priors, opts, fixed }
+}
+
+/// The reports of `--mean both`'s model averaging the GPs of `affine` and `zero` (part names
+/// `names`): each part's two, and the affine model's displacement.
+fn average_reports(names: &[String], affine: &GprModel, zero: &GprModel) -> Vec<RegressorReport> {
+    let mut reports: Vec<RegressorReport> = names
+        .iter()
+        .zip(affine.reports.iter().zip(&zero.reports))
+        .map(|(name, (a, z))| RegressorReport::average(name, a.clone(), z.clone()))
+        .collect();
+    reports.extend(affine.reports.get(names.len()).cloned());
+    reports
 }
 
 /// Logs what training one regressor did (`-v`) and its numerical notes.
