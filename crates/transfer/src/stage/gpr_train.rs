@@ -619,10 +619,13 @@ fn average_reports(names: &[String], affine: &GprModel, zero: &GprModel) -> Vec<
     reports
 }
 
-/// Logs what training one regressor did (`-v`) and its numerical notes.
+/// Logs what training one regressor did (`-v`) and its numerical notes (an average's, its
+/// members').
 fn log_report(r: &RegressorReport) {
     mesh_core::info!("{}", r.line());
-    for n in &r.notes {
-        mesh_core::warn!("{}: {n}", r.name);
+    for r in std::iter::once(r).chain(&r.members) {
+        for n in &r.notes {
+            mesh_core::warn!("{}: {n}", r.name);
+        }
     }
 }
