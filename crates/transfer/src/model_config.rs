@@ -1,7 +1,8 @@
 //! Named configurations of the transfer model (`gpr-train --config NAME`): each a preset of
 //! existing `gpr-train` flags, in one table ([`CONFIGS`]). `--config auto` trains the
-//! candidates of [`AUTO_CANDIDATES`] and keeps the one with the lowest cross-validated
-//! error (`crate::cross_validation`). A flag given explicitly overrides the preset's value.
+//! candidates of [`AUTO_CANDIDATES`] and keeps `default` unless another is clearly better by
+//! its cross-validated errors (`crate::cross_validation::keep`). A flag given explicitly
+//! overrides the preset's value.
 
 use serde::{Deserialize, Serialize};
 
