@@ -250,7 +250,7 @@ pub fn cross_validate(folds: &Folds, candidates: &[Candidate]) -> Result<Vec<Cro
 /// Elements of Statistical Learning*, 2nd ed., section 7.10), paired by motion: the estimates of
 /// the configurations lie within a few per cent of each other and the held-out frames of a
 /// motion are near its other half, so the lowest estimate alone picks a configuration that
-/// does worse on new motions as often as not (docs/studies/10-cross-validation.md).
+/// does worse on new motions as often as not (docs/studies/47-mean-ensemble.md).
 pub fn keep(errors: &[CrossValidation]) -> usize {
     let Some(first) = errors.first() else { return 0 };
     let clearly_better = |e: &CrossValidation| {

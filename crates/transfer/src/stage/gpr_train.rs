@@ -59,8 +59,10 @@ pub struct Params {
     /// average of `affine-mean` and `zero-mean`), `affine-mean` (affine mean, prior weight 0.25,
     /// limb orientation 0.5), `no-prior` (--prior-weight 0), `affine-only` (no prior, no limb
     /// orientation), `zero-mean` (--mean zero, limb orientation), `paper` (zero mean, no limb
-    /// orientation: CVPR's model); `auto` trains those six and keeps the one with the lowest
-    /// cross-validated error. Explicit flags override the configuration's values
+    /// orientation: CVPR's model); `auto` cross-validates the ones that turn the limbs (`default`,
+    /// `affine-mean`, `no-prior`, `zero-mean`) and keeps `default` unless another is better on
+    /// the held-out motions by more than a standard error (docs/studies/47-mean-ensemble.md).
+    /// Explicit flags override the configuration's values
     #[arg(long, value_enum, default_value_t = ConfigName::Default, value_name = "NAME")]
     pub config: ConfigName,
     /// Estimate the pose error on a new motion by cross-validation on the training motions
