@@ -99,7 +99,7 @@ pub const MEAN_RIDGE: f64 = 1e-5;
 
 /// Weight of the zero-mean GP in `--mean both`'s average of the affine-mean and zero-mean GPs:
 /// not tuned (the weight that assumes nothing of how much the user trained on); measured within
-/// 3 % of the better of the two on six sets and below both on three
+/// 3 % of the better of the two on six sets and below both on two (raw: five)
 /// (docs/studies/47-mean-ensemble.md).
 pub const ZERO_MEAN_SHARE: f64 = 0.5;
 
