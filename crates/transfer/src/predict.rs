@@ -268,10 +268,10 @@ pub fn transfer_motion(
     }
     let planted = match &clean {
         Some((target, contacts)) => {
-            let (moves, planted) = crate::feet::solve(frames.feet(), contacts, target, target_pca, ratio, &up, feet)?;
+            let (moves, planted) = crate::feet::solve(frames.feet(), contacts, target, target_pca, ratio, &up, feet, placement)?;
             frames.set_moves(moves);
             if let Some(c) = corrected_frames.as_mut() {
-                c.set_moves(crate::feet::solve(c.feet(), contacts, target, target_pca, ratio, &up, feet)?.0);
+                c.set_moves(crate::feet::solve(c.feet(), contacts, target, target_pca, ratio, &up, feet, placement)?.0);
             }
             Some(planted)
         }

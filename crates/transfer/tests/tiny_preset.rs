@@ -4,7 +4,8 @@
 //! set's ground truth: the full pipeline (correction and stitching) is no worse than the raw
 //! regression over the test motions' frames pooled (on one motion it may be: it pulls each part
 //! toward the nearest training meshes), and on every test motion the default placement beats
-//! the paper's regressed displacement. And the affine mean held at its geometric prior (no
+//! the paper's regressed displacement, whose foot height moves the body rather than the pose
+//! (within 1 cm of the transfer without it). And the affine mean held at its geometric prior (no
 //! training pair shapes the map; the residual GPs still learn; `--config affine-mean`, the
 //! affine-mean GP alone) carries the source's pose: its transfer is far closer than the target's
 //! mean pose (a transfer that ignores the source).
@@ -106,7 +107,14 @@ fn defaults_on_the_tiny_preset_never_lose_to_raw_regression_or_the_papers_placem
     let mut pooled = (0.0, 0.0, 0);
     for m in TEST {
         let (raw_pose, default_placed) = predict(m, &[], "gpr-nn");
-        let (_, regressed_placed) = predict(m, &["--placement", "regressed"], "gpr-nn-regressed");
+        let (regressed_pose, regressed_placed) = predict(m, &["--placement", "regressed"], "gpr-nn-regressed");
+        let (unplanted_pose, _) = predict(m, &["--placement", "regressed", "--no-foot-height"], "gpr-nn-regressed-unplanted");
+        // Where the root's height is regressed it drifts: the foot height lowers the body
+        // rather than stretching the legs by the drift, so the pose barely moves.
+        let (planted, unplanted) = (w(format!("out/{m}/gpr-nn-regressed")), w(format!("out/{m}/gpr-nn-regressed-unplanted")));
+        let moved = rms_errors(&MeshSequence::load_dir(&planted).unwrap(), &MeshSequence::load_dir(&unplanted).unwrap()).unwrap().0;
+        eprintln!("{m}: regressed placement pose {regressed_pose:.4}, without the foot height {unplanted_pose:.4}, moved {moved:.4}");
+        assert!(moved < 0.01, "{m}: the foot height bends the regressed transfer's pose by {moved} m");
         let (full_pose, _) = predict(m, &surface_args, "gpr-nn+correct+stitch");
         eprintln!(
             "{m}: pose raw {raw_pose:.4} full {full_pose:.4}; placed default {default_placed:.4} regressed {regressed_placed:.4}"

@@ -72,7 +72,9 @@ pub struct Params {
     pub footskate_smoothness: f64,
     /// Do not put planted feet on the floor (by default, where the source has a foot down, the
     /// target's leg is deformed, hip seam fixed, so that its lowest point is at the height of the
-    /// template's, smoothly in time; the root is not moved)
+    /// template's, smoothly in time; the root is not moved, but under `--placement regressed` or
+    /// `blended`, whose root height drifts, the whole body is first lowered or raised onto the
+    /// floor and the legs take what is left)
     #[arg(long)]
     pub no_foot_height: bool,
     /// Aligned source motion (from align)
@@ -157,6 +159,9 @@ pub fn run(p: &Params) -> anyhow::Result<()> {
             planted.planted_frames,
             planted.max_shift_m
         );
+        if planted.max_body_drop_m > 0.0 {
+            mesh_core::info!("foot height: the regressed root lowered or raised by at most {:.3} m", planted.max_body_drop_m);
+        }
     }
     if let Some(path) = &p.confidence {
         let xd = crate::predict::displacement_matrix(&motion.info.displacements);
