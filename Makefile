@@ -28,6 +28,10 @@ SURFCAP_CACHE ?= $(HOME)/.cache/surfcap
 export SURFCAP_CACHE
 # rayon does the parallelism; OpenBLAS threads would fight it (see docs/PERFORMANCE.md).
 export OPENBLAS_NUM_THREADS := 1
+# glibc's malloc backs its large blocks with transparent huge pages (glibc 2.35 and later; older
+# ones ignore it): first touches of fresh memory (page faults) were a quarter of make transfer's
+# CPU time; the outputs are the same bytes (docs/PERFORMANCE.md).
+export GLIBC_TUNABLES ?= glibc.malloc.hugetlb=1
 # The pipelines run JOBS stage invocations side by side (their task graph's independent steps;
 # each stage's own threads share the cores), unless make was given its own -j: JOBS=1 runs them
 # one at a time.
