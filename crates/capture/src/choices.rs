@@ -108,8 +108,8 @@ impl Correspondences {
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, PartialOrd, Ord, Serialize, Deserialize, ValueEnum)]
 #[serde(rename_all = "kebab-case")]
 pub enum ConfigName {
-    /// Try the candidates and keep `default` unless another is clearly better by its
-    /// cross-validated errors (`transfer::cross_validation::keep`).
+    /// Choose the limb orientation weight, then try the candidates and keep `default` unless
+    /// another is clearly better by its cross-validated errors (`transfer::cross_validation::keep`).
     Auto,
     /// The defaults: the average of `affine-mean` and `zero-mean` (`--mean both`).
     #[default]

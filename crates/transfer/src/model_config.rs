@@ -50,6 +50,49 @@ pub const CONFIGS: &[(ConfigName, Settings)] = &[
 /// and measured 5.54 against 3.75; docs/studies/47-mean-ensemble.md).
 pub const AUTO_CANDIDATES: &[ConfigName] = &[ConfigName::Default, ConfigName::AffineMean, ConfigName::NoPrior, ConfigName::ZeroMean];
 
+/// `gpr-train --orientation-weight`: a weight in [0, 1], or `auto`, the one of
+/// [`AUTO_ORIENTATION_WEIGHTS`] with the lowest cross-validated error when whole training
+/// motions are held out (docs/studies/48-orientation-weight.md).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum OrientationWeight {
+    Fixed(f64),
+    Auto,
+}
+
+/// The weights `--orientation-weight auto` chooses among, in the order ties are broken.
+pub const AUTO_ORIENTATION_WEIGHTS: &[f64] = &[limb_orientation::WEIGHT, 0.3, 0.0];
+
+impl std::str::FromStr for OrientationWeight {
+    type Err = String;
+
+    /// `auto` or a number (the command-line syntax; the range is checked with the other flags).
+    fn from_str(s: &str) -> std::result::Result<Self, String> {
+        match s {
+            "auto" => Ok(OrientationWeight::Auto),
+            _ => s.parse::<f64>().map(OrientationWeight::Fixed).map_err(|_| format!("expected a weight in [0, 1] or 'auto', got '{s}'")),
+        }
+    }
+}
+
+impl std::fmt::Display for OrientationWeight {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            OrientationWeight::Fixed(w) => write!(f, "{w}"),
+            OrientationWeight::Auto => f.write_str("auto"),
+        }
+    }
+}
+
+impl Serialize for OrientationWeight {
+    /// As written on the command line: the number, or `"auto"`.
+    fn serialize<S: serde::Serializer>(&self, ser: S) -> std::result::Result<S::Ok, S::Error> {
+        match self {
+            OrientationWeight::Fixed(w) => ser.serialize_f64(*w),
+            OrientationWeight::Auto => ser.serialize_str("auto"),
+        }
+    }
+}
+
 /// The settings of `name` with `overrides` applied; `None` for `auto`.
 pub fn settings(name: ConfigName, overrides: &Overrides) -> Option<Settings> {
     let (_, s) = CONFIGS.iter().find(|(n, _)| *n == name)?;

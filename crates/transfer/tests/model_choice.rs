@@ -1,11 +1,14 @@
 //! The transfer model's configurations and methods on the `tiny` preset of `synth` (real bodies
 //! and mocap; needs the synth assets, as `make test` does):
 //! - `gpr-train --config auto`: every candidate configuration is also trained on its own, fixed
-//!   by name, and its cross-validated error measured there; the automatic choice is the one
-//!   the one-standard-error rule picks from those independent runs (`default` unless another
+//!   by name with the orientation weight auto chose, and its cross-validated error measured
+//!   there; the automatic choice is the one the one-standard-error rule picks from those
+//!   independent runs (`default` unless another
 //!   is lower on the held-out motions by more than a standard error of the paired
 //!   differences; then the lowest of those), the auto run reports the same errors, and the
 //!   model it writes is the one `--config NAME` trains for the chosen name.
+//! - `--orientation-weight auto` keeps the weight of lowest error with whole motions held out,
+//!   as each weight trained on its own measures it.
 //! - `--hyperparameters-from` a trained model gives that model and its estimate again.
 //! - The method rows `make transfer` writes, at the default configuration and at `paper`, are
 //!   different models: no two transfer a test motion to the same meshes.
@@ -88,11 +91,19 @@ fn auto_keeps_the_configuration_the_one_standard_error_rule_picks_from_the_fixed
         run("gpr-train", &args);
     };
 
+    // Auto chooses the limb orientation weight first (tested below) and gives it to every
+    // candidate.
+    let auto = w("auto.model".into());
+    let report = w("auto.json".into());
+    train(&["--config", "auto", "--report", &s(&report)], &auto);
+    let (_, _, header) = read_header(&auto).unwrap();
+    let weight = header.params["orientation_weight_choice"]["weight"].as_f64().unwrap().to_string();
+
     // Each candidate fixed by name, its error measured in its own run.
     let mut fixed = Vec::new();
     for name in CANDIDATES {
         let model = w(format!("{name}.model"));
-        train(&["--config", name, "--cross-validate"], &model);
+        train(&["--config", name, "--orientation-weight", &weight, "--cross-validate"], &model);
         let cv = cross_validation(&model);
         assert_eq!(cv["config"], name);
         let motions = cv["motions"].as_array().unwrap();
@@ -123,9 +134,6 @@ fn auto_keeps_the_configuration_the_one_standard_error_rule_picks_from_the_fixed
     let (eh, em) = (halves["cv_rms_pose_m"].as_f64().unwrap(), motions["cv_rms_pose_m"].as_f64().unwrap());
     assert!((eh - em).abs() > 1e-4 * em && em > 1e-3 && em < 0.3, "halves {eh} m, motions {em} m");
 
-    let auto = w("auto.model".into());
-    let report = w("auto.json".into());
-    train(&["--config", "auto", "--report", &s(&report)], &auto);
     let cv = cross_validation(&auto);
     let from_report: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(&report).unwrap()).unwrap();
     assert_eq!(cv, from_report, "the report is the header's record");
@@ -170,6 +178,72 @@ fn auto_keeps_the_configuration_the_one_standard_error_rule_picks_from_the_fixed
     let out = Command::new(common::bin("gpr-train")).args(&args).env("OPENBLAS_NUM_THREADS", "1").output().unwrap();
     assert_eq!(out.status.code(), Some(1));
     assert!(String::from_utf8_lossy(&out.stderr).contains("not with --part"));
+}
+
+/// `gpr-train --orientation-weight auto`: each candidate weight is also trained on its own with
+/// whole motions held out (`--cv-folds motions`); the auto run records the same estimates, keeps
+/// the weight of the lowest, and writes the model `--orientation-weight <kept>` trains. Refused
+/// with `--part`.
+#[test]
+fn orientation_weight_auto_keeps_the_weight_of_lowest_whole_motion_error() {
+    let dir = tempfile::tempdir().unwrap();
+    let (_, work, pair_args) = tiny_training(dir.path());
+    let w = |rel: &str| -> PathBuf { work.join(rel) };
+    let mut base = vec!["--source-pca".into(), s(&w("A/pca.model")), "--target-pca".into(), s(&w("B/pca.model"))];
+    base.extend(pair_args);
+    let train = |extra: &[&str]| -> std::process::Output {
+        let mut args = base.clone();
+        args.extend(extra.iter().map(|a| a.to_string()));
+        Command::new(common::bin("gpr-train")).args(&args).env("OPENBLAS_NUM_THREADS", "1").output().unwrap()
+    };
+    let weights = ["0.5", "0.3", "0"];
+    let mut kept_indices = Vec::new();
+    // Two configurations: on the tiny preset the default keeps 0.5, zero-mean 0.3.
+    for config in ["default", "zero-mean"] {
+        let mut fixed = Vec::new();
+        for weight in weights {
+            let model = w(&format!("{config}-{weight}.model"));
+            let out = train(&["--config", config, "--orientation-weight", weight, "--cross-validate", "--cv-folds", "motions", "--out", &s(&model)]);
+            assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+            let cv = cross_validation(&model);
+            assert_eq!(cv["folds"], "motions");
+            fixed.push(cv["cv_rms_pose_m"].as_f64().unwrap());
+        }
+        // The weights give different estimates, or the choice tests nothing.
+        assert!(fixed.iter().zip(&fixed[1..]).all(|(a, b)| (a - b).abs() > 1e-6 * a), "{config}: {fixed:?}");
+
+        let auto = w(&format!("{config}-auto.model"));
+        let out = train(&["--config", config, "--orientation-weight", "auto", "--out", &s(&auto)]);
+        assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+        let (_, _, header) = read_header(&auto).unwrap();
+        let choice = &header.params["orientation_weight_choice"];
+        assert_eq!(choice["folds"], "motions");
+        let tried: Vec<(f64, f64)> = choice["candidates"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .map(|c| (c["weight"].as_f64().unwrap(), c["cv_rms_pose_m"].as_f64().unwrap()))
+            .collect();
+        assert_eq!(tried.iter().map(|t| t.0.to_string()).collect::<Vec<_>>(), weights);
+        for ((weight, e), f) in tried.iter().zip(&fixed) {
+            assert!((e - f).abs() <= 1e-9 * f, "{config}, weight {weight}: auto {e} m, alone {f} m");
+        }
+        let lowest = (0..fixed.len()).min_by(|&a, &b| fixed[a].total_cmp(&fixed[b])).unwrap();
+        assert_eq!(choice["weight"].as_f64(), Some(tried[lowest].0), "{config}");
+        assert_eq!(header.params["orientation_weight"].as_f64(), Some(tried[lowest].0), "{config}");
+        let kept = GprModel::load(&auto).unwrap();
+        let alone = GprModel::load(w(&format!("{config}-{}.model", weights[lowest]))).unwrap();
+        assert_eq!((&kept.parts, &kept.displacement, &kept.orientation), (&alone.parts, &alone.displacement, &alone.orientation), "{config}");
+        kept_indices.push(lowest);
+    }
+    assert!(kept_indices.iter().any(|&i| i != 0), "every configuration kept the first weight: {kept_indices:?}");
+
+    let refused = train(&["--orientation-weight", "auto", "--part", "displacement", "--out", &s(&w("piece"))]);
+    assert_eq!(refused.status.code(), Some(1));
+    assert!(String::from_utf8_lossy(&refused.stderr).contains("not with --part"));
+    let bad = train(&["--orientation-weight", "half", "--out", &s(&w("bad.model"))]);
+    assert_eq!(bad.status.code(), Some(2), "{}", String::from_utf8_lossy(&bad.stderr));
+    assert!(!w("piece").exists() && !w("bad.model").exists());
 }
 
 /// `--hyperparameters-from` a model trained on the same pairs gives that model again (every GP,

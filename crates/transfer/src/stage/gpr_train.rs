@@ -18,7 +18,7 @@ use crate::gpr_model::{
 };
 use crate::cross_validation::{cross_validate, Candidate, CrossValidation, FoldUnit, Folds, HeldOut, Hyperparameters, MotionError};
 use crate::limb_orientation;
-use crate::model_config::{self, ConfigName, Overrides, Settings};
+use crate::model_config::{self, ConfigName, OrientationWeight, Overrides, Settings, AUTO_ORIENTATION_WEIGHTS};
 use crate::training_rows::PairData;
 use capture::part_pca::PcaModel;
 
@@ -61,7 +61,8 @@ pub struct Params {
     /// orientation), `zero-mean` (--mean zero, limb orientation), `paper` (zero mean, no limb
     /// orientation: CVPR's model); `auto` cross-validates the ones that turn the limbs (`default`,
     /// `affine-mean`, `no-prior`, `zero-mean`) and keeps `default` unless another is better on
-    /// the held-out motions by more than a standard error (docs/studies/47-mean-ensemble.md).
+    /// the held-out motions by more than a standard error (docs/studies/47-mean-ensemble.md),
+    /// after choosing their orientation weight as `--orientation-weight auto` does.
     /// Explicit flags override the configuration's values
     #[arg(long, value_enum, default_value_t = ConfigName::Default, value_name = "NAME")]
     pub config: ConfigName,
@@ -109,9 +110,12 @@ pub struct Params {
     pub prior_weight: Option<f64>,
     /// How far each limb is turned from the orientation the pose GP predicts toward the one a
     /// map of the source limb's orientation predicts (transfer::limb_orientation; 0: the
-    /// paper's model, no turn) [default: the configuration's, 0.5]
-    #[arg(long, value_name = "W")]
-    pub orientation_weight: Option<f64>,
+    /// paper's model, no turn); `auto`: of 0.5, 0.3 and 0 the one with the lowest error when
+    /// each whole training motion is held out (needs two or more pairs; recorded as
+    /// `orientation_weight_choice`; docs/studies/48-orientation-weight.md) [default: `auto`
+    /// with `--config auto`, else the configuration's, 0.5]
+    #[arg(long, value_name = "W|auto")]
+    pub orientation_weight: Option<OrientationWeight>,
     /// Limbs whose orientation is measured relative to their attachment, the root part's region
     /// around their joint (an arm's shoulder girdle), instead of the root part's whole frame
     /// (comma-separated limb names, e.g. `arm_l,arm_r`; ignored by the whole-body method;
@@ -171,7 +175,10 @@ pub fn run(p: &Params) -> anyhow::Result<()> {
             names.len()
         );
     }
-    let configs = configurations(p)?;
+    let mut configs = configurations(p)?;
+    // `--config auto` chooses the orientation weight too, unless one is given.
+    let choose_weight = matches!((p.orientation_weight, p.config), (Some(OrientationWeight::Auto), _) | (None, ConfigName::Auto))
+        && method != Method::KeyposeAffine;
     let cross_validated = p.cross_validate || p.report.is_some() || configs.len() > 1;
     let given = given_hyperparameters(p, &names, configs.len())?;
     // The files are in the set's order (set source, set target); the PCA models are in
@@ -183,7 +190,7 @@ pub fn run(p: &Params) -> anyhow::Result<()> {
     };
     let LoadedPairs { mut pairs, held_out, pair_hashes, fps: (set_source_fps, set_target_fps) } =
         load_pairs(p, set_source_pca, set_target_pca)?;
-    if cross_validated && pairs.len() < 2 {
+    if (cross_validated || choose_weight) && pairs.len() < 2 {
         return Err(mesh_core::Error::invalid(format!("cross-validation needs two or more --pair, got {}", pairs.len())).into());
     }
     let (source_fps, target_fps) = if p.reverse {
@@ -217,7 +224,7 @@ pub fn run(p: &Params) -> anyhow::Result<()> {
     // is hundreds of MB).
     let n_pairs = pairs.len();
     let rows = TrainingRows::new(method, &names, &pairs, ratio, p.keyposes_only)?;
-    if !cross_validated {
+    if !cross_validated && !choose_weight {
         pairs = Vec::new();
     }
     if let Some(unit) = unit {
@@ -229,7 +236,7 @@ pub fn run(p: &Params) -> anyhow::Result<()> {
         let piece = trainer.piece(&rows, unit, &chosen)?;
         spin.finish_and_clear();
         log_report(&piece.report);
-        part_merge::save_piece::<GprModel>(&p.out, &provenance.header(&chosen, None)?, &units, unit, piece)?;
+        part_merge::save_piece::<GprModel>(&p.out, &provenance.header(&chosen, None, None)?, &units, unit, piece)?;
         return Ok(());
     }
     let spin = mesh_core::cli::spinner(
@@ -244,6 +251,23 @@ pub fn run(p: &Params) -> anyhow::Result<()> {
     let mut models = trainer.models(&rows, &configs)?;
     drop(rows);
     let trained_s = start.elapsed().as_secs_f64();
+    let weight_choice = match choose_weight {
+        true => {
+            let choice = trainer.choose_orientation_weight(&configs[0].1, &models[0], &pairs, &held_out, ratio)?;
+            for ((_, s), m) in configs.iter_mut().zip(models.iter_mut()) {
+                s.orientation_weight = choice.weight;
+                m.orientation = m.orientation.take().filter(|_| choice.weight > 0.0).map(|o| limb_orientation::LimbOrientation { weight: choice.weight, ..o });
+            }
+            mesh_core::info!(
+                "orientation weight {} kept of {} (cross-validated pose error {}, whole motions held out)",
+                choice.weight,
+                choice.candidates.iter().map(|c| c.weight.to_string()).collect::<Vec<_>>().join(", "),
+                choice.candidates.iter().map(|c| format!("{:.4} m", c.cv_rms_pose_m)).collect::<Vec<_>>().join(", ")
+            );
+            Some(choice)
+        }
+        false => None,
+    };
     let cv = match cross_validated {
         true => Some(trainer.cross_validation(&configs, &models, &pairs, &held_out, ratio)?),
         false => None,
@@ -269,7 +293,7 @@ pub fn run(p: &Params) -> anyhow::Result<()> {
         }
     );
     model.reports.iter().for_each(log_report);
-    let header = provenance.header(&configs[chosen].1, cv.as_ref())?;
+    let header = provenance.header(&configs[chosen].1, cv.as_ref(), weight_choice.as_ref())?;
     // The report first: the model's presence says both are complete.
     if let (Some(r), Some(cv)) = (&p.report, &cv) {
         let text = serde_json::to_string_pretty(cv)? + "\n";
@@ -322,9 +346,9 @@ fn selected_unit(p: &Params, names: &[String], units: &[String]) -> anyhow::Resu
     if names.iter().any(|n| n == DISPLACEMENT) {
         bail!("{}: a part is named '{DISPLACEMENT}', the name of the displacement regressor", p.source_pca.display());
     }
-    if p.config == ConfigName::Auto || p.cross_validate || p.report.is_some() {
+    if p.config == ConfigName::Auto || p.cross_validate || p.report.is_some() || p.orientation_weight == Some(OrientationWeight::Auto) {
         return Err(mesh_core::Error::invalid(
-            "--config auto, --cross-validate and --report cross-validate whole models: not with --part",
+            "--config auto, --orientation-weight auto, --cross-validate and --report cross-validate whole models: not with --part",
         )
         .into());
     }
@@ -430,6 +454,67 @@ impl Trainer<'_> {
         let errors = cross_validate(&folds, &candidates)?;
         Ok(CrossValidationReport::choose(p.cv_folds, configs.iter().map(|(c, _)| *c).zip(errors).collect()))
     }
+
+    /// `--orientation-weight auto`: configuration `s` with each of [`AUTO_ORIENTATION_WEIGHTS`],
+    /// its model's hyperparameters (`model`), each whole training motion held out; the weight of
+    /// lowest pooled error is kept (the earliest on a tie).
+    fn choose_orientation_weight(
+        &self,
+        s: &Settings,
+        model: &GprModel,
+        pairs: &[PairData],
+        held_out: &[HeldOut],
+        frame_ratio: f64,
+    ) -> anyhow::Result<OrientationWeightChoice> {
+        let p = self.p;
+        let fixed = FixedHyperparameters::of(model)?;
+        let candidates: Vec<Candidate> = AUTO_ORIENTATION_WEIGHTS
+            .iter()
+            .map(|&weight| Candidate {
+                regression: regression_of(p, self.maps, self.opts, s, Some(&fixed)),
+                orientation: OrientationOptions { weight, attached: &p.attached_limbs },
+            })
+            .collect();
+        let folds = Folds {
+            unit: FoldUnit::Motions,
+            hyperparameters: p.cv_hyperparameters,
+            pairs,
+            held_out,
+            frame_ratio,
+            keyposes_only: p.keyposes_only,
+            part_names: self.names,
+            source_pca: self.src_pca,
+            target_pca: self.tgt_pca,
+        };
+        let errors = cross_validate(&folds, &candidates)?;
+        let kept = (1..errors.len()).fold(0, |best, c| if errors[c].cv_rms_pose_m < errors[best].cv_rms_pose_m { c } else { best });
+        Ok(OrientationWeightChoice {
+            weight: AUTO_ORIENTATION_WEIGHTS[kept],
+            folds: FoldUnit::Motions,
+            candidates: AUTO_ORIENTATION_WEIGHTS
+                .iter()
+                .zip(errors)
+                .map(|(&weight, e)| WeightError { weight, cv_rms_pose_m: e.cv_rms_pose_m, motions: e.motions })
+                .collect(),
+        })
+    }
+}
+
+/// `--orientation-weight auto`'s record in the header (`orientation_weight_choice`): the weight
+/// kept, what the folds held out, and every weight's cross-validated errors.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct OrientationWeightChoice {
+    pub weight: f64,
+    pub folds: FoldUnit,
+    pub candidates: Vec<WeightError>,
+}
+
+/// One weight's cross-validated errors (metres): pooled and per held-out motion.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct WeightError {
+    pub weight: f64,
+    pub cv_rms_pose_m: f64,
+    pub motions: Vec<MotionError>,
 }
 
 /// What a model's header records: the flags, the configuration kept and its cross-validation,
@@ -442,7 +527,7 @@ struct Provenance<'a> {
 }
 
 impl Provenance<'_> {
-    fn header(&self, chosen: &Settings, cv: Option<&CrossValidationReport>) -> anyhow::Result<Header> {
+    fn header(&self, chosen: &Settings, cv: Option<&CrossValidationReport>, weight: Option<&OrientationWeightChoice>) -> anyhow::Result<Header> {
         let p = self.p;
         let mut params = serde_json::to_value(p)?;
         params["mean"] = serde_json::to_value(chosen.mean)?;
@@ -452,6 +537,9 @@ impl Provenance<'_> {
         params["target_fps"] = self.target_fps.into();
         if let Some(cv) = cv {
             params["cross_validation"] = serde_json::to_value(cv)?;
+        }
+        if let Some(w) = weight {
+            params["orientation_weight_choice"] = serde_json::to_value(w)?;
         }
         let mut header = p
             .common
@@ -473,15 +561,22 @@ impl Provenance<'_> {
 /// key-pose baseline without limb orientation), the weights checked.
 fn configurations(p: &Params) -> anyhow::Result<Vec<(ConfigName, Settings)>> {
     let method = p.method;
-    let overrides = Overrides { mean: p.mean, prior_weight: p.prior_weight, orientation_weight: p.orientation_weight };
+    // Under `--orientation-weight auto` every configuration turns the limbs while the weight is
+    // chosen (its maps are fitted), then takes the weight kept (`choose_orientation_weight`).
+    let orientation_weight = match p.orientation_weight {
+        Some(OrientationWeight::Fixed(w)) => Some(w),
+        Some(OrientationWeight::Auto) => Some(limb_orientation::WEIGHT),
+        None => None,
+    };
+    let overrides = Overrides { mean: p.mean, prior_weight: p.prior_weight, orientation_weight };
     if let Some(w) = p.prior_weight.filter(|w| !(0.0..=1.0).contains(w)) {
         return Err(mesh_core::Error::invalid(format!("--prior-weight must be in [0, 1], got {w}")).into());
     }
-    if let Some(w) = p.orientation_weight.filter(|w| !(0.0..=1.0).contains(w)) {
+    if let Some(w) = orientation_weight.filter(|w| !(0.0..=1.0).contains(w)) {
         return Err(mesh_core::Error::invalid(format!("--orientation-weight must be in [0, 1], got {w}")).into());
     }
     // The key-pose baseline is Baran et al.'s model class throughout: no limb orientation.
-    if method == Method::KeyposeAffine && p.orientation_weight.is_some_and(|w| w > 0.0) {
+    if method == Method::KeyposeAffine && orientation_weight.is_some_and(|w| w > 0.0) {
         mesh_core::warn!("method keypose-affine has no limb orientation: --orientation-weight is not used");
     }
     Ok(model_config::candidates(p.config)
