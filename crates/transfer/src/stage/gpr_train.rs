@@ -440,19 +440,23 @@ impl Trainer<'_> {
                 orientation: OrientationOptions { weight: s.orientation_weight, attached: &p.attached_limbs },
             })
             .collect();
-        let folds = Folds {
-            unit: p.cv_folds,
-            hyperparameters: p.cv_hyperparameters,
+        let errors = cross_validate(&self.folds(p.cv_folds, pairs, held_out, frame_ratio), &candidates)?;
+        Ok(CrossValidationReport::choose(p.cv_folds, configs.iter().map(|(c, _)| *c).zip(errors).collect()))
+    }
+
+    /// The folds of `pairs` by `unit`, with the stage's options.
+    fn folds<'b>(&'b self, unit: FoldUnit, pairs: &'b [PairData], held_out: &'b [HeldOut], frame_ratio: f64) -> Folds<'b> {
+        Folds {
+            unit,
+            hyperparameters: self.p.cv_hyperparameters,
             pairs,
             held_out,
             frame_ratio,
-            keyposes_only: p.keyposes_only,
+            keyposes_only: self.p.keyposes_only,
             part_names: self.names,
             source_pca: self.src_pca,
             target_pca: self.tgt_pca,
-        };
-        let errors = cross_validate(&folds, &candidates)?;
-        Ok(CrossValidationReport::choose(p.cv_folds, configs.iter().map(|(c, _)| *c).zip(errors).collect()))
+        }
     }
 
     /// `--orientation-weight auto`: configuration `s` with each of [`AUTO_ORIENTATION_WEIGHTS`],
@@ -475,18 +479,7 @@ impl Trainer<'_> {
                 orientation: OrientationOptions { weight, attached: &p.attached_limbs },
             })
             .collect();
-        let folds = Folds {
-            unit: FoldUnit::Motions,
-            hyperparameters: p.cv_hyperparameters,
-            pairs,
-            held_out,
-            frame_ratio,
-            keyposes_only: p.keyposes_only,
-            part_names: self.names,
-            source_pca: self.src_pca,
-            target_pca: self.tgt_pca,
-        };
-        let errors = cross_validate(&folds, &candidates)?;
+        let errors = cross_validate(&self.folds(FoldUnit::Motions, pairs, held_out, frame_ratio), &candidates)?;
         let kept = (1..errors.len()).fold(0, |best, c| if errors[c].cv_rms_pose_m < errors[best].cv_rms_pose_m { c } else { best });
         Ok(OrientationWeightChoice {
             weight: AUTO_ORIENTATION_WEIGHTS[kept],
