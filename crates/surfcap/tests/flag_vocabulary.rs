@@ -29,8 +29,8 @@ const SYNONYMS: &[&[&str]] = &[
     &["--threads", "--jobs", "-j"],
 ];
 
-/// Value names that are a number or a keyword (not a closed choice), so they may show `|`.
-const NUMBER_OR_KEYWORD: &[&str] = &["--sparse"];
+/// Flags that take a number or a keyword (not a closed choice), so their value names may show `|`.
+const NUMBER_OR_KEYWORD: &[&str] = &["--sparse", "--orientation-weight"];
 
 fn bin_dir() -> PathBuf {
     Path::new(env!("CARGO_BIN_EXE_surfcap")).parent().unwrap().to_path_buf()
